@@ -1,0 +1,1 @@
+"""Material tables and small data shipped with translucency (installed as translucency.data)."""

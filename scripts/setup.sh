@@ -1,0 +1,46 @@
+#!/usr/bin/env bash
+# Set up everything translucency needs on a Debian machine, idempotently:
+#   1. system libraries (apt): OpenGL for pymeshlab, EGL for off-screen VTK, OpenMP for numba,
+#      Xvfb for the tests that open a real window, and Python's venv module;
+#   2. a virtual environment in .venv with the package (editable) and its test extras.
+# A second run does nothing unless pyproject.toml changed.
+set -euo pipefail
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+cd "$root"
+
+system_packages=(libgl1 libopengl0 libegl1 libgomp1 xvfb xauth)
+missing=()
+for pkg in "${system_packages[@]}"; do
+    if ! dpkg-query -W -f='${Status}' "$pkg" 2>/dev/null | grep -q "install ok installed"; then
+        missing+=("$pkg")
+    fi
+done
+python=${PYTHON:-python3}
+if ! "$python" -c "import venv, ensurepip" 2>/dev/null; then
+    missing+=(python3 python3-venv)
+    python=python3
+fi
+if ((${#missing[@]})); then
+    if [[ $(id -u) -ne 0 ]]; then
+        echo "setup: missing system packages: ${missing[*]}" >&2
+        echo "setup: install them with: sudo apt-get install -y ${missing[*]}" >&2
+        exit 1
+    fi
+    echo "setup: installing system packages: ${missing[*]}"
+    export DEBIAN_FRONTEND=noninteractive
+    apt-get update -qq
+    apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+fi
+
+if [[ ! -x .venv/bin/python ]]; then
+    echo "setup: creating .venv"
+    "$python" -m venv .venv
+fi
+stamp=.venv/.translucency-setup
+want="$(sha256sum pyproject.toml | cut -d' ' -f1)"
+if [[ ! -f $stamp || "$(cat "$stamp")" != "$want" ]]; then
+    echo "setup: installing Python packages into .venv (about a minute the first time)"
+    .venv/bin/python -m pip install -q --upgrade pip >/dev/null
+    .venv/bin/python -m pip install -q -e ".[test,dask]"
+    echo "$want" > "$stamp"
+fi
