@@ -1,0 +1,47 @@
+"""translucency: translucent shading of 3D scans with the directional dipole BSSRDF.
+
+The public API is re-exported here and imported lazily, so ``import translucency`` stays cheap:
+heavy libraries (numba, PyVista, pymeshlab, Embree) load only when a function that needs them is
+first used.
+"""
+
+import importlib
+import os
+
+# numba: the TBB layer shipped in some environments is too old and only produces a warning; OpenMP
+# (libgomp) is what the set-up installs. A user's own choice wins.
+os.environ.setdefault("NUMBA_THREADING_LAYER", "omp")
+
+__version__ = "0.1.0"
+
+_LAZY = {
+    # scattering physics
+    "Medium": "translucency.scatter.medium",
+    "Material": "translucency.scatter.materials",
+    "material": "translucency.scatter.materials",
+    "material_names": "translucency.scatter.materials",
+    "catalogue": "translucency.scatter.materials",
+    "directional_dipole": "translucency.scatter.dipoles",
+    "standard_dipole_profile": "translucency.scatter.dipoles",
+    "better_dipole_profile": "translucency.scatter.dipoles",
+    # errors
+    "TranslucencyError": "translucency.errors",
+    "InvalidParameterError": "translucency.errors",
+    "UnknownMaterialError": "translucency.errors",
+    "MeshError": "translucency.errors",
+}
+
+__all__ = sorted(_LAZY) + ["__version__"]
+
+
+def __getattr__(name):
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module 'translucency' has no attribute {name!r}")
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    return __all__
