@@ -56,8 +56,8 @@ __all__ = [
     "directional_dipole_total_reflectance",
 ]
 
-#: ``|n_i x x_hat|`` below this (or ``r^2`` below ``PARALLEL_TOLERANCE^2 * D^2``) counts as degenerate:
-#: the modified tangent plane falls back to ``n_i* = n_i`` (spec 1.8).
+#: ``r = 0`` or ``|n_i - (n_i . x_hat) x_hat|`` below this counts as degenerate: the modified tangent
+#: plane falls back to ``n_i* = n_i`` (spec 1.8).
 PARALLEL_TOLERANCE = 1e-12
 
 #: Lower bound of the corrected real-source distance, as a fraction of D. ``d_r`` reaches 0 only when
@@ -144,7 +144,7 @@ def directional_dipole(x_i, n_i, w12, x_o, n_o, sigma_a, sigma_s, g, eta):
         tangent = n_i - _dot(n_i, x_hat)[..., None] * x_hat
         tangent_norm = np.sqrt(_dot(tangent, tangent))
         n_star = tangent / tangent_norm[..., None]
-    degenerate = (r <= PARALLEL_TOLERANCE * D) | ~(tangent_norm > PARALLEL_TOLERANCE)
+    degenerate = ~(r > 0.0) | ~(tangent_norm > PARALLEL_TOLERANCE)
     n_star = np.where(degenerate[..., None], n_i, n_star)
 
     # Virtual source: mirrored direction and position above the surface   (spec 1.2, items 3-4)
