@@ -1,0 +1,207 @@
+"""Shadow rays: Embree (embreex) occlusion queries against one triangle mesh.
+
+An :class:`Occluder` builds one Embree scene per mesh (float32, C-contiguous, committed once) and
+answers "is the way from these surface points toward the light free?" for rays to infinity
+(directional lights, environment samples) and for segments (point lights). Rays start at the
+surface point moved along its normal by a scale-aware offset ``epsilon``; without it nearly every
+ray hits one of the faces around its own vertex (measured on the shared scans: 99.6-99.9 % of the
+front-facing rays with no offset). Large ray sets run in chunks on a thread pool: embreex releases
+the GIL while it traces.
+
+Choice of the offset (measured on the five shared scans, 8 random light directions, vertices with
+``n . w > 0``): any offset from ``1e-7 * diagonal`` up removes every self-hit caused by float32
+rounding (no ray hits a face of its own one-ring that faces the light). What remains are hits on
+one-ring faces that face *away* from the light: vertices at the shadow terminator or in a crease,
+which the surrounding geometry really does block; they carry 0.08-0.3 % of the cosine-weighted
+flux on the clean scans (bunny, horse, Igea) and ~3.5 % on raw photogrammetry. The default
+``RELATIVE_OFFSET = 1e-4`` of the bounding-box diagonal (0.025 mm on a 250 mm bunny, about 2 % of
+its mean edge) is far above rounding, removes a quarter to half of those terminator hits, and is
+too small to leak light through any feature a scan resolves. It is floored at 64 float32 ulps of
+the largest coordinate, so a mesh far from the origin still gets a working offset.
+
+========== ========================================================== ======
+symbol     meaning                                                    unit
+========== ========================================================== ======
+points     mesh vertices                                              mm
+triangles  vertex indices of the triangles                            1
+epsilon    offset of ray origins along the normal                     mm
+origins    surface points the rays leave from (before the offset)     mm
+w          unit ray direction (toward the light)                      1
+distance   segment length to a point light (None: to infinity)        mm
+========== ========================================================== ======
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+from concurrent.futures import ThreadPoolExecutor
+
+import numpy as np
+
+from ..errors import InvalidParameterError, MeshError, TranslucencyError
+
+__all__ = ["Occluder", "RELATIVE_OFFSET", "array_digest"]
+
+RELATIVE_OFFSET = 1e-4
+"""Default ray-origin offset as a fraction of the mesh's bounding-box diagonal (module docstring)."""
+
+ULP_FLOOR = 64.0 * float(np.finfo(np.float32).eps)
+"""The offset is at least this fraction of the largest absolute coordinate (64 float32 ulps)."""
+
+MIN_RAYS_PER_CHUNK = 16384
+"""Below this many rays per worker the rays run on the calling thread (pool overhead dominates)."""
+
+INFINITE_DISTANCE = 1e37  # embreex's "no limit" tfar, representable in float32
+
+
+def _embreex():
+    try:
+        from embreex import mesh_construction, rtcore_scene
+    except ImportError as exc:  # pragma: no cover - depends on the installation
+        raise TranslucencyError(
+            f"shadow rays need the embreex package (Embree ray tracing), which failed to import ({exc}); "
+            "install it with 'pip install embreex' or turn visibility off."
+        ) from None
+    return rtcore_scene, mesh_construction
+
+
+def array_digest(*arrays) -> str:
+    """Hex digest of the dtype, shape and bytes of arrays (cache keys of meshes and ray origins)."""
+    h = hashlib.blake2b(digest_size=16)
+    for a in arrays:
+        a = np.ascontiguousarray(a)
+        h.update(f"{a.dtype.str}{a.shape}".encode())
+        h.update(a.view(np.uint8).reshape(-1).data if a.size else b"")
+    return h.hexdigest()
+
+
+def default_workers() -> int:
+    """Number of CPU cores this process may use."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # pragma: no cover - not on Linux
+        return max(1, os.cpu_count() or 1)
+
+
+class Occluder:
+    """One Embree scene of a triangle mesh, for shadow rays.
+
+    Parameters
+    ----------
+    points : array_like, shape (n, 3)
+        Vertex positions, mm (converted to float32, C-contiguous, for Embree).
+    triangles : array_like, shape (m, 3)
+        Vertex indices of the triangles.
+    relative_offset : float, optional
+        Ray-origin offset along the normal as a fraction of the bounding-box diagonal (default
+        :data:`RELATIVE_OFFSET`; floored at 64 float32 ulps of the largest coordinate).
+    workers : int, optional
+        Threads for large ray sets (default: the CPU cores this process may use).
+
+    Attributes
+    ----------
+    epsilon : float
+        The offset in mm.
+    key : str
+        Digest of the points, triangles and offset (identifies the scene in caches).
+    rays_cast : int
+        Rays traced since construction.
+    """
+
+    def __init__(self, points, triangles, *, relative_offset: float = RELATIVE_OFFSET, workers: int | None = None):
+        points = np.asarray(points, dtype=np.float64)
+        if points.ndim != 2 or points.shape[1] != 3 or len(points) == 0:
+            raise MeshError(f"occluder: points must have shape (n, 3) with n > 0, got {points.shape}.")
+        if not np.all(np.isfinite(points)):
+            raise MeshError("occluder: points contain NaN or infinite coordinates; clean the mesh first.")
+        try:
+            triangles = np.asarray(triangles)
+        except (TypeError, ValueError):
+            raise MeshError("occluder: triangles must be an (m, 3) integer array.") from None
+        if triangles.size == 0:
+            triangles = triangles.reshape(0, 3)
+        if triangles.ndim != 2 or triangles.shape[1] != 3 or not np.issubdtype(triangles.dtype, np.integer):
+            raise MeshError(f"occluder: triangles must be an (m, 3) integer array, got {triangles.dtype} {triangles.shape}.")
+        if len(triangles) and (triangles.min() < 0 or triangles.max() >= len(points)):
+            raise MeshError(
+                f"occluder: triangle indices must lie in [0, {len(points) - 1}], got "
+                f"[{triangles.min()}, {triangles.max()}]."
+            )
+        if not (np.isfinite(relative_offset) and relative_offset > 0):
+            raise InvalidParameterError(f"occluder: relative_offset must be a positive number, got {relative_offset!r}.")
+        self.workers = default_workers() if workers is None else int(workers)
+        if self.workers < 1:
+            raise InvalidParameterError(f"occluder: workers must be >= 1, got {workers!r}.")
+        used = np.zeros(len(points), dtype=bool)
+        used[triangles.reshape(-1)] = True
+        used = points[used] if len(triangles) else points
+        diagonal = float(np.linalg.norm(used.max(axis=0) - used.min(axis=0)))
+        self.epsilon = max(relative_offset * diagonal, ULP_FLOOR * float(np.abs(used).max()), np.finfo(np.float32).tiny)
+        self.key = array_digest(points, triangles.astype(np.int64), np.array([relative_offset]))
+        self.n_triangles = len(triangles)
+        self.rays_cast = 0
+        self._scene = None
+        if self.n_triangles:
+            rtcore_scene, mesh_construction = _embreex()
+            self._scene = rtcore_scene.EmbreeScene()
+            self._mesh = mesh_construction.TriangleMesh(
+                self._scene,
+                np.ascontiguousarray(points, dtype=np.float32),
+                np.ascontiguousarray(triangles, dtype=np.int32),
+            )
+            # The first query commits the scene; do it here, single-threaded, before any pool uses it.
+            self._scene.run(np.zeros((1, 3), np.float32), np.ones((1, 3), np.float32), query="OCCLUDED")
+
+    def visible(self, origins, normals, directions, distances=None) -> np.ndarray:
+        """Whether each ray from a surface point toward its light is unobstructed.
+
+        Every ray given is traced; skip back-facing points (``n . w <= 0``) before calling.
+
+        Parameters
+        ----------
+        origins : array_like, shape (k, 3)
+            Surface points, mm; each ray starts at ``origin + epsilon * normal``.
+        normals : array_like, shape (k, 3)
+            Unit outward normals at the origins.
+        directions : array_like, shape (3,) or (k, 3)
+            Unit directions toward the light (one for all rays, or one per ray).
+        distances : array_like, shape (k,), optional
+            Distance from each origin to a point light, mm; a ray is blocked only by geometry closer
+            than that. None: rays to infinity.
+
+        Returns
+        -------
+        ndarray of bool, shape (k,)
+            True where nothing of the mesh lies between the (offset) origin and the light.
+        """
+        origins = np.asarray(origins, dtype=np.float64)
+        k = len(origins)
+        if k == 0 or self._scene is None:
+            return np.ones(k, dtype=bool)
+        directions = np.asarray(directions, dtype=np.float64)
+        start = origins + self.epsilon * np.asarray(normals, dtype=np.float64)
+        ray_origins = np.ascontiguousarray(start, dtype=np.float32)
+        ray_directions = np.ascontiguousarray(np.broadcast_to(directions, (k, 3)), dtype=np.float32)
+        if distances is None:
+            tfar = np.full(k, INFINITE_DISTANCE, dtype=np.float32)
+        else:
+            # Measured from the offset origin, and stopped just short of the light itself.
+            targets = origins + directions * np.asarray(distances, dtype=np.float64)[:, None]
+            tfar = np.ascontiguousarray(np.linalg.norm(targets - start, axis=1) * (1.0 - 1e-6), dtype=np.float32)
+        hit = self._run(ray_origins, ray_directions, tfar)
+        self.rays_cast += k
+        return hit < 0
+
+    def _run(self, origins, directions, tfar):
+        k = len(origins)
+        n_chunks = min(self.workers * 4, k // MIN_RAYS_PER_CHUNK)
+        if self.workers == 1 or n_chunks < 2:
+            return self._scene.run(origins, directions, dists=tfar, query="OCCLUDED")
+        bounds = np.linspace(0, k, n_chunks + 1).astype(np.int64)
+        chunks = [slice(a, b) for a, b in zip(bounds[:-1], bounds[1:])]
+        with ThreadPoolExecutor(max_workers=self.workers) as pool:
+            parts = pool.map(
+                lambda s: self._scene.run(origins[s], directions[s], dists=tfar[s], query="OCCLUDED"), chunks
+            )
+            return np.concatenate(list(parts))
