@@ -1,0 +1,156 @@
+"""HDR environment maps: equirectangular radiance images read from files.
+
+Readers, by file extension:
+
+* ``.hdr`` / ``.pic`` (Radiance RGBE): VTK's ``vtkHDRReader`` (VTK is already required through
+  PyVista). imageio cannot read this format here: its only ``.hdr`` backends are FreeImage (a
+  separately downloaded binary) and OpenCV, neither a dependency.
+* ``.exr``, ``.tif`` / ``.tiff``, ``.pfm`` and other float images: imageio, when one of its
+  installed backends can read the file (float TIFF works with the base install; EXR needs e.g.
+  ``pip install imageio[opencv]``).
+* ``.npy``: a float array of shape (H, W, 3) saved with NumPy.
+
+Pixel values are taken as linear radiance in W/(m² sr) (scale them with ``scale`` if the map is in
+another unit). The axes of the image are those of
+:class:`translucency.scatter.lights.EnvironmentLight`: row 0 is the zenith, columns run with the
+azimuth.
+
+========= ====================================================== =========
+name      meaning                                                unit
+========= ====================================================== =========
+L         radiance of one pixel, linear RGB                      W/(m² sr)
+H, W      image height (polar angle) and width (azimuth)         pixels
+========= ====================================================== =========
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import TranslucencyError
+from ..scatter.lights import EnvironmentLight
+
+__all__ = ["EnvironmentMapError", "read_equirectangular", "load_environment", "RADIANCE_EXTENSIONS"]
+
+RADIANCE_EXTENSIONS = (".hdr", ".pic")
+IMPLAUSIBLE_RADIANCE = 1e30  # RGBE goes up to ~1.7e38; anything this large is a decoding failure
+
+
+class EnvironmentMapError(TranslucencyError, ValueError):
+    """An environment map file that cannot be read or is not a radiance image."""
+
+
+def _read_radiance_hdr(path: Path) -> np.ndarray:
+    """Radiance RGBE file through VTK, as (H, W, 3) float64 with row 0 at the top of the image."""
+    from vtkmodules.util.numpy_support import vtk_to_numpy
+    from vtkmodules.vtkIOImage import vtkHDRReader
+
+    reader = vtkHDRReader()
+    if not reader.CanReadFile(str(path)):
+        raise EnvironmentMapError(f"{path.name} is not a Radiance HDR (RGBE) file; check the file or its extension.")
+    errors = []
+    reader.AddObserver("ErrorEvent", lambda obj, event: errors.append(event))  # keeps VTK quiet, we report
+    reader.SetFileName(str(path))
+    reader.Update()
+    image = reader.GetOutput()
+    scalars = image.GetPointData().GetScalars() if image is not None else None
+    if errors or scalars is None:
+        raise EnvironmentMapError(f"{path.name} could not be decoded as a Radiance HDR image (damaged or truncated file).")
+    width, height, _ = image.GetDimensions()
+    pixels = vtk_to_numpy(scalars).astype(np.float64)
+    if pixels.shape != (width * height, 3):
+        raise EnvironmentMapError(f"{path.name}: expected an RGB image, got {pixels.shape[-1]} channels per pixel.")
+    return pixels.reshape(height, width, 3)[::-1]  # VTK stores the bottom row first
+
+
+def _read_with_imageio(path: Path) -> np.ndarray:
+    import imageio.v3 as iio
+
+    try:
+        pixels = iio.imread(path)
+    except Exception as exc:  # imageio raises OSError, ValueError or a plugin's own error
+        raise EnvironmentMapError(
+            f"{path.name} cannot be read as an image: no installed reader handles "
+            f"{repr(path.suffix) + ' files' if path.suffix else 'files without an extension'} "
+            f"({type(exc).__name__}); convert the map to Radiance .hdr, or install a backend imageio can use "
+            "for it (e.g. 'pip install imageio[opencv]' for .exr)."
+        ) from None
+    pixels = np.asarray(pixels)
+    if not np.issubdtype(pixels.dtype, np.floating):
+        raise EnvironmentMapError(
+            f"{path.name} holds {pixels.dtype} pixels, a display image, not radiance; "
+            "use a floating-point HDR map (.hdr, .exr, float TIFF)."
+        )
+    return pixels
+
+
+def read_equirectangular(path) -> np.ndarray:
+    """Read an equirectangular environment map as linear radiance.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        ``.hdr``/``.pic`` (Radiance), ``.npy``, or a float image imageio can read (module docstring).
+
+    Returns
+    -------
+    ndarray, shape (H, W, 3), float64
+        Radiance per pixel, row 0 at the top (zenith). Grey images are repeated over RGB and an
+        alpha channel is dropped.
+
+    Raises
+    ------
+    EnvironmentMapError
+        With a sentence, for a missing, unreadable, non-float or non-radiance file.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise EnvironmentMapError(f"environment map {str(path)!r} does not exist or is not a file.")
+    suffix = path.suffix.lower()
+    if suffix in RADIANCE_EXTENSIONS:
+        pixels = _read_radiance_hdr(path)
+    elif suffix == ".npy":
+        try:
+            pixels = np.load(path, allow_pickle=False)
+        except (OSError, ValueError) as exc:
+            raise EnvironmentMapError(f"{path.name} is not a readable NumPy array file ({exc}).") from None
+    else:
+        pixels = _read_with_imageio(path)
+    pixels = np.asarray(pixels, dtype=np.float64)
+    if pixels.ndim == 2:
+        pixels = np.repeat(pixels[:, :, None], 3, axis=2)
+    if pixels.ndim != 3 or pixels.shape[2] not in (1, 3, 4):
+        raise EnvironmentMapError(f"{path.name}: an environment map must be an (H, W, 3) RGB image, got shape {pixels.shape}.")
+    if pixels.shape[2] == 1:
+        pixels = np.repeat(pixels, 3, axis=2)
+    pixels = np.ascontiguousarray(pixels[:, :, :3])
+    if pixels.shape[0] < 1 or pixels.shape[1] < 1:
+        raise EnvironmentMapError(f"{path.name} is an empty image.")
+    if not np.all(np.isfinite(pixels)) or pixels.max() >= IMPLAUSIBLE_RADIANCE:
+        raise EnvironmentMapError(f"{path.name} decodes to NaN, infinite or absurd values; the file is damaged.")
+    if pixels.min() < 0:
+        raise EnvironmentMapError(f"{path.name} has negative pixels (min {pixels.min():g}); radiance must be >= 0.")
+    return pixels
+
+
+def load_environment(path, *, n_directions: int = 256, sampling: str = "importance", seed: int = 0,
+                     up=(0.0, 0.0, 1.0), scale: float = 1.0) -> EnvironmentLight:
+    """An :class:`~translucency.scatter.lights.EnvironmentLight` from an equirectangular map file.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The map (see :func:`read_equirectangular`).
+    n_directions, sampling, seed, up
+        As in :class:`~translucency.scatter.lights.EnvironmentLight` (importance sampling by default:
+        real maps have small bright regions such as the sun).
+    scale : float, optional
+        Factor turning pixel values into W/(m² sr).
+    """
+    if not (np.isfinite(scale) and scale >= 0):
+        raise EnvironmentMapError(f"scale must be a finite number >= 0, got {scale!r}.")
+    radiance = read_equirectangular(path) * float(scale)
+    return EnvironmentLight(radiance_map=radiance, n_directions=n_directions, sampling=sampling, seed=seed,
+                            up=up, name=Path(path).name)
