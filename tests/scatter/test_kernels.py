@@ -1,0 +1,84 @@
+"""numba kernels against the float64 reference formulas of translucency.scatter.dipoles (relative 1e-12)."""
+
+import numpy as np
+import pytest
+
+from translucency.scatter import dipoles, fresnel, kernels
+from translucency.scatter.materials import material
+
+
+def _pairs(rng, n, spread):
+    x_i = rng.normal(size=(n, 3)) * spread
+    x_o = x_i + rng.normal(size=(n, 3)) * spread * rng.random((n, 1))
+    n_i = rng.normal(size=(n, 3))
+    n_i /= np.linalg.norm(n_i, axis=1, keepdims=True)
+    n_o = rng.normal(size=(n, 3))
+    n_o /= np.linalg.norm(n_o, axis=1, keepdims=True)
+    light = rng.normal(size=(n, 3))
+    light /= np.linalg.norm(light, axis=1, keepdims=True)
+    light = np.where((np.sum(light * n_i, 1) < 0)[:, None], light - 2 * np.sum(light * n_i, 1)[:, None] * n_i, light)
+    return x_i, n_i, light, x_o, n_o
+
+
+def test_pair_matches_every_reference_vector(dirpole_vectors):
+    for case in dirpole_vectors["edge_cases"] + dirpole_vectors["random"]:
+        w12 = fresnel.refract(case["w_i"], case["n_i"], case["eta"])
+        params = kernels.channel_parameters(case["sigma_a"], case["sigma_s"], case["g"], case["eta"])
+        out = np.empty(1)
+        kernels.directional_dipole_pair(*case["x_i"], *case["n_i"], *w12, *case["x_o"], *case["n_o"], params, out)
+        if case["S_d"] == 0:
+            assert out[0] == pytest.approx(0.0, abs=1e-15)
+        else:
+            assert out[0] == pytest.approx(case["S_d"], rel=1e-12)
+
+
+@pytest.mark.parametrize("name", ["marble", "ketchup", "skim_milk", "white_grapefruit_juice"])
+@pytest.mark.parametrize("model", ["directional", "standard", "better"])
+def test_all_channels_at_once_match_reference(name, model):
+    medium = material(name).medium()
+    rng = np.random.default_rng(11)
+    x_i, n_i, light, x_o, n_o = _pairs(rng, 3000, 2.0 / np.mean(medium.sigma_t_reduced))
+    x_o[:5] = x_i[:5]  # r = 0 included
+    w12 = fresnel.refract(light, n_i, medium.eta)
+    params = kernels.channel_parameters(medium.sigma_a, medium.sigma_s, medium.g, medium.eta, model)
+    got = kernels.model_pairs(kernels.MODELS[model], x_i, n_i, w12, x_o, n_o, params)
+    r = np.linalg.norm(x_o - x_i, axis=1)
+    for c in range(3):
+        args = (medium.sigma_a[c], medium.sigma_s[c], medium.g[c], medium.eta)
+        if model == "directional":
+            ref = dipoles.directional_dipole(x_i, n_i, w12, x_o, n_o, *args)
+        elif model == "standard":
+            ref = dipoles.standard_dipole_profile(r, *args) / np.pi
+        else:
+            ref = dipoles.better_dipole_profile(r, *args) / (np.pi * 4 * fresnel.C_phi(1 / medium.eta))
+        scale = np.max(ref)
+        assert np.allclose(got[:, c], ref, rtol=1e-12, atol=1e-15 * scale)
+
+
+def test_vertex_sum_equals_dense_reference_sum():
+    rng = np.random.default_rng(5)
+    medium = material("potato").medium()
+    x_i, n_i, light, _, _ = _pairs(rng, 300, 3.0)
+    x_o, n_o = x_i[:120], n_i[:120]
+    w12 = fresnel.refract(light, n_i, medium.eta)
+    flux = rng.random((300, 3))
+    flux[::7] = 0.0
+    params = kernels.channel_parameters(medium.sigma_a, medium.sigma_s, medium.g, medium.eta)
+    B, clamped = kernels.vertex_sum(0, x_i, n_i, w12, flux, x_o, n_o, params, np.arange(3))
+    for c in range(3):
+        S = dipoles.directional_dipole(x_i[None], n_i[None], w12[None], x_o[:, None], n_o[:, None],
+                                       medium.sigma_a[c], medium.sigma_s[c], medium.g[c], medium.eta)
+        assert np.allclose(B[:, c], S @ flux[:, c], rtol=1e-12, atol=0)
+    assert clamped.shape == (120,) and clamped.min() >= 0
+
+
+def test_channel_map_reuses_identical_channels():
+    medium = material("marble").medium()
+    params = kernels.channel_parameters(medium.sigma_a[:1], medium.sigma_s[:1], medium.g[:1], medium.eta)
+    rng = np.random.default_rng(2)
+    x_i, n_i, light, _, _ = _pairs(rng, 50, 2.0)
+    w12 = fresnel.refract(light, n_i, medium.eta)
+    flux = rng.random((50, 3))
+    B, _ = kernels.vertex_sum(0, x_i, n_i, w12, flux, x_i, n_i, params, np.zeros(3, dtype=np.int64))
+    B1, _ = kernels.vertex_sum(0, x_i, n_i, w12, flux[:, :1], x_i, n_i, params, np.zeros(1, dtype=np.int64))
+    assert np.allclose(B[:, 0], B1[:, 0], rtol=1e-14)

@@ -1,0 +1,215 @@
+"""A hierarchy over the source vertices (a binary kd-tree with bounding spheres) and its error criterion.
+
+The structure depends on the geometry only and is reused when the light or the material changes;
+the aggregated sources at the nodes depend on the incident flux and are recomputed per solve (cheap,
+bottom-up). A node seen from a receiver under a small enough angle is replaced by one aggregated
+source (Jensen & Buhler 2002; physics spec 6.1): total flux per channel, flux-weighted position,
+flux-weighted normal and refracted direction (both renormalised).
+
+Criterion: a node is accepted when the receiver is outside its bounding sphere and
+``radius / distance(receiver, centre) < theta``; the error of one accepted node is of order
+``theta^2`` relative to its contribution, so the solver sets ``theta = THETA_PER_SQRT_TOL * sqrt(tol)``.
+
+========== ========================================================== =====
+symbol     meaning                                                    unit
+========== ========================================================== =====
+theta      opening ratio: bounding radius over distance               1
+radius     bounding-sphere radius of a node (about its box centre)    mm
+========== ========================================================== =====
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+from .kernels import model_pair, source_to_receiver
+
+LEAF_SIZE = 8
+#: theta = THETA_PER_SQRT_TOL * sqrt(tol); calibrated in tests/scatter/test_solve.py so that the measured
+#: relative RMS error of the tree stays below tol.
+THETA_PER_SQRT_TOL = 2.0
+
+
+class SourceTree:
+    """Binary kd-tree over points: node ``k`` covers ``order[start[k]:end[k]]``.
+
+    Attributes
+    ----------
+    order : (n,) int64
+        Permutation of the points: every node covers a contiguous range of it.
+    start, end, left, right : (n_nodes,) int64
+        Ranges and children (-1 for a leaf). Node 0 is the root; children follow their parent.
+    centre : (n_nodes, 3) float64
+        Bounding-box centre, mm.
+    radius : (n_nodes,) float64
+        Bounding-sphere radius about ``centre``, mm.
+    """
+
+    def __init__(self, points: np.ndarray, leaf_size: int = LEAF_SIZE):
+        points = np.ascontiguousarray(points, dtype=np.float64)
+        n = points.shape[0]
+        order = np.arange(n, dtype=np.int64)
+        starts, ends, lefts, rights = [], [], [], []
+        # iterative build: (node id, start, end) with the parent's child slot patched afterwards
+        stack = [(0, n, -1, 0)]
+        while stack:
+            lo, hi, parent, side = stack.pop()
+            node = len(starts)
+            starts.append(lo)
+            ends.append(hi)
+            lefts.append(-1)
+            rights.append(-1)
+            if parent >= 0:
+                (lefts if side == 0 else rights)[parent] = node
+            if hi - lo <= leaf_size:
+                continue
+            idx = order[lo:hi]
+            box = points[idx]
+            axis = int(np.argmax(box.max(axis=0) - box.min(axis=0)))
+            mid = (hi - lo) // 2
+            part = np.argpartition(box[:, axis], mid)
+            order[lo:hi] = idx[part]
+            stack.append((lo + mid, hi, node, 1))
+            stack.append((lo, lo + mid, node, 0))
+        self.order = order
+        self.start = np.array(starts, dtype=np.int64)
+        self.end = np.array(ends, dtype=np.int64)
+        self.left = np.array(lefts, dtype=np.int64)
+        self.right = np.array(rights, dtype=np.int64)
+        self.centre, self.radius = _bounds(points, order, self.start, self.end)
+
+    @property
+    def n_nodes(self) -> int:
+        """Number of nodes."""
+        return int(self.start.size)
+
+
+@numba.njit(cache=True)
+def _bounds(points, order, start, end):
+    n_nodes = start.shape[0]
+    centre = np.empty((n_nodes, 3))
+    radius = np.empty(n_nodes)
+    for k in range(n_nodes):
+        lo = np.full(3, np.inf)
+        hi = np.full(3, -np.inf)
+        for i in range(start[k], end[k]):
+            p = points[order[i]]
+            for a in range(3):
+                lo[a] = min(lo[a], p[a])
+                hi[a] = max(hi[a], p[a])
+        r2 = 0.0
+        for a in range(3):
+            centre[k, a] = 0.5 * (lo[a] + hi[a])
+            r2 += (0.5 * (hi[a] - lo[a])) ** 2
+        radius[k] = math.sqrt(r2)
+    return centre, radius
+
+
+@numba.njit(cache=True)
+def aggregate(order, start, end, left, right, points, normals, w12, flux):
+    """Aggregated source of every node: flux per channel, flux-weighted position, normal and w12.
+
+    Children are aggregated before their parents (they have larger node ids).
+    """
+    n_nodes = start.shape[0]
+    n_out = flux.shape[1]
+    node_flux = np.zeros((n_nodes, n_out))
+    weight = np.zeros(n_nodes)
+    pos = np.zeros((n_nodes, 3))
+    nrm = np.zeros((n_nodes, 3))
+    dirn = np.zeros((n_nodes, 3))
+    for k in range(n_nodes - 1, -1, -1):
+        if left[k] < 0:
+            for i in range(start[k], end[k]):
+                j = order[i]
+                wj = 0.0
+                for c in range(n_out):
+                    node_flux[k, c] += flux[j, c]
+                    wj += flux[j, c]
+                weight[k] += wj
+                for a in range(3):
+                    pos[k, a] += wj * points[j, a]
+                    nrm[k, a] += wj * normals[j, a]
+                    dirn[k, a] += wj * w12[j, a]
+        else:
+            for child in (left[k], right[k]):
+                for c in range(n_out):
+                    node_flux[k, c] += node_flux[child, c]
+                weight[k] += weight[child]
+                for a in range(3):
+                    pos[k, a] += pos[child, a]
+                    nrm[k, a] += nrm[child, a]
+                    dirn[k, a] += dirn[child, a]
+    # weighted sums -> means; the unnormalised sums stay in the children's slots until here
+    out_pos = np.zeros((n_nodes, 3))
+    out_nrm = np.zeros((n_nodes, 3))
+    out_dir = np.zeros((n_nodes, 3))
+    for k in range(n_nodes):
+        if weight[k] > 0.0:
+            ln = math.sqrt(nrm[k, 0] ** 2 + nrm[k, 1] ** 2 + nrm[k, 2] ** 2)
+            ld = math.sqrt(dirn[k, 0] ** 2 + dirn[k, 1] ** 2 + dirn[k, 2] ** 2)
+            for a in range(3):
+                out_pos[k, a] = pos[k, a] / weight[k]
+                out_nrm[k, a] = nrm[k, a] / ln if ln > 0.0 else 0.0
+                out_dir[k, a] = dirn[k, a] / ld if ld > 0.0 else 0.0
+    return node_flux, weight, out_pos, out_nrm, out_dir
+
+
+@numba.njit(cache=True, parallel=True, fastmath=True)
+def tree_sum(model, order, start, end, left, right, centre, radius, node_flux, node_weight, node_pos, node_nrm, node_dir,
+             points, normals, w12, flux, rcv_points, rcv_normals, params, channel_of, theta):
+    """Far-field sum with the hierarchy: ``B[o, c]``, sources summed one by one and clusters used, per receiver."""
+    n_rcv = rcv_points.shape[0]
+    n_out = flux.shape[1]
+    B = np.zeros((n_rcv, n_out))
+    direct = np.zeros(n_rcv, dtype=np.int64)
+    clustered = np.zeros(n_rcv, dtype=np.int64)
+    theta2 = theta * theta
+    for o in numba.prange(n_rcv):
+        sd = np.empty(params.shape[0])
+        stack = np.empty(128, dtype=np.int64)
+        top = 1
+        stack[0] = 0
+        px = rcv_points[o, 0]
+        py = rcv_points[o, 1]
+        pz = rcv_points[o, 2]
+        nx = rcv_normals[o, 0]
+        ny = rcv_normals[o, 1]
+        nz = rcv_normals[o, 2]
+        while top > 0:
+            top -= 1
+            k = stack[top]
+            if node_weight[k] <= 0.0:
+                continue
+            dx = px - centre[k, 0]
+            dy = py - centre[k, 1]
+            dz = pz - centre[k, 2]
+            dist2 = dx * dx + dy * dy + dz * dz
+            rk = radius[k]
+            if dist2 > rk * rk and rk * rk < theta2 * dist2:
+                model_pair(model, node_pos[k, 0], node_pos[k, 1], node_pos[k, 2], node_nrm[k, 0], node_nrm[k, 1],
+                           node_nrm[k, 2], node_dir[k, 0], node_dir[k, 1], node_dir[k, 2], px, py, pz, nx, ny, nz,
+                           params, sd)
+                for c in range(n_out):
+                    B[o, c] += sd[channel_of[c]] * node_flux[k, c]
+                clustered[o] += 1
+            elif left[k] < 0:
+                for i in range(start[k], end[k]):
+                    j = order[i]
+                    total = 0.0
+                    for c in range(n_out):
+                        total += flux[j, c]
+                    if total <= 0.0:
+                        continue
+                    source_to_receiver(model, points, normals, w12, j, px, py, pz, nx, ny, nz, params, sd)
+                    for c in range(n_out):
+                        B[o, c] += sd[channel_of[c]] * flux[j, c]
+                direct[o] += end[k] - start[k]
+            else:
+                stack[top] = left[k]
+                stack[top + 1] = right[k]
+                top += 2
+    return B, direct, clustered

@@ -1,0 +1,344 @@
+"""The per-vertex solver: B(x_o) = integral of S_d(x, w12(x); x_o) phi(x) dA(x) at every receiver vertex.
+
+``B`` is the diffuse radiance factor of DESIGN.md: outgoing radiance is ``L = T21(eta, w_o) B``.
+It is computed as a sum over source vertices (the far field, by one of the methods below) plus a
+near-field correction that integrates the triangles around each receiver with adaptive sub-vertex
+quadrature (:mod:`translucency.scatter.nearfield`), so the answer is the surface integral and does
+not depend on the tessellation.
+
+Methods for the far field (each with a tolerance where it has one):
+
+``exact``
+    every (source, receiver) pair, numba-parallel, blocked; the reference.
+``cutoff``
+    pairs farther apart than a radius ``R(tol)`` are skipped: ``R`` is where the tail of a
+    geometry-independent bound of ``S_d`` holds less than ``tol`` of the total reflectance (spec 6.2).
+``tree``
+    a hierarchy over the sources (:mod:`translucency.scatter.hierarchy`): a cluster that is small
+    seen from the receiver is replaced by one aggregated source (Jensen & Buhler 2002, spec 6.1).
+
+Skipped work is reported in :attr:`Solution.stats`: sources with no flux, pairs beyond the cutoff or
+inside accepted clusters, channels with identical coefficients (computed once).
+
+========= ========================================================= ======================
+symbol    meaning                                                   unit
+========= ========================================================= ======================
+phi       incident flux density after the boundary, T12 E cos V    W/m^2 (any flux/area)
+A         barycentric vertex area                                   mm^2
+Phi       source flux phi A                                         W mm^2 / m^2
+S_d       diffusive BSSRDF                                          1/(mm^2 sr)
+B         diffuse radiance factor sum S_d Phi (+ near field)        W/(m^2 sr)
+========= ========================================================= ======================
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+from ..errors import InvalidParameterError
+from . import cutoff, hierarchy, kernels, nearfield
+from .medium import Medium
+
+__all__ = ["SurfaceGeometry", "Solution", "solve", "METHODS", "MODELS"]
+
+METHODS = ("exact", "cutoff", "tree")
+MODELS = tuple(kernels.MODELS)
+
+#: Near field: triangles with a vertex within max(NEAR_EDGES * mean edge, NEAR_MEAN_FREE_PATHS / min sigma_t')
+#: of the receiver are integrated with adaptive quadrature.
+NEAR_EDGES = 3.0
+NEAR_MEAN_FREE_PATHS = 1.0
+#: Refinement ratio of the adaptive quadrature (piece diameter over its distance to the receiver).
+NEAR_BETA = 1.0
+
+
+@dataclass
+class SurfaceGeometry:
+    """A triangle mesh as the solver needs it, with the work that depends on geometry only cached.
+
+    Parameters
+    ----------
+    points : (n, 3) float64
+        Vertex positions, mm.
+    triangles : (m, 3) int64
+        Vertex indices of each triangle.
+    normals : (n, 3) float64
+        Outward unit vertex normals.
+    """
+
+    points: np.ndarray
+    triangles: np.ndarray
+    normals: np.ndarray
+    _cache: dict = field(default_factory=dict, repr=False)
+
+    def __post_init__(self):
+        self.points = _as_array(self.points, np.float64, (None, 3), "points")
+        self.triangles = _as_array(self.triangles, np.int64, (None, 3), "triangles")
+        self.normals = _as_array(self.normals, np.float64, (self.points.shape[0], 3), "normals")
+        if not np.all(np.isfinite(self.points)):
+            raise InvalidParameterError("points contain NaN or infinite coordinates; clean the mesh first.")
+        if self.triangles.size and (self.triangles.min() < 0 or self.triangles.max() >= self.points.shape[0]):
+            raise InvalidParameterError(
+                f"triangles refer to vertices outside 0..{self.points.shape[0] - 1}; the mesh is corrupt."
+            )
+        lengths = np.linalg.norm(self.normals, axis=1)
+        if not np.all(np.isfinite(lengths)):
+            raise InvalidParameterError("normals contain NaN or infinite values.")
+        bad = np.abs(lengths - 1.0) > 1e-6
+        if np.any(bad & (lengths > 0)):
+            self.normals = self.normals / np.where(lengths > 0, lengths, 1.0)[:, None]
+
+    @property
+    def n_vertices(self) -> int:
+        """Number of vertices."""
+        return int(self.points.shape[0])
+
+    @property
+    def triangle_areas(self) -> np.ndarray:
+        """Area of each triangle, mm^2."""
+        if "triangle_areas" not in self._cache:
+            from ..io.geometry import triangle_areas
+
+            self._cache["triangle_areas"] = triangle_areas(self.points, self.triangles)
+        return self._cache["triangle_areas"]
+
+    @property
+    def vertex_areas(self) -> np.ndarray:
+        """Barycentric vertex areas (one third of each adjacent triangle), mm^2.
+
+        The solver always uses these: they make the vertex sum the three-vertex rule that the near
+        field correction subtracts.
+        """
+        if "vertex_areas" not in self._cache:
+            areas = np.zeros(self.n_vertices)
+            np.add.at(areas, self.triangles.ravel(), np.repeat(self.triangle_areas / 3.0, 3))
+            self._cache["vertex_areas"] = areas
+        return self._cache["vertex_areas"]
+
+    @property
+    def mean_edge_length(self) -> float:
+        """Mean edge length, mm."""
+        if "mean_edge" not in self._cache:
+            from ..io.geometry import mean_edge_length
+
+            self._cache["mean_edge"] = float(mean_edge_length(self.points, self.triangles))
+        return self._cache["mean_edge"]
+
+    def source_tree(self) -> "hierarchy.SourceTree":
+        """The kd-tree over all vertices (geometry only; reused across lights and materials)."""
+        if "tree" not in self._cache:
+            self._cache["tree"] = hierarchy.SourceTree(self.points)
+        return self._cache["tree"]
+
+    def source_grid(self, sources: np.ndarray, cell: float) -> "cutoff.SourceGrid":
+        """Uniform grid over the given source vertices, cached per (sources, cell)."""
+        key = ("grid", sources.tobytes(), round(cell, 12))
+        if key not in self._cache:
+            self._cache[key] = cutoff.SourceGrid(self.points[sources], cell)
+        return self._cache[key]
+
+    def near_lists(self, receivers: np.ndarray, radius: float):
+        """Near triangles of each receiver (CSR), cached per (receivers, radius)."""
+        key = ("near", receivers.tobytes() if receivers.size < self.n_vertices else "all", round(radius, 12))
+        if key not in self._cache:
+            self._cache[key] = nearfield.near_triangles(self.points, self.triangles, receivers, radius)
+        return self._cache[key]
+
+
+@dataclass
+class Solution:
+    """What :func:`solve` returns.
+
+    Attributes
+    ----------
+    B : (n_receivers, C) float64
+        Diffuse radiance factor per receiver and channel, W/(m^2 sr) for phi in W/m^2.
+    receivers : (n_receivers,) int64
+        Vertex index of each row of ``B``.
+    stats : dict
+        What was computed and what was skipped (pairs, sources, channels, clamps, pieces).
+    timings : dict
+        Seconds per stage.
+    settings : dict
+        Model, method, tolerance and the medium's description.
+    """
+
+    B: np.ndarray
+    receivers: np.ndarray
+    stats: dict
+    timings: dict
+    settings: dict
+
+
+def _as_array(value, dtype, shape, name):
+    try:
+        array = np.ascontiguousarray(value, dtype=dtype)
+    except (TypeError, ValueError):
+        raise InvalidParameterError(f"{name} must be a numeric array of shape {shape}.") from None
+    if array.ndim != len(shape) or any(s is not None and s != a for s, a in zip(shape, array.shape)):
+        raise InvalidParameterError(f"{name} must have shape {tuple('n' if s is None else s for s in shape)}, got {array.shape}.")
+    return array
+
+
+def unique_channels(medium: Medium):
+    """Distinct coefficient sets of the medium's channels: ``(rows, channel_of)`` (identical channels once)."""
+    table = np.stack([medium.sigma_a, medium.sigma_s, medium.g], axis=1)
+    rows, channel_of = np.unique(table, axis=0, return_inverse=True)
+    return rows, channel_of.astype(np.int64).ravel()
+
+
+def near_radius(geometry: SurfaceGeometry, medium: Medium) -> float:
+    """Radius (mm) inside which triangles get the near-field quadrature (see module constants)."""
+    return max(NEAR_EDGES * geometry.mean_edge_length, NEAR_MEAN_FREE_PATHS / float(np.min(medium.sigma_t_reduced)))
+
+
+def solve(
+    geometry: SurfaceGeometry,
+    phi: np.ndarray,
+    w12: np.ndarray,
+    medium: Medium,
+    *,
+    model: str = "directional",
+    method: str = "exact",
+    tol: float = 1e-3,
+    receivers: np.ndarray | None = None,
+    progress: Callable[[str, float], None] | None = None,
+) -> Solution:
+    """Diffuse radiance factor ``B`` at the receiver vertices (DESIGN.md; spec 1.5, 1.7).
+
+    Parameters
+    ----------
+    geometry : SurfaceGeometry
+        The mesh (mm) with outward unit vertex normals.
+    phi : (n, C) array_like
+        Incident flux density per vertex and channel after the boundary: ``T12 E cos(theta) V``
+        (W/m^2, or any flux per area unit; ``B`` comes out in the same unit per sr). ``C`` must equal
+        the medium's channel count.
+    w12 : (n, 3) array_like
+        Refracted direction of the incident light at each vertex (unit, into the medium);
+        ignored where ``phi`` is 0.
+    medium : Medium
+        Coefficients in 1/mm.
+    model : {"directional", "standard", "better"}
+        The BSSRDF (FHK14, Jensen 2001, d'Eon 2012).
+    method : {"exact", "cutoff", "tree"}
+        How the far field is summed (module docstring).
+    tol : float
+        Relative error allowed to the far-field approximation (``cutoff``, ``tree``); ignored by
+        ``exact``.
+    receivers : array_like of int, optional
+        Vertices to compute ``B`` at (all by default).
+    progress : callable, optional
+        Called as ``progress(stage, fraction)`` while the solver runs.
+
+    Returns
+    -------
+    Solution
+    """
+    timings: dict[str, float] = {}
+    stats: dict[str, object] = {}
+    report = progress or (lambda stage, fraction: None)
+    if model not in kernels.MODELS:
+        raise InvalidParameterError(f"unknown model {model!r}; choose one of {', '.join(MODELS)}.")
+    if method not in METHODS:
+        raise InvalidParameterError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}.")
+    if not (np.isfinite(tol) and 0 < tol < 1):
+        raise InvalidParameterError(f"tol must be a relative error in (0, 1), got {tol!r}.")
+    n = geometry.n_vertices
+    phi = _as_array(phi, np.float64, (n, medium.n_channels), "phi")
+    w12 = _as_array(w12, np.float64, (n, 3), "w12")
+    if not np.all(np.isfinite(phi)) or np.any(phi < 0):
+        raise InvalidParameterError("phi (incident flux density) must be finite and >= 0.")
+    if receivers is None:
+        receivers = np.arange(n, dtype=np.int64)
+    else:
+        receivers = np.asarray(receivers, dtype=np.int64).ravel()
+        if receivers.size and (receivers.min() < 0 or receivers.max() >= n):
+            raise InvalidParameterError(f"receivers must be vertex indices in 0..{n - 1}.")
+
+    start = time.perf_counter()
+    rows, channel_of = unique_channels(medium)
+    params = kernels.channel_parameters(rows[:, 0], rows[:, 1], rows[:, 2], medium.eta, model)
+    model_code = kernels.MODELS[model]
+    stats["channels_computed"] = int(rows.shape[0])
+    stats["channels_skipped_identical"] = int(medium.n_channels - rows.shape[0])
+
+    flux = phi * geometry.vertex_areas[:, None]
+    lit = np.flatnonzero(np.any(flux > 0, axis=1))
+    stats["sources"] = int(lit.size)
+    stats["sources_skipped_no_flux"] = int(n - lit.size)
+    stats["receivers"] = int(receivers.size)
+    timings["setup"] = time.perf_counter() - start
+
+    report("far field", 0.0)
+    start = time.perf_counter()
+    rcv_points = geometry.points[receivers]
+    rcv_normals = geometry.normals[receivers]
+    if lit.size == 0:
+        B = np.zeros((receivers.size, medium.n_channels))
+        stats["pairs_evaluated"] = 0
+    elif method == "exact":
+        B, clamped = kernels.vertex_sum(model_code, geometry.points[lit], geometry.normals[lit], w12[lit], flux[lit],
+                                        rcv_points, rcv_normals, params, channel_of)
+        stats["pairs_evaluated"] = int(lit.size) * int(receivers.size)
+        stats["pairs_skipped"] = 0
+        stats["clamped_values"] = int(clamped.sum())
+    elif method == "cutoff":
+        radius = cutoff.cutoff_radius(medium, tol, model)
+        stats["cutoff_radius_mm"] = radius
+        diagonal = float(np.linalg.norm(np.ptp(geometry.points, axis=0)))
+        if not radius < diagonal:
+            B, clamped = kernels.vertex_sum(model_code, geometry.points[lit], geometry.normals[lit], w12[lit],
+                                            flux[lit], rcv_points, rcv_normals, params, channel_of)
+            stats["pairs_evaluated"] = int(lit.size) * int(receivers.size)
+            stats["pairs_skipped"] = 0
+        else:
+            grid = geometry.source_grid(lit, radius)
+            B, evaluated = cutoff.cutoff_sum(model_code, grid.order, grid.start, grid.origin, grid.cell, grid.dims,
+                                             radius, geometry.points[lit], geometry.normals[lit], w12[lit], flux[lit],
+                                             rcv_points, rcv_normals, params, channel_of)
+            stats["pairs_evaluated"] = int(evaluated.sum())
+            stats["pairs_skipped"] = int(lit.size) * int(receivers.size) - int(evaluated.sum())
+    else:  # tree
+        tree = geometry.source_tree()
+        theta = hierarchy.THETA_PER_SQRT_TOL * float(np.sqrt(tol))
+        nodes = hierarchy.aggregate(tree.order, tree.start, tree.end, tree.left, tree.right, geometry.points,
+                                    geometry.normals, w12, flux)
+        B, direct, clustered = hierarchy.tree_sum(
+            model_code, tree.order, tree.start, tree.end, tree.left, tree.right, tree.centre, tree.radius, *nodes,
+            geometry.points, geometry.normals, w12, flux, rcv_points, rcv_normals, params, channel_of, theta)
+        stats["theta"] = theta
+        stats["tree_nodes"] = tree.n_nodes
+        stats["pairs_evaluated"] = int(direct.sum() + clustered.sum())
+        stats["pairs_direct"] = int(direct.sum())
+        stats["cluster_evaluations"] = int(clustered.sum())
+        stats["pairs_skipped"] = int(lit.size) * int(receivers.size) - int(direct.sum())
+    timings["far_field"] = time.perf_counter() - start
+    report("far field", 1.0)
+
+    report("near field", 0.0)
+    start = time.perf_counter()
+    radius = near_radius(geometry, medium)
+    offsets, triangle_ids = geometry.near_lists(receivers, radius)
+    timings["near_lists"] = time.perf_counter() - start
+    start = time.perf_counter()
+    correction, pieces = nearfield.near_field_correction(
+        model_code, geometry.points, geometry.triangles, geometry.triangle_areas, geometry.normals, w12, phi,
+        receivers, offsets, triangle_ids, params, channel_of, NEAR_BETA, float(np.min(medium.D)),
+        nearfield.RULE_POINTS, nearfield.RULE_WEIGHTS,
+    )
+    B = B + correction
+    negative = B < 0
+    stats["near_radius_mm"] = radius
+    stats["near_triangles"] = int(triangle_ids.size)
+    stats["near_pieces"] = int(pieces.sum())
+    stats["negative_clamped"] = int(negative.sum())
+    B[negative] = 0.0
+    timings["near_field"] = time.perf_counter() - start
+    report("near field", 1.0)
+    settings = {"model": model, "method": method, "tol": tol, "medium": medium.describe()}
+    return Solution(B=B, receivers=receivers, stats=stats, timings=timings, settings=settings)
