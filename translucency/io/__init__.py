@@ -1,0 +1,85 @@
+"""Files and meshes: load scans, repair them, decimate to the solver's resolution, write baked PLYs.
+
+The public API is re-exported here lazily, so ``import translucency.io`` imports neither PyVista,
+VTK nor pymeshlab; each loads when a function that needs it is first called.
+
+==================== ==================================================================
+module               concept
+==================== ==================================================================
+mesh                 :class:`TriangleMesh`, the one triangle-mesh type (points in mm)
+units                length units, conversion to mm, size plausibility
+load                 reading every mesh format into a :class:`TriangleMesh`
+triangulate          polygons and triangle strips to triangle lists
+geometry             triangle areas/normals, vertex normals and areas (plain arrays)
+defects              counts of mesh defects (what repair has to fix)
+orientation          coherent and outward orientation
+clean                scan repair with a report of what changed
+proximity            exact closest points on a triangle mesh
+decimate             proxy meshes and the mapping of proxy values back to the full mesh
+ply                  baked PLY output and input, atomic, with every setting in the header
+==================== ==================================================================
+"""
+
+import importlib
+
+_LAZY = {
+    # the mesh type and units
+    "TriangleMesh": "translucency.io.mesh",
+    "validate_mesh_arrays": "translucency.io.mesh",
+    "parse_unit": "translucency.io.units",
+    "unit_label": "translucency.io.units",
+    "ImplausibleSizeWarning": "translucency.io.units",
+    "UNITS": "translucency.io.units",
+    # loading
+    "load_mesh": "translucency.io.load",
+    "read_mesh_arrays": "translucency.io.load",
+    "detect_format": "translucency.io.load",
+    "SUPPORTED_FORMATS": "translucency.io.load",
+    "triangulate_polygons": "translucency.io.triangulate",
+    "triangulate_strips": "translucency.io.triangulate",
+    # per-vertex geometry for the solver
+    "triangle_areas": "translucency.io.geometry",
+    "triangle_normals": "translucency.io.geometry",
+    "vertex_normals": "translucency.io.geometry",
+    "vertex_areas": "translucency.io.geometry",
+    "mean_edge_length": "translucency.io.geometry",
+    "signed_volume": "translucency.io.geometry",
+    # repair
+    "MeshDefects": "translucency.io.defects",
+    "find_defects": "translucency.io.defects",
+    "CleanReport": "translucency.io.clean",
+    "clean_mesh": "translucency.io.clean",
+    "clean_arrays": "translucency.io.clean",
+    "smooth_vertex_normals": "translucency.io.clean",
+    "coherent_orientation": "translucency.io.orientation",
+    "outward_flips": "translucency.io.orientation",
+    # decimation and the proxy mapping
+    "Decimation": "translucency.io.decimate",
+    "ProxyMapping": "translucency.io.decimate",
+    "decimate_mesh": "translucency.io.decimate",
+    "simplify_arrays": "translucency.io.decimate",
+    "map_to_proxy": "translucency.io.decimate",
+    "target_face_count": "translucency.io.decimate",
+    "closest_points_on_triangles": "translucency.io.proximity",
+    "vertex_hausdorff_distance": "translucency.io.proximity",
+    # baked PLY
+    "BakedPly": "translucency.io.ply",
+    "write_baked_ply": "translucency.io.ply",
+    "read_baked_ply": "translucency.io.ply",
+    "REQUIRED_METADATA": "translucency.io.ply",
+}
+
+__all__ = sorted(_LAZY)
+
+
+def __getattr__(name):
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module 'translucency.io' has no attribute {name!r}")
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    return __all__

@@ -1,0 +1,578 @@
+"""Scan repair: turn a raw scan into a clean, consistently oriented triangle mesh, and report what changed.
+
+The steps run in this order (each can be switched off); the order matters, for example islands are
+removed before holes are closed (the border of a one-triangle island is a 3-edge "hole"), and
+non-manifold vertices are split before components are counted.
+
+==== ============================== =========== ===================================================
+step what                           tool        how
+==== ============================== =========== ===================================================
+1    duplicate vertices             numpy       vertices at exactly the same position are merged
+2    null faces                     numpy       triangles with a repeated index (also those the
+                                                merge of step 1 creates) are removed
+3    duplicate faces                numpy       triangles on the same three vertices as an earlier
+                                                one are removed
+4    zero-area faces                numpy       triangles with collinear corners (see
+                                                :data:`~translucency.io.defects.ZERO_AREA_RATIO`)
+                                                are removed
+5    non-manifold edges             pymeshlab   ``meshing_repair_non_manifold_edges`` (removes the
+                                                fewest faces that make every edge manifold)
+6    non-manifold vertices          pymeshlab   ``meshing_repair_non_manifold_vertices`` (splits the
+                                                vertex, one copy per fan)
+7    small islands                  numpy       components with less than ``min_island_fraction``
+                                                of the area of the largest are removed
+8    coherent orientation           numpy       :mod:`translucency.io.orientation`
+9    holes                          pymeshlab   ``meshing_close_holes`` on boundary loops of at most
+                                                ``max_hole_edges`` edges (a pass that refuses
+                                                self-intersecting patches, then one that does not)
+10   outward orientation            numpy       coherent again, then every component flipped to a
+                                                positive signed volume (heuristic for open ones)
+11   unreferenced vertices          numpy       vertices no triangle uses are removed
+12   normals                        numpy       area-weighted vertex normals, optionally smoothed
+==== ============================== =========== ===================================================
+
+Per-vertex properties follow their vertices (merged vertices keep the first copy's values, split
+vertices copy the original's); the ``"normals"`` property is recomputed from the repaired surface.
+The :class:`CleanReport` holds the defect counts before and after (:mod:`translucency.io.defects`)
+and what every step changed, counted from the arrays themselves.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+
+import numpy as np
+
+from ..errors import InvalidParameterError, MeshError
+from .defects import ZERO_AREA_RATIO, MeshDefects, face_components, find_defects, triangle_keys, unique_edges, zero_area_mask
+from .defects import _count_non_manifold_vertices
+from .geometry import triangle_areas, vertex_normals
+from .mesh import TriangleMesh, validate_mesh_arrays
+from .orientation import coherent_orientation, flip_triangles, outward_flips
+
+__all__ = ["CleanReport", "clean_mesh", "clean_arrays", "smooth_vertex_normals"]
+
+_ORIGIN = "translucency_origin"
+_SPLIT_DISPLACEMENT = 0.01
+
+
+@dataclasses.dataclass(frozen=True)
+class CleanReport:
+    """What :func:`clean_mesh` found and changed; every count is measured on the arrays.
+
+    Attributes
+    ----------
+    before, after : MeshDefects
+        Defect counts of the input and of the result.
+    duplicate_vertices_merged : int
+        Vertices removed because another vertex had exactly the same position.
+    null_faces_removed : int
+        Triangles with a repeated vertex index removed (including those the merge created).
+    duplicate_faces_removed, zero_area_faces_removed : int
+    non_manifold_edges_repaired : int
+        Non-manifold edges found (and made manifold).
+    non_manifold_edge_faces_removed : int
+        Triangles removed to make those edges manifold.
+    non_manifold_vertices_repaired : int
+        Non-manifold vertices found after the edge repair (and split).
+    non_manifold_vertices_added : int
+        Vertices added by splitting them.
+    islands_removed, island_faces_removed : int
+        Small components removed and their triangles.
+    holes_closed, hole_faces_added : int
+        Boundary loops closed and triangles added to close them.
+    faces_flipped_coherent : int
+        Triangles reversed to make the orientation coherent.
+    components_flipped_outward, faces_flipped_outward : int
+        Components (and their triangles) reversed to face outward.
+    non_orientable_components : int
+        Components that admit no coherent orientation (left as they were).
+    unreferenced_vertices_removed : int
+        Vertices no triangle used (in the input, or left so by the removals above).
+    normal_smoothing_iterations : int
+    settings : dict
+        The options the repair ran with.
+    seconds : float
+        Wall-clock time of the repair.
+    """
+
+    before: MeshDefects
+    after: MeshDefects
+    duplicate_vertices_merged: int = 0
+    null_faces_removed: int = 0
+    duplicate_faces_removed: int = 0
+    zero_area_faces_removed: int = 0
+    non_manifold_edges_repaired: int = 0
+    non_manifold_edge_faces_removed: int = 0
+    non_manifold_vertices_repaired: int = 0
+    non_manifold_vertices_added: int = 0
+    islands_removed: int = 0
+    island_faces_removed: int = 0
+    holes_closed: int = 0
+    hole_faces_added: int = 0
+    faces_flipped_coherent: int = 0
+    components_flipped_outward: int = 0
+    faces_flipped_outward: int = 0
+    non_orientable_components: int = 0
+    unreferenced_vertices_removed: int = 0
+    normal_smoothing_iterations: int = 0
+    settings: dict = dataclasses.field(default_factory=dict)
+    seconds: float = 0.0
+
+    @property
+    def changed(self) -> bool:
+        """True when the repair changed anything."""
+        counts = dataclasses.asdict(self)
+        for key in ("before", "after", "settings", "seconds", "normal_smoothing_iterations", "non_orientable_components"):
+            counts.pop(key)
+        return any(counts.values())
+
+    def summary(self) -> str:
+        """A readable two-part table: what was repaired, and the defect counts before and after."""
+        rows = [
+            ("duplicate vertices merged", self.duplicate_vertices_merged),
+            ("null faces removed (repeated index)", self.null_faces_removed),
+            ("duplicate faces removed", self.duplicate_faces_removed),
+            ("zero-area faces removed", self.zero_area_faces_removed),
+            ("non-manifold edges repaired", self.non_manifold_edges_repaired),
+            ("  faces removed for them", self.non_manifold_edge_faces_removed),
+            ("non-manifold vertices repaired", self.non_manifold_vertices_repaired),
+            ("  vertices added by splitting", self.non_manifold_vertices_added),
+            ("small islands removed", self.islands_removed),
+            ("  faces removed with them", self.island_faces_removed),
+            ("holes closed", self.holes_closed),
+            ("  faces added to close them", self.hole_faces_added),
+            ("faces flipped for coherent orientation", self.faces_flipped_coherent),
+            ("components flipped to face outward", self.components_flipped_outward),
+            ("  faces flipped with them", self.faces_flipped_outward),
+            ("unreferenced vertices removed", self.unreferenced_vertices_removed),
+            ("normal smoothing iterations", self.normal_smoothing_iterations),
+        ]
+        width = max(len(name) for name, _ in rows)
+        lines = ["repair" + " " * (width - 6) + "  count"]
+        lines += [f"{name:<{width}}  {value:>5d}" for name, value in rows]
+        if self.non_orientable_components:
+            lines.append(f"{'non-orientable components (left as is)':<{width}}  {self.non_orientable_components:>5d}")
+        before, after = self.before.as_dict(), self.after.as_dict()
+        labels = {
+            "vertices": "vertices",
+            "triangles": "triangles",
+            "duplicate_vertices": "duplicate vertices",
+            "unreferenced_vertices": "unreferenced vertices",
+            "null_faces": "null faces",
+            "duplicate_faces": "duplicate faces",
+            "zero_area_faces": "zero-area faces",
+            "non_manifold_edges": "non-manifold edges",
+            "non_manifold_vertices": "non-manifold vertices",
+            "boundary_edges": "boundary edges",
+            "boundary_loops": "boundary loops (holes, borders)",
+            "largest_boundary_loop": "largest boundary loop (edges)",
+            "components": "components",
+            "inconsistent_edges": "inconsistently oriented edges",
+        }
+        width2 = max(len(v) for v in labels.values())
+        lines += ["", f"{'mesh':<{width2}}  {'before':>9}  {'after':>9}"]
+        lines += [f"{labels[key]:<{width2}}  {before[key]:>9d}  {after[key]:>9d}" for key in labels]
+        lines.append(f"repair took {self.seconds:.2f} s")
+        return "\n".join(lines)
+
+    def __str__(self) -> str:
+        return self.summary()
+
+
+def clean_mesh(
+    mesh: TriangleMesh,
+    *,
+    merge_duplicate_vertices: bool = True,
+    remove_degenerate_faces: bool = True,
+    repair_non_manifold: bool = True,
+    min_island_fraction: float = 0.01,
+    max_hole_edges: int = 100,
+    orient_outward: bool = True,
+    smooth_normals: int = 0,
+) -> tuple[TriangleMesh, CleanReport]:
+    """Repair a scanned mesh and report what changed.
+
+    Parameters
+    ----------
+    mesh : TriangleMesh
+        The scan (points in mm); it is not modified.
+    merge_duplicate_vertices : bool, default True
+        Merge vertices at exactly the same position.
+    remove_degenerate_faces : bool, default True
+        Remove null (repeated index), duplicate and zero-area triangles.
+    repair_non_manifold : bool, default True
+        Make every edge and vertex manifold (required for closing holes).
+    min_island_fraction : float, default 0.01
+        Remove connected components whose area is below this fraction of the largest component's
+        area (0 keeps everything).
+    max_hole_edges : int, default 100
+        Close the boundary loops of at most this many edges (0 closes none). Outer borders of open
+        scans are loops too: keep this below their length to leave them open.
+    orient_outward : bool, default True
+        Make the orientation coherent and the normals point outward (see
+        :mod:`translucency.io.orientation`).
+    smooth_normals : int, default 0
+        Iterations of light normal smoothing (each averages a vertex normal with its neighbours'
+        and renormalises); 0 keeps the plain area-weighted normals.
+
+    Returns
+    -------
+    mesh : TriangleMesh
+        The repaired mesh, with ``point_data["normals"]`` set to its vertex normals.
+    report : CleanReport
+        Counts of what changed; ``str(report)`` is a readable table.
+
+    Raises
+    ------
+    MeshError
+        When nothing is left of the mesh, or pymeshlab fails on it.
+    InvalidParameterError
+        For out-of-range options.
+    """
+    if not isinstance(mesh, TriangleMesh):
+        raise InvalidParameterError(f"clean_mesh needs a TriangleMesh, not {type(mesh).__name__}; load the file with load_mesh first.")
+    points, triangles, origin, normals, report = clean_arrays(
+        mesh.points,
+        mesh.triangles,
+        merge_duplicate_vertices=merge_duplicate_vertices,
+        remove_degenerate_faces=remove_degenerate_faces,
+        repair_non_manifold=repair_non_manifold,
+        min_island_fraction=min_island_fraction,
+        max_hole_edges=max_hole_edges,
+        orient_outward=orient_outward,
+        smooth_normals=smooth_normals,
+    )
+    point_data = {name: np.asarray(values)[origin] for name, values in mesh.point_data.items() if name != "normals"}
+    point_data["normals"] = normals
+    cleaned = TriangleMesh(points, triangles, point_data, source=mesh.source, mm_per_unit=mesh.mm_per_unit)
+    return cleaned, report
+
+
+def clean_arrays(
+    points,
+    triangles,
+    *,
+    merge_duplicate_vertices: bool = True,
+    remove_degenerate_faces: bool = True,
+    repair_non_manifold: bool = True,
+    min_island_fraction: float = 0.01,
+    max_hole_edges: int = 100,
+    orient_outward: bool = True,
+    smooth_normals: int = 0,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, CleanReport]:
+    """Array-level form of :func:`clean_mesh`.
+
+    Parameters
+    ----------
+    points : array_like, shape (n, 3)
+        Vertex positions in mm.
+    triangles : array_like of int, shape (m, 3)
+    **options
+        As for :func:`clean_mesh`.
+
+    Returns
+    -------
+    points : ndarray, shape (k, 3), float64
+    triangles : ndarray, shape (l, 3), int64
+    origin : ndarray, shape (k,), int64
+        For each output vertex, the input vertex it comes from (to carry per-vertex data over).
+    normals : ndarray, shape (k, 3), float64
+        Unit vertex normals of the result (smoothed when asked).
+    report : CleanReport
+    """
+    started = time.perf_counter()
+    points, triangles = validate_mesh_arrays(points, triangles)
+    min_island_fraction = float(min_island_fraction)
+    if not (0.0 <= min_island_fraction < 1.0):
+        raise InvalidParameterError(f"min_island_fraction is {min_island_fraction}; pass a fraction in [0, 1), e.g. 0.01.")
+    if int(max_hole_edges) != max_hole_edges or max_hole_edges < 0:
+        raise InvalidParameterError(f"max_hole_edges is {max_hole_edges!r}; pass a whole number of edges >= 0, e.g. 100.")
+    if int(smooth_normals) != smooth_normals or smooth_normals < 0:
+        raise InvalidParameterError(f"smooth_normals is {smooth_normals!r}; pass a number of iterations >= 0.")
+    settings = dict(
+        merge_duplicate_vertices=bool(merge_duplicate_vertices),
+        remove_degenerate_faces=bool(remove_degenerate_faces),
+        repair_non_manifold=bool(repair_non_manifold),
+        min_island_fraction=min_island_fraction,
+        max_hole_edges=int(max_hole_edges),
+        orient_outward=bool(orient_outward),
+        smooth_normals=int(smooth_normals),
+    )
+    before = find_defects(points, triangles)
+    counts: dict[str, int] = {}
+    origin = np.arange(len(points), dtype=np.int64)
+    input_points, validated_triangles = points, triangles
+
+    # 1. duplicate vertices
+    if merge_duplicate_vertices:
+        points, triangles, origin, counts["duplicate_vertices_merged"] = _merge_duplicate_vertices(points, triangles, origin)
+
+    # 2-3. null and duplicate faces
+    if remove_degenerate_faces:
+        null = (triangles[:, 0] == triangles[:, 1]) | (triangles[:, 1] == triangles[:, 2]) | (triangles[:, 0] == triangles[:, 2])
+        triangles = triangles[~null]
+        counts["null_faces_removed"] = int(np.count_nonzero(null))
+        _, first = np.unique(triangle_keys(triangles, len(points)), return_index=True)
+        counts["duplicate_faces_removed"] = len(triangles) - len(first)
+        triangles = triangles[np.sort(first)]
+        _require_triangles(triangles, "removing degenerate faces")
+
+    # 5-6. non-manifold edges and vertices
+    if repair_non_manifold:
+        points, triangles, origin = _repair_non_manifold(points, triangles, origin, input_points, counts)
+
+    # 4. zero-area faces (after 5-6: collapsing them needs a manifold mesh)
+    if remove_degenerate_faces:
+        zero = zero_area_mask(points, triangles)
+        if zero.any():
+            points, triangles, origin = _repair_zero_area_faces(points, triangles, origin, input_points, zero)
+            counts["zero_area_faces_removed"] = int(np.count_nonzero(zero))
+            _require_triangles(triangles, "removing zero-area faces")
+
+    # 7. small islands
+    if min_island_fraction > 0:
+        count, component = face_components(triangles)
+        if count > 1:
+            area = np.bincount(component, weights=triangle_areas(points, triangles), minlength=count)
+            small = area < min_island_fraction * area.max()
+            counts["islands_removed"] = int(np.count_nonzero(small))
+            keep = ~small[component]
+            counts["island_faces_removed"] = int(np.count_nonzero(~keep))
+            triangles = triangles[keep]
+
+    # 8. coherent orientation (hole filling follows the orientation of the border)
+    non_orientable = 0
+    if orient_outward:
+        flip, non_orientable = coherent_orientation(triangles)
+        triangles = flip_triangles(triangles, flip)
+        counts["faces_flipped_coherent"] = int(np.count_nonzero(flip))
+
+    # 9. holes (a patch over a border with collinear edges can hold zero-area faces: repaired too)
+    if max_hole_edges > 0:
+        faces_before = len(triangles)
+        points, triangles, origin = _close_holes(points, triangles, origin, input_points, int(max_hole_edges), counts)
+        if remove_degenerate_faces and counts.get("holes_closed", 0):
+            zero = zero_area_mask(points, triangles)
+            if zero.any():
+                points, triangles, origin = _repair_zero_area_faces(points, triangles, origin, input_points, zero)
+        counts["hole_faces_added"] = len(triangles) - faces_before
+
+    # 10. coherent again (when holes were closed) and outward
+    if orient_outward:
+        if counts.get("holes_closed", 0):
+            flip, non_orientable = coherent_orientation(triangles)
+            triangles = flip_triangles(triangles, flip)
+            counts["faces_flipped_coherent"] = counts.get("faces_flipped_coherent", 0) + int(np.count_nonzero(flip))
+        flip, components_flipped = outward_flips(points, triangles)
+        triangles = flip_triangles(triangles, flip)
+        counts["components_flipped_outward"] = components_flipped
+        counts["faces_flipped_outward"] = int(np.count_nonzero(flip))
+
+    # 11. unreferenced vertices
+    used = np.zeros(len(points), dtype=bool)
+    used[triangles.ravel()] = True
+    counts["unreferenced_vertices_removed"] = int(np.count_nonzero(~used))
+    new_index = np.cumsum(used) - 1
+    points, origin, triangles = points[used], origin[used], new_index[triangles]
+
+    # 12. normals
+    normals = smooth_vertex_normals(points, triangles, iterations=int(smooth_normals))
+    counts["normal_smoothing_iterations"] = int(smooth_normals)
+
+    unchanged = points.shape == input_points.shape and np.array_equal(triangles, validated_triangles)
+    after = before if unchanged else find_defects(points, triangles)
+    report = CleanReport(
+        before=before,
+        after=after,
+        non_orientable_components=int(non_orientable),
+        settings=settings,
+        seconds=time.perf_counter() - started,
+        **counts,
+    )
+    return points, triangles, origin, normals, report
+
+
+def smooth_vertex_normals(points, triangles, iterations: int = 1) -> np.ndarray:
+    """Area-weighted vertex normals, lightly smoothed over the one-ring.
+
+    Each iteration replaces a vertex normal by the normalised sum of its own and its edge
+    neighbours' normals (equal weights).
+
+    Parameters
+    ----------
+    points : array_like, shape (n, 3)
+        Vertex positions in mm.
+    triangles : array_like of int, shape (m, 3)
+    iterations : int, default 1
+        0 returns the plain area-weighted normals.
+
+    Returns
+    -------
+    ndarray, shape (n, 3), float64
+        Unit normals (zero for vertices without triangles).
+    """
+    from scipy import sparse
+
+    normals = vertex_normals(points, triangles)
+    if iterations <= 0:
+        return normals
+    n = len(normals)
+    edges, _ = unique_edges(triangles)
+    adjacency = sparse.coo_matrix(
+        (np.ones(2 * len(edges)), (np.r_[edges[:, 0], edges[:, 1]], np.r_[edges[:, 1], edges[:, 0]])), shape=(n, n)
+    ).tocsr()
+    adjacency = adjacency + sparse.identity(n, format="csr")
+    for _ in range(iterations):
+        summed = adjacency @ normals
+        length = np.linalg.norm(summed, axis=1, keepdims=True)
+        normals = np.divide(summed, length, out=np.zeros_like(summed), where=length > 0)
+    return normals
+
+
+# --------------------------------------------------------------------------------------------------
+def _require_triangles(triangles: np.ndarray, step: str) -> None:
+    if len(triangles) == 0:
+        raise MeshError(f"no triangle is left after {step}; the mesh is entirely degenerate, check the file.")
+
+
+def _merge_duplicate_vertices(points, triangles, origin):
+    """Merge vertices with identical coordinates; the first of each group stays."""
+    rows = np.ascontiguousarray(points + 0.0)  # -0.0 -> 0.0
+    keys = rows.view(np.dtype((np.void, 24))).ravel()
+    _, first, inverse = np.unique(keys, return_index=True, return_inverse=True)
+    representative = first[inverse.ravel()]
+    keep = representative == np.arange(len(points))
+    merged = int(np.count_nonzero(~keep))
+    if merged == 0:
+        return points, triangles, origin, 0
+    new_index = np.cumsum(keep) - 1
+    return points[keep], new_index[representative[triangles]], origin[keep], merged
+
+
+def _to_meshset(pymeshlab, points, triangles, origin):
+    mesh = pymeshlab.Mesh(vertex_matrix=np.ascontiguousarray(points), face_matrix=np.ascontiguousarray(triangles, dtype=np.int32))
+    mesh.add_vertex_custom_scalar_attribute(origin.astype(np.float64) + 1.0, _ORIGIN)
+    mesh_set = pymeshlab.MeshSet()
+    mesh_set.add_mesh(mesh)
+    return mesh_set
+
+
+def _from_meshset(mesh_set, input_points):
+    """Arrays back from pymeshlab; vertices pymeshlab created get the origin of the input vertex at their position."""
+    mesh = mesh_set.current_mesh()
+    mesh.compact()
+    points = np.array(mesh.vertex_matrix(), dtype=np.float64).reshape(-1, 3)
+    triangles = np.array(mesh.face_matrix(), dtype=np.int64).reshape(-1, 3)
+    tag = np.array(mesh.vertex_custom_scalar_attribute_array(_ORIGIN))
+    origin = np.rint(tag).astype(np.int64) - 1
+    new = origin < 0
+    if np.any(new):
+        from scipy.spatial import cKDTree
+
+        _, nearest = cKDTree(input_points).query(points[new])
+        origin[new] = nearest
+    return points, triangles, origin
+
+
+def _non_manifold_counts(triangles: np.ndarray, n: int) -> tuple[int, int]:
+    _, edge_of_corner = unique_edges(triangles)
+    faces_per_edge = np.bincount(edge_of_corner.ravel())
+    edges = int(np.count_nonzero(faces_per_edge > 2))
+    vertices = _count_non_manifold_vertices(triangles, edge_of_corner, faces_per_edge, n)
+    return edges, vertices
+
+
+def _repair_non_manifold(points, triangles, origin, input_points, counts):
+    from ._pymeshlab import import_pymeshlab
+
+    bad_edges, bad_vertices = _non_manifold_counts(triangles, len(points))
+    if bad_edges == 0 and bad_vertices == 0:
+        return points, triangles, origin
+    pymeshlab = import_pymeshlab()
+    edges_found = faces_removed = vertices_found = vertices_added = 0
+    for _ in range(4):  # pymeshlab's repair can expose a few new defects: repeat until none is left
+        if bad_edges == 0 and bad_vertices == 0:
+            break
+        mesh_set = _to_meshset(pymeshlab, points, triangles, origin)
+        try:
+            if bad_edges:
+                edges_found += bad_edges
+                faces_before = mesh_set.current_mesh().face_number()
+                mesh_set.meshing_repair_non_manifold_edges(method="Remove Faces")
+                faces_removed += faces_before - mesh_set.current_mesh().face_number()
+                mesh_set.meshing_remove_unreferenced_vertices()
+                points, triangles, origin = _from_meshset(mesh_set, input_points)
+                bad_vertices = _non_manifold_counts(triangles, len(points))[1]
+                mesh_set = _to_meshset(pymeshlab, points, triangles, origin)
+            if bad_vertices:
+                vertices_found += bad_vertices
+                vertices_before = mesh_set.current_mesh().vertex_number()
+                mesh_set.meshing_repair_non_manifold_vertices(vertdispratio=_SPLIT_DISPLACEMENT)
+                vertices_added += mesh_set.current_mesh().vertex_number() - vertices_before
+        except pymeshlab.PyMeshLabException as exc:
+            raise MeshError(f"pymeshlab could not repair the non-manifold parts of the mesh ({exc}); repair it in MeshLab first.") from exc
+        points, triangles, origin = _from_meshset(mesh_set, input_points)
+        _require_triangles(triangles, "repairing non-manifold edges")
+        bad_edges, bad_vertices = _non_manifold_counts(triangles, len(points))
+    counts["non_manifold_edges_repaired"] = edges_found
+    counts["non_manifold_edge_faces_removed"] = faces_removed
+    counts["non_manifold_vertices_repaired"] = vertices_found
+    counts["non_manifold_vertices_added"] = vertices_added
+    return points, triangles, origin
+
+
+def _is_manifold(triangles: np.ndarray, n: int) -> bool:
+    return _non_manifold_counts(triangles, n) == (0, 0)
+
+
+def _repair_zero_area_faces(points, triangles, origin, input_points, zero):
+    """Collapse the short edge of zero-area triangles (pymeshlab), then remove any that are left.
+
+    pymeshlab's ``meshing_remove_t_vertices`` with a base/height threshold of
+    ``1 / ZERO_AREA_RATIO`` touches exactly the zero-area triangles of
+    :func:`~translucency.io.defects.zero_area_mask`; collapsing instead of deleting them leaves no
+    crack (deleting an interior zero-area triangle opens a zero-width hole whose filling would make
+    the same triangle again). It needs a manifold mesh; the triangles it cannot fix are removed.
+    """
+    if _is_manifold(triangles, len(points)):
+        from ._pymeshlab import import_pymeshlab
+
+        pymeshlab = import_pymeshlab()
+        mesh_set = _to_meshset(pymeshlab, points, triangles, origin)
+        try:
+            mesh_set.meshing_remove_t_vertices(method="Edge Collapse", threshold=1.0 / ZERO_AREA_RATIO, repeat=True)
+            mesh_set.meshing_remove_unreferenced_vertices()
+            candidate = _from_meshset(mesh_set, input_points)
+        except pymeshlab.PyMeshLabException:
+            candidate = None
+        if candidate is not None and len(candidate[1]) and _is_manifold(candidate[1], len(candidate[0])):
+            points, triangles, origin = candidate
+        zero = zero_area_mask(points, triangles)
+    return points, triangles[~zero], origin
+
+
+def _close_holes(points, triangles, origin, input_points, max_hole_edges, counts):
+    from ._pymeshlab import import_pymeshlab
+
+    edges, edge_of_corner = unique_edges(triangles)
+    faces_per_edge = np.bincount(edge_of_corner.ravel(), minlength=len(edges))
+    if not np.any(faces_per_edge == 1):
+        return points, triangles, origin
+    if np.any(faces_per_edge > 2):
+        raise MeshError("holes cannot be closed in a mesh with non-manifold edges; keep repair_non_manifold=True or pass max_hole_edges=0.")
+    pymeshlab = import_pymeshlab()
+    mesh_set = _to_meshset(pymeshlab, points, triangles, origin)
+    closed = 0
+    try:
+        # first refuse patches that would intersect the surface, then close what is left regardless
+        for self_intersection_check in (True, False):
+            result = mesh_set.meshing_close_holes(
+                maxholesize=int(max_hole_edges), selfintersection=self_intersection_check, newfaceselected=False
+            )
+            closed += int((result or {}).get("closed_holes", 0))
+    except pymeshlab.PyMeshLabException as exc:
+        raise MeshError(f"pymeshlab could not close the holes of the mesh ({exc}); pass max_hole_edges=0 to skip it.") from exc
+    counts["holes_closed"] = closed
+    return _from_meshset(mesh_set, input_points)

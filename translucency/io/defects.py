@@ -1,0 +1,297 @@
+"""Inventory of the defects of a triangle mesh (what a scan repair has to fix), counted with numpy.
+
+:func:`find_defects` counts, with the definitions below, everything :mod:`translucency.io.clean`
+repairs, so a repair can be reported as honest before/after numbers. The definitions follow those
+of the shared scans' README (trimesh's conventions), so the counts can be checked against it.
+
+========================== ======================================================================
+count                      definition
+========================== ======================================================================
+duplicate_vertices         vertices at exactly the position of another vertex (a group of k
+                           coincident vertices counts k - 1)
+unreferenced_vertices      vertices used by no triangle
+null_faces                 triangles with a repeated vertex index
+duplicate_faces            triangles on the same three vertices as an earlier one (any order)
+zero_area_faces            triangles with distinct indices whose area is at most
+                           ``ZERO_AREA_RATIO / 2`` times their longest edge squared (collinear
+                           or coincident corners)
+non_manifold_edges         edges shared by more than two triangles
+non_manifold_vertices      vertices whose triangles form more than one fan (triangles around the
+                           vertex linked through edges of exactly two triangles, so the ends of
+                           a non-manifold edge count too)
+boundary_edges             edges of exactly one triangle
+boundary_loops             connected chains of boundary edges (holes and outer borders)
+largest_boundary_loop      number of edges of the longest of them
+components                 connected pieces: triangles linked through edges of exactly two
+                           triangles (a triangle hanging on a non-manifold edge, or touching the
+                           rest at a vertex only, is a piece of its own)
+inconsistent_edges         edges of two triangles that run the same direction in both (the two
+                           triangles disagree on which side is out)
+========================== ======================================================================
+
+Null faces are left out of every count after ``null_faces``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+from scipy import sparse
+from scipy.sparse import csgraph
+
+__all__ = [
+    "MeshDefects",
+    "find_defects",
+    "unique_edges",
+    "face_components",
+    "triangle_keys",
+    "zero_area_mask",
+    "ZERO_AREA_RATIO",
+]
+
+#: A triangle is zero-area when ``2 A <= ZERO_AREA_RATIO * (longest edge)²`` (height/edge below 1e-10).
+ZERO_AREA_RATIO = 1e-10
+
+
+@dataclasses.dataclass(frozen=True)
+class MeshDefects:
+    """Counts of the defects of a triangle mesh (see the module docstring for the definitions)."""
+
+    vertices: int
+    triangles: int
+    duplicate_vertices: int
+    unreferenced_vertices: int
+    null_faces: int
+    duplicate_faces: int
+    zero_area_faces: int
+    non_manifold_edges: int
+    non_manifold_vertices: int
+    boundary_edges: int
+    boundary_loops: int
+    largest_boundary_loop: int
+    components: int
+    inconsistent_edges: int
+
+    def as_dict(self) -> dict[str, int]:
+        """The counts as a plain dict."""
+        return dataclasses.asdict(self)
+
+
+def unique_edges(triangles) -> tuple[np.ndarray, np.ndarray]:
+    """Undirected edges of a triangle list and, for each triangle corner edge, its edge number.
+
+    Parameters
+    ----------
+    triangles : array_like of int, shape (m, 3)
+
+    Returns
+    -------
+    edges : ndarray, shape (e, 2), int64
+        Unique edges with the smaller index first.
+    edge_of_corner : ndarray, shape (m, 3), int64
+        ``edges[edge_of_corner[t, i]]`` is the edge from corner i to corner i+1 of triangle t.
+    """
+    triangles = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
+    directed = np.stack([triangles, np.roll(triangles, -1, axis=1)], axis=2).reshape(-1, 2)
+    undirected = np.sort(directed, axis=1)
+    n = int(triangles.max()) + 1 if triangles.size else 1
+    key = undirected[:, 0] * n + undirected[:, 1]
+    unique_key, inverse = np.unique(key, return_inverse=True)
+    edges = np.stack([unique_key // n, unique_key % n], axis=1)
+    return edges, inverse.reshape(-1, 3)
+
+
+def triangle_keys(triangles, n_points: int) -> np.ndarray:
+    """One comparable key per triangle, equal for triangles on the same three vertices in any order.
+
+    Parameters
+    ----------
+    triangles : ndarray, shape (m, 3), int
+    n_points : int
+        Number of vertices (the indices are below it).
+
+    Returns
+    -------
+    ndarray, shape (m,)
+        int64 keys when ``n_points ** 3`` fits in int64, else a void view of the sorted rows.
+    """
+    rows = np.sort(np.asarray(triangles, dtype=np.int64).reshape(-1, 3), axis=1)
+    n = max(int(n_points), 1)
+    if n < 2_000_000:
+        return (rows[:, 0] * n + rows[:, 1]) * n + rows[:, 2]
+    return np.ascontiguousarray(rows).view(np.dtype((np.void, 24))).ravel()
+
+
+def zero_area_mask(points, triangles) -> np.ndarray:
+    """True for the triangles whose area is zero relative to their size (see :data:`ZERO_AREA_RATIO`).
+
+    Parameters
+    ----------
+    points : array_like, shape (n, 3)
+        Vertex positions (any length unit).
+    triangles : array_like of int, shape (m, 3)
+
+    Returns
+    -------
+    ndarray of bool, shape (m,)
+    """
+    corners = np.asarray(points, dtype=np.float64)[np.asarray(triangles, dtype=np.int64).reshape(-1, 3)]
+    if len(corners) == 0:
+        return np.zeros(0, dtype=bool)
+    twice_area = np.linalg.norm(np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=1)
+    longest = np.max(np.linalg.norm(np.roll(corners, -1, axis=1) - corners, axis=2), axis=1)
+    return twice_area <= ZERO_AREA_RATIO * longest**2
+
+
+def _count_duplicate_vertices(points: np.ndarray) -> int:
+    if len(points) == 0:
+        return 0
+    # +0.0 turns -0.0 into 0.0 so that the byte comparison sees equal coordinates as equal
+    rows = np.ascontiguousarray(points + 0.0)
+    unique = np.unique(rows.view(np.dtype((np.void, 24))).ravel())
+    return int(len(points) - len(unique))
+
+
+def find_defects(points, triangles) -> MeshDefects:
+    """Count the defects of a triangle mesh.
+
+    Parameters
+    ----------
+    points : array_like, shape (n, 3)
+        Vertex positions (any length unit).
+    triangles : array_like of int, shape (m, 3)
+        Vertex indices of each triangle (valid indices; see :func:`translucency.io.mesh.validate_mesh_arrays`).
+
+    Returns
+    -------
+    MeshDefects
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> points = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [5, 5, 5]], dtype=float)
+    >>> find_defects(points, [[0, 1, 2]]).unreferenced_vertices
+    1
+    """
+    points = np.ascontiguousarray(points, dtype=np.float64)
+    triangles = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
+    n, m = len(points), len(triangles)
+    referenced = np.zeros(n, dtype=bool)
+    referenced[triangles.ravel()] = True
+
+    null = (triangles[:, 0] == triangles[:, 1]) | (triangles[:, 1] == triangles[:, 2]) | (triangles[:, 0] == triangles[:, 2])
+    proper = triangles[~null]
+    duplicate_faces = len(proper) - len(np.unique(triangle_keys(proper, n)))
+    zero_area = int(np.count_nonzero(zero_area_mask(points, proper)))
+
+    inconsistent = non_manifold_edges = loops = largest = non_manifold_vertices = components = boundary_edges = 0
+    if len(proper):
+        edges, edge_of_corner = unique_edges(proper)
+        slot_edge = edge_of_corner.ravel()
+        faces_per_edge = np.bincount(slot_edge, minlength=len(edges))
+        # +1 when a triangle runs along the edge from its smaller to its larger index, else -1;
+        # the two triangles of a consistently oriented edge run it in opposite directions
+        direction = np.where(proper.ravel() == edges[slot_edge, 0], 1.0, -1.0)
+        direction_sum = np.bincount(slot_edge, weights=direction, minlength=len(edges))
+        inconsistent = int(np.count_nonzero((faces_per_edge == 2) & (direction_sum != 0)))
+        non_manifold_edges = int(np.count_nonzero(faces_per_edge > 2))
+        boundary = edges[faces_per_edge == 1]
+        boundary_edges = len(boundary)
+        loops, largest = _boundary_loops(boundary)
+        non_manifold_vertices = _count_non_manifold_vertices(proper, edge_of_corner, faces_per_edge, n)
+        components, _ = face_components(proper, edge_of_corner)
+
+    return MeshDefects(
+        vertices=n,
+        triangles=m,
+        duplicate_vertices=_count_duplicate_vertices(points),
+        unreferenced_vertices=int(np.count_nonzero(~referenced)),
+        null_faces=int(np.count_nonzero(null)),
+        duplicate_faces=int(duplicate_faces),
+        zero_area_faces=zero_area,
+        non_manifold_edges=non_manifold_edges,
+        non_manifold_vertices=non_manifold_vertices,
+        boundary_edges=int(boundary_edges),
+        boundary_loops=int(loops),
+        largest_boundary_loop=int(largest),
+        components=int(components),
+        inconsistent_edges=inconsistent,
+    )
+
+
+def _boundary_loops(boundary_edges: np.ndarray) -> tuple[int, int]:
+    """Number of connected chains of boundary edges and the edge count of the largest."""
+    if len(boundary_edges) == 0:
+        return 0, 0
+    used, local = np.unique(boundary_edges.ravel(), return_inverse=True)
+    local = local.reshape(-1, 2)
+    graph = sparse.coo_matrix((np.ones(len(local), dtype=np.int8), (local[:, 0], local[:, 1])), shape=(len(used), len(used)))
+    count, labels = csgraph.connected_components(graph, directed=False)
+    edges_per_loop = np.bincount(labels[local[:, 0]], minlength=count)
+    return int(count), int(edges_per_loop.max())
+
+
+def face_components(triangles: np.ndarray, edge_of_corner: np.ndarray | None = None) -> tuple[int, np.ndarray]:
+    """Connected components of triangles linked through manifold edges (edges of exactly two triangles).
+
+    A triangle hanging on a non-manifold edge, or touching the rest only at a vertex, is a
+    component of its own.
+
+    Parameters
+    ----------
+    triangles : ndarray, shape (m, 3), int64
+    edge_of_corner : ndarray, shape (m, 3), optional
+        From :func:`unique_edges` (computed when not given).
+
+    Returns
+    -------
+    count : int
+    labels : ndarray, shape (m,), int64
+        Component number of each triangle.
+    """
+    triangles = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
+    if edge_of_corner is None:
+        _, edge_of_corner = unique_edges(triangles)
+    m = len(triangles)
+    slot_edge = edge_of_corner.ravel()
+    faces_per_edge = np.bincount(slot_edge)
+    slots = np.flatnonzero(faces_per_edge[slot_edge] == 2)
+    slots = slots[np.argsort(slot_edge[slots], kind="stable")]
+    a, b = slots[0::2] // 3, slots[1::2] // 3
+    graph = sparse.coo_matrix((np.ones(len(a), dtype=np.int8), (a, b)), shape=(m, m))
+    count, labels = csgraph.connected_components(graph, directed=False)
+    return int(count), labels.astype(np.int64)
+
+
+def _next_corner(slot: np.ndarray) -> np.ndarray:
+    """Slot 3 t + i -> slot 3 t + (i + 1) % 3 (the corner at the end of edge i of triangle t)."""
+    return slot - slot % 3 + (slot % 3 + 1) % 3
+
+
+def _count_non_manifold_vertices(
+    triangles: np.ndarray, edge_of_corner: np.ndarray, faces_per_edge: np.ndarray, n: int
+) -> int:
+    """Vertices whose incident triangles form more than one fan (linked through manifold edges).
+
+    Corners (t, i) are graph nodes 3 t + i; a manifold edge links, at each of its two end vertices,
+    the corners of its two triangles; the fans are the connected components of that graph.
+    """
+    m = len(triangles)
+    slot_edge = edge_of_corner.ravel()  # slot 3 t + i holds the edge from corner i to corner i + 1
+    manifold_slots = np.flatnonzero(faces_per_edge[slot_edge] == 2)
+    order = manifold_slots[np.argsort(slot_edge[manifold_slots], kind="stable")]
+    first, second = order[0::2], order[1::2]  # the two slots of each manifold edge
+    corner_vertex = triangles.ravel()
+    same_start = corner_vertex[first] == corner_vertex[second]
+    a = np.concatenate([first, _next_corner(first)])
+    b = np.concatenate(
+        [np.where(same_start, second, _next_corner(second)), np.where(same_start, _next_corner(second), second)]
+    )
+    graph = sparse.coo_matrix((np.ones(len(a), dtype=np.int8), (a, b)), shape=(3 * m, 3 * m))
+    n_fans, fan = csgraph.connected_components(graph, directed=False)
+    # every fan lies around one vertex: count the fans per vertex through one corner of each
+    corner_of_fan = np.zeros(n_fans, dtype=np.int64)
+    corner_of_fan[fan] = np.arange(3 * m)
+    fans_per_vertex = np.bincount(corner_vertex[corner_of_fan], minlength=n)
+    return int(np.count_nonzero(fans_per_vertex > 1))

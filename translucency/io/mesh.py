@@ -1,0 +1,246 @@
+"""The one triangle-mesh type of translucency: points in mm, triangles, per-vertex properties.
+
+Every loader returns a :class:`TriangleMesh`, every repair and decimation step takes one and returns
+a new one, and the solver receives its plain arrays (``points``, ``triangles``). A mesh is immutable:
+its arrays are private read-only copies, so a mesh handed to the solver cannot change under it, and
+"changing" a mesh means building a new one with :meth:`TriangleMesh.replace`.
+
+=============== ======================================================== =====
+field           meaning                                                  unit
+=============== ======================================================== =====
+points          vertex positions, (n, 3) float64                         mm
+triangles       vertex indices of each triangle, (m, 3) int64            1
+point_data      per-vertex properties of the file (colours, confidence)  any
+source          the file the mesh was read from, or None                 --
+mm_per_unit     length of one unit of the source file                    mm
+=============== ======================================================== =====
+
+Per-vertex colours are stored under the key ``"colors"`` as (n, 3) or (n, 4) uint8 (RGB or RGBA),
+and normals that came with the file under ``"normals"`` as (n, 3) float; every other property keeps
+its name from the file.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Mapping
+from pathlib import Path
+from types import MappingProxyType
+from typing import Any
+
+import numpy as np
+
+from ..errors import MeshError
+
+__all__ = ["TriangleMesh", "validate_mesh_arrays"]
+
+
+def _read_only_copy(array: np.ndarray, dtype=None) -> np.ndarray:
+    copy = np.array(array, dtype=dtype, copy=True, order="C")
+    copy.setflags(write=False)
+    return copy
+
+
+def validate_mesh_arrays(points, triangles, *, what: str = "the mesh") -> tuple[np.ndarray, np.ndarray]:
+    """Check and convert mesh arrays, raising :class:`MeshError` with one sentence on any defect.
+
+    Parameters
+    ----------
+    points : array_like, shape (n, 3)
+        Vertex positions (any length unit); converted to float64.
+    triangles : array_like, shape (m, 3)
+        Vertex indices of each triangle; converted to int64.
+    what : str
+        How the sentence names the mesh (for example the file name).
+
+    Returns
+    -------
+    points : ndarray, shape (n, 3), float64
+    triangles : ndarray, shape (m, 3), int64
+
+    Raises
+    ------
+    MeshError
+        Wrong shapes, no triangles, NaN or infinite coordinates, or indices out of range.
+    """
+    try:
+        points = np.asarray(points, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise MeshError(f"{what} has vertex coordinates that are not numbers; pass an (n, 3) array of floats.") from exc
+    if points.ndim != 2 or points.shape[1] != 3:
+        raise MeshError(f"{what} has points of shape {points.shape}, not (n, 3); pass one row of x, y, z per vertex.")
+    triangles = np.asarray(triangles)
+    if triangles.size == 0:
+        triangles = triangles.reshape(0, 3)
+    if triangles.ndim != 2 or triangles.shape[1] != 3:
+        raise MeshError(
+            f"{what} has triangles of shape {triangles.shape}, not (m, 3); pass three vertex indices per triangle."
+        )
+    if triangles.dtype.kind not in "iu":
+        if triangles.dtype.kind == "f" and np.all(np.isfinite(triangles)) and np.all(triangles == np.round(triangles)):
+            triangles = triangles.astype(np.int64)
+        else:
+            raise MeshError(f"{what} has triangle indices that are not integers; pass integer vertex indices.")
+    triangles = triangles.astype(np.int64, copy=False)
+    if len(points) == 0:
+        raise MeshError(f"{what} has no vertices; pass a mesh with at least one triangle.")
+    if len(triangles) == 0:
+        raise MeshError(
+            f"{what} has {len(points)} vertices but no triangles (a point cloud); "
+            "reconstruct a surface from it first (for example in MeshLab) and load that mesh."
+        )
+    finite = np.isfinite(points).all(axis=1)
+    if not finite.all():
+        bad = int(np.count_nonzero(~finite))
+        raise MeshError(
+            f"{what} has {bad} {'vertex' if bad == 1 else 'vertices'} with NaN or infinite coordinates "
+            f"(the first is vertex {int(np.flatnonzero(~finite)[0])}); repair or remove them and load the mesh again."
+        )
+    low, high = int(triangles.min()), int(triangles.max())
+    if low < 0 or high >= len(points):
+        bad_index = low if low < 0 else high
+        row = int(np.flatnonzero((triangles == bad_index).any(axis=1))[0])
+        raise MeshError(
+            f"{what} has a triangle (number {row}) that refers to vertex {bad_index}, "
+            f"but the vertices are numbered 0 to {len(points) - 1}; the file is corrupt, export it again."
+        )
+    return points, triangles
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class TriangleMesh:
+    """A triangle mesh in mm with per-vertex properties; immutable.
+
+    Parameters
+    ----------
+    points : array_like, shape (n, 3)
+        Vertex positions in mm (converted to float64).
+    triangles : array_like, shape (m, 3)
+        Vertex indices of each triangle, counter-clockwise seen from outside (converted to int64).
+        A mesh has at least one triangle; unreferenced vertices are allowed.
+    point_data : mapping of str to array_like, optional
+        Per-vertex properties, each with ``n`` rows (colours under ``"colors"`` as uint8).
+    source : path, optional
+        The file the mesh came from.
+    mm_per_unit : float, optional
+        Length in mm of one unit of the source file (1 for mm, 1000 for m); ``points`` are already
+        multiplied by it.
+
+    Raises
+    ------
+    MeshError
+        If the arrays are not a valid triangle mesh (see :func:`validate_mesh_arrays`).
+    """
+
+    points: np.ndarray
+    triangles: np.ndarray
+    point_data: Mapping[str, np.ndarray] = dataclasses.field(default_factory=dict)
+    source: Path | None = None
+    mm_per_unit: float = 1.0
+
+    def __post_init__(self):
+        points, triangles = validate_mesh_arrays(self.points, self.triangles)
+        data = {}
+        for name, values in dict(self.point_data).items():
+            values = np.asarray(values)
+            if values.ndim == 0 or len(values) != len(points):
+                raise MeshError(
+                    f"point_data[{name!r}] has {values.shape[0] if values.ndim else 0} rows but the mesh has "
+                    f"{len(points)} vertices; give one row per vertex."
+                )
+            data[str(name)] = _read_only_copy(values)
+        mm_per_unit = float(self.mm_per_unit)
+        if not (np.isfinite(mm_per_unit) and mm_per_unit > 0):
+            raise MeshError(f"mm_per_unit is {self.mm_per_unit!r}; pass a positive length in mm per file unit.")
+        object.__setattr__(self, "points", _read_only_copy(points, np.float64))
+        object.__setattr__(self, "triangles", _read_only_copy(triangles, np.int64))
+        object.__setattr__(self, "point_data", MappingProxyType(data))
+        object.__setattr__(self, "source", None if self.source is None else Path(self.source))
+        object.__setattr__(self, "mm_per_unit", mm_per_unit)
+
+    # --- sizes -------------------------------------------------------------------------------------
+    @property
+    def n_points(self) -> int:
+        """Number of vertices."""
+        return len(self.points)
+
+    @property
+    def n_triangles(self) -> int:
+        """Number of triangles."""
+        return len(self.triangles)
+
+    @property
+    def bounds(self) -> np.ndarray:
+        """Axis-aligned bounding box of the referenced vertices, ``[[xmin, ymin, zmin], [xmax, ymax, zmax]]`` in mm."""
+        used = self.points[np.unique(self.triangles)]
+        return np.stack([used.min(axis=0), used.max(axis=0)])
+
+    @property
+    def extent(self) -> float:
+        """Largest side of the bounding box of the referenced vertices, in mm."""
+        low, high = self.bounds
+        return float(np.max(high - low))
+
+    @property
+    def surface_area(self) -> float:
+        """Total area of the triangles, in mm²."""
+        from .geometry import triangle_areas
+
+        return float(triangle_areas(self.points, self.triangles).sum())
+
+    # --- per-vertex geometry -------------------------------------------------------------------------
+    def vertex_normals(self) -> np.ndarray:
+        """Area-weighted unit vertex normals, (n, 3) float64 (see :func:`translucency.io.geometry.vertex_normals`)."""
+        from .geometry import vertex_normals
+
+        return vertex_normals(self.points, self.triangles)
+
+    def vertex_areas(self, method: str = "barycentric") -> np.ndarray:
+        """Area of each vertex's share of the surface in mm², (n,) float64 (see :func:`translucency.io.geometry.vertex_areas`)."""
+        from .geometry import vertex_areas
+
+        return vertex_areas(self.points, self.triangles, method=method)
+
+    # --- building new meshes -------------------------------------------------------------------------
+    def replace(self, **changes: Any) -> TriangleMesh:
+        """Return a new mesh with some fields replaced (``points``, ``triangles``, ``point_data``, ...)."""
+        return dataclasses.replace(self, **changes)
+
+    def __repr__(self) -> str:
+        name = self.source.name if self.source is not None else "no file"
+        keys = ", ".join(self.point_data) or "none"
+        return (
+            f"TriangleMesh({self.n_points} points, {self.n_triangles} triangles, extent {self.extent:.4g} mm, "
+            f"point_data: {keys}, source: {name})"
+        )
+
+    # --- PyVista ------------------------------------------------------------------------------------
+    def to_pyvista(self):
+        """Return a ``pyvista.PolyData`` with the same points (mm), triangles and point data."""
+        import pyvista
+
+        faces = np.empty((self.n_triangles, 4), dtype=np.int64)
+        faces[:, 0] = 3
+        faces[:, 1:] = self.triangles
+        poly = pyvista.PolyData(np.array(self.points), faces.ravel())
+        for name, values in self.point_data.items():
+            poly.point_data[name] = np.array(values)
+        return poly
+
+    @classmethod
+    def from_pyvista(cls, poly, *, source=None, mm_per_unit: float = 1.0) -> TriangleMesh:
+        """Build a mesh from a ``pyvista.PolyData`` (polygons are triangulated, lines and points dropped).
+
+        Parameters
+        ----------
+        poly : pyvista.PolyData
+            Surface with points already in mm.
+        source : path, optional
+            Recorded as :attr:`source`.
+        mm_per_unit : float
+            Recorded as :attr:`mm_per_unit`.
+        """
+        from .load import mesh_from_vtk_polydata
+
+        points, triangles, point_data = mesh_from_vtk_polydata(poly, what="the PolyData")
+        return cls(points, triangles, point_data, source=source, mm_per_unit=mm_per_unit)

@@ -1,0 +1,432 @@
+"""Baked PLY files: the per-vertex result of a run, with every setting in the header, written atomically.
+
+A bake is a binary little-endian PLY that MeshLab/pymeshlab, trimesh, plyfile, Open3D and PyVista
+read. Its vertex element holds
+
+================================ ========= ==========================================================
+property                         type      meaning
+================================ ========= ==========================================================
+x y z                            float32   position, mm
+nx ny nz                         float32   unit vertex normal (area-weighted, or the mesh's normals)
+red green blue                   uchar     display colour (display transform already applied)
+radiance_r radiance_g radiance_b float32   linear outgoing radiance toward the normal, L = T21 B
+b_r b_g b_b                      float32   the view-independent factor B(x_o) of DESIGN.md
+================================ ========= ==========================================================
+
+followed by a ``face`` element (``list uchar int vertex_indices``, triangles). The header carries
+one ``comment`` line per setting::
+
+    comment translucency format = "translucency-bake"
+    comment translucency material = "marble"
+    comment translucency coefficients.sigma_a = [0.0021, 0.0041, 0.0071]
+
+(``translucency <key> = <JSON value>``; nested dicts become dotted keys; a value longer than
+:data:`COMMENT_CHUNK` characters continues on lines ``<key> += <more JSON text>``, which keeps every
+header line short for readers with fixed line buffers). Floats are written with ``repr`` precision,
+so :func:`read_baked_ply` returns the metadata exactly as given (tuples come back as lists).
+
+The file is written to a temporary file in the destination folder, flushed to disk, then renamed
+over the destination: an existing bake is only ever replaced by a complete one, and a failed write
+leaves no partial file. Writing over the mesh's own source file is refused.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import os
+import re
+import tempfile
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..errors import InvalidParameterError, MeshError, TranslucencyError
+from .mesh import TriangleMesh
+
+__all__ = [
+    "BakedPly",
+    "write_baked_ply",
+    "read_baked_ply",
+    "REQUIRED_METADATA",
+    "COMMENT_CHUNK",
+    "metadata_to_comments",
+    "comments_to_metadata",
+]
+
+#: Settings every bake must record (DESIGN.md: every result carries its settings); ``unit`` and
+#: ``version`` are filled in from the mesh and the package when absent.
+REQUIRED_METADATA = ("material", "coefficients", "unit", "lights", "model", "method", "tolerance", "version")
+
+#: Longest JSON text on one header line; longer values continue on "+=" lines.
+COMMENT_CHUNK = 160
+
+_PREFIX = "translucency "
+_KEY = re.compile(r"[A-Za-z0-9_\-]+")
+FORMAT_NAME = "translucency-bake"
+FORMAT_VERSION = 1
+
+_VERTEX_DTYPE = np.dtype(
+    [
+        ("x", "<f4"), ("y", "<f4"), ("z", "<f4"),
+        ("nx", "<f4"), ("ny", "<f4"), ("nz", "<f4"),
+        ("red", "u1"), ("green", "u1"), ("blue", "u1"),
+        ("radiance_r", "<f4"), ("radiance_g", "<f4"), ("radiance_b", "<f4"),
+        ("b_r", "<f4"), ("b_g", "<f4"), ("b_b", "<f4"),
+    ]
+)  # fmt: skip
+_FACE_DTYPE = np.dtype([("count", "u1"), ("vertex_indices", "<i4", (3,))])
+_PLY_NAMES = {"<f4": "float", "|u1": "uchar"}
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class BakedPly:
+    """The content of a baked PLY (see the module docstring for units)."""
+
+    points: np.ndarray  # (n, 3) float64, mm
+    triangles: np.ndarray  # (m, 3) int64
+    normals: np.ndarray  # (n, 3) float64
+    colors_rgb8: np.ndarray  # (n, 3) uint8
+    radiance: np.ndarray  # (n, 3) float64 (stored float32)
+    b: np.ndarray  # (n, 3) float64 (stored float32)
+    metadata: dict
+    comments: list
+
+
+# --------------------------------------------------------------------------------------------------
+# metadata <-> header comments
+# --------------------------------------------------------------------------------------------------
+def _json_default(value):
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, Path):
+        return str(value)
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        return dataclasses.asdict(value)
+    raise TypeError(f"{type(value).__name__} is not JSON serialisable")
+
+
+def _flatten(metadata: dict, prefix: str = "") -> list[tuple[str, Any]]:
+    items = []
+    for key, value in metadata.items():
+        key = str(key)
+        if not _KEY.fullmatch(key):
+            raise InvalidParameterError(
+                f"metadata key {key!r} is not usable in a PLY header; use letters, digits, '_' and '-' only."
+            )
+        name = f"{prefix}{key}"
+        if isinstance(value, dict) and value:
+            items.extend(_flatten(value, name + "."))
+        else:
+            items.append((name, value))
+    return items
+
+
+def metadata_to_comments(metadata: dict) -> list[str]:
+    """Header comment lines (without the word ``comment``) that encode a metadata dict.
+
+    Parameters
+    ----------
+    metadata : dict
+        JSON-serialisable values (numpy arrays and scalars, paths and dataclasses are converted);
+        keys of letters, digits, ``_`` and ``-``.
+
+    Returns
+    -------
+    list of str
+        ASCII lines ``translucency <key> = <json>`` (and ``+=`` continuation lines).
+    """
+    lines = []
+    for key, value in _flatten(metadata):
+        try:
+            text = json.dumps(value, default=_json_default, ensure_ascii=True, allow_nan=True)
+        except (TypeError, ValueError) as exc:
+            raise InvalidParameterError(f"metadata {key!r} cannot be written to the header ({exc}); pass numbers, strings, lists or dicts.") from exc
+        chunks = _split_text(text)
+        lines.append(f"{_PREFIX}{key} = {chunks[0]}")
+        lines.extend(f"{_PREFIX}{key} += {chunk}" for chunk in chunks[1:])
+    return lines
+
+
+def _split_text(text: str) -> list[str]:
+    """Cut JSON text into pieces of at most about COMMENT_CHUNK characters, never next to whitespace.
+
+    Header readers strip the ends of comment lines, so a piece must neither start nor end with a
+    space; JSON text can always be cut between two non-space characters except inside a long run of
+    spaces, where the piece is made longer instead.
+    """
+    pieces, start = [], 0
+    while len(text) - start > COMMENT_CHUNK:
+        cut = start + COMMENT_CHUNK
+        while cut > start + 1 and (text[cut - 1].isspace() or text[cut].isspace()):
+            cut -= 1
+        if cut == start + 1:  # a run of spaces: cut after it instead
+            cut = start + COMMENT_CHUNK
+            while cut < len(text) and (text[cut - 1].isspace() or text[cut].isspace()):
+                cut += 1
+        pieces.append(text[start:cut])
+        start = cut
+    pieces.append(text[start:])
+    return pieces
+
+
+def comments_to_metadata(comments: list[str]) -> dict:
+    """Decode the metadata written by :func:`metadata_to_comments`; other comments are ignored.
+
+    Parameters
+    ----------
+    comments : list of str
+        Header comment texts (without the word ``comment``).
+
+    Returns
+    -------
+    dict
+        Nested dict of the decoded values.
+    """
+    texts: dict[str, str] = {}
+    for comment in comments:
+        if not comment.startswith(_PREFIX):
+            continue
+        match = re.fullmatch(r"(\S+) (\+?=) (.*)", comment[len(_PREFIX) :].strip())
+        if match is None:
+            continue
+        key, operator, text = match.groups()
+        if operator == "+=":
+            texts[key] = texts.get(key, "") + text
+        else:
+            texts[key] = text
+    metadata: dict = {}
+    for key, text in texts.items():
+        try:
+            value = json.loads(text)
+        except json.JSONDecodeError:
+            value = text
+        node = metadata
+        parts = key.split(".")
+        for part in parts[:-1]:
+            node = node.setdefault(part, {})
+            if not isinstance(node, dict):
+                break
+        else:
+            node[parts[-1]] = value
+    return metadata
+
+
+# --------------------------------------------------------------------------------------------------
+# writing
+# --------------------------------------------------------------------------------------------------
+def _per_vertex(name: str, values, n: int, dtype) -> np.ndarray:
+    array = np.asarray(values)
+    if array.shape != (n, 3):
+        raise InvalidParameterError(f"{name} has shape {array.shape}; pass one row of 3 values (RGB) per vertex, shape ({n}, 3).")
+    if dtype == np.uint8:
+        if array.dtype != np.uint8:
+            if array.dtype.kind not in "iu" or array.min(initial=0) < 0 or array.max(initial=0) > 255:
+                raise InvalidParameterError(
+                    f"{name} must be 8-bit colours (uint8, 0-255), not {array.dtype}; apply the display transform and convert first."
+                )
+            array = array.astype(np.uint8)
+        return array
+    array = array.astype(np.float64)
+    as_stored = array.astype(np.float32)
+    if not np.all(np.isfinite(as_stored)):
+        bad = int(np.count_nonzero(~np.all(np.isfinite(as_stored), axis=1)))
+        raise InvalidParameterError(f"{name} has {bad} vertices with NaN, infinite or float32-overflowing values; fix the computation before baking.")
+    return as_stored
+
+
+def write_baked_ply(path, mesh: TriangleMesh, radiance, b, colors_rgb8, metadata: dict, *, normals=None) -> Path:
+    """Write a baked PLY (binary little endian) atomically.
+
+    Parameters
+    ----------
+    path : str or path-like
+        Destination ``.ply``; its folder must exist. An existing file is replaced only once the new
+        one is completely written.
+    mesh : TriangleMesh
+        The mesh the values belong to (points in mm are written as float32 mm).
+    radiance : array_like, shape (n, 3)
+        Linear outgoing radiance toward the normal, per vertex and RGB channel (the solver's unit,
+        W/(m² sr) for irradiance given in W/m²).
+    b : array_like, shape (n, 3)
+        The diffuse radiance factor B(x_o) per vertex and channel (same unit as ``radiance``).
+    colors_rgb8 : array_like of uint8, shape (n, 3)
+        Display colours, display transform already applied.
+    metadata : dict
+        Every setting of the run: must contain :data:`REQUIRED_METADATA` (``unit`` and ``version``
+        are filled in when absent); nested dicts allowed.
+    normals : array_like, shape (n, 3), optional
+        Vertex normals to write; default ``mesh.point_data["normals"]`` or the area-weighted normals.
+
+    Returns
+    -------
+    Path
+        The written file.
+
+    Raises
+    ------
+    InvalidParameterError
+        Wrong shapes, non-finite values, missing settings, a missing folder, or a destination that
+        is the mesh's source file.
+    TranslucencyError
+        When the file cannot be written (permissions, disk full); nothing is left behind.
+    """
+    path = Path(path)
+    if not isinstance(mesh, TriangleMesh):
+        raise InvalidParameterError(f"write_baked_ply needs a TriangleMesh, not {type(mesh).__name__}.")
+    n = mesh.n_points
+    if mesh.n_points >= 2**31 or mesh.n_triangles >= 2**31:
+        raise InvalidParameterError("the mesh is too large for a PLY with 32-bit indices; decimate it first.")
+    if mesh.source is not None and path.exists() and _same_file(path, mesh.source):
+        raise InvalidParameterError(f"{path} is the scan the mesh was read from; write the bake to another file (inputs are never modified).")
+    parent = path.parent if str(path.parent) else Path(".")
+    if not parent.is_dir():
+        raise InvalidParameterError(f"the folder {parent} does not exist; create it or choose another output path.")
+    if path.is_dir():
+        raise InvalidParameterError(f"{path} is a folder; pass a file name such as {path / 'bake.ply'}.")
+
+    radiance = _per_vertex("radiance", radiance, n, np.float32)
+    b = _per_vertex("b", b, n, np.float32)
+    colors = _per_vertex("colors_rgb8", colors_rgb8, n, np.uint8)
+    if normals is None:
+        normals = mesh.point_data["normals"] if "normals" in mesh.point_data else mesh.vertex_normals()
+    normals = _per_vertex("normals", normals, n, np.float32)
+    points = mesh.points.astype(np.float32)
+    if not np.all(np.isfinite(points)):
+        raise InvalidParameterError("the mesh coordinates overflow float32; scale the mesh to mm before baking.")
+
+    settings = _complete_metadata(metadata, mesh, n)
+    comments = [f"{_PREFIX}format = {json.dumps(FORMAT_NAME)}", f"{_PREFIX}format_version = {FORMAT_VERSION}"]
+    comments += metadata_to_comments(settings)
+
+    vertices = np.empty(n, dtype=_VERTEX_DTYPE)
+    for i, axis in enumerate("xyz"):
+        vertices[axis] = points[:, i]
+        vertices["n" + axis] = normals[:, i]
+    for i, (channel, colour) in enumerate(zip("rgb", ("red", "green", "blue"))):
+        vertices[colour] = colors[:, i]
+        vertices["radiance_" + channel] = radiance[:, i]
+        vertices["b_" + channel] = b[:, i]
+    faces = np.empty(mesh.n_triangles, dtype=_FACE_DTYPE)
+    faces["count"] = 3
+    faces["vertex_indices"] = mesh.triangles.astype(np.int32)
+
+    header = ["ply", "format binary_little_endian 1.0"]
+    header += [f"comment {line}" for line in comments]
+    header.append(f"element vertex {n}")
+    header += [f"property {_PLY_NAMES[_VERTEX_DTYPE[name].str]} {name}" for name in _VERTEX_DTYPE.names]
+    header += [f"element face {mesh.n_triangles}", "property list uchar int vertex_indices", "end_header"]
+    header_bytes = ("\n".join(header) + "\n").encode("ascii")
+    _atomic_write(path, [header_bytes, vertices.tobytes(), faces.tobytes()])
+    return path
+
+
+def _complete_metadata(metadata, mesh: TriangleMesh, n: int) -> dict:
+    if not isinstance(metadata, dict):
+        raise InvalidParameterError(f"metadata must be a dict of settings, not {type(metadata).__name__}.")
+    settings = dict(metadata)
+    if "unit" not in settings:
+        from .units import unit_label
+
+        settings["unit"] = unit_label(mesh.mm_per_unit)
+    if "version" not in settings:
+        from .. import __version__
+
+        settings["version"] = __version__
+    missing = [key for key in REQUIRED_METADATA if key not in settings]
+    if missing:
+        raise InvalidParameterError(
+            f"the bake's metadata lacks {', '.join(missing)}; pass every setting of the run ({', '.join(REQUIRED_METADATA)})."
+        )
+    settings.setdefault("geometry_unit", "mm")
+    settings.setdefault("source", mesh.source.name if mesh.source is not None else None)
+    settings.setdefault("source_mm_per_unit", mesh.mm_per_unit)
+    return settings
+
+
+def _same_file(a: Path, b: Path) -> bool:
+    try:
+        return os.path.samefile(a, b)
+    except OSError:
+        return False
+
+
+def _atomic_write(path: Path, parts: list[bytes]) -> None:
+    """Write bytes to a temporary file beside ``path``, fsync, then rename it over ``path``."""
+    parent = path.parent if str(path.parent) else Path(".")
+    try:
+        mode = os.stat(path).st_mode & 0o777 if path.exists() else 0o644
+        handle = tempfile.NamedTemporaryFile(dir=parent, prefix=f".{path.name}.", suffix=".tmp", delete=False)
+    except OSError as exc:
+        raise TranslucencyError(f"cannot write in {parent} ({exc.strerror or exc}); choose a writable output folder.") from exc
+    temporary = Path(handle.name)
+    try:
+        with handle:
+            for part in parts:
+                handle.write(part)
+            handle.flush()
+            os.fsync(handle.fileno())
+        os.chmod(temporary, mode)
+        os.replace(temporary, path)
+    except BaseException as exc:
+        try:
+            temporary.unlink()
+        except OSError:
+            pass
+        if isinstance(exc, OSError):
+            raise TranslucencyError(f"writing {path.name} failed ({exc.strerror or exc}); check the disk space and permissions.") from exc
+        raise
+    try:  # make the rename itself durable
+        directory = os.open(parent, os.O_RDONLY)
+        try:
+            os.fsync(directory)
+        finally:
+            os.close(directory)
+    except OSError:
+        pass
+
+
+# --------------------------------------------------------------------------------------------------
+# reading
+# --------------------------------------------------------------------------------------------------
+def read_baked_ply(path) -> BakedPly:
+    """Read a bake written by :func:`write_baked_ply`.
+
+    Parameters
+    ----------
+    path : str or path-like
+
+    Returns
+    -------
+    BakedPly
+        Arrays (float64 from the stored float32) and the decoded metadata.
+
+    Raises
+    ------
+    MeshError
+        When the file is not a readable PLY or lacks the bake's properties.
+    """
+    from .load import _PlyHeader, read_mesh_arrays
+
+    path = Path(path)
+    points, triangles, point_data = read_mesh_arrays(path, format="ply")
+    comments = _PlyHeader(path).comments
+    needed = [f"{prefix}_{c}" for prefix in ("radiance", "b") for c in "rgb"]
+    missing = [name for name in needed if name not in point_data]
+    if missing or "colors" not in point_data or "normals" not in point_data:
+        raise MeshError(f"{path.name} is not a translucency bake (it lacks {', '.join(missing) or 'colours or normals'}); bake the mesh first.")
+    stack = lambda prefix: np.stack([np.asarray(point_data[f"{prefix}_{c}"], dtype=np.float64) for c in "rgb"], axis=1)  # noqa: E731
+    return BakedPly(
+        points=points,
+        triangles=triangles,
+        normals=np.asarray(point_data["normals"], dtype=np.float64),
+        colors_rgb8=np.asarray(point_data["colors"])[:, :3],
+        radiance=stack("radiance"),
+        b=stack("b"),
+        metadata=comments_to_metadata(comments),
+        comments=comments,
+    )
+

@@ -1,0 +1,195 @@
+"""Length units of mesh files: parsing, conversion to mm, and the plausibility check of a scan's size.
+
+Scan files rarely state their unit. translucency works in mm (scattering coefficients are in 1/mm),
+so every mesh is converted on entry with a factor ``mm_per_unit``. A wrong unit does not fail, it
+silently makes the object 1000 times too small or too large for the material, so a scan whose size
+is implausible for the given unit gets an :class:`ImplausibleSizeWarning` that names the unit that
+would make it plausible, and a size no object can have is an error.
+
+================ ========================================================== =====
+name             meaning                                                    unit
+================ ========================================================== =====
+mm_per_unit      length of one file unit                                    mm
+extent           largest side of the bounding box                           mm
+PLAUSIBLE_EXTENT extents of scanned objects: 5 mm (a ring) to 5 m (a car)   mm
+ABSURD_EXTENT    outside this range the file cannot be a scan at all        mm
+================ ========================================================== =====
+"""
+
+from __future__ import annotations
+
+import math
+import numbers
+import warnings
+
+from ..errors import InvalidParameterError, MeshError
+
+__all__ = [
+    "UNITS",
+    "PLAUSIBLE_EXTENT",
+    "ABSURD_EXTENT",
+    "ImplausibleSizeWarning",
+    "parse_unit",
+    "unit_label",
+    "likely_unit",
+    "implausible_size_message",
+    "check_extent",
+]
+
+#: Millimetres per unit of the named length units.
+UNITS: dict[str, float] = {"mm": 1.0, "cm": 10.0, "m": 1000.0, "in": 25.4}
+
+_UNIT_WORDS = {"mm": "millimetres", "cm": "centimetres", "m": "metres", "in": "inches"}
+
+#: Extents (largest bounding-box side, mm) of real scanned objects; outside it a warning is given.
+PLAUSIBLE_EXTENT = (5.0, 5000.0)
+
+#: Extents (mm) no scan can have (1 nm to 1000 km); outside it loading fails.
+ABSURD_EXTENT = (1e-6, 1e9)
+
+
+class ImplausibleSizeWarning(UserWarning):
+    """A mesh whose size is implausible for its length unit (probably the wrong unit was given)."""
+
+
+def parse_unit(unit: str | float) -> float:
+    """Return the length of one unit in mm.
+
+    Parameters
+    ----------
+    unit : {"mm", "cm", "m", "in"} or float
+        A unit name (case-insensitive) or a positive number of mm per unit (a number in a string,
+        such as ``"2.5"``, is accepted too, for command lines).
+
+    Returns
+    -------
+    float
+        Millimetres per unit.
+
+    Raises
+    ------
+    InvalidParameterError
+        For an unknown name or a number that is not positive and finite.
+    """
+    if isinstance(unit, str):
+        key = unit.strip().lower()
+        if key in UNITS:
+            return UNITS[key]
+        try:
+            value = float(key)
+        except ValueError:
+            raise InvalidParameterError(
+                f"unknown length unit {unit!r}; use one of {', '.join(UNITS)} or a number of mm per unit."
+            ) from None
+    elif isinstance(unit, numbers.Real) and not isinstance(unit, bool):
+        value = float(unit)
+    else:
+        raise InvalidParameterError(
+            f"the length unit must be one of {', '.join(UNITS)} or a number of mm per unit, not {unit!r}."
+        )
+    if not (math.isfinite(value) and value > 0):
+        raise InvalidParameterError(f"the length unit {unit!r} is not a positive number of mm per unit; pass e.g. 1 or 'mm'.")
+    return value
+
+
+def unit_label(mm_per_unit: float) -> str:
+    """Return ``"mm"``, ``"cm"``, ``"m"`` or ``"in"`` for a known factor, else ``"<factor> mm"``."""
+    for name, factor in UNITS.items():
+        if math.isclose(mm_per_unit, factor, rel_tol=1e-12):
+            return name
+    return f"{mm_per_unit:g} mm"
+
+
+def likely_unit(extent_in_file_units: float) -> str | None:
+    """Name the unit that makes a file extent most plausible for a scanned object.
+
+    Parameters
+    ----------
+    extent_in_file_units : float
+        Largest bounding-box side in the file's own (unknown) unit.
+
+    Returns
+    -------
+    str or None
+        The unit of :data:`UNITS` whose extent in mm lies in :data:`PLAUSIBLE_EXTENT`, closest (in
+        log scale) to the middle of that range; None when no unit makes it plausible.
+    """
+    low, high = PLAUSIBLE_EXTENT
+    middle = math.sqrt(low * high)
+    best, best_distance = None, math.inf
+    for name, factor in UNITS.items():
+        extent_mm = extent_in_file_units * factor
+        if low <= extent_mm <= high:
+            distance = abs(math.log(extent_mm / middle))
+            if distance < best_distance:
+                best, best_distance = name, distance
+    return best
+
+
+def implausible_size_message(extent_mm: float, mm_per_unit: float, name: str = "the mesh") -> str | None:
+    """Return the warning sentence for an implausible size, or None when the size is plausible.
+
+    Parameters
+    ----------
+    extent_mm : float
+        Largest bounding-box side after conversion, in mm.
+    mm_per_unit : float
+        The factor that was used.
+    name : str
+        How the sentence names the mesh.
+    """
+    low, high = PLAUSIBLE_EXTENT
+    if low <= extent_mm <= high:
+        return None
+    suggestion = likely_unit(extent_mm / mm_per_unit)
+    size = f"{extent_mm:.2g} mm" if extent_mm < 1 else f"{extent_mm:.4g} mm"
+    if suggestion is not None and not math.isclose(UNITS[suggestion], mm_per_unit):
+        return (
+            f"{name} is {size} across, implausible for a scan in {unit_label(mm_per_unit)}; "
+            f"if the file is in {_UNIT_WORDS[suggestion]} pass unit={suggestion!r}."
+        )
+    return (
+        f"{name} is {size} across, implausible for a scanned object (5 mm to 5 m); "
+        "check the file's unit and pass it as unit= (a name or mm per unit)."
+    )
+
+
+def check_extent(extent_mm: float, mm_per_unit: float, name: str = "the mesh", *, stacklevel: int = 2) -> None:
+    """Raise for an absurd size, warn for an implausible one, else do nothing.
+
+    Parameters
+    ----------
+    extent_mm : float
+        Largest bounding-box side in mm.
+    mm_per_unit : float
+        The unit factor that was applied, in mm per file unit.
+    name : str
+        How the sentences name the mesh.
+    stacklevel : int
+        Passed to :func:`warnings.warn` (counted from the caller of this function).
+
+    Raises
+    ------
+    MeshError
+        When the extent is zero, not finite, or outside :data:`ABSURD_EXTENT`.
+
+    Warns
+    -----
+    ImplausibleSizeWarning
+        When the extent is outside :data:`PLAUSIBLE_EXTENT`.
+    """
+    low, high = ABSURD_EXTENT
+    if not math.isfinite(extent_mm) or extent_mm > high:
+        raise MeshError(
+            f"{name} is {extent_mm:.3g} mm across, larger than any scanned object; "
+            "check the file's coordinates and unit."
+        )
+    if extent_mm < low:
+        if extent_mm == 0:
+            raise MeshError(f"{name} has all its vertices at one position (size 0); the file holds no surface, export it again.")
+        raise MeshError(
+            f"{name} is {extent_mm:.3g} mm across, smaller than any scanned object; check the file's coordinates and unit."
+        )
+    message = implausible_size_message(extent_mm, mm_per_unit, name)
+    if message is not None:
+        warnings.warn(message, ImplausibleSizeWarning, stacklevel=stacklevel + 1)
