@@ -225,3 +225,19 @@ def test_validation_errors_are_sentences(change, words):
     with pytest.raises(InvalidParameterError, match=words) as info:
         incident_flux(args["points"], args["normals"], args["areas"], args["lights"], args["eta"], occluder=occluder)
     assert str(info.value).endswith(".")
+
+
+def test_ray_batching_does_not_change_the_result(monkeypatch):
+    from translucency.scatter import irradiance
+
+    points, triangles, normals, areas = icosphere()
+    box = trimesh.creation.box(extents=(30.0, 30.0, 2.0))
+    box.apply_translation((0.0, 0.0, 25.0))
+    occluder = Occluder(np.vstack([points, box.vertices]), np.vstack([triangles, np.asarray(box.faces) + len(points)]))
+    lights = [EnvironmentLight(0.5, n_directions=24), PointLight((0, 5, 40), 3.0), DirectionalLight((0, 0, 1))]
+    one_call = incident_flux(points, normals, areas, lights, ETA, occluder=occluder)
+    monkeypatch.setattr(irradiance, "RAYS_PER_BATCH", 100)
+    many_calls = incident_flux(points, normals, areas, lights, ETA, occluder=occluder)
+    assert one_call.stats.n_shadowed > 0
+    assert np.allclose(one_call.flux_rgb, many_calls.flux_rgb, rtol=1e-14, atol=0)
+    assert one_call.stats.as_dict()["n_shadowed"] == many_calls.stats.n_shadowed

@@ -274,6 +274,88 @@ def _samples(lights):
     return out
 
 
+RAYS_PER_BATCH = 1 << 18
+"""Shadow rays of several samples are traced together up to this many (one threaded Embree call)."""
+
+
+@dataclass
+class _Job:
+    """One light sample at the vertices facing it: indices, cosines, directions, distances."""
+
+    light: int
+    kind: str  # "dir" or "point"
+    vector: np.ndarray  # direction toward the light, or the point light's position (mm)
+    rgb: np.ndarray  # E (W/m²) or I (W/sr)
+    front: np.ndarray  # vertices with n . w > 0
+    cos: np.ndarray  # n . w at those vertices
+    w: np.ndarray  # (3,) for a direction, (k, 3) per vertex for a point light
+    distance: np.ndarray | None  # mm, point lights only
+
+
+def _job(sample, points, normals) -> _Job:
+    light, kind, vector, rgb = sample
+    if kind == "dir":
+        cos = normals @ vector
+        front = np.flatnonzero(cos > 0.0)
+        return _Job(light, kind, vector, rgb, front, cos[front], vector, None)
+    to_light = vector[None, :] - points
+    distance = np.linalg.norm(to_light, axis=1)
+    w = to_light / np.where(distance > 0.0, distance, 1.0)[:, None]
+    cos = np.einsum("ij,ij->i", normals, w)
+    front = np.flatnonzero((cos > 0.0) & (distance > 0.0))
+    return _Job(light, kind, vector, rgb, front, cos[front], w[front], distance[front])
+
+
+def _irradiance(job, stats) -> np.ndarray:
+    """Irradiance (W/m², k x 3) of a job's sample on a surface facing it, at its vertices."""
+    if job.kind == "dir":
+        return np.broadcast_to(job.rgb, (len(job.front), 3))
+    stats.n_distance_clamped += int(np.count_nonzero(job.distance < POINT_LIGHT_MIN_DISTANCE_MM))
+    return point_light_irradiance(job.rgb, job.distance)  # inverse square, E = I / d_m^2
+
+
+def _batches(samples, points, normals, stats):
+    """Jobs grouped so that each group casts about RAYS_PER_BATCH rays at most (one big sample alone)."""
+    batch, rays = [], 0
+    for sample in samples:
+        job = _job(sample, points, normals)
+        stats.n_backfacing += len(points) - len(job.front)
+        if batch and rays + len(job.front) > RAYS_PER_BATCH:
+            yield batch
+            batch, rays = [], 0
+        batch.append(job)
+        rays += len(job.front)
+    if batch:
+        yield batch
+
+
+def _apply_visibility(batch, occluder, cache, origins_key, points, normals, stats):
+    """Drop the shadowed vertices from each job: cached visibility, or one Embree call for the rest."""
+    keys = [(occluder.key, origins_key, job.kind, tuple(np.round(job.vector, 12))) for job in batch]
+    visible = [cache.get(key) if cache is not None else None for key in keys]
+    todo = [i for i, v in enumerate(visible) if v is None and len(batch[i].front)]
+    stats.n_visibility_reused += sum(1 for v in visible if v is not None)
+    if todo:
+        jobs = [batch[i] for i in todo]
+        front = np.concatenate([job.front for job in jobs])
+        directions = np.concatenate([np.broadcast_to(job.w, (len(job.front), 3)) for job in jobs])
+        distances = np.concatenate(
+            [job.distance if job.distance is not None else np.full(len(job.front), np.inf) for job in jobs]
+        )
+        traced = occluder.visible(points[front], normals[front], directions, distances)
+        for i, part in zip(todo, np.split(traced, np.cumsum([len(job.front) for job in jobs])[:-1])):
+            visible[i] = part
+            if cache is not None:
+                cache.put(keys[i], part)
+    for job, v in zip(batch, visible):
+        if v is None:  # no vertex faces this sample
+            continue
+        stats.n_shadowed += int(len(job.front) - np.count_nonzero(v))
+        job.front, job.cos = job.front[v], job.cos[v]
+        if job.kind == "point":
+            job.w, job.distance = job.w[v], job.distance[v]
+
+
 def incident_flux(points, normals, areas, lights, eta, *, triangles=None, occluder=None,
                   cache: VisibilityCache | None = None, per_direction: bool = False) -> IncidentLight:
     """Flux and flux-weighted refracted direction entering the medium at each source vertex.
@@ -328,61 +410,36 @@ def incident_flux(points, normals, areas, lights, eta, *, triangles=None, occlud
     stats.seconds["scene"] = time.perf_counter() - t
     origins_key = array_digest(points, normals) if (cache is not None and occluder is not None) else None
 
-    samples = _samples(lights)
-    stats.n_samples = len(samples)
     phi = np.zeros((n, 3))
     weighted_w12 = np.zeros((n, 3))
     contributions = [] if per_direction else None
     rays_before = occluder.rays_cast if occluder is not None else 0
     seconds_visibility = 0.0
-    for light_index, kind, vector, rgb in samples:
-        if kind == "dir":
-            w = vector
-            cos = normals @ w
-            front = np.flatnonzero(cos > 0.0)
-            distance = None
-        else:
-            to_light = vector[None, :] - points
-            distance_all = np.linalg.norm(to_light, axis=1)
-            w = to_light / np.where(distance_all > 0.0, distance_all, 1.0)[:, None]
-            cos = np.einsum("ij,ij->i", normals, w)
-            front = np.flatnonzero((cos > 0.0) & (distance_all > 0.0))
-            distance = distance_all[front]
-        stats.n_backfacing += n - len(front)
-
-        if occluder is not None and len(front):
-            t = time.perf_counter()
-            key = (occluder.key, origins_key, kind, tuple(np.round(vector, 12)))
-            visible = cache.get(key) if cache is not None else None
-            if visible is None:
-                directions = w if kind == "dir" else w[front]
-                visible = occluder.visible(points[front], normals[front], directions, distance)
-                if cache is not None:
-                    cache.put(key, visible)
-            else:
-                stats.n_visibility_reused += 1
-            stats.n_shadowed += int(len(front) - np.count_nonzero(visible))
-            front = front[visible]
-            if distance is not None:
-                distance = distance[visible]
-            seconds_visibility += time.perf_counter() - t
-
-        c = cos[front]
-        if kind == "dir":
-            irradiance = rgb[None, :]
-            w_front = np.broadcast_to(w, (len(front), 3))
-        else:
-            stats.n_distance_clamped += int(np.count_nonzero(distance < POINT_LIGHT_MIN_DISTANCE_MM))
-            irradiance = point_light_irradiance(rgb, distance)  # inverse square, E = I / d_m^2
-            w_front = w[front]
-        phi_k = (fresnel_transmittance(c, eta) * c)[:, None] * irradiance  # T12 E cos(theta) V
-        w12_k = refract(w_front, normals[front], eta)  # spec 1.2 item 1
-        phi[front] += phi_k
-        weighted_w12[front] += phi_k.sum(axis=1)[:, None] * w12_k
+    samples = _samples(lights)
+    stats.n_samples = len(samples)
+    for batch in _batches(samples, points, normals, stats):
+        t = time.perf_counter()
+        if occluder is not None:
+            _apply_visibility(batch, occluder, cache, origins_key, points, normals, stats)
+        seconds_visibility += time.perf_counter() - t
+        # All samples of the batch at once: one Fresnel and refraction evaluation over every
+        # (vertex, sample) pair, summed per vertex with bincount.
+        sizes = [len(job.front) for job in batch]
+        front = np.concatenate([job.front for job in batch])
+        c = np.concatenate([job.cos for job in batch])
+        w = np.concatenate([np.broadcast_to(job.w, (len(job.front), 3)) for job in batch])
+        irradiance = np.concatenate([_irradiance(job, stats) for job in batch])
+        phi_pairs = (fresnel_transmittance(c, eta) * c)[:, None] * irradiance  # T12 E cos(theta) V
+        w12_pairs = refract(w, normals[front], eta)  # spec 1.2 item 1
+        weight = phi_pairs.sum(axis=1)
+        for channel in range(3):
+            phi[:, channel] += np.bincount(front, weights=phi_pairs[:, channel], minlength=n)
+            weighted_w12[:, channel] += np.bincount(front, weights=weight * w12_pairs[:, channel], minlength=n)
         if contributions is not None:
-            contributions.append(LightContribution(
-                light_index, vector.copy() if kind == "dir" else None, front, phi_k, areas[front, None] * phi_k, w12_k
-            ))
+            bounds = np.cumsum(sizes)[:-1]
+            for job, f, p, w12_k in zip(batch, np.split(front, bounds), np.split(phi_pairs, bounds), np.split(w12_pairs, bounds)):
+                direction = job.vector.copy() if job.kind == "dir" else None
+                contributions.append(LightContribution(job.light, direction, f, p, areas[f, None] * p, w12_k))
 
     weight = phi.sum(axis=1)
     lit = weight > 0.0

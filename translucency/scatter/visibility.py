@@ -168,7 +168,7 @@ class Occluder:
             Unit directions toward the light (one for all rays, or one per ray).
         distances : array_like, shape (k,), optional
             Distance from each origin to a point light, mm; a ray is blocked only by geometry closer
-            than that. None: rays to infinity.
+            than that. None, or ``inf`` for single rays: to infinity.
 
         Returns
         -------
@@ -179,16 +179,17 @@ class Occluder:
         k = len(origins)
         if k == 0 or self._scene is None:
             return np.ones(k, dtype=bool)
-        directions = np.asarray(directions, dtype=np.float64)
+        directions = np.broadcast_to(np.asarray(directions, dtype=np.float64), (k, 3))
         start = origins + self.epsilon * np.asarray(normals, dtype=np.float64)
         ray_origins = np.ascontiguousarray(start, dtype=np.float32)
-        ray_directions = np.ascontiguousarray(np.broadcast_to(directions, (k, 3)), dtype=np.float32)
-        if distances is None:
-            tfar = np.full(k, INFINITE_DISTANCE, dtype=np.float32)
-        else:
+        ray_directions = np.ascontiguousarray(directions, dtype=np.float32)
+        tfar = np.full(k, INFINITE_DISTANCE, dtype=np.float32)
+        if distances is not None:
+            distances = np.asarray(distances, dtype=np.float64)
+            segment = np.flatnonzero(np.isfinite(distances))
             # Measured from the offset origin, and stopped just short of the light itself.
-            targets = origins + directions * np.asarray(distances, dtype=np.float64)[:, None]
-            tfar = np.ascontiguousarray(np.linalg.norm(targets - start, axis=1) * (1.0 - 1e-6), dtype=np.float32)
+            target = origins[segment] + directions[segment] * distances[segment, None]
+            tfar[segment] = np.linalg.norm(target - start[segment], axis=1) * (1.0 - 1e-6)
         hit = self._run(ray_origins, ray_directions, tfar)
         self.rays_cast += k
         return hit < 0
