@@ -80,6 +80,8 @@ SUPPORTED_FORMATS: dict[str, str] = {
     **_PYMESHLAB_FORMATS,
 }
 
+_COMMON_FORMATS = ".ply, .obj, .stl, .off, .vtk, .vtp"
+
 # content signatures that are unambiguous: a file that shows one of them under another suffix is misnamed
 _CONFIDENT_SIGNATURES = {".ply", ".off", ".vtk", ".vtp", ".vtu", ".vtm", ".glb"}
 _XML_FAMILY = {".vtp", ".vtu", ".vtm"}
@@ -230,7 +232,7 @@ def detect_format(path) -> str | None:
 def _misnamed(path: Path, suffix: str, sniffed: str) -> str:
     expected = SUPPORTED_FORMATS[suffix].split(" (")[0]
     return (
-        f"{path.name} does not hold {expected} data but looks like a {sniffed[1:].upper()} file; "
+        f"{path.name} does not hold {expected} data but {sniffed[1:].upper()} data; "
         f"rename it to {path.stem}{sniffed} or pass format={sniffed[1:]!r}."
     )
 
@@ -267,8 +269,8 @@ def _check_readable(path: Path, format: str | None) -> str:
                 else ""
             )
             raise MeshError(
-                f"{path.name} has an unknown mesh format {suffix or '(no extension)'!r}{hint}; "
-                f"use one of {', '.join(SUPPORTED_FORMATS)}."
+                f"{path.name} has an unknown mesh format {repr(suffix) if suffix else '(no extension)'}{hint}; "
+                f"use a supported one ({_COMMON_FORMATS} or another of translucency.io.SUPPORTED_FORMATS)."
             )
     if not first:
         raise MeshError(f"{path.name} is empty (0 bytes); export the mesh again.")
@@ -356,7 +358,7 @@ def _read_ply(path: Path):
     body = header.file_size - header.size
     needed = header.minimum_body_size()
     if body < needed:
-        counts = ", ".join(f"{count} {name}" for name, count, _ in header.elements)
+        counts = " and ".join(f"{count} '{name}'" for name, count, _ in header.elements) + " elements"
         raise MeshError(
             f"{path.name} is truncated: its header announces {counts}, which need at least {needed} bytes, "
             f"but only {body} follow the header; download or export the file again."
@@ -587,7 +589,12 @@ def _read_with_vtk(path: Path, suffix: str):
     if data is None or data.n_points == 0:
         raise MeshError(f"{path.name} holds no vertices (an empty or unreadable {description} file); export the mesh again.")
     if not isinstance(data, pyvista.PolyData):
-        data = data.extract_surface(pass_pointid=False, pass_cellid=False)
+        from vtkmodules.vtkFiltersGeometry import vtkDataSetSurfaceFilter
+
+        surface = vtkDataSetSurfaceFilter()
+        surface.SetInputData(data)
+        surface.Update()
+        data = pyvista.wrap(surface.GetOutput())
     return mesh_from_vtk_polydata(data, what=path.name)
 
 

@@ -1,0 +1,108 @@
+"""Per-vertex geometry: property tests on generated meshes (areas partition the surface, normals)."""
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from hypothesis.extra.numpy import arrays
+
+from translucency.errors import InvalidParameterError
+from translucency.io.geometry import (
+    mean_edge_length,
+    signed_volume,
+    triangle_areas,
+    triangle_normals,
+    vertex_areas,
+    vertex_normals,
+)
+
+from .conftest import grid, icosphere
+
+coordinates = arrays(np.float64, (12, 3), elements=st.floats(-100, 100, allow_nan=False, width=64))
+triangle_lists = arrays(np.int64, (15, 3), elements=st.integers(0, 11))
+
+
+@settings(max_examples=60, deadline=None)
+@given(points=coordinates, triangles=triangle_lists, method=st.sampled_from(["barycentric", "mixed_voronoi"]))
+def test_vertex_areas_sum_to_surface_area(points, triangles, method):
+    # any triangle soup, degenerate triangles included: the shares partition the area (tolerance 1e-9 relative)
+    areas = vertex_areas(points, triangles, method=method)
+    total = triangle_areas(points, triangles).sum()
+    assert np.all(areas >= -1e-9 * max(total, 1))
+    assert areas.sum() == pytest.approx(total, rel=1e-9, abs=1e-9)
+    assert np.all(np.isfinite(areas))
+
+
+@settings(max_examples=40, deadline=None)
+@given(points=coordinates, triangles=triangle_lists)
+def test_vertex_normals_are_unit_or_zero_and_finite(points, triangles):
+    normals = vertex_normals(points, triangles)
+    length = np.linalg.norm(normals, axis=1)
+    assert np.all(np.isfinite(normals))
+    assert np.all((np.abs(length - 1) < 1e-12) | (length == 0))
+
+
+@settings(max_examples=30, deadline=None)
+@given(
+    scale=st.floats(1e-3, 1e3),
+    shift=arrays(np.float64, 3, elements=st.floats(-1e3, 1e3)),
+    method=st.sampled_from(["barycentric", "mixed_voronoi"]),
+)
+def test_areas_scale_quadratically_and_ignore_translation(scale, shift, method):
+    points, triangles = icosphere(1, 3.0)
+    base = vertex_areas(points, triangles, method=method)
+    moved = vertex_areas(points * scale + shift, triangles, method=method)
+    np.testing.assert_allclose(moved, base * scale**2, rtol=1e-9, atol=1e-9 * scale**2 * base.max())
+    np.testing.assert_allclose(vertex_normals(points * scale + shift, triangles), vertex_normals(points, triangles), atol=1e-12)
+
+
+def test_sphere_normals_point_outward_radially():
+    points, triangles = icosphere(3, 10.0)
+    normals = vertex_normals(points, triangles)
+    radial = points / np.linalg.norm(points, axis=1, keepdims=True)
+    assert np.min(np.einsum("ij,ij->i", normals, radial)) > 0.999
+
+
+def test_sphere_area_volume_and_edge_length():
+    points, triangles = icosphere(4, 10.0)
+    assert triangle_areas(points, triangles).sum() == pytest.approx(4 * np.pi * 100, rel=2e-3)
+    assert signed_volume(points, triangles) == pytest.approx(4 / 3 * np.pi * 1000, rel=5e-3)
+    assert signed_volume(points, triangles[:, ::-1]) < 0
+    # 2562 vertices on a 10 mm sphere: edges are about 0.7 mm
+    assert 0.5 < mean_edge_length(points, triangles) < 0.9
+
+
+def test_flat_grid_values():
+    points, triangles = grid(4, 4.0)  # unit right triangles
+    np.testing.assert_allclose(triangle_areas(points, triangles), 0.5)
+    np.testing.assert_allclose(triangle_normals(points, triangles), np.tile([0, 0, 1.0], (len(triangles), 1)))
+    np.testing.assert_allclose(vertex_normals(points, triangles), np.tile([0, 0, 1.0], (len(points), 1)))
+    areas = vertex_areas(points, triangles)
+    # an interior vertex touches 6 triangles of this grid: 6 * 0.5 / 3 = 1 mm²
+    assert areas[2 * 5 + 2] == pytest.approx(1.0)
+    # mixed Voronoi on right triangles: the right-angle corner's Voronoi cell
+    voronoi = vertex_areas(points, triangles, method="mixed_voronoi")
+    assert voronoi.sum() == pytest.approx(16.0)
+    assert voronoi[2 * 5 + 2] == pytest.approx(1.0)
+
+
+def test_mixed_voronoi_of_equilateral_triangle_is_a_third_each():
+    points = np.array([[0, 0, 0], [1, 0, 0], [0.5, 3**0.5 / 2, 0]])
+    np.testing.assert_allclose(vertex_areas(points, [[0, 1, 2]], method="mixed_voronoi"), 3**0.5 / 4 / 3)
+
+
+def test_obtuse_triangle_gives_half_to_the_obtuse_corner():
+    points = np.array([[0, 0, 0], [4, 0, 0], [2, 0.5, 0]])  # obtuse at vertex 2
+    areas = vertex_areas(points, [[0, 1, 2]], method="mixed_voronoi")
+    np.testing.assert_allclose(areas, [0.25, 0.25, 0.5])
+
+
+def test_degenerate_and_unreferenced_vertices_get_zero():
+    points = np.array([[0, 0, 0], [1, 0, 0], [2, 0, 0], [9, 9, 9]], dtype=float)
+    assert np.all(vertex_normals(points, [[0, 1, 2]]) == 0)
+    assert np.all(vertex_areas(points, [[0, 1, 2]], method="mixed_voronoi") == 0)
+
+
+def test_unknown_area_method():
+    with pytest.raises(InvalidParameterError, match="barycentric"):
+        vertex_areas(*grid(1), method="voronoi")

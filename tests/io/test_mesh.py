@@ -1,0 +1,89 @@
+"""The triangle-mesh type: validation, immutability, PyVista round trip."""
+
+import numpy as np
+import pytest
+
+from translucency.errors import MeshError
+from translucency.io import TriangleMesh, validate_mesh_arrays
+
+from .conftest import icosphere
+
+
+def test_arrays_are_converted_copied_and_read_only():
+    points, triangles = icosphere(1)
+    source_points = points.astype(np.float32)
+    mesh = TriangleMesh(source_points, triangles.astype(np.int32), {"q": np.arange(len(points))})
+    assert mesh.points.dtype == np.float64 and mesh.triangles.dtype == np.int64
+    with pytest.raises(ValueError):
+        mesh.points[0, 0] = 1.0
+    with pytest.raises(TypeError):
+        mesh.point_data["new"] = np.zeros(len(points))
+    source_points[0, 0] = 1e6  # the caller's array is not shared
+    assert mesh.points[0, 0] != 1e6
+    assert mesh.n_points == len(points) and mesh.n_triangles == len(triangles)
+
+
+def test_sizes_area_and_replace():
+    points, triangles = icosphere(3, 10.0)
+    mesh = TriangleMesh(points, triangles)
+    assert mesh.extent == pytest.approx(20.0, rel=1e-9)
+    assert mesh.surface_area == pytest.approx(4 * np.pi * 100, rel=5e-3)
+    assert mesh.vertex_areas().sum() == pytest.approx(mesh.surface_area)
+    assert mesh.vertex_normals().shape == (len(points), 3)
+    moved = mesh.replace(points=mesh.points + 1)
+    assert np.allclose(moved.points, mesh.points + 1) and moved.triangles is not None
+    assert "TriangleMesh(642 points" in repr(mesh)
+
+
+@pytest.mark.parametrize(
+    "points, triangles, message",
+    [
+        (np.zeros((3, 2)), [[0, 1, 2]], "shape"),
+        (np.zeros((0, 3)), np.zeros((0, 3), int), "no vertices"),
+        (np.eye(3), np.zeros((0, 3), int), "point cloud"),
+        (np.array([[0, 0, 0], [1, 0, 0], [np.nan, 0, 1]]), [[0, 1, 2]], "NaN or infinite"),
+        (np.array([[0, 0, 0], [1, 0, 0], [np.inf, 0, 1]]), [[0, 1, 2]], "NaN or infinite"),
+        (np.eye(3), [[0, 1, 3]], "refers to vertex 3"),
+        (np.eye(3), [[0, -1, 2]], "refers to vertex -1"),
+        (np.eye(3), [[0, 1]], "shape"),
+        (np.eye(3), [[0, 1.5, 2]], "not integers"),
+        ([["a", "b", "c"]], [[0, 0, 0]], "not numbers"),
+    ],
+)
+def test_invalid_arrays_raise_one_sentence(points, triangles, message):
+    with pytest.raises(MeshError, match=message) as info:
+        validate_mesh_arrays(points, triangles)
+    text = str(info.value)
+    assert text.count(". ") == 0 and text.endswith(".") and "\n" not in text
+
+
+def test_point_data_must_match_vertices():
+    with pytest.raises(MeshError, match="one row per vertex"):
+        TriangleMesh(np.eye(3), [[0, 1, 2]], {"colors": np.zeros((2, 3))})
+
+
+def test_bad_unit_factor():
+    with pytest.raises(MeshError, match="mm_per_unit"):
+        TriangleMesh(np.eye(3), [[0, 1, 2]], mm_per_unit=0)
+
+
+def test_pyvista_round_trip(sphere_mesh):
+    poly = sphere_mesh.to_pyvista()
+    assert poly.n_points == sphere_mesh.n_points and poly.n_cells == sphere_mesh.n_triangles
+    back = TriangleMesh.from_pyvista(poly)
+    np.testing.assert_array_equal(back.points, sphere_mesh.points)
+    np.testing.assert_array_equal(back.triangles, sphere_mesh.triangles)
+    np.testing.assert_array_equal(back.point_data["colors"], sphere_mesh.point_data["colors"])
+    np.testing.assert_array_equal(back.point_data["confidence"], sphere_mesh.point_data["confidence"])
+
+
+def test_from_pyvista_triangulates_polygons_and_strips():
+    import pyvista
+
+    quads = pyvista.Plane(i_resolution=3, j_resolution=2)  # 6 quads
+    mesh = TriangleMesh.from_pyvista(quads)
+    assert mesh.n_triangles == 12
+    assert mesh.surface_area == pytest.approx(1.0)
+    strips = quads.triangulate().strip()
+    assert strips.n_strips > 0
+    assert TriangleMesh.from_pyvista(strips).surface_area == pytest.approx(1.0)
