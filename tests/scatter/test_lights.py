@@ -138,6 +138,7 @@ def test_black_map_gives_no_samples():
         ({"radiance_map": -np.ones((4, 8, 3))}, "negative"),
         ({"radiance_map": np.full((4, 8, 3), np.nan)}, "NaN"),
         ({"up": (0, 0, 0)}, "non-zero length"),
+        ({"seed": -1}, "seed must be an integer"),
     ],
 )
 def test_environment_rejects_bad_values_with_a_sentence(kwargs, words):

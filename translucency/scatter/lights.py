@@ -286,6 +286,8 @@ class EnvironmentLight:
                 f"{what}: n_directions must lie in [1, {MAX_DIRECTIONS}], got {self.n_directions}."
             )
         object.__setattr__(self, "n_directions", int(self.n_directions))
+        if isinstance(self.seed, bool) or not isinstance(self.seed, (int, np.integer)) or self.seed < 0:
+            raise InvalidParameterError(f"{what}: seed must be an integer >= 0, got {self.seed!r}.")
         if self.sampling not in SAMPLING_METHODS:
             raise InvalidParameterError(
                 f"{what}: sampling must be one of {', '.join(SAMPLING_METHODS)}, got {self.sampling!r}."
