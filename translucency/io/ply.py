@@ -188,9 +188,10 @@ def comments_to_metadata(comments: list[str]) -> dict:
     """
     texts: dict[str, str] = {}
     for comment in comments:
+        comment = comment.strip()
         if not comment.startswith(_PREFIX):
             continue
-        match = re.fullmatch(r"(\S+) (\+?=) (.*)", comment[len(_PREFIX) :].strip())
+        match = re.fullmatch(r"(\S+) (\+?=) (.*)", comment[len(_PREFIX) :])
         if match is None:
             continue
         key, operator, text = match.groups()
@@ -231,7 +232,8 @@ def _per_vertex(name: str, values, n: int, dtype) -> np.ndarray:
             array = array.astype(np.uint8)
         return array
     array = array.astype(np.float64)
-    as_stored = array.astype(np.float32)
+    with np.errstate(over="ignore", invalid="ignore"):
+        as_stored = array.astype(np.float32)
     if not np.all(np.isfinite(as_stored)):
         bad = int(np.count_nonzero(~np.all(np.isfinite(as_stored), axis=1)))
         raise InvalidParameterError(f"{name} has {bad} vertices with NaN, infinite or float32-overflowing values; fix the computation before baking.")

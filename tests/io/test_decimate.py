@@ -1,0 +1,120 @@
+"""Decimation keeps the shape; the proxy mapping interpolates back exactly at shared vertices."""
+
+import numpy as np
+import pytest
+
+from translucency.errors import InvalidParameterError
+from translucency.io import TriangleMesh, clean_mesh, decimate_mesh, map_to_proxy, simplify_arrays, target_face_count
+from translucency.io.proximity import vertex_hausdorff_distance
+
+from .conftest import icosphere, load_scan
+
+
+def test_target_face_count_from_edge_length():
+    # a 1 mm² equilateral triangle has side sqrt(4 / sqrt(3))
+    side = np.sqrt(4 / np.sqrt(3))
+    assert target_face_count(1000.0, side) == 1000
+    with pytest.raises(InvalidParameterError, match="target_edge_length"):
+        target_face_count(1.0, 0.0)
+
+
+@pytest.mark.parametrize("method", ["fast-simplification", "pymeshlab"])
+def test_sphere_decimation_keeps_the_shape(sphere_mesh, method):
+    decimation = decimate_mesh(sphere_mesh, target_faces=500, method=method)
+    proxy = decimation.proxy
+    assert 400 <= proxy.n_triangles <= 520
+    radius = np.linalg.norm(proxy.points, axis=1)
+    assert np.allclose(radius, 25.0, rtol=0.01)  # proxy vertices stay on the 25 mm sphere
+    hausdorff = vertex_hausdorff_distance(sphere_mesh.points, sphere_mesh.triangles, proxy.points, proxy.triangles)
+    assert hausdorff < 0.02 * 50  # below 2 % of the diameter
+    assert decimation.mapping.distance.max() <= hausdorff + 1e-12
+    assert set(proxy.point_data) == {"colors", "confidence"}
+
+
+def test_interpolation_is_exact_at_shared_vertices(sphere_mesh):
+    # a proxy whose vertices are a subset of the full mesh's (the level-2 icosphere inside level 3)
+    coarse_points, coarse_triangles = icosphere(2, 25.0)
+    mapping = map_to_proxy(sphere_mesh.points, coarse_points, coarse_triangles)
+    values = np.random.default_rng(0).random((len(coarse_points), 3)) * 1e3
+    full = mapping.interpolate(values)
+    shared = np.arange(len(coarse_points))  # icosphere subdivision keeps the coarse vertices first
+    np.testing.assert_array_equal(sphere_mesh.points[shared], coarse_points)
+    np.testing.assert_array_equal(full[shared], values)  # bit for bit
+    # linear fields are reproduced everywhere inside the proxy triangles
+    linear = coarse_points @ [1.0, -2.0, 0.5] + 7.0
+    closest = np.einsum("qi,qij->qj", mapping.weights, coarse_points[mapping.vertex_index])
+    np.testing.assert_allclose(mapping.interpolate(linear), closest @ [1.0, -2.0, 0.5] + 7.0, rtol=1e-12)
+
+
+def test_interpolation_shapes_and_constant_fields(sphere_mesh):
+    decimation = decimate_mesh(sphere_mesh, target_faces=300)
+    n_proxy = decimation.proxy.n_points
+    assert decimation.interpolate(np.ones(n_proxy)).shape == (sphere_mesh.n_points,)
+    np.testing.assert_allclose(decimation.interpolate(np.full((n_proxy, 3), 2.5)), 2.5, rtol=1e-15)
+    assert decimation.interpolate(np.arange(n_proxy)).dtype == np.float64
+    assert decimation.interpolate(np.ones(n_proxy, np.float32)).dtype == np.float32
+    with pytest.raises(InvalidParameterError, match="one value per proxy vertex"):
+        decimation.interpolate(np.ones(n_proxy + 1))
+
+
+def test_no_decimation_needed_is_the_identity(sphere_mesh):
+    decimation = decimate_mesh(sphere_mesh, target_faces=10**6)
+    assert decimation.method == "none" and decimation.proxy is sphere_mesh
+    values = np.random.default_rng(1).random(sphere_mesh.n_points)
+    np.testing.assert_array_equal(decimation.interpolate(values), values)
+
+
+def test_edge_length_target(sphere_mesh):
+    decimation = decimate_mesh(sphere_mesh, target_edge_length=5.0)
+    expected = target_face_count(sphere_mesh.surface_area, 5.0)
+    assert abs(decimation.proxy.n_triangles - expected) <= 0.1 * expected + 4
+    with pytest.raises(InvalidParameterError, match="would leave"):
+        decimate_mesh(sphere_mesh, target_edge_length=100.0)
+
+
+@pytest.mark.parametrize(
+    "options, message",
+    [
+        (dict(), "exactly one"),
+        (dict(target_faces=100, target_edge_length=1.0), "exactly one"),
+        (dict(target_faces=5), "at least 20"),
+        (dict(target_faces=100, method="vtk"), "unknown decimation method"),
+    ],
+)
+def test_bad_arguments(sphere_mesh, options, message):
+    with pytest.raises(InvalidParameterError, match=message):
+        decimate_mesh(sphere_mesh, **options)
+
+
+def test_simplify_arrays_drops_unreferenced_vertices():
+    points, triangles = icosphere(3)
+    points = np.concatenate([points, [[99.0, 99.0, 99.0]]])
+    new_points, new_triangles = simplify_arrays(points, triangles, 200)
+    assert new_triangles.max() == len(new_points) - 1
+    assert not np.any(np.all(new_points == 99.0, axis=1))
+
+
+def test_shared_bunny_decimation_hausdorff_bound():
+    mesh, _ = clean_mesh(load_scan("stanford_bunny_zipper.ply", "m"))
+    diagonal = np.linalg.norm(np.ptp(mesh.points, axis=0))
+    decimation = decimate_mesh(mesh, target_faces=mesh.n_triangles // 10)
+    proxy = decimation.proxy
+    assert proxy.n_triangles == pytest.approx(mesh.n_triangles // 10, rel=0.05)
+    hausdorff = vertex_hausdorff_distance(mesh.points, mesh.triangles, proxy.points, proxy.triangles)
+    assert hausdorff < 0.005 * diagonal  # 10x fewer triangles, within 0.5 % of the size (about 1 mm)
+    assert np.mean(decimation.mapping.distance) < 0.0005 * diagonal
+    # the solver's proxy interpolates back smoothly: a smooth field on the proxy stays within its range
+    field = proxy.points[:, 2]
+    back = decimation.interpolate(field)
+    assert field.min() - 1e-9 <= back.min() and back.max() <= field.max() + 1e-9
+
+
+def test_shared_igea_full_pipeline_timing():
+    # the large scan, once: clean + decimate to the solver's resolution + map back
+    mesh = load_scan("cyberware_igea.ply", "m")
+    cleaned, report = clean_mesh(mesh)
+    assert not report.changed
+    decimation = decimate_mesh(cleaned, target_edge_length=1.5)
+    assert decimation.mapping.weights.shape == (cleaned.n_points, 3)
+    assert decimation.mapping.distance.max() < 0.5  # mm, on a 99 mm head
+    assert decimation.seconds < 30

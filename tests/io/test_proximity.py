@@ -1,0 +1,62 @@
+"""Exact closest points on triangle meshes, against brute force."""
+
+import numpy as np
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from translucency.io.proximity import closest_point_barycentric, closest_points_on_triangles, vertex_hausdorff_distance
+
+from .conftest import grid, icosphere
+
+
+def brute_force(query, points, triangles):
+    weights = closest_point_barycentric(query[:, None, :], *(points[triangles][None, :, i] for i in range(3)))
+    closest = np.einsum("qti,tij->qtj", weights, points[triangles])
+    distance = np.linalg.norm(query[:, None, :] - closest, axis=2)
+    return distance.min(axis=1)
+
+
+@settings(max_examples=30, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), spread=st.floats(0.1, 10), k=st.integers(1, 8))
+def test_matches_brute_force_on_random_soups(seed, spread, k):
+    rng = np.random.default_rng(seed)
+    points = rng.normal(size=(40, 3))
+    points[:5] *= 20  # a few huge triangles next to small ones
+    triangles = rng.integers(0, 40, size=(60, 3))
+    query = rng.normal(size=(200, 3)) * spread
+    index, weights, distance = closest_points_on_triangles(query, points, triangles, k=k)
+    np.testing.assert_allclose(distance, brute_force(query, points, triangles), rtol=1e-9, atol=1e-12)
+    closest = np.einsum("qi,qij->qj", weights, points[triangles[index]])
+    np.testing.assert_allclose(np.linalg.norm(query - closest, axis=1), distance, rtol=1e-9, atol=1e-12)
+    assert np.all(weights >= 0) and np.allclose(weights.sum(axis=1), 1)
+
+
+def test_numba_kernel_agrees_with_numpy_reference():
+    rng = np.random.default_rng(3)
+    points, triangles = icosphere(2, 5.0)
+    query = rng.normal(size=(300, 3)) * 6
+    index, weights, _ = closest_points_on_triangles(query, points, triangles)
+    reference = closest_point_barycentric(query, *(points[triangles[index]][:, i] for i in range(3)))
+    np.testing.assert_allclose(weights, reference, atol=1e-12)
+
+
+def test_vertices_get_exact_one_hot_weights():
+    points, triangles = icosphere(2, 7.3)
+    index, weights, distance = closest_points_on_triangles(points, points, triangles)
+    assert np.all(distance == 0)
+    assert np.all(np.sort(weights, axis=1) == [0.0, 0.0, 1.0])
+    corner = points[triangles[index]][np.arange(len(points)), np.argmax(weights, axis=1)]
+    np.testing.assert_array_equal(corner, points)
+
+
+def test_points_above_a_plane():
+    points, triangles = grid(5, 10.0)
+    query = np.array([[3.3, 4.4, 2.0], [-1.0, 5.0, 0.0], [12.0, 12.0, -1.0]])
+    _, _, distance = closest_points_on_triangles(query, points, triangles)
+    np.testing.assert_allclose(distance, [2.0, 1.0, np.sqrt(2 * 4 + 1)])
+
+
+def test_hausdorff_of_identical_and_shifted_meshes():
+    points, triangles = icosphere(2)
+    assert vertex_hausdorff_distance(points, triangles, points, triangles) == 0
+    assert np.isclose(vertex_hausdorff_distance(points, triangles, points + [0, 0, 0.5], triangles), 0.5, rtol=0.05)
