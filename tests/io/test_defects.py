@@ -18,7 +18,9 @@ def test_clean_closed_sphere_has_no_defects():
 def test_each_defect_is_counted():
     points, triangles = grid(4, 4.0)
     n = len(points)
-    points = np.concatenate([points, points[:2], [[50, 50, 50]], [[10, 0, 0], [20, 0, 0]]])  # 2 duplicates, 1 unreferenced, 2 for a cap
+    points = np.concatenate(
+        [points, points[:2], [[50, 50, 50]], [[10, 0, 0], [20, 0, 0]]]
+    )  # 2 duplicates, 1 unreferenced, 2 for a cap
     extra = [
         [0, 0, 1],  # null face
         triangles[3][::-1],  # duplicate face (other orientation)
@@ -34,7 +36,10 @@ def test_each_defect_is_counted():
 
 def test_non_manifold_edge_and_vertex():
     # three triangles on one edge (a fin), and two fans touching at one vertex (a bowtie)
-    points = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [5, 5, 0], [6, 5, 0], [5, 6, 0], [4, 5, 0], [5, 4, 0]], float)
+    points = np.array(
+        [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [5, 5, 0], [6, 5, 0], [5, 6, 0], [4, 5, 0], [5, 4, 0]],
+        float,
+    )
     triangles = [[0, 1, 2], [1, 0, 3], [0, 1, 4], [5, 6, 7], [5, 8, 9]]
     defects = find_defects(points, triangles)
     assert defects.non_manifold_edges == 1
@@ -56,10 +61,42 @@ def test_holes_loops_and_inconsistent_orientation():
 @pytest.mark.parametrize(
     "name, expected",
     [
-        ("stanford_bunny_zipper.ply", dict(unreferenced_vertices=1113, boundary_loops=5, boundary_edges=223, largest_boundary_loop=80, components=1, non_manifold_edges=0)),
+        (
+            "stanford_bunny_zipper.ply",
+            dict(
+                unreferenced_vertices=1113,
+                boundary_loops=5,
+                boundary_edges=223,
+                largest_boundary_loop=80,
+                components=1,
+                non_manifold_edges=0,
+            ),
+        ),
         ("cyberware_horse.ply", dict(boundary_edges=0, components=1, non_manifold_edges=0, inconsistent_edges=0)),
-        ("ggg_angel_sfm.ply", dict(non_manifold_edges=41, non_manifold_vertices=109, boundary_loops=199, boundary_edges=1413, components=49, null_faces=0, duplicate_faces=0)),
-        ("ggg_birdbath_sfm.ply", dict(duplicate_vertices=3, zero_area_faces=7, non_manifold_edges=2, non_manifold_vertices=206, boundary_loops=328, boundary_edges=3333, components=97)),
+        (
+            "ggg_angel_sfm.ply",
+            dict(
+                non_manifold_edges=41,
+                non_manifold_vertices=109,
+                boundary_loops=199,
+                boundary_edges=1413,
+                components=49,
+                null_faces=0,
+                duplicate_faces=0,
+            ),
+        ),
+        (
+            "ggg_birdbath_sfm.ply",
+            dict(
+                duplicate_vertices=3,
+                zero_area_faces=7,
+                non_manifold_edges=2,
+                non_manifold_vertices=206,
+                boundary_loops=328,
+                boundary_edges=3333,
+                components=97,
+            ),
+        ),
     ],
 )
 def test_shared_scans_match_the_readme(name, expected):

@@ -25,7 +25,7 @@ def write_radiance_hdr(path, image):
         for channel in range(4):  # each channel as literal runs of at most 128 bytes
             data = row[:, channel].tobytes()
             for start in range(0, width, 128):
-                part = data[start:start + 128]
+                part = data[start : start + 128]
                 out += bytes([len(part)]) + part
     path.write_bytes(bytes(out))
 

@@ -53,7 +53,9 @@ def test_areas_scale_quadratically_and_ignore_translation(scale, shift, method):
     base = vertex_areas(points, triangles, method=method)
     moved = vertex_areas(points * scale + shift, triangles, method=method)
     np.testing.assert_allclose(moved, base * scale**2, rtol=1e-9, atol=1e-9 * scale**2 * base.max())
-    np.testing.assert_allclose(vertex_normals(points * scale + shift, triangles), vertex_normals(points, triangles), atol=1e-12)
+    np.testing.assert_allclose(
+        vertex_normals(points * scale + shift, triangles), vertex_normals(points, triangles), atol=1e-12
+    )
 
 
 def test_sphere_normals_point_outward_radially():

@@ -36,7 +36,11 @@ def write_ply(path, points, faces, *, text=False, byte_order="<", colors=None, e
     if strips is not None:
         strip = np.empty(1, dtype=[("vertex_indices", object)])
         strip["vertex_indices"] = [np.asarray(strips, dtype=np.int32)]
-        elements.append(plyfile.PlyElement.describe(strip, "tristrips", len_types={"vertex_indices": "i4"}, val_types={"vertex_indices": "i4"}))
+        elements.append(
+            plyfile.PlyElement.describe(
+                strip, "tristrips", len_types={"vertex_indices": "i4"}, val_types={"vertex_indices": "i4"}
+            )
+        )
     plyfile.PlyData(elements, text=text, byte_order=byte_order).write(str(path))
     return path
 
@@ -52,7 +56,15 @@ def sphere_arrays():
 def test_ply_ascii_and_binary_keep_colours_and_properties(tmp_path, sphere_arrays, text, byte_order):
     points, triangles, colors = sphere_arrays
     confidence = np.linspace(0, 1, len(points)).astype(np.float32)
-    path = write_ply(tmp_path / "s.ply", points, triangles, text=text, byte_order=byte_order, colors=colors, extra={"confidence": confidence})
+    path = write_ply(
+        tmp_path / "s.ply",
+        points,
+        triangles,
+        text=text,
+        byte_order=byte_order,
+        colors=colors,
+        extra={"confidence": confidence},
+    )
     mesh = load_mesh(path)
     np.testing.assert_allclose(mesh.points, points.astype(np.float32), rtol=0, atol=0)
     np.testing.assert_array_equal(mesh.triangles, triangles)
@@ -84,15 +96,21 @@ def test_ply_triangle_strips(tmp_path):
 
 def test_obj_with_vertex_colours_and_quads(tmp_path):
     path = tmp_path / "q.obj"
-    path.write_text("# quad\nv 0 0 0 1 0 0\nv 10 0 0 0 1 0\nv 10 10 0 0 0 1\nv 0 10 0 1 1 1\nvn 0 0 1\nf 1//1 2//1 3//1 4//1\n")
+    path.write_text(
+        "# quad\nv 0 0 0 1 0 0\nv 10 0 0 0 1 0\nv 10 10 0 0 0 1\nv 0 10 0 1 1 1\nvn 0 0 1\nf 1//1 2//1 3//1 4//1\n"
+    )
     mesh = load_mesh(path)
     assert mesh.n_triangles == 2 and mesh.surface_area == pytest.approx(100.0)
-    np.testing.assert_array_equal(mesh.point_data["colors"][:, :3], [[255, 0, 0], [0, 255, 0], [0, 0, 255], [255, 255, 255]])
+    np.testing.assert_array_equal(
+        mesh.point_data["colors"][:, :3], [[255, 0, 0], [0, 255, 0], [0, 0, 255], [255, 255, 255]]
+    )
 
 
 def test_off_and_coff(tmp_path):
     path = tmp_path / "c.off"
-    path.write_text("COFF\n# comment\n4 2 0\n0 0 0 255 0 0 255\n10 0 0 0 255 0 255\n10 10 0 0 0 255 255\n0 10 0 9 9 9 255\n4 0 1 2 3\n3 0 2 1 1 0 0\n")
+    path.write_text(
+        "COFF\n# comment\n4 2 0\n0 0 0 255 0 0 255\n10 0 0 0 255 0 255\n10 10 0 0 0 255 255\n0 10 0 9 9 9 255\n4 0 1 2 3\n3 0 2 1 1 0 0\n"
+    )
     mesh = load_mesh(path)
     np.testing.assert_array_equal(mesh.triangles, [[0, 1, 2], [0, 2, 3], [0, 2, 1]])
     np.testing.assert_array_equal(mesh.point_data["colors"][:, :3], [[255, 0, 0], [0, 255, 0], [0, 0, 255], [9, 9, 9]])

@@ -10,7 +10,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from translucency.errors import InvalidParameterError, MeshError, TranslucencyError
-from translucency.io import TriangleMesh, read_baked_ply, write_baked_ply
+from translucency.io import read_baked_ply, write_baked_ply
 from translucency.io.ply import comments_to_metadata, metadata_to_comments
 
 METADATA = {
@@ -137,7 +137,14 @@ def test_the_input_scan_is_never_overwritten(tmp_path, sphere_mesh):
     mesh = load_mesh(source)
     before = source.read_bytes()
     with pytest.raises(InvalidParameterError, match="never modified"):
-        write_baked_ply(source, mesh, np.ones((mesh.n_points, 3)), np.ones((mesh.n_points, 3)), np.zeros((mesh.n_points, 3), np.uint8), METADATA)
+        write_baked_ply(
+            source,
+            mesh,
+            np.ones((mesh.n_points, 3)),
+            np.ones((mesh.n_points, 3)),
+            np.zeros((mesh.n_points, 3), np.uint8),
+            METADATA,
+        )
     assert source.read_bytes() == before
 
 
@@ -156,7 +163,9 @@ def test_the_input_scan_is_never_overwritten(tmp_path, sphere_mesh):
 )
 def test_invalid_bakes_are_refused(tmp_path, sphere_mesh, change, message):
     n = sphere_mesh.n_points
-    arguments = dict(radiance=np.zeros((n, 3)), b=np.zeros((n, 3)), colors_rgb8=np.zeros((n, 3), np.uint8), metadata=METADATA)
+    arguments = dict(
+        radiance=np.zeros((n, 3)), b=np.zeros((n, 3)), colors_rgb8=np.zeros((n, 3), np.uint8), metadata=METADATA
+    )
     arguments.update(change)
     with pytest.raises(InvalidParameterError, match=message):
         write_baked_ply(tmp_path / "x.ply", sphere_mesh, **arguments)
@@ -166,7 +175,14 @@ def test_invalid_bakes_are_refused(tmp_path, sphere_mesh, change, message):
 def test_missing_folder(tmp_path, sphere_mesh):
     n = sphere_mesh.n_points
     with pytest.raises(InvalidParameterError, match="does not exist"):
-        write_baked_ply(tmp_path / "no" / "x.ply", sphere_mesh, np.zeros((n, 3)), np.zeros((n, 3)), np.zeros((n, 3), np.uint8), METADATA)
+        write_baked_ply(
+            tmp_path / "no" / "x.ply",
+            sphere_mesh,
+            np.zeros((n, 3)),
+            np.zeros((n, 3)),
+            np.zeros((n, 3), np.uint8),
+            METADATA,
+        )
 
 
 def test_a_plain_ply_is_not_a_bake(tmp_path):
@@ -179,7 +195,10 @@ def test_a_plain_ply_is_not_a_bake(tmp_path):
 
 json_values = st.recursive(
     st.none() | st.booleans() | st.integers(-(10**12), 10**12) | st.floats(allow_nan=False) | st.text(max_size=300),
-    lambda children: st.lists(children, max_size=5) | st.dictionaries(st.from_regex(r"[a-z_][a-z0-9_]{0,8}", fullmatch=True), children, max_size=4),
+    lambda children: (
+        st.lists(children, max_size=5)
+        | st.dictionaries(st.from_regex(r"[a-z_][a-z0-9_]{0,8}", fullmatch=True), children, max_size=4)
+    ),
     max_leaves=20,
 )
 

@@ -14,9 +14,7 @@ def test_fan_triangulation_of_mixed_polygons():
     offsets = [0, 3, 7, 9, 14]  # a triangle, a quad, a 2-gon (dropped), a pentagon
     connectivity = [0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13]
     triangles = triangulate_polygons(offsets, connectivity)
-    np.testing.assert_array_equal(
-        triangles, [[0, 1, 2], [3, 4, 5], [3, 5, 6], [9, 10, 11], [9, 11, 12], [9, 12, 13]]
-    )
+    np.testing.assert_array_equal(triangles, [[0, 1, 2], [3, 4, 5], [3, 5, 6], [9, 10, 11], [9, 11, 12], [9, 12, 13]])
     lists = [np.array(connectivity[a:b]) for a, b in zip(offsets[:-1], offsets[1:])]
     np.testing.assert_array_equal(triangulate_polygon_lists(lists), triangles)
 

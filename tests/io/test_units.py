@@ -9,7 +9,8 @@ from translucency.io.units import ImplausibleSizeWarning, check_extent, likely_u
 
 
 @pytest.mark.parametrize(
-    "unit, factor", [("mm", 1.0), ("cm", 10.0), ("m", 1000.0), ("in", 25.4), ("M", 1000.0), (2.5, 2.5), ("0.5", 0.5), (3, 3.0)]
+    "unit, factor",
+    [("mm", 1.0), ("cm", 10.0), ("m", 1000.0), ("in", 25.4), ("M", 1000.0), (2.5, 2.5), ("0.5", 0.5), (3, 3.0)],
 )
 def test_parse_unit(unit, factor):
     assert parse_unit(unit) == factor

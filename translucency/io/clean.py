@@ -45,8 +45,16 @@ import time
 import numpy as np
 
 from ..errors import InvalidParameterError, MeshError
-from .defects import ZERO_AREA_RATIO, MeshDefects, face_components, find_defects, triangle_keys, unique_edges, zero_area_mask
-from .defects import _count_non_manifold_vertices
+from .defects import (
+    ZERO_AREA_RATIO,
+    MeshDefects,
+    _count_non_manifold_vertices,
+    face_components,
+    find_defects,
+    triangle_keys,
+    unique_edges,
+    zero_area_mask,
+)
 from .geometry import triangle_areas, vertex_normals
 from .mesh import TriangleMesh, validate_mesh_arrays
 from .orientation import coherent_orientation, flip_triangles, outward_flips
@@ -124,7 +132,14 @@ class CleanReport:
     def changed(self) -> bool:
         """True when the repair changed anything."""
         counts = dataclasses.asdict(self)
-        for key in ("before", "after", "settings", "seconds", "normal_smoothing_iterations", "non_orientable_components"):
+        for key in (
+            "before",
+            "after",
+            "settings",
+            "seconds",
+            "normal_smoothing_iterations",
+            "non_orientable_components",
+        ):
             counts.pop(key)
         return any(counts.values())
 
@@ -232,7 +247,9 @@ def clean_mesh(
         For out-of-range options.
     """
     if not isinstance(mesh, TriangleMesh):
-        raise InvalidParameterError(f"clean_mesh needs a TriangleMesh, not {type(mesh).__name__}; load the file with load_mesh first.")
+        raise InvalidParameterError(
+            f"clean_mesh needs a TriangleMesh, not {type(mesh).__name__}; load the file with load_mesh first."
+        )
     points, triangles, origin, normals, report = clean_arrays(
         mesh.points,
         mesh.triangles,
@@ -286,9 +303,13 @@ def clean_arrays(
     points, triangles = validate_mesh_arrays(points, triangles)
     min_island_fraction = float(min_island_fraction)
     if not (0.0 <= min_island_fraction < 1.0):
-        raise InvalidParameterError(f"min_island_fraction is {min_island_fraction}; pass a fraction in [0, 1), e.g. 0.01.")
+        raise InvalidParameterError(
+            f"min_island_fraction is {min_island_fraction}; pass a fraction in [0, 1), e.g. 0.01."
+        )
     if int(max_hole_edges) != max_hole_edges or max_hole_edges < 0:
-        raise InvalidParameterError(f"max_hole_edges is {max_hole_edges!r}; pass a whole number of edges >= 0, e.g. 100.")
+        raise InvalidParameterError(
+            f"max_hole_edges is {max_hole_edges!r}; pass a whole number of edges >= 0, e.g. 100."
+        )
     if int(smooth_normals) != smooth_normals or smooth_normals < 0:
         raise InvalidParameterError(f"smooth_normals is {smooth_normals!r}; pass a number of iterations >= 0.")
     settings = dict(
@@ -307,11 +328,17 @@ def clean_arrays(
 
     # 1. duplicate vertices
     if merge_duplicate_vertices:
-        points, triangles, origin, counts["duplicate_vertices_merged"] = _merge_duplicate_vertices(points, triangles, origin)
+        points, triangles, origin, counts["duplicate_vertices_merged"] = _merge_duplicate_vertices(
+            points, triangles, origin
+        )
 
     # 2-3. null and duplicate faces
     if remove_degenerate_faces:
-        null = (triangles[:, 0] == triangles[:, 1]) | (triangles[:, 1] == triangles[:, 2]) | (triangles[:, 0] == triangles[:, 2])
+        null = (
+            (triangles[:, 0] == triangles[:, 1])
+            | (triangles[:, 1] == triangles[:, 2])
+            | (triangles[:, 0] == triangles[:, 2])
+        )
         triangles = triangles[~null]
         counts["null_faces_removed"] = int(np.count_nonzero(null))
         _, first = np.unique(triangle_keys(triangles, len(points)), return_index=True)
@@ -452,7 +479,9 @@ def _merge_duplicate_vertices(points, triangles, origin):
 
 
 def _to_meshset(pymeshlab, points, triangles, origin):
-    mesh = pymeshlab.Mesh(vertex_matrix=np.ascontiguousarray(points), face_matrix=np.ascontiguousarray(triangles, dtype=np.int32))
+    mesh = pymeshlab.Mesh(
+        vertex_matrix=np.ascontiguousarray(points), face_matrix=np.ascontiguousarray(triangles, dtype=np.int32)
+    )
     mesh.add_vertex_custom_scalar_attribute(origin.astype(np.float64) + 1.0, _ORIGIN)
     mesh_set = pymeshlab.MeshSet()
     mesh_set.add_mesh(mesh)
@@ -512,7 +541,9 @@ def _repair_non_manifold(points, triangles, origin, input_points, counts):
                 mesh_set.meshing_repair_non_manifold_vertices(vertdispratio=_SPLIT_DISPLACEMENT)
                 vertices_added += mesh_set.current_mesh().vertex_number() - vertices_before
         except pymeshlab.PyMeshLabException as exc:
-            raise MeshError(f"pymeshlab could not repair the non-manifold parts of the mesh ({exc}); repair it in MeshLab first.") from exc
+            raise MeshError(
+                f"pymeshlab could not repair the non-manifold parts of the mesh ({exc}); repair it in MeshLab first."
+            ) from exc
         points, triangles, origin = _from_meshset(mesh_set, input_points)
         _require_triangles(triangles, "repairing non-manifold edges")
         bad_edges, bad_vertices = _non_manifold_counts(triangles, len(points))
@@ -561,7 +592,9 @@ def _close_holes(points, triangles, origin, input_points, max_hole_edges, counts
     if not np.any(faces_per_edge == 1):
         return points, triangles, origin
     if np.any(faces_per_edge > 2):
-        raise MeshError("holes cannot be closed in a mesh with non-manifold edges; keep repair_non_manifold=True or pass max_hole_edges=0.")
+        raise MeshError(
+            "holes cannot be closed in a mesh with non-manifold edges; keep repair_non_manifold=True or pass max_hole_edges=0."
+        )
     pymeshlab = import_pymeshlab()
     mesh_set = _to_meshset(pymeshlab, points, triangles, origin)
     closed = 0
@@ -573,6 +606,8 @@ def _close_holes(points, triangles, origin, input_points, max_hole_edges, counts
             )
             closed += int((result or {}).get("closed_holes", 0))
     except pymeshlab.PyMeshLabException as exc:
-        raise MeshError(f"pymeshlab could not close the holes of the mesh ({exc}); pass max_hole_edges=0 to skip it.") from exc
+        raise MeshError(
+            f"pymeshlab could not close the holes of the mesh ({exc}); pass max_hole_edges=0 to skip it."
+        ) from exc
     counts["holes_closed"] = closed
     return _from_meshset(mesh_set, input_points)

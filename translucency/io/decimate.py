@@ -105,6 +105,11 @@ def simplify_arrays(
     points : ndarray, shape (k, 3), float64
         Proxy vertices in mm (unreferenced vertices dropped).
     triangles : ndarray, shape (l, 3), int64
+
+    Notes
+    -----
+    fast-simplification keeps its mesh in module-level state: do not call it from several threads
+    at once (processes are fine).
     """
     points, triangles = validate_mesh_arrays(points, triangles)
     if method not in METHODS:
@@ -130,7 +135,9 @@ def simplify_arrays(
         pymeshlab = import_pymeshlab()
         mesh_set = pymeshlab.MeshSet()
         mesh_set.add_mesh(
-            pymeshlab.Mesh(vertex_matrix=np.array(points, order="C"), face_matrix=np.array(triangles, dtype=np.int32, order="C"))
+            pymeshlab.Mesh(
+                vertex_matrix=np.array(points, order="C"), face_matrix=np.array(triangles, dtype=np.int32, order="C")
+            )
         )
         try:
             mesh_set.meshing_decimation_quadric_edge_collapse(
@@ -143,7 +150,9 @@ def simplify_arrays(
                 autoclean=True,
             )
         except pymeshlab.PyMeshLabException as exc:
-            raise MeshError(f"pymeshlab could not decimate the mesh ({exc}); try method='fast-simplification'.") from exc
+            raise MeshError(
+                f"pymeshlab could not decimate the mesh ({exc}); try method='fast-simplification'."
+            ) from exc
         mesh = mesh_set.current_mesh()
         mesh.compact()
         new_points, new_triangles = mesh.vertex_matrix(), mesh.face_matrix()
@@ -314,7 +323,9 @@ def decimate_mesh(
     """
     started = time.perf_counter()
     if not isinstance(mesh, TriangleMesh):
-        raise InvalidParameterError(f"decimate_mesh needs a TriangleMesh, not {type(mesh).__name__}; load the file with load_mesh first.")
+        raise InvalidParameterError(
+            f"decimate_mesh needs a TriangleMesh, not {type(mesh).__name__}; load the file with load_mesh first."
+        )
     if (target_faces is None) == (target_edge_length is None):
         raise InvalidParameterError("give exactly one of target_faces and target_edge_length to decimate_mesh.")
     if method not in METHODS:
@@ -330,19 +341,25 @@ def decimate_mesh(
             )
     else:
         if int(target_faces) != target_faces or target_faces < _MIN_FACES:
-            raise InvalidParameterError(f"target_faces is {target_faces!r}; pass a whole number of at least {_MIN_FACES}.")
+            raise InvalidParameterError(
+                f"target_faces is {target_faces!r}; pass a whole number of at least {_MIN_FACES}."
+            )
         target_faces = int(target_faces)
 
     if target_faces >= mesh.n_triangles:
         proxy, used_method = mesh, "none"
     else:
-        points, triangles = simplify_arrays(mesh.points, mesh.triangles, target_faces, method=method, aggressiveness=aggressiveness)
+        points, triangles = simplify_arrays(
+            mesh.points, mesh.triangles, target_faces, method=method, aggressiveness=aggressiveness
+        )
         point_data = {}
         if mesh.point_data:
             from scipy.spatial import cKDTree
 
             _, nearest = cKDTree(mesh.points).query(points)
-            point_data = {name: np.asarray(values)[nearest] for name, values in mesh.point_data.items() if name != "normals"}
+            point_data = {
+                name: np.asarray(values)[nearest] for name, values in mesh.point_data.items() if name != "normals"
+            }
             if "normals" in mesh.point_data:
                 from .geometry import vertex_normals
 
@@ -351,5 +368,9 @@ def decimate_mesh(
         used_method = method
     mapping = map_to_proxy(mesh.points, proxy.points, proxy.triangles)
     return Decimation(
-        proxy=proxy, mapping=mapping, method=used_method, target_faces=int(target_faces), seconds=time.perf_counter() - started
+        proxy=proxy,
+        mapping=mapping,
+        method=used_method,
+        target_faces=int(target_faces),
+        seconds=time.perf_counter() - started,
     )

@@ -180,7 +180,11 @@ def find_defects(points, triangles) -> MeshDefects:
     referenced = np.zeros(n, dtype=bool)
     referenced[triangles.ravel()] = True
 
-    null = (triangles[:, 0] == triangles[:, 1]) | (triangles[:, 1] == triangles[:, 2]) | (triangles[:, 0] == triangles[:, 2])
+    null = (
+        (triangles[:, 0] == triangles[:, 1])
+        | (triangles[:, 1] == triangles[:, 2])
+        | (triangles[:, 0] == triangles[:, 2])
+    )
     proper = triangles[~null]
     duplicate_faces = len(proper) - len(np.unique(triangle_keys(proper, n)))
     zero_area = int(np.count_nonzero(zero_area_mask(points, proper)))
@@ -226,7 +230,9 @@ def _boundary_loops(boundary_edges: np.ndarray) -> tuple[int, int]:
         return 0, 0
     used, local = np.unique(boundary_edges.ravel(), return_inverse=True)
     local = local.reshape(-1, 2)
-    graph = sparse.coo_matrix((np.ones(len(local), dtype=np.int8), (local[:, 0], local[:, 1])), shape=(len(used), len(used)))
+    graph = sparse.coo_matrix(
+        (np.ones(len(local), dtype=np.int8), (local[:, 0], local[:, 1])), shape=(len(used), len(used))
+    )
     count, labels = csgraph.connected_components(graph, directed=False)
     edges_per_loop = np.bincount(labels[local[:, 0]], minlength=count)
     return int(count), int(edges_per_loop.max())

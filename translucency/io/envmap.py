@@ -57,7 +57,9 @@ def _read_radiance_hdr(path: Path) -> np.ndarray:
     image = reader.GetOutput()
     scalars = image.GetPointData().GetScalars() if image is not None else None
     if errors or scalars is None:
-        raise EnvironmentMapError(f"{path.name} could not be decoded as a Radiance HDR image (damaged or truncated file).")
+        raise EnvironmentMapError(
+            f"{path.name} could not be decoded as a Radiance HDR image (damaged or truncated file)."
+        )
     width, height, _ = image.GetDimensions()
     pixels = vtk_to_numpy(scalars).astype(np.float64)
     if pixels.shape != (width * height, 3):
@@ -122,7 +124,9 @@ def read_equirectangular(path) -> np.ndarray:
     if pixels.ndim == 2:
         pixels = np.repeat(pixels[:, :, None], 3, axis=2)
     if pixels.ndim != 3 or pixels.shape[2] not in (1, 3, 4):
-        raise EnvironmentMapError(f"{path.name}: an environment map must be an (H, W, 3) RGB image, got shape {pixels.shape}.")
+        raise EnvironmentMapError(
+            f"{path.name}: an environment map must be an (H, W, 3) RGB image, got shape {pixels.shape}."
+        )
     if pixels.shape[2] == 1:
         pixels = np.repeat(pixels, 3, axis=2)
     pixels = np.ascontiguousarray(pixels[:, :, :3])
@@ -135,8 +139,15 @@ def read_equirectangular(path) -> np.ndarray:
     return pixels
 
 
-def load_environment(path, *, n_directions: int = 256, sampling: str = "importance", seed: int = 0,
-                     up=(0.0, 0.0, 1.0), scale: float = 1.0) -> EnvironmentLight:
+def load_environment(
+    path,
+    *,
+    n_directions: int = 256,
+    sampling: str = "importance",
+    seed: int = 0,
+    up=(0.0, 0.0, 1.0),
+    scale: float = 1.0,
+) -> EnvironmentLight:
     """An :class:`~translucency.scatter.lights.EnvironmentLight` from an equirectangular map file.
 
     Parameters
@@ -152,5 +163,6 @@ def load_environment(path, *, n_directions: int = 256, sampling: str = "importan
     if not (np.isfinite(scale) and scale >= 0):
         raise EnvironmentMapError(f"scale must be a finite number >= 0, got {scale!r}.")
     radiance = read_equirectangular(path) * float(scale)
-    return EnvironmentLight(radiance_map=radiance, n_directions=n_directions, sampling=sampling, seed=seed,
-                            up=up, name=Path(path).name)
+    return EnvironmentLight(
+        radiance_map=radiance, n_directions=n_directions, sampling=sampling, seed=seed, up=up, name=Path(path).name
+    )

@@ -132,9 +132,13 @@ def load_mesh(path, unit: str | float = "mm", *, format: str | None = None) -> T
     points, triangles, point_data = read_mesh_arrays(path, format=format)
     points = points * mm_per_unit
     if not np.isfinite(points).all():
-        raise MeshError(f"{path.name} has coordinates too large to convert to mm; check the file's unit and coordinates.")
-    used = np.unique(triangles)
-    extent = float(np.max(points[used].max(axis=0) - points[used].min(axis=0)))
+        raise MeshError(
+            f"{path.name} has coordinates too large to convert to mm; check the file's unit and coordinates."
+        )
+    referenced = np.zeros(len(points), dtype=bool)
+    referenced[triangles.ravel()] = True
+    used = points[referenced]
+    extent = float(np.max(used.max(axis=0) - used.min(axis=0)))
     check_extent(extent, mm_per_unit, path.name, stacklevel=2)
     return TriangleMesh(points, triangles, point_data, source=path, mm_per_unit=mm_per_unit)
 
@@ -250,7 +254,9 @@ def _check_readable(path: Path, format: str | None) -> str:
         with open(path, "rb") as stream:
             first = stream.read(1)
     except PermissionError as exc:
-        raise MeshError(f"{path.name} cannot be read (permission denied); make it readable (chmod +r) or copy it.") from exc
+        raise MeshError(
+            f"{path.name} cannot be read (permission denied); make it readable (chmod +r) or copy it."
+        ) from exc
     except OSError as exc:
         raise MeshError(f"{path.name} cannot be read ({exc.strerror or exc}); check the file and the disk.") from exc
     if format is not None:
@@ -332,7 +338,9 @@ class _PlyHeader:
             raise MeshError(f"{path.name} has a corrupt PLY header (format {self.format!r}); export the mesh again.")
         for name, count, _ in self.elements:
             if count < 0:
-                raise MeshError(f"{path.name} has a corrupt PLY header ({count} {name} elements); export the mesh again.")
+                raise MeshError(
+                    f"{path.name} has a corrupt PLY header ({count} {name} elements); export the mesh again."
+                )
 
     def minimum_body_size(self) -> int:
         """Smallest number of bytes the body can have for the announced element counts."""
@@ -412,7 +420,9 @@ def _read_ply_with_plyfile(path: Path, header: _PlyHeader, plyfile):
         try:
             ply = plyfile.PlyData.read(str(path), mmap="c")
         except errors as exc:
-            raise MeshError(f"{path.name} is corrupt or truncated ({_short(exc)}); download or export the file again.") from exc
+            raise MeshError(
+                f"{path.name} is corrupt or truncated ({_short(exc)}); download or export the file again."
+            ) from exc
     vertex_data = {
         p.name: np.array(ply["vertex"].data[p.name]) for p in ply["vertex"].properties if not hasattr(p, "len_dtype")
     }
@@ -464,7 +474,10 @@ def _read_ply_ascii_fast(path: Path, header: _PlyHeader):
 
 def _ply_point_data(vertex_data: dict, properties) -> dict[str, np.ndarray]:
     """Per-vertex properties other than x, y, z; colours as uint8 "colors", normals as "normals"."""
-    native = {name: np.asarray(values).astype(np.asarray(values).dtype.newbyteorder("="), copy=False) for name, values in vertex_data.items()}
+    native = {
+        name: np.asarray(values).astype(np.asarray(values).dtype.newbyteorder("="), copy=False)
+        for name, values in vertex_data.items()
+    }
     point_data: dict[str, np.ndarray] = {}
     used = {"x", "y", "z"}
     for prefix in ("", "diffuse_"):
@@ -506,12 +519,16 @@ def _read_off(path: Path):
     keyword = lines[0][0]
     match = re.fullmatch(r"(ST)?(C)?(N)?(4)?(n)?OFF", keyword)
     if match is None:
-        raise MeshError(f"{path.name} is not an OFF file (it starts with {keyword[:20]!r}, not 'OFF'); check the file's format.")
+        raise MeshError(
+            f"{path.name} is not an OFF file (it starts with {keyword[:20]!r}, not 'OFF'); check the file's format."
+        )
     if match.group(4) or match.group(5):
         raise MeshError(f"{path.name} is a {keyword} file (not 3D coordinates); convert it to a 3D OFF or PLY file.")
     rest = lines[0][1:]
     if rest and rest[0].upper() == "BINARY":
-        raise MeshError(f"{path.name} is a binary OFF file, which is not supported; convert it to PLY (for example with MeshLab).")
+        raise MeshError(
+            f"{path.name} is a binary OFF file, which is not supported; convert it to PLY (for example with MeshLab)."
+        )
     body = lines[1:]
     if not rest:
         if not body:
@@ -520,7 +537,9 @@ def _read_off(path: Path):
     try:
         n_vertices, n_faces = int(rest[0]), int(rest[1])
     except (IndexError, ValueError):
-        raise MeshError(f"{path.name} has a corrupt OFF header (counts {' '.join(rest)[:40]!r}); export the mesh again.") from None
+        raise MeshError(
+            f"{path.name} has a corrupt OFF header (counts {' '.join(rest)[:40]!r}); export the mesh again."
+        ) from None
     if n_vertices < 0 or n_faces < 0:
         raise MeshError(f"{path.name} has a corrupt OFF header (negative counts); export the mesh again.")
     if len(body) < n_vertices + n_faces:
@@ -533,9 +552,13 @@ def _read_off(path: Path):
     try:
         values = np.array([words[:width] for words in vertex_lines], dtype=np.float64)
     except ValueError:
-        raise MeshError(f"{path.name} has vertex lines that are not numbers; the file is corrupt, export it again.") from None
+        raise MeshError(
+            f"{path.name} has vertex lines that are not numbers; the file is corrupt, export it again."
+        ) from None
     if width < 3:
-        raise MeshError(f"{path.name} has vertex lines with fewer than 3 coordinates; the file is corrupt, export it again.")
+        raise MeshError(
+            f"{path.name} has vertex lines with fewer than 3 coordinates; the file is corrupt, export it again."
+        )
     points = values[:, :3]
     point_data: dict[str, np.ndarray] = {}
     column = 3
@@ -545,7 +568,9 @@ def _read_off(path: Path):
     if match.group(2) and width >= column + 3:
         n_channels = 4 if width >= column + 4 else 3
         colors = values[:, column : column + n_channels]
-        point_data["colors"] = _as_rgb8(colors) if colors.max(initial=0) <= 1.0 else np.clip(np.round(colors), 0, 255).astype(np.uint8)
+        point_data["colors"] = (
+            _as_rgb8(colors) if colors.max(initial=0) <= 1.0 else np.clip(np.round(colors), 0, 255).astype(np.uint8)
+        )
         column += n_channels
     if match.group(1) and width >= column + 2:
         point_data["texture_coordinates"] = values[:, column : column + 2]
@@ -554,7 +579,9 @@ def _read_off(path: Path):
         sizes = np.array([int(words[0]) for words in face_lines], dtype=np.int64)
         if np.any(sizes < 0) or any(len(words) < 1 + k for words, k in zip(face_lines, sizes)):
             raise ValueError("face lines shorter than their counts")
-        connectivity = np.array([int(i) for words, k in zip(face_lines, sizes) for i in words[1 : 1 + k]], dtype=np.int64)
+        connectivity = np.array(
+            [int(i) for words, k in zip(face_lines, sizes) for i in words[1 : 1 + k]], dtype=np.int64
+        )
     except ValueError:
         raise MeshError(f"{path.name} has corrupt face lines; export the mesh again.") from None
     offsets = np.concatenate([[0], np.cumsum(sizes)])
@@ -580,14 +607,18 @@ def _read_with_vtk(path: Path, suffix: str):
     errors = [event.alert for event in catcher.error_events]
     if errors:
         first = errors[0].strip().splitlines()[0] if errors[0].strip() else "unknown error"
-        raise MeshError(f"{path.name} is not a readable {description} file ({first[:120]}); check or export the file again.")
+        raise MeshError(
+            f"{path.name} is not a readable {description} file ({first[:120]}); check or export the file again."
+        )
     if output is None:
         raise MeshError(f"{path.name} is not a readable {description} file; check or export the file again.")
     data = pyvista.wrap(output)
     if isinstance(data, pyvista.MultiBlock):
         data = data.combine(merge_points=False) if data.n_blocks else pyvista.PolyData()
     if data is None or data.n_points == 0:
-        raise MeshError(f"{path.name} holds no vertices (an empty or unreadable {description} file); export the mesh again.")
+        raise MeshError(
+            f"{path.name} holds no vertices (an empty or unreadable {description} file); export the mesh again."
+        )
     if not isinstance(data, pyvista.PolyData):
         from vtkmodules.vtkFiltersGeometry import vtkDataSetSurfaceFilter
 

@@ -172,7 +172,9 @@ class TriangleMesh:
     @property
     def bounds(self) -> np.ndarray:
         """Axis-aligned bounding box of the referenced vertices, ``[[xmin, ymin, zmin], [xmax, ymax, zmax]]`` in mm."""
-        used = self.points[np.unique(self.triangles)]
+        referenced = np.zeros(self.n_points, dtype=bool)
+        referenced[self.triangles.ravel()] = True
+        used = self.points[referenced]
         return np.stack([used.min(axis=0), used.max(axis=0)])
 
     @property

@@ -74,7 +74,9 @@ def coherent_orientation(triangles) -> tuple[np.ndarray, int]:
     orientable = kept != flipped
     # in each cover component count the triangles whose "kept" node lies there; keep the larger side
     kept_count = np.bincount(kept, minlength=label.max() + 1)
-    keep_here = (kept_count[kept] > kept_count[flipped]) | ((kept_count[kept] == kept_count[flipped]) & (kept < flipped))
+    keep_here = (kept_count[kept] > kept_count[flipped]) | (
+        (kept_count[kept] == kept_count[flipped]) & (kept < flipped)
+    )
     flip = orientable & ~keep_here
     non_orientable = len(np.unique(kept[~orientable]))
     return flip, int(non_orientable)
@@ -108,7 +110,9 @@ def outward_flips(points, triangles) -> tuple[np.ndarray, int]:
     centre = (p0 + p1 + p2) / 3.0
     area_sum = np.bincount(component, weights=area, minlength=count)
     safe = np.where(area_sum > 0, area_sum, 1.0)
-    centroid = np.stack([np.bincount(component, weights=area * centre[:, k], minlength=count) for k in range(3)], axis=1)
+    centroid = np.stack(
+        [np.bincount(component, weights=area * centre[:, k], minlength=count) for k in range(3)], axis=1
+    )
     centroid /= safe[:, None]
     # signed volume of the tetrahedron (c, p0, p1, p2) = (p0 - c) . ((p1 - c) x (p2 - c)) / 6
     #                                               = (p0 - c) . ((p1 - p0) x (p2 - p0)) / 6

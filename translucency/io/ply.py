@@ -144,7 +144,9 @@ def metadata_to_comments(metadata: dict) -> list[str]:
         try:
             text = json.dumps(value, default=_json_default, ensure_ascii=True, allow_nan=True)
         except (TypeError, ValueError) as exc:
-            raise InvalidParameterError(f"metadata {key!r} cannot be written to the header ({exc}); pass numbers, strings, lists or dicts.") from exc
+            raise InvalidParameterError(
+                f"metadata {key!r} cannot be written to the header ({exc}); pass numbers, strings, lists or dicts."
+            ) from exc
         chunks = _split_text(text)
         lines.append(f"{_PREFIX}{key} = {chunks[0]}")
         lines.extend(f"{_PREFIX}{key} += {chunk}" for chunk in chunks[1:])
@@ -222,7 +224,9 @@ def comments_to_metadata(comments: list[str]) -> dict:
 def _per_vertex(name: str, values, n: int, dtype) -> np.ndarray:
     array = np.asarray(values)
     if array.shape != (n, 3):
-        raise InvalidParameterError(f"{name} has shape {array.shape}; pass one row of 3 values (RGB) per vertex, shape ({n}, 3).")
+        raise InvalidParameterError(
+            f"{name} has shape {array.shape}; pass one row of 3 values (RGB) per vertex, shape ({n}, 3)."
+        )
     if dtype == np.uint8:
         if array.dtype != np.uint8:
             if array.dtype.kind not in "iu" or array.min(initial=0) < 0 or array.max(initial=0) > 255:
@@ -236,7 +240,9 @@ def _per_vertex(name: str, values, n: int, dtype) -> np.ndarray:
         as_stored = array.astype(np.float32)
     if not np.all(np.isfinite(as_stored)):
         bad = int(np.count_nonzero(~np.all(np.isfinite(as_stored), axis=1)))
-        raise InvalidParameterError(f"{name} has {bad} vertices with NaN, infinite or float32-overflowing values; fix the computation before baking.")
+        raise InvalidParameterError(
+            f"{name} has {bad} vertices with NaN, infinite or float32-overflowing values; fix the computation before baking."
+        )
     return as_stored
 
 
@@ -283,7 +289,9 @@ def write_baked_ply(path, mesh: TriangleMesh, radiance, b, colors_rgb8, metadata
     if mesh.n_points >= 2**31 or mesh.n_triangles >= 2**31:
         raise InvalidParameterError("the mesh is too large for a PLY with 32-bit indices; decimate it first.")
     if mesh.source is not None and path.exists() and _same_file(path, mesh.source):
-        raise InvalidParameterError(f"{path} is the scan the mesh was read from; write the bake to another file (inputs are never modified).")
+        raise InvalidParameterError(
+            f"{path} is the scan the mesh was read from; write the bake to another file (inputs are never modified)."
+        )
     parent = path.parent if str(path.parent) else Path(".")
     if not parent.is_dir():
         raise InvalidParameterError(f"the folder {parent} does not exist; create it or choose another output path.")
@@ -363,7 +371,9 @@ def _atomic_write(path: Path, parts: list[bytes]) -> None:
         mode = os.stat(path).st_mode & 0o777 if path.exists() else 0o644
         handle = tempfile.NamedTemporaryFile(dir=parent, prefix=f".{path.name}.", suffix=".tmp", delete=False)
     except OSError as exc:
-        raise TranslucencyError(f"cannot write in {parent} ({exc.strerror or exc}); choose a writable output folder.") from exc
+        raise TranslucencyError(
+            f"cannot write in {parent} ({exc.strerror or exc}); choose a writable output folder."
+        ) from exc
     temporary = Path(handle.name)
     try:
         with handle:
@@ -379,7 +389,9 @@ def _atomic_write(path: Path, parts: list[bytes]) -> None:
         except OSError:
             pass
         if isinstance(exc, OSError):
-            raise TranslucencyError(f"writing {path.name} failed ({exc.strerror or exc}); check the disk space and permissions.") from exc
+            raise TranslucencyError(
+                f"writing {path.name} failed ({exc.strerror or exc}); check the disk space and permissions."
+            ) from exc
         raise
     try:  # make the rename itself durable
         directory = os.open(parent, os.O_RDONLY)
@@ -419,7 +431,9 @@ def read_baked_ply(path) -> BakedPly:
     needed = [f"{prefix}_{c}" for prefix in ("radiance", "b") for c in "rgb"]
     missing = [name for name in needed if name not in point_data]
     if missing or "colors" not in point_data or "normals" not in point_data:
-        raise MeshError(f"{path.name} is not a translucency bake (it lacks {', '.join(missing) or 'colours or normals'}); bake the mesh first.")
+        raise MeshError(
+            f"{path.name} is not a translucency bake (it lacks {', '.join(missing) or 'colours or normals'}); bake the mesh first."
+        )
     stack = lambda prefix: np.stack([np.asarray(point_data[f"{prefix}_{c}"], dtype=np.float64) for c in "rgb"], axis=1)  # noqa: E731
     return BakedPly(
         points=points,
@@ -431,4 +445,3 @@ def read_baked_ply(path) -> BakedPly:
         metadata=comments_to_metadata(comments),
         comments=comments,
     )
-

@@ -34,7 +34,6 @@ from scipy.spatial import cKDTree
 __all__ = ["closest_points_on_triangles", "closest_point_barycentric", "vertex_hausdorff_distance"]
 
 
-
 def closest_point_barycentric(p: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
     """Barycentric coordinates of the closest point to ``p`` on triangles ``(a, b, c)``, vectorised.
 
@@ -238,7 +237,9 @@ def _scan_kernel():
                 u = 1.0 - v - w
             tolerance = 1e-6
             if denominator == 0.0 or not (
-                -tolerance <= u <= 1 + tolerance and -tolerance <= v <= 1 + tolerance and -tolerance <= w <= 1 + tolerance
+                -tolerance <= u <= 1 + tolerance
+                and -tolerance <= v <= 1 + tolerance
+                and -tolerance <= w <= 1 + tolerance
             ):
                 degenerate = True
         if degenerate:  # nearest corner

@@ -65,9 +65,7 @@ def triangulate_polygons(offsets, connectivity) -> np.ndarray:
     first_of_polygon = np.cumsum(n_fan) - n_fan
     j = np.arange(total) - first_of_polygon[polygon]
     start = offsets[:-1][polygon]
-    return np.stack(
-        [connectivity[start], connectivity[start + j + 1], connectivity[start + j + 2]], axis=1
-    )
+    return np.stack([connectivity[start], connectivity[start + j + 1], connectivity[start + j + 2]], axis=1)
 
 
 def triangulate_polygon_lists(polygons) -> np.ndarray:

@@ -88,7 +88,9 @@ def parse_unit(unit: str | float) -> float:
             f"the length unit must be one of {', '.join(UNITS)} or a number of mm per unit, not {unit!r}."
         )
     if not (math.isfinite(value) and value > 0):
-        raise InvalidParameterError(f"the length unit {unit!r} is not a positive number of mm per unit; pass e.g. 1 or 'mm'.")
+        raise InvalidParameterError(
+            f"the length unit {unit!r} is not a positive number of mm per unit; pass e.g. 1 or 'mm'."
+        )
     return value
 
 
@@ -186,7 +188,9 @@ def check_extent(extent_mm: float, mm_per_unit: float, name: str = "the mesh", *
         )
     if extent_mm < low:
         if extent_mm == 0:
-            raise MeshError(f"{name} has all its vertices at one position (size 0); the file holds no surface, export it again.")
+            raise MeshError(
+                f"{name} has all its vertices at one position (size 0); the file holds no surface, export it again."
+            )
         raise MeshError(
             f"{name} is {extent_mm:.3g} mm across, smaller than any scanned object; check the file's coordinates and unit."
         )
