@@ -7,6 +7,7 @@ import numpy as np
 import plyfile
 import pytest
 
+from translucency.errors import MeshError
 from translucency.io import TriangleMesh, load_mesh, read_mesh_arrays
 from translucency.io.units import ImplausibleSizeWarning
 
@@ -104,6 +105,25 @@ def test_obj_with_vertex_colours_and_quads(tmp_path):
     np.testing.assert_array_equal(
         mesh.point_data["colors"][:, :3], [[255, 0, 0], [0, 255, 0], [0, 0, 255], [255, 255, 255]]
     )
+
+
+def test_obj_texture_corners_do_not_split_vertices_and_negative_indices(tmp_path):
+    path = tmp_path / "t.obj"
+    path.write_text(
+        "mtllib t.mtl\no scan\nv 0 0 0\nv 10 0 0\nv 10 10 0\nv 0 10 0\n"
+        "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nvt 0.5 0.5\nvn 0 0 1\n"
+        "usemtl skin\nf 1/1/1 2/2/1 3/3/1\nf -4/5/1 -2/4/1 -1/4/1\n"
+    )
+    mesh = load_mesh(path)
+    assert mesh.n_points == 4  # VTK's reader would make 6 points, one per face corner
+    np.testing.assert_array_equal(mesh.triangles, [[0, 1, 2], [0, 2, 3]])
+
+
+def test_obj_index_zero_is_out_of_range(tmp_path):
+    path = tmp_path / "zero.obj"
+    path.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n")
+    with pytest.raises(MeshError, match="refers to vertex"):
+        load_mesh(path)
 
 
 def test_off_and_coff(tmp_path):

@@ -89,7 +89,8 @@ class CleanReport:
     islands_removed, island_faces_removed : int
         Small components removed and their triangles.
     holes_closed, hole_faces_added : int
-        Boundary loops closed and triangles added to close them.
+        Boundary loops closed (as pymeshlab reports them: a loop left by a first patch and closed
+        by the second pass counts again) and the net number of triangles added.
     faces_flipped_coherent : int
         Triangles reversed to make the orientation coherent.
     components_flipped_outward, faces_flipped_outward : int

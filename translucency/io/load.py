@@ -6,8 +6,10 @@ format                      reader
 PLY (ascii, binary LE/BE)   plyfile, with fast paths for triangle lists; ``face`` polygons and
                             ``tristrips`` strips; every vertex property is kept
 OFF (and COFF, NOFF, STOFF) translucency's own reader (vertex colours and normals are kept)
-OBJ, STL, VTK, VTP, VTU,    VTK's readers (point arrays are kept; colours as ``"colors"``)
-VTM, BYU (.g), glTF, HDF
+OBJ                         translucency's own reader (vertex colours kept; vertices are not
+                            split at texture seams, unlike VTK's OBJ reader)
+STL, VTK, VTP, VTU, VTM,    VTK's readers (point arrays are kept; colours as ``"colors"``)
+BYU (.g), glTF, VTK HDF
 3DS, DAE, WRL, X3D, CTM,    pymeshlab (vertex colours and quality are kept); note that pymeshlab
 GTS, PTX, VMI, ...          drops invalid faces and vertices itself instead of reporting them
 =========================== ====================================================================
@@ -38,7 +40,6 @@ from .units import check_extent, parse_unit
 __all__ = ["load_mesh", "read_mesh_arrays", "mesh_from_vtk_polydata", "SUPPORTED_FORMATS", "detect_format"]
 
 _VTK_FORMATS = {
-    ".obj": ("vtkmodules.vtkIOGeometry", "vtkOBJReader", "OBJ"),
     ".stl": ("vtkmodules.vtkIOGeometry", "vtkSTLReader", "STL"),
     ".vtk": ("vtkmodules.vtkIOLegacy", "vtkDataSetReader", "legacy VTK"),
     ".vtp": ("vtkmodules.vtkIOXML", "vtkXMLGenericDataObjectReader", "VTK XML PolyData"),
@@ -76,6 +77,7 @@ _PYMESHLAB_FORMATS = {
 SUPPORTED_FORMATS: dict[str, str] = {
     ".ply": "Stanford PLY (ascii or binary, triangles, polygons or triangle strips)",
     ".off": "Object File Format (OFF, COFF, NOFF, STOFF)",
+    ".obj": "Wavefront OBJ (vertex colours kept)",
     **{suffix: name for suffix, (_, _, name) in _VTK_FORMATS.items()},
     **_PYMESHLAB_FORMATS,
 }
@@ -181,6 +183,8 @@ def read_mesh_arrays(path, *, format: str | None = None) -> tuple[np.ndarray, np
             points, triangles, point_data = _read_ply(path)
         elif suffix == ".off":
             points, triangles, point_data = _read_off(path)
+        elif suffix == ".obj":
+            points, triangles, point_data = _read_obj(path)
         elif suffix in _VTK_FORMATS:
             points, triangles, point_data = _read_with_vtk(path, suffix)
         else:
@@ -589,7 +593,48 @@ def _read_off(path: Path):
 
 
 # --------------------------------------------------------------------------------------------------
-# VTK readers (OBJ, STL, VTK, VTP, ...)
+# OBJ
+# --------------------------------------------------------------------------------------------------
+def _read_obj(path: Path):
+    """Vertices (``v x y z [r g b]``) and faces (``f a b c ...``, ``a/t/n`` forms, negative = relative).
+
+    Texture coordinates and normals are per face corner in OBJ, not per vertex, so they are not
+    kept; vertices are never split at texture seams (VTK's OBJ reader does split them).
+    """
+    text = path.read_bytes().decode("latin-1")
+    vertex_rows: list[list[str]] = []
+    face_rows: list[list[str]] = []
+    vertices_before_face: list[int] = []
+    for line in text.splitlines():
+        line = line.strip()
+        if line.startswith(("v ", "v\t")):
+            vertex_rows.append(line[2:].split())
+        elif line.startswith(("f ", "f\t")):
+            face_rows.append(line[2:].split())
+            vertices_before_face.append(len(vertex_rows))
+    if not vertex_rows:
+        raise MeshError(f"{path.name} has no vertex ('v') lines; it is not a mesh OBJ file, export the mesh again.")
+    width = min(len(row) for row in vertex_rows)
+    if width < 3:
+        raise MeshError(f"{path.name} has vertex lines with fewer than 3 coordinates; the file is corrupt, export it again.")
+    try:
+        values = np.array([row[:width] for row in vertex_rows], dtype=np.float64)
+        sizes = np.array([len(row) for row in face_rows], dtype=np.int64)
+        corners = np.array([int(token.split("/", 1)[0]) for row in face_rows for token in row], dtype=np.int64)
+    except ValueError:
+        raise MeshError(f"{path.name} has vertex or face lines that are not numbers; the file is corrupt, export it again.") from None
+    point_data: dict[str, np.ndarray] = {}
+    if width >= 6:  # v x y z r g b
+        point_data["colors"] = _as_rgb8(values[:, 3:6])
+    # OBJ indices start at 1; negative ones count back from the last vertex defined before the face
+    before = np.repeat(np.asarray(vertices_before_face, dtype=np.int64), sizes)
+    corners = np.where(corners > 0, corners - 1, np.where(corners < 0, before + corners, -(len(values) + 1)))
+    offsets = np.concatenate([[0], np.cumsum(sizes)])
+    return values[:, :3], triangulate_polygons(offsets, corners), point_data
+
+
+# --------------------------------------------------------------------------------------------------
+# VTK readers (STL, VTK, VTP, ...)
 # --------------------------------------------------------------------------------------------------
 def _read_with_vtk(path: Path, suffix: str):
     import importlib
