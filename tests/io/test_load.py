@@ -84,6 +84,14 @@ def test_ply_polygons_are_triangulated(tmp_path, text):
     assert mesh.surface_area == pytest.approx(125.0)
 
 
+@pytest.mark.parametrize("text", [True, False])
+def test_ply_all_quads(tmp_path, text):
+    points = np.array([[0, 0, 0], [10, 0, 0], [10, 10, 0], [0, 10, 0], [20, 0, 0], [20, 10, 0]], dtype=float)
+    path = write_ply(tmp_path / "quads.ply", points, [[0, 1, 2, 3], [1, 4, 5, 2]], text=text)
+    mesh = load_mesh(path)
+    np.testing.assert_array_equal(mesh.triangles, [[0, 1, 2], [0, 2, 3], [1, 4, 5], [1, 5, 2]])
+
+
 def test_ply_triangle_strips(tmp_path):
     points = np.array([[x, y, 0.0] for x in range(0, 50, 10) for y in (0, 10)])
     path = write_ply(tmp_path / "strip.ply", points, None, strips=[0, 1, 2, 3, 4, 5, -1, 6, 7, 8, 9])

@@ -416,10 +416,12 @@ def _read_ply_with_plyfile(path: Path, header: _PlyHeader, plyfile):
     errors = (plyfile.PlyParseError, ValueError, TypeError, IndexError, EOFError, UnicodeDecodeError, MemoryError)
     ply = None
     if face is not None and header.format != "ascii":
-        try:  # fast path: all faces are triangles, read as one fixed-size record array
-            ply = plyfile.PlyData.read(str(path), mmap="c", known_list_len={face[0]: {face[1]: 3}})
-        except errors:
-            ply = None
+        for corners in (3, 4):  # fast paths: all triangles or all quads, read as one record array
+            try:
+                ply = plyfile.PlyData.read(str(path), mmap="c", known_list_len={face[0]: {face[1]: corners}})
+                break
+            except errors:
+                ply = None
     if ply is None:
         try:
             ply = plyfile.PlyData.read(str(path), mmap="c")
@@ -433,8 +435,9 @@ def _read_ply_with_plyfile(path: Path, header: _PlyHeader, plyfile):
     polygons = None
     if face is not None:
         lists = ply[face[0]].data[face[1]]
-        if lists.dtype != object:
-            polygons = np.asarray(lists, dtype=np.int64).reshape(-1, 3)
+        if lists.dtype != object:  # fixed-length lists of the fast path
+            lists = np.asarray(lists, dtype=np.int64)
+            polygons = triangulate_polygons(np.arange(len(lists) + 1) * lists.shape[1], lists.ravel())
         else:
             polygons = triangulate_polygon_lists(lists)
     strips = None
