@@ -619,13 +619,17 @@ def _read_obj(path: Path):
         raise MeshError(f"{path.name} has no vertex ('v') lines; it is not a mesh OBJ file, export the mesh again.")
     width = min(len(row) for row in vertex_rows)
     if width < 3:
-        raise MeshError(f"{path.name} has vertex lines with fewer than 3 coordinates; the file is corrupt, export it again.")
+        raise MeshError(
+            f"{path.name} has vertex lines with fewer than 3 coordinates; the file is corrupt, export it again."
+        )
     try:
         values = np.array([row[:width] for row in vertex_rows], dtype=np.float64)
         sizes = np.array([len(row) for row in face_rows], dtype=np.int64)
         corners = np.array([int(token.split("/", 1)[0]) for row in face_rows for token in row], dtype=np.int64)
     except ValueError:
-        raise MeshError(f"{path.name} has vertex or face lines that are not numbers; the file is corrupt, export it again.") from None
+        raise MeshError(
+            f"{path.name} has vertex or face lines that are not numbers; the file is corrupt, export it again."
+        ) from None
     point_data: dict[str, np.ndarray] = {}
     if width >= 6:  # v x y z r g b
         point_data["colors"] = _as_rgb8(values[:, 3:6])

@@ -20,9 +20,10 @@ one ``comment`` line per setting::
     comment translucency material = "marble"
     comment translucency coefficients.sigma_a = [0.0021, 0.0041, 0.0071]
 
-(``translucency <key> = <JSON value>``; nested dicts become dotted keys; a value longer than
-:data:`COMMENT_CHUNK` characters continues on lines ``<key> += <more JSON text>``, which keeps every
-header line short for readers with fixed line buffers). Floats are written with ``repr`` precision,
+(``translucency <key> = <JSON value>``; nested dicts become dotted keys; a value too long for one
+line of :data:`MAX_COMMENT_LINE` characters is written as compact JSON and continues on lines
+``<key> += <more JSON text>``, which keeps every header line short for readers with fixed line
+buffers). Floats are written with ``repr`` precision,
 so :func:`read_baked_ply` returns the metadata exactly as given (tuples come back as lists).
 
 The file is written to a temporary file in the destination folder, flushed to disk, then renamed
@@ -50,7 +51,7 @@ __all__ = [
     "write_baked_ply",
     "read_baked_ply",
     "REQUIRED_METADATA",
-    "COMMENT_CHUNK",
+    "MAX_COMMENT_LINE",
     "metadata_to_comments",
     "comments_to_metadata",
 ]
@@ -59,8 +60,9 @@ __all__ = [
 #: ``version`` are filled in from the mesh and the package when absent.
 REQUIRED_METADATA = ("material", "coefficients", "unit", "lights", "model", "method", "tolerance", "version")
 
-#: Longest JSON text on one header line; longer values continue on "+=" lines.
-COMMENT_CHUNK = 160
+#: Longest header comment line written (unless a metadata key alone is longer); longer values
+#: continue on "+=" lines, which keeps every line short for readers with fixed line buffers.
+MAX_COMMENT_LINE = 200
 
 _PREFIX = "translucency "
 _KEY = re.compile(r"[A-Za-z0-9_\-]+")
@@ -142,37 +144,31 @@ def metadata_to_comments(metadata: dict) -> list[str]:
     lines = []
     for key, value in _flatten(metadata):
         try:
-            text = json.dumps(value, default=_json_default, ensure_ascii=True, allow_nan=True)
+            lines.extend(_json_lines(key, value))
         except (TypeError, ValueError) as exc:
             raise InvalidParameterError(
                 f"metadata {key!r} cannot be written to the header ({exc}); pass numbers, strings, lists or dicts."
             ) from exc
-        chunks = _split_text(text)
-        lines.append(f"{_PREFIX}{key} = {chunks[0]}")
-        lines.extend(f"{_PREFIX}{key} += {chunk}" for chunk in chunks[1:])
     return lines
 
 
-def _split_text(text: str) -> list[str]:
-    """Cut JSON text into pieces of at most about COMMENT_CHUNK characters, never next to whitespace.
+def _json_lines(key: str, value) -> list[str]:
+    """The header lines of one metadata value: one readable line, or compact pieces cut anywhere.
 
-    Header readers strip the ends of comment lines, so a piece must neither start nor end with a
-    space; JSON text can always be cut between two non-space characters except inside a long run of
-    spaces, where the piece is made longer instead.
+    A value whose JSON text fits on one line of at most :data:`MAX_COMMENT_LINE` characters keeps
+    its spaces (JSON text never starts or ends with one, so readers that strip header lines do not
+    change it). A longer value is written without any whitespace (compact separators, spaces inside
+    strings escaped as ``\\u0020``) and cut into ``+=`` pieces at fixed lengths.
     """
-    pieces, start = [], 0
-    while len(text) - start > COMMENT_CHUNK:
-        cut = start + COMMENT_CHUNK
-        while cut > start + 1 and (text[cut - 1].isspace() or text[cut].isspace()):
-            cut -= 1
-        if cut == start + 1:  # a run of spaces: cut after it instead
-            cut = start + COMMENT_CHUNK
-            while cut < len(text) and (text[cut - 1].isspace() or text[cut].isspace()):
-                cut += 1
-        pieces.append(text[start:cut])
-        start = cut
-    pieces.append(text[start:])
-    return pieces
+    head = f"{_PREFIX}{key} = "
+    text = json.dumps(value, default=_json_default, ensure_ascii=True, allow_nan=True)
+    if len(head) + len(text) <= MAX_COMMENT_LINE:
+        return [head + text]
+    compact = json.dumps(value, default=_json_default, ensure_ascii=True, allow_nan=True, separators=(",", ":"))
+    compact = compact.replace(" ", "\\u0020")  # every space of compact JSON text is inside a string
+    size = max(MAX_COMMENT_LINE - len(head) - 1, 40)
+    pieces = [compact[i : i + size] for i in range(0, len(compact), size)]
+    return [head + pieces[0]] + [f"{_PREFIX}{key} += {piece}" for piece in pieces[1:]]
 
 
 def comments_to_metadata(comments: list[str]) -> dict:
