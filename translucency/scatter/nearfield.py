@@ -68,22 +68,47 @@ def near_triangles(points, triangles, receivers, radius):
     vt_tris = (order // 3).astype(np.int64)
     vt_offsets = np.zeros(n + 1, dtype=np.int64)
     np.cumsum(np.bincount(corner_vertex, minlength=n), out=vt_offsets[1:])
-    # receiver -> vertices within the radius (itself included, at distance 0)
+    # receiver -> vertices within the radius (itself included, at distance 0), as CSR
     found = cKDTree(points[receivers]).sparse_distance_matrix(cKDTree(points), radius, output_type="ndarray")
     rcv = np.concatenate([found["i"].astype(np.int64), np.arange(receivers.size)])
     vtx = np.concatenate([found["j"].astype(np.int64), receivers])
-    # expand each (receiver, vertex) into (receiver, triangle) and deduplicate
-    counts = vt_offsets[vtx + 1] - vt_offsets[vtx]
-    rcv_rep = np.repeat(rcv, counts)
-    starts = np.repeat(vt_offsets[vtx], counts)
-    within = np.arange(counts.sum()) - np.repeat(np.cumsum(counts) - counts, counts)
-    tri = vt_tris[starts + within]
-    m = triangles.shape[0]
-    keys = np.unique(rcv_rep * m + tri)
-    rcv_sorted = keys // m
-    offsets = np.zeros(receivers.size + 1, dtype=np.int64)
-    np.cumsum(np.bincount(rcv_sorted, minlength=receivers.size), out=offsets[1:])
-    return offsets, (keys % m).astype(np.int64)
+    by_receiver = np.argsort(rcv, kind="stable")
+    near_vertices = vtx[by_receiver]
+    nv_offsets = np.zeros(receivers.size + 1, dtype=np.int64)
+    np.cumsum(np.bincount(rcv, minlength=receivers.size), out=nv_offsets[1:])
+    return _incident_triangles(nv_offsets, near_vertices, vt_offsets, vt_tris, triangles.shape[0])
+
+
+@numba.njit(cache=True)
+def _incident_triangles(nv_offsets, near_vertices, vt_offsets, vt_tris, n_triangles):
+    """Deduplicated union of the triangles incident to each receiver's near vertices (CSR in, CSR out)."""
+    n_r = nv_offsets.shape[0] - 1
+    stamp = np.full(n_triangles, -1, dtype=np.int64)
+    counts = np.zeros(n_r, dtype=np.int64)
+    for r in range(n_r):
+        for q in range(nv_offsets[r], nv_offsets[r + 1]):
+            v = near_vertices[q]
+            for k in range(vt_offsets[v], vt_offsets[v + 1]):
+                t = vt_tris[k]
+                if stamp[t] != r:
+                    stamp[t] = r
+                    counts[r] += 1
+    offsets = np.zeros(n_r + 1, dtype=np.int64)
+    for r in range(n_r):
+        offsets[r + 1] = offsets[r] + counts[r]
+    ids = np.empty(offsets[n_r], dtype=np.int64)
+    stamp[:] = -1
+    for r in range(n_r):
+        pos = offsets[r]
+        for q in range(nv_offsets[r], nv_offsets[r + 1]):
+            v = near_vertices[q]
+            for k in range(vt_offsets[v], vt_offsets[v + 1]):
+                t = vt_tris[k]
+                if stamp[t] != r:
+                    stamp[t] = r
+                    ids[pos] = t
+                    pos += 1
+    return offsets, ids
 
 
 @numba.njit(cache=True, fastmath=True)
