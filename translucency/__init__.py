@@ -24,6 +24,23 @@ _LAZY = {
     "directional_dipole": "translucency.scatter.dipoles",
     "standard_dipole_profile": "translucency.scatter.dipoles",
     "better_dipole_profile": "translucency.scatter.dipoles",
+    # meshes
+    "TriangleMesh": "translucency.io.mesh",
+    "load_mesh": "translucency.io.load",
+    "clean_mesh": "translucency.io.clean",
+    "decimate_mesh": "translucency.io.decimate",
+    "write_baked_ply": "translucency.io.ply",
+    "read_baked_ply": "translucency.io.ply",
+    # lights and the solver
+    "DirectionalLight": "translucency.scatter.lights",
+    "PointLight": "translucency.scatter.lights",
+    "EnvironmentLight": "translucency.scatter.lights",
+    "incident_flux": "translucency.scatter.irradiance",
+    "SurfaceGeometry": "translucency.scatter.solve",
+    "solve": "translucency.scatter.solve",
+    # the whole chain on one mesh
+    "shade": "translucency.app.pipeline",
+    "load_default_scan": "translucency.app.pipeline",
     # errors
     "TranslucencyError": "translucency.errors",
     "InvalidParameterError": "translucency.errors",

@@ -72,6 +72,31 @@ def cmd_report(args) -> int:
     return 0 if ok else 1
 
 
+def cmd_inspect(args) -> int:
+    """Load a scan, print its size and defects, repair it and print what changed; optionally save it."""
+    import warnings
+
+    from ..io.clean import clean_mesh
+    from ..io.load import load_mesh
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        mesh = load_mesh(args.mesh, unit=args.unit)
+    for warning in caught:
+        print(f"translucency: warning: {warning.message}", file=sys.stderr)
+    low, high = mesh.bounds
+    print(f"{args.mesh}: {mesh.n_points} vertices, {mesh.n_triangles} triangles, "
+          f"{mesh.extent:.4g} mm across ({' x '.join(f'{v:.4g}' for v in high - low)} mm), area {mesh.surface_area:.4g} mm^2")
+    cleaned, report = clean_mesh(mesh, max_hole_edges=args.max_hole_edges)
+    print(report)
+    if args.output:
+        if not args.output.lower().endswith((".ply", ".vtp", ".vtk", ".stl", ".obj")):
+            raise TranslucencyError(f"cannot write {args.output}: use a .ply, .vtp, .vtk, .stl or .obj name.")
+        cleaned.to_pyvista().save(args.output)
+        print(f"wrote the repaired mesh to {args.output}")
+    return 0
+
+
 def cmd_main_job(args) -> int:
     """The main job on the embedded default scan (see :mod:`translucency.app.default_job`)."""
     from .default_job import run_default_job
@@ -93,6 +118,13 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("report", help="versions of the stack and whether off-screen rendering works")
     p.set_defaults(func=cmd_report)
+
+    p = sub.add_parser("inspect", help="load a scan, show its defects and repair it")
+    p.add_argument("mesh", help="mesh file (PLY, OBJ, STL, OFF, VTK, VTP, ...)")
+    p.add_argument("--unit", default="mm", help="length unit of the file: mm, cm, m, in or mm per unit (default mm)")
+    p.add_argument("--max-hole-edges", type=int, default=100, help="close holes of at most this many edges")
+    p.add_argument("-o", "--output", help="save the repaired mesh (any format PyVista writes)")
+    p.set_defaults(func=cmd_inspect)
 
     parser.set_defaults(func=cmd_main_job)
     return parser

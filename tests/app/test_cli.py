@@ -1,0 +1,90 @@
+"""The command line: exit codes, one-sentence errors, output that agrees with the API, the main job."""
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from translucency.app import cli
+from translucency.io.ply import read_baked_ply
+from translucency.scatter.materials import catalogue
+
+
+def run_cli(*args, cwd=None):
+    """Run ``python -m translucency`` in a fresh process; returns (exit code, stdout, stderr)."""
+    done = subprocess.run([sys.executable, "-m", "translucency", *args], capture_output=True, text=True, cwd=cwd, timeout=300)
+    return done.returncode, done.stdout, done.stderr
+
+
+def test_materials_lists_the_catalogue(capsys):
+    assert cli.main(["materials"]) == 0
+    out = capsys.readouterr().out
+    for entry in catalogue():
+        assert entry.key in out
+    marble = next(line for line in out.splitlines() if line.startswith("marble "))
+    assert "0.0021, 0.0041, 0.0071" in marble and "2.19, 2.62, 3" in marble
+    # reduced mean free path 1/sigma_t' of marble red = 1 / 2.1921 mm
+    assert f"{1 / 2.1921:.3g}" in marble
+
+
+def test_unknown_material_table_is_a_usage_error():
+    code, _, err = run_cli("materials", "--table", "nope")
+    assert code == 2 and "invalid choice" in err
+
+
+@pytest.mark.parametrize(
+    "content, fragment",
+    [
+        (b"", "empty"),
+        (b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nend_header\n1\n", "truncated"),
+        (b"solid x\nendsolid x\n", "no vertices"),
+    ],
+)
+def test_inspect_bad_files_give_one_sentence_and_exit_2(tmp_path, content, fragment):
+    path = tmp_path / ("broken.stl" if content.startswith(b"solid") else "broken.ply")
+    path.write_bytes(content)
+    code, out, err = run_cli("inspect", str(path))
+    assert code == 2
+    assert "Traceback" not in err
+    lines = [line for line in err.splitlines() if line.strip()]
+    assert len(lines) == 1 and lines[0].startswith("translucency: error:")
+    assert fragment in lines[0].lower()
+    assert path.read_bytes() == content  # input untouched
+
+
+def test_inspect_missing_file():
+    code, _, err = run_cli("inspect", "does-not-exist.ply")
+    assert code == 2 and "does not exist" in err and "Traceback" not in err
+
+
+def test_inspect_repairs_a_shared_scan(shared_meshes, tmp_path):
+    out = tmp_path / "fixed.ply"
+    code, stdout, err = run_cli("inspect", str(shared_meshes / "stanford_bunny_zipper.ply"), "--unit", "m", "-o", str(out))
+    assert code == 0, err
+    assert "unreferenced vertices removed            1113" in stdout
+    assert out.exists()
+
+
+def test_report_prints_versions_and_offscreen_status():
+    code, out, _ = run_cli("report")
+    assert "numpy" in out and "pymeshlab" in out and "off-screen rendering" in out
+    assert code in (0, 1)
+
+
+def test_main_job_bakes_the_embedded_default(tmp_path):
+    code, out, err = run_cli(cwd=tmp_path)
+    assert code == 0, err
+    ply = tmp_path / "translucency-output" / "bunny_marble.ply"
+    png = tmp_path / "translucency-output" / "bunny_marble.png"
+    assert ply.exists() and png.exists()
+    baked = read_baked_ply(ply)
+    assert baked.metadata["material"] == "marble" and baked.metadata["method"] == "tree"
+    radiance = baked.radiance
+    assert np.all(np.isfinite(radiance)) and np.all(radiance >= 0)
+    light = np.array(baked.metadata["lights"][0]["direction"])
+    facing = baked.normals @ light
+    assert radiance[facing > 0.5].mean() > 5 * radiance[facing < -0.5].mean()
+    # marble scatters red farther than blue: relative to the lit side, the dark side is redder
+    dark, bright = radiance[facing < -0.5].mean(axis=0), radiance[facing > 0.5].mean(axis=0)
+    assert dark[0] / bright[0] > dark[2] / bright[2]
