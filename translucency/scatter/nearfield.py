@@ -83,23 +83,14 @@ def near_triangles(points, triangles, receivers, radius):
 def _incident_triangles(nv_offsets, near_vertices, vt_offsets, vt_tris, n_triangles):
     """Deduplicated union of the triangles incident to each receiver's near vertices (CSR in, CSR out)."""
     n_r = nv_offsets.shape[0] - 1
-    stamp = np.full(n_triangles, -1, dtype=np.int64)
-    counts = np.zeros(n_r, dtype=np.int64)
-    for r in range(n_r):
-        for q in range(nv_offsets[r], nv_offsets[r + 1]):
-            v = near_vertices[q]
-            for k in range(vt_offsets[v], vt_offsets[v + 1]):
-                t = vt_tris[k]
-                if stamp[t] != r:
-                    stamp[t] = r
-                    counts[r] += 1
+    bound = 0
+    for q in range(near_vertices.shape[0]):
+        bound += vt_offsets[near_vertices[q] + 1] - vt_offsets[near_vertices[q]]
+    ids = np.empty(bound, dtype=np.int64)
     offsets = np.zeros(n_r + 1, dtype=np.int64)
+    stamp = np.full(n_triangles, -1, dtype=np.int64)
+    pos = 0
     for r in range(n_r):
-        offsets[r + 1] = offsets[r] + counts[r]
-    ids = np.empty(offsets[n_r], dtype=np.int64)
-    stamp[:] = -1
-    for r in range(n_r):
-        pos = offsets[r]
         for q in range(nv_offsets[r], nv_offsets[r + 1]):
             v = near_vertices[q]
             for k in range(vt_offsets[v], vt_offsets[v + 1]):
@@ -108,7 +99,8 @@ def _incident_triangles(nv_offsets, near_vertices, vt_offsets, vt_tris, n_triang
                     stamp[t] = r
                     ids[pos] = t
                     pos += 1
-    return offsets, ids
+        offsets[r + 1] = pos
+    return offsets, ids[:pos].copy()
 
 
 @numba.njit(cache=True, fastmath=True)
