@@ -82,3 +82,28 @@ def test_channel_map_reuses_identical_channels():
     B, _ = kernels.vertex_sum(0, x_i, n_i, w12, flux, x_i, n_i, params, np.zeros(3, dtype=np.int64))
     B1, _ = kernels.vertex_sum(0, x_i, n_i, w12, flux[:, :1], x_i, n_i, params, np.zeros(1, dtype=np.int64))
     assert np.allclose(B[:, 0], B1[:, 0], rtol=1e-14)
+
+
+def test_vectorised_directional_sum_matches_the_generic_kernel():
+    rng = np.random.default_rng(9)
+    medium = material("skin1").medium()
+    x_i, n_i, light, _, _ = _pairs(rng, 400, 2.0)
+    x_i[:3] = x_i[3]  # coincident sources and receivers (r = 0)
+    w12 = fresnel.refract(light, n_i, medium.eta)
+    flux = rng.random((400, 3))
+    for rows, channel_of in ((3, np.arange(3)), (1, np.zeros(3, dtype=np.int64)), (2, np.array([0, 1, 1]))):
+        params = kernels.channel_parameters(medium.sigma_a[:rows], medium.sigma_s[:rows], medium.g[:rows], medium.eta)
+        columns = [np.ascontiguousarray(a[:, i]) for a in (x_i, n_i, w12) for i in range(3)]
+        fast, clamped_fast = kernels.directional_vertex_sum(*columns, np.ascontiguousarray(flux.T), x_i[:150], n_i[:150],
+                                                            params, channel_of)
+        generic, clamped = kernels.vertex_sum(0, x_i, n_i, w12, flux, x_i[:150], n_i[:150], params, channel_of)
+        assert np.allclose(fast, generic, rtol=1e-12, atol=0)
+        assert np.array_equal(clamped_fast, clamped)
+
+
+def test_exp_nonpositive_is_accurate():
+    x = -np.concatenate([np.linspace(0, 50, 20001), np.geomspace(1e-12, 745, 2001)])
+    approx = np.array([kernels.exp_nonpositive(v) for v in x[::7]])
+    exact = np.exp(x[::7])
+    assert np.all(np.abs(approx - exact) <= 5e-13 * exact)
+    assert kernels.exp_nonpositive(-800.0) == 0.0

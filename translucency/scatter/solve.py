@@ -184,6 +184,17 @@ def _as_array(value, dtype, shape, name):
     return array
 
 
+def _all_pairs(model_code, geometry, sources, w12, flux, rcv_points, rcv_normals, params, channel_of):
+    """Every (source, receiver) pair: the vectorised kernel for the directional dipole with <= 3 channels."""
+    if model_code == kernels.MODEL_DIRECTIONAL and flux.shape[1] <= 3:
+        p, n, w = geometry.points[sources], geometry.normals[sources], w12[sources]
+        columns = [np.ascontiguousarray(a[:, i]) for a in (p, n, w) for i in range(3)]
+        return kernels.directional_vertex_sum(*columns, np.ascontiguousarray(flux[sources].T), rcv_points, rcv_normals,
+                                              params, channel_of)
+    return kernels.vertex_sum(model_code, geometry.points[sources], geometry.normals[sources], w12[sources],
+                              flux[sources], rcv_points, rcv_normals, params, channel_of)
+
+
 def unique_channels(medium: Medium):
     """Distinct coefficient sets of the medium's channels: ``(rows, channel_of)`` (identical channels once)."""
     table = np.stack([medium.sigma_a, medium.sigma_s, medium.g], axis=1)
@@ -282,8 +293,7 @@ def solve(
         B = np.zeros((receivers.size, medium.n_channels))
         stats["pairs_evaluated"] = 0
     elif method == "exact":
-        B, clamped = kernels.vertex_sum(model_code, geometry.points[lit], geometry.normals[lit], w12[lit], flux[lit],
-                                        rcv_points, rcv_normals, params, channel_of)
+        B, clamped = _all_pairs(model_code, geometry, lit, w12, flux, rcv_points, rcv_normals, params, channel_of)
         stats["pairs_evaluated"] = int(lit.size) * int(receivers.size)
         stats["pairs_skipped"] = 0
         stats["clamped_values"] = int(clamped.sum())
@@ -292,8 +302,7 @@ def solve(
         stats["cutoff_radius_mm"] = radius
         diagonal = float(np.linalg.norm(np.ptp(geometry.points, axis=0)))
         if not radius < diagonal:
-            B, clamped = kernels.vertex_sum(model_code, geometry.points[lit], geometry.normals[lit], w12[lit],
-                                            flux[lit], rcv_points, rcv_normals, params, channel_of)
+            B, clamped = _all_pairs(model_code, geometry, lit, w12, flux, rcv_points, rcv_normals, params, channel_of)
             stats["pairs_evaluated"] = int(lit.size) * int(receivers.size)
             stats["pairs_skipped"] = 0
         else:
