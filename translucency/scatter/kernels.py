@@ -293,6 +293,47 @@ def _channel_fast(params, k, r2, perp2, mu0, x_dot_w, x_dot_n, x_dot_v, s_dot_v,
     return real - virtual
 
 
+@numba.njit(cache=True, inline="always", fastmath=True)
+def directional_three(x0, x1, x2, ni0, ni1, ni2, w0, w1, w2, nx, ny, nz, params):
+    """Unclamped ``S_d`` of three channels (rows of ``params``) for the pair offset ``x = x_o - x_i``.
+
+    Branch-free restatement of :func:`directional_dipole_pair` for vectorised loops (same conventions).
+    """
+    r2 = x0 * x0 + x1 * x1 + x2 * x2
+    positive = r2 > 0.0
+    inv_r = 1.0 / math.sqrt(r2 if positive else 1.0)
+    h0 = x0 * inv_r
+    h1 = x1 * inv_r
+    h2 = x2 * inv_r
+    proj = ni0 * h0 + ni1 * h1 + ni2 * h2
+    t0 = ni0 - proj * h0
+    t1 = ni1 - proj * h1
+    t2 = ni2 - proj * h2
+    tn2 = t0 * t0 + t1 * t1 + t2 * t2
+    regular = positive and tn2 > PARALLEL_TOLERANCE * PARALLEL_TOLERANCE
+    inv_t = 1.0 / math.sqrt(tn2 if regular else 1.0)
+    s0 = t0 * inv_t if regular else ni0
+    s1 = t1 * inv_t if regular else ni1
+    s2 = t2 * inv_t if regular else ni2
+    w_dot_s = w0 * s0 + w1 * s1 + w2 * s2
+    v0 = w0 - 2.0 * w_dot_s * s0
+    v1 = w1 - 2.0 * w_dot_s * s1
+    v2 = w2 - 2.0 * w_dot_s * s2
+    mu0 = -(nx * w0 + ny * w1 + nz * w2)
+    x_dot_w = x0 * w0 + x1 * w1 + x2 * w2
+    x_dot_n = x0 * nx + x1 * ny + x2 * nz
+    v_dot_n = v0 * nx + v1 * ny + v2 * nz
+    s_dot_n = s0 * nx + s1 * ny + s2 * nz
+    s_dot_v = s0 * v0 + s1 * v1 + s2 * v2
+    x_dot_v = x0 * v0 + x1 * v1 + x2 * v2
+    x_dot_s = x0 * s0 + x1 * s1 + x2 * s2
+    perp2 = max(r2 - x_dot_w * x_dot_w, 0.0)
+    e0 = _channel_fast(params, 0, r2, perp2, mu0, x_dot_w, x_dot_n, x_dot_v, s_dot_v, s_dot_n, v_dot_n, x_dot_s)
+    e1 = _channel_fast(params, 1, r2, perp2, mu0, x_dot_w, x_dot_n, x_dot_v, s_dot_v, s_dot_n, v_dot_n, x_dot_s)
+    e2 = _channel_fast(params, 2, r2, perp2, mu0, x_dot_w, x_dot_n, x_dot_v, s_dot_v, s_dot_n, v_dot_n, x_dot_s)
+    return e0, e1, e2
+
+
 @numba.njit(cache=True, parallel=True, fastmath=True)
 def directional_vertex_sum(sx, sy, sz, snx, sny, snz, swx, swy, swz, flux_t, rcv_points, rcv_normals, params,
                            channel_of):
@@ -340,47 +381,8 @@ def directional_vertex_sum(sx, sy, sz, snx, sny, snz, swx, swy, swz, flux_t, rcv
         a2 = 0.0
         count = 0
         for j in range(n_src):
-            x0 = px - sx[j]
-            x1 = py - sy[j]
-            x2 = pz - sz[j]
-            ni0 = snx[j]
-            ni1 = sny[j]
-            ni2 = snz[j]
-            w0 = swx[j]
-            w1 = swy[j]
-            w2 = swz[j]
-            r2 = x0 * x0 + x1 * x1 + x2 * x2
-            positive = r2 > 0.0
-            inv_r = 1.0 / math.sqrt(r2 if positive else 1.0)
-            h0 = x0 * inv_r
-            h1 = x1 * inv_r
-            h2 = x2 * inv_r
-            proj = ni0 * h0 + ni1 * h1 + ni2 * h2
-            t0 = ni0 - proj * h0
-            t1 = ni1 - proj * h1
-            t2 = ni2 - proj * h2
-            tn2 = t0 * t0 + t1 * t1 + t2 * t2
-            regular = positive and tn2 > PARALLEL_TOLERANCE * PARALLEL_TOLERANCE
-            inv_t = 1.0 / math.sqrt(tn2 if regular else 1.0)
-            s0 = t0 * inv_t if regular else ni0
-            s1 = t1 * inv_t if regular else ni1
-            s2 = t2 * inv_t if regular else ni2
-            w_dot_s = w0 * s0 + w1 * s1 + w2 * s2
-            v0 = w0 - 2.0 * w_dot_s * s0
-            v1 = w1 - 2.0 * w_dot_s * s1
-            v2 = w2 - 2.0 * w_dot_s * s2
-            mu0 = -(nx * w0 + ny * w1 + nz * w2)
-            x_dot_w = x0 * w0 + x1 * w1 + x2 * w2
-            x_dot_n = x0 * nx + x1 * ny + x2 * nz
-            v_dot_n = v0 * nx + v1 * ny + v2 * nz
-            s_dot_n = s0 * nx + s1 * ny + s2 * nz
-            s_dot_v = s0 * v0 + s1 * v1 + s2 * v2
-            x_dot_v = x0 * v0 + x1 * v1 + x2 * v2
-            x_dot_s = x0 * s0 + x1 * s1 + x2 * s2
-            perp2 = max(r2 - x_dot_w * x_dot_w, 0.0)
-            e0 = _channel_fast(params, 0, r2, perp2, mu0, x_dot_w, x_dot_n, x_dot_v, s_dot_v, s_dot_n, v_dot_n, x_dot_s)
-            e1 = _channel_fast(params, 1, r2, perp2, mu0, x_dot_w, x_dot_n, x_dot_v, s_dot_v, s_dot_n, v_dot_n, x_dot_s)
-            e2 = _channel_fast(params, 2, r2, perp2, mu0, x_dot_w, x_dot_n, x_dot_v, s_dot_v, s_dot_n, v_dot_n, x_dot_s)
+            e0, e1, e2 = directional_three(px - sx[j], py - sy[j], pz - sz[j], snx[j], sny[j], snz[j], swx[j], swy[j],
+                                           swz[j], nx, ny, nz, params)
             count += (e0 < 0.0) + (e1 < 0.0) * count_1 + (e2 < 0.0) * count_2
             e0 = max(e0, 0.0)
             e1 = max(e1, 0.0)

@@ -34,7 +34,7 @@ import numba
 import numpy as np
 from scipy.spatial import cKDTree
 
-from .kernels import model_pair
+from .kernels import MODEL_DIRECTIONAL, directional_three, model_pair
 
 # Dunavant (1985) 7-point rule, exact for polynomials of degree 5: barycentric points and weights
 # (weights sum to 1; multiply by the area).
@@ -103,23 +103,19 @@ def _incident_triangles(nv_offsets, near_vertices, vt_offsets, vt_tris, n_triang
     return offsets, ids[:pos].copy()
 
 
+BUFFER_POINTS = 2048  # quadrature points gathered before one vectorised evaluation
+
+
 @numba.njit(cache=True, fastmath=True)
-def _integrand(model, points, normals, w12, phi, tri, b0, b1, b2, xo, no, params, channel_of, sd, out, weight):
-    """Add ``weight * S_d(x(b); x_o) * phi(b)`` for every output channel to ``out`` (barycentric ``b``)."""
+def _gather(points, normals, w12, phi, tri, b0, b1, b2, weight, buf, weights, count):
+    """Append the point with barycentric ``b`` of triangle ``tri`` to the buffer; returns the new count.
+
+    ``buf[:, i]`` = position (3), normal (3, renormalised), refracted direction (3, flux-weighted and
+    renormalised); ``weights[c, i] = weight * phi_c(b)`` (phi interpolated linearly). Points where no
+    light enters are skipped.
+    """
     a, b, c = tri[0], tri[1], tri[2]
-    x0 = b0 * points[a, 0] + b1 * points[b, 0] + b2 * points[c, 0]
-    x1 = b0 * points[a, 1] + b1 * points[b, 1] + b2 * points[c, 1]
-    x2 = b0 * points[a, 2] + b1 * points[b, 2] + b2 * points[c, 2]
-    m0 = b0 * normals[a, 0] + b1 * normals[b, 0] + b2 * normals[c, 0]
-    m1 = b0 * normals[a, 1] + b1 * normals[b, 1] + b2 * normals[c, 1]
-    m2 = b0 * normals[a, 2] + b1 * normals[b, 2] + b2 * normals[c, 2]
-    mn = math.sqrt(m0 * m0 + m1 * m1 + m2 * m2)
-    if mn > 0.0:
-        m0 /= mn
-        m1 /= mn
-        m2 /= mn
     n_out = phi.shape[1]
-    # flux-weighted refracted direction (weights: mean flux density over the channels)
     fa = 0.0
     fb = 0.0
     fc = 0.0
@@ -131,33 +127,105 @@ def _integrand(model, points, normals, w12, phi, tri, b0, b1, b2, xo, no, params
     wb = b1 * fb
     wc = b2 * fc
     if wa + wb + wc <= 0.0:
-        return
+        return count
     v0 = wa * w12[a, 0] + wb * w12[b, 0] + wc * w12[c, 0]
     v1 = wa * w12[a, 1] + wb * w12[b, 1] + wc * w12[c, 1]
     v2 = wa * w12[a, 2] + wb * w12[b, 2] + wc * w12[c, 2]
     vn = math.sqrt(v0 * v0 + v1 * v1 + v2 * v2)
     if vn <= 0.0:
-        return
-    model_pair(model, x0, x1, x2, m0, m1, m2, v0 / vn, v1 / vn, v2 / vn, xo[0], xo[1], xo[2], no[0], no[1], no[2],
-                            params, sd)
+        return count
+    m0 = b0 * normals[a, 0] + b1 * normals[b, 0] + b2 * normals[c, 0]
+    m1 = b0 * normals[a, 1] + b1 * normals[b, 1] + b2 * normals[c, 1]
+    m2 = b0 * normals[a, 2] + b1 * normals[b, 2] + b2 * normals[c, 2]
+    mn = math.sqrt(m0 * m0 + m1 * m1 + m2 * m2)
+    if mn <= 0.0:
+        mn = 1.0
+    for i in range(3):
+        buf[i, count] = b0 * points[a, i] + b1 * points[b, i] + b2 * points[c, i]
+    buf[3, count] = m0 / mn
+    buf[4, count] = m1 / mn
+    buf[5, count] = m2 / mn
+    buf[6, count] = v0 / vn
+    buf[7, count] = v1 / vn
+    buf[8, count] = v2 / vn
     for ch in range(n_out):
-        density = b0 * phi[a, ch] + b1 * phi[b, ch] + b2 * phi[c, ch]
-        out[ch] += weight * sd[channel_of[ch]] * density
+        weights[ch, count] = weight * (b0 * phi[a, ch] + b1 * phi[b, ch] + b2 * phi[c, ch])
+    return count + 1
+
+
+@numba.njit(cache=True, parallel=True)
+def triangle_rule_points(points, normals, w12, phi, triangles, triangle_areas, rule_points, rule_weights):
+    """The quadrature points of every whole triangle, as :func:`_gather` would make them (reused per receiver).
+
+    Returns ``buf (9, m * n_rule)``, ``weights (C, m * n_rule)`` (weight includes the area) and
+    ``valid (m * n_rule,)`` (False where no light enters).
+    """
+    m = triangles.shape[0]
+    n_rule = rule_points.shape[0]
+    buf = np.zeros((9, m * n_rule))
+    weights = np.zeros((phi.shape[1], m * n_rule))
+    for t in numba.prange(m):
+        for q in range(n_rule):
+            _gather(points, normals, w12, phi, triangles[t], rule_points[q, 0], rule_points[q, 1], rule_points[q, 2],
+                    triangle_areas[t] * rule_weights[q], buf[:, t * n_rule:(t + 1) * n_rule],
+                    weights[:, t * n_rule:(t + 1) * n_rule], q)
+    return buf, weights
 
 
 @numba.njit(cache=True, fastmath=True)
-def _triangle_correction(model, points, normals, w12, phi, tri, area, xo, no, params, channel_of, beta, scale_min,
-                         rule_points, rule_weights, sd, acc, stack, cx):
-    """Add ``Q_T(f) - (A_T/3) sum_k f(x_k)`` of one triangle to ``acc``; returns the number of pieces."""
-    n_out = acc.shape[0]
+def _evaluate(model, buf, weights, count, xo, no, params, params3, channel_of, acc):
+    """``acc[c] += sum_i S_d(point i; x_o)[channel_of[c]] * weights[c, i]`` over the buffer."""
+    n_out = weights.shape[0]
+    if model == MODEL_DIRECTIONAL and n_out <= 3:
+        m0 = channel_of[0]
+        m1 = channel_of[min(1, n_out - 1)]
+        m2 = channel_of[min(2, n_out - 1)]
+        a0 = 0.0
+        a1 = 0.0
+        a2 = 0.0
+        for i in range(count):
+            e0, e1, e2 = directional_three(xo[0] - buf[0, i], xo[1] - buf[1, i], xo[2] - buf[2, i], buf[3, i], buf[4, i],
+                                           buf[5, i], buf[6, i], buf[7, i], buf[8, i], no[0], no[1], no[2], params3)
+            e0 = max(e0, 0.0)
+            e1 = max(e1, 0.0)
+            e2 = max(e2, 0.0)
+            a0 += (e0 if m0 == 0 else (e1 if m0 == 1 else e2)) * weights[0, i]
+            a1 += (e0 if m1 == 0 else (e1 if m1 == 1 else e2)) * weights[min(1, n_out - 1), i]
+            a2 += (e0 if m2 == 0 else (e1 if m2 == 1 else e2)) * weights[min(2, n_out - 1), i]
+        acc[0] += a0
+        if n_out > 1:
+            acc[1] += a1
+        if n_out > 2:
+            acc[2] += a2
+        return
+    sd = np.empty(params.shape[0])
+    for i in range(count):
+        model_pair(model, buf[0, i], buf[1, i], buf[2, i], buf[3, i], buf[4, i], buf[5, i], buf[6, i], buf[7, i],
+                   buf[8, i], xo[0], xo[1], xo[2], no[0], no[1], no[2], params, sd)
+        for ch in range(n_out):
+            acc[ch] += sd[channel_of[ch]] * weights[ch, i]
+
+
+@numba.njit(cache=True, fastmath=True)
+def _triangle_points(model, points, normals, w12, phi, t, tri, area, xo, no, params, params3, channel_of, beta,
+                     scale_min, rule_points, rule_weights, whole_buf, whole_weights, stack, cx, buf, weights, count, acc):
+    """Gather the quadrature points of ``Q_T(f) - (A_T/3) sum_k f(x_k)`` for one triangle.
+
+    Points go to the buffer; a full buffer is evaluated into ``acc`` and emptied. Returns the new
+    buffer count and the number of quadrature pieces.
+    """
+    n_rule = rule_points.shape[0]
+    capacity = buf.shape[1]
+    if count + 3 > capacity:
+        _evaluate(model, buf, weights, count, xo, no, params, params3, channel_of, acc)
+        count = 0
     # the three-vertex rule that the vertex sum applied to this triangle, subtracted
     third = -area / 3.0
-    _integrand(model, points, normals, w12, phi, tri, 1.0, 0.0, 0.0, xo, no, params, channel_of, sd, acc, third)
-    _integrand(model, points, normals, w12, phi, tri, 0.0, 1.0, 0.0, xo, no, params, channel_of, sd, acc, third)
-    _integrand(model, points, normals, w12, phi, tri, 0.0, 0.0, 1.0, xo, no, params, channel_of, sd, acc, third)
+    count = _gather(points, normals, w12, phi, tri, 1.0, 0.0, 0.0, third, buf, weights, count)
+    count = _gather(points, normals, w12, phi, tri, 0.0, 1.0, 0.0, third, buf, weights, count)
+    count = _gather(points, normals, w12, phi, tri, 0.0, 0.0, 1.0, third, buf, weights, count)
     a, b, c = tri[0], tri[1], tri[2]
     # stack rows: barycentric (b0, b1) of the piece's three corners, then depth
-    top = 0
     stack[0, 0] = 1.0
     stack[0, 1] = 0.0
     stack[0, 2] = 0.0
@@ -190,15 +258,29 @@ def _triangle_correction(model, points, normals, w12, phi, tri, area, xo, no, pa
             dist2 += ((cx[0, i] + cx[1, i] + cx[2, i]) / 3.0 - xo[i]) ** 2
         dist = max(math.sqrt(dist2), scale_min)
         if h <= beta * dist or depth >= MAX_DEPTH:
+            if count + n_rule > capacity:
+                _evaluate(model, buf, weights, count, xo, no, params, params3, channel_of, acc)
+                count = 0
             pieces += 1
+            if depth == 0:  # the whole triangle: its points are precomputed
+                for qp in range(t * n_rule, (t + 1) * n_rule):
+                    used = False
+                    for ch in range(weights.shape[0]):
+                        weights[ch, count] = whole_weights[ch, qp]
+                        used = used or whole_weights[ch, qp] != 0.0
+                    if used:
+                        for i in range(9):
+                            buf[i, count] = whole_buf[i, qp]
+                        count += 1
+                continue
             piece_area = area * 0.25**depth
-            for qp in range(rule_points.shape[0]):
+            for qp in range(n_rule):
                 l0 = rule_points[qp, 0]
                 l1 = rule_points[qp, 1]
                 l2 = rule_points[qp, 2]
-                _integrand(model, points, normals, w12, phi, tri,
-                           l0 * p0 + l1 * p1 + l2 * p2, l0 * q0 + l1 * q1 + l2 * q2, l0 * r0 + l1 * r1 + l2 * r2,
-                           xo, no, params, channel_of, sd, acc, piece_area * rule_weights[qp])
+                count = _gather(points, normals, w12, phi, tri, l0 * p0 + l1 * p1 + l2 * p2,
+                                l0 * q0 + l1 * q1 + l2 * q2, l0 * r0 + l1 * r1 + l2 * r2, piece_area * rule_weights[qp],
+                                buf, weights, count)
         else:
             m01p = 0.5 * (p0 + p1)
             m01q = 0.5 * (q0 + q1)
@@ -213,12 +295,12 @@ def _triangle_correction(model, points, normals, w12, phi, tri, area, xo, no, pa
                     stack[top, i] = child[i]
                 stack[top, 6] = depth + 1.0
                 top += 1
-    return pieces
+    return count, pieces
 
 
 @numba.njit(cache=True, parallel=True)
 def near_field_correction(model, points, triangles, triangle_areas, normals, w12, phi, receivers, offsets, triangle_ids, params,
-                          channel_of, beta, scale_min, rule_points, rule_weights):
+                          channel_of, beta, scale_min, rule_points, rule_weights, whole_buf, whole_weights):
     """Correction ``C[r, c]`` of the vertex sum for every receiver ``r`` (see the module docstring).
 
     Returns
@@ -231,18 +313,32 @@ def near_field_correction(model, points, triangles, triangle_areas, normals, w12
     n_out = phi.shape[1]
     correction = np.zeros((n_r, n_out))
     pieces = np.zeros(n_r, dtype=np.int64)
-    for r in numba.prange(n_r):
-        o = receivers[r]
-        xo = points[o]
-        no = normals[o]
-        sd = np.empty(params.shape[0])
+    K = params.shape[0]
+    params3 = np.empty((3, params.shape[1]))
+    for k in range(3):
+        params3[k] = params[min(k, K - 1)]
+    n_chunks = min(n_r, 256)
+    for chunk in numba.prange(n_chunks):
+        # scratch memory per chunk of receivers, not per receiver
         acc = np.zeros(n_out)
         stack = np.empty((3 * MAX_DEPTH + 8, 7))
         cx = np.empty((3, 3))
-        for k in range(offsets[r], offsets[r + 1]):
-            t = triangle_ids[k]
-            pieces[r] += _triangle_correction(model, points, normals, w12, phi, triangles[t], triangle_areas[t], xo, no, params,
-                                              channel_of, beta, scale_min, rule_points, rule_weights, sd, acc, stack, cx)
-        for ch in range(n_out):
-            correction[r, ch] = acc[ch]
+        buf = np.empty((9, BUFFER_POINTS))
+        weights = np.empty((n_out, BUFFER_POINTS))
+        for r in range(chunk * n_r // n_chunks, (chunk + 1) * n_r // n_chunks):
+            o = receivers[r]
+            xo = points[o]
+            no = normals[o]
+            acc[:] = 0.0
+            count = 0
+            for k in range(offsets[r], offsets[r + 1]):
+                t = triangle_ids[k]
+                count, used = _triangle_points(model, points, normals, w12, phi, t, triangles[t], triangle_areas[t],
+                                               xo, no, params, params3, channel_of, beta, scale_min, rule_points,
+                                               rule_weights, whole_buf, whole_weights, stack, cx, buf, weights, count,
+                                               acc)
+                pieces[r] += used
+            _evaluate(model, buf, weights, count, xo, no, params, params3, channel_of, acc)
+            for ch in range(n_out):
+                correction[r, ch] = acc[ch]
     return correction, pieces
