@@ -156,3 +156,28 @@ def test_bad_arguments_are_sentences():
         solve.solve(geometry, phi[:, :2], w12, medium)
     with pytest.raises(InvalidParameterError, match="outside"):
         solve.SurfaceGeometry(points, triangles + 1000, normals)
+
+
+def test_vectorised_cutoff_equals_the_generic_cutoff_kernel():
+    from translucency.scatter import cutoff, kernels
+
+    medium = material("ketchup").medium()
+    points, triangles = icosphere(3, 15.0)
+    normals, phi, w12 = _lit(points, triangles, medium, _unit([0.3, 0.0, 1.0]))
+    geometry = solve.SurfaceGeometry(points, triangles, normals)
+    flux = phi * geometry.vertex_areas[:, None]
+    lit = np.flatnonzero(flux.max(axis=1) > 0)
+    radius = 6.0
+    grid = cutoff.SourceGrid(points[lit], radius)
+    for rows, channel_of in ((3, np.arange(3)), (1, np.zeros(3, dtype=np.int64))):
+        params = kernels.channel_parameters(medium.sigma_a[:rows], medium.sigma_s[:rows], medium.g[:rows], medium.eta)
+        generic, n_generic = cutoff.cutoff_sum(0, grid.order, grid.start, grid.origin, grid.cell, grid.dims, radius,
+                                               points[lit], normals[lit], w12[lit], flux[lit], points, normals, params,
+                                               channel_of)
+        ordered = lit[grid.order]
+        columns = [np.ascontiguousarray(a[ordered, i]) for a in (points, normals, w12) for i in range(3)]
+        fast, n_fast = cutoff.cutoff_sum_directional(*columns, np.ascontiguousarray(flux[ordered].T), grid.start,
+                                                     grid.origin, grid.cell, grid.dims, radius, points, normals, params,
+                                                     channel_of)
+        assert np.allclose(fast, generic, rtol=1e-12, atol=1e-300)
+        assert np.array_equal(n_fast, n_generic) and n_fast.sum() < len(lit) * len(points)

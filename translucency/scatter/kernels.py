@@ -334,6 +334,15 @@ def directional_three(x0, x1, x2, ni0, ni1, ni2, w0, w1, w2, nx, ny, nz, params)
     return e0, e1, e2
 
 
+@numba.njit(cache=True)
+def padded_three_rows(params):
+    """``params`` with exactly three rows (fewer are padded with copies of the last) for the vectorised kernels."""
+    rows = np.empty((3, params.shape[1]))
+    for k in range(3):
+        rows[k] = params[min(k, params.shape[0] - 1)]
+    return rows
+
+
 @numba.njit(cache=True, parallel=True, fastmath=True)
 def directional_vertex_sum(sx, sy, sz, snx, sny, snz, swx, swy, swz, flux_t, rcv_points, rcv_normals, params,
                            channel_of):
@@ -357,10 +366,7 @@ def directional_vertex_sum(sx, sy, sz, snx, sny, snz, swx, swy, swz, flux_t, rcv
     K = params.shape[0]
     count_1 = 1 if K > 1 else 0
     count_2 = 1 if K > 2 else 0
-    rows = np.empty((3, params.shape[1]))
-    for k in range(3):
-        rows[k] = params[min(k, K - 1)]
-    params = rows
+    params = padded_three_rows(params)
     B = np.zeros((n_rcv, n_out))
     clamped = np.zeros(n_rcv, dtype=np.int64)
     m0 = channel_of[0]

@@ -34,7 +34,7 @@ import numba
 import numpy as np
 from scipy.spatial import cKDTree
 
-from .kernels import MODEL_DIRECTIONAL, directional_three, model_pair
+from .kernels import MODEL_DIRECTIONAL, directional_three, model_pair, padded_three_rows
 
 # Dunavant (1985) 7-point rule, exact for polynomials of degree 5: barycentric points and weights
 # (weights sum to 1; multiply by the area).
@@ -313,10 +313,7 @@ def near_field_correction(model, points, triangles, triangle_areas, normals, w12
     n_out = phi.shape[1]
     correction = np.zeros((n_r, n_out))
     pieces = np.zeros(n_r, dtype=np.int64)
-    K = params.shape[0]
-    params3 = np.empty((3, params.shape[1]))
-    for k in range(3):
-        params3[k] = params[min(k, K - 1)]
+    params3 = padded_three_rows(params)
     n_chunks = min(n_r, 256)
     for chunk in numba.prange(n_chunks):
         # scratch memory per chunk of receivers, not per receiver

@@ -307,9 +307,17 @@ def solve(
             stats["pairs_skipped"] = 0
         else:
             grid = geometry.source_grid(lit, radius)
-            B, evaluated = cutoff.cutoff_sum(model_code, grid.order, grid.start, grid.origin, grid.cell, grid.dims,
-                                             radius, geometry.points[lit], geometry.normals[lit], w12[lit], flux[lit],
-                                             rcv_points, rcv_normals, params, channel_of)
+            if model_code == kernels.MODEL_DIRECTIONAL and flux.shape[1] <= 3:
+                ordered = lit[grid.order]
+                columns = [np.ascontiguousarray(a[ordered, i]) for a in (geometry.points, geometry.normals, w12)
+                           for i in range(3)]
+                B, evaluated = cutoff.cutoff_sum_directional(*columns, np.ascontiguousarray(flux[ordered].T), grid.start,
+                                                             grid.origin, grid.cell, grid.dims, radius, rcv_points,
+                                                             rcv_normals, params, channel_of)
+            else:
+                B, evaluated = cutoff.cutoff_sum(model_code, grid.order, grid.start, grid.origin, grid.cell, grid.dims,
+                                                 radius, geometry.points[lit], geometry.normals[lit], w12[lit],
+                                                 flux[lit], rcv_points, rcv_normals, params, channel_of)
             stats["pairs_evaluated"] = int(evaluated.sum())
             stats["pairs_skipped"] = int(lit.size) * int(receivers.size) - int(evaluated.sum())
     else:  # tree
