@@ -88,3 +88,18 @@ def test_main_job_bakes_the_embedded_default(tmp_path):
     # marble scatters red farther than blue: relative to the lit side, the dark side is redder
     dark, bright = radiance[facing < -0.5].mean(axis=0), radiance[facing > 0.5].mean(axis=0)
     assert dark[0] / bright[0] > dark[2] / bright[2]
+
+
+def test_shade_on_a_proxy_interpolates_back_to_every_vertex():
+    from tests.synthetic import icosphere
+    from translucency.app.pipeline import shade
+    from translucency.io.mesh import TriangleMesh
+
+    points, triangles = icosphere(5, 20.0)  # 0.6 mm edges
+    mesh = TriangleMesh(points, triangles)
+    full = shade(mesh, "skim_milk", resolution="full", method="exact")
+    proxy = shade(mesh, "skim_milk", resolution=2.0, method="exact")
+    assert proxy.stats["solver_vertices"] < mesh.n_points / 4
+    assert proxy.B.shape == full.B.shape and np.all(np.isfinite(proxy.B)) and np.all(proxy.B >= 0)
+    assert np.linalg.norm(proxy.B - full.B) / np.linalg.norm(full.B) < 0.05
+    assert "proxy" in proxy.metadata["resolution"]

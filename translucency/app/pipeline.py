@@ -24,6 +24,22 @@ DEFAULT_SCAN_WIDTH_MM = 155.0
 DEFAULT_MATERIAL = "marble"
 DEFAULT_LIGHT_DIRECTION = (0.35, 1.0, 0.45)  # from the object toward the light; the bunny's +y is up
 
+#: Proxy resolution ("auto"): the solver's mesh needs no edges shorter than
+#: min(PROXY_DIFFUSION_FRACTION / max sigma_tr, PROXY_MEAN_FREE_PATHS / max sigma_t'), the detail the
+#: light can show after diffusing (a fraction of the shortest diffusion length, and a few reduced mean
+#: free paths, which set how sharp a shadow edge stays). Meshes finer than PROXY_MIN_RATIO times that
+#: are decimated to it; the result is interpolated back to every vertex of the full mesh. The near
+#: field is still integrated over the proxy's real triangles, so only where B is computed changes.
+PROXY_DIFFUSION_FRACTION = 0.5
+PROXY_MEAN_FREE_PATHS = 5.0
+PROXY_MIN_RATIO = 1.5
+
+
+def proxy_edge_length(medium) -> float:
+    """Edge length (mm) the solver needs for this medium (see :data:`PROXY_DIFFUSION_FRACTION`)."""
+    return float(min(PROXY_DIFFUSION_FRACTION / np.max(medium.sigma_tr),
+                     PROXY_MEAN_FREE_PATHS / np.max(medium.sigma_t_reduced)))
+
 
 def default_scan_path() -> Path:
     """Path of the embedded default scan (``pymeshlab/tests/sample_meshes/bunny.obj``)."""
@@ -86,7 +102,7 @@ class ShadeResult:
 
 
 def shade(mesh, material="marble", lights=None, *, model="directional", method="tree", tol=1e-2, shadows=True,
-          exposure=None, progress=None) -> ShadeResult:
+          resolution="full", exposure=None, progress=None) -> ShadeResult:
     """Translucent shading of one mesh (mm): ``B``, radiance toward the normal and display colours.
 
     Parameters
@@ -101,6 +117,11 @@ def shade(mesh, material="marble", lights=None, *, model="directional", method="
         Passed to :func:`translucency.scatter.solve.solve`.
     shadows : bool
         Cast Embree shadow rays (off: every front-facing vertex is lit).
+    resolution : "auto", "full" or float
+        Where ``B`` is computed: ``"auto"`` decimates to :func:`proxy_edge_length` when the mesh is much
+        finer, ``"full"`` (default) uses every vertex, a number is a proxy edge length in mm. Measured:
+        the shared Igea (134k vertices, 0.48 mm edges) in marble on an auto proxy of 9.8k vertices is
+        4.2 % relative RMS from ``exact`` on the full mesh, which is why ``"full"`` is the default.
     exposure : float, optional
         Display exposure (automatic by default, see :func:`display_colors`).
     progress : callable, optional
@@ -118,19 +139,25 @@ def shade(mesh, material="marble", lights=None, *, model="directional", method="
     medium = material if isinstance(material, Medium) else (
         material.medium() if isinstance(material, Material) else lookup(material).medium())
     lights = as_light_list(lights if lights is not None else DirectionalLight(DEFAULT_LIGHT_DIRECTION, 1.0))
-    normals = mesh.vertex_normals()
-    geometry = SurfaceGeometry(mesh.points, mesh.triangles, normals)
+    solver_mesh, decimation, edge = _solver_mesh(mesh, medium, resolution)
+    normals = solver_mesh.vertex_normals()
+    geometry = SurfaceGeometry(solver_mesh.points, solver_mesh.triangles, normals)
     timings["geometry"] = time.perf_counter() - start
 
     start = time.perf_counter()
-    incident = incident_flux(mesh.points, normals, geometry.vertex_areas, lights, medium.eta,
-                             triangles=mesh.triangles if shadows else None)
+    incident = incident_flux(solver_mesh.points, normals, geometry.vertex_areas, lights, medium.eta,
+                             triangles=solver_mesh.triangles if shadows else None)
     timings["incident_light"] = time.perf_counter() - start
 
     solution = solve(geometry, incident.phi_rgb, incident.w12, medium, model=model, method=method, tol=tol,
                      progress=progress)
     timings.update({f"solve_{k}": v for k, v in solution.timings.items()})
-    radiance = float(fresnel_transmittance(1.0, medium.eta)) * solution.B  # L toward the normal, T21(eta, 1) B
+    B = solution.B
+    if decimation is not None:
+        start = time.perf_counter()
+        B = np.maximum(decimation.interpolate(B), 0.0)
+        timings["interpolate_to_full"] = time.perf_counter() - start
+    radiance = float(fresnel_transmittance(1.0, medium.eta)) * B  # L toward the normal, T21(eta, 1) B
     colors, exposure = display_colors(radiance, exposure)
     metadata = {
         "version": __version__,
@@ -140,11 +167,40 @@ def shade(mesh, material="marble", lights=None, *, model="directional", method="
         "model": model,
         "method": method,
         "tolerance": tol,
-        "resolution": "full",
+        "resolution": "full" if decimation is None else f"proxy, {solver_mesh.n_points} vertices, edge {edge:.3g} mm",
         "shadows": shadows,
         "exposure": exposure,
         "unit": "mm",
         "mm_per_unit": mesh.mm_per_unit,
     }
-    stats = {"incident": incident.stats.as_dict(), "solver": solution.stats}
-    return ShadeResult(mesh, solution.B, radiance, colors, exposure, normals, stats, timings, metadata)
+    stats = {"incident": incident.stats.as_dict(), "solver": solution.stats,
+             "solver_vertices": solver_mesh.n_points, "vertices": mesh.n_points}
+    return ShadeResult(mesh, B, radiance, colors, exposure, mesh.vertex_normals(), stats, timings, metadata)
+
+
+def _solver_mesh(mesh, medium, resolution):
+    """The mesh the solver runs on: ``(mesh or proxy, Decimation or None, proxy edge length or None)``."""
+    from ..errors import InvalidParameterError
+    from ..io.decimate import decimate_mesh
+    from ..io.geometry import mean_edge_length
+
+    if resolution == "full":
+        return mesh, None, None
+    if resolution == "auto":
+        edge = proxy_edge_length(medium)
+        if edge < PROXY_MIN_RATIO * mean_edge_length(mesh.points, mesh.triangles):
+            return mesh, None, None
+    else:
+        try:
+            edge = float(resolution)
+        except (TypeError, ValueError):
+            edge = float("nan")
+        if not (np.isfinite(edge) and edge > 0):
+            raise InvalidParameterError(
+                f"resolution must be 'auto', 'full' or a proxy edge length in mm, got {resolution!r}.")
+        if edge <= mean_edge_length(mesh.points, mesh.triangles):
+            return mesh, None, None
+    decimation = decimate_mesh(mesh, target_edge_length=edge)
+    if decimation.method == "none":
+        return mesh, None, None
+    return decimation.proxy, decimation, edge
