@@ -139,100 +139,6 @@ def source_to_receiver(model, points, normals, w12, j, px, py, pz, nx, ny, nz, p
                       w12[j, 0], w12[j, 1], w12[j, 2], px, py, pz, nx, ny, nz, params, out)
 
 
-@numba.njit(cache=True, inline="always", fastmath=True)
-def _ray_source(x_dot_w, x_dot_n, w_dot_n, d, D, sigma_tr_, C_phi, C_E, norm):
-    """``S'_d`` of one ray source from its dot products and distance (spec 1.3), 1/(mm^2 sr)."""
-    s = sigma_tr_ * d
-    one_plus_s = 1.0 + s
-    fluence = C_phi * (d * d / D + 3.0 * one_plus_s * x_dot_w)
-    flux = C_E * (3.0 * D * one_plus_s * w_dot_n - (one_plus_s + 3.0 * D * (3.0 * one_plus_s + s * s) * x_dot_w / (d * d)) * x_dot_n)
-    return norm * math.exp(-s) / (FOUR_PI_SQUARED * d * d * d) * (fluence - flux)
-
-
-@numba.njit(cache=True, fastmath=True)
-def directional_dipole_pair(xi0, xi1, xi2, ni0, ni1, ni2, w0, w1, w2, xo0, xo1, xo2, no0, no1, no2, params, out):
-    """``S_d`` of one source/receiver pair for every channel of ``params``, written into ``out``.
-
-    Same formula and conventions as :func:`translucency.scatter.dipoles.directional_dipole`
-    (spec 1.1-1.3): ``n_i* = n_i`` when ``r = 0`` or ``n_i || x``, ``d_r`` floored at
-    ``D_R_FLOOR * D``, clamp at 0 after subtracting the virtual source.
-
-    Returns
-    -------
-    int
-        The number of channels whose value was clamped from below 0 to 0.
-    """
-    x0 = xo0 - xi0
-    x1 = xo1 - xi1
-    x2 = xo2 - xi2
-    r2 = x0 * x0 + x1 * x1 + x2 * x2
-    r = math.sqrt(r2)
-    # modified tangent-plane normal n_i* (spec 1.2 item 2)
-    s0 = ni0
-    s1 = ni1
-    s2 = ni2
-    if r > 0.0:
-        h0 = x0 / r
-        h1 = x1 / r
-        h2 = x2 / r
-        proj = ni0 * h0 + ni1 * h1 + ni2 * h2
-        t0 = ni0 - proj * h0
-        t1 = ni1 - proj * h1
-        t2 = ni2 - proj * h2
-        tn = math.sqrt(t0 * t0 + t1 * t1 + t2 * t2)
-        if tn > PARALLEL_TOLERANCE:
-            s0 = t0 / tn
-            s1 = t1 / tn
-            s2 = t2 / tn
-    # virtual source direction w_v (item 3)
-    w_dot_s = w0 * s0 + w1 * s1 + w2 * s2
-    v0 = w0 - 2.0 * w_dot_s * s0
-    v1 = w1 - 2.0 * w_dot_s * s1
-    v2 = w2 - 2.0 * w_dot_s * s2
-    # shared dot products
-    mu0 = -(no0 * w0 + no1 * w1 + no2 * w2)
-    x_dot_w = x0 * w0 + x1 * w1 + x2 * w2
-    x_dot_n = x0 * no0 + x1 * no1 + x2 * no2
-    w_dot_n = -mu0
-    v_dot_n = v0 * no0 + v1 * no1 + v2 * no2
-    s_dot_n = s0 * no0 + s1 * no1 + s2 * no2
-    s_dot_v = s0 * v0 + s1 * v1 + s2 * v2
-    x_dot_v = x0 * v0 + x1 * v1 + x2 * v2
-    perp2 = r2 - x_dot_w * x_dot_w
-    if perp2 < 0.0:
-        perp2 = 0.0
-    clamped = 0
-    for k in range(params.shape[0]):
-        D = params[k, P_D]
-        d_e = params[k, P_D_E]
-        # real source: corrected distance d_r (item 5)
-        if mu0 > 0.0:
-            cos_beta = -math.sqrt(perp2 / (r2 + d_e * d_e))
-            d_r2 = r2 + D * mu0 * (D * mu0 - 2.0 * d_e * cos_beta)
-        else:
-            b = params[k, P_BACKLIT]
-            d_r2 = r2 + b * b
-        d_r = math.sqrt(d_r2)
-        if d_r < D_R_FLOOR * D:
-            d_r = D_R_FLOOR * D
-        # virtual source at x_i + c n_i*: x_o - x_v = x - c n_i* (item 4)
-        c = params[k, P_VIRTUAL]
-        xv0 = x0 - c * s0
-        xv1 = x1 - c * s1
-        xv2 = x2 - c * s2
-        d_v = math.sqrt(xv0 * xv0 + xv1 * xv1 + xv2 * xv2)
-        real = _ray_source(x_dot_w, x_dot_n, w_dot_n, d_r, D, params[k, P_SIGMA_TR], params[k, P_C_PHI],
-                           params[k, P_C_E], params[k, P_NORM])
-        virtual = _ray_source(x_dot_v - c * s_dot_v, x_dot_n - c * s_dot_n, v_dot_n, d_v, D, params[k, P_SIGMA_TR],
-                              params[k, P_C_PHI], params[k, P_C_E], params[k, P_NORM])
-        value = real - virtual
-        if value < 0.0:
-            value = 0.0
-            clamped += 1
-        out[k] = value
-    return clamped
-
-
 @numba.njit(cache=True, parallel=True)
 def model_pairs(model, x_i, n_i, w12, x_o, n_o, params):
     """``S_d`` for aligned rows of pairs: ``out[p, k]`` for pair ``p`` and channel ``k`` (testing aid)."""
@@ -262,8 +168,13 @@ def exp_nonpositive(x):
 
 
 @numba.njit(cache=True, inline="always", fastmath=True)
-def _ray_source_fast(x_dot_w, x_dot_n, w_dot_n, d, D, inv_D, sigma_tr_, C_phi, C_E, norm_over_4pi2):
-    """:func:`_ray_source` with reciprocals and :func:`exp_nonpositive` (vectorisable)."""
+def _ray_source(x_dot_w, x_dot_n, w_dot_n, d, D, inv_D, sigma_tr_, C_phi, C_E, norm_over_4pi2):
+    """``S'_d`` of one ray source from its dot products and distance (spec 1.3), 1/(mm^2 sr).
+
+    ``norm exp(-s) / (4 pi^2 d^3) [C_phi (d^2/D + 3 (1+s) x.w) - C_E (3 D (1+s) w.n_o
+    - ((1+s) + 3 D (3 (1+s) + s^2) x.w / d^2) x.n_o)]`` with ``s = sigma_tr d``; written with
+    reciprocals and :func:`exp_nonpositive` so that loops using it vectorise.
+    """
     s = sigma_tr_ * d
     one_plus_s = 1.0 + s
     inv_d = 1.0 / d
@@ -274,7 +185,7 @@ def _ray_source_fast(x_dot_w, x_dot_n, w_dot_n, d, D, inv_D, sigma_tr_, C_phi, C
 
 
 @numba.njit(cache=True, inline="always", fastmath=True)
-def _channel_fast(params, k, r2, perp2, mu0, x_dot_w, x_dot_n, x_dot_v, s_dot_v, s_dot_n, v_dot_n, x_dot_s):
+def _channel(params, k, r2, perp2, mu0, x_dot_w, x_dot_n, x_dot_v, s_dot_v, s_dot_n, v_dot_n, x_dot_s):
     """``S_d`` of one channel from the shared pair geometry, before the clamp (real minus virtual)."""
     D = params[k, P_D]
     d_e = params[k, P_D_E]
@@ -286,18 +197,21 @@ def _channel_fast(params, k, r2, perp2, mu0, x_dot_w, x_dot_n, x_dot_v, s_dot_v,
     d_v = math.sqrt(max(r2 - 2.0 * c * x_dot_s + c * c, 0.0))  # |x - c n_i*|
     inv_D = 1.0 / D
     scale = params[k, P_NORM] / FOUR_PI_SQUARED
-    real = _ray_source_fast(x_dot_w, x_dot_n, -mu0, d_r, D, inv_D, params[k, P_SIGMA_TR], params[k, P_C_PHI],
+    real = _ray_source(x_dot_w, x_dot_n, -mu0, d_r, D, inv_D, params[k, P_SIGMA_TR], params[k, P_C_PHI],
                             params[k, P_C_E], scale)
-    virtual = _ray_source_fast(x_dot_v - c * s_dot_v, x_dot_n - c * s_dot_n, v_dot_n, d_v, D, inv_D,
+    virtual = _ray_source(x_dot_v - c * s_dot_v, x_dot_n - c * s_dot_n, v_dot_n, d_v, D, inv_D,
                                params[k, P_SIGMA_TR], params[k, P_C_PHI], params[k, P_C_E], scale)
     return real - virtual
 
 
 @numba.njit(cache=True, inline="always", fastmath=True)
-def directional_three(x0, x1, x2, ni0, ni1, ni2, w0, w1, w2, nx, ny, nz, params):
-    """Unclamped ``S_d`` of three channels (rows of ``params``) for the pair offset ``x = x_o - x_i``.
+def pair_geometry(x0, x1, x2, ni0, ni1, ni2, w0, w1, w2, nx, ny, nz):
+    """The channel-independent part of the directional dipole for the pair offset ``x = x_o - x_i``.
 
-    Branch-free restatement of :func:`directional_dipole_pair` for vectorised loops (same conventions).
+    Modified tangent-plane normal ``n_i*`` (``n_i`` when ``r = 0`` or ``n_i || x``; spec 1.2 item 2),
+    virtual direction ``w_v`` (item 3), and the dot products the channels need (branch-free, so that
+    loops using it vectorise). Returns ``(r2, perp2, mu0, x.w12, x.n_o, x.w_v, n*.w_v, n*.n_o, w_v.n_o,
+    x.n*)`` with ``perp2 = r^2 - (x.w12)^2`` (>= 0) and ``mu0 = -n_o.w12``.
     """
     r2 = x0 * x0 + x1 * x1 + x2 * x2
     positive = r2 > 0.0
@@ -328,10 +242,41 @@ def directional_three(x0, x1, x2, ni0, ni1, ni2, w0, w1, w2, nx, ny, nz, params)
     x_dot_v = x0 * v0 + x1 * v1 + x2 * v2
     x_dot_s = x0 * s0 + x1 * s1 + x2 * s2
     perp2 = max(r2 - x_dot_w * x_dot_w, 0.0)
-    e0 = _channel_fast(params, 0, r2, perp2, mu0, x_dot_w, x_dot_n, x_dot_v, s_dot_v, s_dot_n, v_dot_n, x_dot_s)
-    e1 = _channel_fast(params, 1, r2, perp2, mu0, x_dot_w, x_dot_n, x_dot_v, s_dot_v, s_dot_n, v_dot_n, x_dot_s)
-    e2 = _channel_fast(params, 2, r2, perp2, mu0, x_dot_w, x_dot_n, x_dot_v, s_dot_v, s_dot_n, v_dot_n, x_dot_s)
-    return e0, e1, e2
+    return r2, perp2, mu0, x_dot_w, x_dot_n, x_dot_v, s_dot_v, s_dot_n, v_dot_n, x_dot_s
+
+
+@numba.njit(cache=True, inline="always", fastmath=True)
+def directional_three(x0, x1, x2, ni0, ni1, ni2, w0, w1, w2, nx, ny, nz, params):
+    """Unclamped ``S_d`` of three channels (rows of ``params``) for the pair offset ``x = x_o - x_i``."""
+    r2, perp2, mu0, xw, xn, xv, sv, sn, vn, xs = pair_geometry(x0, x1, x2, ni0, ni1, ni2, w0, w1, w2, nx, ny, nz)
+    return (_channel(params, 0, r2, perp2, mu0, xw, xn, xv, sv, sn, vn, xs),
+            _channel(params, 1, r2, perp2, mu0, xw, xn, xv, sv, sn, vn, xs),
+            _channel(params, 2, r2, perp2, mu0, xw, xn, xv, sv, sn, vn, xs))
+
+
+@numba.njit(cache=True, fastmath=True)
+def directional_dipole_pair(xi0, xi1, xi2, ni0, ni1, ni2, w0, w1, w2, xo0, xo1, xo2, no0, no1, no2, params, out):
+    """``S_d`` of one source/receiver pair for every channel of ``params``, written into ``out``.
+
+    Same formula and conventions as :func:`translucency.scatter.dipoles.directional_dipole`
+    (spec 1.1-1.3): ``n_i* = n_i`` when ``r = 0`` or ``n_i || x``, ``d_r`` floored at
+    ``D_R_FLOOR * D``, clamp at 0 after subtracting the virtual source.
+
+    Returns
+    -------
+    int
+        The number of channels whose value was clamped from below 0 to 0.
+    """
+    r2, perp2, mu0, xw, xn, xv, sv, sn, vn, xs = pair_geometry(xo0 - xi0, xo1 - xi1, xo2 - xi2, ni0, ni1, ni2, w0, w1,
+                                                               w2, no0, no1, no2)
+    clamped = 0
+    for k in range(params.shape[0]):
+        value = _channel(params, k, r2, perp2, mu0, xw, xn, xv, sv, sn, vn, xs)
+        if value < 0.0:
+            value = 0.0
+            clamped += 1
+        out[k] = value
+    return clamped
 
 
 @numba.njit(cache=True)
