@@ -53,7 +53,9 @@ MODELS = tuple(kernels.MODELS)
 NEAR_EDGES = 3.0
 NEAR_MEAN_FREE_PATHS = 1.0
 #: Refinement ratio of the adaptive quadrature (piece diameter over its distance to the receiver).
-NEAR_BETA = 1.0
+#: Measured on planes (ketchup, marble; 1-2 mm triangles): 1.5 gives the same B as 1.0 to 0.005 % with
+#: 20 % fewer pieces; 2.0 accepts the piece that holds the receiver too early (errors of 1-16 %).
+NEAR_BETA = 1.5
 
 
 @dataclass
