@@ -181,3 +181,15 @@ def test_vectorised_cutoff_equals_the_generic_cutoff_kernel():
                                                      channel_of)
         assert np.allclose(fast, generic, rtol=1e-12, atol=1e-300)
         assert np.array_equal(n_fast, n_generic) and n_fast.sum() < len(lit) * len(points)
+
+
+@pytest.mark.parametrize("method", solve.METHODS)
+def test_no_light_gives_zero_and_complete_stats(method):
+    medium = material("marble").medium()
+    points, triangles = icosphere(2, 5.0)
+    normals = vertex_normals(points, triangles)
+    geometry = solve.SurfaceGeometry(points, triangles, normals)
+    solution = solve.solve(geometry, np.zeros((len(points), 3)), -normals, medium, method=method, tol=0.01)
+    assert np.array_equal(solution.B, np.zeros((len(points), 3)))
+    assert solution.stats["pairs_evaluated"] == 0 and solution.stats["pairs_skipped"] == 0
+    assert solution.stats["sources_skipped_no_flux"] == len(points)

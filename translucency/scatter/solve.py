@@ -197,6 +197,54 @@ def _all_pairs(model_code, geometry, sources, w12, flux, rcv_points, rcv_normals
                               flux[sources], rcv_points, rcv_normals, params, channel_of)
 
 
+def _far_field_exact(model, geometry, medium, lit, w12, flux, rcv_points, rcv_normals, params, channel_of, tol):
+    """Method ``exact``: every (lit source, receiver) pair."""
+    B, clamped = _all_pairs(kernels.MODELS[model], geometry, lit, w12, flux, rcv_points, rcv_normals, params, channel_of)
+    pairs = int(lit.size) * int(rcv_points.shape[0])
+    return B, {"pairs_evaluated": pairs, "pairs_skipped": 0, "clamped_values": int(clamped.sum())}
+
+
+def _far_field_cutoff(model, geometry, medium, lit, w12, flux, rcv_points, rcv_normals, params, channel_of, tol):
+    """Method ``cutoff``: pairs within the radius of :func:`translucency.scatter.cutoff.cutoff_radius`."""
+    radius = cutoff.cutoff_radius(medium, tol, model)
+    model_code = kernels.MODELS[model]
+    diagonal = float(np.linalg.norm(np.ptp(geometry.points, axis=0)))
+    if not radius < diagonal:  # the radius covers the object: every pair
+        B, stats = _far_field_exact(model, geometry, medium, lit, w12, flux, rcv_points, rcv_normals, params,
+                                    channel_of, tol)
+        return B, {**stats, "cutoff_radius_mm": radius}
+    grid = geometry.source_grid(lit, radius)
+    if model_code == kernels.MODEL_DIRECTIONAL and flux.shape[1] <= 3:
+        ordered = lit[grid.order]
+        columns = [np.ascontiguousarray(a[ordered, i]) for a in (geometry.points, geometry.normals, w12) for i in range(3)]
+        B, evaluated = cutoff.cutoff_sum_directional(*columns, np.ascontiguousarray(flux[ordered].T), grid.start,
+                                                     grid.origin, grid.cell, grid.dims, radius, rcv_points, rcv_normals,
+                                                     params, channel_of)
+    else:
+        B, evaluated = cutoff.cutoff_sum(model_code, grid.order, grid.start, grid.origin, grid.cell, grid.dims, radius,
+                                         geometry.points[lit], geometry.normals[lit], w12[lit], flux[lit], rcv_points,
+                                         rcv_normals, params, channel_of)
+    pairs = int(lit.size) * int(rcv_points.shape[0])
+    return B, {"cutoff_radius_mm": radius, "pairs_evaluated": int(evaluated.sum()),
+               "pairs_skipped": pairs - int(evaluated.sum())}
+
+
+def _far_field_tree(model, geometry, medium, lit, w12, flux, rcv_points, rcv_normals, params, channel_of, tol):
+    """Method ``tree``: clusters small seen from the receiver replaced by their aggregated source."""
+    model_code = kernels.MODELS[model]
+    tree = geometry.source_tree()
+    theta = hierarchy.THETA_PER_SQRT_TOL * float(np.sqrt(tol))
+    nodes = hierarchy.aggregate(tree.order, tree.start, tree.end, tree.left, tree.right, geometry.points,
+                                geometry.normals, w12, flux)
+    B, direct, clustered = hierarchy.tree_sum(
+        model_code, tree.order, tree.start, tree.end, tree.left, tree.right, tree.centre, tree.radius, *nodes,
+        geometry.points, geometry.normals, w12, flux, rcv_points, rcv_normals, params, channel_of, theta)
+    pairs = int(lit.size) * int(rcv_points.shape[0])
+    return B, {"theta": theta, "tree_nodes": tree.n_nodes, "pairs_evaluated": int(direct.sum() + clustered.sum()),
+               "pairs_direct": int(direct.sum()), "cluster_evaluations": int(clustered.sum()),
+               "pairs_skipped": pairs - int(direct.sum())}
+
+
 def unique_channels(medium: Medium):
     """Distinct coefficient sets of the medium's channels: ``(rows, channel_of)`` (identical channels once)."""
     table = np.stack([medium.sigma_a, medium.sigma_s, medium.g], axis=1)
@@ -292,50 +340,12 @@ def solve(
     rcv_points = geometry.points[receivers]
     rcv_normals = geometry.normals[receivers]
     if lit.size == 0:
-        B = np.zeros((receivers.size, medium.n_channels))
-        stats["pairs_evaluated"] = 0
-    elif method == "exact":
-        B, clamped = _all_pairs(model_code, geometry, lit, w12, flux, rcv_points, rcv_normals, params, channel_of)
-        stats["pairs_evaluated"] = int(lit.size) * int(receivers.size)
-        stats["pairs_skipped"] = 0
-        stats["clamped_values"] = int(clamped.sum())
-    elif method == "cutoff":
-        radius = cutoff.cutoff_radius(medium, tol, model)
-        stats["cutoff_radius_mm"] = radius
-        diagonal = float(np.linalg.norm(np.ptp(geometry.points, axis=0)))
-        if not radius < diagonal:
-            B, clamped = _all_pairs(model_code, geometry, lit, w12, flux, rcv_points, rcv_normals, params, channel_of)
-            stats["pairs_evaluated"] = int(lit.size) * int(receivers.size)
-            stats["pairs_skipped"] = 0
-        else:
-            grid = geometry.source_grid(lit, radius)
-            if model_code == kernels.MODEL_DIRECTIONAL and flux.shape[1] <= 3:
-                ordered = lit[grid.order]
-                columns = [np.ascontiguousarray(a[ordered, i]) for a in (geometry.points, geometry.normals, w12)
-                           for i in range(3)]
-                B, evaluated = cutoff.cutoff_sum_directional(*columns, np.ascontiguousarray(flux[ordered].T), grid.start,
-                                                             grid.origin, grid.cell, grid.dims, radius, rcv_points,
-                                                             rcv_normals, params, channel_of)
-            else:
-                B, evaluated = cutoff.cutoff_sum(model_code, grid.order, grid.start, grid.origin, grid.cell, grid.dims,
-                                                 radius, geometry.points[lit], geometry.normals[lit], w12[lit],
-                                                 flux[lit], rcv_points, rcv_normals, params, channel_of)
-            stats["pairs_evaluated"] = int(evaluated.sum())
-            stats["pairs_skipped"] = int(lit.size) * int(receivers.size) - int(evaluated.sum())
-    else:  # tree
-        tree = geometry.source_tree()
-        theta = hierarchy.THETA_PER_SQRT_TOL * float(np.sqrt(tol))
-        nodes = hierarchy.aggregate(tree.order, tree.start, tree.end, tree.left, tree.right, geometry.points,
-                                    geometry.normals, w12, flux)
-        B, direct, clustered = hierarchy.tree_sum(
-            model_code, tree.order, tree.start, tree.end, tree.left, tree.right, tree.centre, tree.radius, *nodes,
-            geometry.points, geometry.normals, w12, flux, rcv_points, rcv_normals, params, channel_of, theta)
-        stats["theta"] = theta
-        stats["tree_nodes"] = tree.n_nodes
-        stats["pairs_evaluated"] = int(direct.sum() + clustered.sum())
-        stats["pairs_direct"] = int(direct.sum())
-        stats["cluster_evaluations"] = int(clustered.sum())
-        stats["pairs_skipped"] = int(lit.size) * int(receivers.size) - int(direct.sum())
+        B, far_stats = np.zeros((receivers.size, medium.n_channels)), {"pairs_evaluated": 0, "pairs_skipped": 0}
+    else:
+        far_field = {"exact": _far_field_exact, "cutoff": _far_field_cutoff, "tree": _far_field_tree}[method]
+        B, far_stats = far_field(model, geometry, medium, lit, w12, flux, rcv_points, rcv_normals, params,
+                                 channel_of, tol)
+    stats.update(far_stats)
     timings["far_field"] = time.perf_counter() - start
     report("far field", 1.0)
 
