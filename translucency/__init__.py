@@ -40,6 +40,7 @@ _LAZY = {
     "solve": "translucency.scatter.solve",
     # the whole chain on one mesh
     "shade": "translucency.app.pipeline",
+    "Scene": "translucency.app.pipeline",
     "load_default_scan": "translucency.app.pipeline",
     # errors
     "TranslucencyError": "translucency.errors",

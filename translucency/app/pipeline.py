@@ -101,9 +101,163 @@ class ShadeResult:
     metadata: dict = field(default_factory=dict)
 
 
+def resolve_medium(material):
+    """A :class:`~translucency.scatter.medium.Medium` from a catalogue name, catalogue entry or medium."""
+    from ..scatter.materials import Material, material as lookup
+    from ..scatter.medium import Medium
+
+    if isinstance(material, Medium):
+        return material
+    if isinstance(material, Material):
+        return material.medium()
+    return lookup(material).medium()
+
+
+class Scene:
+    """One mesh prepared for repeated shading, keeping every piece of work that a new call can reuse.
+
+    What is kept, and when it is reused (reported in ``ShadeResult.stats["reused"]``):
+
+    * the solver mesh (full, or a proxy per edge length) with its geometry caches -- vertex areas,
+      near-triangle lists (per near radius), the source tree -- reused whatever the light and the
+      material;
+    * the Embree scene and the visibility of every light sample (:class:`VisibilityCache`), reused
+      when only the material changes (or when a light comes back);
+    * the incident light per (lights, eta, shadows), reused when only the coefficients change.
+
+    A viewer keeps one ``Scene`` and calls :meth:`shade` on every change; :func:`shade` is the
+    one-call form.
+
+    Parameters
+    ----------
+    mesh : TriangleMesh
+        A cleaned mesh in mm with outward orientation.
+    shadows : bool
+        Cast Embree shadow rays (off: every front-facing vertex is lit).
+    """
+
+    def __init__(self, mesh, *, shadows: bool = True):
+        from ..scatter.irradiance import VisibilityCache
+
+        self.mesh = mesh
+        self.shadows = bool(shadows)
+        self.visibility = VisibilityCache()
+        self._solver_meshes: dict = {}
+        self._incident: dict = {}
+        self._normals = None
+
+    def solver_mesh(self, medium, resolution="full"):
+        """``(solver mesh, Decimation or None, edge or None, SurfaceGeometry, reused)`` for a resolution."""
+        from ..scatter.solve import SurfaceGeometry
+
+        mesh, decimation, edge = _solver_mesh(self.mesh, medium, resolution)
+        key = None if decimation is None else round(edge, 9)
+        if key in self._solver_meshes:
+            return (*self._solver_meshes[key], True)
+        normals = mesh.vertex_normals()
+        geometry = SurfaceGeometry(mesh.points, mesh.triangles, normals)
+        self._solver_meshes[key] = (mesh, decimation, edge, geometry)
+        return mesh, decimation, edge, geometry, False
+
+    def incident(self, geometry, triangles, lights, eta, per_direction=False):
+        """Incident light on a solver mesh, memoised per (mesh, lights, eta, shadows); ``(light, reused)``."""
+        from ..scatter.irradiance import incident_flux
+
+        key = (id(geometry), repr([light.to_dict() for light in lights]), float(eta), per_direction)
+        if key in self._incident:
+            return self._incident[key], True
+        light = incident_flux(geometry.points, geometry.normals, geometry.vertex_areas, lights, eta,
+                              triangles=triangles if self.shadows else None, cache=self.visibility,
+                              per_direction=per_direction)
+        while len(self._incident) >= 8:  # a few recent light set-ups; the oldest goes first
+            self._incident.pop(next(iter(self._incident)))
+        self._incident[key] = light
+        return light, False
+
+    def shade(self, material="marble", lights=None, *, model="directional", method="tree", tol=1e-2,
+              resolution="full", exposure=None, per_direction=False, progress=None) -> "ShadeResult":
+        """Translucent shading: ``B``, radiance toward the normal and display colours (see :func:`shade`)."""
+        from ..scatter.fresnel import fresnel_transmittance
+        from ..scatter.lights import DirectionalLight, as_light_list
+        from ..scatter.solve import solve
+
+        timings = {}
+        start = time.perf_counter()
+        medium = resolve_medium(material)
+        lights = as_light_list(lights if lights is not None else DirectionalLight(DEFAULT_LIGHT_DIRECTION, 1.0))
+        solver_mesh, decimation, edge, geometry, geometry_reused = self.solver_mesh(medium, resolution)
+        timings["geometry"] = time.perf_counter() - start
+
+        start = time.perf_counter()
+        incident, incident_reused = self.incident(geometry, solver_mesh.triangles, lights, medium.eta, per_direction)
+        timings["incident_light"] = time.perf_counter() - start
+
+        if per_direction:
+            solutions = _solve_per_direction(geometry, incident, medium, model, method, tol, progress)
+        else:
+            solutions = [solve(geometry, incident.phi_rgb, incident.w12, medium, model=model, method=method, tol=tol,
+                               progress=progress)]
+        B = sum(solution.B for solution in solutions)
+        for solution in solutions:
+            for k, v in solution.timings.items():
+                timings[f"solve_{k}"] = timings.get(f"solve_{k}", 0.0) + v
+        if decimation is not None:
+            start = time.perf_counter()
+            B = np.maximum(decimation.interpolate(B), 0.0)
+            timings["interpolate_to_full"] = time.perf_counter() - start
+        radiance = float(fresnel_transmittance(1.0, medium.eta)) * B  # L toward the normal, T21(eta, 1) B
+        colors, exposure = display_colors(radiance, exposure)
+        metadata = {
+            "version": __version__,
+            "material": medium.name,
+            "coefficients": medium.describe(),
+            "lights": [light.to_dict() for light in lights],
+            "model": model,
+            "method": method,
+            "tolerance": tol,
+            "resolution": "full" if decimation is None else f"proxy, {solver_mesh.n_points} vertices, edge {edge:.3g} mm",
+            "shadows": self.shadows,
+            "light_summation": "per direction" if per_direction else "aggregated per vertex",
+            "exposure": exposure,
+            "unit": "mm",
+            "mm_per_unit": self.mesh.mm_per_unit,
+        }
+        if self._normals is None:
+            self._normals = self.mesh.vertex_normals()
+        reused = [name for name, flag in (("geometry", geometry_reused), ("incident light", incident_reused),
+                                          ("Embree scene", incident.stats.scene == "reused")) if flag]
+        if incident.stats.n_visibility_reused:
+            reused.append(f"visibility of {incident.stats.n_visibility_reused} light samples")
+        solver_stats = solutions[0].stats if len(solutions) == 1 else {
+            "solves": len(solutions), **{k: sum(s.stats.get(k, 0) for s in solutions)
+                                          for k in ("pairs_evaluated", "pairs_skipped", "near_pieces")}}
+        stats = {"incident": incident.stats.as_dict(), "solver": solver_stats, "reused": reused,
+                 "solver_vertices": solver_mesh.n_points, "vertices": self.mesh.n_points}
+        return ShadeResult(self.mesh, B, radiance, colors, exposure, self._normals, stats, timings, metadata)
+
+
+def _solve_per_direction(geometry, incident, medium, model, method, tol, progress):
+    """One solve per light sample (each with its own refracted direction); their ``B`` add up."""
+    from ..scatter.solve import solve
+
+    n = geometry.n_vertices
+    solutions = []
+    for k, part in enumerate(incident.contributions):
+        phi = np.zeros((n, 3))
+        w12 = np.tile((0.0, 0.0, -1.0), (n, 1))
+        phi[part.vertices] = part.phi_rgb
+        w12[part.vertices] = part.w12
+        inner = None if progress is None else (
+            lambda stage, fraction, k=k: progress(stage, (k + fraction) / len(incident.contributions)))
+        solutions.append(solve(geometry, phi, w12, medium, model=model, method=method, tol=tol, progress=inner))
+    return solutions
+
+
 def shade(mesh, material="marble", lights=None, *, model="directional", method="tree", tol=1e-2, shadows=True,
-          resolution="full", exposure=None, progress=None) -> ShadeResult:
+          resolution="full", exposure=None, per_direction=False, progress=None) -> ShadeResult:
     """Translucent shading of one mesh (mm): ``B``, radiance toward the normal and display colours.
+
+    The one-call form of :class:`Scene` (nothing is kept between calls; keep a ``Scene`` to reuse work).
 
     Parameters
     ----------
@@ -124,58 +278,16 @@ def shade(mesh, material="marble", lights=None, *, model="directional", method="
         4.2 % relative RMS from ``exact`` on the full mesh, which is why ``"full"`` is the default.
     exposure : float, optional
         Display exposure (automatic by default, see :func:`display_colors`).
+    per_direction : bool
+        Solve once per light sample with its own refracted direction and add the results (exact for
+        several lights; the default aggregates the lights per vertex, see
+        :mod:`translucency.scatter.irradiance`).
     progress : callable, optional
         ``progress(stage, fraction)``.
     """
-    from ..scatter.fresnel import fresnel_transmittance
-    from ..scatter.irradiance import incident_flux
-    from ..scatter.lights import DirectionalLight, as_light_list
-    from ..scatter.materials import Material, material as lookup
-    from ..scatter.medium import Medium
-    from ..scatter.solve import SurfaceGeometry, solve
-
-    timings = {}
-    start = time.perf_counter()
-    medium = material if isinstance(material, Medium) else (
-        material.medium() if isinstance(material, Material) else lookup(material).medium())
-    lights = as_light_list(lights if lights is not None else DirectionalLight(DEFAULT_LIGHT_DIRECTION, 1.0))
-    solver_mesh, decimation, edge = _solver_mesh(mesh, medium, resolution)
-    normals = solver_mesh.vertex_normals()
-    geometry = SurfaceGeometry(solver_mesh.points, solver_mesh.triangles, normals)
-    timings["geometry"] = time.perf_counter() - start
-
-    start = time.perf_counter()
-    incident = incident_flux(solver_mesh.points, normals, geometry.vertex_areas, lights, medium.eta,
-                             triangles=solver_mesh.triangles if shadows else None)
-    timings["incident_light"] = time.perf_counter() - start
-
-    solution = solve(geometry, incident.phi_rgb, incident.w12, medium, model=model, method=method, tol=tol,
-                     progress=progress)
-    timings.update({f"solve_{k}": v for k, v in solution.timings.items()})
-    B = solution.B
-    if decimation is not None:
-        start = time.perf_counter()
-        B = np.maximum(decimation.interpolate(B), 0.0)
-        timings["interpolate_to_full"] = time.perf_counter() - start
-    radiance = float(fresnel_transmittance(1.0, medium.eta)) * B  # L toward the normal, T21(eta, 1) B
-    colors, exposure = display_colors(radiance, exposure)
-    metadata = {
-        "version": __version__,
-        "material": medium.name,
-        "coefficients": medium.describe(),
-        "lights": [light.to_dict() for light in lights],
-        "model": model,
-        "method": method,
-        "tolerance": tol,
-        "resolution": "full" if decimation is None else f"proxy, {solver_mesh.n_points} vertices, edge {edge:.3g} mm",
-        "shadows": shadows,
-        "exposure": exposure,
-        "unit": "mm",
-        "mm_per_unit": mesh.mm_per_unit,
-    }
-    stats = {"incident": incident.stats.as_dict(), "solver": solution.stats,
-             "solver_vertices": solver_mesh.n_points, "vertices": mesh.n_points}
-    return ShadeResult(mesh, B, radiance, colors, exposure, mesh.vertex_normals(), stats, timings, metadata)
+    return Scene(mesh, shadows=shadows).shade(material, lights, model=model, method=method, tol=tol,
+                                              resolution=resolution, exposure=exposure, per_direction=per_direction,
+                                              progress=progress)
 
 
 def _solver_mesh(mesh, medium, resolution):

@@ -1,0 +1,48 @@
+"""Shared command-line options: what the user types becomes lights and solver settings, or one sentence."""
+
+import argparse
+
+import numpy as np
+import pytest
+
+from translucency.app import options
+from translucency.errors import InvalidParameterError
+from translucency.scatter.lights import DirectionalLight, EnvironmentLight, PointLight
+
+
+def parse(*argv):
+    parser = argparse.ArgumentParser()
+    options.add_scan_options(parser)
+    options.add_light_options(parser)
+    options.add_solver_options(parser)
+    return parser.parse_args(list(argv))
+
+
+def test_defaults_give_the_default_light_and_the_tree_method():
+    args = parse()
+    (light,) = options.lights_from_args(args)
+    assert isinstance(light, DirectionalLight)
+    settings = options.solver_settings(args)
+    assert settings["method"] == "tree" and settings["tol"] == 0.01 and settings["resolution"] == "full"
+    assert settings["material"].name == "marble" and args.mesh is None
+
+
+def test_light_options_add_up():
+    args = parse("--light-dir", "0,0,2", "--light", "point:0,0,100:3;env:0.1:16")
+    lights = options.lights_from_args(args)
+    assert [type(light) for light in lights] == [DirectionalLight, PointLight, EnvironmentLight]
+    np.testing.assert_allclose(lights[0].direction, (0, 0, 1))  # normalised, toward the light
+    assert lights[2].n_directions == 16
+
+
+@pytest.mark.parametrize("text", ["1,2", "a,b,c", "0,0,0", "1,nan,0", ""])
+def test_bad_light_direction_is_one_sentence(text):
+    with pytest.raises(InvalidParameterError, match="--light-dir"):
+        options.lights_from_args(parse("--light-dir", text))
+
+
+@pytest.mark.parametrize("flag, value, words", [("--tol", "2", "--tol"), ("--resolution", "fine", "--resolution"),
+                                                ("--exposure", "-1", "--exposure"), ("--material", "plutonium", "plutonium")])
+def test_bad_solver_settings_are_one_sentence(flag, value, words):
+    with pytest.raises(InvalidParameterError, match=words):
+        options.solver_settings(parse(flag, value))

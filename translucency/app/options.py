@@ -1,0 +1,137 @@
+"""Command-line options shared by ``view``, ``bake`` and ``compare``: scan, material, lights, solver.
+
+One place turns the words a user types into the API's objects, so every subcommand accepts and
+rejects the same things with the same sentences:
+
+* :func:`add_scan_options` / :func:`load_scan` -- a mesh file (or the embedded default) and its unit,
+  loaded and cleaned, in mm;
+* :func:`add_light_options` / :func:`lights_from_args` -- ``--light-dir X,Y,Z`` (from the object toward
+  the light), ``--light SPEC`` (any mix, see :data:`~translucency.scatter.lights.LIGHT_SPEC_HELP`),
+  ``--env FILE`` (an equirectangular HDR map) with ``--env-directions N``;
+* :func:`add_solver_options` / :func:`solver_settings` -- ``--model``, ``--method``, ``--tol``,
+  ``--resolution``, ``--no-shadows``, ``--per-direction``, ``--exposure``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import warnings
+
+import numpy as np
+
+from ..errors import InvalidParameterError
+from ..scatter.solve import METHODS, MODELS
+
+
+def add_scan_options(parser: argparse.ArgumentParser, *, several: bool = False) -> None:
+    """``MESH`` (optional: the embedded default scan) and ``--unit``."""
+    if several:
+        parser.add_argument("meshes", nargs="*", metavar="MESH",
+                            help="mesh files (PLY, OBJ, STL, OFF, VTK, ...); none: the embedded default scan")
+    else:
+        parser.add_argument("mesh", nargs="?", metavar="MESH",
+                            help="mesh file (PLY, OBJ, STL, OFF, VTK, ...); none: the embedded default scan")
+    parser.add_argument("--unit", default="mm",
+                        help="length unit of the file: mm, cm, m, in, or mm per unit as a number (default mm)")
+
+
+def add_light_options(parser: argparse.ArgumentParser) -> None:
+    """``--light-dir``, ``--light``, ``--env`` and ``--env-directions``."""
+    from ..scatter.lights import LIGHT_SPEC_HELP
+
+    group = parser.add_argument_group("lights (default: one white directional light of 1 W/m^2)")
+    group.add_argument("--light-dir", metavar="X,Y,Z",
+                       help="direction from the object toward a white directional light of 1 W/m^2")
+    group.add_argument("--light", metavar="SPEC", help=f"lights in short form: {LIGHT_SPEC_HELP}")
+    group.add_argument("--env", metavar="FILE", help="equirectangular HDR environment map (.hdr), W/(m^2 sr)")
+    group.add_argument("--env-directions", type=int, default=256, metavar="N",
+                       help="directions sampled from the environment map (default 256)")
+
+
+def add_solver_options(parser: argparse.ArgumentParser) -> None:
+    """``--material`` and the solver's settings."""
+    group = parser.add_argument_group("material and solver")
+    group.add_argument("--material", default="marble", help="catalogue name (see 'translucency materials')")
+    group.add_argument("--model", default="directional", choices=MODELS, help="scattering model (default directional)")
+    group.add_argument("--method", default="tree", choices=METHODS, help="far-field method (default tree)")
+    group.add_argument("--tol", type=float, default=1e-2, help="relative error allowed to cutoff/tree (default 0.01)")
+    group.add_argument("--resolution", default="full",
+                       help="where B is computed: full (every vertex), auto, or a proxy edge length in mm")
+    group.add_argument("--no-shadows", action="store_true", help="no shadow rays: every front-facing vertex is lit")
+    group.add_argument("--per-direction", action="store_true",
+                       help="solve each light sample with its own refracted direction (exact for several lights)")
+    group.add_argument("--exposure", type=float, default=None, help="display exposure (default: automatic)")
+
+
+def parse_vector(text: str, name: str) -> np.ndarray:
+    """Three finite numbers from ``"x,y,z"``; ``name`` is the option, for the error sentence."""
+    try:
+        values = np.array([float(part) for part in str(text).split(",")], dtype=np.float64)
+    except ValueError:
+        values = np.array([])
+    if values.shape != (3,) or not np.all(np.isfinite(values)):
+        raise InvalidParameterError(f"{name} must be three finite numbers x,y,z (e.g. 0,1,0.5), got {text!r}.")
+    if not np.any(values):
+        raise InvalidParameterError(f"{name} must not be the zero vector, got {text!r}.")
+    return values
+
+
+def lights_from_args(args) -> tuple:
+    """The lights the options describe (several options add up), or the pipeline's default light."""
+    from ..scatter.lights import DirectionalLight, parse_light_spec
+    from .pipeline import DEFAULT_LIGHT_DIRECTION
+
+    lights = []
+    if getattr(args, "light_dir", None) is not None:
+        lights.append(DirectionalLight(parse_vector(args.light_dir, "--light-dir"), 1.0))
+    if getattr(args, "light", None) is not None:
+        lights.extend(parse_light_spec(args.light))
+    if getattr(args, "env", None):
+        from ..io.envmap import load_environment
+
+        lights.append(load_environment(args.env, n_directions=args.env_directions))
+    if not lights:
+        lights.append(DirectionalLight(DEFAULT_LIGHT_DIRECTION, 1.0))
+    return tuple(lights)
+
+
+def solver_settings(args) -> dict:
+    """Keyword arguments of :meth:`translucency.app.pipeline.Scene.shade` from the options."""
+    from .pipeline import resolve_medium
+
+    resolution = args.resolution
+    if resolution not in ("full", "auto"):
+        try:
+            resolution = float(resolution)
+        except ValueError:
+            raise InvalidParameterError(
+                f"--resolution must be full, auto or a proxy edge length in mm, got {args.resolution!r}.") from None
+    if not (np.isfinite(args.tol) and 0 < args.tol < 1):
+        raise InvalidParameterError(f"--tol must be a relative error in (0, 1), got {args.tol!r}.")
+    if args.exposure is not None and not (np.isfinite(args.exposure) and args.exposure > 0):
+        raise InvalidParameterError(f"--exposure must be a positive number, got {args.exposure!r}.")
+    return {"material": resolve_medium(args.material), "model": args.model, "method": args.method, "tol": args.tol,
+            "resolution": resolution, "exposure": args.exposure, "per_direction": args.per_direction}
+
+
+def load_scan(path, unit="mm", *, warn=None):
+    """A mesh file (or the embedded default scan when ``path`` is None), loaded in ``unit`` and cleaned.
+
+    Returns ``(mesh in mm, CleanReport or None, name)``. Warnings from loading (an implausible size
+    for the unit, say) go to ``warn(message)`` when given.
+    """
+    from ..io.clean import clean_mesh
+    from ..io.load import load_mesh
+    from .pipeline import default_scan_path, load_default_scan
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        if path is None:
+            mesh, name = load_default_scan(), default_scan_path().stem
+        else:
+            mesh, name = load_mesh(path, unit=unit), str(path)
+    if warn is not None:
+        for warning in caught:
+            warn(str(warning.message))
+    mesh, report = clean_mesh(mesh)
+    return mesh, report, name
