@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from translucency.app import options
-from translucency.errors import InvalidParameterError
+from translucency.errors import InvalidParameterError, TranslucencyError
 from translucency.scatter.lights import DirectionalLight, EnvironmentLight, PointLight
 
 
@@ -44,5 +44,5 @@ def test_bad_light_direction_is_one_sentence(text):
 @pytest.mark.parametrize("flag, value, words", [("--tol", "2", "--tol"), ("--resolution", "fine", "--resolution"),
                                                 ("--exposure", "-1", "--exposure"), ("--material", "plutonium", "plutonium")])
 def test_bad_solver_settings_are_one_sentence(flag, value, words):
-    with pytest.raises(InvalidParameterError, match=words):
+    with pytest.raises(TranslucencyError, match=words):
         options.solver_settings(parse(flag, value))
