@@ -22,6 +22,7 @@ Nothing else of the README changes, and a ``--quick`` run leaves it alone.
     .venv/bin/python bench/run_all.py              # the suite (about 1.5 h on 2 free cores)
     .venv/bin/python bench/run_all.py --validate   # and the Monte Carlo validation (+ about 10 min)
     .venv/bin/python bench/run_all.py --quick      # a smoke run of every script (a few minutes)
+    .venv/bin/python bench/run_all.py --tables-only  # only rewrite the README's tables from bench/results
 """
 
 from __future__ import annotations
@@ -75,7 +76,8 @@ def goals_markdown(results):
         if not best:
             lines.append(f"| {scan}: ≤ {GOALS[scan]:g} s per solve at ≤ 1 % | not measured | |")
             continue
-        parts = [f"{m} {r['seconds']:.1f} s ({r['method']} {r['tol']:g}, {r['resolution']}, {100 * r['error_rms']:.2f} %)"
+        parts = [f"{m} {r['seconds']:.1f} s ({r['method']} {r['tol']:g}, {r.get('resolution', 'full')}, "
+                 f"{100 * r['error_rms']:.2f} %)"
                  for m, r in best.items()]
         ok = all(r["seconds"] <= GOALS[scan] for r in best.values())
         lines.append(f"| {scan}: ≤ {GOALS[scan]:g} s per solve at ≤ 1 % | fastest setting within 1 %: {'; '.join(parts)} "
@@ -104,12 +106,14 @@ def main(argv=None):
     parser.add_argument("--only", nargs="+", choices=[name for name, *_ in SUITE], help="run only these scripts")
     parser.add_argument("--repeats", type=int, help="timed warm runs per setting for solver.py and scaling.py")
     parser.add_argument("--no-readme", action="store_true", help="leave bench/README.md as it is")
+    parser.add_argument("--tables-only", action="store_true",
+                        help="run nothing: rewrite goals.md and the README's tables from the results there are")
     args = parser.parse_args(argv)
     out = output_dir(args.quick)
     info = machine_info()
     ran = {}
     for name, script, takes_repeats, optional in SUITE:
-        if args.only and name not in args.only:
+        if args.tables_only or (args.only and name not in args.only):
             continue
         if optional and not args.validate and not (args.only and name in args.only):
             print(f"== {script}: skipped (slow; run it with --validate)")
@@ -122,7 +126,8 @@ def main(argv=None):
         if ran[name]["returncode"]:
             print(f"== {script} failed with exit code {ran[name]['returncode']}")
     info["load_average_end"] = load_average()
-    (out / "suite.json").write_text(json.dumps({"info": info, "scripts": ran}, indent=1))
+    if not args.tables_only:
+        (out / "suite.json").write_text(json.dumps({"info": info, "scripts": ran}, indent=1))
     (out / "goals.md").write_text(goals_markdown(out) + "\n")
     print((out / "goals.md").read_text())
     if args.quick or args.no_readme:
