@@ -103,7 +103,7 @@ def _incident_triangles(nv_offsets, near_vertices, vt_offsets, vt_tris, n_triang
     return offsets, ids[:pos].copy()
 
 
-BUFFER_POINTS = 2048  # quadrature points gathered before one vectorised evaluation
+BUFFER_POINTS = 2048  # refined quadrature points gathered before one evaluation
 
 
 @numba.njit(cache=True, fastmath=True)
@@ -153,45 +153,88 @@ def _gather(points, normals, w12, phi, tri, b0, b1, b2, weight, buf, weights, co
     return count + 1
 
 
-@numba.njit(cache=True, parallel=True)
-def triangle_rule_points(points, normals, w12, phi, triangles, triangle_areas, rule_points, rule_weights):
-    """The quadrature points of every whole triangle, as :func:`_gather` would make them (reused per receiver).
+def source_point_table(points, normals, w12, phi, triangles, triangle_areas, rule_points=RULE_POINTS,
+                       rule_weights=RULE_WEIGHTS):
+    """Quadrature points every receiver shares: the vertices, then the rule points of each lit triangle.
 
-    Returns ``buf (9, m * n_rule)``, ``weights (C, m * n_rule)`` (weight includes the area) and
-    ``valid (m * n_rule,)`` (False where no light enters).
+    Columns ``0..n-1`` are the vertices (weight ``phi``; the vertex rule's area factor is applied per
+    receiver), then ``len(rule_points)`` columns per triangle with light at a corner (weight
+    ``area * w_q * phi(x_q)``), made as :func:`_gather` makes them.
+
+    Returns
+    -------
+    table : (9, P) float64
+        Position (mm), unit normal, unit refracted direction of each point.
+    weights : (C, P) float64
+    vertex_lit : (n,) bool
+        Whether light enters at the vertex.
+    first_rule : (m,) int64
+        Column of triangle ``t``'s first rule point, or -1 where no light enters at any corner.
     """
-    m = triangles.shape[0]
+    n = points.shape[0]
+    vertex_lit = phi.sum(axis=1) > 0
+    lit_triangles = np.flatnonzero(vertex_lit[triangles].any(axis=1))
     n_rule = rule_points.shape[0]
-    buf = np.zeros((9, m * n_rule))
-    weights = np.zeros((phi.shape[1], m * n_rule))
-    for t in numba.prange(m):
+    first_rule = np.full(triangles.shape[0], -1, dtype=np.int64)
+    first_rule[lit_triangles] = n + n_rule * np.arange(lit_triangles.size)
+    table = np.zeros((9, n + n_rule * lit_triangles.size))
+    weights = np.zeros((phi.shape[1], table.shape[1]))
+    table[0:3, :n] = points.T
+    table[3:6, :n] = normals.T
+    table[6:9, :n] = w12.T
+    weights[:, :n] = phi.T
+    _fill_rule_points(points, normals, w12, phi, triangles, triangle_areas, rule_points, rule_weights, lit_triangles,
+                      table, weights, n)
+    return table, weights, vertex_lit, first_rule
+
+
+@numba.njit(cache=True, parallel=True)
+def _fill_rule_points(points, normals, w12, phi, triangles, triangle_areas, rule_points, rule_weights, lit_triangles,
+                      table, weights, start):
+    """Rule points of the lit triangles into ``table``/``weights`` from column ``start`` on."""
+    n_rule = rule_points.shape[0]
+    for k in numba.prange(lit_triangles.shape[0]):
+        t = lit_triangles[k]
+        column = start + k * n_rule
         for q in range(n_rule):
             _gather(points, normals, w12, phi, triangles[t], rule_points[q, 0], rule_points[q, 1], rule_points[q, 2],
-                    triangle_areas[t] * rule_weights[q], buf[:, t * n_rule:(t + 1) * n_rule],
-                    weights[:, t * n_rule:(t + 1) * n_rule], q)
-    return buf, weights
+                    triangle_areas[t] * rule_weights[q], table[:, column:column + n_rule],
+                    weights[:, column:column + n_rule], q)
 
 
-@numba.njit(cache=True, fastmath=True)
-def _evaluate(model, buf, weights, count, xo, no, params, params3, channel_of, acc):
-    """``acc[c] += sum_i S_d(point i; x_o)[channel_of[c]] * weights[c, i]`` over the buffer."""
+@numba.njit(cache=True)
+def channel_lanes(params, channel_of, n_out):
+    """Parameter rows in output-channel order, three of them: lane ``c`` of the three-channel kernel is
+    output channel ``c`` (fewer outputs are padded with the last)."""
+    lanes = np.empty((3, params.shape[1]))
+    for c in range(3):
+        lanes[c] = params[channel_of[min(c, n_out - 1)]]
+    return lanes
+
+
+@numba.njit(cache=True, fastmath=True, inline="always")
+def _evaluate(model, table, weights, columns, factors, count, xo, no, params, lanes, channel_of, acc):
+    """``acc[c] += sum_k S_d(point columns[k]; x_o)[c] * weights[c, columns[k]] * factors[k]`` (k < count)."""
     n_out = weights.shape[0]
     if model == MODEL_DIRECTIONAL and n_out <= 3:
-        m0 = channel_of[0]
-        m1 = channel_of[min(1, n_out - 1)]
-        m2 = channel_of[min(2, n_out - 1)]
+        c1 = min(1, n_out - 1)
+        c2 = min(2, n_out - 1)
+        # one-dimensional rows and scalars: the loop below then vectorises
+        X0, X1, X2, N0, N1, N2, W0, W1, W2 = (table[0], table[1], table[2], table[3], table[4], table[5], table[6],
+                                              table[7], table[8])
+        F0, F1, F2 = weights[0], weights[c1], weights[c2]
+        x0, x1, x2, n0, n1, n2 = xo[0], xo[1], xo[2], no[0], no[1], no[2]
         a0 = 0.0
         a1 = 0.0
         a2 = 0.0
-        for i in range(count):
-            e0, e1, e2 = directional_three(xo[0] - buf[0, i], xo[1] - buf[1, i], xo[2] - buf[2, i], buf[3, i], buf[4, i],
-                                           buf[5, i], buf[6, i], buf[7, i], buf[8, i], no[0], no[1], no[2], params3)
-            e0 = max(e0, 0.0)
-            e1 = max(e1, 0.0)
-            e2 = max(e2, 0.0)
-            a0 += (e0 if m0 == 0 else (e1 if m0 == 1 else e2)) * weights[0, i]
-            a1 += (e0 if m1 == 0 else (e1 if m1 == 1 else e2)) * weights[min(1, n_out - 1), i]
-            a2 += (e0 if m2 == 0 else (e1 if m2 == 1 else e2)) * weights[min(2, n_out - 1), i]
+        for k in range(count):
+            i = columns[k]
+            e0, e1, e2 = directional_three(x0 - X0[i], x1 - X1[i], x2 - X2[i], N0[i], N1[i], N2[i], W0[i], W1[i],
+                                           W2[i], n0, n1, n2, lanes)
+            f = factors[k]
+            a0 += max(e0, 0.0) * F0[i] * f
+            a1 += max(e1, 0.0) * F1[i] * f
+            a2 += max(e2, 0.0) * F2[i] * f
         acc[0] += a0
         if n_out > 1:
             acc[1] += a1
@@ -199,41 +242,33 @@ def _evaluate(model, buf, weights, count, xo, no, params, params3, channel_of, a
             acc[2] += a2
         return
     sd = np.empty(params.shape[0])
-    for i in range(count):
-        model_pair(model, buf[0, i], buf[1, i], buf[2, i], buf[3, i], buf[4, i], buf[5, i], buf[6, i], buf[7, i],
-                   buf[8, i], xo[0], xo[1], xo[2], no[0], no[1], no[2], params, sd)
+    for k in range(count):
+        i = columns[k]
+        model_pair(model, table[0, i], table[1, i], table[2, i], table[3, i], table[4, i], table[5, i], table[6, i],
+                   table[7, i], table[8, i], xo[0], xo[1], xo[2], no[0], no[1], no[2], params, sd)
         for ch in range(n_out):
-            acc[ch] += sd[channel_of[ch]] * weights[ch, i]
+            acc[ch] += sd[channel_of[ch]] * weights[ch, i] * factors[k]
 
 
-@numba.njit(cache=True, fastmath=True)
-def _triangle_points(model, points, normals, w12, phi, t, tri, area, xo, no, params, params3, channel_of, beta,
-                     scale_min, rule_points, rule_weights, whole_buf, whole_weights, stack, cx, buf, weights, count, acc):
-    """Gather the quadrature points of ``Q_T(f) - (A_T/3) sum_k f(x_k)`` for one triangle.
+@numba.njit(cache=True, fastmath=True, inline="always")
+def _refined_points(model, points, normals, w12, phi, tri, area, xo, no, params, lanes, channel_of, beta, scale_min,
+                    rule_points, rule_weights, stack, cx, buf, weights, columns, factors, count, acc):
+    """Adaptive quadrature of one triangle that is too close to be integrated whole: midpoint subdivision
+    until a piece's diameter is at most ``beta * max(distance, scale_min)``, then the rule on each piece.
 
-    Points go to the buffer; a full buffer is evaluated into ``acc`` and emptied. Returns the new
-    buffer count and the number of quadrature pieces.
+    The points go to ``buf``/``weights`` from column ``count`` on; a full buffer is evaluated into
+    ``acc`` and emptied. Returns the new count and the number of pieces.
     """
     n_rule = rule_points.shape[0]
-    capacity = buf.shape[1]
-    if count + 3 > capacity:
-        _evaluate(model, buf, weights, count, xo, no, params, params3, channel_of, acc)
-        count = 0
-    # the three-vertex rule that the vertex sum applied to this triangle, subtracted
-    third = -area / 3.0
-    count = _gather(points, normals, w12, phi, tri, 1.0, 0.0, 0.0, third, buf, weights, count)
-    count = _gather(points, normals, w12, phi, tri, 0.0, 1.0, 0.0, third, buf, weights, count)
-    count = _gather(points, normals, w12, phi, tri, 0.0, 0.0, 1.0, third, buf, weights, count)
     a, b, c = tri[0], tri[1], tri[2]
-    # stack rows: barycentric (b0, b1) of the piece's three corners, then depth
-    stack[0, 0] = 1.0
-    stack[0, 1] = 0.0
-    stack[0, 2] = 0.0
-    stack[0, 3] = 1.0
-    stack[0, 4] = 0.0
-    stack[0, 5] = 0.0
-    stack[0, 6] = 0.0
-    top = 1
+    # the four children of the whole triangle (rows: barycentric (b0, b1) of the three corners, depth)
+    top = 0
+    for child in ((1.0, 0.0, 0.5, 0.5, 0.5, 0.0), (0.5, 0.5, 0.0, 1.0, 0.0, 0.5), (0.5, 0.0, 0.0, 0.5, 0.0, 0.0),
+                  (0.5, 0.5, 0.0, 0.5, 0.5, 0.0)):
+        for i in range(6):
+            stack[top, i] = child[i]
+        stack[top, 6] = 1.0
+        top += 1
     pieces = 0
     while top > 0:
         top -= 1
@@ -242,7 +277,6 @@ def _triangle_points(model, points, normals, w12, phi, t, tri, area, xo, no, par
         r0 = 1.0 - p0 - q0
         r1 = 1.0 - p1 - q1
         r2 = 1.0 - p2 - q2
-        # world-space corners of the piece
         for i in range(3):
             cx[0, i] = p0 * points[a, i] + q0 * points[b, i] + r0 * points[c, i]
             cx[1, i] = p1 * points[a, i] + q1 * points[b, i] + r1 * points[c, i]
@@ -252,27 +286,15 @@ def _triangle_points(model, points, normals, w12, phi, t, tri, area, xo, no, par
             e = (cx[u, 0] - cx[v, 0]) ** 2 + (cx[u, 1] - cx[v, 1]) ** 2 + (cx[u, 2] - cx[v, 2]) ** 2
             if e > h2:
                 h2 = e
-        h = math.sqrt(h2)
         dist2 = 0.0
         for i in range(3):
             dist2 += ((cx[0, i] + cx[1, i] + cx[2, i]) / 3.0 - xo[i]) ** 2
         dist = max(math.sqrt(dist2), scale_min)
-        if h <= beta * dist or depth >= MAX_DEPTH:
-            if count + n_rule > capacity:
-                _evaluate(model, buf, weights, count, xo, no, params, params3, channel_of, acc)
+        if math.sqrt(h2) <= beta * dist or depth >= MAX_DEPTH:
+            if count + n_rule > buf.shape[1]:
+                _evaluate(model, buf, weights, columns, factors, count, xo, no, params, lanes, channel_of, acc)
                 count = 0
             pieces += 1
-            if depth == 0:  # the whole triangle: its points are precomputed
-                for qp in range(t * n_rule, (t + 1) * n_rule):
-                    used = False
-                    for ch in range(weights.shape[0]):
-                        weights[ch, count] = whole_weights[ch, qp]
-                        used = used or whole_weights[ch, qp] != 0.0
-                    if used:
-                        for i in range(9):
-                            buf[i, count] = whole_buf[i, qp]
-                        count += 1
-                continue
             piece_area = area * 0.25**depth
             for qp in range(n_rule):
                 l0 = rule_points[qp, 0]
@@ -298,44 +320,101 @@ def _triangle_points(model, points, normals, w12, phi, t, tri, area, xo, no, par
     return count, pieces
 
 
-@numba.njit(cache=True, parallel=True)
-def near_field_correction(model, points, triangles, triangle_areas, normals, w12, phi, receivers, offsets, triangle_ids, params,
-                          channel_of, beta, scale_min, rule_points, rule_weights, whole_buf, whole_weights):
+def near_field_correction(model, points, triangles, triangle_areas, normals, w12, phi, receivers, offsets,
+                          triangle_ids, params, channel_of, beta, scale_min, rule_points=RULE_POINTS,
+                          rule_weights=RULE_WEIGHTS):
     """Correction ``C[r, c]`` of the vertex sum for every receiver ``r`` (see the module docstring).
 
     Returns
     -------
     correction : (n_receivers, C) float64
     pieces : (n_receivers,) int64
-        Number of quadrature pieces used per receiver (cost and refinement diagnostics).
+        Number of quadrature pieces (whole triangles and refined pieces) per receiver.
+    """
+    table, weights, vertex_lit, first_rule = source_point_table(points, normals, w12, phi, triangles, triangle_areas,
+                                                                rule_points, rule_weights)
+    from ..io.geometry import edge_lengths
+
+    diameters = edge_lengths(points, triangles).max(axis=1)
+    centroids = points[triangles].mean(axis=1)
+    near_max = int(np.max(np.diff(offsets))) if offsets.size > 1 else 0
+    return _near_field_correction(model, points, triangles, triangle_areas, normals, w12, phi, receivers, offsets,
+                                  triangle_ids, params, channel_of, beta, scale_min, rule_points, rule_weights, table,
+                                  weights, vertex_lit, first_rule, diameters, centroids, near_max,
+                                  min(receivers.shape[0], 16 * numba.get_num_threads()))
+
+
+@numba.njit(cache=True, parallel=True)
+def _near_field_correction(model, points, triangles, triangle_areas, normals, w12, phi, receivers, offsets,
+                           triangle_ids, params, channel_of, beta, scale_min, rule_points, rule_weights, table, weights,
+                           vertex_lit, first_rule, diameters, centroids, near_max, n_chunks):
+    """:func:`near_field_correction` once the shared point table is made.
+
+    Per receiver: the vertex rule of the near triangles, subtracted once per vertex (its weight is the
+    sum of the near triangles' thirds), the rule points of the triangles far enough to be integrated
+    whole (from the shared table), and the refined pieces of the closer ones (made here).
     """
     n_r = receivers.shape[0]
+    n_v = points.shape[0]
     n_out = phi.shape[1]
+    n_rule = rule_points.shape[0]
     correction = np.zeros((n_r, n_out))
     pieces = np.zeros(n_r, dtype=np.int64)
-    params3 = padded_three_rows(params)
-    n_chunks = min(n_r, 256)
+    lanes = channel_lanes(params, channel_of, n_out)
+    capacity = (3 + n_rule) * near_max + 1
     for chunk in numba.prange(n_chunks):
-        # scratch memory per chunk of receivers, not per receiver
+        # scratch memory per chunk of receivers
         acc = np.zeros(n_out)
         stack = np.empty((3 * MAX_DEPTH + 8, 7))
         cx = np.empty((3, 3))
         buf = np.empty((9, BUFFER_POINTS))
-        weights = np.empty((n_out, BUFFER_POINTS))
+        buf_weights = np.empty((n_out, BUFFER_POINTS))
+        buf_columns = np.arange(BUFFER_POINTS)
+        buf_factors = np.ones(BUFFER_POINTS)
+        columns = np.empty(capacity, dtype=np.int64)
+        factors = np.empty(capacity)
+        slot = np.full(n_v, -1, dtype=np.int64)  # position of a vertex in this receiver's list
+        owner = np.full(n_v, -1, dtype=np.int64)
         for r in range(chunk * n_r // n_chunks, (chunk + 1) * n_r // n_chunks):
             o = receivers[r]
             xo = points[o]
             no = normals[o]
             acc[:] = 0.0
             count = 0
+            listed = 0
             for k in range(offsets[r], offsets[r + 1]):
                 t = triangle_ids[k]
-                count, used = _triangle_points(model, points, normals, w12, phi, t, triangles[t], triangle_areas[t],
-                                               xo, no, params, params3, channel_of, beta, scale_min, rule_points,
-                                               rule_weights, whole_buf, whole_weights, stack, cx, buf, weights, count,
-                                               acc)
-                pieces[r] += used
-            _evaluate(model, buf, weights, count, xo, no, params, params3, channel_of, acc)
+                if first_rule[t] < 0:  # no light enters at any corner: nothing to integrate
+                    continue
+                third = triangle_areas[t] / 3.0
+                for corner in range(3):
+                    v = triangles[t, corner]
+                    if not vertex_lit[v]:
+                        continue
+                    if owner[v] != r:
+                        owner[v] = r
+                        slot[v] = listed
+                        columns[listed] = v
+                        factors[listed] = 0.0
+                        listed += 1
+                    factors[slot[v]] -= third
+                d2 = 0.0
+                for i in range(3):
+                    d2 += (centroids[t, i] - xo[i]) ** 2
+                pieces[r] += 1
+                if diameters[t] <= beta * max(math.sqrt(d2), scale_min):  # whole: the shared rule points
+                    for q in range(n_rule):
+                        columns[listed] = first_rule[t] + q
+                        factors[listed] = 1.0
+                        listed += 1
+                    continue
+                count, used = _refined_points(model, points, normals, w12, phi, triangles[t], triangle_areas[t], xo,
+                                              no, params, lanes, channel_of, beta, scale_min, rule_points,
+                                              rule_weights, stack, cx, buf, buf_weights, buf_columns, buf_factors,
+                                              count, acc)
+                pieces[r] += used - 1
+            _evaluate(model, table, weights, columns, factors, listed, xo, no, params, lanes, channel_of, acc)
+            _evaluate(model, buf, buf_weights, buf_columns, buf_factors, count, xo, no, params, lanes, channel_of, acc)
             for ch in range(n_out):
                 correction[r, ch] = acc[ch]
     return correction, pieces

@@ -355,13 +355,9 @@ def solve(
     offsets, triangle_ids = geometry.near_lists(receivers, radius)
     timings["near_lists"] = time.perf_counter() - start
     start = time.perf_counter()
-    whole = nearfield.triangle_rule_points(geometry.points, geometry.normals, w12, phi, geometry.triangles,
-                                           geometry.triangle_areas, nearfield.RULE_POINTS, nearfield.RULE_WEIGHTS)
     correction, pieces = nearfield.near_field_correction(
         model_code, geometry.points, geometry.triangles, geometry.triangle_areas, geometry.normals, w12, phi,
-        receivers, offsets, triangle_ids, params, channel_of, NEAR_BETA, float(np.min(medium.D)),
-        nearfield.RULE_POINTS, nearfield.RULE_WEIGHTS, *whole,
-    )
+        receivers, offsets, triangle_ids, params, channel_of, NEAR_BETA, float(np.min(medium.D)))
     B = B + correction
     negative = B < 0
     stats["near_radius_mm"] = radius
