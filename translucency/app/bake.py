@@ -400,7 +400,8 @@ def bake_files(paths, output, settings: BakeSettings, *, workers: int = 1, sched
     progress = progress or BakeProgress()
     sources = list(paths) if paths else [None]
     if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
-        raise InvalidParameterError(f"the number of workers (--workers) must be a whole number >= 1, got {workers!r}.")
+        raise InvalidParameterError(
+            f"the number of workers (--workers) must be a whole number >= 1, got {workers!r}.")
     if scheduler is not None and workers > 1:
         raise InvalidParameterError("pass either workers (local processes) or a Dask scheduler, not both.")
     if output is None:
