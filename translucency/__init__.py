@@ -42,6 +42,8 @@ _LAZY = {
     "shade": "translucency.app.pipeline",
     "Scene": "translucency.app.pipeline",
     "load_default_scan": "translucency.app.pipeline",
+    # many scans to baked PLY files
+    "bake": "translucency.app.bake",
     # errors
     "TranslucencyError": "translucency.errors",
     "InvalidParameterError": "translucency.errors",

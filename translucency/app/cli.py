@@ -97,6 +97,22 @@ def cmd_inspect(args) -> int:
     return 0
 
 
+def cmd_bake(args) -> int:
+    """Bake each MESH (or the embedded default scan) to a PLY and print a summary (see :mod:`translucency.app.bake`)."""
+    import time
+
+    from .bake import BakeSettings, ConsoleProgress, bake_files, exit_code, format_summary
+    from .options import lights_from_args, solver_settings
+
+    settings = BakeSettings(lights=lights_from_args(args), unit=args.unit, shadows=not args.no_shadows,
+                            **solver_settings(args))
+    start = time.perf_counter()
+    records = bake_files(args.meshes, args.output, settings, workers=args.workers, scheduler=args.scheduler,
+                         progress=ConsoleProgress())
+    print(format_summary(records, time.perf_counter() - start))
+    return exit_code(records)
+
+
 def cmd_main_job(args) -> int:
     """The main job on the embedded default scan (see :mod:`translucency.app.default_job`)."""
     from .default_job import run_default_job
@@ -125,6 +141,21 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--max-hole-edges", type=int, default=100, help="close holes of at most this many edges")
     p.add_argument("-o", "--output", help="save the repaired mesh (any format PyVista writes)")
     p.set_defaults(func=cmd_inspect)
+
+    from .options import add_light_options, add_scan_options, add_solver_options
+
+    p = sub.add_parser("bake", help="bake scans to PLY files of translucent radiance",
+                       description="Bake each MESH to <stem>_<material>.ply. Exit code 0: every file baked; "
+                                   "1: some files failed (see the summary); 2: nothing could start.")
+    add_scan_options(p, several=True)
+    add_light_options(p)
+    add_solver_options(p)
+    p.add_argument("-o", "--output",
+                   help="a .ply file for one mesh, else a folder, created when missing (default translucency-output)")
+    p.add_argument("--workers", type=int, default=1, metavar="N", help="bake N files at a time in local processes")
+    p.add_argument("--scheduler", metavar="ADDRESS",
+                   help="bake on a Dask cluster (tcp://host:8786); its workers must reach the meshes and the output folder")
+    p.set_defaults(func=cmd_bake)
 
     parser.set_defaults(func=cmd_main_job)
     return parser
