@@ -34,7 +34,7 @@ import numba
 import numpy as np
 from scipy.spatial import cKDTree
 
-from .kernels import MODEL_DIRECTIONAL, directional_three, model_pair, padded_three_rows
+from .kernels import MODEL_DIRECTIONAL, directional_three, model_pair
 
 # Dunavant (1985) 7-point rule, exact for polynomials of degree 5: barycentric points and weights
 # (weights sum to 1; multiply by the area).
@@ -103,16 +103,14 @@ def _incident_triangles(nv_offsets, near_vertices, vt_offsets, vt_tris, n_triang
     return offsets, ids[:pos].copy()
 
 
-BUFFER_POINTS = 2048  # refined quadrature points gathered before one evaluation
-
-
 @numba.njit(cache=True, fastmath=True)
-def _gather(points, normals, w12, phi, tri, b0, b1, b2, weight, buf, weights, count):
-    """Append the point with barycentric ``b`` of triangle ``tri`` to the buffer; returns the new count.
+def _gather(points, normals, w12, phi, tri, b0, b1, b2, weight, buf, weights, column):
+    """Write the point with barycentric ``b`` of triangle ``tri`` to column ``column`` of the buffer.
 
-    ``buf[:, i]`` = position (3), normal (3, renormalised), refracted direction (3, flux-weighted and
-    renormalised); ``weights[c, i] = weight * phi_c(b)`` (phi interpolated linearly). Points where no
-    light enters are skipped.
+    ``buf[:, column]`` = position (3), normal (3, renormalised), refracted direction (3, flux-weighted
+    and renormalised); ``weights[c, column] = weight * phi_c(b)`` (phi interpolated linearly). Where
+    no light enters, the weights are 0 and the point is a harmless copy of the first corner (normal
+    ``n``, direction ``-n``), so that evaluating it gives a finite 0.
     """
     a, b, c = tri[0], tri[1], tri[2]
     n_out = phi.shape[1]
@@ -126,31 +124,38 @@ def _gather(points, normals, w12, phi, tri, b0, b1, b2, weight, buf, weights, co
     wa = b0 * fa
     wb = b1 * fb
     wc = b2 * fc
-    if wa + wb + wc <= 0.0:
-        return count
     v0 = wa * w12[a, 0] + wb * w12[b, 0] + wc * w12[c, 0]
     v1 = wa * w12[a, 1] + wb * w12[b, 1] + wc * w12[c, 1]
     v2 = wa * w12[a, 2] + wb * w12[b, 2] + wc * w12[c, 2]
     vn = math.sqrt(v0 * v0 + v1 * v1 + v2 * v2)
-    if vn <= 0.0:
-        return count
     m0 = b0 * normals[a, 0] + b1 * normals[b, 0] + b2 * normals[c, 0]
     m1 = b0 * normals[a, 1] + b1 * normals[b, 1] + b2 * normals[c, 1]
     m2 = b0 * normals[a, 2] + b1 * normals[b, 2] + b2 * normals[c, 2]
     mn = math.sqrt(m0 * m0 + m1 * m1 + m2 * m2)
     if mn <= 0.0:
-        mn = 1.0
+        m0, m1, m2, mn = 0.0, 0.0, 1.0, 1.0
+    if wa + wb + wc <= 0.0 or vn <= 0.0:  # no light enters here
+        for i in range(3):
+            buf[i, column] = points[a, i]
+        buf[3, column] = m0 / mn
+        buf[4, column] = m1 / mn
+        buf[5, column] = m2 / mn
+        buf[6, column] = -m0 / mn
+        buf[7, column] = -m1 / mn
+        buf[8, column] = -m2 / mn
+        for ch in range(n_out):
+            weights[ch, column] = 0.0
+        return
     for i in range(3):
-        buf[i, count] = b0 * points[a, i] + b1 * points[b, i] + b2 * points[c, i]
-    buf[3, count] = m0 / mn
-    buf[4, count] = m1 / mn
-    buf[5, count] = m2 / mn
-    buf[6, count] = v0 / vn
-    buf[7, count] = v1 / vn
-    buf[8, count] = v2 / vn
+        buf[i, column] = b0 * points[a, i] + b1 * points[b, i] + b2 * points[c, i]
+    buf[3, column] = m0 / mn
+    buf[4, column] = m1 / mn
+    buf[5, column] = m2 / mn
+    buf[6, column] = v0 / vn
+    buf[7, column] = v1 / vn
+    buf[8, column] = v2 / vn
     for ch in range(n_out):
-        weights[ch, count] = weight * (b0 * phi[a, ch] + b1 * phi[b, ch] + b2 * phi[c, ch])
-    return count + 1
+        weights[ch, column] = weight * (b0 * phi[a, ch] + b1 * phi[b, ch] + b2 * phi[c, ch])
 
 
 def source_point_table(points, normals, w12, phi, triangles, triangle_areas, rule_points=RULE_POINTS,
@@ -198,8 +203,7 @@ def _fill_rule_points(points, normals, w12, phi, triangles, triangle_areas, rule
         column = start + k * n_rule
         for q in range(n_rule):
             _gather(points, normals, w12, phi, triangles[t], rule_points[q, 0], rule_points[q, 1], rule_points[q, 2],
-                    triangle_areas[t] * rule_weights[q], table[:, column:column + n_rule],
-                    weights[:, column:column + n_rule], q)
+                    triangle_areas[t] * rule_weights[q], table, weights, column + q)
 
 
 @numba.njit(cache=True)
@@ -212,64 +216,23 @@ def channel_lanes(params, channel_of, n_out):
     return lanes
 
 
-@numba.njit(cache=True, fastmath=True, inline="always")
-def _evaluate(model, table, weights, columns, factors, count, xo, no, params, lanes, channel_of, acc):
-    """``acc[c] += sum_k S_d(point columns[k]; x_o)[c] * weights[c, columns[k]] * factors[k]`` (k < count)."""
-    n_out = weights.shape[0]
-    if model == MODEL_DIRECTIONAL and n_out <= 3:
-        c1 = min(1, n_out - 1)
-        c2 = min(2, n_out - 1)
-        # one-dimensional rows and scalars: the loop below then vectorises
-        X0, X1, X2, N0, N1, N2, W0, W1, W2 = (table[0], table[1], table[2], table[3], table[4], table[5], table[6],
-                                              table[7], table[8])
-        F0, F1, F2 = weights[0], weights[c1], weights[c2]
-        x0, x1, x2, n0, n1, n2 = xo[0], xo[1], xo[2], no[0], no[1], no[2]
-        a0 = 0.0
-        a1 = 0.0
-        a2 = 0.0
-        for k in range(count):
-            i = columns[k]
-            e0, e1, e2 = directional_three(x0 - X0[i], x1 - X1[i], x2 - X2[i], N0[i], N1[i], N2[i], W0[i], W1[i],
-                                           W2[i], n0, n1, n2, lanes)
-            f = factors[k]
-            a0 += max(e0, 0.0) * F0[i] * f
-            a1 += max(e1, 0.0) * F1[i] * f
-            a2 += max(e2, 0.0) * F2[i] * f
-        acc[0] += a0
-        if n_out > 1:
-            acc[1] += a1
-        if n_out > 2:
-            acc[2] += a2
-        return
-    sd = np.empty(params.shape[0])
-    for k in range(count):
-        i = columns[k]
-        model_pair(model, table[0, i], table[1, i], table[2, i], table[3, i], table[4, i], table[5, i], table[6, i],
-                   table[7, i], table[8, i], xo[0], xo[1], xo[2], no[0], no[1], no[2], params, sd)
-        for ch in range(n_out):
-            acc[ch] += sd[channel_of[ch]] * weights[ch, i] * factors[k]
+@numba.njit(cache=True, fastmath=True)
+def _pieces(points, tri, xo, beta, scale_min, stack, cx, out):
+    """Adaptive midpoint subdivision of a triangle that is too close to be integrated whole.
 
-
-@numba.njit(cache=True, fastmath=True, inline="always")
-def _refined_points(model, points, normals, w12, phi, tri, area, xo, no, params, lanes, channel_of, beta, scale_min,
-                    rule_points, rule_weights, stack, cx, buf, weights, columns, factors, count, acc):
-    """Adaptive quadrature of one triangle that is too close to be integrated whole: midpoint subdivision
-    until a piece's diameter is at most ``beta * max(distance, scale_min)``, then the rule on each piece.
-
-    The points go to ``buf``/``weights`` from column ``count`` on; a full buffer is evaluated into
-    ``acc`` and emptied. Returns the new count and the number of pieces.
+    A piece is accepted when its diameter is at most ``beta * max(distance to x_o, scale_min)`` (or at
+    depth :data:`MAX_DEPTH`). Writes the accepted pieces to ``out`` (rows: barycentric ``(b0, b1)`` of
+    the three corners, then depth) when ``out`` has room, and returns how many there are.
     """
-    n_rule = rule_points.shape[0]
     a, b, c = tri[0], tri[1], tri[2]
-    # the four children of the whole triangle (rows: barycentric (b0, b1) of the three corners, depth)
     top = 0
     for child in ((1.0, 0.0, 0.5, 0.5, 0.5, 0.0), (0.5, 0.5, 0.0, 1.0, 0.0, 0.5), (0.5, 0.0, 0.0, 0.5, 0.0, 0.0),
-                  (0.5, 0.5, 0.0, 0.5, 0.5, 0.0)):
+                  (0.5, 0.5, 0.0, 0.5, 0.5, 0.0)):  # the four children of the whole triangle
         for i in range(6):
             stack[top, i] = child[i]
         stack[top, 6] = 1.0
         top += 1
-    pieces = 0
+    n = 0
     while top > 0:
         top -= 1
         p0, q0, p1, q1, p2, q2, depth = (stack[top, 0], stack[top, 1], stack[top, 2], stack[top, 3], stack[top, 4],
@@ -289,20 +252,16 @@ def _refined_points(model, points, normals, w12, phi, tri, area, xo, no, params,
         dist2 = 0.0
         for i in range(3):
             dist2 += ((cx[0, i] + cx[1, i] + cx[2, i]) / 3.0 - xo[i]) ** 2
-        dist = max(math.sqrt(dist2), scale_min)
-        if math.sqrt(h2) <= beta * dist or depth >= MAX_DEPTH:
-            if count + n_rule > buf.shape[1]:
-                _evaluate(model, buf, weights, columns, factors, count, xo, no, params, lanes, channel_of, acc)
-                count = 0
-            pieces += 1
-            piece_area = area * 0.25**depth
-            for qp in range(n_rule):
-                l0 = rule_points[qp, 0]
-                l1 = rule_points[qp, 1]
-                l2 = rule_points[qp, 2]
-                count = _gather(points, normals, w12, phi, tri, l0 * p0 + l1 * p1 + l2 * p2,
-                                l0 * q0 + l1 * q1 + l2 * q2, l0 * r0 + l1 * r1 + l2 * r2, piece_area * rule_weights[qp],
-                                buf, weights, count)
+        if math.sqrt(h2) <= beta * max(math.sqrt(dist2), scale_min) or depth >= MAX_DEPTH:
+            if n < out.shape[0]:
+                out[n, 0] = p0
+                out[n, 1] = q0
+                out[n, 2] = p1
+                out[n, 3] = q1
+                out[n, 4] = p2
+                out[n, 5] = q2
+                out[n, 6] = depth
+            n += 1
         else:
             m01p = 0.5 * (p0 + p1)
             m01q = 0.5 * (q0 + q1)
@@ -317,7 +276,7 @@ def _refined_points(model, points, normals, w12, phi, tri, area, xo, no, params,
                     stack[top, i] = child[i]
                 stack[top, 6] = depth + 1.0
                 top += 1
-    return count, pieces
+    return n
 
 
 def near_field_correction(model, points, triangles, triangle_areas, normals, w12, phi, receivers, offsets,
@@ -325,63 +284,78 @@ def near_field_correction(model, points, triangles, triangle_areas, normals, w12
                           rule_weights=RULE_WEIGHTS):
     """Correction ``C[r, c]`` of the vertex sum for every receiver ``r`` (see the module docstring).
 
+    Receivers are done in blocks of :data:`BLOCK_RECEIVERS`: (1) list each receiver's quadrature
+    points -- the vertex rule of its near triangles (each vertex once, weighted by the sum of the near
+    triangles' thirds), the shared rule points of the triangles far enough to be integrated whole, and a
+    count of the refined pieces of the closer ones; (2) make the refined points; (3) evaluate every
+    receiver's points in one loop each (this is where the time goes, and these loops vectorise).
+
     Returns
     -------
     correction : (n_receivers, C) float64
     pieces : (n_receivers,) int64
         Number of quadrature pieces (whole triangles and refined pieces) per receiver.
     """
-    table, weights, vertex_lit, first_rule = source_point_table(points, normals, w12, phi, triangles, triangle_areas,
-                                                                rule_points, rule_weights)
     from ..io.geometry import edge_lengths
 
+    table, weights, vertex_lit, first_rule = source_point_table(points, normals, w12, phi, triangles, triangle_areas,
+                                                                rule_points, rule_weights)
     diameters = edge_lengths(points, triangles).max(axis=1)
     centroids = points[triangles].mean(axis=1)
-    near_max = int(np.max(np.diff(offsets))) if offsets.size > 1 else 0
-    return _near_field_correction(model, points, triangles, triangle_areas, normals, w12, phi, receivers, offsets,
-                                  triangle_ids, params, channel_of, beta, scale_min, rule_points, rule_weights, table,
-                                  weights, vertex_lit, first_rule, diameters, centroids, near_max,
-                                  min(receivers.shape[0], 16 * numba.get_num_threads()))
+    lanes = channel_lanes(params, channel_of, phi.shape[1])
+    n_r = receivers.shape[0]
+    correction = np.zeros((n_r, phi.shape[1]))
+    pieces = np.zeros(n_r, dtype=np.int64)
+    near_count = np.diff(offsets)
+    chunks = 16 * numba.get_num_threads()
+    for start in range(0, n_r, BLOCK_RECEIVERS):
+        block = slice(start, min(n_r, start + BLOCK_RECEIVERS))
+        rcv = receivers[block]
+        col_offsets = np.zeros(rcv.size + 1, dtype=np.int64)
+        np.cumsum((3 + rule_points.shape[0]) * near_count[block], out=col_offsets[1:])
+        columns = np.empty(col_offsets[-1], dtype=np.int64)
+        factors = np.empty(col_offsets[-1])
+        n_columns = np.zeros(rcv.size, dtype=np.int64)
+        n_refined = np.zeros(rcv.size, dtype=np.int64)
+        _list_points(points, triangles, triangle_areas, rcv, offsets[start:block.stop + 1], triangle_ids, beta,
+                     scale_min, vertex_lit, first_rule, diameters, centroids, col_offsets, columns, factors, n_columns,
+                     n_refined, pieces[block], min(rcv.size, chunks))
+        ref_offsets = np.zeros(rcv.size + 1, dtype=np.int64)
+        np.cumsum(n_refined * rule_points.shape[0], out=ref_offsets[1:])
+        refined = np.zeros((9, ref_offsets[-1]))
+        refined_weights = np.zeros((phi.shape[1], ref_offsets[-1]))
+        _refined_points(points, normals, w12, phi, triangles, triangle_areas, rcv, offsets[start:block.stop + 1],
+                        triangle_ids, beta, scale_min, first_rule, diameters, centroids, rule_points, rule_weights,
+                        ref_offsets, refined, refined_weights, min(rcv.size, chunks))
+        correction[block] = _evaluate(model, points, normals, rcv, table, weights, col_offsets, columns, factors,
+                                      n_columns, refined, refined_weights, ref_offsets, params, lanes, channel_of)
+    return correction, pieces
+
+
+#: Receivers whose quadrature points are listed at a time (bounds the memory: ~150 KB per receiver).
+BLOCK_RECEIVERS = 2048
 
 
 @numba.njit(cache=True, parallel=True)
-def _near_field_correction(model, points, triangles, triangle_areas, normals, w12, phi, receivers, offsets,
-                           triangle_ids, params, channel_of, beta, scale_min, rule_points, rule_weights, table, weights,
-                           vertex_lit, first_rule, diameters, centroids, near_max, n_chunks):
-    """:func:`near_field_correction` once the shared point table is made.
-
-    Per receiver: the vertex rule of the near triangles, subtracted once per vertex (its weight is the
-    sum of the near triangles' thirds), the rule points of the triangles far enough to be integrated
-    whole (from the shared table), and the refined pieces of the closer ones (made here).
-    """
+def _list_points(points, triangles, triangle_areas, receivers, offsets, triangle_ids, beta, scale_min, vertex_lit,
+                 first_rule, diameters, centroids, col_offsets, columns, factors, n_columns, n_refined, pieces,
+                 n_chunks):
+    """Pass 1: per receiver, the shared-table points (vertex rule, whole triangles) and the refined count."""
     n_r = receivers.shape[0]
     n_v = points.shape[0]
-    n_out = phi.shape[1]
-    n_rule = rule_points.shape[0]
-    correction = np.zeros((n_r, n_out))
-    pieces = np.zeros(n_r, dtype=np.int64)
-    lanes = channel_lanes(params, channel_of, n_out)
-    capacity = (3 + n_rule) * near_max + 1
+    n_rule = RULE_POINTS.shape[0]
     for chunk in numba.prange(n_chunks):
-        # scratch memory per chunk of receivers
-        acc = np.zeros(n_out)
         stack = np.empty((3 * MAX_DEPTH + 8, 7))
         cx = np.empty((3, 3))
-        buf = np.empty((9, BUFFER_POINTS))
-        buf_weights = np.empty((n_out, BUFFER_POINTS))
-        buf_columns = np.arange(BUFFER_POINTS)
-        buf_factors = np.ones(BUFFER_POINTS)
-        columns = np.empty(capacity, dtype=np.int64)
-        factors = np.empty(capacity)
-        slot = np.full(n_v, -1, dtype=np.int64)  # position of a vertex in this receiver's list
+        none = np.empty((0, 7))
+        slot = np.full(n_v, -1, dtype=np.int64)  # position of a vertex in the receiver's list
         owner = np.full(n_v, -1, dtype=np.int64)
         for r in range(chunk * n_r // n_chunks, (chunk + 1) * n_r // n_chunks):
-            o = receivers[r]
-            xo = points[o]
-            no = normals[o]
-            acc[:] = 0.0
-            count = 0
+            xo = points[receivers[r]]
+            base = col_offsets[r]
             listed = 0
+            refined = 0
+            count = 0
             for k in range(offsets[r], offsets[r + 1]):
                 t = triangle_ids[k]
                 if first_rule[t] < 0:  # no light enters at any corner: nothing to integrate
@@ -394,27 +368,129 @@ def _near_field_correction(model, points, triangles, triangle_areas, normals, w1
                     if owner[v] != r:
                         owner[v] = r
                         slot[v] = listed
-                        columns[listed] = v
-                        factors[listed] = 0.0
+                        columns[base + listed] = v
+                        factors[base + listed] = 0.0
                         listed += 1
-                    factors[slot[v]] -= third
+                    factors[base + slot[v]] -= third
                 d2 = 0.0
                 for i in range(3):
                     d2 += (centroids[t, i] - xo[i]) ** 2
-                pieces[r] += 1
                 if diameters[t] <= beta * max(math.sqrt(d2), scale_min):  # whole: the shared rule points
                     for q in range(n_rule):
-                        columns[listed] = first_rule[t] + q
-                        factors[listed] = 1.0
+                        columns[base + listed] = first_rule[t] + q
+                        factors[base + listed] = 1.0
                         listed += 1
+                    count += 1
+                else:
+                    used = _pieces(points, triangles[t], xo, beta, scale_min, stack, cx, none)
+                    refined += used
+                    count += used
+            n_columns[r] = listed
+            n_refined[r] = refined
+            pieces[r] = count
+
+
+@numba.njit(cache=True, parallel=True)
+def _refined_points(points, normals, w12, phi, triangles, triangle_areas, receivers, offsets, triangle_ids, beta,
+                    scale_min, first_rule, diameters, centroids, rule_points, rule_weights, ref_offsets, refined,
+                    refined_weights, n_chunks):
+    """Pass 2: the rule points of every refined piece, receiver by receiver from ``ref_offsets``."""
+    n_r = receivers.shape[0]
+    n_rule = rule_points.shape[0]
+    for chunk in numba.prange(n_chunks):
+        stack = np.empty((3 * MAX_DEPTH + 8, 7))
+        cx = np.empty((3, 3))
+        found = np.empty((4 ** 6, 7))
+        for r in range(chunk * n_r // n_chunks, (chunk + 1) * n_r // n_chunks):
+            xo = points[receivers[r]]
+            column = ref_offsets[r]
+            for k in range(offsets[r], offsets[r + 1]):
+                t = triangle_ids[k]
+                if first_rule[t] < 0:
                     continue
-                count, used = _refined_points(model, points, normals, w12, phi, triangles[t], triangle_areas[t], xo,
-                                              no, params, lanes, channel_of, beta, scale_min, rule_points,
-                                              rule_weights, stack, cx, buf, buf_weights, buf_columns, buf_factors,
-                                              count, acc)
-                pieces[r] += used - 1
-            _evaluate(model, table, weights, columns, factors, listed, xo, no, params, lanes, channel_of, acc)
-            _evaluate(model, buf, buf_weights, buf_columns, buf_factors, count, xo, no, params, lanes, channel_of, acc)
-            for ch in range(n_out):
-                correction[r, ch] = acc[ch]
-    return correction, pieces
+                d2 = 0.0
+                for i in range(3):
+                    d2 += (centroids[t, i] - xo[i]) ** 2
+                if diameters[t] <= beta * max(math.sqrt(d2), scale_min):
+                    continue
+                n = _pieces(points, triangles[t], xo, beta, scale_min, stack, cx, found)
+                if n > found.shape[0]:  # deeper than the scratch space: grow it and subdivide again
+                    found = np.empty((n, 7))
+                    n = _pieces(points, triangles[t], xo, beta, scale_min, stack, cx, found)
+                tri = triangles[t]
+                for j in range(n):
+                    p0, q0, p1, q1, p2, q2 = found[j, 0], found[j, 1], found[j, 2], found[j, 3], found[j, 4], found[j, 5]
+                    r0 = 1.0 - p0 - q0
+                    r1 = 1.0 - p1 - q1
+                    r2 = 1.0 - p2 - q2
+                    piece_area = triangle_areas[t] * 0.25 ** found[j, 6]
+                    for qp in range(n_rule):
+                        l0 = rule_points[qp, 0]
+                        l1 = rule_points[qp, 1]
+                        l2 = rule_points[qp, 2]
+                        _gather(points, normals, w12, phi, tri, l0 * p0 + l1 * p1 + l2 * p2, l0 * q0 + l1 * q1 + l2 * q2,
+                                l0 * r0 + l1 * r1 + l2 * r2, piece_area * rule_weights[qp], refined, refined_weights,
+                                column)
+                        column += 1
+
+
+@numba.njit(cache=True, parallel=True, fastmath=True)
+def _evaluate(model, points, normals, receivers, table, weights, col_offsets, columns, factors, n_columns, refined,
+              refined_weights, ref_offsets, params, lanes, channel_of):
+    """Pass 3: ``C[r, c] = sum over the receiver's points of S_d(point; x_o)[c] * weight[c] (* factor)``.
+
+    The directional dipole's loops are written out here, in the parallel loop's body, so they vectorise.
+    """
+    n_r = receivers.shape[0]
+    n_out = weights.shape[0]
+    out = np.zeros((n_r, n_out))
+    c1 = min(1, n_out - 1)
+    c2 = min(2, n_out - 1)
+    X0, X1, X2, N0, N1, N2, W0, W1, W2 = (table[0], table[1], table[2], table[3], table[4], table[5], table[6],
+                                          table[7], table[8])
+    F0, F1, F2 = weights[0], weights[c1], weights[c2]
+    Y0, Y1, Y2, M0, M1, M2, V0, V1, V2 = (refined[0], refined[1], refined[2], refined[3], refined[4], refined[5],
+                                          refined[6], refined[7], refined[8])
+    G0, G1, G2 = refined_weights[0], refined_weights[c1], refined_weights[c2]
+    directional = model == MODEL_DIRECTIONAL and n_out <= 3
+    for r in numba.prange(n_r):
+        o = receivers[r]
+        x0, x1, x2 = points[o, 0], points[o, 1], points[o, 2]
+        n0, n1, n2 = normals[o, 0], normals[o, 1], normals[o, 2]
+        if directional:
+            a0 = 0.0
+            a1 = 0.0
+            a2 = 0.0
+            for k in range(col_offsets[r], col_offsets[r] + n_columns[r]):
+                i = columns[k]
+                e0, e1, e2 = directional_three(x0 - X0[i], x1 - X1[i], x2 - X2[i], N0[i], N1[i], N2[i], W0[i], W1[i],
+                                               W2[i], n0, n1, n2, lanes)
+                f = factors[k]
+                a0 += max(e0, 0.0) * F0[i] * f
+                a1 += max(e1, 0.0) * F1[i] * f
+                a2 += max(e2, 0.0) * F2[i] * f
+            for i in range(ref_offsets[r], ref_offsets[r + 1]):
+                e0, e1, e2 = directional_three(x0 - Y0[i], x1 - Y1[i], x2 - Y2[i], M0[i], M1[i], M2[i], V0[i], V1[i],
+                                               V2[i], n0, n1, n2, lanes)
+                a0 += max(e0, 0.0) * G0[i]
+                a1 += max(e1, 0.0) * G1[i]
+                a2 += max(e2, 0.0) * G2[i]
+            out[r, 0] = a0
+            if n_out > 1:
+                out[r, 1] = a1
+            if n_out > 2:
+                out[r, 2] = a2
+        else:
+            sd = np.empty(params.shape[0])
+            for k in range(col_offsets[r], col_offsets[r] + n_columns[r]):
+                i = columns[k]
+                model_pair(model, X0[i], X1[i], X2[i], N0[i], N1[i], N2[i], W0[i], W1[i], W2[i], x0, x1, x2, n0, n1, n2,
+                           params, sd)
+                for ch in range(n_out):
+                    out[r, ch] += sd[channel_of[ch]] * weights[ch, i] * factors[k]
+            for i in range(ref_offsets[r], ref_offsets[r + 1]):
+                model_pair(model, Y0[i], Y1[i], Y2[i], M0[i], M1[i], M2[i], V0[i], V1[i], V2[i], x0, x1, x2, n0, n1, n2,
+                           params, sd)
+                for ch in range(n_out):
+                    out[r, ch] += sd[channel_of[ch]] * refined_weights[ch, i]
+    return out
