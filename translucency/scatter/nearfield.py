@@ -34,7 +34,7 @@ import numba
 import numpy as np
 from scipy.spatial import cKDTree
 
-from .kernels import MODEL_DIRECTIONAL, directional_three, model_pair
+from .kernels import channel_lanes, indexed_sum
 
 # Dunavant (1985) 7-point rule, exact for polynomials of degree 5: barycentric points and weights
 # (weights sum to 1; multiply by the area).
@@ -206,16 +206,6 @@ def _fill_rule_points(points, normals, w12, phi, triangles, triangle_areas, rule
                     triangle_areas[t] * rule_weights[q], table, weights, column + q)
 
 
-@numba.njit(cache=True)
-def channel_lanes(params, channel_of, n_out):
-    """Parameter rows in output-channel order, three of them: lane ``c`` of the three-channel kernel is
-    output channel ``c`` (fewer outputs are padded with the last)."""
-    lanes = np.empty((3, params.shape[1]))
-    for c in range(3):
-        lanes[c] = params[channel_of[min(c, n_out - 1)]]
-    return lanes
-
-
 @numba.njit(cache=True, fastmath=True)
 def _pieces(points, tri, xo, beta, scale_min, stack, cx, out):
     """Adaptive midpoint subdivision of a triangle that is too close to be integrated whole.
@@ -288,7 +278,7 @@ def near_field_correction(model, points, triangles, triangle_areas, normals, w12
     points -- the vertex rule of its near triangles (each vertex once, weighted by the sum of the near
     triangles' thirds), the shared rule points of the triangles far enough to be integrated whole, and a
     count of the refined pieces of the closer ones; (2) make the refined points; (3) evaluate every
-    receiver's points in one loop each (this is where the time goes, and these loops vectorise).
+    receiver's points with :func:`~translucency.scatter.kernels.indexed_sum` (where the time goes).
 
     Returns
     -------
@@ -327,8 +317,13 @@ def near_field_correction(model, points, triangles, triangle_areas, normals, w12
         _refined_points(points, normals, w12, phi, triangles, triangle_areas, rcv, offsets[start:block.stop + 1],
                         triangle_ids, beta, scale_min, first_rule, diameters, centroids, rule_points, rule_weights,
                         ref_offsets, refined, refined_weights, min(rcv.size, chunks))
-        correction[block] = _evaluate(model, points, normals, rcv, table, weights, col_offsets, columns, factors,
-                                      n_columns, refined, refined_weights, ref_offsets, params, lanes, channel_of)
+        rcv_points, rcv_normals = points[rcv], normals[rcv]
+        correction[block] = (
+            indexed_sum(model, rcv_points, rcv_normals, table, weights, col_offsets[:-1], n_columns, columns, factors,
+                        params, lanes, channel_of)
+            + indexed_sum(model, rcv_points, rcv_normals, refined, refined_weights, ref_offsets[:-1],
+                          np.diff(ref_offsets), np.arange(ref_offsets[-1]), np.ones(ref_offsets[-1]), params, lanes,
+                          channel_of))
     return correction, pieces
 
 
@@ -432,65 +427,3 @@ def _refined_points(points, normals, w12, phi, triangles, triangle_areas, receiv
                                 l0 * r0 + l1 * r1 + l2 * r2, piece_area * rule_weights[qp], refined, refined_weights,
                                 column)
                         column += 1
-
-
-@numba.njit(cache=True, parallel=True, fastmath=True)
-def _evaluate(model, points, normals, receivers, table, weights, col_offsets, columns, factors, n_columns, refined,
-              refined_weights, ref_offsets, params, lanes, channel_of):
-    """Pass 3: ``C[r, c] = sum over the receiver's points of S_d(point; x_o)[c] * weight[c] (* factor)``.
-
-    The directional dipole's loops are written out here, in the parallel loop's body, so they vectorise.
-    """
-    n_r = receivers.shape[0]
-    n_out = weights.shape[0]
-    out = np.zeros((n_r, n_out))
-    c1 = min(1, n_out - 1)
-    c2 = min(2, n_out - 1)
-    X0, X1, X2, N0, N1, N2, W0, W1, W2 = (table[0], table[1], table[2], table[3], table[4], table[5], table[6],
-                                          table[7], table[8])
-    F0, F1, F2 = weights[0], weights[c1], weights[c2]
-    Y0, Y1, Y2, M0, M1, M2, V0, V1, V2 = (refined[0], refined[1], refined[2], refined[3], refined[4], refined[5],
-                                          refined[6], refined[7], refined[8])
-    G0, G1, G2 = refined_weights[0], refined_weights[c1], refined_weights[c2]
-    directional = model == MODEL_DIRECTIONAL and n_out <= 3
-    for r in numba.prange(n_r):
-        o = receivers[r]
-        x0, x1, x2 = points[o, 0], points[o, 1], points[o, 2]
-        n0, n1, n2 = normals[o, 0], normals[o, 1], normals[o, 2]
-        if directional:
-            a0 = 0.0
-            a1 = 0.0
-            a2 = 0.0
-            for k in range(col_offsets[r], col_offsets[r] + n_columns[r]):
-                i = columns[k]
-                e0, e1, e2 = directional_three(x0 - X0[i], x1 - X1[i], x2 - X2[i], N0[i], N1[i], N2[i], W0[i], W1[i],
-                                               W2[i], n0, n1, n2, lanes)
-                f = factors[k]
-                a0 += max(e0, 0.0) * F0[i] * f
-                a1 += max(e1, 0.0) * F1[i] * f
-                a2 += max(e2, 0.0) * F2[i] * f
-            for i in range(ref_offsets[r], ref_offsets[r + 1]):
-                e0, e1, e2 = directional_three(x0 - Y0[i], x1 - Y1[i], x2 - Y2[i], M0[i], M1[i], M2[i], V0[i], V1[i],
-                                               V2[i], n0, n1, n2, lanes)
-                a0 += max(e0, 0.0) * G0[i]
-                a1 += max(e1, 0.0) * G1[i]
-                a2 += max(e2, 0.0) * G2[i]
-            out[r, 0] = a0
-            if n_out > 1:
-                out[r, 1] = a1
-            if n_out > 2:
-                out[r, 2] = a2
-        else:
-            sd = np.empty(params.shape[0])
-            for k in range(col_offsets[r], col_offsets[r] + n_columns[r]):
-                i = columns[k]
-                model_pair(model, X0[i], X1[i], X2[i], N0[i], N1[i], N2[i], W0[i], W1[i], W2[i], x0, x1, x2, n0, n1, n2,
-                           params, sd)
-                for ch in range(n_out):
-                    out[r, ch] += sd[channel_of[ch]] * weights[ch, i] * factors[k]
-            for i in range(ref_offsets[r], ref_offsets[r + 1]):
-                model_pair(model, Y0[i], Y1[i], Y2[i], M0[i], M1[i], M2[i], V0[i], V1[i], V2[i], x0, x1, x2, n0, n1, n2,
-                           params, sd)
-                for ch in range(n_out):
-                    out[r, ch] += sd[channel_of[ch]] * refined_weights[ch, i]
-    return out

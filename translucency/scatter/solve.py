@@ -236,9 +236,8 @@ def _far_field_tree(model, geometry, medium, lit, w12, flux, rcv_points, rcv_nor
     theta = hierarchy.THETA_PER_SQRT_TOL * float(np.sqrt(tol))
     nodes = hierarchy.aggregate(tree.order, tree.start, tree.end, tree.left, tree.right, geometry.points,
                                 geometry.normals, w12, flux)
-    B, direct, clustered = hierarchy.tree_sum(
-        model_code, tree.order, tree.start, tree.end, tree.left, tree.right, tree.centre, tree.radius, *nodes,
-        geometry.points, geometry.normals, w12, flux, rcv_points, rcv_normals, params, channel_of, theta)
+    B, direct, clustered = hierarchy.tree_sum(model_code, tree, nodes, geometry.points, geometry.normals, w12, flux,
+                                              rcv_points, rcv_normals, params, channel_of, theta)
     pairs = int(lit.size) * int(rcv_points.shape[0])
     return B, {"theta": theta, "tree_nodes": tree.n_nodes, "pairs_evaluated": int(direct.sum() + clustered.sum()),
                "pairs_direct": int(direct.sum()), "cluster_evaluations": int(clustered.sum()),
