@@ -82,13 +82,22 @@ def test_one_exposure_for_every_cell(two_by_two):
     assert np.isclose(result.exposure, 0.9 / level)
 
 
-def test_the_profile_cuts_across_the_light_boundary(sphere):
-    light = np.array([0.0, 0.0, 1.0])
-    vertices, angle, plane = profile_cut(sphere.points, 2.0, light, up=(0, 1, 0))
-    assert np.all(np.diff(angle) >= 0) and angle.min() < -150 and angle.max() > 150
-    assert np.allclose(np.abs(sphere.points[vertices] @ np.array(plane["normal"])), 0, atol=2.0)
-    facing = sphere.points[vertices] @ light
-    np.testing.assert_array_equal(facing > 1e-9, np.abs(angle) < 90 - 1e-6)  # on a sphere: +-90 deg is the terminator
+def test_the_profile_cuts_across_the_light_boundary(two_by_two, sphere):
+    result, _ = two_by_two
+    # light along +z, up +y: the cut is the circle x = 0 of radius 20 mm; position 0 faces the light,
+    # the terminator lies a quarter of the circle away on either side
+    position, samples, plane = profile_cut(sphere, {"z": sphere.points[:, 2]}, (0, 0, 1), up=(0, 1, 0))
+    assert np.all(np.diff(position) >= 0)
+    assert np.isclose(plane["length_mm"], 2 * np.pi * 20, rtol=0.01)
+    assert samples["z"][np.argmin(np.abs(position))] > 19.5
+    quarter = np.abs(np.abs(position) - 0.5 * np.pi * 20) < 1.0
+    assert quarter.sum() >= 2 and np.all(np.abs(samples["z"][quarter]) < 1.5)
+    # compare's own cut: the lit stretch around 0 is bounded by two light boundaries, and the radiance
+    # is highest near the point that faces the light
+    boundaries = np.array(result.profile_plane["light_boundaries_mm"])
+    assert len(boundaries) == 2 and boundaries[0] < 0 < boundaries[1]
+    position, radiance = result.profiles["marble", "directional"]
+    assert radiance[np.abs(position) < 5].mean() > 20 * radiance[np.abs(position) > boundaries[1] + 15].mean()
 
 
 def test_statistics_of_an_empty_subset_are_none():

@@ -26,11 +26,12 @@ Common exposure: unless one is given, it maps the 99.5th percentile of the brigh
 vertices of *all* cells together to 0.9 (:func:`~translucency.app.pipeline.display_colors`), so the
 brightest cell looks as a single render would and darker materials look darker.
 
-Profile: the vertices within one mean edge length of the plane through the mesh's centre that contains
-the light direction (of the first directional light; the ``up`` axis without one) and the ``up`` axis
-(the camera direction when the light is along ``up``). Each is placed by its angle around the centre
-in that plane, measured from the light direction: 0 deg faces the light, +-90 deg is where the
-terminator of a convex object would be, +-180 deg the far side; positive angles are on the ``up`` side.
+Profile: the plane through the centre of the mesh's bounding box that contains the light direction (of
+the first directional light; the ``up`` axis without one) and the ``up`` axis (the camera direction when
+the light is along ``up``) cuts the surface in closed lines; along the longest, the radiance is
+interpolated linearly from the vertices and plotted against the signed arc length, in mm, from the point
+that faces the light most (positive toward ``up``). Dotted lines mark where the direct light ends (the
+shadow terminator, and cast shadows), so the plot shows how far light bleeds past it in each material.
 
 Files are written into a temporary folder beside the output folder and moved in only when all are
 complete (:func:`~translucency.app.outputs.staged_folder`): a failed run leaves the folder as it was.
@@ -87,9 +88,11 @@ class Comparison:
         One row per (material, model, subset) for models after the first: statistics of the relative
         difference of luminance against the first model.
     profiles : dict
-        ``(material, model) -> (angle in degrees (k,), radiance (k, 3))`` along the cut, sorted by angle.
+        ``(material, model) -> (position (k,), radiance (k, 3))`` along the cut: signed arc length in mm
+        from the point facing the light, and the interpolated radiance.
     profile_plane : dict
-        The cut: centre and plane normal (mm, unit), light direction, half width (mm), vertex count.
+        The cut: ``center_mm``, unit ``normal``, ``light_direction``, ``length_mm`` and
+        ``light_boundaries_mm`` (positions where the direct light ends).
     files : dict
         ``name -> Path`` of the written files (empty without an output folder).
     """
@@ -140,20 +143,32 @@ def relative_difference(radiance, reference) -> np.ndarray:
     return np.divide(y - y_ref, denominator, out=np.zeros_like(y), where=denominator > 0)
 
 
-def profile_cut(points, mean_edge, light_direction, up=DEFAULT_UP, camera_direction=DEFAULT_CAMERA_DIRECTION):
-    """Vertices near the plane through the centre containing the light direction and ``up`` (module docstring).
+def profile_cut(mesh, values, light_direction, up=DEFAULT_UP, camera_direction=DEFAULT_CAMERA_DIRECTION):
+    """Per-vertex values along the cut across the light boundary (module docstring).
+
+    The plane through the centre of the bounding box containing ``light_direction`` and ``up`` (or the
+    camera direction, when the light is along ``up``) cuts the surface in closed lines; the longest is
+    kept, and the values are interpolated linearly onto it.
+
+    Parameters
+    ----------
+    mesh : TriangleMesh
+        The mesh, mm.
+    values : dict of str to (n, ...) array_like
+        Per-vertex values to carry onto the cut.
+    light_direction, up, camera_direction : sequence of 3 float
+        Directions spanning the plane (see above).
 
     Returns
     -------
-    vertices : (k,) int
-        Indices of the vertices within ``mean_edge`` (mm) of the plane, sorted by angle.
-    angle : (k,) float
-        Their angle from the light direction in the plane, degrees in (-180, 180].
+    position : (k,) ndarray
+        Signed arc length along the cut, mm: 0 at the point that faces the light most, positive on the
+        ``up`` side.
+    samples : dict of str to (k, ...) ndarray
+        The values at those points.
     plane : dict
-        ``center`` (mm), ``normal``, ``light_direction``, ``half_width_mm``.
+        ``center_mm``, ``normal``, ``light_direction`` and ``length_mm`` of the cut.
     """
-    points = np.asarray(points, dtype=np.float64)
-    center = 0.5 * (points.min(axis=0) + points.max(axis=0))
     d = np.asarray(light_direction, dtype=np.float64)
     d = d / np.linalg.norm(d)
     second = None
@@ -163,14 +178,36 @@ def profile_cut(points, mean_edge, light_direction, up=DEFAULT_UP, camera_direct
         if np.linalg.norm(u) > 1e-3:
             second = u / np.linalg.norm(u)
             break
+    center = 0.5 * (mesh.points.min(axis=0) + mesh.points.max(axis=0))
     normal = np.cross(d, second)
-    offset = points - center
-    near = np.flatnonzero(np.abs(offset @ normal) <= mean_edge)
-    angle = np.degrees(np.arctan2(offset[near] @ second, offset[near] @ d))
-    order = np.argsort(angle, kind="stable")
-    plane = {"center_mm": center.tolist(), "normal": normal.tolist(), "light_direction": d.tolist(),
-             "half_width_mm": float(mean_edge)}
-    return near[order], angle[order], plane
+    poly = mesh.to_pyvista()
+    for name, value in values.items():
+        poly.point_data[name] = np.asarray(value, dtype=np.float64)
+    cut = poly.slice(normal=normal, origin=center).strip(join=True)
+    plane = {"center_mm": center.tolist(), "normal": normal.tolist(), "light_direction": d.tolist(), "length_mm": 0.0}
+    lines, longest, i = np.asarray(cut.lines), np.zeros(0, dtype=np.int64), 0
+    while i < len(lines):  # the VTK cell array: count, ids, count, ids, ...
+        ids = lines[i + 1:i + 1 + lines[i]]
+        longest = ids if len(ids) > len(longest) else longest
+        i += lines[i] + 1
+    if len(longest) < 2:
+        return np.zeros(0), {name: np.zeros((0,) + np.shape(v)[1:]) for name, v in values.items()}, plane
+    closed = longest[0] == longest[-1]
+    ids = longest[:-1] if closed else longest
+    points = np.asarray(cut.points)[ids]
+    steps = np.linalg.norm(np.diff(points, axis=0), axis=1)
+    arc = np.concatenate([[0.0], np.cumsum(steps)])
+    length = arc[-1] + (np.linalg.norm(points[-1] - points[0]) if closed else 0.0)
+    start = int(np.argmax((points - center) @ d))
+    position = arc - arc[start]
+    if closed:  # wrap onto (-length / 2, length / 2]
+        position = (position + 0.5 * length) % length - 0.5 * length
+    if np.mean(((points - center) @ second)[position > 0]) < np.mean(((points - center) @ second)[position < 0]):
+        position = -position  # positive toward up
+    order = np.argsort(position, kind="stable")
+    plane["length_mm"] = float(length)
+    samples = {name: np.asarray(cut.point_data[name])[ids][order] for name in values}
+    return position[order], samples, plane
 
 
 def _names(values, what, known=None) -> list:
@@ -232,7 +269,6 @@ def compare(mesh=None, materials=("marble",), models=("directional",), lights=No
     -------
     Comparison
     """
-    from ..io.geometry import mean_edge_length
     from ..scatter.lights import DirectionalLight, as_light_list
     from .pipeline import DEFAULT_LIGHT_DIRECTION
 
@@ -286,10 +322,13 @@ def compare(mesh=None, materials=("marble",), models=("directional",), lights=No
 
     key_light = next((light for light in lights if isinstance(light, DirectionalLight)), None)
     light_direction = key_light.direction if key_light is not None else np.asarray(up, dtype=np.float64)
-    vertices, angle, plane = profile_cut(mesh.points, mean_edge_length(mesh.points, mesh.triangles), light_direction,
-                                         up, camera_direction)
-    plane["n_vertices"] = int(vertices.size)
-    profiles = {key: (angle, result.radiance[vertices]) for key, result in results.items()}
+    names = {key: f"{key[0]}/{key[1]}" for key in results}
+    values = {names[key]: result.radiance for key, result in results.items()}
+    values["lit"] = lit[materials[0]].astype(np.float64)
+    position, samples, plane = profile_cut(mesh, values, light_direction, up, camera_direction)
+    inside = samples["lit"] >= 0.5
+    plane["light_boundaries_mm"] = (0.5 * (position[1:] + position[:-1]))[inside[1:] != inside[:-1]].tolist()
+    profiles = {key: (position, samples[names[key]]) for key in results}
 
     comparison = Comparison(materials, models, exposure, results, times, statistics, differences, profiles, plane)
     if output is not None:
@@ -385,16 +424,17 @@ def _difference_image(mesh, comparison, relative, camera_direction, up, cell_siz
         plotter.camera_position = camera
         plotter.add_text(f"{material}: {model} vs {reference}", position="upper_left", font_size=10, color="white")
     plotter.subplot(rows, 0)
-    plotter.add_scalar_bar(title=f"relative difference of luminance, (Y - Y_{reference}) / Y_{reference}",
-                           mapper=actor.mapper, color="white", fmt="%.2f", position_x=0.2, position_y=0.05,
-                           width=0.6, height=0.6, title_font_size=14, label_font_size=11)
+    font = int(np.clip(columns * cell_size[0] / 40, 8, 14))  # the title fits the band's width
+    plotter.add_scalar_bar(title=f"(Y - Y_{reference}) / Y_{reference}", mapper=actor.mapper, color="white",
+                           fmt="%.2f", position_x=0.1, position_y=0.05, width=0.8, height=0.6, title_font_size=font,
+                           label_font_size=font - 2)
     image = plotter.screenshot(return_img=True)
     plotter.close()
     return image
 
 
 def _profile_plot(comparison, path) -> None:
-    """Radiance against angle along the cut, one panel per channel (matplotlib, no global state)."""
+    """Radiance along the cut, one panel per channel (matplotlib, no global state)."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
@@ -403,23 +443,21 @@ def _profile_plot(comparison, path) -> None:
     axes = figure.subplots(1, 3, sharex=True)
     styles = ["-", "--", ":", "-."]
     colours = [f"C{k % 10}" for k in range(len(comparison.materials))]
-    top = max(float(radiance.max()) for _, radiance in comparison.profiles.values()) or 1.0
+    top = max([float(radiance.max()) for _, radiance in comparison.profiles.values() if radiance.size] + [0.0]) or 1.0
+    plane = comparison.profile_plane
     for c, (ax, channel) in enumerate(zip(axes, ("red", "green", "blue"))):
-        for (material, model), (angle, radiance) in comparison.profiles.items():
-            values = np.maximum(radiance[:, c], PROFILE_RANGE * top)
-            ax.plot(angle, values, styles[comparison.models.index(model) % len(styles)],
+        for (material, model), (position, radiance) in comparison.profiles.items():
+            ax.plot(position, np.maximum(radiance[:, c], PROFILE_RANGE * top),
+                    styles[comparison.models.index(model) % len(styles)],
                     color=colours[comparison.materials.index(material)], lw=1.0, label=f"{material}, {model}")
-        for x in (-90, 90):
+        for x in plane["light_boundaries_mm"]:
             ax.axvline(x, color="0.6", lw=0.6, ls=":")
         ax.set_yscale("log")
         ax.set_ylim(bottom=PROFILE_RANGE * top)
-        ax.set_xlim(-180, 180)
-        ax.set_xticks(range(-180, 181, 90))
-        ax.set_xlabel("angle from the light in the cut plane (deg)")
+        ax.set_xlabel("position along the cut (mm; 0 faces the light)")
         ax.set_title(f"{channel} channel")
     axes[0].set_ylabel("radiance toward the normal, W/(m² sr) per W/m²")
     axes[-1].legend(fontsize=7, loc="lower center")
-    plane = comparison.profile_plane
-    figure.suptitle(f"profile across the light boundary: {plane['n_vertices']} vertices within "
-                    f"{plane['half_width_mm']:.2g} mm of the plane through the centre containing the light", fontsize=9)
+    figure.suptitle(f"profile across the light boundary: the plane through the centre containing the light cuts the "
+                    f"surface in a line of {plane['length_mm']:.0f} mm; dotted: where the direct light ends", fontsize=9)
     figure.savefig(path, format="png")
