@@ -23,24 +23,27 @@ folder, ``Return`` solves the current state on every vertex (``resolution="full"
 Interactive resolution. Every change re-solves on one persistent ``Scene`` (geometry, Embree scene and
 visibility are reused) on a proxy of about :data:`INTERACTIVE_VERTICES` vertices
 (:func:`interactive_edge_length`), interpolated back to every vertex. Measured on the embedded default
-scan (28,088 vertices after cleaning, 155 mm; 2 shared cores; tree method, tolerance 1e-2 for the
-reference): the full solve takes 8-10 s warm; on proxies, with ``tree``, a light or material change takes
+scan (28,088 vertices after cleaning, 155 mm across) on a 2-core machine, warm, ``tree`` method; the
+reference is the full solve with the default settings (``tree``, tol 1e-2, every vertex), which takes
+6-11 s there. Errors are over marble, skim milk and ketchup under three lights (elevations 10-60 deg):
 
-============ ========= ======================= ===================================================
-proxy edge   vertices  time per change         relative RMS error of B vs the full solve (marble, skim milk)
-============ ========= ======================= ===================================================
-3 mm         7,312     1.3-1.6 s               4.2 %, 3.7 %
-4 mm         4,114     0.53-0.71 s             6.3 %, 5.5 %
-5 mm         2,633     0.35-0.45 s             8.2 %, 7.2 %
-6 mm         1,829     0.31-0.50 s             10 %, 9 %
-8 mm         1,030     0.25-0.35 s             13 %, 12 %
-============ ========= ======================= ===================================================
+============ ========= ==================== ==================== ============== =====================
+proxy edge   vertices  time per change,     time per change,     relative RMS   median relative error,
+                       load ~1.7            load ~4              error of B     lit vertices
+============ ========= ==================== ==================== ============== =====================
+3 mm         7,312     1.1-1.7 s            1.3-2.4 s            3.2-5.0 %      3.1 %
+4 mm         4,114     0.53-0.71 s          0.60-1.4 s           4.8-7.6 %      5.2 %
+5.1 mm       2,502     0.35-0.45 s          0.56-1.1 s           6.7-9.7 %      7.7 %
+6 mm         1,829     0.31-0.50 s                               9-10 %
+8 mm         1,030     0.25-0.35 s                               12-13 %
+============ ========= ==================== ==================== ============== =====================
 
-(tolerance 0.03 or 0.1 changes these times by less than their spread: the near-field quadrature takes
-90 % of the time). The default, about 2,500 vertices (5 mm on the default scan), answers in about 0.4 s.
-The error sits at the shadow terminator, which the proxy moves by up to an edge: there single vertices
-can be many times too bright, while the lit and the far side match the full solve within a few percent.
-Press ``Return`` for the full solve of what is on screen, and save that.
+The tolerance (0.01 or 0.03) changes these times by less than their spread: the near-field quadrature
+takes 90 % of the time on a proxy. The default, about 2,500 vertices (5.1 mm on the default scan),
+answers in about 0.4 s on an idle machine. Its error sits at the shadow terminator, which the proxy
+moves by up to an edge: single vertices just past it can be many times too bright (ketchup, whose light
+fades within 1-5 mm, most), while the lit and the far side stay within a few percent. ``Return`` solves
+what is on screen on every vertex; ``s`` then saves that.
 """
 
 from __future__ import annotations
