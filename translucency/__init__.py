@@ -44,6 +44,12 @@ _LAZY = {
     "load_default_scan": "translucency.app.pipeline",
     # many scans to baked PLY files
     "bake": "translucency.app.bake",
+    "display_colors": "translucency.app.pipeline",
+    # showing and comparing
+    "Viewer": "translucency.app.viewer",
+    "compare": "translucency.app.compare",
+    "Comparison": "translucency.app.compare",
+    "render_colors": "translucency.app.render",
     # errors
     "TranslucencyError": "translucency.errors",
     "InvalidParameterError": "translucency.errors",
