@@ -83,7 +83,10 @@ def cmd_inspect(args) -> int:
 
     from ..io.clean import clean_mesh
     from ..io.load import load_mesh
+    from ..io.save import check_output_path, save_mesh
 
+    if args.output:
+        check_output_path(args.output, args.mesh)  # before any work: a bad output path fails at once
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         mesh = load_mesh(args.mesh, unit=args.unit)
@@ -95,9 +98,7 @@ def cmd_inspect(args) -> int:
     cleaned, report = clean_mesh(mesh, max_hole_edges=args.max_hole_edges)
     print(report)
     if args.output:
-        if not args.output.lower().endswith((".ply", ".vtp", ".vtk", ".stl", ".obj")):
-            raise TranslucencyError(f"cannot write {args.output}: use a .ply, .vtp, .vtk, .stl or .obj name.")
-        cleaned.to_pyvista().save(args.output)
+        save_mesh(args.output, cleaned)
         print(f"wrote the repaired mesh to {args.output}")
     return 0
 

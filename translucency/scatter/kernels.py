@@ -194,7 +194,7 @@ def _channel(params, k, r2, perp2, mu0, x_dot_w, x_dot_n, x_dot_v, s_dot_v, s_do
     b = params[k, P_BACKLIT]
     d_r2 = r2 + D * mu0 * (D * mu0 - 2.0 * d_e * cos_beta) if mu0 > 0.0 else r2 + b * b
     d_r = max(math.sqrt(d_r2), D_R_FLOOR * D)
-    d_v = math.sqrt(max(r2 - 2.0 * c * x_dot_s + c * c, 0.0))  # |x - c n_i*|
+    d_v = max(math.sqrt(max(r2 - 2.0 * c * x_dot_s + c * c, 0.0)), D_R_FLOOR * D)  # |x - c n_i*|, floored as d_r
     inv_D = 1.0 / D
     scale = params[k, P_NORM] / FOUR_PI_SQUARED
     real = _ray_source(x_dot_w, x_dot_n, -mu0, d_r, D, inv_D, params[k, P_SIGMA_TR], params[k, P_C_PHI],
@@ -259,7 +259,7 @@ def directional_dipole_pair(xi0, xi1, xi2, ni0, ni1, ni2, w0, w1, w2, xo0, xo1, 
     """``S_d`` of one source/receiver pair for every channel of ``params``, written into ``out``.
 
     Same formula and conventions as :func:`translucency.scatter.dipoles.directional_dipole`
-    (spec 1.1-1.3): ``n_i* = n_i`` when ``r = 0`` or ``n_i || x``, ``d_r`` floored at
+    (spec 1.1-1.3): ``n_i* = n_i`` when ``r = 0`` or ``n_i || x``, ``d_r`` and ``d_v`` floored at
     ``D_R_FLOOR * D``, clamp at 0 after subtracting the virtual source.
 
     Returns
