@@ -82,16 +82,18 @@ def test_sweep_has_no_nan_inf_or_negative_value(sweep, model):
         pairs = extremes.kernel_pairs(b, model)
         _assert_clean(ref, (model, "reference", precision))
         _assert_clean(pairs, (model, "model_pair", precision))
-    flux = np.random.default_rng(3).random(blocks.x_i.shape[:2] + (3,))
-    summed, clamped = extremes.kernel_sums(blocks, model, flux)
+    # the solver's sums, on a quarter of the materials (one parallel kernel call per material)
+    some = blocks.subset(100)
+    flux = np.random.default_rng(3).random(some.x_i.shape[:2] + (3,))
+    summed, clamped = extremes.kernel_sums(some, model, flux)
     _assert_clean(summed, (model, "vertex_sum"))
     if model == "directional":
-        vectorised, clamped_vectorised = extremes.kernel_sums(blocks, model, flux, vectorised=True)
+        vectorised, clamped_vectorised = extremes.kernel_sums(some, model, flux, vectorised=True)
         _assert_clean(vectorised, (model, "directional_vertex_sum"))
         # clamps happen (backlit and grazing pairs) and are counted: at most one per pair and channel
         # (the two kernels may disagree on values that round to either side of 0)
         for count in (clamped, clamped_vectorised):
-            assert count.sum() > 0 and count.max() <= 3 * blocks.x_i.shape[1]
+            assert count.sum() > 0 and count.max() <= 3 * some.x_i.shape[1]
     # away from the model's discontinuities the kernels agree with the reference; their arithmetic
     # differs (reciprocals, polynomial exp: relative 5e-13), amplified where real and virtual source
     # nearly cancel, hence 1e-8 rather than 1e-12
@@ -139,7 +141,7 @@ def configurations(draw):
     return extremes.single_block(eta, sigma_a, sigma_s, g, x_i, n_i, w12, x_o, n_o)
 
 
-@settings(max_examples=150, deadline=None, derandomize=True)
+@settings(max_examples=120, deadline=None, derandomize=True)
 @given(block=configurations(), precision=st.sampled_from([np.float64, np.float32]))
 def test_every_implementation_is_finite_and_non_negative(block, precision):
     """Reference and per-pair kernel with float64 and float32 input; the solver's sums (float64, as the
