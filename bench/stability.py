@@ -169,6 +169,7 @@ def markdown(results: dict) -> str:
 
 
 def main(argv=None) -> int:
+    """Run every model and implementation, write the JSON and Markdown results; exit 1 if any value is bad."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--blocks", type=int, default=8192, help="materials (each 8 sources x 32 receivers)")
     parser.add_argument("--sum-blocks", type=int, default=2048, help="materials whose vertex sums are evaluated")

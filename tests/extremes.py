@@ -273,11 +273,11 @@ def kernel_parameters(blocks: Blocks, model: str) -> np.ndarray:
                      for k in range(len(blocks.eta))])
 
 
-@numba.njit(parallel=True, cache=True)
+@numba.njit(cache=True)
 def _kernel_pairs(model, x_i, n_i, w12, x_o, n_o, params):
     G, S, R = x_i.shape[0], x_i.shape[1], x_o.shape[1]
     out = np.empty((G, R, S, params.shape[1]))
-    for g in numba.prange(G):
+    for g in range(G):  # serial: many small calls must not each start the thread pool
         for o in range(R):
             for j in range(S):
                 kernels.model_pair(model, x_i[g, j, 0], x_i[g, j, 1], x_i[g, j, 2], n_i[g, j, 0], n_i[g, j, 1],

@@ -76,33 +76,35 @@ def _assert_clean(values, what):
 def test_sweep_has_no_nan_inf_or_negative_value(sweep, model):
     blocks, blocks32, regular = sweep
     assert blocks.n_pairs == 102_400
-    reference = extremes.reference(blocks, model)
+    reference, kernel = {}, {}
     for precision, b in (("float64", blocks), ("float32", blocks32)):
-        ref = reference if precision == "float64" else extremes.reference(b, model)
-        pairs = extremes.kernel_pairs(b, model)
-        _assert_clean(ref, (model, "reference", precision))
-        _assert_clean(pairs, (model, "model_pair", precision))
-    flux = np.random.default_rng(3).random(blocks.x_i.shape[:2] + (3,))
-    summed, clamped = extremes.kernel_sums(blocks, model, flux)
+        reference[precision] = extremes.reference(b, model)
+        kernel[precision] = extremes.kernel_pairs(b, model)
+        _assert_clean(reference[precision], (model, "reference", precision))
+        _assert_clean(kernel[precision], (model, "model_pair", precision))
+    # the solver's sums, on a quarter of the materials (one parallel kernel call per material)
+    some = blocks.subset(100)
+    flux = np.random.default_rng(3).random(some.x_i.shape[:2] + (3,))
+    summed, clamped = extremes.kernel_sums(some, model, flux)
     _assert_clean(summed, (model, "vertex_sum"))
     if model == "directional":
-        vectorised, clamped_vectorised = extremes.kernel_sums(blocks, model, flux, vectorised=True)
+        vectorised, clamped_vectorised = extremes.kernel_sums(some, model, flux, vectorised=True)
         _assert_clean(vectorised, (model, "directional_vertex_sum"))
         # clamps happen (backlit and grazing pairs) and are counted: at most one per pair and channel
         # (the two kernels may disagree on values that round to either side of 0)
         for count in (clamped, clamped_vectorised):
-            assert count.sum() > 0 and count.max() <= 3 * blocks.x_i.shape[1]
+            assert count.sum() > 0 and count.max() <= 3 * some.x_i.shape[1]
     # away from the model's discontinuities the kernels agree with the reference; their arithmetic
     # differs (reciprocals, polynomial exp: relative 5e-13), amplified where real and virtual source
     # nearly cancel, hence 1e-8 rather than 1e-12
     peak = extremes.peak(blocks, model)[:, None, None, :]
-    kernel = extremes.kernel_pairs(blocks, model)
-    rel = extremes.relative_differences(np.where(regular[..., None], kernel, np.nan), reference, peak)
+    rel = extremes.relative_differences(np.where(regular[..., None], kernel["float64"], np.nan), reference["float64"],
+                                        peak)
     assert rel.size > 100_000 and rel.max() < 1e-8
     # float32 input: each coordinate carries a relative rounding of 6e-8, so a typical value moves by
     # about that much (the tail, where D is far below the coordinates' magnitude, is measured by the bench)
-    ref32 = extremes.reference(blocks32, model)
-    rel32 = extremes.relative_differences(np.where(regular[..., None], ref32, np.nan), reference, peak)
+    rel32 = extremes.relative_differences(np.where(regular[..., None], reference["float32"], np.nan),
+                                          reference["float64"], peak)
     assert np.median(rel32) < 1e-6
 
 
@@ -139,7 +141,7 @@ def configurations(draw):
     return extremes.single_block(eta, sigma_a, sigma_s, g, x_i, n_i, w12, x_o, n_o)
 
 
-@settings(max_examples=150, deadline=None, derandomize=True)
+@settings(max_examples=120, deadline=None, derandomize=True)
 @given(block=configurations(), precision=st.sampled_from([np.float64, np.float32]))
 def test_every_implementation_is_finite_and_non_negative(block, precision):
     """Reference and per-pair kernel with float64 and float32 input; the solver's sums (float64, as the
