@@ -1,0 +1,143 @@
+"""Run the benchmark suite with one command and put its tables into ``bench/README.md``.
+
+The suite, in this order, each script in its own process:
+
+=================== ========================================================= ==================
+script              what it measures                                          when
+=================== ========================================================= ==================
+solver.py           time against error per scan, material, method, tolerance  always
+                    and proxy resolution; the ``exact`` kernel's throughput
+scaling.py          time and memory from 10k to 1M vertices; the 1M bake      always
+stability.py        the solver's stability at extreme inputs                  when the file exists
+validate_models.py  the diffusion models against Monte Carlo (slow)           with ``--validate``
+=================== ========================================================= ==================
+
+Each script writes its JSON, Markdown tables and PNG plots into ``bench/results`` (with ``--quick``:
+small sizes, into ``bench/results/tmp``). Afterwards the suite writes ``suite.json`` (what ran, how
+long, the load average) and ``goals.md`` (the issue's speed goals against the measurements), and
+replaces every generated block of ``bench/README.md`` -- the text between
+``<!-- NAME-table:start -->`` and ``<!-- NAME-table:end -->`` -- with ``bench/results/NAME.md``.
+Nothing else of the README changes, and a ``--quick`` run leaves it alone.
+
+    .venv/bin/python bench/run_all.py              # the suite (about 1.5 h on 2 free cores)
+    .venv/bin/python bench/run_all.py --validate   # and the Monte Carlo validation (+ about 10 min)
+    .venv/bin/python bench/run_all.py --quick      # a smoke run of every script (a few minutes)
+    .venv/bin/python bench/run_all.py --tables-only  # only rewrite the README's tables from bench/results
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import subprocess
+import sys
+import time
+
+from report import RESULTS, ROOT, load_average, machine_info, output_dir, update_readme
+
+BENCH = ROOT / "bench"
+#: (name, script, takes --repeats, optional): the suite in the order it runs.
+SUITE = [("solver", "solver.py", True, False), ("scaling", "scaling.py", True, False),
+         ("stability", "stability.py", False, False), ("validate_models", "validate_models.py", False, True)]
+
+
+def run_script(script, quick, repeats):
+    """Run one benchmark script in a child process; ``{"returncode", "seconds", "load_average_*"}``."""
+    command = [sys.executable, str(BENCH / script)] + (["--quick"] if quick else [])
+    if repeats is not None:
+        command += ["--repeats", str(repeats)]
+    print(f"== bench/{script} {' '.join(command[2:])}", flush=True)
+    before = load_average()
+    start = time.perf_counter()
+    returncode = subprocess.run(command, cwd=ROOT).returncode
+    return {"returncode": returncode, "seconds": time.perf_counter() - start, "load_average_start": before,
+            "load_average_end": load_average()}
+
+
+def fastest_within(rows, scan, error):
+    """Per material of ``scan``: the fastest row (not ``exact``) with relative RMS error at most ``error``."""
+    best = {}
+    for r in rows:
+        if r["scan"] == scan and r["method"] != "exact" and r["error_rms"] <= error:
+            if r["material"] not in best or r["seconds"] < best[r["material"]]["seconds"]:
+                best[r["material"]] = r
+    return best
+
+
+def goals_markdown(results):
+    """The issue's goals against the latest results in ``results`` (a table; missing results are said so)."""
+    from scaling import GOAL_ERROR, GOALS
+
+    lines = ["| goal | measured | verdict |", "|---|---|---|"]
+    solver = results / "solver.json"
+    rows = json.loads(solver.read_text())["rows"] if solver.exists() else []
+    for scan in ("bunny", "igea"):
+        best = fastest_within(rows, scan, GOAL_ERROR)
+        if not best:
+            lines.append(f"| {scan}: ≤ {GOALS[scan]:g} s per solve at ≤ 1 % | not measured | |")
+            continue
+        parts = [f"{m} {r['seconds']:.1f} s ({r['method']} {r['tol']:g}, {r.get('resolution', 'full')}, "
+                 f"{100 * r['error_rms']:.2f} %)"
+                 for m, r in best.items()]
+        ok = all(r["seconds"] <= GOALS[scan] for r in best.values())
+        lines.append(f"| {scan}: ≤ {GOALS[scan]:g} s per solve at ≤ 1 % | fastest setting within 1 %: {'; '.join(parts)} "
+                     f"| {'met' if ok else 'missed'} |")
+    scaling = results / "scaling.json"
+    bakes = [r for r in json.loads(scaling.read_text())["rows"] if r["label"] == "1M"] if scaling.exists() else []
+    if bakes and "bake_seconds" in bakes[0] and "error_rms" in bakes[0]:
+        r = bakes[0]
+        ok = r["bake_seconds"] <= GOALS["bake_1M"] and r["error_rms"] <= GOAL_ERROR
+        lines.append(f"| 1M-vertex bake ≤ {GOALS['bake_1M']:g} s at ≤ 1 % | {r['bake_seconds']:.0f} s, "
+                     f"{100 * r['error_rms']:.2f} %, peak RSS {r['ru_maxrss_mb'] / 1024:.1f} GB | {'met' if ok else 'missed'} |")
+    else:
+        status = bakes[0]["status"] if bakes else "not measured"
+        lines.append(f"| 1M-vertex bake ≤ {GOALS['bake_1M']:g} s at ≤ 1 % | {status} | {'missed' if bakes else ''} |")
+    lines.append("")
+    lines.append("Times are wall times on the machine of the run; the load average in each table shows how much "
+                 "other work shared it.")
+    return "\n".join(lines)
+
+
+def main(argv=None):
+    """Command line: run the suite, write ``suite.json`` and ``goals.md``, update the README's tables."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="a smoke run: small sizes, into results/tmp, README untouched")
+    parser.add_argument("--validate", action="store_true", help="also run validate_models.py (slow)")
+    parser.add_argument("--only", nargs="+", choices=[name for name, *_ in SUITE], help="run only these scripts")
+    parser.add_argument("--repeats", type=int, help="timed warm runs per setting for solver.py and scaling.py")
+    parser.add_argument("--no-readme", action="store_true", help="leave bench/README.md as it is")
+    parser.add_argument("--tables-only", action="store_true",
+                        help="run nothing: rewrite goals.md and the README's tables from the results there are")
+    args = parser.parse_args(argv)
+    out = output_dir(args.quick)
+    info = machine_info()
+    ran = {}
+    for name, script, takes_repeats, optional in SUITE:
+        if args.tables_only or (args.only and name not in args.only):
+            continue
+        if optional and not args.validate and not (args.only and name in args.only):
+            print(f"== {script}: skipped (slow; run it with --validate)")
+            continue
+        if not (BENCH / script).exists():
+            print(f"== {script}: skipped (bench/{script} does not exist in this checkout)")
+            ran[name] = {"skipped": "script not present"}
+            continue
+        ran[name] = run_script(script, args.quick, args.repeats if takes_repeats else None)
+        if ran[name]["returncode"]:
+            print(f"== {script} failed with exit code {ran[name]['returncode']}")
+    info["load_average_end"] = load_average()
+    if not args.tables_only:
+        (out / "suite.json").write_text(json.dumps({"info": info, "scripts": ran}, indent=1))
+    (out / "goals.md").write_text(goals_markdown(out) + "\n")
+    print((out / "goals.md").read_text())
+    if args.quick or args.no_readme:
+        print(f"results in {out.relative_to(ROOT)}; bench/README.md left as it is")
+    else:
+        tables = {f"{path.stem}-table": path.read_text() for path in sorted(RESULTS.glob("*.md"))}
+        done = update_readme(tables)
+        print(f"bench/README.md: updated {', '.join(done) or 'nothing'}")
+    return 1 if any(r.get("returncode") for r in ran.values()) else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,447 @@
+"""Time and memory against vertex count (10k to 1M vertices), and the 1M-vertex bake end to end.
+
+The meshes are all the shared Igea (cleaned, in mm) at other densities, so that only the vertex count
+changes:
+
+========= ================================================================================
+label     how it is made
+========= ================================================================================
+10k, 30k  decimated (:func:`translucency.io.decimate.simplify_arrays`, quadric edge collapse)
+134k      the scan itself
+537k      midpoint-subdivided once (every triangle into four; the surface is unchanged)
+1M        midpoint-subdivided once, then the longest edges (29 %) split at their midpoints once more
+========= ================================================================================
+
+Each mesh is written to a temporary PLY and baked in a child process, as a user would bake it:
+load -> clean -> ``Scene.shade()`` with the default settings (marble, one directional light with
+Embree shadows, ``tree`` at tolerance 1 %, every vertex) -> :func:`translucency.io.ply.write_baked_ply`,
+with the wall time of every stage; the solver's own stages (incident light and visibility, far
+field, near lists, near field) come from the shade's timings. That first shade builds every cache
+(Embree scene, source tree, near-triangle lists); a viewer's later solves reuse them, so warm shades
+of the same scene are timed too (median of ``--repeats`` at up to 200k vertices, one above).
+Then ``exact`` at a fixed number of random receivers (2000) gives the error of the bake: relative RMS
+and worst lit-vertex error, as in ``bench/solver.py``. Numba's compiled code is loaded on a small
+sphere before anything is timed.
+
+Peak memory is the child's peak resident set size: ``VmHWM`` read from ``/proc/self/status`` right
+after the bake is written (the bake's peak) and ``ru_maxrss`` of the finished child (everything,
+``exact`` included). The parent stops a child whose bake runs past ``--time-limit`` seconds or whose
+resident set grows past ``--memory-limit`` GB, and records why.
+
+Writes ``scaling.json``, ``scaling.md``, ``bake.md`` and ``scaling.png`` into ``bench/results``
+(``bench/results/tmp`` with ``--quick``: 10k and 30k only).
+
+    .venv/bin/python bench/scaling.py            # every size (about 30 min on 2 cores, most of it at 1M)
+    .venv/bin/python bench/scaling.py --quick    # 10k and 30k, in a minute or two
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import resource
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from translucency import __version__  # noqa: E402,F401  (first: it selects numba's threading layer)
+
+import numpy as np  # noqa: E402
+from report import load_average, machine_info, output_dir, write_results  # noqa: E402
+from solver import MESHES, SCANS, errors, prepare  # noqa: E402
+
+SIZES = ("10k", "30k", "134k", "537k", "1M")
+QUICK_SIZES = ("10k", "30k")
+RECEIVERS = 2000
+#: Warm shades are repeated (median) on meshes up to this many vertices, run once above.
+REPEAT_MAX_VERTICES = 200_000
+#: What the solver's stages are called in ``ShadeResult.timings``, and in the tables.
+SOLVER_STAGES = {"incident_light": "incident light + visibility", "solve_far_field": "far field",
+                 "solve_near_lists": "near lists", "solve_near_field": "near field"}
+#: Goals of the issue: seconds per solve at <= 1 % error.
+GOALS = {"bunny": 0.5, "igea": 2.0, "bake_1M": 60.0}
+GOAL_ERROR = 0.01
+
+
+def build_mesh(label, igea):
+    """``(points, triangles, how)``: the cleaned Igea ``igea`` at the density ``label`` (module table)."""
+    from tests.synthetic import subdivide
+    from translucency.io.decimate import simplify_arrays
+
+    points, triangles = igea.points, igea.triangles
+    if label in ("10k", "30k"):
+        vertices = int(label[:-1]) * 1000
+        points, triangles = simplify_arrays(points, triangles, 2 * vertices)
+        return points, triangles, f"decimated to {2 * vertices} triangles"
+    if label == "134k":
+        return points, triangles, "the scan"
+    points, triangles = subdivide(points, triangles)
+    if label == "537k":
+        return points, triangles, "midpoint-subdivided once"
+    points, triangles, share = split_longest_edges(points, triangles, 1_000_000)
+    return points, triangles, f"midpoint-subdivided once, then its longest {100 * share:.0f} % of edges split at their midpoints"
+
+
+def split_longest_edges(points, triangles, vertices):
+    """Split the longest edges at their midpoints until the mesh has about ``vertices`` vertices.
+
+    pymeshlab's midpoint subdivision with an edge-length threshold: every edge longer than the
+    threshold gets a new vertex at its midpoint (the surface does not change) and the triangles
+    around it are split. The threshold is the edge length that as many edges exceed as vertices are
+    missing. Returns ``(points, triangles, share of the edges split)``.
+    """
+    from translucency.io._pymeshlab import import_pymeshlab
+
+    pymeshlab = import_pymeshlab()
+    edges = np.unique(np.sort(np.concatenate([triangles[:, [0, 1]], triangles[:, [1, 2]], triangles[:, [2, 0]]]), axis=1),
+                      axis=0)
+    lengths = np.sort(np.linalg.norm(points[edges[:, 0]] - points[edges[:, 1]], axis=1))
+    missing = min(max(vertices - len(points), 1), len(lengths))
+    mesh_set = pymeshlab.MeshSet()
+    mesh_set.add_mesh(pymeshlab.Mesh(vertex_matrix=np.asarray(points, np.float64),
+                                     face_matrix=np.asarray(triangles, np.int32)))
+    mesh_set.meshing_surface_subdivision_midpoint(iterations=1,
+                                                  threshold=pymeshlab.PureValue(float(lengths[len(lengths) - missing])))
+    mesh = mesh_set.current_mesh()
+    return (np.asarray(mesh.vertex_matrix(), np.float64), np.asarray(mesh.face_matrix(), np.int64),
+            missing / len(lengths))
+
+
+def write_mesh(path, points, triangles):
+    """Write a plain triangle mesh (mm) as a binary PLY, the way the package's ``inspect -o`` does."""
+    from translucency.io.mesh import TriangleMesh
+
+    TriangleMesh(points, triangles).to_pyvista().save(str(path))
+
+
+def peak_rss_mb() -> float:
+    """This process's peak resident set size so far (``VmHWM``), MB."""
+    for line in Path("/proc/self/status").read_text().splitlines():
+        if line.startswith("VmHWM:"):
+            return int(line.split()[1]) / 1024.0
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+
+
+def current_rss_mb(pid) -> float:
+    """Resident set size (``VmRSS``) of process ``pid`` now, MB (0 when it is gone)."""
+    try:
+        for line in Path(f"/proc/{pid}/status").read_text().splitlines():
+            if line.startswith("VmRSS:"):
+                return int(line.split()[1]) / 1024.0
+    except OSError:
+        pass
+    return 0.0
+
+
+def bake(path, out_ply):
+    """Load -> clean -> shade (default settings) -> write the baked PLY; ``(scene, result, mesh, seconds per stage)``."""
+    from translucency.app.pipeline import Scene
+    from translucency.io.clean import clean_mesh
+    from translucency.io.load import load_mesh
+    from translucency.io.ply import write_baked_ply
+
+    stages = {}
+    start = time.perf_counter()
+    mesh = load_mesh(path, unit="mm")
+    stages["load"] = time.perf_counter() - start
+    start = time.perf_counter()
+    mesh, _ = clean_mesh(mesh)
+    stages["clean"] = time.perf_counter() - start
+    start = time.perf_counter()
+    scene = Scene(mesh)
+    result = scene.shade()
+    stages["shade"] = time.perf_counter() - start
+    start = time.perf_counter()
+    write_baked_ply(out_ply, mesh, result.radiance, result.B, result.colors, result.metadata)
+    stages["write"] = time.perf_counter() - start
+    return scene, result, mesh, stages
+
+
+def exact_at(scene, receivers):
+    """``exact`` (the default material and light, as the shade used them) at ``receivers``; ``(B, seconds)``."""
+    from translucency.app.pipeline import DEFAULT_LIGHT_DIRECTION, DEFAULT_MATERIAL, resolve_medium
+    from translucency.scatter.lights import DirectionalLight
+    from translucency.scatter.solve import solve
+
+    medium = resolve_medium(DEFAULT_MATERIAL)
+    solver_mesh, _, _, geometry, _ = scene.solver_mesh(medium, "full")
+    incident, _ = scene.incident(geometry, solver_mesh.triangles, [DirectionalLight(DEFAULT_LIGHT_DIRECTION, 1.0)],
+                                 medium.eta)
+    start = time.perf_counter()
+    exact = solve(geometry, incident.phi_rgb, incident.w12, medium, method="exact", receivers=receivers)
+    return exact.B, time.perf_counter() - start
+
+
+def warm_up(folder):
+    """Load numba's compiled code and the libraries: the whole bake and ``exact`` on a small sphere."""
+    from tests.synthetic import icosphere
+
+    points, triangles = icosphere(3, radius=20.0)
+    write_mesh(folder / "warm_up.ply", points, triangles)
+    scene, _, _, _ = bake(folder / "warm_up.ply", folder / "warm_up_baked.ply")
+    exact_at(scene, np.arange(10))
+
+
+def child(path, out_json, repeats):
+    """Child process: the timed bake, warm shades and ``exact``, written to ``out_json`` after each phase."""
+    folder = Path(path).parent
+    record = {"phase": "warm-up"}
+
+    def save(**values):
+        """Add ``values`` to the record and rewrite the JSON file."""
+        record.update(values)
+        Path(f"{out_json}.part").write_text(json.dumps(record, indent=1))
+        os.replace(f"{out_json}.part", out_json)  # the parent never reads a half-written file
+
+    save()
+    warm_up(folder)
+    save(phase="bake", load_average_start=load_average())
+    scene, result, mesh, stages = bake(path, folder / (Path(path).stem + "_baked.ply"))
+    stages.update({SOLVER_STAGES[k]: result.timings.get(k, 0.0) for k in SOLVER_STAGES})
+    save(phase="warm shades", vertices=mesh.n_points, triangles=mesh.n_triangles, stages=stages,
+         bake_seconds=stages["load"] + stages["clean"] + stages["shade"] + stages["write"],
+         peak_rss_bake_mb=peak_rss_mb(), load_average_bake=load_average(), solver_stats=result.stats["solver"])
+    runs = repeats if mesh.n_points <= REPEAT_MAX_VERTICES else 1
+    warm = []
+    for _ in range(runs):
+        start = time.perf_counter()
+        again = scene.shade()
+        warm.append((time.perf_counter() - start, again.timings))
+    seconds, timings = sorted(warm, key=lambda item: item[0])[len(warm) // 2]
+    save(phase="exact", warm_seconds=seconds, warm_runs=runs,
+         warm_stages={SOLVER_STAGES[k]: timings.get(k, 0.0) for k in SOLVER_STAGES})
+    receivers = np.sort(np.random.default_rng(0).choice(mesh.n_points, min(RECEIVERS, mesh.n_points), replace=False))
+    exact, exact_seconds = exact_at(scene, receivers)
+    rms, worst = errors(result.B[receivers], exact)
+    save(phase="done", exact_seconds=exact_seconds, receivers=int(receivers.size), error_rms=rms, error_worst=worst,
+         peak_rss_mb=peak_rss_mb(), load_average_end=load_average())
+
+
+def run_child(path, out_json, repeats, time_limit, memory_limit_gb):
+    """Run :func:`child` on ``path`` in a new process, watching its time and memory; its record, with ``status``."""
+    command = [sys.executable, __file__, "--child", str(path), str(out_json), "--repeats", str(repeats)]
+    process = subprocess.Popen(command, cwd=ROOT)
+    start = time.perf_counter()
+    status, peak_seen, usage = "finished", 0.0, None
+    while usage is None:
+        pid, code, ru = os.wait4(process.pid, os.WNOHANG)
+        if pid:
+            usage = ru
+            status = "finished" if os.waitstatus_to_exitcode(code) == 0 else f"failed (exit {os.waitstatus_to_exitcode(code)})"
+            break
+        rss = current_rss_mb(process.pid)
+        peak_seen = max(peak_seen, rss)
+        record = json.loads(Path(out_json).read_text()) if Path(out_json).exists() else {}
+        in_bake = record.get("phase") in (None, "warm-up", "bake")
+        if rss > memory_limit_gb * 1024:
+            status = f"stopped: resident set {rss / 1024:.1f} GB above the {memory_limit_gb:g} GB limit (phase {record.get('phase')})"
+        elif time.perf_counter() - start > (time_limit if in_bake else 2 * time_limit):
+            status = f"stopped: over the {time_limit:g} s limit (phase {record.get('phase')})"
+        else:
+            time.sleep(0.5)
+            continue
+        process.kill()
+        _, _, usage = os.wait4(process.pid, 0)
+    record = json.loads(Path(out_json).read_text()) if Path(out_json).exists() else {}
+    record.update(status=status, child_seconds=time.perf_counter() - start, peak_rss_polled_mb=peak_seen,
+                  ru_maxrss_mb=usage.ru_maxrss / 1024.0)
+    return record
+
+
+def fit_exponent(n, seconds):
+    """Slope of log(seconds) against log(n) (least squares), or None with fewer than two points."""
+    n, seconds = np.asarray(n, float), np.asarray(seconds, float)
+    ok = np.isfinite(seconds) & (seconds > 0)
+    if ok.sum() < 2:
+        return None
+    return float(np.polyfit(np.log(n[ok]), np.log(seconds[ok]), 1)[0])
+
+
+def curves(rows):
+    """The timed series per row: ``{name: [seconds or nan per row]}`` (exact at all vertices extrapolated)."""
+    get = lambda key: [r.get(key, float("nan")) for r in rows]  # noqa: E731
+    exact = np.array(get("exact_seconds"), float)
+    scale = np.array([r.get("vertices", np.nan) / r.get("receivers", np.nan) for r in rows], float)
+    return {"bake (load to write)": get("bake_seconds"),
+            "tree 1e-2, first shade": [r.get("stages", {}).get("shade", float("nan")) for r in rows],
+            "tree 1e-2, warm shade": get("warm_seconds"),
+            f"exact at {RECEIVERS} receivers": list(exact),
+            "exact at every vertex (extrapolated)": list(exact * scale)}
+
+
+def plot(rows, exponents, path):
+    """Three panels: time against vertices (log-log, fitted exponents), the first shade's stages, peak memory."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    done = [r for r in rows if "vertices" in r]
+    n = np.array([r["vertices"] for r in done], float)
+    fig, axes = plt.subplots(1, 3, figsize=(17, 4.8))
+    ax = axes[0]
+    for (name, seconds), style in zip(curves(done).items(), ("k-o", "C0-o", "C1-s", "C3-^", "C3:^")):
+        ax.plot(n, seconds, style, label=f"{name}: n^{exponents[name]:.2f}" if exponents.get(name) else name,
+                mfc="none" if "extrapolated" in name else None)
+    ax.axhline(GOALS["bake_1M"], color="grey", ls="--", lw=0.8)
+    ax.text(n.min(), GOALS["bake_1M"] * 1.1, "goal: 1M bake in 60 s", fontsize=7, color="grey")
+    ax.set(xscale="log", yscale="log", xlabel="vertices", ylabel="wall time (s)", title="time against vertex count")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=7)
+    ax = axes[1]
+    bottom = np.zeros(len(done))
+    labels = [r["label"] for r in done]
+    totals = np.array([r["bake_seconds"] for r in done])
+    for name in ["load", "clean", *SOLVER_STAGES.values(), "other (shade)", "write"]:
+        values = np.array([stage_seconds(r, name) for r in done]) / totals
+        ax.bar(labels, values, bottom=bottom, label=name)
+        bottom += values
+    for x, total in enumerate(totals):
+        ax.text(x, 1.01, f"{total:.0f} s" if total >= 10 else f"{total:.1f} s", ha="center", fontsize=8)
+    ax.set(ylabel="share of the bake's wall time", ylim=(0, 1.45), yticks=np.linspace(0, 1, 6),
+           title="the bake's stages (first shade, caches cold)")
+    ax.legend(fontsize=7, loc="upper center", ncol=3)
+    ax = axes[2]
+    memory = fit_exponent(n, [r.get("peak_rss_bake_mb", np.nan) for r in done])
+    ax.plot(n, [r.get("peak_rss_bake_mb", np.nan) for r in done], "k-o",
+            label=f"peak RSS of the bake: n^{memory:.2f}" if memory else "peak RSS of the bake")
+    ax.plot(n, [r.get("ru_maxrss_mb", np.nan) for r in done], "C3:s", label="peak RSS of the child (exact included)")
+    ax.set(xscale="log", yscale="log", xlabel="vertices", ylabel="MB", title="memory against vertex count")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=7)
+    fig.suptitle("translucency: the Igea from 10k to 1M vertices, marble, one directional light, tree 1e-2")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def stage_seconds(row, name):
+    """Seconds of one bake stage of ``row``; ``other (shade)`` is the shade's time outside the solver stages."""
+    stages = row.get("stages", {})
+    if name == "other (shade)":
+        return max(stages.get("shade", 0.0) - sum(stages.get(s, 0.0) for s in SOLVER_STAGES.values()), 0.0)
+    return stages.get(name, 0.0)
+
+
+def markdown(rows, exponents):
+    """The scaling table (one row per size) and the fitted exponents."""
+    lines = ["| mesh | vertices | how | bake (s) | first shade (s) | incident light (s) | far field (s) | near lists (s) "
+             "| near field (s) | warm shade (s) | exact at 2000 (s) | rel. RMS error | worst lit-vertex error | peak RSS (MB) | load | status |",
+             "|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|"]
+    fmt = lambda value, spec: "" if value is None or value != value else format(value, spec)  # noqa: E731
+    for r in rows:
+        stages = r.get("stages", {})
+        lines.append(
+            f"| {r['label']} | {r.get('vertices', '')} | {r['how']} | {fmt(r.get('bake_seconds'), '.1f')} | "
+            f"{fmt(stages.get('shade'), '.1f')} | "
+            + " | ".join(fmt(stages.get(s), ".2f") for s in SOLVER_STAGES.values())
+            + f" | {fmt(r.get('warm_seconds'), '.1f')} | {fmt(r.get('exact_seconds'), '.1f')} | "
+            f"{fmt(r.get('error_rms'), '.1e')} | {fmt(r.get('error_worst'), '.1e')} | {fmt(r.get('ru_maxrss_mb'), '.0f')} | "
+            f"{fmt((r.get('load_average_bake') or [None])[0], '.1f')} | {r['status']} |")
+    lines.append("")
+    lines.append("Fitted exponents (time or memory ∝ vertices^k, least squares over the sizes measured): "
+                 + "; ".join(f"{name}: k = {k:.2f}" for name, k in exponents.items() if k is not None) + ".")
+    return "\n".join(lines)
+
+
+def bake_markdown(row):
+    """The table of the largest bake: seconds per stage, error against ``exact``, peak memory, goal."""
+    if row is None or "stages" not in row:
+        return f"(the bake did not finish: {row['status'] if row else 'not run'})"
+    s = row["stages"]
+    lines = [f"Mesh: {row['label']} ({row['vertices']:,} vertices, {row['triangles']:,} triangles; {row['how']}).",
+             "", "| stage | wall time (s) |", "|---|---:|",
+             f"| load (PLY) | {s['load']:.1f} |", f"| clean | {s['clean']:.1f} |"]
+    lines += [f"| shade: {name} | {s[name]:.1f} |" for name in SOLVER_STAGES.values()]
+    lines += [f"| shade: other (geometry, set-up, colours) | {stage_seconds(row, 'other (shade)'):.1f} |",
+              f"| write (baked PLY) | {s['write']:.1f} |",
+              f"| **bake, load to write** | **{row['bake_seconds']:.1f}** |", "",
+              "| measure | value | goal |", "|---|---:|---|"]
+    met = lambda ok: "met" if ok else "missed"  # noqa: E731
+    judged = row["label"] == "1M"  # the goals are for the 1M-vertex bake
+    lines.append(f"| bake time | {row['bake_seconds']:.0f} s | ≤ {GOALS['bake_1M']:.0f} s at 1M vertices"
+                 + (f": {met(row['bake_seconds'] <= GOALS['bake_1M'])} |" if judged else " |"))
+    if "error_rms" in row:
+        lines.append(f"| error against `exact` at {row['receivers']} random vertices: rel. RMS | {100 * row['error_rms']:.2f} % "
+                     f"| ≤ 1 %: {met(row['error_rms'] <= GOAL_ERROR)} |")
+        lines.append(f"| worst lit-vertex error | {100 * row['error_worst']:.1f} % | |")
+    lines.append(f"| peak RSS of the bake (VmHWM after writing) | {row['peak_rss_bake_mb'] / 1024:.2f} GB | |")
+    lines.append(f"| peak RSS of the child (exact included, ru_maxrss) | {row['ru_maxrss_mb'] / 1024:.2f} GB | |")
+    if "warm_seconds" in row:
+        lines.append(f"| a later shade of the same scene (caches warm) | {row['warm_seconds']:.0f} s | |")
+    lines.append(f"| load average (1 min) at the start / end of the bake | {row['load_average_start'][0]:.1f} / "
+                 f"{row['load_average_bake'][0]:.1f} | |")
+    return "\n".join(lines)
+
+
+def run(labels, repeats, time_limit, memory_limit_gb):
+    """Build the meshes, bake each in a child process; the rows (one per size)."""
+    folder = Path(tempfile.mkdtemp(prefix="translucency-scaling-"))
+    rows = []
+    try:
+        igea, _ = prepare("igea")
+        for label in labels:
+            start = time.perf_counter()
+            points, triangles, how = build_mesh(label, igea)
+            path = folder / f"igea_{label}.ply"
+            write_mesh(path, points, triangles)
+            print(f"{label}: {len(points)} vertices ({how}) built in {time.perf_counter() - start:.1f} s; baking")
+            record = run_child(path, folder / f"igea_{label}.json", repeats, time_limit, memory_limit_gb)
+            record.update(label=label, how=how, built_vertices=len(points))
+            rows.append(record)
+            print(f"{label}: {record['status']}; bake {record.get('bake_seconds', float('nan')):.1f} s, "
+                  f"error {record.get('error_rms', float('nan')):.2e}, peak RSS {record['ru_maxrss_mb']:.0f} MB")
+            for stale in folder.glob(f"igea_{label}*.ply"):
+                stale.unlink()
+    finally:
+        shutil.rmtree(folder, ignore_errors=True)
+    return rows
+
+
+def main(argv=None):
+    """Command line: the scaling run (or, with ``--child``, one bake in this process)."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="10k and 30k only, into results/tmp")
+    parser.add_argument("--sizes", nargs="+", choices=SIZES, help="sizes to run (default: all)")
+    parser.add_argument("--repeats", type=int, default=3, help="warm shades per size up to 200k vertices (median)")
+    parser.add_argument("--time-limit", type=float, default=900.0, help="seconds a bake may take before it is stopped")
+    parser.add_argument("--memory-limit", type=float, default=16.0, help="GB of resident memory a bake may use")
+    parser.add_argument("--child", nargs=2, metavar=("MESH", "JSON"), help=argparse.SUPPRESS)
+    args = parser.parse_args(argv)
+    if args.child:
+        child(args.child[0], args.child[1], args.repeats)
+        return 0
+    if not (MESHES / SCANS["igea"][0]).exists():
+        print(f"the shared Igea ({SCANS['igea'][0]} in ../shared/meshes) is not present; nothing to benchmark")
+        return 0
+    labels = args.sizes or (QUICK_SIZES if args.quick else SIZES)
+    info = machine_info()
+    start = time.perf_counter()
+    rows = run(labels, args.repeats, args.time_limit, args.memory_limit)
+    info["seconds_total"] = time.perf_counter() - start
+    done = [r for r in rows if "vertices" in r]
+    exponents = {name: fit_exponent([r["vertices"] for r in done], seconds)
+                 for name, seconds in curves(done).items()}
+    exponents["peak RSS of the bake"] = fit_exponent([r["vertices"] for r in done],
+                                                     [r.get("peak_rss_bake_mb", np.nan) for r in done])
+    out = output_dir(args.quick)
+    largest = rows[-1] if rows else None
+    write_results(out, "scaling", {"info": info, "receivers": RECEIVERS, "goals": GOALS, "exponents": exponents,
+                                   "rows": rows}, markdown(rows, exponents))
+    (out / "bake.md").write_text(bake_markdown(largest) + "\n")
+    if done:
+        plot(rows, exponents, out / "scaling.png")
+    print(markdown(rows, exponents))
+    print(bake_markdown(largest))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
