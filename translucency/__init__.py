@@ -42,6 +42,14 @@ _LAZY = {
     "shade": "translucency.app.pipeline",
     "Scene": "translucency.app.pipeline",
     "load_default_scan": "translucency.app.pipeline",
+    # many scans to baked PLY files
+    "bake": "translucency.app.bake",
+    "display_colors": "translucency.app.pipeline",
+    # showing and comparing
+    "Viewer": "translucency.app.viewer",
+    "compare": "translucency.app.compare",
+    "Comparison": "translucency.app.compare",
+    "render_colors": "translucency.app.render",
     # errors
     "TranslucencyError": "translucency.errors",
     "InvalidParameterError": "translucency.errors",

@@ -46,3 +46,9 @@ def test_bad_light_direction_is_one_sentence(text):
 def test_bad_solver_settings_are_one_sentence(flag, value, words):
     with pytest.raises(TranslucencyError, match=words):
         options.solver_settings(parse(flag, value))
+
+
+def test_the_parser_offers_exactly_the_solvers_choices():
+    from translucency.scatter import solve
+
+    assert options.MODELS == solve.MODELS and options.METHODS == solve.METHODS

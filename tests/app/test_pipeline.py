@@ -50,3 +50,16 @@ def test_per_direction_summation_is_the_sum_of_single_light_solves():
     # aggregating both lights per vertex approximates only the real-source term: close, not equal
     difference = np.linalg.norm(aggregated.B - single) / np.linalg.norm(single)
     assert 0 < difference < 0.05
+
+
+def test_a_repeated_proxy_resolution_decimates_once(monkeypatch):
+    from translucency.io import decimate
+
+    calls = []
+    real = decimate.decimate_mesh
+    monkeypatch.setattr(decimate, "decimate_mesh", lambda *a, **k: calls.append(k) or real(*a, **k))
+    scene = Scene(sphere(level=5, radius=20.0))  # 0.6 mm edges
+    first = scene.shade("marble", DirectionalLight((0, 0, 1), 1.0), method="exact", resolution=3.0)
+    moved = scene.shade("ketchup", DirectionalLight((1, 0, 0), 1.0), method="exact", resolution=3.0)
+    assert len(calls) == 1 and "geometry" in moved.stats["reused"]
+    assert moved.stats["solver_vertices"] == first.stats["solver_vertices"] < scene.mesh.n_points / 4

@@ -27,7 +27,29 @@ def binary_ply(points, triangles, *, vertex_count=None, face_count=None, index_t
     return header + np.asarray(points, "<f4").tobytes() + faces.tobytes()
 
 
+def binary_stl(points, triangles, *, count=None):
+    """Bytes of a binary STL (80-byte header, triangle count, 50 bytes per facet; the count can lie)."""
+    facets = np.zeros(len(triangles), dtype=[("normal", "<f4", (3,)), ("corners", "<f4", (3, 3)), ("attribute", "<u2")])
+    facets["corners"] = np.asarray(points)[triangles]
+    return b"binary stl".ljust(80) + struct.pack("<I", len(triangles) if count is None else count) + facets.tobytes()
+
+
+def ascii_stl(points, triangles):
+    """Bytes of an ASCII STL."""
+    corners = np.asarray(points)[triangles]
+    facets = "".join("facet normal 0 0 0\nouter loop\n" + "".join(f"vertex {x} {y} {z}\n" for x, y, z in c)
+                     + "endloop\nendfacet\n" for c in corners)
+    return f"solid s\n{facets}endsolid s\n".encode()
+
+
+def obj_text(points, triangles):
+    """Bytes of a Wavefront OBJ (1-based indices)."""
+    return ("".join(f"v {x} {y} {z}\n" for x, y, z in points)
+            + "".join(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in triangles)).encode()
+
+
 POINTS, TRIANGLES = icosphere(1, 20.0)
+NAN_POINTS = np.where(np.arange(len(POINTS))[:, None] == 5, np.nan, POINTS)
 
 
 def check_sentence(info, name):
@@ -85,6 +107,30 @@ CORPUS = [
     ("garbage.vtp", b"\x00\x01\x02garbage" * 10, "VTK XML PolyData"),
     ("mesh.abc", b"v 0 0 0\n", "unknown mesh format '.abc'"),
     ("noextension", b"ply\nformat ascii 1.0\n", "unknown mesh format"),
+    # a list length beyond its count type (plyfile raises OverflowError; found by tests/io/test_fuzz_ply.py)
+    ("list_overflow.ply", (
+        b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+        b"element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n300 0 1 2\n"), "corrupt"),
+    ("ply_index_overflow.ply", binary_ply(POINTS, np.where(TRIANGLES == 7, 2**31 - 1, TRIANGLES)), "refers to vertex 2147483647"),
+    ("ascii_nan.ply", b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+     b"element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\nnan 0 0\n0 1 0\n3 0 1 2\n", "NaN or infinite"),
+    # cut at a record boundary: VTK alone would read the 40 whole triangles and say nothing
+    ("truncated_half.stl", binary_stl(POINTS, TRIANGLES)[: 84 + 25 * len(TRIANGLES)], "announces 80 triangles"),
+    ("count_too_large.stl", binary_stl(POINTS, TRIANGLES, count=10**6), "truncated"),
+    ("truncated_header.stl", binary_stl(POINTS, TRIANGLES)[:50], "not a readable STL"),
+    ("truncated_ascii_half.stl", ascii_stl(POINTS, TRIANGLES)[:1000], "not a readable STL"),
+    ("nan_binary.stl", binary_stl(NAN_POINTS, TRIANGLES), "STL"),
+    ("nan_ascii.stl", ascii_stl(NAN_POINTS, TRIANGLES), "NaN or infinite"),
+    ("empty.stl", b"", "is empty"),
+    ("truncated.obj", obj_text(POINTS, TRIANGLES)[:700], "fewer than 3 coordinates"),  # cut in a vertex line
+    ("out_of_range.obj", b"v 0 0 0\nv 10 0 0\nv 0 10 0\nf 1 2 99\n", "refers to vertex 98"),
+    ("nan.obj", obj_text(NAN_POINTS, TRIANGLES), "NaN or infinite"),
+    ("points_only.obj", b"v 0 0 0\nv 10 0 0\nv 0 10 0\n", "point cloud"),
+    ("words.obj", b"v 0 0 0\nv 10 0 zero\nv 0 10 0\nf 1 2 3\n", "not numbers"),
+    ("random_bytes.obj", bytes(np.random.default_rng(0).integers(128, 256, 300, dtype=np.uint8)), "no vertex"),
+    ("plybytes.obj", binary_ply(POINTS, TRIANGLES), "but PLY data; rename it to plybytes.ply"),
+    ("plybytes.xyz", binary_ply(POINTS, TRIANGLES), "but PLY data; rename it to plybytes.ply"),
+    ("points.xyz", b"0 0 0\n10 0 0\n0 10 0\n", "point cloud"),
 ]
 
 
@@ -119,6 +165,14 @@ def test_missing_file(tmp_path):
     with pytest.raises(MeshError, match="does not exist") as info:
         load_mesh(tmp_path / "nothing.ply")
     check_sentence(info, "nothing.ply")
+
+
+def test_dangling_symlink(tmp_path):
+    link = tmp_path / "scan.ply"
+    link.symlink_to(tmp_path / "moved_away.ply")
+    with pytest.raises(MeshError, match="does not exist") as info:
+        load_mesh(link)
+    check_sentence(info, "scan.ply")
 
 
 def test_directory_instead_of_file(tmp_path):

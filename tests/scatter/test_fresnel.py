@@ -118,7 +118,7 @@ def test_refraction_obeys_snell(w_i, n, eta):
     assert np.linalg.norm(w12) == pytest.approx(1.0, abs=1e-12)
     cos_i = np.dot(w_i, n)
     cos_t = -np.dot(w12, n)
-    assert cos_t > 0  # into the medium
+    assert cos_t > -1e-12  # into the medium (grazing light at eta = 1 stays along the surface, to rounding)
     sin_i = np.linalg.norm(np.cross(w_i, n))
     sin_t = np.linalg.norm(np.cross(w12, n))
     assert sin_t == pytest.approx(sin_i / eta, abs=1e-9)

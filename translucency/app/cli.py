@@ -1,12 +1,17 @@
 """The ``translucency`` command line: a thin layer over the Python API.
 
-Subcommands (more arrive with the solver and the viewer):
+Subcommands:
 
 * ``translucency materials`` -- the material catalogue with coefficients and length scales;
 * ``translucency report`` -- versions of the stack and whether off-screen rendering works;
+* ``translucency inspect`` -- a scan's size and defects, repaired;
+* ``translucency bake`` -- scans to baked PLY files (:mod:`translucency.app.bake`);
+* ``translucency view`` -- the interactive viewer, or an off-screen screenshot (:mod:`translucency.app.viewer`);
+* ``translucency compare`` -- materials and models side by side (:mod:`translucency.app.compare`);
 * ``translucency`` with no subcommand -- the main job on the embedded default scan.
 
-Errors the user can cause are printed as one sentence on stderr with exit code 2; no traceback.
+Errors the user can cause are printed as one sentence on stderr with exit code 2 (``bake``: 1 when
+some files failed); no traceback.
 """
 
 from __future__ import annotations
@@ -78,7 +83,10 @@ def cmd_inspect(args) -> int:
 
     from ..io.clean import clean_mesh
     from ..io.load import load_mesh
+    from ..io.save import check_output_path, save_mesh
 
+    if args.output:
+        check_output_path(args.output, args.mesh)  # before any work: a bad output path fails at once
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         mesh = load_mesh(args.mesh, unit=args.unit)
@@ -90,10 +98,105 @@ def cmd_inspect(args) -> int:
     cleaned, report = clean_mesh(mesh, max_hole_edges=args.max_hole_edges)
     print(report)
     if args.output:
-        if not args.output.lower().endswith((".ply", ".vtp", ".vtk", ".stl", ".obj")):
-            raise TranslucencyError(f"cannot write {args.output}: use a .ply, .vtp, .vtk, .stl or .obj name.")
-        cleaned.to_pyvista().save(args.output)
+        save_mesh(args.output, cleaned)
         print(f"wrote the repaired mesh to {args.output}")
+    return 0
+
+
+def cmd_bake(args) -> int:
+    """Bake each MESH (or the embedded default scan) to a PLY and print a summary (see :mod:`translucency.app.bake`)."""
+    import time
+
+    from .bake import BakeSettings, ConsoleProgress, bake_files, exit_code, format_summary
+    from .options import lights_from_args, solver_settings
+
+    settings = BakeSettings(lights=lights_from_args(args), unit=args.unit, shadows=not args.no_shadows,
+                            **solver_settings(args))
+    start = time.perf_counter()
+    records = bake_files(args.meshes, args.output, settings, workers=args.workers, scheduler=args.scheduler,
+                         progress=ConsoleProgress())
+    print(format_summary(records, time.perf_counter() - start))
+    return exit_code(records)
+
+
+def _pixels(text: str, option: str) -> tuple[int, int]:
+    """``"WxH"`` as two pixel counts (16 to 8192), or a one-sentence error naming ``option``."""
+    try:
+        width, height = (int(part) for part in str(text).lower().split("x"))
+    except ValueError:
+        width = height = 0
+    if not (16 <= width <= 8192 and 16 <= height <= 8192):
+        raise TranslucencyError(f"{option} must be WIDTHxHEIGHT in pixels, each 16 to 8192 (e.g. 1024x768), got {text!r}.")
+    return width, height
+
+
+def _warn(message: str) -> None:
+    print(f"translucency: warning: {message}", file=sys.stderr)
+
+
+def cmd_view(args) -> int:
+    """Open the viewer on a scan; with ``--screenshot`` render its first picture off-screen and exit."""
+    import os
+    from pathlib import Path
+
+    from .options import lights_from_args, load_scan, solver_settings
+
+    window_size = _pixels(args.window_size, "--window-size")
+    if args.screenshot is not None:
+        screenshot = Path(args.screenshot)
+        if screenshot.suffix.lower() != ".png":
+            raise TranslucencyError(f"--screenshot {args.screenshot} is not a .png file name; pass e.g. view.png.")
+        if not screenshot.parent.is_dir():
+            raise TranslucencyError(f"the folder {screenshot.parent} for --screenshot does not exist; create it first.")
+    elif sys.platform.startswith("linux") and not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
+        raise TranslucencyError("there is no display to open the viewer on; pass --screenshot FILE.png to render "
+                                "off-screen, or run it under xvfb-run or on a desktop.")
+    if not (0 < args.roughness <= 1):
+        raise TranslucencyError(f"--roughness must be a GGX alpha in (0, 1], got {args.roughness!r}.")
+    interactive = args.resolution == "interactive"
+    settings = solver_settings(argparse.Namespace(**{**vars(args), "resolution": "full"}) if interactive else args)
+    if interactive:
+        settings["resolution"] = "interactive"
+    lights = lights_from_args(args)
+    mesh, _, name = load_scan(args.mesh, args.unit, warn=_warn)
+    from .viewer import Viewer
+
+    viewer = Viewer(mesh, lights=lights, shadows=not args.no_shadows, view_dependent=args.view_dependent,
+                    specular=args.specular, roughness=args.roughness, window_size=window_size,
+                    off_screen=args.screenshot is not None, widgets=args.screenshot is None, output=args.output,
+                    name=Path(name).stem, **settings)
+    print(viewer.status)
+    if args.screenshot is not None:
+        viewer.screenshot(args.screenshot)
+        viewer.close()
+        print(f"wrote {args.screenshot}")
+    else:
+        viewer.show()
+    return 0
+
+
+def cmd_compare(args) -> int:
+    """Render and measure a scan in several materials and models into a folder."""
+    from .compare import compare, validate_choices
+    from .options import lights_from_args, load_scan, solver_settings
+
+    settings = solver_settings(args)
+    settings.pop("material")
+    settings.pop("model")
+    materials, models, _ = validate_choices(args.materials if args.materials is not None else args.material,
+                                            args.models if args.models is not None else args.model)
+    cell_size = _pixels(args.cell_size, "--cell-size")
+    lights = lights_from_args(args)
+    mesh, _, name = load_scan(args.mesh, args.unit, warn=_warn)
+    print(f"{name}: {mesh.n_points} vertices, {mesh.extent:.4g} mm across")
+    result = compare(mesh, materials, models, lights, output=args.output, shadows=not args.no_shadows,
+                     cell_size=cell_size, progress=lambda line: print(f"  solved {line}"), **settings)
+    print(f"common exposure {result.exposure:.4g}; mean radiance toward the normal over lit vertices, W/(m^2 sr) per W/m^2:")
+    for material in result.materials:
+        for model in result.models:
+            r, g, b = result.mean(material, model)
+            print(f"  {material:<24} {model:<12} R {r:.4g}  G {g:.4g}  B {b:.4g}")
+    print("wrote " + ", ".join(str(path) for path in result.files.values()))
     return 0
 
 
@@ -102,6 +205,41 @@ def cmd_main_job(args) -> int:
     from .default_job import run_default_job
 
     return run_default_job()
+
+
+def _add_view_and_compare_parsers(sub) -> None:
+    """The ``view`` and ``compare`` subcommands: a scan, its lights and the solver's options, and their own."""
+    from .options import add_light_options, add_scan_options, add_solver_options
+
+    def scene_parser(name, summary, description):
+        parser = sub.add_parser(name, help=summary, description=description)
+        for add_options in (add_scan_options, add_light_options, add_solver_options):
+            add_options(parser)
+        return parser
+
+    p = scene_parser("view", "show a scan as a translucent object, with controls that solve again",
+                     "Open the interactive viewer (sliders for light, material, model, scale and exposure; key s "
+                     "saves a screenshot and the bake, Return solves on every vertex). Here --resolution defaults "
+                     "to 'interactive': a proxy of about 2,500 vertices.")
+    p.set_defaults(resolution="interactive")
+    p.add_argument("--screenshot", metavar="FILE.png", help="render the first picture off-screen to FILE.png and exit")
+    p.add_argument("--view-dependent", action="store_true", help="show T21(eta, n.w_o) B toward the camera")
+    p.add_argument("--specular", action="store_true", help="add the boundary's specular highlight (GGX)")
+    p.add_argument("--roughness", type=float, default=0.25, help="GGX alpha of the highlight (default 0.25)")
+    p.add_argument("--window-size", default="1024x768", metavar="WxH", help="window size in pixels (default 1024x768)")
+    p.add_argument("-o", "--output", default=".", help="folder for what key s saves (default: here)")
+    p.set_defaults(func=cmd_view)
+
+    p = scene_parser("compare", "one scan in several materials and models: image grid, differences, statistics",
+                     "Solve a scan in several materials and models with the same view and light; write grid.png "
+                     "(common exposure), differences.png (models against the first), statistics.csv/.json and "
+                     "profile.png into the output folder.")
+    p.add_argument("--materials", metavar="A,B,C", help="catalogue names, comma-separated (default: --material)")
+    p.add_argument("--models", metavar="M1,M2", help="models, comma-separated; the first is the reference (default: --model)")
+    p.add_argument("--cell-size", default="480x480", metavar="WxH", help="pixels of one grid cell (default 480x480)")
+    p.add_argument("-o", "--output", default="translucency-output/compare", help="output folder (created; default "
+                                                                                 "translucency-output/compare)")
+    p.set_defaults(func=cmd_compare)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -126,6 +264,22 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("-o", "--output", help="save the repaired mesh (any format PyVista writes)")
     p.set_defaults(func=cmd_inspect)
 
+    from .options import add_light_options, add_scan_options, add_solver_options
+
+    p = sub.add_parser("bake", help="bake scans to PLY files of translucent radiance",
+                       description="Bake each MESH to <stem>_<material>.ply. Exit code 0: every file baked; "
+                                   "1: some files failed (see the summary); 2: nothing could start.")
+    add_scan_options(p, several=True)
+    add_light_options(p)
+    add_solver_options(p)
+    p.add_argument("-o", "--output",
+                   help="a .ply file for one mesh, else a folder, created when missing (default translucency-output)")
+    p.add_argument("--workers", type=int, default=1, metavar="N", help="bake N files at a time in local processes")
+    p.add_argument("--scheduler", metavar="ADDRESS",
+                   help="bake on a Dask cluster (tcp://host:8786); its workers must reach the meshes and the output folder")
+    p.set_defaults(func=cmd_bake)
+
+    _add_view_and_compare_parsers(sub)
     parser.set_defaults(func=cmd_main_job)
     return parser
 

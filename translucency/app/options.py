@@ -20,7 +20,11 @@ import warnings
 import numpy as np
 
 from ..errors import InvalidParameterError
-from ..scatter.solve import METHODS, MODELS
+
+# The solver's choices, spelled here so that building the parser does not import numba
+# (tests/app/test_options.py checks them against translucency.scatter.solve).
+MODELS = ("directional", "standard", "better")
+METHODS = ("exact", "cutoff", "tree")
 
 
 def add_scan_options(parser: argparse.ArgumentParser, *, several: bool = False) -> None:

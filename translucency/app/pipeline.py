@@ -17,6 +17,7 @@ import numpy as np
 
 from .. import __version__
 from ..errors import TranslucencyError
+from ..io.geometry import mean_edge_length
 
 #: The embedded default scan: the watertight Stanford bunny inside the pymeshlab wheel, stored
 #: normalised to a unit diagonal; it is scaled to this width (mm), the size of the original figurine.
@@ -145,15 +146,19 @@ class Scene:
         self._solver_meshes: dict = {}
         self._incident: dict = {}
         self._normals = None
+        self._mean_edge = None
 
     def solver_mesh(self, medium, resolution="full"):
         """``(solver mesh, Decimation or None, edge or None, SurfaceGeometry, reused)`` for a resolution."""
         from ..scatter.solve import SurfaceGeometry
 
-        mesh, decimation, edge = _solver_mesh(self.mesh, medium, resolution)
-        key = None if decimation is None else round(edge, 9)
+        if self._mean_edge is None:
+            self._mean_edge = mean_edge_length(self.mesh.points, self.mesh.triangles)
+        edge = _proxy_edge(self._mean_edge, medium, resolution)
+        key = None if edge is None else round(edge, 9)  # decided before decimating: a cache hit costs nothing
         if key in self._solver_meshes:
             return (*self._solver_meshes[key], True)
+        mesh, decimation, edge = _solver_mesh(self.mesh, edge)
         normals = mesh.vertex_normals()
         geometry = SurfaceGeometry(mesh.points, mesh.triangles, normals)
         self._solver_meshes[key] = (mesh, decimation, edge, geometry)
@@ -173,6 +178,13 @@ class Scene:
             self._incident.pop(next(iter(self._incident)))
         self._incident[key] = light
         return light, False
+
+    def incident_on_mesh(self, medium, lights, per_direction=False):
+        """Incident light at every vertex of the full mesh (memoised as :meth:`incident`); ``(light, reused)``."""
+        from ..scatter.lights import as_light_list
+
+        _, _, _, geometry, _ = self.solver_mesh(medium, "full")
+        return self.incident(geometry, self.mesh.triangles, as_light_list(lights), medium.eta, per_direction)
 
     def shade(self, material="marble", lights=None, *, model="directional", method="tree", tol=1e-2,
               resolution="full", exposure=None, per_direction=False, progress=None) -> "ShadeResult":
@@ -290,28 +302,30 @@ def shade(mesh, material="marble", lights=None, *, model="directional", method="
                                               progress=progress)
 
 
-def _solver_mesh(mesh, medium, resolution):
-    """The mesh the solver runs on: ``(mesh or proxy, Decimation or None, proxy edge length or None)``."""
+def _proxy_edge(mean_edge, medium, resolution):
+    """Proxy edge length (mm) for a resolution on a mesh of ``mean_edge`` (mm), or None for the full mesh."""
     from ..errors import InvalidParameterError
-    from ..io.decimate import decimate_mesh
-    from ..io.geometry import mean_edge_length
 
     if resolution == "full":
-        return mesh, None, None
+        return None
     if resolution == "auto":
         edge = proxy_edge_length(medium)
-        if edge < PROXY_MIN_RATIO * mean_edge_length(mesh.points, mesh.triangles):
-            return mesh, None, None
-    else:
-        try:
-            edge = float(resolution)
-        except (TypeError, ValueError):
-            edge = float("nan")
-        if not (np.isfinite(edge) and edge > 0):
-            raise InvalidParameterError(
-                f"resolution must be 'auto', 'full' or a proxy edge length in mm, got {resolution!r}.")
-        if edge <= mean_edge_length(mesh.points, mesh.triangles):
-            return mesh, None, None
+        return edge if edge >= PROXY_MIN_RATIO * mean_edge else None
+    try:
+        edge = float(resolution)
+    except (TypeError, ValueError):
+        edge = float("nan")
+    if not (np.isfinite(edge) and edge > 0):
+        raise InvalidParameterError(f"resolution must be 'auto', 'full' or a proxy edge length in mm, got {resolution!r}.")
+    return edge if edge > mean_edge else None
+
+
+def _solver_mesh(mesh, edge):
+    """The mesh the solver runs on: ``(mesh or proxy, Decimation or None, proxy edge length or None)``."""
+    from ..io.decimate import decimate_mesh
+
+    if edge is None:
+        return mesh, None, None
     decimation = decimate_mesh(mesh, target_edge_length=edge)
     if decimation.method == "none":
         return mesh, None, None

@@ -35,26 +35,91 @@ def offscreen_check() -> tuple[bool, str]:
     return True, f"{window}, {image.shape[1]}x{image.shape[0]} image"
 
 
-def render_colors(mesh, colors_rgb8, path=None, *, window_size=(800, 800), camera_direction=(0.6, 0.35, 1.0)):
+#: Default camera: looking at the mesh's centre from this direction (the bunny's front, a little from above).
+DEFAULT_CAMERA_DIRECTION = (0.6, 0.35, 1.0)
+#: Default view-up vector of the camera (the bunny's +y is up).
+DEFAULT_UP = (0.0, 1.0, 0.0)
+#: Camera distance from the centre, in bounding-box diagonals.
+CAMERA_DISTANCE = 1.7
+
+
+def camera_position(center, diagonal, direction=DEFAULT_CAMERA_DIRECTION, up=DEFAULT_UP) -> list:
+    """PyVista camera position looking at ``center`` from ``direction``.
+
+    Parameters
+    ----------
+    center : sequence of 3 float
+        Focal point, mm.
+    diagonal : float
+        Size of the object (bounding-box diagonal), mm; the eye is :data:`CAMERA_DISTANCE` of it away.
+    direction : sequence of 3 float
+        From the focal point toward the eye (any non-zero length).
+    up : sequence of 3 float
+        View-up vector.
+
+    Returns
+    -------
+    list
+        ``[eye, focal point, view up]``, as ``plotter.camera_position`` takes it.
+    """
+    center = np.asarray(center, dtype=float)
+    direction = np.asarray(direction, dtype=float)
+    direction = direction / np.linalg.norm(direction)
+    return [tuple(center + direction * CAMERA_DISTANCE * float(diagonal)), tuple(center), tuple(float(u) for u in up)]
+
+
+def new_plotter(window_size, *, off_screen=True, **layout):
+    """A PyVista plotter with the package's rendering set-up (black background, EGL without a display).
+
+    ``layout`` goes to ``pyvista.Plotter`` (``shape``, ``row_weights``, ``groups``, ...).
+    """
+    configure_offscreen()
+    import pyvista
+
+    plotter = pyvista.Plotter(off_screen=off_screen, window_size=list(window_size), **layout)
+    plotter.set_background("black")
+    return plotter
+
+
+def add_colored_mesh(plotter, mesh, colors_rgb8):
+    """Add a mesh (mm) showing per-vertex display colours as they are (no lighting); returns the PolyData.
+
+    The colours are the array ``"colors"`` of the returned PolyData: change it in place and call
+    ``plotter.render()`` to show new colours.
+    """
+    poly = mesh.to_pyvista()
+    poly.point_data["colors"] = np.asarray(colors_rgb8, dtype=np.uint8)
+    plotter.add_mesh(poly, scalars="colors", rgb=True, lighting=False)
+    return poly
+
+
+def render_colors(mesh, colors_rgb8, path=None, *, window_size=(800, 800), camera_direction=DEFAULT_CAMERA_DIRECTION,
+                  camera=None):
     """Render a mesh (mm) with per-vertex display colours off-screen; save a PNG when ``path`` is given.
+
+    Parameters
+    ----------
+    mesh : TriangleMesh
+        The mesh, mm.
+    colors_rgb8 : (n, 3) uint8
+        Display colours per vertex (display transform applied).
+    path : path-like, optional
+        PNG to write.
+    window_size : (int, int)
+        Image width and height, pixels.
+    camera_direction : sequence of 3 float
+        From the mesh's centre toward the eye (used when ``camera`` is None; see :func:`camera_position`).
+    camera : list, optional
+        An explicit PyVista camera position ``[eye, focal point, view up]`` (mm).
 
     Returns
     -------
     ndarray
         The image, (height, width, 3) uint8.
     """
-    configure_offscreen()
-    import pyvista
-
-    poly = mesh.to_pyvista()
-    poly.point_data["colors"] = np.asarray(colors_rgb8, dtype=np.uint8)
-    plotter = pyvista.Plotter(off_screen=True, window_size=list(window_size))
-    plotter.set_background("black")
-    plotter.add_mesh(poly, scalars="colors", rgb=True, lighting=False, smooth_shading=True)
-    centre = np.asarray(poly.center)
-    direction = np.asarray(camera_direction, dtype=float)
-    direction /= np.linalg.norm(direction)
-    plotter.camera_position = [tuple(centre + direction * 1.7 * poly.length), tuple(centre), (0.0, 1.0, 0.0)]
+    plotter = new_plotter(window_size)
+    poly = add_colored_mesh(plotter, mesh, colors_rgb8)
+    plotter.camera_position = camera if camera is not None else camera_position(poly.center, poly.length, camera_direction)
     image = plotter.screenshot(str(path) if path is not None else None, return_img=True)
     plotter.close()
     return image

@@ -17,6 +17,7 @@ clean                scan repair with a report of what changed
 proximity            exact closest points on a triangle mesh
 decimate             proxy meshes and the mapping of proxy values back to the full mesh
 ply                  baked PLY output and input, atomic, with every setting in the header
+save                 any mesh to a mesh file, atomic, never over its source
 ==================== ==================================================================
 """
 
@@ -67,6 +68,10 @@ _LAZY = {
     "write_baked_ply": "translucency.io.ply",
     "read_baked_ply": "translucency.io.ply",
     "REQUIRED_METADATA": "translucency.io.ply",
+    # any mesh file
+    "save_mesh": "translucency.io.save",
+    "check_output_path": "translucency.io.save",
+    "WRITABLE_FORMATS": "translucency.io.save",
 }
 
 __all__ = sorted(_LAZY)

@@ -413,7 +413,8 @@ def _face_list_property(header: _PlyHeader):
 
 def _read_ply_with_plyfile(path: Path, header: _PlyHeader, plyfile):
     face = _face_list_property(header)
-    errors = (plyfile.PlyParseError, ValueError, TypeError, IndexError, EOFError, UnicodeDecodeError, MemoryError)
+    errors = (plyfile.PlyParseError, ValueError, TypeError, IndexError, EOFError, UnicodeDecodeError, MemoryError,
+              OverflowError)  # OverflowError: an ascii list length beyond its count type (300 for uchar)
     ply = None
     if face is not None and header.format != "ascii":
         for corners in (3, 4):  # fast paths: all triangles or all quads, read as one record array
@@ -643,11 +644,35 @@ def _read_obj(path: Path):
 # --------------------------------------------------------------------------------------------------
 # VTK readers (STL, VTK, VTP, ...)
 # --------------------------------------------------------------------------------------------------
+def _check_binary_stl(path: Path) -> None:
+    """Refuse a binary STL shorter than its header's triangle count says.
+
+    VTK's reader reads whatever whole 50-byte records follow the header, so a file cut at a record
+    boundary would silently lose triangles. ASCII STL (text starting with ``solid``) is left to VTK.
+    """
+    with open(path, "rb") as stream:
+        head = stream.read(512)
+        stream.seek(0, os.SEEK_END)
+        size = stream.tell()
+    text = head.lstrip()
+    if size < 84 or (text.startswith(b"solid") and all(32 <= c < 127 or c in b"\t\r\n" for c in text)):
+        return
+    count = int.from_bytes(head[80:84], "little")
+    needed = 84 + 50 * count
+    if size < needed:
+        raise MeshError(
+            f"{path.name} is truncated: its header announces {count} triangles, which need {needed} bytes, "
+            f"but the file has {size}; download or export the file again."
+        )
+
+
 def _read_with_vtk(path: Path, suffix: str):
     import importlib
 
     import pyvista
 
+    if suffix == ".stl":
+        _check_binary_stl(path)
     module, class_name, description = _VTK_FORMATS[suffix]
     reader = getattr(importlib.import_module(module), class_name)()
     reader.SetFileName(str(path))

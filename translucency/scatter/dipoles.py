@@ -28,7 +28,8 @@ R_d, R    radial exitance profiles per unit flux                             1/m
 Numerical conventions (spec "Decisions" and 1.8): when ``r`` is ~0 or ``n_i`` is parallel to ``x``
 the modified tangent plane is undefined and ``n_i* = n_i`` is used; ``mu0 > 0`` is frontlit and
 ``mu0 <= 0`` backlit; the result is clamped at 0 after subtracting the virtual source; exponentials
-that underflow give 0, never NaN; ``d_r`` is floored at ``D_R_FLOOR * D`` (the only other clamp).
+that underflow give 0, never NaN; ``d_r`` and ``d_v`` are floored at ``D_R_FLOOR * D`` (the only other
+clamp).
 """
 
 from __future__ import annotations
@@ -64,6 +65,9 @@ PARALLEL_TOLERANCE = 1e-12
 #: the exit point coincides with the entry point *and* the refracted ray grazes the exit surface
 #: (``mu0 -> 0+``, possible at eta = 1 or on curved geometry), where the model is singular; the floor
 #: keeps the value finite and never changes it elsewhere (``d_r >= D mu0`` at r = 0).
+#: The virtual-source distance ``d_v`` has the same floor: with the fallback ``n_i* = n_i`` (exit point
+#: on the outward normal of the entry point) the virtual source lies on the line of ``x`` and ``d_v``
+#: is 0 at ``x = 2 A d_e n_i``, where the model is singular too; elsewhere ``d_v >= 2 A d_e > 4 D``.
 D_R_FLOOR = 1e-9
 
 
@@ -151,7 +155,7 @@ def directional_dipole(x_i, n_i, w12, x_o, n_o, sigma_a, sigma_s, g, eta):
     w_v = w12 - 2.0 * _dot(w12, n_star)[..., None] * n_star
     x_v = x_i + (2.0 * A * d_e)[..., None] * n_star
     x_from_v = x_o - x_v
-    d_v = np.sqrt(_dot(x_from_v, x_from_v))
+    d_v = np.maximum(np.sqrt(_dot(x_from_v, x_from_v)), D_R_FLOOR * D)  # explicit clamp, only on the n_i axis
 
     # Real source: corrected distance d_r   (spec 1.2, item 5)
     mu0 = -_dot(n_o, w12)

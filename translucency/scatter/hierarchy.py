@@ -25,7 +25,6 @@ import math
 import numba
 import numpy as np
 
-from .kernels import model_pair, source_to_receiver
 
 LEAF_SIZE = 8
 #: theta = THETA_PER_SQRT_TOL * sqrt(tol); calibrated in tests/scatter/test_solve.py so that the measured
@@ -158,27 +157,78 @@ def aggregate(order, start, end, left, right, points, normals, w12, flux):
     return node_flux, weight, out_pos, out_nrm, out_dir
 
 
-@numba.njit(cache=True, parallel=True, fastmath=True)
-def tree_sum(model, order, start, end, left, right, centre, radius, node_flux, node_weight, node_pos, node_nrm, node_dir,
-             points, normals, w12, flux, rcv_points, rcv_normals, params, channel_of, theta):
-    """Far-field sum with the hierarchy: ``B[o, c]``, sources summed one by one and clusters used, per receiver."""
+def source_table(points, normals, w12, flux, node_flux, node_pos, node_nrm, node_dir):
+    """Sources and aggregated clusters as one table for :func:`~translucency.scatter.kernels.indexed_sum`:
+    columns ``0..n-1`` are the sources, ``n + k`` the aggregated source of node ``k``.
+
+    Returns ``table (9, n + nodes)`` (position mm, unit normal, unit w12) and ``weights (C, n + nodes)`` (flux).
+    """
+    table = np.ascontiguousarray(np.concatenate([np.hstack([points, normals, w12]),
+                                                 np.hstack([node_pos, node_nrm, node_dir])]).T)
+    weights = np.ascontiguousarray(np.concatenate([flux, node_flux]).T)
+    return table, weights
+
+
+def tree_sum(model, tree, nodes, points, normals, w12, flux, rcv_points, rcv_normals, params, channel_of, theta,
+             block=4096):
+    """Far-field sum with the hierarchy: ``B[o, c]``, sources summed one by one and clusters used, per receiver.
+
+    A node small seen from the receiver (radius < ``theta`` x distance, receiver outside it) is one
+    aggregated source; otherwise its children are opened, down to the leaves' sources. The lists of
+    sources and clusters are made per block of receivers, then evaluated with
+    :func:`~translucency.scatter.kernels.indexed_sum`.
+
+    Returns
+    -------
+    B : (n_rcv, C) float64
+    direct, clustered : (n_rcv,) int64
+        Source pairs evaluated one by one (lit sources only) and cluster evaluations, per receiver.
+    """
+    from .kernels import channel_lanes, indexed_sum
+
+    node_flux, node_weight, node_pos, node_nrm, node_dir = nodes
+    table, weights = source_table(points, normals, w12, flux, node_flux, node_pos, node_nrm, node_dir)
+    lanes = channel_lanes(params, channel_of, flux.shape[1])
+    lit = flux.sum(axis=1) > 0
     n_rcv = rcv_points.shape[0]
-    n_out = flux.shape[1]
-    B = np.zeros((n_rcv, n_out))
+    B = np.zeros((n_rcv, flux.shape[1]))
     direct = np.zeros(n_rcv, dtype=np.int64)
     clustered = np.zeros(n_rcv, dtype=np.int64)
+    for first in range(0, n_rcv, block):
+        part = slice(first, min(n_rcv, first + block))
+        p, nrm = rcv_points[part], rcv_normals[part]
+        _traverse(tree.order, tree.start, tree.end, tree.left, tree.right, tree.centre, tree.radius, node_weight, lit,
+                  p, theta, np.empty(0, dtype=np.int64), np.zeros(1, dtype=np.int64), direct[part], clustered[part])
+        counts = direct[part] + clustered[part]
+        starts = np.zeros(counts.size, dtype=np.int64)
+        np.cumsum(counts[:-1], out=starts[1:])
+        columns = np.empty(int(counts.sum()), dtype=np.int64)
+        _traverse(tree.order, tree.start, tree.end, tree.left, tree.right, tree.centre, tree.radius, node_weight, lit,
+                  p, theta, columns, starts, direct[part], clustered[part])
+        B[part] = indexed_sum(model, p, nrm, table, weights, starts, counts, columns, np.ones(columns.size), params,
+                              lanes, channel_of)
+    return B, direct, clustered
+
+
+@numba.njit(cache=True, parallel=True)
+def _traverse(order, start, end, left, right, centre, radius, node_weight, lit, rcv_points, theta, columns, starts,
+              direct, clustered):
+    """Walk the tree for every receiver: count the lit sources and clusters it evaluates (``columns`` empty),
+    or write their columns (source ``j`` or ``n + node``) from ``starts[o]`` on."""
+    n_rcv = rcv_points.shape[0]
+    n_src = lit.shape[0]
+    write = columns.shape[0] > 0
     theta2 = theta * theta
     for o in numba.prange(n_rcv):
-        sd = np.empty(params.shape[0])
         stack = np.empty(128, dtype=np.int64)
         top = 1
         stack[0] = 0
         px = rcv_points[o, 0]
         py = rcv_points[o, 1]
         pz = rcv_points[o, 2]
-        nx = rcv_normals[o, 0]
-        ny = rcv_normals[o, 1]
-        nz = rcv_normals[o, 2]
+        n_direct = 0
+        n_cluster = 0
+        at = starts[o] if write else 0
         while top > 0:
             top -= 1
             k = stack[top]
@@ -190,26 +240,21 @@ def tree_sum(model, order, start, end, left, right, centre, radius, node_flux, n
             dist2 = dx * dx + dy * dy + dz * dz
             rk = radius[k]
             if dist2 > rk * rk and rk * rk < theta2 * dist2:
-                model_pair(model, node_pos[k, 0], node_pos[k, 1], node_pos[k, 2], node_nrm[k, 0], node_nrm[k, 1],
-                           node_nrm[k, 2], node_dir[k, 0], node_dir[k, 1], node_dir[k, 2], px, py, pz, nx, ny, nz,
-                           params, sd)
-                for c in range(n_out):
-                    B[o, c] += sd[channel_of[c]] * node_flux[k, c]
-                clustered[o] += 1
+                if write:
+                    columns[at] = n_src + k
+                    at += 1
+                n_cluster += 1
             elif left[k] < 0:
                 for i in range(start[k], end[k]):
                     j = order[i]
-                    total = 0.0
-                    for c in range(n_out):
-                        total += flux[j, c]
-                    if total <= 0.0:
-                        continue
-                    source_to_receiver(model, points, normals, w12, j, px, py, pz, nx, ny, nz, params, sd)
-                    for c in range(n_out):
-                        B[o, c] += sd[channel_of[c]] * flux[j, c]
-                direct[o] += end[k] - start[k]
+                    if lit[j]:
+                        if write:
+                            columns[at] = j
+                            at += 1
+                        n_direct += 1
             else:
                 stack[top] = left[k]
                 stack[top + 1] = right[k]
                 top += 2
-    return B, direct, clustered
+        direct[o] = n_direct
+        clustered[o] = n_cluster

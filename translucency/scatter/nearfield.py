@@ -34,7 +34,7 @@ import numba
 import numpy as np
 from scipy.spatial import cKDTree
 
-from .kernels import MODEL_DIRECTIONAL, directional_three, model_pair, padded_three_rows
+from .kernels import channel_lanes, indexed_sum
 
 # Dunavant (1985) 7-point rule, exact for polynomials of degree 5: barycentric points and weights
 # (weights sum to 1; multiply by the area).
@@ -103,16 +103,14 @@ def _incident_triangles(nv_offsets, near_vertices, vt_offsets, vt_tris, n_triang
     return offsets, ids[:pos].copy()
 
 
-BUFFER_POINTS = 2048  # quadrature points gathered before one vectorised evaluation
-
-
 @numba.njit(cache=True, fastmath=True)
-def _gather(points, normals, w12, phi, tri, b0, b1, b2, weight, buf, weights, count):
-    """Append the point with barycentric ``b`` of triangle ``tri`` to the buffer; returns the new count.
+def _gather(points, normals, w12, phi, tri, b0, b1, b2, weight, buf, weights, column):
+    """Write the point with barycentric ``b`` of triangle ``tri`` to column ``column`` of the buffer.
 
-    ``buf[:, i]`` = position (3), normal (3, renormalised), refracted direction (3, flux-weighted and
-    renormalised); ``weights[c, i] = weight * phi_c(b)`` (phi interpolated linearly). Points where no
-    light enters are skipped.
+    ``buf[:, column]`` = position (3), normal (3, renormalised), refracted direction (3, flux-weighted
+    and renormalised); ``weights[c, column] = weight * phi_c(b)`` (phi interpolated linearly). Where
+    no light enters, the weights are 0 and the point is a harmless copy of the first corner (normal
+    ``n``, direction ``-n``), so that evaluating it gives a finite 0.
     """
     a, b, c = tri[0], tri[1], tri[2]
     n_out = phi.shape[1]
@@ -126,115 +124,105 @@ def _gather(points, normals, w12, phi, tri, b0, b1, b2, weight, buf, weights, co
     wa = b0 * fa
     wb = b1 * fb
     wc = b2 * fc
-    if wa + wb + wc <= 0.0:
-        return count
     v0 = wa * w12[a, 0] + wb * w12[b, 0] + wc * w12[c, 0]
     v1 = wa * w12[a, 1] + wb * w12[b, 1] + wc * w12[c, 1]
     v2 = wa * w12[a, 2] + wb * w12[b, 2] + wc * w12[c, 2]
     vn = math.sqrt(v0 * v0 + v1 * v1 + v2 * v2)
-    if vn <= 0.0:
-        return count
     m0 = b0 * normals[a, 0] + b1 * normals[b, 0] + b2 * normals[c, 0]
     m1 = b0 * normals[a, 1] + b1 * normals[b, 1] + b2 * normals[c, 1]
     m2 = b0 * normals[a, 2] + b1 * normals[b, 2] + b2 * normals[c, 2]
     mn = math.sqrt(m0 * m0 + m1 * m1 + m2 * m2)
     if mn <= 0.0:
-        mn = 1.0
+        m0, m1, m2, mn = 0.0, 0.0, 1.0, 1.0
+    if wa + wb + wc <= 0.0 or vn <= 0.0:  # no light enters here
+        for i in range(3):
+            buf[i, column] = points[a, i]
+        buf[3, column] = m0 / mn
+        buf[4, column] = m1 / mn
+        buf[5, column] = m2 / mn
+        buf[6, column] = -m0 / mn
+        buf[7, column] = -m1 / mn
+        buf[8, column] = -m2 / mn
+        for ch in range(n_out):
+            weights[ch, column] = 0.0
+        return
     for i in range(3):
-        buf[i, count] = b0 * points[a, i] + b1 * points[b, i] + b2 * points[c, i]
-    buf[3, count] = m0 / mn
-    buf[4, count] = m1 / mn
-    buf[5, count] = m2 / mn
-    buf[6, count] = v0 / vn
-    buf[7, count] = v1 / vn
-    buf[8, count] = v2 / vn
+        buf[i, column] = b0 * points[a, i] + b1 * points[b, i] + b2 * points[c, i]
+    buf[3, column] = m0 / mn
+    buf[4, column] = m1 / mn
+    buf[5, column] = m2 / mn
+    buf[6, column] = v0 / vn
+    buf[7, column] = v1 / vn
+    buf[8, column] = v2 / vn
     for ch in range(n_out):
-        weights[ch, count] = weight * (b0 * phi[a, ch] + b1 * phi[b, ch] + b2 * phi[c, ch])
-    return count + 1
+        weights[ch, column] = weight * (b0 * phi[a, ch] + b1 * phi[b, ch] + b2 * phi[c, ch])
+
+
+def source_point_table(points, normals, w12, phi, triangles, triangle_areas, rule_points=RULE_POINTS,
+                       rule_weights=RULE_WEIGHTS):
+    """Quadrature points every receiver shares: the vertices, then the rule points of each lit triangle.
+
+    Columns ``0..n-1`` are the vertices (weight ``phi``; the vertex rule's area factor is applied per
+    receiver), then ``len(rule_points)`` columns per triangle with light at a corner (weight
+    ``area * w_q * phi(x_q)``), made as :func:`_gather` makes them.
+
+    Returns
+    -------
+    table : (9, P) float64
+        Position (mm), unit normal, unit refracted direction of each point.
+    weights : (C, P) float64
+    vertex_lit : (n,) bool
+        Whether light enters at the vertex.
+    first_rule : (m,) int64
+        Column of triangle ``t``'s first rule point, or -1 where no light enters at any corner.
+    """
+    n = points.shape[0]
+    vertex_lit = phi.sum(axis=1) > 0
+    lit_triangles = np.flatnonzero(vertex_lit[triangles].any(axis=1))
+    n_rule = rule_points.shape[0]
+    first_rule = np.full(triangles.shape[0], -1, dtype=np.int64)
+    first_rule[lit_triangles] = n + n_rule * np.arange(lit_triangles.size)
+    table = np.zeros((9, n + n_rule * lit_triangles.size))
+    weights = np.zeros((phi.shape[1], table.shape[1]))
+    table[0:3, :n] = points.T
+    table[3:6, :n] = normals.T
+    table[6:9, :n] = w12.T
+    weights[:, :n] = phi.T
+    _fill_rule_points(points, normals, w12, phi, triangles, triangle_areas, rule_points, rule_weights, lit_triangles,
+                      table, weights, n)
+    return table, weights, vertex_lit, first_rule
 
 
 @numba.njit(cache=True, parallel=True)
-def triangle_rule_points(points, normals, w12, phi, triangles, triangle_areas, rule_points, rule_weights):
-    """The quadrature points of every whole triangle, as :func:`_gather` would make them (reused per receiver).
-
-    Returns ``buf (9, m * n_rule)``, ``weights (C, m * n_rule)`` (weight includes the area) and
-    ``valid (m * n_rule,)`` (False where no light enters).
-    """
-    m = triangles.shape[0]
+def _fill_rule_points(points, normals, w12, phi, triangles, triangle_areas, rule_points, rule_weights, lit_triangles,
+                      table, weights, start):
+    """Rule points of the lit triangles into ``table``/``weights`` from column ``start`` on."""
     n_rule = rule_points.shape[0]
-    buf = np.zeros((9, m * n_rule))
-    weights = np.zeros((phi.shape[1], m * n_rule))
-    for t in numba.prange(m):
+    for k in numba.prange(lit_triangles.shape[0]):
+        t = lit_triangles[k]
+        column = start + k * n_rule
         for q in range(n_rule):
             _gather(points, normals, w12, phi, triangles[t], rule_points[q, 0], rule_points[q, 1], rule_points[q, 2],
-                    triangle_areas[t] * rule_weights[q], buf[:, t * n_rule:(t + 1) * n_rule],
-                    weights[:, t * n_rule:(t + 1) * n_rule], q)
-    return buf, weights
+                    triangle_areas[t] * rule_weights[q], table, weights, column + q)
 
 
 @numba.njit(cache=True, fastmath=True)
-def _evaluate(model, buf, weights, count, xo, no, params, params3, channel_of, acc):
-    """``acc[c] += sum_i S_d(point i; x_o)[channel_of[c]] * weights[c, i]`` over the buffer."""
-    n_out = weights.shape[0]
-    if model == MODEL_DIRECTIONAL and n_out <= 3:
-        m0 = channel_of[0]
-        m1 = channel_of[min(1, n_out - 1)]
-        m2 = channel_of[min(2, n_out - 1)]
-        a0 = 0.0
-        a1 = 0.0
-        a2 = 0.0
-        for i in range(count):
-            e0, e1, e2 = directional_three(xo[0] - buf[0, i], xo[1] - buf[1, i], xo[2] - buf[2, i], buf[3, i], buf[4, i],
-                                           buf[5, i], buf[6, i], buf[7, i], buf[8, i], no[0], no[1], no[2], params3)
-            e0 = max(e0, 0.0)
-            e1 = max(e1, 0.0)
-            e2 = max(e2, 0.0)
-            a0 += (e0 if m0 == 0 else (e1 if m0 == 1 else e2)) * weights[0, i]
-            a1 += (e0 if m1 == 0 else (e1 if m1 == 1 else e2)) * weights[min(1, n_out - 1), i]
-            a2 += (e0 if m2 == 0 else (e1 if m2 == 1 else e2)) * weights[min(2, n_out - 1), i]
-        acc[0] += a0
-        if n_out > 1:
-            acc[1] += a1
-        if n_out > 2:
-            acc[2] += a2
-        return
-    sd = np.empty(params.shape[0])
-    for i in range(count):
-        model_pair(model, buf[0, i], buf[1, i], buf[2, i], buf[3, i], buf[4, i], buf[5, i], buf[6, i], buf[7, i],
-                   buf[8, i], xo[0], xo[1], xo[2], no[0], no[1], no[2], params, sd)
-        for ch in range(n_out):
-            acc[ch] += sd[channel_of[ch]] * weights[ch, i]
+def _pieces(points, tri, xo, beta, scale_min, stack, cx, out):
+    """Adaptive midpoint subdivision of a triangle that is too close to be integrated whole.
 
-
-@numba.njit(cache=True, fastmath=True)
-def _triangle_points(model, points, normals, w12, phi, t, tri, area, xo, no, params, params3, channel_of, beta,
-                     scale_min, rule_points, rule_weights, whole_buf, whole_weights, stack, cx, buf, weights, count, acc):
-    """Gather the quadrature points of ``Q_T(f) - (A_T/3) sum_k f(x_k)`` for one triangle.
-
-    Points go to the buffer; a full buffer is evaluated into ``acc`` and emptied. Returns the new
-    buffer count and the number of quadrature pieces.
+    A piece is accepted when its diameter is at most ``beta * max(distance to x_o, scale_min)`` (or at
+    depth :data:`MAX_DEPTH`). Writes the accepted pieces to ``out`` (rows: barycentric ``(b0, b1)`` of
+    the three corners, then depth) when ``out`` has room, and returns how many there are.
     """
-    n_rule = rule_points.shape[0]
-    capacity = buf.shape[1]
-    if count + 3 > capacity:
-        _evaluate(model, buf, weights, count, xo, no, params, params3, channel_of, acc)
-        count = 0
-    # the three-vertex rule that the vertex sum applied to this triangle, subtracted
-    third = -area / 3.0
-    count = _gather(points, normals, w12, phi, tri, 1.0, 0.0, 0.0, third, buf, weights, count)
-    count = _gather(points, normals, w12, phi, tri, 0.0, 1.0, 0.0, third, buf, weights, count)
-    count = _gather(points, normals, w12, phi, tri, 0.0, 0.0, 1.0, third, buf, weights, count)
     a, b, c = tri[0], tri[1], tri[2]
-    # stack rows: barycentric (b0, b1) of the piece's three corners, then depth
-    stack[0, 0] = 1.0
-    stack[0, 1] = 0.0
-    stack[0, 2] = 0.0
-    stack[0, 3] = 1.0
-    stack[0, 4] = 0.0
-    stack[0, 5] = 0.0
-    stack[0, 6] = 0.0
-    top = 1
-    pieces = 0
+    top = 0
+    for child in ((1.0, 0.0, 0.5, 0.5, 0.5, 0.0), (0.5, 0.5, 0.0, 1.0, 0.0, 0.5), (0.5, 0.0, 0.0, 0.5, 0.0, 0.0),
+                  (0.5, 0.5, 0.0, 0.5, 0.5, 0.0)):  # the four children of the whole triangle
+        for i in range(6):
+            stack[top, i] = child[i]
+        stack[top, 6] = 1.0
+        top += 1
+    n = 0
     while top > 0:
         top -= 1
         p0, q0, p1, q1, p2, q2, depth = (stack[top, 0], stack[top, 1], stack[top, 2], stack[top, 3], stack[top, 4],
@@ -242,7 +230,6 @@ def _triangle_points(model, points, normals, w12, phi, t, tri, area, xo, no, par
         r0 = 1.0 - p0 - q0
         r1 = 1.0 - p1 - q1
         r2 = 1.0 - p2 - q2
-        # world-space corners of the piece
         for i in range(3):
             cx[0, i] = p0 * points[a, i] + q0 * points[b, i] + r0 * points[c, i]
             cx[1, i] = p1 * points[a, i] + q1 * points[b, i] + r1 * points[c, i]
@@ -252,35 +239,19 @@ def _triangle_points(model, points, normals, w12, phi, t, tri, area, xo, no, par
             e = (cx[u, 0] - cx[v, 0]) ** 2 + (cx[u, 1] - cx[v, 1]) ** 2 + (cx[u, 2] - cx[v, 2]) ** 2
             if e > h2:
                 h2 = e
-        h = math.sqrt(h2)
         dist2 = 0.0
         for i in range(3):
             dist2 += ((cx[0, i] + cx[1, i] + cx[2, i]) / 3.0 - xo[i]) ** 2
-        dist = max(math.sqrt(dist2), scale_min)
-        if h <= beta * dist or depth >= MAX_DEPTH:
-            if count + n_rule > capacity:
-                _evaluate(model, buf, weights, count, xo, no, params, params3, channel_of, acc)
-                count = 0
-            pieces += 1
-            if depth == 0:  # the whole triangle: its points are precomputed
-                for qp in range(t * n_rule, (t + 1) * n_rule):
-                    used = False
-                    for ch in range(weights.shape[0]):
-                        weights[ch, count] = whole_weights[ch, qp]
-                        used = used or whole_weights[ch, qp] != 0.0
-                    if used:
-                        for i in range(9):
-                            buf[i, count] = whole_buf[i, qp]
-                        count += 1
-                continue
-            piece_area = area * 0.25**depth
-            for qp in range(n_rule):
-                l0 = rule_points[qp, 0]
-                l1 = rule_points[qp, 1]
-                l2 = rule_points[qp, 2]
-                count = _gather(points, normals, w12, phi, tri, l0 * p0 + l1 * p1 + l2 * p2,
-                                l0 * q0 + l1 * q1 + l2 * q2, l0 * r0 + l1 * r1 + l2 * r2, piece_area * rule_weights[qp],
-                                buf, weights, count)
+        if math.sqrt(h2) <= beta * max(math.sqrt(dist2), scale_min) or depth >= MAX_DEPTH:
+            if n < out.shape[0]:
+                out[n, 0] = p0
+                out[n, 1] = q0
+                out[n, 2] = p1
+                out[n, 3] = q1
+                out[n, 4] = p2
+                out[n, 5] = q2
+                out[n, 6] = depth
+            n += 1
         else:
             m01p = 0.5 * (p0 + p1)
             m01q = 0.5 * (q0 + q1)
@@ -295,47 +266,164 @@ def _triangle_points(model, points, normals, w12, phi, t, tri, area, xo, no, par
                     stack[top, i] = child[i]
                 stack[top, 6] = depth + 1.0
                 top += 1
-    return count, pieces
+    return n
 
 
-@numba.njit(cache=True, parallel=True)
-def near_field_correction(model, points, triangles, triangle_areas, normals, w12, phi, receivers, offsets, triangle_ids, params,
-                          channel_of, beta, scale_min, rule_points, rule_weights, whole_buf, whole_weights):
+def near_field_correction(model, points, triangles, triangle_areas, normals, w12, phi, receivers, offsets,
+                          triangle_ids, params, channel_of, beta, scale_min, rule_points=RULE_POINTS,
+                          rule_weights=RULE_WEIGHTS):
     """Correction ``C[r, c]`` of the vertex sum for every receiver ``r`` (see the module docstring).
+
+    Receivers are done in blocks of :data:`BLOCK_RECEIVERS`: (1) list each receiver's quadrature
+    points -- the vertex rule of its near triangles (each vertex once, weighted by the sum of the near
+    triangles' thirds), the shared rule points of the triangles far enough to be integrated whole, and a
+    count of the refined pieces of the closer ones; (2) make the refined points; (3) evaluate every
+    receiver's points with :func:`~translucency.scatter.kernels.indexed_sum` (where the time goes).
 
     Returns
     -------
     correction : (n_receivers, C) float64
     pieces : (n_receivers,) int64
-        Number of quadrature pieces used per receiver (cost and refinement diagnostics).
+        Number of quadrature pieces (whole triangles and refined pieces) per receiver.
     """
+    from ..io.geometry import edge_lengths
+
+    table, weights, vertex_lit, first_rule = source_point_table(points, normals, w12, phi, triangles, triangle_areas,
+                                                                rule_points, rule_weights)
+    diameters = edge_lengths(points, triangles).max(axis=1)
+    centroids = points[triangles].mean(axis=1)
+    lanes = channel_lanes(params, channel_of, phi.shape[1])
     n_r = receivers.shape[0]
-    n_out = phi.shape[1]
-    correction = np.zeros((n_r, n_out))
+    correction = np.zeros((n_r, phi.shape[1]))
     pieces = np.zeros(n_r, dtype=np.int64)
-    params3 = padded_three_rows(params)
-    n_chunks = min(n_r, 256)
+    near_count = np.diff(offsets)
+    chunks = 16 * numba.get_num_threads()
+    for start in range(0, n_r, BLOCK_RECEIVERS):
+        block = slice(start, min(n_r, start + BLOCK_RECEIVERS))
+        rcv = receivers[block]
+        col_offsets = np.zeros(rcv.size + 1, dtype=np.int64)
+        np.cumsum((3 + rule_points.shape[0]) * near_count[block], out=col_offsets[1:])
+        columns = np.empty(col_offsets[-1], dtype=np.int64)
+        factors = np.empty(col_offsets[-1])
+        n_columns = np.zeros(rcv.size, dtype=np.int64)
+        n_refined = np.zeros(rcv.size, dtype=np.int64)
+        _list_points(points, triangles, triangle_areas, rcv, offsets[start:block.stop + 1], triangle_ids, beta,
+                     scale_min, vertex_lit, first_rule, diameters, centroids, col_offsets, columns, factors, n_columns,
+                     n_refined, pieces[block], min(rcv.size, chunks))
+        ref_offsets = np.zeros(rcv.size + 1, dtype=np.int64)
+        np.cumsum(n_refined * rule_points.shape[0], out=ref_offsets[1:])
+        refined = np.zeros((9, ref_offsets[-1]))
+        refined_weights = np.zeros((phi.shape[1], ref_offsets[-1]))
+        _refined_points(points, normals, w12, phi, triangles, triangle_areas, rcv, offsets[start:block.stop + 1],
+                        triangle_ids, beta, scale_min, first_rule, diameters, centroids, rule_points, rule_weights,
+                        ref_offsets, refined, refined_weights, min(rcv.size, chunks))
+        rcv_points, rcv_normals = points[rcv], normals[rcv]
+        correction[block] = (
+            indexed_sum(model, rcv_points, rcv_normals, table, weights, col_offsets[:-1], n_columns, columns, factors,
+                        params, lanes, channel_of)
+            + indexed_sum(model, rcv_points, rcv_normals, refined, refined_weights, ref_offsets[:-1],
+                          np.diff(ref_offsets), np.arange(ref_offsets[-1]), np.ones(ref_offsets[-1]), params, lanes,
+                          channel_of))
+    return correction, pieces
+
+
+#: Receivers whose quadrature points are listed at a time (bounds the memory: ~150 KB per receiver).
+BLOCK_RECEIVERS = 2048
+
+
+@numba.njit(cache=True, parallel=True)
+def _list_points(points, triangles, triangle_areas, receivers, offsets, triangle_ids, beta, scale_min, vertex_lit,
+                 first_rule, diameters, centroids, col_offsets, columns, factors, n_columns, n_refined, pieces,
+                 n_chunks):
+    """Pass 1: per receiver, the shared-table points (vertex rule, whole triangles) and the refined count."""
+    n_r = receivers.shape[0]
+    n_v = points.shape[0]
+    n_rule = RULE_POINTS.shape[0]
     for chunk in numba.prange(n_chunks):
-        # scratch memory per chunk of receivers, not per receiver
-        acc = np.zeros(n_out)
         stack = np.empty((3 * MAX_DEPTH + 8, 7))
         cx = np.empty((3, 3))
-        buf = np.empty((9, BUFFER_POINTS))
-        weights = np.empty((n_out, BUFFER_POINTS))
+        none = np.empty((0, 7))
+        slot = np.full(n_v, -1, dtype=np.int64)  # position of a vertex in the receiver's list
+        owner = np.full(n_v, -1, dtype=np.int64)
         for r in range(chunk * n_r // n_chunks, (chunk + 1) * n_r // n_chunks):
-            o = receivers[r]
-            xo = points[o]
-            no = normals[o]
-            acc[:] = 0.0
+            xo = points[receivers[r]]
+            base = col_offsets[r]
+            listed = 0
+            refined = 0
             count = 0
             for k in range(offsets[r], offsets[r + 1]):
                 t = triangle_ids[k]
-                count, used = _triangle_points(model, points, normals, w12, phi, t, triangles[t], triangle_areas[t],
-                                               xo, no, params, params3, channel_of, beta, scale_min, rule_points,
-                                               rule_weights, whole_buf, whole_weights, stack, cx, buf, weights, count,
-                                               acc)
-                pieces[r] += used
-            _evaluate(model, buf, weights, count, xo, no, params, params3, channel_of, acc)
-            for ch in range(n_out):
-                correction[r, ch] = acc[ch]
-    return correction, pieces
+                if first_rule[t] < 0:  # no light enters at any corner: nothing to integrate
+                    continue
+                third = triangle_areas[t] / 3.0
+                for corner in range(3):
+                    v = triangles[t, corner]
+                    if not vertex_lit[v]:
+                        continue
+                    if owner[v] != r:
+                        owner[v] = r
+                        slot[v] = listed
+                        columns[base + listed] = v
+                        factors[base + listed] = 0.0
+                        listed += 1
+                    factors[base + slot[v]] -= third
+                d2 = 0.0
+                for i in range(3):
+                    d2 += (centroids[t, i] - xo[i]) ** 2
+                if diameters[t] <= beta * max(math.sqrt(d2), scale_min):  # whole: the shared rule points
+                    for q in range(n_rule):
+                        columns[base + listed] = first_rule[t] + q
+                        factors[base + listed] = 1.0
+                        listed += 1
+                    count += 1
+                else:
+                    used = _pieces(points, triangles[t], xo, beta, scale_min, stack, cx, none)
+                    refined += used
+                    count += used
+            n_columns[r] = listed
+            n_refined[r] = refined
+            pieces[r] = count
+
+
+@numba.njit(cache=True, parallel=True)
+def _refined_points(points, normals, w12, phi, triangles, triangle_areas, receivers, offsets, triangle_ids, beta,
+                    scale_min, first_rule, diameters, centroids, rule_points, rule_weights, ref_offsets, refined,
+                    refined_weights, n_chunks):
+    """Pass 2: the rule points of every refined piece, receiver by receiver from ``ref_offsets``."""
+    n_r = receivers.shape[0]
+    n_rule = rule_points.shape[0]
+    for chunk in numba.prange(n_chunks):
+        stack = np.empty((3 * MAX_DEPTH + 8, 7))
+        cx = np.empty((3, 3))
+        found = np.empty((4 ** 6, 7))
+        for r in range(chunk * n_r // n_chunks, (chunk + 1) * n_r // n_chunks):
+            xo = points[receivers[r]]
+            column = ref_offsets[r]
+            for k in range(offsets[r], offsets[r + 1]):
+                t = triangle_ids[k]
+                if first_rule[t] < 0:
+                    continue
+                d2 = 0.0
+                for i in range(3):
+                    d2 += (centroids[t, i] - xo[i]) ** 2
+                if diameters[t] <= beta * max(math.sqrt(d2), scale_min):
+                    continue
+                n = _pieces(points, triangles[t], xo, beta, scale_min, stack, cx, found)
+                if n > found.shape[0]:  # deeper than the scratch space: grow it and subdivide again
+                    found = np.empty((n, 7))
+                    n = _pieces(points, triangles[t], xo, beta, scale_min, stack, cx, found)
+                tri = triangles[t]
+                for j in range(n):
+                    p0, q0, p1, q1, p2, q2 = found[j, 0], found[j, 1], found[j, 2], found[j, 3], found[j, 4], found[j, 5]
+                    r0 = 1.0 - p0 - q0
+                    r1 = 1.0 - p1 - q1
+                    r2 = 1.0 - p2 - q2
+                    piece_area = triangle_areas[t] * 0.25 ** found[j, 6]
+                    for qp in range(n_rule):
+                        l0 = rule_points[qp, 0]
+                        l1 = rule_points[qp, 1]
+                        l2 = rule_points[qp, 2]
+                        _gather(points, normals, w12, phi, tri, l0 * p0 + l1 * p1 + l2 * p2, l0 * q0 + l1 * q1 + l2 * q2,
+                                l0 * r0 + l1 * r1 + l2 * r2, piece_area * rule_weights[qp], refined, refined_weights,
+                                column)
+                        column += 1

@@ -236,9 +236,8 @@ def _far_field_tree(model, geometry, medium, lit, w12, flux, rcv_points, rcv_nor
     theta = hierarchy.THETA_PER_SQRT_TOL * float(np.sqrt(tol))
     nodes = hierarchy.aggregate(tree.order, tree.start, tree.end, tree.left, tree.right, geometry.points,
                                 geometry.normals, w12, flux)
-    B, direct, clustered = hierarchy.tree_sum(
-        model_code, tree.order, tree.start, tree.end, tree.left, tree.right, tree.centre, tree.radius, *nodes,
-        geometry.points, geometry.normals, w12, flux, rcv_points, rcv_normals, params, channel_of, theta)
+    B, direct, clustered = hierarchy.tree_sum(model_code, tree, nodes, geometry.points, geometry.normals, w12, flux,
+                                              rcv_points, rcv_normals, params, channel_of, theta)
     pairs = int(lit.size) * int(rcv_points.shape[0])
     return B, {"theta": theta, "tree_nodes": tree.n_nodes, "pairs_evaluated": int(direct.sum() + clustered.sum()),
                "pairs_direct": int(direct.sum()), "cluster_evaluations": int(clustered.sum()),
@@ -355,13 +354,9 @@ def solve(
     offsets, triangle_ids = geometry.near_lists(receivers, radius)
     timings["near_lists"] = time.perf_counter() - start
     start = time.perf_counter()
-    whole = nearfield.triangle_rule_points(geometry.points, geometry.normals, w12, phi, geometry.triangles,
-                                           geometry.triangle_areas, nearfield.RULE_POINTS, nearfield.RULE_WEIGHTS)
     correction, pieces = nearfield.near_field_correction(
         model_code, geometry.points, geometry.triangles, geometry.triangle_areas, geometry.normals, w12, phi,
-        receivers, offsets, triangle_ids, params, channel_of, NEAR_BETA, float(np.min(medium.D)),
-        nearfield.RULE_POINTS, nearfield.RULE_WEIGHTS, *whole,
-    )
+        receivers, offsets, triangle_ids, params, channel_of, NEAR_BETA, float(np.min(medium.D)))
     B = B + correction
     negative = B < 0
     stats["near_radius_mm"] = radius

@@ -1,0 +1,635 @@
+"""Batch baking: many scans, one material and one set of lights, one baked PLY per scan.
+
+* :func:`bake_file` bakes one scan (load, clean, shade, write) and returns a :class:`BakeRecord`; it
+  never raises for a problem of that file: the record says what went wrong in one sentence.
+* :func:`bake_files` plans the output names and runs :func:`bake_file` over a list of scans: in this
+  process, in ``workers`` spawned processes, or on a Dask distributed cluster.
+* :func:`bake` is the same from Python, with the settings as keyword arguments.
+* :func:`format_summary` and :func:`exit_code` turn the records into the table and the exit status
+  of ``translucency bake``; :class:`ConsoleProgress` draws its progress bars.
+
+Output names are ``<stem>_<material>.ply`` in the output folder; a stem met twice (``a/scan.ply``,
+``b/scan.obj``) gets ``-2``, ``-3``, ... and a name is never that of an input, so no input is ever
+written over. Each PLY is written atomically (:func:`translucency.io.ply.write_baked_ply`): a
+failed file leaves no partial output.
+
+Threads: ``workers`` processes each run numba with ``cores // workers`` threads. On Dask every task
+runs numba with ``cores // nthreads`` threads of its worker (start workers with ``--nthreads 1`` and
+let numba use the cores, or cap it with ``NUMBA_NUM_THREADS`` in the workers' environment). Dask
+workers read the scans and write the PLYs themselves: the input files and the output folder must be
+reachable from every worker under the same paths (a shared file system); only the records travel
+back to the client.
+"""
+
+from __future__ import annotations
+
+import math
+import numbers
+import os
+import re
+import time
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+from ..errors import InvalidParameterError, TranslucencyError
+
+__all__ = ["BakeSettings", "BakeRecord", "BakeProgress", "ConsoleProgress", "bake", "bake_file", "bake_files",
+           "output_paths", "format_summary", "exit_code", "DASK_CONNECT_TIMEOUT_S"]
+
+#: Seconds to wait for a Dask scheduler to answer before giving up.
+DASK_CONNECT_TIMEOUT_S = 20.0
+
+#: Message of a file whose worker process died (see :func:`_run_in_processes`).
+_CRASHED = ("the worker process stopped while baking this file (a crash, or the machine ran out of memory); "
+            "bake it alone to see more.")
+
+
+def _positive(value) -> bool:
+    """True for a finite real number > 0 (not a bool)."""
+    return isinstance(value, numbers.Real) and not isinstance(value, bool) and math.isfinite(value) and value > 0
+
+
+@dataclass(frozen=True)
+class BakeSettings:
+    """Everything a bake needs besides the file names; validated on construction.
+
+    Parameters
+    ----------
+    material : str or Material or Medium
+        Catalogue name, entry or medium (coefficients in 1/mm); stored as a ``Medium``.
+    lights : light or sequence of lights, optional
+        Default: the pipeline's white directional light (1 W/m²).
+    unit : str or float
+        Length unit of the scan files: ``mm``, ``cm``, ``m``, ``in`` or mm per unit (ignored for the
+        embedded default scan, which has its own size).
+    model, method, tol, resolution, shadows, exposure, per_direction
+        As in :func:`translucency.app.pipeline.shade` (``resolution`` in mm when a number).
+    """
+
+    material: object = "marble"
+    lights: tuple | None = None
+    unit: str | float = "mm"
+    model: str = "directional"
+    method: str = "tree"
+    tol: float = 1e-2
+    resolution: str | float = "full"
+    shadows: bool = True
+    exposure: float | None = None
+    per_direction: bool = False
+
+    def __post_init__(self):
+        from ..io.units import parse_unit
+        from ..scatter.lights import as_light_list
+        from ..scatter.solve import METHODS, MODELS
+        from .pipeline import resolve_medium
+
+        object.__setattr__(self, "material", resolve_medium(self.material))
+        if self.lights is not None:
+            object.__setattr__(self, "lights", as_light_list(self.lights))
+        parse_unit(self.unit)
+        if self.model not in MODELS:
+            raise InvalidParameterError(f"unknown model {self.model!r}; choose one of {', '.join(MODELS)}.")
+        if self.method not in METHODS:
+            raise InvalidParameterError(f"unknown method {self.method!r}; choose one of {', '.join(METHODS)}.")
+        if not (_positive(self.tol) and self.tol < 1):
+            raise InvalidParameterError(f"tol must be a relative error in (0, 1), got {self.tol!r}.")
+        if not (self.resolution in ("full", "auto") or _positive(self.resolution)):
+            raise InvalidParameterError(
+                f"resolution must be 'full', 'auto' or a proxy edge length in mm, got {self.resolution!r}.")
+        if not (self.exposure is None or _positive(self.exposure)):
+            raise InvalidParameterError(f"exposure must be a positive number, got {self.exposure!r}.")
+
+    @property
+    def material_name(self) -> str:
+        """The material's name as it appears in output file names (letters, digits and ``_``)."""
+        return re.sub(r"[^A-Za-z0-9]+", "_", self.material.name).strip("_") or "material"
+
+
+@dataclass(frozen=True)
+class BakeRecord:
+    """What happened to one scan of a batch (one row of the summary).
+
+    Attributes
+    ----------
+    source : str
+        The input as given (or the embedded default scan's file name).
+    output : str or None
+        The PLY written; None when the file failed.
+    vertices : int or None
+        Vertices of the cleaned mesh that was baked.
+    lit_sources : int or None
+        Vertices of the solver's mesh that receive light (the sources of the sum).
+    seconds : float
+        Wall time of this file, loading to writing, s.
+    error : str or None
+        One sentence saying what went wrong; None when the file was baked.
+    warnings : tuple of str
+        Warnings while loading (an implausible size for the unit, say).
+    threads : int or None
+        numba threads the solver used.
+    """
+
+    source: str
+    output: str | None = None
+    vertices: int | None = None
+    lit_sources: int | None = None
+    seconds: float = 0.0
+    error: str | None = None
+    warnings: tuple = field(default=())
+    threads: int | None = None
+
+    @property
+    def ok(self) -> bool:
+        """True when the file was baked."""
+        return self.error is None
+
+    @property
+    def status(self) -> str:
+        """``"baked"`` or ``"failed: <sentence>"``."""
+        return "baked" if self.ok else f"failed: {self.error}"
+
+
+class BakeProgress:
+    """Receives a batch's progress; this base class ignores it (subclass to show it).
+
+    :func:`bake_files` calls :meth:`start` once the outputs are planned, :meth:`stage` while a file
+    is baked in this process (not from worker processes or Dask), :meth:`finished` when a file is
+    done (in whatever order files finish) and :meth:`end` at the end, also after an error.
+    """
+
+    def start(self, sources: list[str], outputs: list[str]) -> None:
+        """The batch starts: the inputs and their planned outputs, in order."""
+
+    def stage(self, index: int, stage: str, fraction: float) -> None:
+        """File ``index`` is at ``fraction`` (0 to 1) of ``stage`` (loading, far field, near field, writing)."""
+
+    def finished(self, index: int, record: BakeRecord) -> None:
+        """File ``index`` is done, baked or failed."""
+
+    def end(self) -> None:
+        """The batch is over."""
+
+
+class ConsoleProgress(BakeProgress):
+    """tqdm progress bars on stderr: files done, and the current file's stage when baked here.
+
+    Failures and loading warnings are printed above the bars as they happen, one line each.
+    """
+
+    def __init__(self, file=None):
+        self.file = file
+        self._files = self._stage = None
+        self._sources: list[str] = []
+
+    def _stream(self):
+        import sys
+
+        return self.file if self.file is not None else sys.stderr
+
+    def start(self, sources, outputs):
+        """Open the bar of files."""
+        from tqdm import tqdm
+
+        self._sources = list(sources)
+        self._files = tqdm(total=len(sources), desc="baking", unit="file", file=self._stream(), position=0,
+                           dynamic_ncols=True)
+
+    def stage(self, index, stage, fraction):
+        """Show the stage of the file baked in this process."""
+        from tqdm import tqdm
+
+        if self._stage is None:
+            self._stage = tqdm(total=100, unit="%", file=self._stream(), position=1, leave=False,
+                               dynamic_ncols=True, bar_format="{desc}: {percentage:3.0f}%|{bar}|")
+        self._stage.set_description_str(f"{Path(self._sources[index]).name}: {stage}", refresh=False)
+        self._stage.n = round(100 * min(max(fraction, 0.0), 1.0))
+        self._stage.refresh()
+
+    def finished(self, index, record):
+        """Count the file; print its warnings and its error, if any."""
+        for warning in record.warnings:
+            self._files.write(f"translucency: warning: {record.source}: {warning}", file=self._stream())
+        if not record.ok:
+            self._files.write(f"translucency: error: {record.source}: {record.error}", file=self._stream())
+        self._files.update(1)
+
+    def end(self):
+        """Close the bars."""
+        for bar in (self._stage, self._files):
+            if bar is not None:
+                bar.close()
+        self._files = self._stage = None
+
+
+# --------------------------------------------------------------------------------------------------
+# one file
+# --------------------------------------------------------------------------------------------------
+def bake_file(path, output, settings: BakeSettings, progress=None) -> BakeRecord:
+    """Bake one scan to a PLY; a problem with this file is returned in the record, never raised.
+
+    Parameters
+    ----------
+    path : str or path-like or None
+        The scan (in ``settings.unit``); None for the embedded default scan.
+    output : str or path-like
+        The PLY to write (its folder must exist); written atomically, so a failure leaves nothing.
+    settings : BakeSettings
+    progress : callable, optional
+        ``progress(stage, fraction)`` with stages ``loading``, the solver's (``far field``,
+        ``near field``) and ``writing``.
+
+    Returns
+    -------
+    BakeRecord
+    """
+    from ..io.ply import write_baked_ply
+    from .options import load_scan
+    from .pipeline import Scene
+
+    report = progress or (lambda stage, fraction: None)
+    start = time.perf_counter()
+    source = _source_label(path)
+    warnings: list[str] = []
+    vertices = lit = threads = None
+    try:
+        import numba
+
+        threads = numba.get_num_threads()
+        report("loading", 0.0)
+        mesh, _, _ = load_scan(path, settings.unit, warn=warnings.append)
+        vertices = mesh.n_points
+        report("loading", 1.0)
+        result = Scene(mesh, shadows=settings.shadows).shade(
+            settings.material, settings.lights, model=settings.model, method=settings.method, tol=settings.tol,
+            resolution=settings.resolution, exposure=settings.exposure, per_direction=settings.per_direction,
+            progress=report)
+        lit = int(result.stats["incident"]["n_lit"])
+        report("writing", 0.0)
+        write_baked_ply(output, mesh, result.radiance, result.B, result.colors, result.metadata,
+                        normals=result.normals)
+        report("writing", 1.0)
+    except Exception as exc:  # noqa: BLE001 -- every failure of one file becomes its record
+        return BakeRecord(source, None, vertices, lit, time.perf_counter() - start, failure_sentence(exc),
+                          tuple(warnings), threads)
+    return BakeRecord(source, str(output), vertices, lit, time.perf_counter() - start, None, tuple(warnings), threads)
+
+
+def _source_label(path) -> str:
+    if path is None:
+        from .pipeline import default_scan_path
+
+        return f"{default_scan_path().name} (embedded default scan)"
+    return str(path)
+
+
+def failure_sentence(exc: BaseException) -> str:
+    """One line that says why a file failed, from the exception that stopped it."""
+    from concurrent.futures.process import BrokenProcessPool
+
+    if isinstance(exc, TranslucencyError):
+        text = str(exc)
+    elif isinstance(exc, BrokenProcessPool):
+        text = _CRASHED
+    elif isinstance(exc, ImportError):  # a Dask worker without the package
+        text = (f"the worker cannot import {exc.name or 'a module'} ({exc}); install translucency, the same "
+                "version, on every worker.")
+    elif isinstance(exc, MemoryError):
+        text = "ran out of memory; bake it with --resolution auto or on a machine with more memory."
+    elif isinstance(exc, OSError):
+        where = f" ({exc.filename})" if exc.filename else ""
+        text = f"{exc.strerror or exc}{where}."
+    else:
+        text = f"unexpected {type(exc).__name__}: {exc} (a bug: please report it with the file)."
+    return " ".join(text.split()) or type(exc).__name__
+
+
+# --------------------------------------------------------------------------------------------------
+# output names
+# --------------------------------------------------------------------------------------------------
+def output_paths(sources, output, material_name: str) -> list[Path]:
+    """The PLY each source is baked to (``<stem>_<material>.ply``); creates nothing.
+
+    Parameters
+    ----------
+    sources : list of path-like or None
+        The scans (None: the embedded default scan, stem ``bunny``).
+    output : path-like
+        A ``.ply`` file for one source, else a folder (existing, or to be created); a name ending
+        in a path separator is always a folder.
+    material_name : str
+        The material part of the names.
+
+    Raises
+    ------
+    InvalidParameterError
+        A file name for several sources, a folder name that is an existing file, or an output file
+        that is an input.
+    """
+    text = os.fspath(output)
+    output = Path(text)
+    as_file = (output.suffix.lower() == ".ply" and not output.is_dir()
+               and not text.endswith(("/", os.sep)))
+    inputs = {_key(path) for path in sources if path is not None}
+    if as_file:
+        if len(sources) != 1:
+            raise InvalidParameterError(
+                f"the output {text} names one file, but {len(sources)} meshes were given; "
+                f"pass a folder to bake several (e.g. -o {output.with_suffix('')}/).")
+        if _key(output) in inputs:
+            raise InvalidParameterError(f"the output {text} is the input scan; inputs are never written over, "
+                                        "choose another name.")
+        return [output]
+    if output.exists() and not output.is_dir():
+        raise InvalidParameterError(f"the output {text} is an existing file, not a folder; pass a folder, "
+                                    "or a .ply name when baking one mesh.")
+    taken = set(inputs)
+    paths = []
+    for source in sources:
+        stem = _default_stem() if source is None else Path(source).stem
+        candidate, k = output / f"{stem}_{material_name}.ply", 2
+        while _key(candidate) in taken:
+            candidate, k = output / f"{stem}-{k}_{material_name}.ply", k + 1
+        taken.add(_key(candidate))
+        paths.append(candidate)
+    return paths
+
+
+def _key(path) -> str:
+    return os.path.normcase(os.path.realpath(path)).casefold()
+
+
+def _default_stem() -> str:
+    from .pipeline import default_scan_path
+
+    return default_scan_path().stem
+
+
+# --------------------------------------------------------------------------------------------------
+# a batch
+# --------------------------------------------------------------------------------------------------
+def bake_files(paths, output, settings: BakeSettings, *, workers: int = 1, scheduler=None,
+               progress: BakeProgress | None = None) -> list[BakeRecord]:
+    """Bake every scan of ``paths`` with the same settings; one failed file does not stop the others.
+
+    Parameters
+    ----------
+    paths : sequence of path-like or None
+        The scans; None (or an empty sequence) stands for the embedded default scan.
+    output : path-like or None
+        A ``.ply`` file for a single scan, else a folder, created when missing (default
+        ``translucency-output``); see :func:`output_paths` for the names.
+    settings : BakeSettings
+    workers : int
+        Processes to bake in (spawned; each runs numba with ``cores // workers`` threads). 1: here.
+    scheduler : str or distributed.Client, optional
+        Bake on a Dask cluster: the scheduler's address (``tcp://host:8786``) or a client. The
+        workers read the scans and write the PLYs: both must be reachable from them.
+    progress : BakeProgress, optional
+
+    Returns
+    -------
+    list of BakeRecord
+        In the order of ``paths``.
+
+    Raises
+    ------
+    InvalidParameterError, TranslucencyError
+        Only for problems that stop the whole batch before it starts (output names, ``workers``,
+        the scheduler); problems of single files are in their records.
+    """
+    progress = progress or BakeProgress()
+    sources = list(paths) if paths else [None]
+    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
+        raise InvalidParameterError(
+            f"the number of workers (--workers) must be a whole number >= 1, got {workers!r}.")
+    if scheduler is not None and workers > 1:
+        raise InvalidParameterError("pass either workers (local processes) or a Dask scheduler, not both.")
+    if output is None:
+        from .default_job import OUTPUT_FOLDER
+
+        output = OUTPUT_FOLDER
+    outputs = output_paths(sources, output, settings.material_name)
+    labels = [_source_label(source) for source in sources]
+    client = None if scheduler is None else _dask_client(scheduler)
+    try:
+        _make_folders(outputs)
+        records: list = [None] * len(sources)
+
+        def done(index, result):
+            if isinstance(result, BakeRecord):  # the names as given here, whatever the worker saw
+                result = replace(result, source=labels[index], output=result.output and str(outputs[index]))
+            else:
+                result = BakeRecord(labels[index], error=failure_sentence(result))
+            records[index] = result
+            progress.finished(index, result)
+
+        progress.start(labels, [str(o) for o in outputs])
+        try:
+            if client is not None:  # the workers may run elsewhere: absolute paths
+                jobs = [(None if source is None else os.path.abspath(source), os.path.abspath(target), settings)
+                        for source, target in zip(sources, outputs)]
+                _run_on_dask(client, jobs, done)
+            elif min(workers, len(sources)) > 1:
+                jobs = [(source, target, settings) for source, target in zip(sources, outputs)]
+                _run_in_processes(bake_file, jobs, min(workers, len(jobs)), done)
+            else:
+                for index, (source, target) in enumerate(zip(sources, outputs)):
+                    def stage(name, fraction, index=index):
+                        progress.stage(index, name, fraction)
+
+                    done(index, bake_file(source, target, settings, progress=stage))
+        finally:
+            progress.end()
+    finally:
+        if client is not None and client is not scheduler:
+            client.close()
+    return records
+
+
+def _make_folders(outputs) -> None:
+    for folder in {Path(o).parent for o in outputs}:
+        try:
+            folder.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise TranslucencyError(f"cannot create the output folder {folder} ({exc.strerror or exc}); "
+                                    "choose a writable place.") from exc
+
+
+# --------------------------------------------------------------------------------------------------
+# local processes
+# --------------------------------------------------------------------------------------------------
+def available_cores() -> int:
+    """CPU cores this process may run on."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # not on every platform
+        return os.cpu_count() or 1
+
+
+def _use_threads(threads: int) -> None:
+    """Run numba's parallel loops called from this thread on ``threads`` threads (numba's limit is per thread)."""
+    import numba
+
+    numba.set_num_threads(max(1, min(threads, numba.config.NUMBA_NUM_THREADS)))
+
+
+def _start_worker_process(threads: int) -> None:
+    """Initialiser of a worker process: ``threads`` threads for numba and for the BLAS libraries it loads."""
+    for name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+        os.environ[name] = str(threads)
+    _use_threads(threads)
+
+
+def _run_in_processes(function, jobs, workers: int, done) -> None:
+    """Call ``function(*job)`` for every job in ``workers`` spawned processes; ``done(index, result)``.
+
+    ``result`` is what the function returned, or the exception it raised. A worker process that
+    dies (a crash, out of memory) breaks its pool: the jobs that had not finished are then run again
+    in a fresh pool of one process, where the job that dies is the first unfinished one, so that only
+    it is lost (reported as :class:`~concurrent.futures.process.BrokenProcessPool`).
+
+    Spawned, not forked: numba's OpenMP threads and a forked copy of them do not mix.
+    """
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor, as_completed
+    from concurrent.futures.process import BrokenProcessPool
+
+    context = multiprocessing.get_context("spawn")
+    pending, size = list(range(len(jobs))), workers
+    while pending:
+        size = min(size, len(pending))
+        executor = ProcessPoolExecutor(size, mp_context=context, initializer=_start_worker_process,
+                                       initargs=(max(1, available_cores() // size),))
+        unfinished = []
+        try:
+            futures = {executor.submit(function, *jobs[index]): index for index in pending}
+            for future in as_completed(futures):
+                try:
+                    result = future.result()
+                except BrokenProcessPool:
+                    unfinished.append(futures[future])
+                    continue
+                except Exception as exc:  # noqa: BLE001 -- e.g. an argument that does not pickle
+                    result = exc
+                done(futures[future], result)
+        except BaseException:
+            executor.shutdown(wait=False, cancel_futures=True)
+            raise
+        executor.shutdown(wait=True)
+        unfinished.sort()
+        if unfinished and size == 1:
+            culprit = unfinished.pop(0)
+            done(culprit, BrokenProcessPool(_CRASHED))
+        pending, size = unfinished, 1
+
+
+# --------------------------------------------------------------------------------------------------
+# Dask
+# --------------------------------------------------------------------------------------------------
+def _dask_client(scheduler):
+    """A ``distributed.Client`` for an address (or the client given), or one sentence why not."""
+    if hasattr(scheduler, "submit"):
+        return scheduler
+    try:
+        from distributed import Client
+    except ImportError:
+        raise TranslucencyError("baking on a Dask cluster needs the 'distributed' package; "
+                                "install it with: pip install 'translucency[dask]'.") from None
+    try:
+        return Client(str(scheduler), timeout=DASK_CONNECT_TIMEOUT_S)
+    except (OSError, TimeoutError, ValueError, TypeError) as exc:
+        raise TranslucencyError(f"cannot reach the Dask scheduler at {scheduler} "
+                                f"({' '.join(str(exc).split()) or type(exc).__name__}); "
+                                "check the address (tcp://host:8786) and that the scheduler runs.") from None
+
+
+def _dask_task(path, output, settings):
+    """:func:`bake_file` on a Dask worker, with numba limited to ``cores // nthreads`` of the worker."""
+    from distributed import get_worker
+
+    _use_threads(max(1, available_cores() // max(1, get_worker().state.nthreads)))
+    return bake_file(path, output, settings)
+
+
+def _run_on_dask(client, jobs, done) -> None:
+    """Submit every job to the cluster; ``done(index, record or exception)`` as they come back."""
+    from distributed import as_completed
+
+    futures = [client.submit(_dask_task, *job, pure=False) for job in jobs]
+    index_of = {future.key: index for index, future in enumerate(futures)}
+    try:
+        for future in as_completed(futures):
+            try:
+                result = future.result()
+            except Exception as exc:  # noqa: BLE001 -- a worker that died, a task that was lost
+                result = exc
+            done(index_of[future.key], result)
+    except BaseException:
+        client.cancel(futures)
+        raise
+
+
+# --------------------------------------------------------------------------------------------------
+# summary
+# --------------------------------------------------------------------------------------------------
+def format_summary(records, seconds: float | None = None) -> str:
+    """The summary table of a batch: file, vertices, lit sources, time, output, status; and a total line."""
+    header = ("file", "vertices", "lit sources", "time [s]", "output", "status")
+    rows = [(r.source, "-" if r.vertices is None else str(r.vertices), "-" if r.lit_sources is None else str(r.lit_sources),
+             f"{r.seconds:.1f}", r.output or "-", r.status) for r in records]
+    widths = [max(len(row[i]) for row in rows + [header]) for i in range(len(header) - 1)]
+    lines = ["  ".join(cell.ljust(w) for cell, w in zip(row, widths + [0])).rstrip()
+             for row in [header, tuple("-" * w for w in widths) + ("------",)] + rows]
+    failed = sum(not r.ok for r in records)
+    total = f"baked {len(records) - failed} of {len(records)} files"
+    if seconds is not None:
+        total += f" in {seconds:.1f} s"
+    if failed:
+        total += f"; {failed} failed"
+    return "\n".join(lines + [total])
+
+
+def exit_code(records) -> int:
+    """0 when every file was baked, 1 when any failed (2, for errors before the batch, is the CLI's)."""
+    return 0 if all(r.ok for r in records) else 1
+
+
+def bake(meshes=None, output=None, material="marble", lights=None, *, unit="mm", model="directional",
+         method="tree", tol=1e-2, resolution="full", shadows=True, exposure=None, per_direction=False,
+         workers=1, scheduler=None, progress=None) -> list[BakeRecord]:
+    """Bake scans to PLY files of per-vertex translucent radiance, one file per scan.
+
+    Parameters
+    ----------
+    meshes : path-like or sequence of path-like, optional
+        Scan files; None: the embedded default scan (the Stanford bunny, 155 mm across).
+    output : path-like, optional
+        A ``.ply`` file for one scan, else a folder (created when missing), default
+        ``translucency-output``; files are named ``<stem>_<material>.ply``.
+    material : str or Material or Medium
+        Catalogue name or coefficients (1/mm).
+    lights : light or sequence of lights, optional
+        Default: one white directional light of 1 W/m².
+    unit : str or float
+        Length unit of the files: ``mm``, ``cm``, ``m``, ``in`` or a number of mm per unit.
+    model, method, tol, resolution, shadows, exposure, per_direction
+        As in :func:`translucency.shade`; ``resolution`` is ``"full"``, ``"auto"`` or a proxy edge
+        length in mm.
+    workers : int
+        Local processes to bake in (1: in this process).
+    scheduler : str or distributed.Client, optional
+        A Dask scheduler's address or a client: the cluster's workers bake and write the files, so
+        the scans and the output folder must be reachable from them under the same paths.
+    progress : BakeProgress, optional
+        E.g. :class:`ConsoleProgress` for progress bars.
+
+    Returns
+    -------
+    list of BakeRecord
+        One per scan, in order: the PLY written (radiance in W/(m² sr) per W/m² of irradiance,
+        positions in mm), or the sentence saying why it failed.
+    """
+    if meshes is not None and isinstance(meshes, (str, os.PathLike)):
+        meshes = [meshes]
+    settings = BakeSettings(material, lights, unit, model, method, tol, resolution, shadows, exposure, per_direction)
+    return bake_files(meshes, output, settings, workers=workers, scheduler=scheduler, progress=progress)

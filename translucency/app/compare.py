@@ -1,0 +1,463 @@
+"""Scripted comparisons: one scan, view and light in several materials and models.
+
+:func:`compare` solves every (material, model) pair on one :class:`~translucency.app.pipeline.Scene`
+(the geometry, Embree scene and visibility are computed once) and returns the numbers; with an output
+folder it also writes
+
+============================ ===========================================================================
+file                         content
+============================ ===========================================================================
+``grid.png``                 one cell per (material, model): rows are models, columns materials, each
+                             labelled; all cells share **one exposure** (below), so brightness compares
+``differences.png``          with two or more models: per-vertex relative difference of luminance of each
+                             model against the first, ``(Y_m - Y_ref) / max(Y_ref, 1e-3 Y_ref,99)``, one
+                             row per model, one diverging colour bar with symmetric limits for all cells
+``statistics.csv``           per (material, model, vertex subset, channel): mean, median and percentiles
+                             5/25/75/95/99 of the radiance toward the normal, and the solve time
+``statistics.json``          the same, the differences' statistics, the settings and the profile's plane
+``profile.png``              radiance along a cut across the light boundary (below), one panel per channel
+============================ ===========================================================================
+
+Statistics are per vertex (not area weighted) over two subsets: ``all`` vertices and ``lit`` ones (those
+the lights reach directly: front-facing and not shadowed, i.e. with incident flux). Radiance is the
+linear radiance toward the normal ``T21(eta, 1) B`` in W/(m² sr) for irradiance in W/m².
+
+Common exposure: unless one is given, it maps the 99.5th percentile of the brightest channel over the
+vertices of *all* cells together to 0.9 (:func:`~translucency.app.pipeline.display_colors`), so the
+brightest cell looks as a single render would and darker materials look darker.
+
+Profile: the plane through the centre of the mesh's bounding box that contains the light direction (of
+the first directional light; the ``up`` axis without one) and the ``up`` axis (the camera direction when
+the light is along ``up``) cuts the surface in closed lines; along the longest, the radiance is
+interpolated linearly from the vertices and plotted against the signed arc length, in mm, from the point
+that faces the light most (positive toward ``up``). Dotted lines mark where the direct light ends (the
+shadow terminator, and cast shadows), so the plot shows how far light bleeds past it in each material.
+
+Files are written into a temporary folder beside the output folder and moved in only when all are
+complete (:func:`~translucency.app.outputs.staged_folder`): a failed run leaves the folder as it was.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .. import __version__
+from ..errors import InvalidParameterError
+from .pipeline import Scene, display_colors, resolve_medium
+from .render import DEFAULT_CAMERA_DIRECTION, DEFAULT_UP, add_colored_mesh, camera_position, new_plotter
+
+__all__ = ["Comparison", "compare", "validate_choices", "radiance_statistics", "relative_difference", "profile_cut",
+           "PERCENTILES"]
+
+#: Percentiles reported besides the mean and the median.
+PERCENTILES = (5, 25, 75, 95, 99)
+#: Rec. 709 luminance weights of linear RGB (the difference maps compare luminance).
+LUMINANCE = np.array([0.2126, 0.7152, 0.0722])
+#: The difference's denominator is at least this fraction of the reference's 99th percentile.
+DIFFERENCE_FLOOR = 1e-3
+CHANNELS = ("R", "G", "B")
+#: Height of the band under the difference maps that holds the colour bar, in cell heights.
+COLOUR_BAR_BAND = 0.3
+#: The profile's log axis spans this fraction of the largest radiance and up (darker values sit on the floor).
+PROFILE_RANGE = 1e-6
+
+
+@dataclass
+class Comparison:
+    """What :func:`compare` computed (and wrote).
+
+    Attributes
+    ----------
+    materials, models : list of str
+        In the order of the grid's columns and rows.
+    exposure : float
+        The display exposure every cell shares.
+    results : dict
+        ``(material, model) -> ShadeResult``.
+    times : dict
+        ``(material, model) -> solve time``, s.
+    statistics : list of dict
+        One row per (material, model, subset, channel), as in ``statistics.csv``.
+    differences : list of dict
+        One row per (material, model, subset) for models after the first: statistics of the relative
+        difference of luminance against the first model.
+    profiles : dict
+        ``(material, model) -> (position (k,), radiance (k, 3))`` along the cut: signed arc length in mm
+        from the point facing the light, and the interpolated radiance.
+    profile_plane : dict
+        The cut: ``center_mm``, unit ``normal``, ``light_direction``, ``length_mm`` and
+        ``light_boundaries_mm`` (positions where the direct light ends).
+    files : dict
+        ``name -> Path`` of the written files (empty without an output folder).
+    """
+
+    materials: list
+    models: list
+    exposure: float
+    results: dict
+    times: dict
+    statistics: list
+    differences: list
+    profiles: dict
+    profile_plane: dict
+    files: dict = field(default_factory=dict)
+
+    def mean(self, material: str, model: str, subset: str = "lit") -> np.ndarray:
+        """Mean radiance per channel (R, G, B) of one cell over ``subset`` (``"lit"`` or ``"all"``)."""
+        rows = {row["channel"]: row["mean"] for row in self.statistics
+                if (row["material"], row["model"], row["subset"]) == (material, model, subset)}
+        return np.array([rows[c] if rows[c] is not None else np.nan for c in CHANNELS])
+
+
+def radiance_statistics(radiance, mask=None) -> dict:
+    """Per channel: vertex count, mean, median and :data:`PERCENTILES` of ``radiance`` (n, 3) where ``mask``.
+
+    Values are None when the mask selects no vertex.
+    """
+    radiance = np.asarray(radiance, dtype=np.float64)
+    values = radiance if mask is None else radiance[np.asarray(mask, dtype=bool)]
+    out = {}
+    for c, channel in enumerate(CHANNELS):
+        v = values[:, c]
+        empty = v.size == 0
+        row = {"n_vertices": int(v.size), "mean": None if empty else float(v.mean()),
+               "median": None if empty else float(np.median(v))}
+        for p in PERCENTILES:
+            row[f"p{p}"] = None if empty else float(np.percentile(v, p))
+        out[channel] = row
+    return out
+
+
+def relative_difference(radiance, reference) -> np.ndarray:
+    """Per-vertex relative difference of luminance, ``(Y - Y_ref) / max(Y_ref, DIFFERENCE_FLOOR Y_ref,99)``."""
+    y = np.asarray(radiance, dtype=np.float64) @ LUMINANCE
+    y_ref = np.asarray(reference, dtype=np.float64) @ LUMINANCE
+    floor = DIFFERENCE_FLOOR * float(np.percentile(y_ref, 99)) if y_ref.size else 0.0
+    denominator = np.maximum(y_ref, floor)
+    return np.divide(y - y_ref, denominator, out=np.zeros_like(y), where=denominator > 0)
+
+
+def profile_cut(mesh, values, light_direction, up=DEFAULT_UP, camera_direction=DEFAULT_CAMERA_DIRECTION):
+    """Per-vertex values along the cut across the light boundary (module docstring).
+
+    The plane through the centre of the bounding box containing ``light_direction`` and ``up`` (or the
+    camera direction, when the light is along ``up``) cuts the surface in closed lines; the longest is
+    kept, and the values are interpolated linearly onto it.
+
+    Parameters
+    ----------
+    mesh : TriangleMesh
+        The mesh, mm.
+    values : dict of str to (n, ...) array_like
+        Per-vertex values to carry onto the cut.
+    light_direction, up, camera_direction : sequence of 3 float
+        Directions spanning the plane (see above).
+
+    Returns
+    -------
+    position : (k,) ndarray
+        Signed arc length along the cut, mm: 0 at the point that faces the light most, positive on the
+        ``up`` side.
+    samples : dict of str to (k, ...) ndarray
+        The values at those points.
+    plane : dict
+        ``center_mm``, ``normal``, ``light_direction`` and ``length_mm`` of the cut.
+    """
+    d = np.asarray(light_direction, dtype=np.float64)
+    d = d / np.linalg.norm(d)
+    second = None
+    for candidate in (up, camera_direction, (1.0, 0.0, 0.0), (0.0, 1.0, 0.0)):
+        u = np.asarray(candidate, dtype=np.float64)
+        u = u - (u @ d) * d
+        if np.linalg.norm(u) > 1e-3:
+            second = u / np.linalg.norm(u)
+            break
+    center = 0.5 * (mesh.points.min(axis=0) + mesh.points.max(axis=0))
+    normal = np.cross(d, second)
+    poly = mesh.to_pyvista()
+    for name, value in values.items():
+        poly.point_data[name] = np.asarray(value, dtype=np.float64)
+    cut = poly.slice(normal=normal, origin=center).strip(join=True)
+    plane = {"center_mm": center.tolist(), "normal": normal.tolist(), "light_direction": d.tolist(), "length_mm": 0.0}
+    lines, longest, i = np.asarray(cut.lines), np.zeros(0, dtype=np.int64), 0
+    while i < len(lines):  # the VTK cell array: count, ids, count, ids, ...
+        ids = lines[i + 1:i + 1 + lines[i]]
+        longest = ids if len(ids) > len(longest) else longest
+        i += lines[i] + 1
+    if len(longest) < 2:
+        return np.zeros(0), {name: np.zeros((0,) + np.shape(v)[1:]) for name, v in values.items()}, plane
+    closed = longest[0] == longest[-1]
+    ids = longest[:-1] if closed else longest
+    points = np.asarray(cut.points)[ids]
+    steps = np.linalg.norm(np.diff(points, axis=0), axis=1)
+    arc = np.concatenate([[0.0], np.cumsum(steps)])
+    length = arc[-1] + (np.linalg.norm(points[-1] - points[0]) if closed else 0.0)
+    start = int(np.argmax((points - center) @ d))
+    position = arc - arc[start]
+    if closed:  # wrap onto (-length / 2, length / 2]
+        position = (position + 0.5 * length) % length - 0.5 * length
+    if np.mean(((points - center) @ second)[position > 0]) < np.mean(((points - center) @ second)[position < 0]):
+        position = -position  # positive toward up
+    order = np.argsort(position, kind="stable")
+    plane["length_mm"] = float(length)
+    samples = {name: np.asarray(cut.point_data[name])[ids][order] for name in values}
+    return position[order], samples, plane
+
+
+def _names(values, what, known=None) -> list:
+    if isinstance(values, str):
+        values = [v.strip() for v in values.split(",")]
+    values = [v for v in values if v]
+    if not values:
+        raise InvalidParameterError(f"give at least one {what}.")
+    if len(set(values)) != len(values):
+        raise InvalidParameterError(f"the {what}s {', '.join(values)} repeat a name; give each once.")
+    for value in values if known is not None else ():
+        if value not in known:
+            raise InvalidParameterError(f"unknown {what} {value!r}; choose from {', '.join(known)}.")
+    return list(values)
+
+
+def validate_choices(materials, models) -> tuple[list, list, dict]:
+    """Materials and models as lists (a string ``"a,b"`` is split), checked; ``(materials, models, media)``.
+
+    Raises a :class:`~translucency.errors.TranslucencyError` with one sentence for an empty or repeated
+    list, an unknown model or an unknown or non-scattering material.
+    """
+    from ..scatter.solve import MODELS
+
+    materials = _names(materials, "material")
+    models = _names(models, "model", MODELS)
+    return materials, models, {name: resolve_medium(name) for name in materials}
+
+
+def compare(mesh=None, materials=("marble",), models=("directional",), lights=None, *, output=None, method="tree",
+            tol=1e-2, resolution="full", shadows=True, per_direction=False, exposure=None,
+            camera_direction=DEFAULT_CAMERA_DIRECTION, up=DEFAULT_UP, cell_size=(480, 480), progress=None) -> Comparison:
+    """Render and measure one scan in several materials and models (module docstring for every output).
+
+    Parameters
+    ----------
+    mesh : TriangleMesh, optional
+        A cleaned mesh in mm (default: the embedded default scan, cleaned).
+    materials : sequence of str, or str "a,b,c"
+        Catalogue names (the grid's columns).
+    models : sequence of str, or str
+        Scattering models (the grid's rows; the first is the reference of the difference maps).
+    lights : light or sequence of lights, optional
+        Default: the pipeline's white directional light of 1 W/m².
+    output : path-like, optional
+        Folder for the files (created; files in it are replaced atomically). None: numbers only.
+    method, tol, resolution, shadows, per_direction
+        Solver settings (:meth:`Scene.shade <translucency.app.pipeline.Scene.shade>`).
+    exposure : float, optional
+        The common display exposure (default: automatic over all cells).
+    camera_direction, up : sequence of 3 float
+        From the mesh's centre toward the camera; the view-up (also the second axis of the profile's plane).
+    cell_size : (int, int)
+        Width and height of one grid cell, pixels; ``grid.png`` is ``(columns * width, rows * height)``.
+    progress : callable, optional
+        Called with a line of text after each solve.
+
+    Returns
+    -------
+    Comparison
+    """
+    from ..scatter.lights import DirectionalLight, as_light_list
+    from .pipeline import DEFAULT_LIGHT_DIRECTION
+
+    materials, models, media = validate_choices(materials, models)
+    if exposure is not None and not (np.isfinite(exposure) and exposure > 0):
+        raise InvalidParameterError(f"exposure must be a positive number, got {exposure!r}.")
+    width, height = (int(v) for v in cell_size)
+    if width < 16 or height < 16:
+        raise InvalidParameterError(f"cell_size must be at least 16 x 16 pixels, got {cell_size!r}.")
+    if mesh is None:
+        from .options import load_scan
+
+        mesh, _, _ = load_scan(None)
+    lights = as_light_list(lights if lights is not None else DirectionalLight(DEFAULT_LIGHT_DIRECTION, 1.0))
+
+    scene = Scene(mesh, shadows=shadows)
+    results, times = {}, {}
+    for material in materials:
+        for model in models:
+            start = time.perf_counter()
+            results[material, model] = scene.shade(media[material], lights, model=model, method=method, tol=tol,
+                                                   resolution=resolution, exposure=1.0, per_direction=per_direction)
+            times[material, model] = time.perf_counter() - start
+            if progress is not None:
+                progress(f"{material}, {model}: {times[material, model]:.2f} s")
+    if exposure is None:
+        _, exposure = display_colors(np.concatenate([r.radiance for r in results.values()]))
+    exposure = float(exposure)
+
+    lit = {material: scene.incident_on_mesh(media[material], lights)[0].phi_rgb.max(axis=1) > 0
+           for material in materials}
+    statistics, differences = [], []
+    for (material, model), result in results.items():
+        for subset, mask in (("all", None), ("lit", lit[material])):
+            for channel, row in radiance_statistics(result.radiance, mask).items():
+                statistics.append({"material": material, "model": model, "subset": subset, "channel": channel, **row,
+                                   "time_s": times[material, model]})
+    relative = {}
+    for material in materials:
+        for model in models[1:]:
+            relative[material, model] = difference = relative_difference(results[material, model].radiance,
+                                                                         results[material, models[0]].radiance)
+            for subset, mask in (("all", slice(None)), ("lit", lit[material])):
+                values = difference[mask]
+                row = {"material": material, "model": model, "reference": models[0], "subset": subset,
+                       "n_vertices": int(values.size)}
+                if values.size:
+                    row.update(mean=float(values.mean()), mean_abs=float(np.abs(values).mean()),
+                               **{f"p{p}": float(np.percentile(values, p)) for p in (5, 50, 95)})
+                differences.append(row)
+
+    key_light = next((light for light in lights if isinstance(light, DirectionalLight)), None)
+    light_direction = key_light.direction if key_light is not None else np.asarray(up, dtype=np.float64)
+    names = {key: f"{key[0]}/{key[1]}" for key in results}
+    values = {names[key]: result.radiance for key, result in results.items()}
+    values["lit"] = lit[materials[0]].astype(np.float64)
+    position, samples, plane = profile_cut(mesh, values, light_direction, up, camera_direction)
+    inside = samples["lit"] >= 0.5
+    plane["light_boundaries_mm"] = (0.5 * (position[1:] + position[:-1]))[inside[1:] != inside[:-1]].tolist()
+    profiles = {key: (position, samples[names[key]]) for key in results}
+
+    comparison = Comparison(materials, models, exposure, results, times, statistics, differences, profiles, plane)
+    if output is not None:
+        comparison.files = _write_files(Path(output), mesh, comparison, relative, lights, camera_direction, up,
+                                        (width, height), {"method": method, "tol": tol, "resolution": resolution,
+                                                          "shadows": bool(shadows), "per_direction": bool(per_direction)})
+    return comparison
+
+
+def _write_files(folder, mesh, comparison, relative, lights, camera_direction, up, cell_size, settings) -> dict:
+    """Write every file into a staging folder, then move them into ``folder`` (module docstring)."""
+    from .outputs import staged_folder, write_png
+
+    names = {"grid": "grid.png", "csv": "statistics.csv", "json": "statistics.json", "profile": "profile.png"}
+    if relative:
+        names["differences"] = "differences.png"
+    with staged_folder(folder) as staging:
+        write_png(staging / names["grid"], _grid_image(mesh, comparison, camera_direction, up, cell_size))
+        if relative:
+            write_png(staging / names["differences"],
+                      _difference_image(mesh, comparison, relative, camera_direction, up, cell_size))
+        _profile_plot(comparison, staging / names["profile"])
+        _write_csv(comparison.statistics, staging / names["csv"])
+        document = {
+            "format": "translucency-comparison", "version": __version__,
+            "mesh": {"source": str(mesh.source) if mesh.source is not None else "embedded default scan",
+                     "vertices": mesh.n_points, "extent_mm": float(mesh.extent)},
+            "settings": {**settings, "lights": [light.to_dict() for light in lights]},
+            "materials": comparison.materials, "models": comparison.models,
+            "exposure": {"value": comparison.exposure, "rule": "common to every cell"},
+            "radiance_unit": "W/(m^2 sr) per W/m^2 of irradiance, toward the normal",
+            "times_s": [{"material": m, "model": k, "seconds": t} for (m, k), t in comparison.times.items()],
+            "statistics": comparison.statistics, "differences": comparison.differences,
+            "profile_plane": comparison.profile_plane, "files": names,
+        }
+        (staging / names["json"]).write_text(json.dumps(document, indent=1) + "\n", encoding="utf-8")
+    return {key: folder / name for key, name in names.items()}
+
+
+def _write_csv(rows, path) -> None:
+    columns = ["material", "model", "subset", "channel", "n_vertices", "mean", "median"] + \
+              [f"p{p}" for p in PERCENTILES] + ["time_s"]
+    with open(path, "w", newline="", encoding="utf-8") as handle:
+        writer = csv.DictWriter(handle, fieldnames=columns)
+        writer.writeheader()
+        for row in rows:
+            writer.writerow({k: ("" if row[k] is None else row[k]) for k in columns})
+
+
+def _cells(plotter, rows, columns):
+    """Make every subplot current in turn; yields (row, column)."""
+    for row in range(rows):
+        for column in range(columns):
+            plotter.subplot(row, column)
+            yield row, column
+
+
+def _grid_image(mesh, comparison, camera_direction, up, cell_size) -> np.ndarray:
+    rows, columns = len(comparison.models), len(comparison.materials)
+    plotter = new_plotter((columns * cell_size[0], rows * cell_size[1]), shape=(rows, columns))
+    camera = None
+    for row, column in _cells(plotter, rows, columns):
+        material, model = comparison.materials[column], comparison.models[row]
+        colors, _ = display_colors(comparison.results[material, model].radiance, comparison.exposure)
+        poly = add_colored_mesh(plotter, mesh, colors)
+        camera = camera or camera_position(poly.center, poly.length, camera_direction, up)
+        plotter.camera_position = camera
+        plotter.add_text(f"{material}, {model}", position="upper_left", font_size=10, color="white")
+    plotter.subplot(0, 0)
+    plotter.add_text(f"exposure {comparison.exposure:.3g} (all cells)", position="lower_left", font_size=7,
+                     color="white")
+    image = plotter.screenshot(return_img=True)
+    plotter.close()
+    return image
+
+
+def _difference_image(mesh, comparison, relative, camera_direction, up, cell_size) -> np.ndarray:
+    """Relative-difference maps, one row per model after the first, and one colour bar in a band below."""
+    rows, columns = len(comparison.models) - 1, len(comparison.materials)
+    reference = comparison.models[0]
+    limit = max(float(np.percentile(np.abs(np.concatenate(list(relative.values()))), 99)), 1e-3)
+    band = COLOUR_BAR_BAND
+    plotter = new_plotter((columns * cell_size[0], int(round((rows + band) * cell_size[1]))), shape=(rows + 1, columns),
+                          row_weights=[1.0] * rows + [band], groups=[(rows, np.s_[:])])
+    camera, actor = None, None
+    for row, column in _cells(plotter, rows, columns):
+        material, model = comparison.materials[column], comparison.models[row + 1]
+        poly = mesh.to_pyvista()
+        poly.point_data["relative difference"] = relative[material, model]
+        actor = plotter.add_mesh(poly, scalars="relative difference", cmap="RdBu_r", clim=(-limit, limit),
+                                 lighting=False, show_scalar_bar=False)
+        camera = camera or camera_position(poly.center, poly.length, camera_direction, up)
+        plotter.camera_position = camera
+        plotter.add_text(f"{material}: {model} vs {reference}", position="upper_left", font_size=10, color="white")
+    plotter.subplot(rows, 0)
+    font = int(np.clip(columns * cell_size[0] / 40, 8, 14))  # the title fits the band's width
+    plotter.add_scalar_bar(title=f"(Y - Y_{reference}) / Y_{reference}", mapper=actor.mapper, color="white",
+                           fmt="%.2f", position_x=0.1, position_y=0.05, width=0.8, height=0.6, title_font_size=font,
+                           label_font_size=font - 2)
+    image = plotter.screenshot(return_img=True)
+    plotter.close()
+    return image
+
+
+def _profile_plot(comparison, path) -> None:
+    """Radiance along the cut, one panel per channel (matplotlib, no global state)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    figure = Figure(figsize=(12, 4), dpi=100, layout="constrained")
+    FigureCanvasAgg(figure)
+    axes = figure.subplots(1, 3, sharex=True)
+    styles = ["-", "--", ":", "-."]
+    colours = [f"C{k % 10}" for k in range(len(comparison.materials))]
+    top = max([float(radiance.max()) for _, radiance in comparison.profiles.values() if radiance.size] + [0.0]) or 1.0
+    plane = comparison.profile_plane
+    for c, (ax, channel) in enumerate(zip(axes, ("red", "green", "blue"))):
+        for (material, model), (position, radiance) in comparison.profiles.items():
+            ax.plot(position, np.maximum(radiance[:, c], PROFILE_RANGE * top),
+                    styles[comparison.models.index(model) % len(styles)],
+                    color=colours[comparison.materials.index(material)], lw=1.0, label=f"{material}, {model}")
+        for x in plane["light_boundaries_mm"]:
+            ax.axvline(x, color="0.6", lw=0.6, ls=":")
+        ax.set_yscale("log")
+        ax.set_ylim(bottom=PROFILE_RANGE * top)
+        ax.set_xlabel("position along the cut (mm; 0 faces the light)")
+        ax.set_title(f"{channel} channel")
+    axes[0].set_ylabel("radiance toward the normal, W/(m² sr) per W/m²")
+    axes[-1].legend(fontsize=7, loc="lower center")
+    figure.suptitle(f"profile across the light boundary: the plane through the centre containing the light cuts the "
+                    f"surface in a line of {plane['length_mm']:.0f} mm; dotted: where the direct light ends", fontsize=9)
+    figure.savefig(path, format="png")
