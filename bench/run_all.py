@@ -13,7 +13,7 @@ validate_models.py  the diffusion models against Monte Carlo (slow)           wi
 =================== ========================================================= ==================
 
 Each script writes its JSON, Markdown tables and PNG plots into ``bench/results`` (with ``--quick``:
-small sizes, into ``bench/results/tmp``). Afterwards the suite writes ``suite.json`` (what ran, how
+small sizes, into ``bench/results/tmp``; :data:`SUITE` holds each script's quick arguments). Afterwards the suite writes ``suite.json`` (what ran, how
 long, the load average) and ``goals.md`` (the issue's speed goals against the measurements), and
 replaces every generated block of ``bench/README.md`` -- the text between
 ``<!-- NAME-table:start -->`` and ``<!-- NAME-table:end -->`` -- with ``bench/results/NAME.md``.
@@ -36,14 +36,18 @@ import time
 from report import RESULTS, ROOT, load_average, machine_info, output_dir, update_readme
 
 BENCH = ROOT / "bench"
-#: (name, script, takes --repeats, optional): the suite in the order it runs.
-SUITE = [("solver", "solver.py", True, False), ("scaling", "scaling.py", True, False),
-         ("stability", "stability.py", False, False), ("validate_models", "validate_models.py", False, True)]
+#: (name, script, arguments of a quick run, takes --repeats, optional): the suite in the order it runs.
+SUITE = [("solver", "solver.py", ["--quick"], True, False), ("scaling", "scaling.py", ["--quick"], True, False),
+         ("stability", "stability.py", ["--blocks", "256", "--out", "bench/results/tmp"], False, False),
+         ("validate_models", "validate_models.py", ["--quick"], False, True)]
 
 
-def run_script(script, quick, repeats):
-    """Run one benchmark script in a child process; ``{"returncode", "seconds", "load_average_*"}``."""
-    command = [sys.executable, str(BENCH / script)] + (["--quick"] if quick else [])
+def run_script(script, quick_arguments, repeats):
+    """Run one benchmark script in a child process; ``{"returncode", "seconds", "load_average_*"}``.
+
+    ``quick_arguments`` (a list, or None for a full run) are what makes the script a smoke run.
+    """
+    command = [sys.executable, str(BENCH / script)] + (quick_arguments or [])
     if repeats is not None:
         command += ["--repeats", str(repeats)]
     print(f"== bench/{script} {' '.join(command[2:])}", flush=True)
@@ -112,7 +116,7 @@ def main(argv=None):
     out = output_dir(args.quick)
     info = machine_info()
     ran = {}
-    for name, script, takes_repeats, optional in SUITE:
+    for name, script, quick_arguments, takes_repeats, optional in SUITE:
         if args.tables_only or (args.only and name not in args.only):
             continue
         if optional and not args.validate and not (args.only and name in args.only):
@@ -122,7 +126,7 @@ def main(argv=None):
             print(f"== {script}: skipped (bench/{script} does not exist in this checkout)")
             ran[name] = {"skipped": "script not present"}
             continue
-        ran[name] = run_script(script, args.quick, args.repeats if takes_repeats else None)
+        ran[name] = run_script(script, quick_arguments if args.quick else None, args.repeats if takes_repeats else None)
         if ran[name]["returncode"]:
             print(f"== {script} failed with exit code {ran[name]['returncode']}")
     info["load_average_end"] = load_average()

@@ -115,10 +115,11 @@ def split_longest_edges(points, triangles, vertices):
 
 
 def write_mesh(path, points, triangles):
-    """Write a plain triangle mesh (mm) as a binary PLY, the way the package's ``inspect -o`` does."""
+    """Write a plain triangle mesh (mm) as a PLY with :func:`translucency.io.save.save_mesh` (as ``inspect -o`` does)."""
     from translucency.io.mesh import TriangleMesh
+    from translucency.io.save import save_mesh
 
-    TriangleMesh(points, triangles).to_pyvista().save(str(path))
+    save_mesh(path, TriangleMesh(points, triangles))
 
 
 def peak_rss_mb() -> float:
