@@ -347,8 +347,9 @@ def markdown(rows, exponents):
             f"{fmt(r.get('error_rms'), '.1e')} | {fmt(r.get('error_worst'), '.1e')} | {fmt(r.get('ru_maxrss_mb'), '.0f')} | "
             f"{fmt((r.get('load_average_bake') or [None])[0], '.1f')} | {r['status']} |")
     lines.append("")
+    fitted = "; ".join(f"{name}: k = {k:.2f}" for name, k in exponents.items() if k is not None)
     lines.append("Fitted exponents (time or memory ∝ vertices^k, least squares over the sizes measured): "
-                 + "; ".join(f"{name}: k = {k:.2f}" for name, k in exponents.items() if k is not None) + ".")
+                 + (fitted or "none (fewer than two sizes)") + ".")
     return "\n".join(lines)
 
 
