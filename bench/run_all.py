@@ -19,7 +19,7 @@ replaces every generated block of ``bench/README.md`` -- the text between
 ``<!-- NAME-table:start -->`` and ``<!-- NAME-table:end -->`` -- with ``bench/results/NAME.md``.
 Nothing else of the README changes, and a ``--quick`` run leaves it alone.
 
-    .venv/bin/python bench/run_all.py              # the suite (about 1.5 h on 2 free cores)
+    .venv/bin/python bench/run_all.py              # the suite (about 40 min on 2 cores)
     .venv/bin/python bench/run_all.py --validate   # and the Monte Carlo validation (+ about 10 min)
     .venv/bin/python bench/run_all.py --quick      # a smoke run of every script (a few minutes)
     .venv/bin/python bench/run_all.py --tables-only  # only rewrite the README's tables from bench/results

@@ -31,7 +31,7 @@ resident set grows past ``--memory-limit`` GB, and records why.
 Writes ``scaling.json``, ``scaling.md``, ``bake.md`` and ``scaling.png`` into ``bench/results``
 (``bench/results/tmp`` with ``--quick``: 10k and 30k only).
 
-    .venv/bin/python bench/scaling.py            # every size (about 30 min on 2 cores, most of it at 1M)
+    .venv/bin/python bench/scaling.py            # every size (about 5 min on 2 cores, most of it at 1M)
     .venv/bin/python bench/scaling.py --quick    # 10k and 30k, in a minute or two
 """
 
@@ -208,7 +208,8 @@ def child(path, out_json, repeats):
     stages.update({SOLVER_STAGES[k]: result.timings.get(k, 0.0) for k in SOLVER_STAGES})
     save(phase="warm shades", vertices=mesh.n_points, triangles=mesh.n_triangles, stages=stages,
          bake_seconds=stages["load"] + stages["clean"] + stages["shade"] + stages["write"],
-         peak_rss_bake_mb=peak_rss_mb(), load_average_bake=load_average(), solver_stats=result.stats["solver"])
+         peak_rss_bake_mb=peak_rss_mb(), load_average_bake=load_average(), solver_stats=result.stats["solver"],
+         shade_timings=result.timings)
     runs = repeats if mesh.n_points <= REPEAT_MAX_VERTICES else 1
     warm = []
     for _ in range(runs):
