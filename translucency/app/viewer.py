@@ -23,8 +23,9 @@ folder, ``Return`` solves the current state on every vertex (``resolution="full"
 Interactive resolution. Every change re-solves on one persistent ``Scene`` (geometry, Embree scene and
 visibility are reused) on a proxy of about :data:`INTERACTIVE_VERTICES` vertices
 (:func:`interactive_edge_length`), interpolated back to every vertex. Measured on the embedded default
-scan (28,088 vertices after cleaning, 155 mm across) on a 2-core machine, warm, ``tree`` method; the
-reference is the full solve with the default settings (``tree``, tol 1e-2, every vertex), which takes
+scan (28,088 vertices after cleaning, 155 mm across) on a 2-core machine, warm, ``tree`` method, with
+the solver as it was before its near field and tree were vectorised (2.5-3.7x faster since; see
+``bench/README.md``: a finer proxy now answers in the same time); the reference is the full solve with the default settings (``tree``, tol 1e-2, every vertex), which takes
 6-11 s there. Errors are over marble, skim milk and ketchup under three lights (elevations 10-60 deg):
 
 ============ ========= ==================== ==================== ============== =====================
