@@ -206,6 +206,16 @@ def _fill_rule_points(points, normals, w12, phi, triangles, triangle_areas, rule
                     triangle_areas[t] * rule_weights[q], table, weights, column + q)
 
 
+@numba.njit(cache=True, inline="always")
+def _whole(diameter, centroid, xo, beta, scale_min):
+    """Whether a triangle is far enough from ``x_o`` to be integrated whole with the rule (the
+    refinement test of :func:`_pieces` applied to the triangle itself)."""
+    d2 = 0.0
+    for i in range(3):
+        d2 += (centroid[i] - xo[i]) ** 2
+    return diameter <= beta * max(math.sqrt(d2), scale_min)
+
+
 @numba.njit(cache=True, fastmath=True)
 def _pieces(points, tri, xo, beta, scale_min, stack, cx, out):
     """Adaptive midpoint subdivision of a triangle that is too close to be integrated whole.
@@ -367,10 +377,7 @@ def _list_points(points, triangles, triangle_areas, receivers, offsets, triangle
                         factors[base + listed] = 0.0
                         listed += 1
                     factors[base + slot[v]] -= third
-                d2 = 0.0
-                for i in range(3):
-                    d2 += (centroids[t, i] - xo[i]) ** 2
-                if diameters[t] <= beta * max(math.sqrt(d2), scale_min):  # whole: the shared rule points
+                if _whole(diameters[t], centroids[t], xo, beta, scale_min):  # the shared rule points
                     for q in range(n_rule):
                         columns[base + listed] = first_rule[t] + q
                         factors[base + listed] = 1.0
@@ -403,10 +410,7 @@ def _refined_points(points, normals, w12, phi, triangles, triangle_areas, receiv
                 t = triangle_ids[k]
                 if first_rule[t] < 0:
                     continue
-                d2 = 0.0
-                for i in range(3):
-                    d2 += (centroids[t, i] - xo[i]) ** 2
-                if diameters[t] <= beta * max(math.sqrt(d2), scale_min):
+                if _whole(diameters[t], centroids[t], xo, beta, scale_min):
                     continue
                 n = _pieces(points, triangles[t], xo, beta, scale_min, stack, cx, found)
                 if n > found.shape[0]:  # deeper than the scratch space: grow it and subdivide again
