@@ -242,7 +242,7 @@ class Scene:
             reused.append(f"visibility of {incident.stats.n_visibility_reused} light samples")
         solver_stats = solutions[0].stats if len(solutions) == 1 else {
             "solves": len(solutions), **{k: sum(s.stats.get(k, 0) for s in solutions)
-                                          for k in ("pairs_evaluated", "pairs_skipped", "near_pieces")}}
+                                          for k in ("pairs_evaluated", "pairs_skipped", "near_points")}}
         stats = {"incident": incident.stats.as_dict(), "solver": solver_stats, "reused": reused,
                  "solver_vertices": solver_mesh.n_points, "vertices": self.mesh.n_points}
         return ShadeResult(self.mesh, B, radiance, colors, exposure, self._normals, stats, timings, metadata)
