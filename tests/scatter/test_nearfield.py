@@ -94,3 +94,20 @@ def test_degree3_rule_is_exact_for_cubics():
             if a + b <= 3:
                 assert np.isclose(rule, exact, rtol=1e-13), (a, b)
     assert not np.isclose(weights @ points[:, 0] ** 4, 1 / 30, rtol=1e-3)
+
+
+@pytest.mark.parametrize("radius", [0.0, 0.3, 1.0, 50.0])
+def test_near_triangles_are_those_with_a_vertex_within_the_radius(radius):
+    """The grid search equals a brute-force distance check (every receiver, every vertex)."""
+    from tests.synthetic import icosphere
+
+    points, triangles = icosphere(2, 5.0)
+    points = points * np.array([1.0, 0.7, 1.3])  # not a sphere: cells fill unevenly
+    receivers = np.array([0, 5, 17, len(points) - 1])
+    offsets, ids = nearfield.near_triangles(points, triangles, receivers, radius)
+    for q, v in enumerate(receivers):
+        close = np.linalg.norm(points - points[v], axis=1) <= radius
+        expected = np.flatnonzero(close[triangles].any(axis=1))
+        found = ids[offsets[q]:offsets[q + 1]]
+        assert len(found) == len(set(found.tolist()))  # each triangle once
+        assert np.array_equal(np.sort(found), expected)

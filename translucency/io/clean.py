@@ -327,14 +327,22 @@ def clean_arrays(
     origin = np.arange(len(points), dtype=np.int64)
     input_points, validated_triangles = points, triangles
 
+    def pristine():
+        """Whether the arrays are still the input's: then ``before`` tells which steps find nothing."""
+        return points is input_points and triangles is validated_triangles
+
     # 1. duplicate vertices
-    if merge_duplicate_vertices:
+    if merge_duplicate_vertices and before.duplicate_vertices:
         points, triangles, origin, counts["duplicate_vertices_merged"] = _merge_duplicate_vertices(
             points, triangles, origin
         )
+    elif merge_duplicate_vertices:
+        counts["duplicate_vertices_merged"] = 0
 
     # 2-3. null and duplicate faces
-    if remove_degenerate_faces:
+    if remove_degenerate_faces and pristine() and before.null_faces == 0 and before.duplicate_faces == 0:
+        counts["null_faces_removed"] = counts["duplicate_faces_removed"] = 0
+    elif remove_degenerate_faces:
         null = (
             (triangles[:, 0] == triangles[:, 1])
             | (triangles[:, 1] == triangles[:, 2])
@@ -348,11 +356,11 @@ def clean_arrays(
         _require_triangles(triangles, "removing degenerate faces")
 
     # 5-6. non-manifold edges and vertices
-    if repair_non_manifold:
+    if repair_non_manifold and not (pristine() and before.non_manifold_edges == 0 and before.non_manifold_vertices == 0):
         points, triangles, origin = _repair_non_manifold(points, triangles, origin, input_points, counts)
 
     # 4. zero-area faces (after 5-6: collapsing them needs a manifold mesh)
-    if remove_degenerate_faces:
+    if remove_degenerate_faces and not (pristine() and before.zero_area_faces == 0):
         zero = zero_area_mask(points, triangles)
         if zero.any():
             points, triangles, origin = _repair_zero_area_faces(points, triangles, origin, input_points, zero)
@@ -360,7 +368,7 @@ def clean_arrays(
             _require_triangles(triangles, "removing zero-area faces")
 
     # 7. small islands
-    if min_island_fraction > 0:
+    if min_island_fraction > 0 and not (pristine() and before.components <= 1):
         count, component = face_components(triangles)
         if count > 1:
             area = np.bincount(component, weights=triangle_areas(points, triangles), minlength=count)
@@ -372,13 +380,15 @@ def clean_arrays(
 
     # 8. coherent orientation (hole filling follows the orientation of the border)
     non_orientable = 0
-    if orient_outward:
+    if orient_outward and pristine() and before.inconsistent_edges == 0 and before.non_manifold_edges == 0:
+        counts["faces_flipped_coherent"] = 0  # every edge already runs both ways
+    elif orient_outward:
         flip, non_orientable = coherent_orientation(triangles)
         triangles = flip_triangles(triangles, flip)
         counts["faces_flipped_coherent"] = int(np.count_nonzero(flip))
 
     # 9. holes (a patch over a border with collinear edges can hold zero-area faces: repaired too)
-    if max_hole_edges > 0:
+    if max_hole_edges > 0 and not (pristine() and before.boundary_edges == 0):
         faces_before = len(triangles)
         points, triangles, origin = _close_holes(points, triangles, origin, input_points, int(max_hole_edges), counts)
         if remove_degenerate_faces and counts.get("holes_closed", 0):

@@ -42,7 +42,6 @@ from dataclasses import dataclass
 
 import numba
 import numpy as np
-from scipy.spatial import cKDTree
 
 from .kernels import channel_lanes, indexed_sum
 
@@ -74,7 +73,9 @@ FAN_RADIAL = 5
 def near_triangles(points, triangles, receivers, radius):
     """For each receiver vertex, the triangles that have a vertex within ``radius`` (mm) of it.
 
-    Includes the receiver's own 1-ring (the receiver is within any radius of itself).
+    Includes the receiver's own 1-ring (the receiver is within any radius of itself). The vertices
+    are binned in a uniform grid of cells at least ``radius`` wide, and each receiver looks at the 27
+    cells around its own, in parallel (two passes: count, then fill).
 
     Returns
     -------
@@ -82,47 +83,93 @@ def near_triangles(points, triangles, receivers, radius):
     triangle_ids : (offsets[-1],) int64
         CSR lists: the near triangles of receiver ``r`` are ``triangle_ids[offsets[r]:offsets[r+1]]``.
     """
+    points = np.ascontiguousarray(points, dtype=np.float64)
+    triangles = np.ascontiguousarray(triangles, dtype=np.int64)
     n = points.shape[0]
-    receivers = np.asarray(receivers, dtype=np.int64)
+    receivers = np.ascontiguousarray(receivers, dtype=np.int64)
     # vertex -> incident triangles (CSR)
     corner_vertex = triangles.ravel()
-    order = np.argsort(corner_vertex, kind="stable")
-    vt_tris = (order // 3).astype(np.int64)
+    vt_tris = (np.argsort(corner_vertex, kind="stable") // 3).astype(np.int64)
     vt_offsets = np.zeros(n + 1, dtype=np.int64)
     np.cumsum(np.bincount(corner_vertex, minlength=n), out=vt_offsets[1:])
-    # receiver -> vertices within the radius (itself included, at distance 0), as CSR
-    found = cKDTree(points[receivers]).sparse_distance_matrix(cKDTree(points), radius, output_type="ndarray")
-    rcv = np.concatenate([found["i"].astype(np.int64), np.arange(receivers.size)])
-    vtx = np.concatenate([found["j"].astype(np.int64), receivers])
-    by_receiver = np.argsort(rcv, kind="stable")
-    near_vertices = vtx[by_receiver]
-    nv_offsets = np.zeros(receivers.size + 1, dtype=np.int64)
-    np.cumsum(np.bincount(rcv, minlength=receivers.size), out=nv_offsets[1:])
-    return _incident_triangles(nv_offsets, near_vertices, vt_offsets, vt_tris, triangles.shape[0])
+    # the grid: cells keyed by their integer coordinates, vertices sorted by key
+    low = points.min(axis=0) if n else np.zeros(3)
+    extent = float(np.ptp(points, axis=0).max()) if n else 0.0
+    cell = max(float(radius), extent * 1e-6, 1e-300)  # at most 1e6 cells a side: keys fit in int64
+    dims = (np.floor((points.max(axis=0) - low) / cell).astype(np.int64) + 1) if n else np.ones(3, dtype=np.int64)
+    keys = _cell_keys(points, low, cell, dims)
+    by_key = np.argsort(keys, kind="stable")
+    cell_keys, cell_start = np.unique(keys[by_key], return_index=True)
+    cell_start = np.append(cell_start, n).astype(np.int64)
+    stamps = np.full((numba.get_num_threads(), triangles.shape[0]), -1, dtype=np.int64)
+    counts = np.zeros(receivers.size, dtype=np.int64)
+    none = np.empty(0, dtype=np.int64)
+    visit = np.argsort(keys[receivers], kind="stable")  # receivers cell by cell: neighbours share the cells' cache lines
+    args = (points, np.ascontiguousarray(points[by_key]), receivers, visit, float(radius), low, cell, dims, cell_keys,
+            cell_start, by_key.astype(np.int64), vt_offsets, vt_tris)
+    _near_pass(*args, none, none, counts, stamps, 0)
+    offsets = np.zeros(receivers.size + 1, dtype=np.int64)
+    np.cumsum(counts, out=offsets[1:])
+    triangle_ids = np.empty(offsets[-1], dtype=np.int64)
+    _near_pass(*args, offsets, triangle_ids, counts, stamps, receivers.size)
+    return offsets, triangle_ids
 
 
 @numba.njit(cache=True)
-def _incident_triangles(nv_offsets, near_vertices, vt_offsets, vt_tris, n_triangles):
-    """Deduplicated union of the triangles incident to each receiver's near vertices (CSR in, CSR out)."""
-    n_r = nv_offsets.shape[0] - 1
-    bound = 0
-    for q in range(near_vertices.shape[0]):
-        bound += vt_offsets[near_vertices[q] + 1] - vt_offsets[near_vertices[q]]
-    ids = np.empty(bound, dtype=np.int64)
-    offsets = np.zeros(n_r + 1, dtype=np.int64)
-    stamp = np.full(n_triangles, -1, dtype=np.int64)
-    pos = 0
-    for r in range(n_r):
-        for q in range(nv_offsets[r], nv_offsets[r + 1]):
-            v = near_vertices[q]
-            for k in range(vt_offsets[v], vt_offsets[v + 1]):
-                t = vt_tris[k]
-                if stamp[t] != r:
-                    stamp[t] = r
-                    ids[pos] = t
-                    pos += 1
-        offsets[r + 1] = pos
-    return offsets, ids[:pos].copy()
+def _cell_keys(points, low, cell, dims):
+    """Grid key ``(i * dims[1] + j) * dims[2] + k`` of each point's cell."""
+    keys = np.empty(points.shape[0], dtype=np.int64)
+    for v in range(points.shape[0]):
+        i = min(int((points[v, 0] - low[0]) / cell), dims[0] - 1)
+        j = min(int((points[v, 1] - low[1]) / cell), dims[1] - 1)
+        k = min(int((points[v, 2] - low[2]) / cell), dims[2] - 1)
+        keys[v] = (i * dims[1] + j) * dims[2] + k
+    return keys
+
+
+@numba.njit(cache=True, parallel=True)
+def _near_pass(points, sorted_points, receivers, visit, radius, low, cell, dims, cell_keys, cell_start, by_key,
+               vt_offsets, vt_tris, offsets, triangle_ids, counts, stamps, stamp_base):
+    """Count (``triangle_ids`` empty) or write each receiver's near triangles, each once, receivers in
+    the order ``visit``: ``stamps`` (threads x triangles) hold the stamp ``stamp_base + receiver`` of the
+    receiver that last took one. ``sorted_points`` are the points cell by cell (``points[by_key]``), so
+    that a cell's distance checks read contiguous memory."""
+    write = triangle_ids.shape[0] > 0
+    r2 = radius * radius
+    for p in numba.prange(receivers.shape[0]):
+        q = visit[p]
+        mine = stamps[numba.get_thread_id()]
+        me = stamp_base + q
+        x = points[receivers[q]]
+        ci = min(int((x[0] - low[0]) / cell), dims[0] - 1)
+        cj = min(int((x[1] - low[1]) / cell), dims[1] - 1)
+        ck = min(int((x[2] - low[2]) / cell), dims[2] - 1)
+        at = offsets[q] if write else 0
+        count = 0
+        k_lo = max(ck - 1, 0)
+        k_hi = min(ck + 1, dims[2] - 1)
+        for i in range(max(ci - 1, 0), min(ci + 2, dims[0])):
+            for j in range(max(cj - 1, 0), min(cj + 2, dims[1])):
+                # the cells (i, j, k_lo..k_hi) have consecutive keys: one search, then walk
+                last = (i * dims[1] + j) * dims[2] + k_hi
+                c = np.searchsorted(cell_keys, last - (k_hi - k_lo))
+                while c < cell_keys.shape[0] and cell_keys[c] <= last:
+                    for s in range(cell_start[c], cell_start[c + 1]):
+                        d2 = ((sorted_points[s, 0] - x[0]) ** 2 + (sorted_points[s, 1] - x[1]) ** 2
+                              + (sorted_points[s, 2] - x[2]) ** 2)
+                        if d2 > r2:
+                            continue
+                        v = by_key[s]
+                        for e in range(vt_offsets[v], vt_offsets[v + 1]):
+                            t = vt_tris[e]
+                            if mine[t] != me:
+                                mine[t] = me
+                                if write:
+                                    triangle_ids[at] = t
+                                    at += 1
+                                count += 1
+                    c += 1
+        counts[q] = count
 
 
 @numba.njit(cache=True, fastmath=True)

@@ -155,6 +155,26 @@ class SurfaceGeometry:
             self._cache["triangle_tables"] = nearfield.triangle_tables(self.points, self.triangles)
         return self._cache["triangle_tables"]
 
+    def spatial_order(self) -> tuple["SurfaceGeometry", np.ndarray, np.ndarray]:
+        """``(ordered, order, rank)``: the same surface with its vertices along a Morton curve
+        (:func:`translucency.io.geometry.morton_order`) and its triangles by first vertex, so that
+        neighbours sit close in memory whatever order the mesh came in (subdivided or merged meshes
+        append vertices far from their neighbours); ``ordered.points == points[order]``,
+        ``rank[order] == arange(n)``. The solver works on it; cached, with its own caches."""
+        if "ordered" not in self._cache:
+            from ..io.geometry import morton_order
+
+            order = morton_order(self.points)
+            rank = np.empty_like(order)
+            rank[order] = np.arange(order.size)
+            triangles = rank[self.triangles]
+            triangles = triangles[np.argsort(triangles.min(axis=1), kind="stable")]
+            ordered = SurfaceGeometry(self.points[order], triangles, self.normals[order])
+            identity = np.arange(order.size)
+            ordered._cache["ordered"] = (ordered, identity, identity)  # already ordered
+            self._cache["ordered"] = (ordered, order, rank)
+        return self._cache["ordered"]
+
     def near_lists(self, receivers: np.ndarray, radius: float):
         """Near triangles of each receiver (CSR), cached per (receivers, radius)."""
         key = ("near", receivers.tobytes() if receivers.size < self.n_vertices else "all", round(radius, 12))
@@ -333,6 +353,12 @@ def solve(
             raise InvalidParameterError(f"receivers must be vertex indices in 0..{n - 1}.")
 
     start = time.perf_counter()
+    # work on the spatially ordered copy, receivers in its order; B goes back to the caller's order
+    geometry, order, rank = geometry.spatial_order()
+    phi, w12 = phi[order], w12[order]
+    inner = rank[receivers]
+    visit = np.argsort(inner, kind="stable")
+    inner = inner[visit]
     rows, channel_of = unique_channels(medium)
     params = kernels.channel_parameters(rows[:, 0], rows[:, 1], rows[:, 2], medium.eta, model)
     model_code = kernels.MODELS[model]
@@ -348,10 +374,10 @@ def solve(
 
     report("far field", 0.0)
     start = time.perf_counter()
-    rcv_points = geometry.points[receivers]
-    rcv_normals = geometry.normals[receivers]
+    rcv_points = geometry.points[inner]
+    rcv_normals = geometry.normals[inner]
     if lit.size == 0:
-        B, far_stats = np.zeros((receivers.size, medium.n_channels)), {"pairs_evaluated": 0, "pairs_skipped": 0}
+        B, far_stats = np.zeros((inner.size, medium.n_channels)), {"pairs_evaluated": 0, "pairs_skipped": 0}
     else:
         far_field = {"exact": _far_field_exact, "cutoff": _far_field_cutoff, "tree": _far_field_tree}[method]
         B, far_stats = far_field(model, geometry, medium, lit, w12, flux, rcv_points, rcv_normals, params,
@@ -363,12 +389,12 @@ def solve(
     report("near field", 0.0)
     start = time.perf_counter()
     radius = near_radius(geometry, medium)
-    offsets, triangle_ids = geometry.near_lists(receivers, radius)
+    offsets, triangle_ids = geometry.near_lists(inner, radius)
     timings["near_lists"] = time.perf_counter() - start
     start = time.perf_counter()
     correction, near_points = nearfield.near_field_correction(
         model_code, geometry.points, geometry.triangles, geometry.triangle_areas, geometry.normals, w12, phi,
-        receivers, offsets, triangle_ids, params, channel_of, NEAR_BETA, float(np.min(medium.D)),
+        inner, offsets, triangle_ids, params, channel_of, NEAR_BETA, float(np.min(medium.D)),
         tables=geometry.triangle_tables(), degree3_ratio=0.0 if method == "exact" else NEAR_DEGREE3_RATIO)
     B = B + correction
     negative = B < 0
@@ -377,6 +403,7 @@ def solve(
     stats["near_points"] = int(near_points.sum())
     stats["negative_clamped"] = int(negative.sum())
     B[negative] = 0.0
+    B[visit] = B.copy()  # rows back in the order of ``receivers``
     timings["near_field"] = time.perf_counter() - start
     report("near field", 1.0)
     settings = {"model": model, "method": method, "tol": tol, "medium": medium.describe()}
