@@ -194,9 +194,10 @@ def mean_edge_length(points, triangles) -> float:
     """Mean length of the unique edges, in mm."""
     triangles = np.asarray(triangles, dtype=np.int64)
     edges = np.sort(triangles[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
-    edges = np.unique(edges, axis=0)
     p = np.asarray(points, dtype=np.float64)
-    return float(np.linalg.norm(p[edges[:, 0]] - p[edges[:, 1]], axis=1).mean())
+    keys = np.unique(edges[:, 0] * len(p) + edges[:, 1])  # one integer per undirected edge (rows would sort slowly)
+    first, second = np.divmod(keys, len(p))
+    return float(np.linalg.norm(p[first] - p[second], axis=1).mean())
 
 
 def signed_volume(points, triangles, origin=None) -> float:
