@@ -41,7 +41,22 @@ def _directional_bound(r, D, sigma_tr_, C_phi, C_E, norm):
 
 
 def cutoff_radius(medium: Medium, tol: float, model: str = "directional") -> float:
-    """Radius (mm) beyond which pairs may be skipped with at most ``tol`` of the energy dropped."""
+    """Radius (mm) beyond which pairs may be skipped with at most ``tol`` of the energy dropped.
+
+    Memoised on the coefficients (a few quadratures and a root search: ~50 ms per call otherwise)."""
+    key = (tuple(np.asarray(medium.sigma_a, float).tolist()), tuple(np.asarray(medium.sigma_s, float).tolist()),
+           tuple(np.asarray(medium.g, float).tolist()), float(medium.eta), float(tol), str(model))
+    if key not in _RADII:
+        if len(_RADII) >= 256:
+            _RADII.clear()
+        _RADII[key] = _cutoff_radius(medium, tol, model)
+    return _RADII[key]
+
+
+_RADII: dict = {}
+
+
+def _cutoff_radius(medium: Medium, tol: float, model: str) -> float:
     radii = []
     norm = 1.0 / (4.0 * float(fresnel.C_phi(1.0 / medium.eta)))
     for c in range(medium.n_channels):

@@ -170,11 +170,12 @@ def source_table(points, normals, w12, flux, node_flux, node_pos, node_nrm, node
 
 
 def tree_sum(model, tree, nodes, points, normals, w12, flux, rcv_points, rcv_normals, params, channel_of, theta,
-             block=4096):
+             block=4096, reach=math.inf):
     """Far-field sum with the hierarchy: ``B[o, c]``, sources summed one by one and clusters used, per receiver.
 
     A node small seen from the receiver (radius < ``theta`` x distance, receiver outside it) is one
-    aggregated source; otherwise its children are opened, down to the leaves' sources. The lists of
+    aggregated source; otherwise its children are opened, down to the leaves' sources. A node wholly
+    farther than ``reach`` (mm; the cutoff radius of the tolerance) is skipped. The lists of
     sources and clusters are made per block of receivers, then evaluated with
     :func:`~translucency.scatter.kernels.indexed_sum`.
 
@@ -198,21 +199,22 @@ def tree_sum(model, tree, nodes, points, normals, w12, flux, rcv_points, rcv_nor
         part = slice(first, min(n_rcv, first + block))
         p, nrm = rcv_points[part], rcv_normals[part]
         _traverse(tree.order, tree.start, tree.end, tree.left, tree.right, tree.centre, tree.radius, node_weight, lit,
-                  p, theta, np.empty(0, dtype=np.int64), np.zeros(1, dtype=np.int64), direct[part], clustered[part])
+                  p, theta, reach, np.empty(0, dtype=np.int64), np.zeros(1, dtype=np.int64),
+                  direct[part], clustered[part])
         counts = direct[part] + clustered[part]
         starts = np.zeros(counts.size, dtype=np.int64)
         np.cumsum(counts[:-1], out=starts[1:])
         columns = np.empty(int(counts.sum()), dtype=np.int64)
         _traverse(tree.order, tree.start, tree.end, tree.left, tree.right, tree.centre, tree.radius, node_weight, lit,
-                  p, theta, columns, starts, direct[part], clustered[part])
+                  p, theta, reach, columns, starts, direct[part], clustered[part])
         B[part] = indexed_sum(model, p, nrm, table, weights, starts, counts, columns, np.ones(columns.size), params,
                               lanes, channel_of)
     return B, direct, clustered
 
 
 @numba.njit(cache=True, parallel=True)
-def _traverse(order, start, end, left, right, centre, radius, node_weight, lit, rcv_points, theta, columns, starts,
-              direct, clustered):
+def _traverse(order, start, end, left, right, centre, radius, node_weight, lit, rcv_points, theta, reach, columns,
+              starts, direct, clustered):
     """Walk the tree for every receiver: count the lit sources and clusters it evaluates (``columns`` empty),
     or write their columns (source ``j`` or ``n + node``) from ``starts[o]`` on."""
     n_rcv = rcv_points.shape[0]
@@ -239,6 +241,8 @@ def _traverse(order, start, end, left, right, centre, radius, node_weight, lit, 
             dz = pz - centre[k, 2]
             dist2 = dx * dx + dy * dy + dz * dz
             rk = radius[k]
+            if dist2 > (reach + rk) * (reach + rk):  # wholly beyond the cutoff radius
+                continue
             if dist2 > rk * rk and rk * rk < theta2 * dist2:
                 if write:
                     columns[at] = n_src + k

@@ -15,7 +15,9 @@ Methods for the far field (each with a tolerance where it has one):
     geometry-independent bound of ``S_d`` holds less than ``tol`` of the total reflectance (spec 6.2).
 ``tree``
     a hierarchy over the sources (:mod:`translucency.scatter.hierarchy`): a cluster that is small
-    seen from the receiver is replaced by one aggregated source (Jensen & Buhler 2002, spec 6.1).
+    seen from the receiver is replaced by one aggregated source (Jensen & Buhler 2002, spec 6.1);
+    clusters wholly beyond the ``cutoff`` radius ``R(tol)`` are skipped (on the bunny in marble this
+    drops a quarter of the evaluations and changes ``B`` by 5e-6 relative, in ketchup 45 % and 3e-4).
 
 Skipped work is reported in :attr:`Solution.stats`: sources with no flux, pairs beyond the cutoff or
 inside accepted clusters, channels with identical coefficients (computed once).
@@ -268,10 +270,12 @@ def _far_field_tree(model, geometry, medium, lit, w12, flux, rcv_points, rcv_nor
     theta = hierarchy.THETA_PER_SQRT_TOL * float(np.sqrt(tol))
     nodes = hierarchy.aggregate(tree.order, tree.start, tree.end, tree.left, tree.right, geometry.points,
                                 geometry.normals, w12, flux)
+    reach = cutoff.cutoff_radius(medium, tol, model)
     B, direct, clustered = hierarchy.tree_sum(model_code, tree, nodes, geometry.points, geometry.normals, w12, flux,
-                                              rcv_points, rcv_normals, params, channel_of, theta)
+                                              rcv_points, rcv_normals, params, channel_of, theta, reach=reach)
     pairs = int(lit.size) * int(rcv_points.shape[0])
-    return B, {"theta": theta, "tree_nodes": tree.n_nodes, "pairs_evaluated": int(direct.sum() + clustered.sum()),
+    return B, {"theta": theta, "cutoff_radius_mm": reach, "tree_nodes": tree.n_nodes,
+               "pairs_evaluated": int(direct.sum() + clustered.sum()),
                "pairs_direct": int(direct.sum()), "cluster_evaluations": int(clustered.sum()),
                "pairs_skipped": pairs - int(direct.sum())}
 
