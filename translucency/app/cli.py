@@ -220,7 +220,7 @@ def _add_view_and_compare_parsers(sub) -> None:
     p = scene_parser("view", "show a scan as a translucent object, with controls that solve again",
                      "Open the interactive viewer (sliders for light, material, model, scale and exposure; key s "
                      "saves a screenshot and the bake, Return solves on every vertex). Here --resolution defaults "
-                     "to 'interactive': a proxy of about 2,500 vertices.")
+                     "to 'interactive': a proxy of about 7,500 vertices.")
     p.set_defaults(resolution="interactive")
     p.add_argument("--screenshot", metavar="FILE.png", help="render the first picture off-screen to FILE.png and exit")
     p.add_argument("--view-dependent", action="store_true", help="show T21(eta, n.w_o) B toward the camera")

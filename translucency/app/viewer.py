@@ -23,28 +23,26 @@ folder, ``Return`` solves the current state on every vertex (``resolution="full"
 Interactive resolution. Every change re-solves on one persistent ``Scene`` (geometry, Embree scene and
 visibility are reused) on a proxy of about :data:`INTERACTIVE_VERTICES` vertices
 (:func:`interactive_edge_length`), interpolated back to every vertex. Measured on the embedded default
-scan (28,088 vertices after cleaning, 155 mm across) on a 2-core machine, warm, ``tree`` method, with
-the solver as it was before its near field and tree were vectorised (2.5-3.7x faster since; see
-``bench/README.md``: a finer proxy now answers in the same time); the reference is the full solve with the default settings (``tree``, tol 1e-2, every vertex), which takes
-6-11 s there. Errors are over marble, skim milk and ketchup under three lights (elevations 10-60 deg):
+scan (28,088 vertices after cleaning, 155 mm across) on the 2-core machine at a load of about 1, warm,
+``tree`` at tolerance 0.01, a new light direction per change (new visibility and solve); the reference
+is the full solve with the default settings (every vertex), which takes 0.58 s per change there.
+Errors are over marble, skim milk and ketchup under three lights (elevations 10-60 deg):
 
-============ ========= ==================== ==================== ============== =====================
-proxy edge   vertices  time per change,     time per change,     relative RMS   median relative error,
-                       load ~1.7            load ~4              error of B     lit vertices
-============ ========= ==================== ==================== ============== =====================
-3 mm         7,312     1.1-1.7 s            1.3-2.4 s            3.2-5.0 %      3.1 %
-4 mm         4,114     0.53-0.71 s          0.60-1.4 s           4.8-7.6 %      5.2 %
-5.1 mm       2,502     0.35-0.45 s          0.56-1.1 s           6.7-9.7 %      7.7 %
-6 mm         1,829     0.31-0.50 s                               9-10 %
-8 mm         1,030     0.25-0.35 s                               12-13 %
-============ ========= ==================== ==================== ============== =====================
+============ ========= ================ ============== =====================
+proxy edge   vertices  time per change  relative RMS   median relative error,
+                                        error of B     lit vertices
+============ ========= ================ ============== =====================
+2 mm         16,449    0.35-0.45 s      1.0-1.9 %      0.8 %
+2.5 mm       10,528    0.23-0.39 s      1.8-3.0 %      1.6 %
+3 mm         7,312     0.17-0.23 s      2.4-3.8 %      2.3 %
+4 mm         4,114     0.11-0.20 s      3.8-5.5 %      3.5 %
+5.1 mm       2,531     0.07-0.15 s      5.3-7.3 %      5.4 %
+============ ========= ================ ============== =====================
 
-The tolerance (0.01 or 0.03) changes these times by less than their spread: the near-field quadrature
-takes 90 % of the time on a proxy. The default, about 2,500 vertices (5.1 mm on the default scan),
-answers in about 0.4 s on an idle machine. Its error sits at the shadow terminator, which the proxy
-moves by up to an edge: single vertices just past it can be many times too bright (ketchup, whose light
-fades within 1-5 mm, most), while the lit and the far side stay within a few percent. ``Return`` solves
-what is on screen on every vertex; ``s`` then saves that.
+The default, about 7,500 vertices (3 mm on the default scan), answers in about 0.2 s. Its error sits
+at the shadow terminator, which the proxy moves by up to an edge: single vertices just past it can be
+many times too bright (ketchup, whose light fades within 1-5 mm, most), while the lit and the far side
+stay within a few percent. ``Return`` solves what is on screen on every vertex; ``s`` then saves that.
 """
 
 from __future__ import annotations
@@ -60,7 +58,7 @@ from .pipeline import DEFAULT_LIGHT_DIRECTION, Scene, display_colors, proxy_edge
 from .render import DEFAULT_CAMERA_DIRECTION, DEFAULT_UP, add_colored_mesh, camera_position, new_plotter
 
 #: Vertices of the interactive proxy (see the module docstring for the measurements behind it).
-INTERACTIVE_VERTICES = 2500
+INTERACTIVE_VERTICES = 7500
 
 #: Range of the scale slider, as factors of the mesh's own mm per unit.
 SCALE_RANGE = (0.25, 4.0)
