@@ -31,7 +31,7 @@ resident set grows past ``--memory-limit`` GB, and records why.
 Writes ``scaling.json``, ``scaling.md``, ``bake.md`` and ``scaling.png`` into ``bench/results``
 (``bench/results/tmp`` with ``--quick``: 10k and 30k only).
 
-    .venv/bin/python bench/scaling.py            # every size (about 5 min on 2 cores, most of it at 1M)
+    .venv/bin/python bench/scaling.py            # every size (about 3 min on 2 cores, most of it at 1M)
     .venv/bin/python bench/scaling.py --quick    # 10k and 30k, in a minute or two
 """
 

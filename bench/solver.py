@@ -23,7 +23,7 @@ Writes ``solver.json``, ``solver.md``, ``kernel.md`` and ``solver_pareto.png`` i
 ``bench/results`` (``bench/results/tmp`` with ``--quick``); ``bench/run_all.py`` puts the tables
 into ``bench/README.md``.
 
-    .venv/bin/python bench/solver.py            # everything (about 35 min on 2 cores; --repeats 2: 25 min)
+    .venv/bin/python bench/solver.py            # everything (about 30 min on 2 cores; --repeats 2: 20 min)
     .venv/bin/python bench/solver.py --quick    # bunny in marble only, fewer settings, one repeat
 """
 

@@ -51,7 +51,7 @@ METHODS = ("exact", "cutoff", "tree")
 MODELS = tuple(kernels.MODELS)
 
 #: Near field: triangles with a vertex within max(NEAR_EDGES * mean edge, NEAR_MEAN_FREE_PATHS / min sigma_t')
-#: of the receiver are integrated with adaptive quadrature.
+#: of the receiver are integrated with sub-triangle quadrature (:mod:`translucency.scatter.nearfield`).
 NEAR_EDGES = 3.0
 NEAR_MEAN_FREE_PATHS = 1.0
 #: Refinement ratio of the adaptive quadrature (piece diameter over its distance to the receiver; also
