@@ -9,6 +9,8 @@ flux-weighted normal and refracted direction (both renormalised).
 Criterion: a node is accepted when the receiver is outside its bounding sphere and
 ``radius / distance(receiver, centre) < theta``; the error of one accepted node is of order
 ``theta^2`` relative to its contribution, so the solver sets ``theta = THETA_PER_SQRT_TOL * sqrt(tol)``.
+The tree is walked once per small group of neighbouring receivers, with the distance from the group's
+bounding sphere (conservative for each member, so a larger ``theta`` gives the same error).
 
 ========== ========================================================== =====
 symbol     meaning                                                    unit
@@ -27,9 +29,14 @@ import numpy as np
 
 
 LEAF_SIZE = 8
-#: theta = THETA_PER_SQRT_TOL * sqrt(tol); calibrated in tests/scatter/test_solve.py so that the measured
-#: relative RMS error of the tree stays below tol.
-THETA_PER_SQRT_TOL = 2.0
+#: Receivers that share one walk of the tree (consecutive along the solver's space-filling curve).
+#: Measured on the bunny and the Igea (marble, ketchup; tol 0.1-0.003): groups of 4 with
+#: THETA_PER_SQRT_TOL = 2.5 give the error of single receivers with 2.0 (0.6-0.9 x tol) in 60-75 % of
+#: the far-field time (8 and 16 evaluate more clusters than the shared walk saves).
+GROUP_RECEIVERS = 4
+#: theta = THETA_PER_SQRT_TOL * sqrt(tol); calibrated in tests/scatter/test_solve.py and bench/solver.py
+#: so that the measured relative RMS error of the tree stays below tol.
+THETA_PER_SQRT_TOL = 2.5
 
 
 class SourceTree:
@@ -170,14 +177,16 @@ def source_table(points, normals, w12, flux, node_flux, node_pos, node_nrm, node
 
 
 def tree_sum(model, tree, nodes, points, normals, w12, flux, rcv_points, rcv_normals, params, channel_of, theta,
-             block=4096, reach=math.inf):
+             block=4096, reach=math.inf, group=GROUP_RECEIVERS):
     """Far-field sum with the hierarchy: ``B[o, c]``, sources summed one by one and clusters used, per receiver.
 
     A node small seen from the receiver (radius < ``theta`` x distance, receiver outside it) is one
     aggregated source; otherwise its children are opened, down to the leaves' sources. A node wholly
-    farther than ``reach`` (mm; the cutoff radius of the tolerance) is skipped. The lists of
-    sources and clusters are made per block of receivers, then evaluated with
-    :func:`~translucency.scatter.kernels.indexed_sum`.
+    farther than ``reach`` (mm; the cutoff radius of the tolerance) is skipped. The tree is walked once
+    per group of ``group`` consecutive receivers (the solver orders them along a space-filling curve)
+    with the tests made for the group's bounding sphere -- for every receiver of the group they hold
+    with at least the same margin -- and the group's list of sources and clusters is evaluated at each
+    of its receivers with :func:`~translucency.scatter.kernels.indexed_sum`, ``block`` receivers at a time.
 
     Returns
     -------
@@ -195,28 +204,41 @@ def tree_sum(model, tree, nodes, points, normals, w12, flux, rcv_points, rcv_nor
     B = np.zeros((n_rcv, flux.shape[1]))
     direct = np.zeros(n_rcv, dtype=np.int64)
     clustered = np.zeros(n_rcv, dtype=np.int64)
+    group = max(1, int(group))
+    block = max(group, block // group * group)
     for first in range(0, n_rcv, block):
         part = slice(first, min(n_rcv, first + block))
         p, nrm = rcv_points[part], rcv_normals[part]
+        n_groups = -(-p.shape[0] // group)
+        members = np.minimum(np.arange(n_groups * group).reshape(n_groups, group), p.shape[0] - 1)
+        centre = p[members].mean(axis=1)
+        spread = np.linalg.norm(p[members] - centre[:, None, :], axis=2).max(axis=1)
+        g_direct = np.zeros(n_groups, dtype=np.int64)
+        g_clustered = np.zeros(n_groups, dtype=np.int64)
         _traverse(tree.order, tree.start, tree.end, tree.left, tree.right, tree.centre, tree.radius, node_weight, lit,
-                  p, theta, reach, np.empty(0, dtype=np.int64), np.zeros(1, dtype=np.int64),
-                  direct[part], clustered[part])
-        counts = direct[part] + clustered[part]
-        starts = np.zeros(counts.size, dtype=np.int64)
-        np.cumsum(counts[:-1], out=starts[1:])
-        columns = np.empty(int(counts.sum()), dtype=np.int64)
+                  centre, spread, theta, reach, np.empty(0, dtype=np.int64), np.zeros(1, dtype=np.int64), g_direct,
+                  g_clustered)
+        g_counts = g_direct + g_clustered
+        g_starts = np.zeros(n_groups, dtype=np.int64)
+        np.cumsum(g_counts[:-1], out=g_starts[1:])
+        columns = np.empty(int(g_counts.sum()), dtype=np.int64)
         _traverse(tree.order, tree.start, tree.end, tree.left, tree.right, tree.centre, tree.radius, node_weight, lit,
-                  p, theta, reach, columns, starts, direct[part], clustered[part])
-        B[part] = indexed_sum(model, p, nrm, table, weights, starts, counts, columns, np.ones(columns.size), params,
-                              lanes, channel_of)
+                  centre, spread, theta, reach, columns, g_starts, g_direct, g_clustered)
+        of = np.arange(p.shape[0]) // group  # each receiver's group
+        direct[part], clustered[part] = g_direct[of], g_clustered[of]
+        B[part] = indexed_sum(model, p, nrm, table, weights, g_starts[of], g_counts[of], columns, np.ones(columns.size),
+                              params, lanes, channel_of)
     return B, direct, clustered
 
 
 @numba.njit(cache=True, parallel=True)
-def _traverse(order, start, end, left, right, centre, radius, node_weight, lit, rcv_points, theta, reach, columns,
-              starts, direct, clustered):
-    """Walk the tree for every receiver: count the lit sources and clusters it evaluates (``columns`` empty),
-    or write their columns (source ``j`` or ``n + node``) from ``starts[o]`` on."""
+def _traverse(order, start, end, left, right, centre, radius, node_weight, lit, rcv_points, rcv_spread, theta, reach,
+              columns, starts, direct, clustered):
+    """Walk the tree for every group of receivers (a sphere: ``rcv_points`` centres, ``rcv_spread``
+    radii, mm): count the lit sources and clusters it evaluates (``columns`` empty), or write their
+    columns (source ``j`` or ``n + node``) from ``starts[o]`` on. A node is a cluster when the sphere is
+    outside the node's and ``radius < theta * (distance - spread)``: then ``radius < theta * distance``
+    for every point of the sphere."""
     n_rcv = rcv_points.shape[0]
     n_src = lit.shape[0]
     write = columns.shape[0] > 0
@@ -241,9 +263,10 @@ def _traverse(order, start, end, left, right, centre, radius, node_weight, lit, 
             dz = pz - centre[k, 2]
             dist2 = dx * dx + dy * dy + dz * dz
             rk = radius[k]
-            if dist2 > (reach + rk) * (reach + rk):  # wholly beyond the cutoff radius
+            near = math.sqrt(dist2) - rcv_spread[o]  # the group's closest possible distance to the centre
+            if near > reach + rk:  # wholly beyond the cutoff radius
                 continue
-            if dist2 > rk * rk and rk * rk < theta2 * dist2:
+            if near > rk and rk * rk < theta2 * near * near:
                 if write:
                     columns[at] = n_src + k
                     at += 1
