@@ -113,6 +113,30 @@ def test_cutoff_skips_pairs_for_a_short_diffusion_length():
     assert np.linalg.norm(cut.B - exact.B) / np.linalg.norm(exact.B) < 1e-3
 
 
+@pytest.mark.parametrize("method", ["exact", "tree"])
+def test_vertex_and_receiver_order_do_not_matter(method):
+    """The solver works on its own spatially ordered copy of the mesh: relabelling the vertices and
+    triangles, or asking for the receivers in another order, gives the same B row for row (``tree``:
+    to within its tolerance, since the receivers that share a walk of the tree may change)."""
+    medium = material("marble").medium()
+    points, triangles = icosphere(3, 10.0)
+    normals, phi, w12 = _lit(points, triangles, medium, _unit([0.2, 0.3, 1.0]))
+    tol = 1e-2
+    reference = solve.solve(solve.SurfaceGeometry(points, triangles, normals), phi, w12, medium, method=method, tol=tol)
+    rtol = 1e-9 if method == "exact" else tol
+    rng = np.random.default_rng(1)
+    perm = rng.permutation(len(points))  # new vertex i is old vertex perm[i]
+    rank = np.argsort(perm)
+    shuffled = solve.SurfaceGeometry(points[perm], rank[triangles][rng.permutation(len(triangles))], normals[perm])
+    relabelled = solve.solve(shuffled, phi[perm], w12[perm], medium, method=method, tol=tol)
+    scale = np.linalg.norm(reference.B)
+    assert np.linalg.norm(relabelled.B - reference.B[perm]) <= rtol * scale
+    receivers = rng.permutation(len(points))[:50]
+    subset = solve.solve(shuffled, phi[perm], w12[perm], medium, method=method, tol=tol, receivers=receivers)
+    assert np.array_equal(subset.receivers, receivers)
+    assert np.linalg.norm(subset.B - relabelled.B[receivers]) <= rtol * np.linalg.norm(relabelled.B[receivers])
+
+
 def test_skips_are_reported_and_identical_channels_computed_once():
     grey = Medium(0.01, 1.0, 0.0, 1.3)  # the three channels are the same
     points, triangles = icosphere(2, 5.0)
