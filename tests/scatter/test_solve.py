@@ -182,11 +182,7 @@ def test_bad_arguments_are_sentences():
         solve.SurfaceGeometry(points, triangles + 1000, normals)
 
 
-@pytest.mark.parametrize("model", solve.MODELS)
-def test_cutoff_sum_is_the_sum_over_the_sources_within_the_radius(model):
-    """The grid search and the indexed kernel against a brute-force sum over every pair closer than the
-    radius (pairs by ``kernels.model_pairs``, itself tested against dipoles.py), one and three
-    distinct channels."""
+def test_vectorised_cutoff_equals_the_generic_cutoff_kernel():
     from translucency.scatter import cutoff, kernels
 
     medium = material("ketchup").medium()
@@ -197,20 +193,18 @@ def test_cutoff_sum_is_the_sum_over_the_sources_within_the_radius(model):
     lit = np.flatnonzero(flux.max(axis=1) > 0)
     radius = 6.0
     grid = cutoff.SourceGrid(points[lit], radius)
-    receivers = np.arange(0, len(points), 7)
     for rows, channel_of in ((3, np.arange(3)), (1, np.zeros(3, dtype=np.int64))):
-        params = kernels.channel_parameters(medium.sigma_a[:rows], medium.sigma_s[:rows], medium.g[:rows], medium.eta,
-                                            model)
-        B, evaluated = cutoff.cutoff_sum(kernels.MODELS[model], grid, radius, points[lit], normals[lit], w12[lit],
-                                         flux[lit], points[receivers], normals[receivers], params, channel_of)
-        for row, o in enumerate(receivers):
-            close = lit[np.linalg.norm(points[lit] - points[o], axis=1) <= radius]
-            assert evaluated[row] == len(close)
-            here = np.broadcast_to(points[o], (len(close), 3))
-            up = np.broadcast_to(normals[o], (len(close), 3))
-            sd = kernels.model_pairs(kernels.MODELS[model], points[close], normals[close], w12[close], here, up, params)
-            expected = [np.maximum(sd[:, channel_of[c]], 0.0) @ flux[close, c] for c in range(3)]
-            assert np.allclose(B[row], expected, rtol=1e-9, atol=1e-300)
+        params = kernels.channel_parameters(medium.sigma_a[:rows], medium.sigma_s[:rows], medium.g[:rows], medium.eta)
+        generic, n_generic = cutoff.cutoff_sum(0, grid.order, grid.start, grid.origin, grid.cell, grid.dims, radius,
+                                               points[lit], normals[lit], w12[lit], flux[lit], points, normals, params,
+                                               channel_of)
+        ordered = lit[grid.order]
+        columns = [np.ascontiguousarray(a[ordered, i]) for a in (points, normals, w12) for i in range(3)]
+        fast, n_fast = cutoff.cutoff_sum_directional(*columns, np.ascontiguousarray(flux[ordered].T), grid.start,
+                                                     grid.origin, grid.cell, grid.dims, radius, points, normals, params,
+                                                     channel_of)
+        assert np.allclose(fast, generic, rtol=1e-12, atol=1e-300)
+        assert np.array_equal(n_fast, n_generic) and n_fast.sum() < len(lit) * len(points)
 
 
 @pytest.mark.parametrize("method", solve.METHODS)

@@ -29,6 +29,7 @@ import numpy as np
 from scipy import integrate, optimize
 
 from . import dipoles, fresnel
+from .kernels import directional_three, padded_three_rows, source_to_receiver
 from .medium import Medium
 
 
@@ -108,65 +109,99 @@ class SourceGrid:
         self.dims = dims
 
 
-def cutoff_sum(model, grid, radius, points, normals, w12, flux, rcv_points, rcv_normals, params, channel_of,
-               block=4096):
-    """Sum over the sources within ``radius`` (mm) of each receiver: ``(B, pairs evaluated per receiver)``.
-
-    ``grid`` is a :class:`SourceGrid` over the sources (rows of ``points``, ``normals``, ``w12``,
-    ``flux``). For each block of receivers the sources within the radius are listed from the grid
-    cells around the receiver (a count, then the list) and evaluated with
-    :func:`~translucency.scatter.kernels.indexed_sum`, any model.
-    """
-    from .kernels import channel_lanes, indexed_sum
-
-    order = grid.order
-    table = np.ascontiguousarray(np.hstack([points[order], normals[order], w12[order]]).T)  # sources cell by cell
-    weights = np.ascontiguousarray(flux[order].T)
-    lanes = channel_lanes(params, channel_of, flux.shape[1])
+@numba.njit(cache=True, parallel=True, fastmath=True)
+def cutoff_sum(model, grid_order, grid_start, origin, cell, dims, radius, src_points, src_normals, src_w12, src_flux,
+               rcv_points, rcv_normals, params, channel_of):
+    """Sum over the sources within ``radius`` of each receiver; returns ``B`` and pairs evaluated per receiver."""
     n_rcv = rcv_points.shape[0]
-    B = np.zeros((n_rcv, flux.shape[1]))
+    n_out = src_flux.shape[1]
+    B = np.zeros((n_rcv, n_out))
     evaluated = np.zeros(n_rcv, dtype=np.int64)
-    for first in range(0, n_rcv, block):
-        part = slice(first, min(n_rcv, first + block))
-        p, nrm = rcv_points[part], rcv_normals[part]
-        counts = evaluated[part]
-        _within(table, grid.start, grid.origin, grid.cell, grid.dims, radius, p, np.empty(0, dtype=np.int64),
-                np.zeros(1, dtype=np.int64), counts)
-        starts = np.zeros(counts.size, dtype=np.int64)
-        np.cumsum(counts[:-1], out=starts[1:])
-        columns = np.empty(int(counts.sum()), dtype=np.int64)
-        _within(table, grid.start, grid.origin, grid.cell, grid.dims, radius, p, columns, starts, counts)
-        B[part] = indexed_sum(model, p, nrm, table, weights, starts, counts, columns, np.ones(columns.size), params,
-                              lanes, channel_of)
-    return B, evaluated
-
-
-@numba.njit(cache=True, parallel=True)
-def _within(table, grid_start, origin, cell, dims, radius, rcv_points, columns, starts, counts):
-    """Count (``columns`` empty) or list from ``starts[o]`` on the sources (columns of ``table``, in grid
-    order) within ``radius`` of each receiver."""
-    write = columns.shape[0] > 0
     reach = int(math.ceil(radius / cell))
     r2max = radius * radius
-    for o in numba.prange(rcv_points.shape[0]):
+    for o in numba.prange(n_rcv):
+        sd = np.empty(params.shape[0])
         px = rcv_points[o, 0]
         py = rcv_points[o, 1]
         pz = rcv_points[o, 2]
         ci = int((px - origin[0]) / cell)
         cj = int((py - origin[1]) / cell)
         ck = int((pz - origin[2]) / cell)
-        at = starts[o] if write else 0
+        for i in range(max(ci - reach, 0), min(ci + reach + 1, dims[0])):
+            for j in range(max(cj - reach, 0), min(cj + reach + 1, dims[1])):
+                base = (i * dims[1] + j) * dims[2]
+                for q in range(grid_start[base + max(ck - reach, 0)], grid_start[base + min(ck + reach + 1, dims[2])]):
+                    s = grid_order[q]
+                    dx = src_points[s, 0] - px
+                    dy = src_points[s, 1] - py
+                    dz = src_points[s, 2] - pz
+                    if dx * dx + dy * dy + dz * dz > r2max:
+                        continue
+                    source_to_receiver(model, src_points, src_normals, src_w12, s, px, py, pz, rcv_normals[o, 0],
+                                       rcv_normals[o, 1], rcv_normals[o, 2], params, sd)
+                    for c in range(n_out):
+                        B[o, c] += sd[channel_of[c]] * src_flux[s, c]
+                    evaluated[o] += 1
+    return B, evaluated
+
+
+@numba.njit(cache=True, parallel=True, fastmath=True)
+def cutoff_sum_directional(sx, sy, sz, snx, sny, snz, swx, swy, swz, flux_t, grid_start, origin, cell, dims, radius,
+                           rcv_points, rcv_normals, params, channel_of):
+    """:func:`cutoff_sum` for the directional dipole with <= 3 channels, vectorised over each grid row.
+
+    The source columns (``sx`` ... ``swz``, ``flux_t[c, j]``) must be in grid order (sorted by cell), so
+    the sources of consecutive cells along z are contiguous; pairs beyond ``radius`` are masked out.
+    Returns ``B`` and the number of pairs within the radius per receiver.
+    """
+    n_rcv = rcv_points.shape[0]
+    n_out = flux_t.shape[0]
+    rows = padded_three_rows(params)
+    B = np.zeros((n_rcv, n_out))
+    evaluated = np.zeros(n_rcv, dtype=np.int64)
+    reach = int(math.ceil(radius / cell))
+    r2max = radius * radius
+    m0 = channel_of[0]
+    m1 = channel_of[min(1, n_out - 1)]
+    m2 = channel_of[min(2, n_out - 1)]
+    f0 = flux_t[0]
+    f1 = flux_t[min(1, n_out - 1)]
+    f2 = flux_t[min(2, n_out - 1)]
+    for o in numba.prange(n_rcv):
+        px = rcv_points[o, 0]
+        py = rcv_points[o, 1]
+        pz = rcv_points[o, 2]
+        nx = rcv_normals[o, 0]
+        ny = rcv_normals[o, 1]
+        nz = rcv_normals[o, 2]
+        ci = int((px - origin[0]) / cell)
+        cj = int((py - origin[1]) / cell)
+        ck = int((pz - origin[2]) / cell)
+        a0 = 0.0
+        a1 = 0.0
+        a2 = 0.0
         count = 0
         for i in range(max(ci - reach, 0), min(ci + reach + 1, dims[0])):
             for j in range(max(cj - reach, 0), min(cj + reach + 1, dims[1])):
                 base = (i * dims[1] + j) * dims[2]
                 for q in range(grid_start[base + max(ck - reach, 0)], grid_start[base + min(ck + reach + 1, dims[2])]):
-                    dx = table[0, q] - px
-                    dy = table[1, q] - py
-                    dz = table[2, q] - pz
-                    if dx * dx + dy * dy + dz * dz <= r2max:
-                        if write:
-                            columns[at] = q
-                            at += 1
-                        count += 1
-        counts[o] = count
+                    x0 = px - sx[q]
+                    x1 = py - sy[q]
+                    x2 = pz - sz[q]
+                    inside = x0 * x0 + x1 * x1 + x2 * x2 <= r2max
+                    e0, e1, e2 = directional_three(x0, x1, x2, snx[q], sny[q], snz[q], swx[q], swy[q], swz[q], nx, ny, nz,
+                                                   rows)
+                    e0 = max(e0, 0.0) if inside else 0.0
+                    e1 = max(e1, 0.0) if inside else 0.0
+                    e2 = max(e2, 0.0) if inside else 0.0
+                    count += inside
+                    a0 += (e0 if m0 == 0 else (e1 if m0 == 1 else e2)) * f0[q]
+                    a1 += (e0 if m1 == 0 else (e1 if m1 == 1 else e2)) * f1[q]
+                    a2 += (e0 if m2 == 0 else (e1 if m2 == 1 else e2)) * f2[q]
+        B[o, 0] = a0
+        if n_out > 1:
+            B[o, 1] = a1
+        if n_out > 2:
+            B[o, 2] = a2
+        evaluated[o] = count
+    return B, evaluated
