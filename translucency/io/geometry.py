@@ -192,12 +192,11 @@ def edge_lengths(points, triangles) -> np.ndarray:
 
 def mean_edge_length(points, triangles) -> float:
     """Mean length of the unique edges, in mm."""
-    triangles = np.asarray(triangles, dtype=np.int64)
-    edges = np.sort(triangles[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
+    from .defects import unique_edges
+
+    edges, _ = unique_edges(triangles)
     p = np.asarray(points, dtype=np.float64)
-    keys = np.unique(edges[:, 0] * len(p) + edges[:, 1])  # one integer per undirected edge (rows would sort slowly)
-    first, second = np.divmod(keys, len(p))
-    return float(np.linalg.norm(p[first] - p[second], axis=1).mean())
+    return float(np.linalg.norm(p[edges[:, 0]] - p[edges[:, 1]], axis=1).mean())
 
 
 def signed_volume(points, triangles, origin=None) -> float:
