@@ -64,8 +64,8 @@ def _gauss_legendre_unit(n):
     return 0.5 * (x + 1.0), 0.5 * w
 
 
-#: Fan rule over the receiver's own triangles: Gauss-Legendre nodes across the fan (angular) and
-#: along each ray (radial, per interval).
+#: Fan rule over the receiver's own triangles: Gauss-Legendre nodes across the fan (angular, per sector)
+#: and along each ray (radial, per stretch); see :func:`_fan`.
 FAN_ANGULAR = 3
 FAN_RADIAL = 5
 
@@ -228,8 +228,9 @@ def _gather(points, normals, w12, phi, tri, b0, b1, b2, weight, buf, weights, co
 
 
 #: Degree-3 rule (Strang & Fix 1973) on the corners, edge midpoints and centroid: weights (sum 1,
-#: multiply by the area). Its midpoints are shared by the two triangles of an edge and its corners
-#: by the vertex rule, so a triangle costs about 2.5 new points instead of the 7 of Dunavant's rule.
+#: multiply by the area). Its midpoints are shared by the two triangles of an edge, its corners by the
+#: vertex rule and its centroid is the first of Dunavant's points (already in the shared table), so a
+#: triangle costs a receiver about 2.5 evaluations instead of the 7 of Dunavant's rule.
 CORNER_WEIGHT, MIDPOINT_WEIGHT, CENTROID_WEIGHT = 1.0 / 20.0, 2.0 / 15.0, 9.0 / 20.0
 
 
@@ -242,16 +243,15 @@ class SourcePoints:
     table : (9, P) float64
         Position (mm), unit normal, unit refracted direction of each point.
     weights : (C, P) float64
-        Vertices: ``phi``; rule points: ``area * w_q * phi(x_q)``; midpoints and centroids:
-        ``phi(x)`` (the rule's weight and the area are applied per receiver).
+        Vertices: ``phi``; rule points: ``area * w_q * phi(x_q)``; midpoints: ``phi(x)`` (the rule's
+        weight and the area are applied per receiver).
     vertex_lit : (n,) bool
         Whether light enters at the vertex.
     first_rule : (m,) int64
-        Column of triangle ``t``'s first Dunavant point, or -1 where no light enters at any corner.
+        Column of triangle ``t``'s first Dunavant point (its centroid, which the degree-3 rule uses
+        too), or -1 where no light enters at any corner.
     midpoint_column : (e,) int64
         Column of each edge's midpoint (-1 where neither triangle of the edge has light).
-    centroid_column : (m,) int64
-        Column of each lit triangle's centroid (-1 elsewhere).
     """
 
     table: np.ndarray
@@ -259,7 +259,6 @@ class SourcePoints:
     vertex_lit: np.ndarray
     first_rule: np.ndarray
     midpoint_column: np.ndarray
-    centroid_column: np.ndarray
 
 
 @dataclass
@@ -299,7 +298,7 @@ def source_point_table(points, normals, w12, phi, triangles, triangle_areas, tab
     """Quadrature points every receiver shares (made as :func:`_gather` makes them).
 
     Columns ``0..n-1`` are the vertices, then ``len(rule_points)`` Dunavant points per triangle with
-    light at a corner, then the midpoints of the edges of those triangles, then their centroids.
+    light at a corner (the first is the centroid), then the midpoints of the edges of those triangles.
     """
     n = points.shape[0]
     vertex_lit = phi.sum(axis=1) > 0
@@ -311,10 +310,7 @@ def source_point_table(points, normals, w12, phi, triangles, triangle_areas, tab
     start_mid = n + n_rule * lit_triangles.size
     midpoint_column = np.full(tables.edges.shape[0], -1, dtype=np.int64)
     midpoint_column[lit_edges] = start_mid + np.arange(lit_edges.size)
-    start_centroid = start_mid + lit_edges.size
-    centroid_column = np.full(triangles.shape[0], -1, dtype=np.int64)
-    centroid_column[lit_triangles] = start_centroid + np.arange(lit_triangles.size)
-    size = start_centroid + lit_triangles.size
+    size = start_mid + lit_edges.size
     table = np.zeros((9, size))
     weights = np.zeros((phi.shape[1], size))
     table[0:3, :n] = points.T
@@ -324,14 +320,14 @@ def source_point_table(points, normals, w12, phi, triangles, triangle_areas, tab
     # an edge as a degenerate "triangle" (its two ends twice) interpolates as the edge does
     edge_triangles = np.ascontiguousarray(tables.edges[lit_edges][:, [0, 1, 1]])
     _fill_shared_points(points, normals, w12, phi, triangles, triangle_areas, rule_points, rule_weights, lit_triangles,
-                        edge_triangles, table, weights, n, start_mid, start_centroid)
-    return SourcePoints(table, weights, vertex_lit, first_rule, midpoint_column, centroid_column)
+                        edge_triangles, table, weights, n, start_mid)
+    return SourcePoints(table, weights, vertex_lit, first_rule, midpoint_column)
 
 
 @numba.njit(cache=True, parallel=True)
 def _fill_shared_points(points, normals, w12, phi, triangles, triangle_areas, rule_points, rule_weights, lit_triangles,
-                        edge_triangles, table, weights, start_rule, start_mid, start_centroid):
-    """Dunavant points and centroids of the lit triangles and midpoints of their edges into ``table``."""
+                        edge_triangles, table, weights, start_rule, start_mid):
+    """Dunavant points of the lit triangles and midpoints of their edges into ``table``."""
     n_rule = rule_points.shape[0]
     for k in numba.prange(lit_triangles.shape[0]):
         t = lit_triangles[k]
@@ -339,8 +335,6 @@ def _fill_shared_points(points, normals, w12, phi, triangles, triangle_areas, ru
         for q in range(n_rule):
             _gather(points, normals, w12, phi, triangles[t], rule_points[q, 0], rule_points[q, 1], rule_points[q, 2],
                     triangle_areas[t] * rule_weights[q], table, weights, column + q)
-        _gather(points, normals, w12, phi, triangles[t], 1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0, 1.0, table, weights,
-                start_centroid + k)
     for k in numba.prange(edge_triangles.shape[0]):
         _gather(points, normals, w12, phi, edge_triangles[k], 0.5, 0.25, 0.25, 1.0, table, weights, start_mid + k)
 
@@ -424,12 +418,15 @@ FAN_SECTOR = math.pi / 3
 FAN_SPAN = 3.0
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True)
 def _corner_frame(points, tri, corner, scale):
     """The triangle seen from its corner ``corner``: first edge length ``a``, second edge in the frame
     (``bu`` along the first edge, ``bv`` across), twice the area, the corner's angle (rad), the number
     of fan sectors (``ceil(angle / FAN_SECTOR)``; 0 for a degenerate triangle) and of radial stretches
-    (``ceil(log(1 + longest edge / scale) / FAN_SPAN)``)."""
+    (``ceil(log(1 + longest edge / scale) / FAN_SPAN)``).
+
+    Compiled once, without ``fastmath`` and not inlined: :func:`_fan_count` (which sizes the buffers)
+    and :func:`_fan` (which fills them, with ``fastmath``) must get the same counts to the bit."""
     i0 = tri[corner]
     i1 = tri[(corner + 1) % 3]
     i2 = tri[(corner + 2) % 3]
@@ -536,6 +533,9 @@ def near_field_correction(model, points, triangles, triangle_areas, normals, w12
     if tables is None:
         tables = triangle_tables(points, triangles)
     degree3_ratio = min(degree3_ratio, beta)  # a degree-3 triangle is one the refinement leaves whole
+    if not np.allclose(rule_points[0], 1.0 / 3.0):
+        raise ValueError("the rule's first point must be the centroid (the degree-3 rule shares it)")
+    centroid_factor = CENTROID_WEIGHT / float(rule_weights[0])  # its weight is area * w_0 * phi
     shared = source_point_table(points, normals, w12, phi, triangles, triangle_areas, tables, rule_points, rule_weights)
     diameters, centroids = tables.diameters, tables.centroids
     lanes = channel_lanes(params, channel_of, phi.shape[1])
@@ -561,8 +561,8 @@ def near_field_correction(model, points, triangles, triangle_areas, normals, w12
         n_columns = np.zeros(rcv.size, dtype=np.int64)
         n_refined = np.zeros(rcv.size, dtype=np.int64)
         _list_points(points, triangles, triangle_areas, rcv, offsets[start:block.stop + 1], triangle_ids, beta,
-                     scale_min, degree3_ratio, shared.vertex_lit, shared.first_rule, shared.midpoint_column,
-                     shared.centroid_column, tables.edge_of_corner, diameters, centroids, fan[0].size, fan[2].size,
+                     scale_min, degree3_ratio, centroid_factor, shared.vertex_lit, shared.first_rule,
+                     shared.midpoint_column, tables.edge_of_corner, diameters, centroids, fan[0].size, fan[2].size,
                      col_offsets, columns, factors, n_columns, n_refined, min(rcv.size, chunks), start, stamps)
         n_points[block] = n_columns + n_refined
         ref_offsets = np.zeros(rcv.size + 1, dtype=np.int64)
@@ -591,7 +591,7 @@ BLOCK_RECEIVERS = 2048
 
 @numba.njit(cache=True, parallel=True)
 def _list_points(points, triangles, triangle_areas, receivers, offsets, triangle_ids, beta, scale_min, degree3_ratio,
-                 vertex_lit, first_rule, midpoint_column, centroid_column, edge_of_corner, diameters, centroids,
+                 centroid_factor, vertex_lit, first_rule, midpoint_column, edge_of_corner, diameters, centroids,
                  fan_angular, fan_radial, col_offsets, columns, factors, n_columns, n_refined, n_chunks, first_receiver,
                  stamps):
     """Pass 1: per receiver, the shared-table points (vertex rule, whole triangles) and the number of
@@ -653,8 +653,8 @@ def _list_points(points, triangles, triangle_areas, receivers, offsets, triangle
                             factors[base + listed] = 0.0
                             listed += 1
                         factors[base + edge_slot[e]] += MIDPOINT_WEIGHT * area
-                    columns[base + listed] = centroid_column[t]
-                    factors[base + listed] = CENTROID_WEIGHT * area
+                    columns[base + listed] = first_rule[t]  # Dunavant's first point: the centroid
+                    factors[base + listed] = centroid_factor
                     listed += 1
                 elif _whole(diameters[t], centroids[t], xo, beta, scale_min):  # Dunavant: shared rule points
                     for q in range(n_rule):
