@@ -172,6 +172,9 @@ class SurfaceGeometry:
             triangles = rank[self.triangles]
             triangles = triangles[np.argsort(triangles.min(axis=1), kind="stable")]
             ordered = SurfaceGeometry(self.points[order], triangles, self.normals[order])
+            for name, permuted in (("vertex_areas", lambda a: a[order]), ("mean_edge", lambda a: a)):
+                if name in self._cache:  # already computed here: the same surface, relabelled
+                    ordered._cache[name] = permuted(self._cache[name])
             identity = np.arange(order.size)
             ordered._cache["ordered"] = (ordered, identity, identity)  # already ordered
             self._cache["ordered"] = (ordered, order, rank)
