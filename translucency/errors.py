@@ -3,7 +3,46 @@
 Every error that a user can cause (bad parameters, bad files, bad light specifications) is raised as
 a subclass of :class:`TranslucencyError` with one sentence that says what is wrong and how to fix it.
 The CLI prints that sentence and exits non-zero; it never shows a traceback for these.
+
+A sentence names the setting to change the way the user spelt it: ``--unit m`` in a command-line
+run, ``unit='m'`` in a Python call. :func:`option` writes that name; the command line switches it
+with :func:`command_line_spelling`.
 """
+
+from __future__ import annotations
+
+import contextlib
+
+# True while a command-line run is in progress (a module global, not a context variable, so that
+# the solver's threads and the processes that bake in parallel spell settings the same way).
+_command_line = False
+
+
+def option(keyword: str, value=None) -> str:
+    """How a message names a setting: ``--light-dir X`` on the command line, ``light_dir=X`` in Python.
+
+    Parameters
+    ----------
+    keyword : str
+        The Python keyword (``"unit"``, ``"memory_limit"``); the flag is the same with dashes.
+    value : optional
+        A value to suggest; written as typed on the command line and as a Python literal otherwise.
+    """
+    if _command_line:
+        flag = "--" + keyword.replace("_", "-")
+        return flag if value is None else f"{flag} {value}"
+    return f"{keyword}=" if value is None else f"{keyword}={value!r}"
+
+
+@contextlib.contextmanager
+def command_line_spelling(enabled: bool = True):
+    """Within this block, :func:`option` spells settings as command-line flags."""
+    global _command_line
+    previous, _command_line = _command_line, enabled
+    try:
+        yield
+    finally:
+        _command_line = previous
 
 
 class TranslucencyError(Exception):

@@ -20,7 +20,7 @@ import argparse
 import sys
 
 from .. import __version__
-from ..errors import TranslucencyError
+from ..errors import TranslucencyError, command_line_spelling
 
 
 def _format_triplet(values, fmt="{:.4g}") -> str:
@@ -289,7 +289,8 @@ def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
-        return int(args.func(args) or 0)
+        with command_line_spelling():
+            return int(args.func(args) or 0)
     except TranslucencyError as exc:
         print(f"translucency: error: {exc}", file=sys.stderr)
         return 2
