@@ -145,8 +145,8 @@ def throughput(geometry, incident, medium):
     rows = kernels.channel_parameters(medium.sigma_a, medium.sigma_s, medium.g, medium.eta)
     flux = incident.phi_rgb * geometry.vertex_areas[:, None]
     cols = [np.ascontiguousarray(a[lit, i]) for a in (geometry.points, geometry.normals, incident.w12) for i in range(3)]
-    run = lambda: kernels.directional_vertex_sum(*cols, np.ascontiguousarray(flux[lit].T), geometry.points[receivers],  # noqa: E731
-                                                  geometry.normals[receivers], rows, np.arange(3))
+    run = lambda: kernels.vertex_sum(0, geometry.points[lit], geometry.normals[lit], incident.w12[lit], flux[lit],  # noqa: E731
+                                     geometry.points[receivers], geometry.normals[receivers], rows, np.arange(3))
     _, seconds = timed(run, 3)
     pairs = lit.size * receivers.size
     ref = lambda: _reference_loop(cols[0], cols[1], cols[2], *[np.ascontiguousarray(geometry.points[receivers, i]) for i in range(3)])  # noqa: E731

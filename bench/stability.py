@@ -1,8 +1,8 @@
 """Numerical stability of the three diffusion models over millions of extreme configurations.
 
 Every implementation -- the float64 reference formulas of :mod:`translucency.scatter.dipoles` and the
-numba kernels of :mod:`translucency.scatter.kernels` (``model_pair`` per pair, ``vertex_sum`` and the
-vectorised ``directional_vertex_sum`` as the solver's ``exact`` method calls them) -- is evaluated on
+numba kernels of :mod:`translucency.scatter.kernels` (``model_pair`` per pair, ``vertex_sum`` as the solver's ``exact`` method
+calls it) -- is evaluated on
 the same configurations (``tests/extremes.py``: eta 1 to 2.5, reduced albedo 1e-6 to 1 - 1e-9,
 reduced mean free path 1e-4 to 1e4 times the mesh size, r from 0 to the far field, grazing and
 backlit incidence, exit points on the normal axis and at the virtual source, exact coordinate-axis
@@ -86,14 +86,13 @@ def run_model(model: str, blocks, blocks32, flux, geometry, regular_pairs, regul
     values["kernel model_pair"] = {"float64": extremes.kernel_pairs(blocks, model, params["float64"]),
                                    "float32": extremes.kernel_pairs(blocks32, model, params["float32"])}
     seconds["kernel model_pair"] = time.perf_counter() - start
-    sums = {"kernel vertex_sum": False} | ({"kernel directional_vertex_sum": True} if model == "directional" else {})
     clamped = 0
-    for name, vectorised in sums.items():
+    for name in ("kernel vertex_sum",):
         start = time.perf_counter()
         values[name] = {}
         for precision, b in zip(("float64", "float32"), sum_set):
             values[name][precision], count = extremes.kernel_sums(b, model, flux[:sum_blocks],
-                                                                  params[precision][:sum_blocks], vectorised=vectorised)
+                                                                  params[precision][:sum_blocks])
             clamped = int(count.sum()) if precision == "float64" else clamped
         seconds[name] = time.perf_counter() - start
 

@@ -292,12 +292,11 @@ def kernel_pairs(blocks: Blocks, model: str, params: np.ndarray | None = None) -
     return _kernel_pairs(kernels.MODELS[model], blocks.x_i, blocks.n_i, blocks.w12, blocks.x_o, blocks.n_o, params)
 
 
-def kernel_sums(blocks: Blocks, model: str, flux: np.ndarray, params: np.ndarray | None = None, *,
-                vectorised: bool = False) -> tuple[np.ndarray, np.ndarray]:
+def kernel_sums(blocks: Blocks, model: str, flux: np.ndarray,
+                params: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """``B[g, o, c] = sum_j S_d(j -> o)[c] flux[g, j, c]`` per block, by the solver's ``exact`` kernels.
 
-    ``vectorised`` selects :func:`~translucency.scatter.kernels.directional_vertex_sum` (directional
-    model only), else :func:`~translucency.scatter.kernels.vertex_sum`. Returns ``B`` and the clamp
+    :func:`~translucency.scatter.kernels.vertex_sum` for every model. Returns ``B`` and the clamp
     counts per receiver.
     """
     params = kernel_parameters(blocks, model) if params is None else params
@@ -307,13 +306,8 @@ def kernel_sums(blocks: Blocks, model: str, flux: np.ndarray, params: np.ndarray
     channel_of = np.arange(3, dtype=np.int64)
     flux = np.ascontiguousarray(flux, dtype=blocks.x_i.dtype)
     for k in range(G):
-        if vectorised:
-            columns = [np.ascontiguousarray(a[k, :, i]) for a in (blocks.x_i, blocks.n_i, blocks.w12) for i in range(3)]
-            B[k], clamped[k] = kernels.directional_vertex_sum(*columns, np.ascontiguousarray(flux[k].T), blocks.x_o[k],
-                                                              blocks.n_o[k], params[k], channel_of)
-        else:
-            B[k], clamped[k] = kernels.vertex_sum(kernels.MODELS[model], blocks.x_i[k], blocks.n_i[k], blocks.w12[k],
-                                                  flux[k], blocks.x_o[k], blocks.n_o[k], params[k], channel_of)
+        B[k], clamped[k] = kernels.vertex_sum(kernels.MODELS[model], blocks.x_i[k], blocks.n_i[k], blocks.w12[k],
+                                              flux[k], blocks.x_o[k], blocks.n_o[k], params[k], channel_of)
     return B, clamped
 
 

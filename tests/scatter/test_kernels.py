@@ -84,21 +84,50 @@ def test_channel_map_reuses_identical_channels():
     assert np.allclose(B[:, 0], B1[:, 0], rtol=1e-14)
 
 
-def test_vectorised_directional_sum_matches_the_generic_kernel():
+@pytest.mark.parametrize("model", ["directional", "standard", "better"])
+def test_one_kernel_for_every_model_and_channel_map(model):
+    """vertex_sum is the dense reference sum for every model, for 1-3 distinct parameter rows mapped to the
+    output channels, and for more than three output channels (lanes in groups of three); a row's clamps
+    are counted once however many channels share it."""
     rng = np.random.default_rng(9)
     medium = material("skin1").medium()
     x_i, n_i, light, _, _ = _pairs(rng, 400, 2.0)
     x_i[:3] = x_i[3]  # coincident sources and receivers (r = 0)
     w12 = fresnel.refract(light, n_i, medium.eta)
-    flux = rng.random((400, 3))
-    for rows, channel_of in ((3, np.arange(3)), (1, np.zeros(3, dtype=np.int64)), (2, np.array([0, 1, 1]))):
-        params = kernels.channel_parameters(medium.sigma_a[:rows], medium.sigma_s[:rows], medium.g[:rows], medium.eta)
-        columns = [np.ascontiguousarray(a[:, i]) for a in (x_i, n_i, w12) for i in range(3)]
-        fast, clamped_fast = kernels.directional_vertex_sum(*columns, np.ascontiguousarray(flux.T), x_i[:150], n_i[:150],
-                                                            params, channel_of)
-        generic, clamped = kernels.vertex_sum(0, x_i, n_i, w12, flux, x_i[:150], n_i[:150], params, channel_of)
-        assert np.allclose(fast, generic, rtol=1e-12, atol=0)
-        assert np.array_equal(clamped_fast, clamped)
+    profiles = {"directional": None, "standard": dipoles.standard_dipole_profile, "better": dipoles.better_dipole_profile}
+    reference = []
+    for c in range(3):
+        coefficients = (medium.sigma_a[c], medium.sigma_s[c], medium.g[c], medium.eta)
+        if model == "directional":
+            S = dipoles.directional_dipole(x_i[None], n_i[None], w12[None], x_i[:150, None], n_i[:150, None], *coefficients)
+        else:
+            r = np.linalg.norm(x_i[:150, None] - x_i[None], axis=2)
+            scale = 1.0 / np.pi if model == "standard" else 1.0 / (np.pi * 4.0 * fresnel.C_phi(1.0 / medium.eta))
+            S = scale * profiles[model](r, *coefficients)
+        reference.append(S)
+    code = kernels.MODELS[model]
+    single = []
+    for rows, channel_of in ((3, [0, 1, 2]), (1, [0, 0, 0]), (2, [0, 1, 1]), (3, [0, 1, 2, 2, 0])):
+        channel_of = np.array(channel_of, dtype=np.int64)
+        flux = rng.random((400, channel_of.size))
+        params = kernels.channel_parameters(medium.sigma_a[:rows], medium.sigma_s[:rows], medium.g[:rows], medium.eta,
+                                            model)
+        B, clamped = kernels.vertex_sum(code, x_i, n_i, w12, flux, x_i[:150], n_i[:150], params, channel_of)
+        for c, row in enumerate(channel_of):
+            assert np.allclose(B[:, c], reference[row] @ flux[:, c], rtol=1e-12, atol=0)
+        if rows == 3 and channel_of.size == 3:
+            for c in range(3):
+                one = kernels.channel_parameters(medium.sigma_a[c:c + 1], medium.sigma_s[c:c + 1], medium.g[c:c + 1],
+                                                 medium.eta, model)
+                single.append(kernels.vertex_sum(code, x_i, n_i, w12, flux[:, :1], x_i[:150], n_i[:150], one,
+                                                 np.zeros(1, dtype=np.int64))[1])
+            assert np.array_equal(clamped, sum(single))
+        else:
+            assert np.array_equal(clamped, sum(single[:rows]))
+    if model == "directional":
+        assert sum(single).sum() > 0  # backlit pairs are clamped and counted
+    else:
+        assert sum(single).sum() == 0  # the radial profiles are positive
 
 
 def test_exp_nonpositive_is_accurate():

@@ -182,7 +182,8 @@ def test_bad_arguments_are_sentences():
         solve.SurfaceGeometry(points, triangles + 1000, normals)
 
 
-def test_vectorised_cutoff_equals_the_generic_cutoff_kernel():
+@pytest.mark.parametrize("model", ["directional", "standard"])
+def test_cutoff_kernel_is_the_sum_over_pairs_within_the_radius(model):
     from translucency.scatter import cutoff, kernels
 
     medium = material("ketchup").medium()
@@ -193,18 +194,20 @@ def test_vectorised_cutoff_equals_the_generic_cutoff_kernel():
     lit = np.flatnonzero(flux.max(axis=1) > 0)
     radius = 6.0
     grid = cutoff.SourceGrid(points[lit], radius)
+    code = kernels.MODELS[model]
+    o, j = np.meshgrid(np.arange(len(points)), lit, indexing="ij")
+    inside = np.linalg.norm(points[o] - points[j], axis=2) <= radius
     for rows, channel_of in ((3, np.arange(3)), (1, np.zeros(3, dtype=np.int64))):
-        params = kernels.channel_parameters(medium.sigma_a[:rows], medium.sigma_s[:rows], medium.g[:rows], medium.eta)
-        generic, n_generic = cutoff.cutoff_sum(0, grid.order, grid.start, grid.origin, grid.cell, grid.dims, radius,
-                                               points[lit], normals[lit], w12[lit], flux[lit], points, normals, params,
-                                               channel_of)
-        ordered = lit[grid.order]
-        columns = [np.ascontiguousarray(a[ordered, i]) for a in (points, normals, w12) for i in range(3)]
-        fast, n_fast = cutoff.cutoff_sum_directional(*columns, np.ascontiguousarray(flux[ordered].T), grid.start,
-                                                     grid.origin, grid.cell, grid.dims, radius, points, normals, params,
-                                                     channel_of)
-        assert np.allclose(fast, generic, rtol=1e-12, atol=1e-300)
-        assert np.array_equal(n_fast, n_generic) and n_fast.sum() < len(lit) * len(points)
+        params = kernels.channel_parameters(medium.sigma_a[:rows], medium.sigma_s[:rows], medium.g[:rows], medium.eta,
+                                            model)
+        B, evaluated = cutoff.cutoff_sum(code, grid.order, grid.start, grid.origin, grid.cell, grid.dims, radius,
+                                         points[lit], normals[lit], w12[lit], flux[lit], points, normals, params,
+                                         channel_of)
+        S = kernels.model_pairs(code, points[j].reshape(-1, 3), normals[j].reshape(-1, 3), w12[j].reshape(-1, 3),
+                                points[o].reshape(-1, 3), normals[o].reshape(-1, 3), params).reshape(*o.shape, rows)
+        brute = np.einsum("oj,ojc,jc->oc", inside, S[:, :, channel_of], flux[lit])
+        assert np.allclose(B, brute, rtol=1e-12, atol=1e-300)
+        assert np.array_equal(evaluated, inside.sum(axis=1)) and evaluated.sum() < len(lit) * len(points)
 
 
 @pytest.mark.parametrize("method", solve.METHODS)

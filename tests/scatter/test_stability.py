@@ -38,9 +38,8 @@ def test_exit_point_at_the_virtual_source_is_finite(sign):
     params = kernels.channel_parameters(*coeff[:3], coeff[3])
     out = np.empty(1)
     kernels.directional_dipole_pair(*x_i, *n_i, *w12, *x_o, *n_o, params, out)
-    columns = [np.array([v]) for v in (*x_i, *n_i, *w12)]
-    summed, _ = kernels.directional_vertex_sum(*columns, np.ones((1, 1)), x_o[None], n_o[None], params,
-                                               np.zeros(1, dtype=np.int64))
+    summed, _ = kernels.vertex_sum(0, x_i[None], n_i[None], w12[None], np.ones((1, 1)), x_o[None], n_o[None], params,
+                                   np.zeros(1, dtype=np.int64))
     for value in (reference, out[0], summed[0, 0]):
         assert np.isfinite(value) and value >= 0.0
     if sign < 0:
@@ -88,12 +87,8 @@ def test_sweep_has_no_nan_inf_or_negative_value(sweep, model):
     summed, clamped = extremes.kernel_sums(some, model, flux)
     _assert_clean(summed, (model, "vertex_sum"))
     if model == "directional":
-        vectorised, clamped_vectorised = extremes.kernel_sums(some, model, flux, vectorised=True)
-        _assert_clean(vectorised, (model, "directional_vertex_sum"))
         # clamps happen (backlit and grazing pairs) and are counted: at most one per pair and channel
-        # (the two kernels may disagree on values that round to either side of 0)
-        for count in (clamped, clamped_vectorised):
-            assert count.sum() > 0 and count.max() <= 3 * some.x_i.shape[1]
+        assert clamped.sum() > 0 and clamped.max() <= 3 * some.x_i.shape[1]
     # away from the model's discontinuities the kernels agree with the reference; their arithmetic
     # differs (reciprocals, polynomial exp: relative 5e-13), amplified where real and virtual source
     # nearly cancel, hence 1e-8 rather than 1e-12
@@ -152,4 +147,3 @@ def test_every_implementation_is_finite_and_non_negative(block, precision):
         _assert_clean(extremes.reference(b, model), (model, "reference"))
         _assert_clean(extremes.kernel_pairs(b, model), (model, "model_pair"))
         _assert_clean(extremes.kernel_sums(block, model, flux)[0], (model, "vertex_sum"))
-    _assert_clean(extremes.kernel_sums(block, "directional", flux, vectorised=True)[0], "directional_vertex_sum")

@@ -29,8 +29,9 @@ import numpy as np
 from scipy import integrate, optimize
 
 from . import dipoles, fresnel
-from .kernels import directional_three, padded_three_rows, source_to_receiver
+from .kernels import channel_lanes, group_inputs, pair_three, source_columns, store_three, table_rows
 from .medium import Medium
+from .threads import for_ranges
 
 
 def _directional_bound(r, D, sigma_tr_, C_phi, C_E, norm):
@@ -109,99 +110,66 @@ class SourceGrid:
         self.dims = dims
 
 
-@numba.njit(cache=True, parallel=True, fastmath=True)
 def cutoff_sum(model, grid_order, grid_start, origin, cell, dims, radius, src_points, src_normals, src_w12, src_flux,
                rcv_points, rcv_normals, params, channel_of):
-    """Sum over the sources within ``radius`` of each receiver; returns ``B`` and pairs evaluated per receiver."""
-    n_rcv = rcv_points.shape[0]
-    n_out = src_flux.shape[1]
-    B = np.zeros((n_rcv, n_out))
-    evaluated = np.zeros(n_rcv, dtype=np.int64)
-    reach = int(math.ceil(radius / cell))
-    r2max = radius * radius
-    for o in numba.prange(n_rcv):
-        sd = np.empty(params.shape[0])
-        px = rcv_points[o, 0]
-        py = rcv_points[o, 1]
-        pz = rcv_points[o, 2]
-        ci = int((px - origin[0]) / cell)
-        cj = int((py - origin[1]) / cell)
-        ck = int((pz - origin[2]) / cell)
-        for i in range(max(ci - reach, 0), min(ci + reach + 1, dims[0])):
-            for j in range(max(cj - reach, 0), min(cj + reach + 1, dims[1])):
-                base = (i * dims[1] + j) * dims[2]
-                for q in range(grid_start[base + max(ck - reach, 0)], grid_start[base + min(ck + reach + 1, dims[2])]):
-                    s = grid_order[q]
-                    dx = src_points[s, 0] - px
-                    dy = src_points[s, 1] - py
-                    dz = src_points[s, 2] - pz
-                    if dx * dx + dy * dy + dz * dz > r2max:
-                        continue
-                    source_to_receiver(model, src_points, src_normals, src_w12, s, px, py, pz, rcv_normals[o, 0],
-                                       rcv_normals[o, 1], rcv_normals[o, 2], params, sd)
-                    for c in range(n_out):
-                        B[o, c] += sd[channel_of[c]] * src_flux[s, c]
-                    evaluated[o] += 1
-    return B, evaluated
+    """Sum over the sources within ``radius`` (mm) of each receiver (method ``cutoff``).
 
+    Arguments as :func:`~translucency.scatter.kernels.vertex_sum`, with the sources binned in a
+    :class:`SourceGrid` (``grid_order``, ``grid_start``, ``origin``, ``cell``, ``dims``). The sources are
+    copied into grid order, so that the sources of consecutive cells along z are contiguous and each
+    grid row is one loop that vectorises (pairs beyond ``radius`` are masked out).
 
-@numba.njit(cache=True, parallel=True, fastmath=True)
-def cutoff_sum_directional(sx, sy, sz, snx, sny, snz, swx, swy, swz, flux_t, grid_start, origin, cell, dims, radius,
-                           rcv_points, rcv_normals, params, channel_of):
-    """:func:`cutoff_sum` for the directional dipole with <= 3 channels, vectorised over each grid row.
-
-    The source columns (``sx`` ... ``swz``, ``flux_t[c, j]``) must be in grid order (sorted by cell), so
-    the sources of consecutive cells along z are contiguous; pairs beyond ``radius`` are masked out.
-    Returns ``B`` and the number of pairs within the radius per receiver.
+    Returns
+    -------
+    B : (n_rcv, C) float64
+    evaluated : (n_rcv,) int64
+        Pairs within the radius, per receiver.
     """
+    order = np.asarray(grid_order)
+    table, weights = source_columns(np.asarray(src_points)[order], np.asarray(src_normals)[order],
+                                    np.asarray(src_w12)[order], np.asarray(src_flux)[order])
+    lanes = channel_lanes(params, channel_of, weights.shape[0])
     n_rcv = rcv_points.shape[0]
-    n_out = flux_t.shape[0]
-    rows = padded_three_rows(params)
-    B = np.zeros((n_rcv, n_out))
+    B = np.zeros((n_rcv, weights.shape[0]))
     evaluated = np.zeros(n_rcv, dtype=np.int64)
+    for_ranges(_cutoff_rows, n_rcv, model, table, weights, grid_start, origin, float(cell), dims, float(radius),
+               rcv_points, rcv_normals, lanes, B, evaluated)
+    return B, evaluated
+
+
+@numba.njit(cache=True, nogil=True, fastmath=True, error_model="numpy")
+def _cutoff_rows(worker, lo, hi, model, table, weights, grid_start, origin, cell, dims, radius, rcv_points, rcv_normals,
+                 lanes, B, evaluated):
+    """Receivers ``lo .. hi - 1`` of :func:`cutoff_sum`."""
+    n_out = weights.shape[0]
     reach = int(math.ceil(radius / cell))
     r2max = radius * radius
-    m0 = channel_of[0]
-    m1 = channel_of[min(1, n_out - 1)]
-    m2 = channel_of[min(2, n_out - 1)]
-    f0 = flux_t[0]
-    f1 = flux_t[min(1, n_out - 1)]
-    f2 = flux_t[min(2, n_out - 1)]
-    for o in numba.prange(n_rcv):
-        px = rcv_points[o, 0]
-        py = rcv_points[o, 1]
-        pz = rcv_points[o, 2]
-        nx = rcv_normals[o, 0]
-        ny = rcv_normals[o, 1]
-        nz = rcv_normals[o, 2]
+    X0, X1, X2, N0, N1, N2, W0, W1, W2 = table_rows(table)
+    for o in range(lo, hi):
+        px, py, pz = rcv_points[o, 0], rcv_points[o, 1], rcv_points[o, 2]
+        nx, ny, nz = rcv_normals[o, 0], rcv_normals[o, 1], rcv_normals[o, 2]
         ci = int((px - origin[0]) / cell)
         cj = int((py - origin[1]) / cell)
         ck = int((pz - origin[2]) / cell)
-        a0 = 0.0
-        a1 = 0.0
-        a2 = 0.0
         count = 0
-        for i in range(max(ci - reach, 0), min(ci + reach + 1, dims[0])):
-            for j in range(max(cj - reach, 0), min(cj + reach + 1, dims[1])):
-                base = (i * dims[1] + j) * dims[2]
-                for q in range(grid_start[base + max(ck - reach, 0)], grid_start[base + min(ck + reach + 1, dims[2])]):
-                    x0 = px - sx[q]
-                    x1 = py - sy[q]
-                    x2 = pz - sz[q]
-                    inside = x0 * x0 + x1 * x1 + x2 * x2 <= r2max
-                    e0, e1, e2 = directional_three(x0, x1, x2, snx[q], sny[q], snz[q], swx[q], swy[q], swz[q], nx, ny, nz,
-                                                   rows)
-                    e0 = max(e0, 0.0) if inside else 0.0
-                    e1 = max(e1, 0.0) if inside else 0.0
-                    e2 = max(e2, 0.0) if inside else 0.0
-                    count += inside
-                    a0 += (e0 if m0 == 0 else (e1 if m0 == 1 else e2)) * f0[q]
-                    a1 += (e0 if m1 == 0 else (e1 if m1 == 1 else e2)) * f1[q]
-                    a2 += (e0 if m2 == 0 else (e1 if m2 == 1 else e2)) * f2[q]
-        B[o, 0] = a0
-        if n_out > 1:
-            B[o, 1] = a1
-        if n_out > 2:
-            B[o, 2] = a2
+        for group in range(lanes.shape[0] // 3):
+            c0 = 3 * group
+            F0, F1, F2, p0, p1, p2 = group_inputs(weights, lanes, c0)
+            a0 = a1 = a2 = 0.0
+            count = 0  # pairs within the radius (the same for every group)
+            for i in range(max(ci - reach, 0), min(ci + reach + 1, dims[0])):
+                for j in range(max(cj - reach, 0), min(cj + reach + 1, dims[1])):
+                    base = (i * dims[1] + j) * dims[2]
+                    for q in range(grid_start[base + max(ck - reach, 0)], grid_start[base + min(ck + reach + 1, dims[2])]):
+                        x0 = px - X0[q]
+                        x1 = py - X1[q]
+                        x2 = pz - X2[q]
+                        inside = x0 * x0 + x1 * x1 + x2 * x2 <= r2max
+                        e0, e1, e2 = pair_three(model, x0, x1, x2, N0[q], N1[q], N2[q], W0[q], W1[q], W2[q], nx, ny, nz,
+                                                p0, p1, p2)
+                        count += inside
+                        a0 += (max(e0, 0.0) if inside else 0.0) * F0[q]
+                        a1 += (max(e1, 0.0) if inside else 0.0) * F1[q]
+                        a2 += (max(e2, 0.0) if inside else 0.0) * F2[q]
+            store_three(B, o, c0, n_out, a0, a1, a2)
         evaluated[o] = count
-    return B, evaluated

@@ -27,6 +27,8 @@ import math
 import numba
 import numpy as np
 
+from .threads import for_ranges
+
 
 LEAF_SIZE = 8
 #: Receivers that share one walk of the tree (consecutive along the solver's space-filling curve).
@@ -85,7 +87,7 @@ class SourceTree:
         self.end = np.array(ends, dtype=np.int64)
         self.left = np.array(lefts, dtype=np.int64)
         self.right = np.array(rights, dtype=np.int64)
-        self.centre, self.radius = _bounds(points, order, self.start, self.end)
+        self.centre, self.radius = _bounds(points, order, self.start, self.end, self.left, self.right)
 
     @property
     def n_nodes(self) -> int:
@@ -93,75 +95,74 @@ class SourceTree:
         return int(self.start.size)
 
 
-@numba.njit(cache=True)
-def _bounds(points, order, start, end):
+def _leaves_then_levels(start, left, right):
+    """The leaves in the order of their ranges, and the internal nodes by depth, deepest first: the order
+    in which every node's children are done before the node (plain numpy, nothing to compile)."""
+    leaves = np.flatnonzero(left < 0)
+    leaves = leaves[np.argsort(start[leaves], kind="stable")]
+    levels, level = [], np.zeros(1, dtype=np.int64)
+    while level.size:
+        inner = level[left[level] >= 0]
+        if inner.size:
+            levels.append(inner)
+        level = np.concatenate([left[inner], right[inner]])
+    return leaves, levels[::-1]
+
+
+def _bounds(points, order, start, end, left, right):
+    """Bounding-box centre (mm) and bounding-sphere radius about it of every node."""
     n_nodes = start.shape[0]
-    centre = np.empty((n_nodes, 3))
-    radius = np.empty(n_nodes)
-    for k in range(n_nodes):
-        lo = np.full(3, np.inf)
-        hi = np.full(3, -np.inf)
-        for i in range(start[k], end[k]):
-            p = points[order[i]]
-            for a in range(3):
-                lo[a] = min(lo[a], p[a])
-                hi[a] = max(hi[a], p[a])
-        r2 = 0.0
-        for a in range(3):
-            centre[k, a] = 0.5 * (lo[a] + hi[a])
-            r2 += (0.5 * (hi[a] - lo[a])) ** 2
-        radius[k] = math.sqrt(r2)
-    return centre, radius
+    lo = np.full((n_nodes, 3), np.inf)
+    hi = np.full((n_nodes, 3), -np.inf)
+    leaves, levels = _leaves_then_levels(start, left, right)
+    filled = leaves[end[leaves] > start[leaves]]
+    if filled.size:
+        ordered = points[order]
+        lo[filled] = np.minimum.reduceat(ordered, start[filled], axis=0)
+        hi[filled] = np.maximum.reduceat(ordered, start[filled], axis=0)
+    for nodes in levels:
+        lo[nodes] = np.minimum(lo[left[nodes]], lo[right[nodes]])
+        hi[nodes] = np.maximum(hi[left[nodes]], hi[right[nodes]])
+    return 0.5 * (lo + hi), np.sqrt(np.sum((0.5 * (hi - lo)) ** 2, axis=1))
 
 
-@numba.njit(cache=True)
 def aggregate(order, start, end, left, right, points, normals, w12, flux):
     """Aggregated source of every node: flux per channel, flux-weighted position, normal and w12.
 
-    Children are aggregated before their parents (they have larger node ids).
+    Leaves sum their sources, then every level of internal nodes its two children, deepest first.
+    Returns ``node_flux (nodes, C)``, ``weight (nodes,)`` (total flux over channels) and the mean
+    position (mm), unit normal and unit refracted direction ``(nodes, 3)`` (0 where no flux).
     """
     n_nodes = start.shape[0]
     n_out = flux.shape[1]
     node_flux = np.zeros((n_nodes, n_out))
     weight = np.zeros(n_nodes)
-    pos = np.zeros((n_nodes, 3))
-    nrm = np.zeros((n_nodes, 3))
-    dirn = np.zeros((n_nodes, 3))
-    for k in range(n_nodes - 1, -1, -1):
-        if left[k] < 0:
-            for i in range(start[k], end[k]):
-                j = order[i]
-                wj = 0.0
-                for c in range(n_out):
-                    node_flux[k, c] += flux[j, c]
-                    wj += flux[j, c]
-                weight[k] += wj
-                for a in range(3):
-                    pos[k, a] += wj * points[j, a]
-                    nrm[k, a] += wj * normals[j, a]
-                    dirn[k, a] += wj * w12[j, a]
-        else:
-            for child in (left[k], right[k]):
-                for c in range(n_out):
-                    node_flux[k, c] += node_flux[child, c]
-                weight[k] += weight[child]
-                for a in range(3):
-                    pos[k, a] += pos[child, a]
-                    nrm[k, a] += nrm[child, a]
-                    dirn[k, a] += dirn[child, a]
-    # weighted sums -> means; the unnormalised sums stay in the children's slots until here
+    sums = np.zeros((n_nodes, 9))  # flux-weighted position, normal, w12
+    leaves, levels = _leaves_then_levels(start, left, right)
+    filled = leaves[end[leaves] > start[leaves]]
+    if filled.size:
+        source_flux = flux[order]
+        source_weight = source_flux.sum(axis=1)
+        node_flux[filled] = np.add.reduceat(source_flux, start[filled], axis=0)
+        weight[filled] = np.add.reduceat(source_weight, start[filled])
+        weighted = source_weight[:, None] * np.hstack([points[order], normals[order], w12[order]])
+        sums[filled] = np.add.reduceat(weighted, start[filled], axis=0)
+    for nodes in levels:
+        node_flux[nodes] = node_flux[left[nodes]] + node_flux[right[nodes]]
+        weight[nodes] = weight[left[nodes]] + weight[right[nodes]]
+        sums[nodes] = sums[left[nodes]] + sums[right[nodes]]
+    # weighted sums -> means
+    some = weight > 0.0
     out_pos = np.zeros((n_nodes, 3))
-    out_nrm = np.zeros((n_nodes, 3))
-    out_dir = np.zeros((n_nodes, 3))
-    for k in range(n_nodes):
-        if weight[k] > 0.0:
-            ln = math.sqrt(nrm[k, 0] ** 2 + nrm[k, 1] ** 2 + nrm[k, 2] ** 2)
-            ld = math.sqrt(dirn[k, 0] ** 2 + dirn[k, 1] ** 2 + dirn[k, 2] ** 2)
-            for a in range(3):
-                out_pos[k, a] = pos[k, a] / weight[k]
-                out_nrm[k, a] = nrm[k, a] / ln if ln > 0.0 else 0.0
-                out_dir[k, a] = dirn[k, a] / ld if ld > 0.0 else 0.0
-    return node_flux, weight, out_pos, out_nrm, out_dir
+    out_pos[some] = sums[some, 0:3] / weight[some, None]
+    unit = []
+    for block in (sums[:, 3:6], sums[:, 6:9]):
+        length = np.sqrt(np.sum(block ** 2, axis=1))
+        out = np.zeros((n_nodes, 3))
+        ok = some & (length > 0.0)
+        out[ok] = block[ok] / length[ok, None]
+        unit.append(out)
+    return node_flux, weight, out_pos, unit[0], unit[1]
 
 
 def source_table(points, normals, w12, flux, node_flux, node_pos, node_nrm, node_dir):
@@ -215,35 +216,34 @@ def tree_sum(model, tree, nodes, points, normals, w12, flux, rcv_points, rcv_nor
         spread = np.linalg.norm(p[members] - centre[:, None, :], axis=2).max(axis=1)
         g_direct = np.zeros(n_groups, dtype=np.int64)
         g_clustered = np.zeros(n_groups, dtype=np.int64)
-        _traverse(tree.order, tree.start, tree.end, tree.left, tree.right, tree.centre, tree.radius, node_weight, lit,
-                  centre, spread, theta, reach, np.empty(0, dtype=np.int64), np.zeros(1, dtype=np.int64), g_direct,
-                  g_clustered)
+        walk = (tree.order, tree.start, tree.end, tree.left, tree.right, tree.centre, tree.radius, node_weight, lit,
+                centre, spread, theta, reach)
+        for_ranges(_traverse, n_groups, *walk, np.empty(0, dtype=np.int64), np.zeros(1, dtype=np.int64), g_direct,
+                   g_clustered)
         g_counts = g_direct + g_clustered
         g_starts = np.zeros(n_groups, dtype=np.int64)
         np.cumsum(g_counts[:-1], out=g_starts[1:])
         columns = np.empty(int(g_counts.sum()), dtype=np.int64)
-        _traverse(tree.order, tree.start, tree.end, tree.left, tree.right, tree.centre, tree.radius, node_weight, lit,
-                  centre, spread, theta, reach, columns, g_starts, g_direct, g_clustered)
+        for_ranges(_traverse, n_groups, *walk, columns, g_starts, g_direct, g_clustered)
         of = np.arange(p.shape[0]) // group  # each receiver's group
         direct[part], clustered[part] = g_direct[of], g_clustered[of]
         B[part] = indexed_sum(model, p, nrm, table, weights, g_starts[of], g_counts[of], columns, np.ones(columns.size),
-                              params, lanes, channel_of)
+                              lanes)
     return B, direct, clustered
 
 
-@numba.njit(cache=True, parallel=True)
-def _traverse(order, start, end, left, right, centre, radius, node_weight, lit, rcv_points, rcv_spread, theta, reach,
-              columns, starts, direct, clustered):
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _traverse(worker, lo, hi, order, start, end, left, right, centre, radius, node_weight, lit, rcv_points, rcv_spread,
+              theta, reach, columns, starts, direct, clustered):
     """Walk the tree for every group of receivers (a sphere: ``rcv_points`` centres, ``rcv_spread``
     radii, mm): count the lit sources and clusters it evaluates (``columns`` empty), or write their
     columns (source ``j`` or ``n + node``) from ``starts[o]`` on. A node is a cluster when the sphere is
     outside the node's and ``radius < theta * (distance - spread)``: then ``radius < theta * distance``
-    for every point of the sphere."""
-    n_rcv = rcv_points.shape[0]
+    for every point of the sphere. Groups ``lo .. hi - 1`` (:func:`~translucency.scatter.threads.for_ranges`)."""
     n_src = lit.shape[0]
     write = columns.shape[0] > 0
     theta2 = theta * theta
-    for o in numba.prange(n_rcv):
+    for o in range(lo, hi):
         stack = np.empty(128, dtype=np.int64)
         top = 1
         stack[0] = 0

@@ -2,8 +2,11 @@
 
 The directional dipole of :mod:`translucency.scatter.dipoles` restated for one pair and several
 colour channels at once: the geometry (``x``, ``r``, ``n_i*``, ``w_v``, the dot products) is computed
-once per pair and shared by the channels; only the radial functions are per channel. Every kernel is
-tested against the float64 reference (relative 1e-12).
+once per pair and shared by the channels; only the radial functions are per channel. One pair
+function (:func:`_lane`, a model index argument) serves every model, and one kernel each traversal
+(every pair, the cutoff grid, index lists), compiled without ``parallel=True`` and run on threads
+(:mod:`translucency.scatter.threads`). Every kernel is tested against the float64 reference
+(relative 1e-12).
 
 Channel parameters travel as a ``(K, N_PARAMS)`` float64 array built by :func:`channel_parameters`;
 the columns are named by the ``P_*`` constants. Kernels never validate: the solver does, at its
@@ -33,6 +36,7 @@ import numpy as np
 from . import fresnel
 from .dipoles import D_R_FLOOR, PARALLEL_TOLERANCE
 from .medium import alpha_reduced, diffusion_coefficient, extrapolation_distance, sigma_t, sigma_t_reduced, sigma_tr
+from .threads import for_ranges
 
 P_D, P_SIGMA_TR, P_D_E, P_VIRTUAL, P_C_PHI, P_C_E, P_NORM, P_BACKLIT = range(8)
 N_PARAMS = 8
@@ -100,57 +104,6 @@ def _radial_parameters(sigma_a, sigma_s, g, eta, model):
     return params
 
 
-@numba.njit(cache=True, fastmath=True)
-def radial_pair(model, r2, params, out):
-    """``S_d`` of the standard (``model`` 1) or better (2) dipole at squared distance ``r2`` per channel."""
-    for k in range(params.shape[0]):
-        z_r = params[k, R_Z_R]
-        z_v = params[k, R_Z_V]
-        st = params[k, R_SIGMA_TR]
-        d_r = math.sqrt(r2 + z_r * z_r)
-        d_v = math.sqrt(r2 + z_v * z_v)
-        e_r = math.exp(-st * d_r)
-        e_v = math.exp(-st * d_v)
-        if model == MODEL_STANDARD:
-            value = z_r * (1.0 + st * d_r) * e_r / (d_r * d_r * d_r) + z_v * (1.0 + st * d_v) * e_v / (d_v * d_v * d_v)
-        else:
-            value = params[k, R_C_PHI] / params[k, R_D] * (e_r / d_r - e_v / d_v) + params[k, R_C_E] * (
-                z_r * (1.0 + st * d_r) * e_r / (d_r * d_r * d_r) - z_v * (1.0 + st * d_v) * e_v / (d_v * d_v * d_v))
-        out[k] = params[k, R_SCALE] * value
-    return 0
-
-
-@numba.njit(cache=True, fastmath=True)
-def model_pair(model, xi0, xi1, xi2, ni0, ni1, ni2, w0, w1, w2, xo0, xo1, xo2, no0, no1, no2, params, out):
-    """``S_d`` of one pair for the chosen model (0 directional, 1 standard, 2 better); returns clamp count."""
-    if model == MODEL_DIRECTIONAL:
-        return directional_dipole_pair(xi0, xi1, xi2, ni0, ni1, ni2, w0, w1, w2, xo0, xo1, xo2, no0, no1, no2, params,
-                                       out)
-    dx = xo0 - xi0
-    dy = xo1 - xi1
-    dz = xo2 - xi2
-    return radial_pair(model, dx * dx + dy * dy + dz * dz, params, out)
-
-
-@numba.njit(cache=True, fastmath=True)
-def source_to_receiver(model, points, normals, w12, j, px, py, pz, nx, ny, nz, params, out):
-    """``S_d`` from source vertex ``j`` (rows of ``points``, ``normals``, ``w12``) to the receiver (p, n)."""
-    return model_pair(model, points[j, 0], points[j, 1], points[j, 2], normals[j, 0], normals[j, 1], normals[j, 2],
-                      w12[j, 0], w12[j, 1], w12[j, 2], px, py, pz, nx, ny, nz, params, out)
-
-
-@numba.njit(cache=True, parallel=True)
-def model_pairs(model, x_i, n_i, w12, x_o, n_o, params):
-    """``S_d`` for aligned rows of pairs: ``out[p, k]`` for pair ``p`` and channel ``k`` (testing aid)."""
-    n = x_i.shape[0]
-    out = np.empty((n, params.shape[0]))
-    for p in numba.prange(n):
-        model_pair(model, x_i[p, 0], x_i[p, 1], x_i[p, 2], n_i[p, 0], n_i[p, 1], n_i[p, 2],
-                                w12[p, 0], w12[p, 1], w12[p, 2], x_o[p, 0], x_o[p, 1], x_o[p, 2],
-                                n_o[p, 0], n_o[p, 1], n_o[p, 2], params, out[p])
-    return out
-
-
 @numba.njit(cache=True, inline="always", fastmath=True)
 def exp_nonpositive(x):
     """``e^x`` for ``x <= 0`` without a library call, so that loops using it vectorise.
@@ -185,22 +138,22 @@ def _ray_source(x_dot_w, x_dot_n, w_dot_n, d, D, inv_D, sigma_tr_, C_phi, C_E, n
 
 
 @numba.njit(cache=True, inline="always", fastmath=True)
-def _channel(params, k, r2, perp2, mu0, x_dot_w, x_dot_n, x_dot_v, s_dot_v, s_dot_n, v_dot_n, x_dot_s):
-    """``S_d`` of one channel from the shared pair geometry, before the clamp (real minus virtual)."""
-    D = params[k, P_D]
-    d_e = params[k, P_D_E]
-    c = params[k, P_VIRTUAL]
+def _channel(p, r2, perp2, mu0, x_dot_w, x_dot_n, x_dot_v, s_dot_v, s_dot_n, v_dot_n, x_dot_s):
+    """``S_d`` of one channel (``p``: its parameters, :func:`lane`) from the shared pair geometry, before the
+    clamp (real minus virtual)."""
+    D = p[P_D]
+    d_e = p[P_D_E]
+    c = p[P_VIRTUAL]
     cos_beta = -math.sqrt(perp2 / (r2 + d_e * d_e))
-    b = params[k, P_BACKLIT]
+    b = p[P_BACKLIT]
     d_r2 = r2 + D * mu0 * (D * mu0 - 2.0 * d_e * cos_beta) if mu0 > 0.0 else r2 + b * b
     d_r = max(math.sqrt(d_r2), D_R_FLOOR * D)
     d_v = max(math.sqrt(max(r2 - 2.0 * c * x_dot_s + c * c, 0.0)), D_R_FLOOR * D)  # |x - c n_i*|, floored as d_r
     inv_D = 1.0 / D
-    scale = params[k, P_NORM] / FOUR_PI_SQUARED
-    real = _ray_source(x_dot_w, x_dot_n, -mu0, d_r, D, inv_D, params[k, P_SIGMA_TR], params[k, P_C_PHI],
-                            params[k, P_C_E], scale)
-    virtual = _ray_source(x_dot_v - c * s_dot_v, x_dot_n - c * s_dot_n, v_dot_n, d_v, D, inv_D,
-                               params[k, P_SIGMA_TR], params[k, P_C_PHI], params[k, P_C_E], scale)
+    scale = p[P_NORM] / FOUR_PI_SQUARED
+    real = _ray_source(x_dot_w, x_dot_n, -mu0, d_r, D, inv_D, p[P_SIGMA_TR], p[P_C_PHI], p[P_C_E], scale)
+    virtual = _ray_source(x_dot_v - c * s_dot_v, x_dot_n - c * s_dot_n, v_dot_n, d_v, D, inv_D, p[P_SIGMA_TR],
+                          p[P_C_PHI], p[P_C_E], scale)
     return real - virtual
 
 
@@ -246,21 +199,60 @@ def pair_geometry(x0, x1, x2, ni0, ni1, ni2, w0, w1, w2, nx, ny, nz):
 
 
 @numba.njit(cache=True, inline="always", fastmath=True)
-def directional_three(x0, x1, x2, ni0, ni1, ni2, w0, w1, w2, nx, ny, nz, params):
-    """Unclamped ``S_d`` of three channels (rows of ``params``) for the pair offset ``x = x_o - x_i``."""
+def _radial(model, r2, p):
+    """``S_d`` of the standard (``model`` 1) or better (2) dipole at squared distance ``r2`` (mm^2) for one
+    channel (``p``: its parameters, :func:`lane`)."""
+    z_r = p[R_Z_R]
+    z_v = p[R_Z_V]
+    st = p[R_SIGMA_TR]
+    d_r = math.sqrt(r2 + z_r * z_r)
+    d_v = math.sqrt(r2 + z_v * z_v)
+    e_r = math.exp(-st * d_r)
+    e_v = math.exp(-st * d_v)
+    if model == MODEL_STANDARD:
+        value = z_r * (1.0 + st * d_r) * e_r / (d_r * d_r * d_r) + z_v * (1.0 + st * d_v) * e_v / (d_v * d_v * d_v)
+    else:
+        value = p[R_C_PHI] / p[R_D] * (e_r / d_r - e_v / d_v) + p[R_C_E] * (
+            z_r * (1.0 + st * d_r) * e_r / (d_r * d_r * d_r) - z_v * (1.0 + st * d_v) * e_v / (d_v * d_v * d_v))
+    return p[R_SCALE] * value
+
+
+@numba.njit(cache=True, inline="always", fastmath=True)
+def _lane(model, p, r2, perp2, mu0, xw, xn, xv, sv, sn, vn, xs):
+    """The pair function: unclamped ``S_d`` (1/(mm^2 sr)) of one channel (``p``: its parameters,
+    :func:`lane`) for ``model`` (0 directional, 1 standard, 2 better) from the pair geometry of
+    :func:`pair_geometry`. Every kernel evaluates every model through it."""
+    if model == MODEL_DIRECTIONAL:
+        return _channel(p, r2, perp2, mu0, xw, xn, xv, sv, sn, vn, xs)
+    return _radial(model, r2, p)
+
+
+@numba.njit(cache=True, inline="always")
+def lane(params, k):
+    """Row ``k`` of ``params`` as a tuple of ``N_PARAMS`` floats. Kernels read a channel's parameters
+    into one before their inner loop: values, not an array, so that the loop vectorises."""
+    return (params[k, 0], params[k, 1], params[k, 2], params[k, 3], params[k, 4], params[k, 5], params[k, 6],
+            params[k, 7])
+
+
+@numba.njit(cache=True, inline="always", fastmath=True)
+def pair_three(model, x0, x1, x2, ni0, ni1, ni2, w0, w1, w2, nx, ny, nz, p0, p1, p2):
+    """Unclamped ``S_d`` of three channels (parameters ``p0, p1, p2``, :func:`lane`) for the pair offset
+    ``x = x_o - x_i``: the geometry once, the channels from it (branch-free, so loops vectorise)."""
     r2, perp2, mu0, xw, xn, xv, sv, sn, vn, xs = pair_geometry(x0, x1, x2, ni0, ni1, ni2, w0, w1, w2, nx, ny, nz)
-    return (_channel(params, 0, r2, perp2, mu0, xw, xn, xv, sv, sn, vn, xs),
-            _channel(params, 1, r2, perp2, mu0, xw, xn, xv, sv, sn, vn, xs),
-            _channel(params, 2, r2, perp2, mu0, xw, xn, xv, sv, sn, vn, xs))
+    return (_lane(model, p0, r2, perp2, mu0, xw, xn, xv, sv, sn, vn, xs),
+            _lane(model, p1, r2, perp2, mu0, xw, xn, xv, sv, sn, vn, xs),
+            _lane(model, p2, r2, perp2, mu0, xw, xn, xv, sv, sn, vn, xs))
 
 
 @numba.njit(cache=True, fastmath=True)
-def directional_dipole_pair(xi0, xi1, xi2, ni0, ni1, ni2, w0, w1, w2, xo0, xo1, xo2, no0, no1, no2, params, out):
-    """``S_d`` of one source/receiver pair for every channel of ``params``, written into ``out``.
+def model_pair(model, xi0, xi1, xi2, ni0, ni1, ni2, w0, w1, w2, xo0, xo1, xo2, no0, no1, no2, params, out):
+    """``S_d`` of one source/receiver pair for every channel of ``params`` and the chosen model
+    (0 directional, 1 standard, 2 better), written into ``out`` (1/(mm^2 sr)).
 
-    Same formula and conventions as :func:`translucency.scatter.dipoles.directional_dipole`
-    (spec 1.1-1.3): ``n_i* = n_i`` when ``r = 0`` or ``n_i || x``, ``d_r`` and ``d_v`` floored at
-    ``D_R_FLOOR * D``, clamp at 0 after subtracting the virtual source.
+    Same formulas and conventions as :mod:`translucency.scatter.dipoles` (spec 1.1-1.3, 3.1, 3.2):
+    ``n_i* = n_i`` when ``r = 0`` or ``n_i || x``, ``d_r`` and ``d_v`` floored at ``D_R_FLOOR * D``,
+    clamp at 0 after subtracting the virtual source.
 
     Returns
     -------
@@ -271,7 +263,7 @@ def directional_dipole_pair(xi0, xi1, xi2, ni0, ni1, ni2, w0, w1, w2, xo0, xo1, 
                                                                w2, no0, no1, no2)
     clamped = 0
     for k in range(params.shape[0]):
-        value = _channel(params, k, r2, perp2, mu0, xw, xn, xv, sv, sn, vn, xs)
+        value = _lane(model, lane(params, k), r2, perp2, mu0, xw, xn, xv, sv, sn, vn, xs)
         if value < 0.0:
             value = 0.0
             clamped += 1
@@ -280,86 +272,45 @@ def directional_dipole_pair(xi0, xi1, xi2, ni0, ni1, ni2, w0, w1, w2, xo0, xo1, 
 
 
 @numba.njit(cache=True)
-def padded_three_rows(params):
-    """``params`` with exactly three rows (fewer are padded with copies of the last) for the vectorised kernels."""
-    rows = np.empty((3, params.shape[1]))
-    for k in range(3):
-        rows[k] = params[min(k, params.shape[0] - 1)]
-    return rows
+def directional_dipole_pair(xi0, xi1, xi2, ni0, ni1, ni2, w0, w1, w2, xo0, xo1, xo2, no0, no1, no2, params, out):
+    """:func:`model_pair` of the directional dipole (FHK14); returns the clamp count."""
+    return model_pair(MODEL_DIRECTIONAL, xi0, xi1, xi2, ni0, ni1, ni2, w0, w1, w2, xo0, xo1, xo2, no0, no1, no2, params,
+                      out)
 
 
-@numba.njit(cache=True, parallel=True, fastmath=True)
-def directional_vertex_sum(sx, sy, sz, snx, sny, snz, swx, swy, swz, flux_t, rcv_points, rcv_normals, params,
-                           channel_of):
-    """Method ``exact`` for the directional dipole with up to three channels, vectorised over sources.
-
-    Same sum as :func:`vertex_sum` (model 0), restructured so the compiler vectorises the loop over
-    sources: sources as separate coordinate arrays (``sx`` ... ``swz``), fluxes as ``flux_t[c, j]``,
-    branch-free arithmetic and :func:`exp_nonpositive`. ``params`` has 1-3 rows; ``channel_of``
-    maps each of the 1-3 output channels to a row. Rows are always evaluated three at a time (fewer
-    are padded with copies, whose clamps are not counted): a loop without branches vectorises.
-
-    Returns
-    -------
-    B : (n_rcv, C) float64
-    clamped : (n_rcv,) int64
-        Per receiver, the number of (pair, channel) values clamped from below 0 to 0.
-    """
-    n_rcv = rcv_points.shape[0]
-    n_src = sx.shape[0]
-    n_out = flux_t.shape[0]
-    K = params.shape[0]
-    count_1 = 1 if K > 1 else 0
-    count_2 = 1 if K > 2 else 0
-    params = padded_three_rows(params)
-    B = np.zeros((n_rcv, n_out))
-    clamped = np.zeros(n_rcv, dtype=np.int64)
-    m0 = channel_of[0]
-    m1 = channel_of[min(1, n_out - 1)]
-    m2 = channel_of[min(2, n_out - 1)]
-    f0 = flux_t[0]
-    f1 = flux_t[min(1, n_out - 1)]
-    f2 = flux_t[min(2, n_out - 1)]
-    for o in numba.prange(n_rcv):
-        px = rcv_points[o, 0]
-        py = rcv_points[o, 1]
-        pz = rcv_points[o, 2]
-        nx = rcv_normals[o, 0]
-        ny = rcv_normals[o, 1]
-        nz = rcv_normals[o, 2]
-        a0 = 0.0
-        a1 = 0.0
-        a2 = 0.0
-        count = 0
-        for j in range(n_src):
-            e0, e1, e2 = directional_three(px - sx[j], py - sy[j], pz - sz[j], snx[j], sny[j], snz[j], swx[j], swy[j],
-                                           swz[j], nx, ny, nz, params)
-            count += (e0 < 0.0) + (e1 < 0.0) * count_1 + (e2 < 0.0) * count_2
-            e0 = max(e0, 0.0)
-            e1 = max(e1, 0.0)
-            e2 = max(e2, 0.0)
-            a0 += (e0 if m0 == 0 else (e1 if m0 == 1 else e2)) * f0[j]
-            a1 += (e0 if m1 == 0 else (e1 if m1 == 1 else e2)) * f1[j]
-            a2 += (e0 if m2 == 0 else (e1 if m2 == 1 else e2)) * f2[j]
-        B[o, 0] = a0
-        if n_out > 1:
-            B[o, 1] = a1
-        if n_out > 2:
-            B[o, 2] = a2
-        clamped[o] = count
-    return B, clamped
+@numba.njit(cache=True)
+def model_pairs(model, x_i, n_i, w12, x_o, n_o, params):
+    """``S_d`` for aligned rows of pairs: ``out[p, k]`` for pair ``p`` and channel ``k`` (testing aid)."""
+    n = x_i.shape[0]
+    out = np.empty((n, params.shape[0]))
+    for p in range(n):
+        model_pair(model, x_i[p, 0], x_i[p, 1], x_i[p, 2], n_i[p, 0], n_i[p, 1], n_i[p, 2], w12[p, 0], w12[p, 1],
+                   w12[p, 2], x_o[p, 0], x_o[p, 1], x_o[p, 2], n_o[p, 0], n_o[p, 1], n_o[p, 2], params, out[p])
+    return out
 
 
-RECEIVER_BLOCK = 32
-SOURCE_BLOCK = 1024
+def channel_lanes(params, channel_of, n_out):
+    """Parameter rows in output-channel order, padded to a multiple of three with the last: lane ``c`` of
+    :func:`pair_three` is output channel ``c``; ``(3 ceil(n_out / 3), N_PARAMS)`` float64."""
+    lanes = -(-int(n_out) // 3) * 3
+    channel_of = np.asarray(channel_of, dtype=np.int64)
+    return np.ascontiguousarray(params[channel_of[np.minimum(np.arange(lanes), int(n_out) - 1)]], dtype=np.float64)
 
 
-@numba.njit(cache=True, parallel=True, fastmath=True)
+def source_columns(points, normals, w12, flux):
+    """Sources as the kernels read them: ``table (9, n)`` (position mm, unit normal, unit refracted
+    direction) and ``weights (C, n)`` (flux per output channel); the input's dtype is kept."""
+    table = np.ascontiguousarray(np.concatenate([np.asarray(points).T, np.asarray(normals).T, np.asarray(w12).T]))
+    return table, np.ascontiguousarray(np.asarray(flux).T)
+
+
 def vertex_sum(model, src_points, src_normals, src_w12, src_flux, rcv_points, rcv_normals, params, channel_of):
     """``B[o, c] = sum_j S_d(x_j, w12_j; x_o)[channel_of[c]] * flux[j, c]`` over every pair (method ``exact``).
 
     Parameters
     ----------
+    model : int
+        0 directional, 1 standard, 2 better (:data:`MODELS`).
     src_points, src_normals, src_w12 : (n_src, 3) float64
         Source positions (mm), outward unit normals and refracted directions.
     src_flux : (n_src, C) float64
@@ -376,95 +327,115 @@ def vertex_sum(model, src_points, src_normals, src_w12, src_flux, rcv_points, rc
     B : (n_rcv, C) float64
         Diffuse radiance factor, flux units x 1/(mm^2 sr).
     clamped : (n_rcv,) int64
-        Per receiver, the number of (pair, channel) values clamped from below 0 to 0.
+        Per receiver, the number of (pair, row of ``params``) values clamped from below 0 to 0.
 
-    Receivers run in parallel blocks of ``RECEIVER_BLOCK``; sources are visited in blocks of
-    ``SOURCE_BLOCK`` so a block stays in cache while every receiver of the block uses it.
+    Receivers are done on :func:`~translucency.scatter.threads.for_ranges`' threads, sources in a loop
+    that vectorises (three channels at a time).
     """
+    table, weights = source_columns(src_points, src_normals, src_w12, src_flux)
+    n_out = weights.shape[0]
+    lanes = channel_lanes(params, channel_of, n_out)
+    counted = np.zeros(lanes.shape[0], dtype=np.int64)  # a row's clamps counted at its first output channel
+    channel_of = np.asarray(channel_of, dtype=np.int64)
+    for c in range(n_out):
+        counted[c] = int(channel_of[c] not in channel_of[:c])
     n_rcv = rcv_points.shape[0]
-    n_src = src_points.shape[0]
-    n_out = src_flux.shape[1]
-    K = params.shape[0]
     B = np.zeros((n_rcv, n_out))
     clamped = np.zeros(n_rcv, dtype=np.int64)
-    n_blocks = (n_rcv + RECEIVER_BLOCK - 1) // RECEIVER_BLOCK
-    for blk in numba.prange(n_blocks):
-        lo = blk * RECEIVER_BLOCK
-        hi = min(lo + RECEIVER_BLOCK, n_rcv)
-        sd = np.empty(K)
-        for s_lo in range(0, n_src, SOURCE_BLOCK):
-            s_hi = min(s_lo + SOURCE_BLOCK, n_src)
-            for o in range(lo, hi):
-                px = rcv_points[o, 0]
-                py = rcv_points[o, 1]
-                pz = rcv_points[o, 2]
-                nx = rcv_normals[o, 0]
-                ny = rcv_normals[o, 1]
-                nz = rcv_normals[o, 2]
-                for j in range(s_lo, s_hi):
-                    clamped[o] += source_to_receiver(model, src_points, src_normals, src_w12, j, px, py, pz, nx, ny, nz,
-                                                     params, sd)
-                    for c in range(n_out):
-                        B[o, c] += sd[channel_of[c]] * src_flux[j, c]
+    for_ranges(_vertex_rows, n_rcv, model, table, weights, rcv_points, rcv_normals, lanes, counted, B, clamped)
     return B, clamped
 
 
-@numba.njit(cache=True, parallel=True, fastmath=True)
-def indexed_sum(model, rcv_points, rcv_normals, table, weights, starts, counts, columns, factors, params, lanes,
-                channel_of):
+@numba.njit(cache=True, nogil=True, fastmath=True, error_model="numpy")
+def _vertex_rows(worker, lo, hi, model, table, weights, rcv_points, rcv_normals, lanes, counted, B, clamped):
+    """Receivers ``lo .. hi - 1`` of :func:`vertex_sum`."""
+    n_src = table.shape[1]
+    n_out = weights.shape[0]
+    X0, X1, X2, N0, N1, N2, W0, W1, W2 = table_rows(table)
+    for o in range(lo, hi):
+        px, py, pz = rcv_points[o, 0], rcv_points[o, 1], rcv_points[o, 2]
+        nx, ny, nz = rcv_normals[o, 0], rcv_normals[o, 1], rcv_normals[o, 2]
+        count = 0
+        for group in range(lanes.shape[0] // 3):
+            c0 = 3 * group
+            F0, F1, F2, p0, p1, p2 = group_inputs(weights, lanes, c0)
+            k0, k1, k2 = counted[c0], counted[c0 + 1], counted[c0 + 2]
+            a0 = 0.0
+            a1 = 0.0
+            a2 = 0.0
+            for j in range(n_src):
+                e0, e1, e2 = pair_three(model, px - X0[j], py - X1[j], pz - X2[j], N0[j], N1[j], N2[j], W0[j], W1[j],
+                                        W2[j], nx, ny, nz, p0, p1, p2)
+                count += (e0 < 0.0) * k0 + (e1 < 0.0) * k1 + (e2 < 0.0) * k2
+                a0 += max(e0, 0.0) * F0[j]
+                a1 += max(e1, 0.0) * F1[j]
+                a2 += max(e2, 0.0) * F2[j]
+            store_three(B, o, c0, n_out, a0, a1, a2)
+        clamped[o] = count
+
+
+@numba.njit(cache=True, inline="always")
+def table_rows(table):
+    """The nine rows of a source table (position mm, unit normal, unit refracted direction)."""
+    return table[0], table[1], table[2], table[3], table[4], table[5], table[6], table[7], table[8]
+
+
+@numba.njit(cache=True, inline="always")
+def group_inputs(weights, lanes, c0):
+    """For the output channels ``c0 .. c0 + 2``: their weight rows (the last repeated past the end) and
+    their parameters (:func:`lane`), read once before a kernel's inner loop."""
+    n_out = weights.shape[0]
+    return (weights[c0], weights[min(c0 + 1, n_out - 1)], weights[min(c0 + 2, n_out - 1)], lane(lanes, c0),
+            lane(lanes, c0 + 1), lane(lanes, c0 + 2))
+
+
+@numba.njit(cache=True, inline="always")
+def store_three(out, row, c0, n_out, a0, a1, a2):
+    """``out[row, c0 .. c0 + 2] = a0, a1, a2`` for the channels that exist (the lanes past ``n_out`` pad)."""
+    out[row, c0] = a0
+    if c0 + 1 < n_out:
+        out[row, c0 + 1] = a1
+    if c0 + 2 < n_out:
+        out[row, c0 + 2] = a2
+
+
+def indexed_sum(model, rcv_points, rcv_normals, table, weights, starts, counts, columns, factors, lanes):
     """Per receiver ``r``: ``B[r, c] = sum_k S_d(point columns[k]; x_r)[c] * weights[c, columns[k]] * factors[k]``
     over ``k`` in ``starts[r] .. starts[r] + counts[r]``.
 
-    The sources are columns of ``table`` (rows: position mm, unit normal, unit refracted direction);
-    ``lanes`` is :func:`channel_lanes` of ``params``. The directional dipole's loop is written out in the
-    parallel loop's body, where it vectorises (about four times faster than the same loop in a
-    function of its own); the other models use :func:`model_pair`.
+    The sources are columns of ``table`` (rows: position mm, unit normal, unit refracted direction) with
+    ``weights (C, P)``; ``lanes`` is :func:`channel_lanes` of the parameters; ``model`` as in
+    :func:`vertex_sum`. Returns ``(n_rcv, C)`` float64. Receivers run on
+    :func:`~translucency.scatter.threads.for_ranges`' threads, each receiver's list in a loop that
+    vectorises.
     """
-    n_r = rcv_points.shape[0]
+    out = np.zeros((rcv_points.shape[0], weights.shape[0]))
+    for_ranges(_indexed_rows, rcv_points.shape[0], model, rcv_points, rcv_normals, table, weights, starts, counts,
+               columns, factors, lanes, out)
+    return out
+
+
+@numba.njit(cache=True, nogil=True, fastmath=True, error_model="numpy")
+def _indexed_rows(worker, lo, hi, model, rcv_points, rcv_normals, table, weights, starts, counts, columns, factors,
+                  lanes, out):
+    """Receivers ``lo .. hi - 1`` of :func:`indexed_sum`."""
     n_out = weights.shape[0]
-    out = np.zeros((n_r, n_out))
-    c1 = min(1, n_out - 1)
-    c2 = min(2, n_out - 1)
-    X0, X1, X2, N0, N1, N2, W0, W1, W2 = (table[0], table[1], table[2], table[3], table[4], table[5], table[6],
-                                          table[7], table[8])
-    F0, F1, F2 = weights[0], weights[c1], weights[c2]
-    directional = model == MODEL_DIRECTIONAL and n_out <= 3
-    for r in numba.prange(n_r):
+    X0, X1, X2, N0, N1, N2, W0, W1, W2 = table_rows(table)
+    for r in range(lo, hi):
         x0, x1, x2 = rcv_points[r, 0], rcv_points[r, 1], rcv_points[r, 2]
         n0, n1, n2 = rcv_normals[r, 0], rcv_normals[r, 1], rcv_normals[r, 2]
-        if directional:
+        for group in range(lanes.shape[0] // 3):
+            c0 = 3 * group
+            F0, F1, F2, p0, p1, p2 = group_inputs(weights, lanes, c0)
             a0 = 0.0
             a1 = 0.0
             a2 = 0.0
             for k in range(starts[r], starts[r] + counts[r]):
                 i = columns[k]
-                e0, e1, e2 = directional_three(x0 - X0[i], x1 - X1[i], x2 - X2[i], N0[i], N1[i], N2[i], W0[i], W1[i],
-                                               W2[i], n0, n1, n2, lanes)
+                e0, e1, e2 = pair_three(model, x0 - X0[i], x1 - X1[i], x2 - X2[i], N0[i], N1[i], N2[i], W0[i], W1[i],
+                                        W2[i], n0, n1, n2, p0, p1, p2)
                 f = factors[k]
                 a0 += max(e0, 0.0) * F0[i] * f
                 a1 += max(e1, 0.0) * F1[i] * f
                 a2 += max(e2, 0.0) * F2[i] * f
-            out[r, 0] = a0
-            if n_out > 1:
-                out[r, 1] = a1
-            if n_out > 2:
-                out[r, 2] = a2
-        else:
-            sd = np.empty(params.shape[0])
-            for k in range(starts[r], starts[r] + counts[r]):
-                i = columns[k]
-                model_pair(model, X0[i], X1[i], X2[i], N0[i], N1[i], N2[i], W0[i], W1[i], W2[i], x0, x1, x2, n0, n1, n2,
-                           params, sd)
-                for ch in range(n_out):
-                    out[r, ch] += sd[channel_of[ch]] * weights[ch, i] * factors[k]
-    return out
-
-
-@numba.njit(cache=True)
-def channel_lanes(params, channel_of, n_out):
-    """Parameter rows in output-channel order, three of them: lane ``c`` of :func:`directional_three` is
-    output channel ``c`` (fewer outputs are padded with the last)."""
-    lanes = np.empty((3, params.shape[1]))
-    for c in range(3):
-        lanes[c] = params[channel_of[min(c, n_out - 1)]]
-    return lanes
+            store_three(out, r, c0, n_out, a0, a1, a2)

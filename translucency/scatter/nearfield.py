@@ -44,6 +44,7 @@ import numba
 import numpy as np
 
 from .kernels import channel_lanes, indexed_sum
+from .threads import for_ranges, thread_count
 
 # Dunavant (1985) 7-point rule, exact for polynomials of degree 5: barycentric points and weights
 # (weights sum to 1; multiply by the area).
@@ -101,44 +102,39 @@ def near_triangles(points, triangles, receivers, radius):
     by_key = np.argsort(keys, kind="stable")
     cell_keys, cell_start = np.unique(keys[by_key], return_index=True)
     cell_start = np.append(cell_start, n).astype(np.int64)
-    stamps = np.full((numba.get_num_threads(), triangles.shape[0]), -1, dtype=np.int64)
+    stamps = np.full((thread_count(), triangles.shape[0]), -1, dtype=np.int64)
     counts = np.zeros(receivers.size, dtype=np.int64)
     none = np.empty(0, dtype=np.int64)
     visit = np.argsort(keys[receivers], kind="stable")  # receivers cell by cell: neighbours share the cells' cache lines
     args = (points, np.ascontiguousarray(points[by_key]), receivers, visit, float(radius), low, cell, dims, cell_keys,
             cell_start, by_key.astype(np.int64), vt_offsets, vt_tris)
-    _near_pass(*args, none, none, counts, stamps, 0)
+    for_ranges(_near_pass, receivers.size, *args, none, none, counts, stamps, 0)
     offsets = np.zeros(receivers.size + 1, dtype=np.int64)
     np.cumsum(counts, out=offsets[1:])
     triangle_ids = np.empty(offsets[-1], dtype=np.int64)
-    _near_pass(*args, offsets, triangle_ids, counts, stamps, receivers.size)
+    for_ranges(_near_pass, receivers.size, *args, offsets, triangle_ids, counts, stamps, receivers.size)
     return offsets, triangle_ids
 
 
-@numba.njit(cache=True)
 def _cell_keys(points, low, cell, dims):
     """Grid key ``(i * dims[1] + j) * dims[2] + k`` of each point's cell."""
-    keys = np.empty(points.shape[0], dtype=np.int64)
-    for v in range(points.shape[0]):
-        i = min(int((points[v, 0] - low[0]) / cell), dims[0] - 1)
-        j = min(int((points[v, 1] - low[1]) / cell), dims[1] - 1)
-        k = min(int((points[v, 2] - low[2]) / cell), dims[2] - 1)
-        keys[v] = (i * dims[1] + j) * dims[2] + k
-    return keys
+    ijk = np.minimum(((points - low) / cell).astype(np.int64), dims - 1)
+    return (ijk[:, 0] * dims[1] + ijk[:, 1]) * dims[2] + ijk[:, 2]
 
 
-@numba.njit(cache=True, parallel=True)
-def _near_pass(points, sorted_points, receivers, visit, radius, low, cell, dims, cell_keys, cell_start, by_key,
-               vt_offsets, vt_tris, offsets, triangle_ids, counts, stamps, stamp_base):
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _near_pass(worker, lo, hi, points, sorted_points, receivers, visit, radius, low, cell, dims, cell_keys, cell_start,
+               by_key, vt_offsets, vt_tris, offsets, triangle_ids, counts, stamps, stamp_base):
     """Count (``triangle_ids`` empty) or write each receiver's near triangles, each once, receivers in
     the order ``visit``: ``stamps`` (threads x triangles) hold the stamp ``stamp_base + receiver`` of the
     receiver that last took one. ``sorted_points`` are the points cell by cell (``points[by_key]``), so
-    that a cell's distance checks read contiguous memory."""
+    that a cell's distance checks read contiguous memory. Receivers ``visit[lo:hi]``; ``worker`` picks the
+    row of ``stamps`` (:func:`~translucency.scatter.threads.for_ranges`)."""
     write = triangle_ids.shape[0] > 0
     r2 = radius * radius
-    for p in numba.prange(receivers.shape[0]):
+    mine = stamps[worker]
+    for p in range(lo, hi):
         q = visit[p]
-        mine = stamps[numba.get_thread_id()]
         me = stamp_base + q
         x = points[receivers[q]]
         ci = min(int((x[0] - low[0]) / cell), dims[0] - 1)
@@ -319,24 +315,28 @@ def source_point_table(points, normals, w12, phi, triangles, triangle_areas, tab
     weights[:, :n] = phi.T
     # an edge as a degenerate "triangle" (its two ends twice) interpolates as the edge does
     edge_triangles = np.ascontiguousarray(tables.edges[lit_edges][:, [0, 1, 1]])
-    _fill_shared_points(points, normals, w12, phi, triangles, triangle_areas, rule_points, rule_weights, lit_triangles,
-                        edge_triangles, table, weights, n, start_mid)
+    for_ranges(_fill_shared_points, lit_triangles.size + edge_triangles.shape[0], points, normals, w12, phi, triangles,
+               triangle_areas, rule_points, rule_weights, lit_triangles, edge_triangles, table, weights, n, start_mid)
     return SourcePoints(table, weights, vertex_lit, first_rule, midpoint_column)
 
 
-@numba.njit(cache=True, parallel=True)
-def _fill_shared_points(points, normals, w12, phi, triangles, triangle_areas, rule_points, rule_weights, lit_triangles,
-                        edge_triangles, table, weights, start_rule, start_mid):
-    """Dunavant points of the lit triangles and midpoints of their edges into ``table``."""
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _fill_shared_points(worker, lo, hi, points, normals, w12, phi, triangles, triangle_areas, rule_points, rule_weights,
+                        lit_triangles, edge_triangles, table, weights, start_rule, start_mid):
+    """Dunavant points of the lit triangles and midpoints of their edges into ``table``: items ``lo .. hi - 1``
+    of the lit triangles followed by the edges."""
     n_rule = rule_points.shape[0]
-    for k in numba.prange(lit_triangles.shape[0]):
-        t = lit_triangles[k]
-        column = start_rule + k * n_rule
-        for q in range(n_rule):
-            _gather(points, normals, w12, phi, triangles[t], rule_points[q, 0], rule_points[q, 1], rule_points[q, 2],
-                    triangle_areas[t] * rule_weights[q], table, weights, column + q)
-    for k in numba.prange(edge_triangles.shape[0]):
-        _gather(points, normals, w12, phi, edge_triangles[k], 0.5, 0.25, 0.25, 1.0, table, weights, start_mid + k)
+    n_lit = lit_triangles.shape[0]
+    for k in range(lo, hi):
+        if k < n_lit:
+            t = lit_triangles[k]
+            column = start_rule + k * n_rule
+            for q in range(n_rule):
+                _gather(points, normals, w12, phi, triangles[t], rule_points[q, 0], rule_points[q, 1], rule_points[q, 2],
+                        triangle_areas[t] * rule_weights[q], table, weights, column + q)
+        else:
+            _gather(points, normals, w12, phi, edge_triangles[k - n_lit], 0.5, 0.25, 0.25, 1.0, table, weights,
+                    start_mid + k - n_lit)
 
 
 @numba.njit(cache=True, inline="always")
@@ -552,18 +552,17 @@ def near_field_correction(model, points, triangles, triangle_areas, normals, w12
     factors = np.empty(room)
     own = np.empty(0)
     ones = np.empty(0)
-    stamps = np.full((numba.get_num_threads(), 2 * (points.shape[0] + tables.edges.shape[0])), -1, dtype=np.int64)
-    chunks = 16 * numba.get_num_threads()
+    stamps = np.full((thread_count(), 2 * (points.shape[0] + tables.edges.shape[0])), -1, dtype=np.int64)
     for start in starts:
         block = slice(start, min(n_r, start + BLOCK_RECEIVERS))
         rcv = receivers[block]
         col_offsets = bound[start:block.stop + 1] - bound[start]
         n_columns = np.zeros(rcv.size, dtype=np.int64)
         n_refined = np.zeros(rcv.size, dtype=np.int64)
-        _list_points(points, triangles, triangle_areas, rcv, offsets[start:block.stop + 1], triangle_ids, beta,
-                     scale_min, degree3_ratio, centroid_factor, shared.vertex_lit, shared.first_rule,
-                     shared.midpoint_column, tables.edge_of_corner, diameters, centroids, fan[0].size, fan[2].size,
-                     col_offsets, columns, factors, n_columns, n_refined, min(rcv.size, chunks), start, stamps)
+        for_ranges(_list_points, rcv.size, points, triangles, triangle_areas, rcv, offsets[start:block.stop + 1],
+                   triangle_ids, beta, scale_min, degree3_ratio, centroid_factor, shared.vertex_lit, shared.first_rule,
+                   shared.midpoint_column, tables.edge_of_corner, diameters, centroids, fan[0].size, fan[2].size,
+                   col_offsets, columns, factors, n_columns, n_refined, start, stamps)
         n_points[block] = n_columns + n_refined
         ref_offsets = np.zeros(rcv.size + 1, dtype=np.int64)
         np.cumsum(n_refined, out=ref_offsets[1:])
@@ -573,15 +572,15 @@ def near_field_correction(model, points, triangles, triangle_areas, normals, w12
             ones = np.ones(own.size // (9 + n_c))
         refined = own[:9 * size].reshape(9, size)  # every column is written
         refined_weights = own[9 * size:(9 + n_c) * size].reshape(n_c, size)
-        _refined_points(points, normals, w12, phi, triangles, triangle_areas, rcv, offsets[start:block.stop + 1],
-                        triangle_ids, beta, scale_min, shared.first_rule, diameters, centroids, rule_points, rule_weights,
-                        *fan, ref_offsets, refined, refined_weights, min(rcv.size, chunks))
+        for_ranges(_refined_points, rcv.size, points, normals, w12, phi, triangles, triangle_areas, rcv,
+                   offsets[start:block.stop + 1], triangle_ids, beta, scale_min, shared.first_rule, diameters, centroids,
+                   rule_points, rule_weights, *fan, ref_offsets, refined, refined_weights)
         rcv_points, rcv_normals = points[rcv], normals[rcv]
         correction[block] = (
             indexed_sum(model, rcv_points, rcv_normals, shared.table, shared.weights, col_offsets[:-1], n_columns,
-                        columns, factors, params, lanes, channel_of)
+                        columns, factors, lanes)
             + indexed_sum(model, rcv_points, rcv_normals, refined, refined_weights, ref_offsets[:-1],
-                          np.diff(ref_offsets), np.arange(size), ones[:size], params, lanes, channel_of))
+                          np.diff(ref_offsets), np.arange(size), ones[:size], lanes))
     return correction, n_points
 
 
@@ -589,10 +588,10 @@ def near_field_correction(model, points, triangles, triangle_areas, normals, w12
 BLOCK_RECEIVERS = 2048
 
 
-@numba.njit(cache=True, parallel=True)
-def _list_points(points, triangles, triangle_areas, receivers, offsets, triangle_ids, beta, scale_min, degree3_ratio,
-                 centroid_factor, vertex_lit, first_rule, midpoint_column, edge_of_corner, diameters, centroids,
-                 fan_angular, fan_radial, col_offsets, columns, factors, n_columns, n_refined, n_chunks, first_receiver,
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _list_points(worker, lo, hi, points, triangles, triangle_areas, receivers, offsets, triangle_ids, beta, scale_min,
+                 degree3_ratio, centroid_factor, vertex_lit, first_rule, midpoint_column, edge_of_corner, diameters,
+                 centroids, fan_angular, fan_radial, col_offsets, columns, factors, n_columns, n_refined, first_receiver,
                  stamps):
     """Pass 1: per receiver, the shared-table points (vertex rule, whole triangles) and the number of
     points of its own quadrature (fan rule on its own triangles, refined pieces of the other close ones).
@@ -601,120 +600,118 @@ def _list_points(points, triangles, triangle_areas, receivers, offsets, triangle
     (``first_receiver + r``) last listed a vertex or an edge midpoint and where: allocating them per
     block instead would cost a pass over memory proportional to the mesh for every chunk of receivers.
     """
-    n_r = receivers.shape[0]
     n_v = points.shape[0]
     n_rule = RULE_POINTS.shape[0]
-    for chunk in numba.prange(n_chunks):
-        stack = np.empty((3 * MAX_DEPTH + 8, 7))
-        cx = np.empty((3, 3))
-        none = np.empty((0, 7))
-        n_e = midpoint_column.shape[0]
-        mine = stamps[numba.get_thread_id()]
-        owner = mine[:n_v]  # receiver that last listed a vertex
-        slot = mine[n_v:2 * n_v]  # its position in that receiver's list
-        edge_owner = mine[2 * n_v:2 * n_v + n_e]  # the same for edge midpoints
-        edge_slot = mine[2 * n_v + n_e:]
-        for r in range(chunk * n_r // n_chunks, (chunk + 1) * n_r // n_chunks):
-            me = first_receiver + r
-            xo = points[receivers[r]]
-            base = col_offsets[r]
-            listed = 0
-            refined = 0
-            for k in range(offsets[r], offsets[r + 1]):
-                t = triangle_ids[k]
-                if first_rule[t] < 0:  # no light enters at any corner: nothing to integrate
+    # receivers lo .. hi - 1, with the scratch space and stamps of ``worker``
+    stack = np.empty((3 * MAX_DEPTH + 8, 7))
+    cx = np.empty((3, 3))
+    none = np.empty((0, 7))
+    n_e = midpoint_column.shape[0]
+    mine = stamps[worker]
+    owner = mine[:n_v]  # receiver that last listed a vertex
+    slot = mine[n_v:2 * n_v]  # its position in that receiver's list
+    edge_owner = mine[2 * n_v:2 * n_v + n_e]  # the same for edge midpoints
+    edge_slot = mine[2 * n_v + n_e:]
+    for r in range(lo, hi):
+        me = first_receiver + r
+        xo = points[receivers[r]]
+        base = col_offsets[r]
+        listed = 0
+        refined = 0
+        for k in range(offsets[r], offsets[r + 1]):
+            t = triangle_ids[k]
+            if first_rule[t] < 0:  # no light enters at any corner: nothing to integrate
+                continue
+            third = triangle_areas[t] / 3.0
+            for corner in range(3):
+                v = triangles[t, corner]
+                if not vertex_lit[v]:
                     continue
-                third = triangle_areas[t] / 3.0
+                if owner[v] != me:
+                    owner[v] = me
+                    slot[v] = listed
+                    columns[base + listed] = v
+                    factors[base + listed] = 0.0
+                    listed += 1
+                factors[base + slot[v]] -= third
+            corner = _corner_of(triangles[t], receivers[r])
+            if corner >= 0:  # the receiver's own triangle: the fan rule
+                refined += _fan_count(points, triangles[t], corner, beta * scale_min, fan_angular, fan_radial)
+            elif _whole(diameters[t], centroids[t], xo, degree3_ratio, 0.0):  # degree 3: shared points
+                area = triangle_areas[t]
                 for corner in range(3):
                     v = triangles[t, corner]
-                    if not vertex_lit[v]:
-                        continue
-                    if owner[v] != me:
-                        owner[v] = me
-                        slot[v] = listed
-                        columns[base + listed] = v
+                    if vertex_lit[v]:
+                        factors[base + slot[v]] += CORNER_WEIGHT * area
+                    e = edge_of_corner[t, corner]
+                    if edge_owner[e] != me:
+                        edge_owner[e] = me
+                        edge_slot[e] = listed
+                        columns[base + listed] = midpoint_column[e]
                         factors[base + listed] = 0.0
                         listed += 1
-                    factors[base + slot[v]] -= third
-                corner = _corner_of(triangles[t], receivers[r])
-                if corner >= 0:  # the receiver's own triangle: the fan rule
-                    refined += _fan_count(points, triangles[t], corner, beta * scale_min, fan_angular, fan_radial)
-                elif _whole(diameters[t], centroids[t], xo, degree3_ratio, 0.0):  # degree 3: shared points
-                    area = triangle_areas[t]
-                    for corner in range(3):
-                        v = triangles[t, corner]
-                        if vertex_lit[v]:
-                            factors[base + slot[v]] += CORNER_WEIGHT * area
-                        e = edge_of_corner[t, corner]
-                        if edge_owner[e] != me:
-                            edge_owner[e] = me
-                            edge_slot[e] = listed
-                            columns[base + listed] = midpoint_column[e]
-                            factors[base + listed] = 0.0
-                            listed += 1
-                        factors[base + edge_slot[e]] += MIDPOINT_WEIGHT * area
-                    columns[base + listed] = first_rule[t]  # Dunavant's first point: the centroid
-                    factors[base + listed] = centroid_factor
+                    factors[base + edge_slot[e]] += MIDPOINT_WEIGHT * area
+                columns[base + listed] = first_rule[t]  # Dunavant's first point: the centroid
+                factors[base + listed] = centroid_factor
+                listed += 1
+            elif _whole(diameters[t], centroids[t], xo, beta, scale_min):  # Dunavant: shared rule points
+                for q in range(n_rule):
+                    columns[base + listed] = first_rule[t] + q
+                    factors[base + listed] = 1.0
                     listed += 1
-                elif _whole(diameters[t], centroids[t], xo, beta, scale_min):  # Dunavant: shared rule points
-                    for q in range(n_rule):
-                        columns[base + listed] = first_rule[t] + q
-                        factors[base + listed] = 1.0
-                        listed += 1
-                else:
-                    refined += n_rule * _pieces(points, triangles[t], xo, beta, scale_min, stack, cx, none)
-            n_columns[r] = listed
-            n_refined[r] = refined
+            else:
+                refined += n_rule * _pieces(points, triangles[t], xo, beta, scale_min, stack, cx, none)
+        n_columns[r] = listed
+        n_refined[r] = refined
 
 
-@numba.njit(cache=True, parallel=True)
-def _refined_points(points, normals, w12, phi, triangles, triangle_areas, receivers, offsets, triangle_ids, beta,
-                    scale_min, first_rule, diameters, centroids, rule_points, rule_weights, ang_x, ang_w, rad_x, rad_w,
-                    ref_offsets, refined, refined_weights, n_chunks):
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _refined_points(worker, lo, hi, points, normals, w12, phi, triangles, triangle_areas, receivers, offsets,
+                    triangle_ids, beta, scale_min, first_rule, diameters, centroids, rule_points, rule_weights, ang_x,
+                    ang_w, rad_x, rad_w, ref_offsets, refined, refined_weights):
     """Pass 2: each receiver's own quadrature points (fan rule, refined pieces), from ``ref_offsets`` on."""
-    n_r = receivers.shape[0]
     n_rule = rule_points.shape[0]
-    for chunk in numba.prange(n_chunks):
-        stack = np.empty((3 * MAX_DEPTH + 8, 7))
-        cx = np.empty((3, 3))
-        found = np.empty((4 ** 6, 7))
-        fan = np.empty((4 * ang_x.shape[0] * rad_x.shape[0], 4))
-        for r in range(chunk * n_r // n_chunks, (chunk + 1) * n_r // n_chunks):
-            xo = points[receivers[r]]
-            column = ref_offsets[r]
-            for k in range(offsets[r], offsets[r + 1]):
-                t = triangle_ids[k]
-                if first_rule[t] < 0:
-                    continue
-                tri = triangles[t]
-                corner = _corner_of(tri, receivers[r])
-                if corner >= 0:
-                    n = _fan_count(points, tri, corner, beta * scale_min, ang_x.shape[0], rad_x.shape[0])
-                    if n > fan.shape[0]:
-                        fan = np.empty((n, 4))
-                    _fan(points, tri, corner, beta, scale_min, ang_x, ang_w, rad_x, rad_w, fan)
-                    for j in range(n):
-                        _gather(points, normals, w12, phi, tri, fan[j, 0], fan[j, 1], fan[j, 2],
-                                triangle_areas[t] * fan[j, 3], refined, refined_weights, column)
-                        column += 1
-                    continue
-                if _whole(diameters[t], centroids[t], xo, beta, scale_min):
-                    continue
-                n = _pieces(points, tri, xo, beta, scale_min, stack, cx, found)
-                if n > found.shape[0]:  # deeper than the scratch space: grow it and subdivide again
-                    found = np.empty((n, 7))
-                    n = _pieces(points, tri, xo, beta, scale_min, stack, cx, found)
+    # receivers lo .. hi - 1, with their own scratch space
+    stack = np.empty((3 * MAX_DEPTH + 8, 7))
+    cx = np.empty((3, 3))
+    found = np.empty((4 ** 6, 7))
+    fan = np.empty((4 * ang_x.shape[0] * rad_x.shape[0], 4))
+    for r in range(lo, hi):
+        xo = points[receivers[r]]
+        column = ref_offsets[r]
+        for k in range(offsets[r], offsets[r + 1]):
+            t = triangle_ids[k]
+            if first_rule[t] < 0:
+                continue
+            tri = triangles[t]
+            corner = _corner_of(tri, receivers[r])
+            if corner >= 0:
+                n = _fan_count(points, tri, corner, beta * scale_min, ang_x.shape[0], rad_x.shape[0])
+                if n > fan.shape[0]:
+                    fan = np.empty((n, 4))
+                _fan(points, tri, corner, beta, scale_min, ang_x, ang_w, rad_x, rad_w, fan)
                 for j in range(n):
-                    p0, q0, p1, q1, p2, q2 = found[j, 0], found[j, 1], found[j, 2], found[j, 3], found[j, 4], found[j, 5]
-                    r0 = 1.0 - p0 - q0
-                    r1 = 1.0 - p1 - q1
-                    r2 = 1.0 - p2 - q2
-                    piece_area = triangle_areas[t] * 0.25 ** found[j, 6]
-                    for qp in range(n_rule):
-                        l0 = rule_points[qp, 0]
-                        l1 = rule_points[qp, 1]
-                        l2 = rule_points[qp, 2]
-                        _gather(points, normals, w12, phi, tri, l0 * p0 + l1 * p1 + l2 * p2, l0 * q0 + l1 * q1 + l2 * q2,
-                                l0 * r0 + l1 * r1 + l2 * r2, piece_area * rule_weights[qp], refined, refined_weights,
-                                column)
-                        column += 1
+                    _gather(points, normals, w12, phi, tri, fan[j, 0], fan[j, 1], fan[j, 2],
+                            triangle_areas[t] * fan[j, 3], refined, refined_weights, column)
+                    column += 1
+                continue
+            if _whole(diameters[t], centroids[t], xo, beta, scale_min):
+                continue
+            n = _pieces(points, tri, xo, beta, scale_min, stack, cx, found)
+            if n > found.shape[0]:  # deeper than the scratch space: grow it and subdivide again
+                found = np.empty((n, 7))
+                n = _pieces(points, tri, xo, beta, scale_min, stack, cx, found)
+            for j in range(n):
+                p0, q0, p1, q1, p2, q2 = found[j, 0], found[j, 1], found[j, 2], found[j, 3], found[j, 4], found[j, 5]
+                r0 = 1.0 - p0 - q0
+                r1 = 1.0 - p1 - q1
+                r2 = 1.0 - p2 - q2
+                piece_area = triangle_areas[t] * 0.25 ** found[j, 6]
+                for qp in range(n_rule):
+                    l0 = rule_points[qp, 0]
+                    l1 = rule_points[qp, 1]
+                    l2 = rule_points[qp, 2]
+                    _gather(points, normals, w12, phi, tri, l0 * p0 + l1 * p1 + l2 * p2, l0 * q0 + l1 * q1 + l2 * q2,
+                            l0 * r0 + l1 * r1 + l2 * r2, piece_area * rule_weights[qp], refined, refined_weights,
+                            column)
+                    column += 1

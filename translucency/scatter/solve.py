@@ -224,12 +224,7 @@ def _as_array(value, dtype, shape, name):
 
 
 def _all_pairs(model_code, geometry, sources, w12, flux, rcv_points, rcv_normals, params, channel_of):
-    """Every (source, receiver) pair: the vectorised kernel for the directional dipole with <= 3 channels."""
-    if model_code == kernels.MODEL_DIRECTIONAL and flux.shape[1] <= 3:
-        p, n, w = geometry.points[sources], geometry.normals[sources], w12[sources]
-        columns = [np.ascontiguousarray(a[:, i]) for a in (p, n, w) for i in range(3)]
-        return kernels.directional_vertex_sum(*columns, np.ascontiguousarray(flux[sources].T), rcv_points, rcv_normals,
-                                              params, channel_of)
+    """Every (source, receiver) pair."""
     return kernels.vertex_sum(model_code, geometry.points[sources], geometry.normals[sources], w12[sources],
                               flux[sources], rcv_points, rcv_normals, params, channel_of)
 
@@ -251,16 +246,9 @@ def _far_field_cutoff(model, geometry, medium, lit, w12, flux, rcv_points, rcv_n
                                     channel_of, tol)
         return B, {**stats, "cutoff_radius_mm": radius}
     grid = geometry.source_grid(lit, radius)
-    if model_code == kernels.MODEL_DIRECTIONAL and flux.shape[1] <= 3:
-        ordered = lit[grid.order]
-        columns = [np.ascontiguousarray(a[ordered, i]) for a in (geometry.points, geometry.normals, w12) for i in range(3)]
-        B, evaluated = cutoff.cutoff_sum_directional(*columns, np.ascontiguousarray(flux[ordered].T), grid.start,
-                                                     grid.origin, grid.cell, grid.dims, radius, rcv_points, rcv_normals,
-                                                     params, channel_of)
-    else:
-        B, evaluated = cutoff.cutoff_sum(model_code, grid.order, grid.start, grid.origin, grid.cell, grid.dims, radius,
-                                         geometry.points[lit], geometry.normals[lit], w12[lit], flux[lit], rcv_points,
-                                         rcv_normals, params, channel_of)
+    B, evaluated = cutoff.cutoff_sum(model_code, grid.order, grid.start, grid.origin, grid.cell, grid.dims, radius,
+                                     geometry.points[lit], geometry.normals[lit], w12[lit], flux[lit], rcv_points,
+                                     rcv_normals, params, channel_of)
     pairs = int(lit.size) * int(rcv_points.shape[0])
     return B, {"cutoff_radius_mm": radius, "pairs_evaluated": int(evaluated.sum()),
                "pairs_skipped": pairs - int(evaluated.sum())}
