@@ -2,8 +2,10 @@
 # Set up everything translucency needs on a Debian machine, idempotently:
 #   1. system libraries (apt): OpenGL for pymeshlab, EGL for off-screen VTK, OpenMP for numba,
 #      Xvfb for the tests that open a real window, and Python's venv module;
-#   2. a virtual environment in .venv with the package (editable) and its test extras.
-# A second run does nothing unless pyproject.toml changed.
+#   2. a virtual environment in .venv with the package (editable) and its test extras;
+#   3. the solver's kernels compiled into numba's cache, so that the first real run does not wait for
+#      the compiler (skipped when the cache already holds them).
+# A second run does nothing unless pyproject.toml changed or the kernels' cache is empty.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$root"
@@ -44,3 +46,4 @@ if [[ ! -f $stamp || "$(cat "$stamp")" != "$want" ]]; then
     .venv/bin/python -m pip install -q -e ".[test,dask]"
     echo "$want" > "$stamp"
 fi
+.venv/bin/python -m translucency.scatter.warmup

@@ -284,12 +284,23 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _first_run_notice(solves: bool):
+    """For commands that solve: one line on stderr when numba really compiles the solver's kernels."""
+    import contextlib
+
+    if not solves:
+        return contextlib.nullcontext()
+    from ..scatter.warmup import NOTICE, compile_notice
+
+    return compile_notice(lambda: print(f"translucency: {NOTICE}", file=sys.stderr, flush=True))
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point of ``translucency`` and ``python -m translucency``; returns the exit code."""
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
-        with command_line_spelling():
+        with command_line_spelling(), _first_run_notice(args.func in (cmd_main_job, cmd_bake, cmd_view, cmd_compare)):
             return int(args.func(args) or 0)
     except TranslucencyError as exc:
         print(f"translucency: error: {exc}", file=sys.stderr)

@@ -1,0 +1,60 @@
+"""The first-run notice (real compilation only) and the set-up's warm-up of the solver's kernels."""
+
+import os
+import subprocess
+import sys
+
+import numba
+import pytest
+
+from translucency.scatter import warmup
+
+
+def _compiled_function(module):
+    def f(x):
+        return x + 1
+
+    f.__module__ = module
+    return numba.njit(f)
+
+
+def test_notice_is_said_once_and_only_for_translucency_kernels():
+    said = []
+    with warmup.compile_notice(lambda: said.append(1)):
+        _compiled_function("elsewhere.module")(1)
+        assert said == []
+        _compiled_function("translucency.scatter.fake")(1)
+        _compiled_function("translucency.scatter.fake")(2.0)
+    assert said == [1]
+    _compiled_function("translucency.scatter.fake")(1)  # outside the block: nothing listens
+    assert said == [1]
+
+
+def test_notice_is_silent_when_nothing_compiles():
+    kernel = _compiled_function("translucency.scatter.fake")
+    kernel(1)
+    said = []
+    with warmup.compile_notice(lambda: said.append(1)):
+        kernel(3)  # already compiled for int64
+    assert said == []
+
+
+@pytest.mark.slow
+def test_warm_up_fills_the_cache_in_numba_cache_dir_once(tmp_path):
+    """An empty NUMBA_CACHE_DIR: the warm-up says it compiles and fills it; the second run finds every
+    kernel of the main job in the cache, compiles nothing and prints nothing."""
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "cache")}
+    command = [sys.executable, "-m", "translucency.scatter.warmup"]
+    first = subprocess.run(command, env=env, capture_output=True, text=True, timeout=600)
+    assert first.returncode == 0, first.stderr
+    assert first.stdout.count(warmup.NOTICE) == 1 and "ready" in first.stdout
+    assert any((tmp_path / "cache").rglob("*.nbi"))
+    second = subprocess.run(command, env=env, capture_output=True, text=True, timeout=600)
+    assert second.returncode == 0 and second.stdout == ""
+    check = subprocess.run([sys.executable, "-c", "from translucency.scatter.warmup import cold_kernels; "
+                            "print(cold_kernels())"], env=env, capture_output=True, text=True, timeout=600)
+    assert check.stdout.strip() == "[]"
+    empty = subprocess.run([sys.executable, "-c", "from translucency.scatter.warmup import cold_kernels; "
+                            "print(len(cold_kernels()))"], env={**env, "NUMBA_CACHE_DIR": str(tmp_path / "other")},
+                           capture_output=True, text=True, timeout=600)
+    assert int(empty.stdout) == len(warmup.MAIN_JOB_KERNELS)

@@ -1,0 +1,127 @@
+"""The solver's compiled kernels: say when they are being compiled, and compile them ahead of use.
+
+numba compiles a kernel the first time it is called and keeps the machine code in its cache (next to
+the sources, or in ``NUMBA_CACHE_DIR``); later runs load it. A first run therefore waits for the
+compiler (about 10 s on two cores for what the main job uses). Two helpers:
+
+* :func:`compile_notice` calls a function once, when numba really starts compiling one of
+  translucency's kernels (numba's ``numba:compile`` event, which fires on a cache miss only), so the
+  command line can say why it is quiet;
+* :func:`warm_up` (``python -m translucency.scatter.warmup``, run by ``scripts/setup.sh``) compiles
+  the kernels the main job uses by solving a small synthetic surface, unless every one of them is
+  already in the cache (:func:`cold_kernels`, read from numba's cache index).
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import sys
+import time
+from typing import Callable, Iterator
+
+import numpy as np
+
+#: Kernels (module, name) the main job's solve calls (``tree`` method, near field).
+MAIN_JOB_KERNELS = (
+    ("translucency.scatter.kernels", "_indexed_rows"),
+    ("translucency.scatter.hierarchy", "_traverse"),
+    ("translucency.scatter.nearfield", "_near_pass"),
+    ("translucency.scatter.nearfield", "_fill_shared_points"),
+    ("translucency.scatter.nearfield", "_list_points"),
+    ("translucency.scatter.nearfield", "_refined_points"),
+)
+
+NOTICE = "compiling the solver's kernels (first run only, about 10-20 s) ..."
+
+
+@contextlib.contextmanager
+def compile_notice(say: Callable[[], None]) -> Iterator[None]:
+    """Within the block, call ``say()`` once when numba starts compiling a kernel of translucency.
+
+    Only real compilation counts: numba raises ``numba:compile`` on a cache miss, not when it loads a
+    kernel from its cache (wherever ``NUMBA_CACHE_DIR`` puts it).
+    """
+    from numba.core import event
+
+    class Listener(event.Listener):
+        said = False
+
+        def on_start(self, ev):
+            dispatcher = (ev.data or {}).get("dispatcher")
+            module = getattr(getattr(dispatcher, "py_func", None), "__module__", "") or ""
+            if not self.said and module.startswith("translucency."):
+                self.said = True
+                say()
+
+        def on_end(self, ev):
+            pass
+
+    listener = Listener()
+    event.register("numba:compile", listener)
+    try:
+        yield
+    finally:
+        event.unregister("numba:compile", listener)
+
+
+def cold_kernels() -> list[str]:
+    """Names of the main job's kernels that numba's cache holds no compiled version of (all of them
+    when the cache cannot be read)."""
+    import importlib
+
+    cold = []
+    for module, name in MAIN_JOB_KERNELS:
+        dispatcher = getattr(importlib.import_module(module), name)
+        try:
+            index = dispatcher._cache._cache_file._load_index()  # {(signature, target, flags): file}; {} when stale
+        except Exception:  # noqa: BLE001 - an unreadable cache is a cold one
+            index = {}
+        if not index:
+            cold.append(name)
+    return cold
+
+
+def _plane(n: int = 24, spacing: float = 1.0):
+    """A flat square of ``n x n`` vertices (mm), two triangles per cell, normals +z."""
+    u, v = np.meshgrid(np.arange(n, dtype=np.float64), np.arange(n, dtype=np.float64), indexing="ij")
+    points = np.column_stack([u.ravel() * spacing, v.ravel() * spacing, np.zeros(n * n)])
+    corner = (np.arange(n - 1)[:, None] * n + np.arange(n - 1)[None, :]).ravel()
+    triangles = np.concatenate([np.column_stack([corner, corner + n, corner + 1]),
+                                np.column_stack([corner + 1, corner + n, corner + n + 1])]).astype(np.int64)
+    normals = np.tile([0.0, 0.0, 1.0], (n * n, 1))
+    return points, triangles, normals
+
+
+def warm_up(force: bool = False) -> float:
+    """Compile the kernels the main job uses (a ``tree`` solve of a small plane in marble); returns the
+    seconds it took (0 when every kernel was already cached and ``force`` is false)."""
+    if not force and not cold_kernels():
+        return 0.0
+    from .materials import material
+    from .solve import SurfaceGeometry, solve
+
+    start = time.perf_counter()
+    points, triangles, normals = _plane()
+    medium = material("marble").medium()
+    phi = np.ones((points.shape[0], medium.n_channels))
+    phi[::5] = 0.0  # unlit vertices too, as under shadows
+    w12 = np.tile([0.0, 0.0, -1.0], (points.shape[0], 1))
+    solve(SurfaceGeometry(points, triangles, normals), phi, w12, medium, method="tree", tol=1e-2)
+    return time.perf_counter() - start
+
+
+def main(argv: list[str] | None = None) -> int:
+    """``python -m translucency.scatter.warmup [--force]``: compile the main job's kernels once."""
+    parser = argparse.ArgumentParser(prog="python -m translucency.scatter.warmup", description=main.__doc__)
+    parser.add_argument("--force", action="store_true", help="solve the warm-up surface even when the cache is warm")
+    args = parser.parse_args(argv)
+    with compile_notice(lambda: print(NOTICE, flush=True)):
+        seconds = warm_up(force=args.force)
+    if seconds:
+        print(f"the solver's kernels are ready ({seconds:.1f} s)")
+    return 0
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())
