@@ -9,6 +9,7 @@ solver.py           time against error per scan, material, method, tolerance  al
                     and proxy resolution; the ``exact`` kernel's throughput
 scaling.py          time and memory from 10k to 1M vertices; the 1M bake      always
 stability.py        the solver's stability at extreme inputs                  when the file exists
+first_run.py        cold (empty numba cache) and warm times of the commands   always (last)
 validate_models.py  the diffusion models against Monte Carlo (slow)           with ``--validate``
 =================== ========================================================= ==================
 
@@ -39,7 +40,8 @@ BENCH = ROOT / "bench"
 #: (name, script, arguments of a quick run, takes --repeats, optional): the suite in the order it runs.
 SUITE = [("solver", "solver.py", ["--quick"], True, False), ("scaling", "scaling.py", ["--quick"], True, False),
          ("stability", "stability.py", ["--blocks", "256", "--out", "bench/results/tmp"], False, False),
-         ("validate_models", "validate_models.py", ["--quick"], False, True)]
+         ("validate_models", "validate_models.py", ["--quick"], False, True),
+         ("first_run", "first_run.py", ["--quick"], True, False)]
 
 
 def run_script(script, quick_arguments, repeats):

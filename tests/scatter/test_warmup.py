@@ -18,10 +18,11 @@ def _compiled_function(module):
     return numba.njit(f)
 
 
-def test_notice_is_said_once_and_only_for_translucency_kernels():
+def test_notice_is_said_once_and_only_for_the_solver_kernels():
     said = []
     with warmup.compile_notice(lambda: said.append(1)):
         _compiled_function("elsewhere.module")(1)
+        _compiled_function("translucency.io.fake")(1)  # not the solver
         assert said == []
         _compiled_function("translucency.scatter.fake")(1)
         _compiled_function("translucency.scatter.fake")(2.0)

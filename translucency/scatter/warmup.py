@@ -4,8 +4,8 @@ numba compiles a kernel the first time it is called and keeps the machine code i
 the sources, or in ``NUMBA_CACHE_DIR``); later runs load it. A first run therefore waits for the
 compiler (about 10 s on two cores for what the main job uses). Two helpers:
 
-* :func:`compile_notice` calls a function once, when numba really starts compiling one of
-  translucency's kernels (numba's ``numba:compile`` event, which fires on a cache miss only), so the
+* :func:`compile_notice` calls a function once, when numba really starts compiling one of the
+  solver's kernels (numba's ``numba:compile`` event, which fires on a cache miss only), so the
   command line can say why it is quiet;
 * :func:`warm_up` (``python -m translucency.scatter.warmup``, run by ``scripts/setup.sh``) compiles
   the kernels the main job uses by solving a small synthetic surface, unless every one of them is
@@ -37,7 +37,8 @@ NOTICE = "compiling the solver's kernels (first run only, about 10-20 s) ..."
 
 @contextlib.contextmanager
 def compile_notice(say: Callable[[], None]) -> Iterator[None]:
-    """Within the block, call ``say()`` once when numba starts compiling a kernel of translucency.
+    """Within the block, call ``say()`` once when numba starts compiling one of the solver's kernels
+    (a function of ``translucency.scatter``).
 
     Only real compilation counts: numba raises ``numba:compile`` on a cache miss, not when it loads a
     kernel from its cache (wherever ``NUMBA_CACHE_DIR`` puts it).
@@ -50,7 +51,7 @@ def compile_notice(say: Callable[[], None]) -> Iterator[None]:
         def on_start(self, ev):
             dispatcher = (ev.data or {}).get("dispatcher")
             module = getattr(getattr(dispatcher, "py_func", None), "__module__", "") or ""
-            if not self.said and module.startswith("translucency."):
+            if not self.said and module.startswith("translucency.scatter."):
                 self.said = True
                 say()
 
