@@ -34,6 +34,11 @@ def option(keyword: str, value=None) -> str:
     return f"{keyword}=" if value is None else f"{keyword}={value!r}"
 
 
+def command_line_active() -> bool:
+    """True while :func:`option` spells settings as command-line flags (to pass on to worker processes)."""
+    return _command_line
+
+
 @contextlib.contextmanager
 def command_line_spelling(enabled: bool = True):
     """Within this block, :func:`option` spells settings as command-line flags."""

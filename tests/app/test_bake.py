@@ -333,3 +333,35 @@ def test_an_unreachable_scheduler_is_exit_2(scans, tmp_path, capsys, monkeypatch
 
 def test_bake_is_in_the_public_api():
     assert "bake" in translucency.__all__ and translucency.bake is batch.bake
+
+
+# --------------------------------------------------------------------------------------------------
+# units and orientation
+# --------------------------------------------------------------------------------------------------
+def test_bake_without_unit_infers_says_it_once_and_records_it(tmp_path, capsys):
+    path = write_sphere(tmp_path / "ball.ply", 3, 0.02)  # 0.04 units across: read as metres, 40 mm
+    out = tmp_path / "out"
+    assert cli.main(["bake", str(path), "--no-shadows", "-o", str(out)]) == 0
+    err = capsys.readouterr().err
+    line = "ball.ply: no --unit given; 0.04 units across, read as metres (40 mm); pass --unit to override"
+    assert err.count(line) == 1 and "ball.ply: ball.ply" not in err
+    baked = read_baked_ply(out / "ball_marble.ply")
+    assert baked.metadata["unit"] == "m" and baked.metadata["unit_name"] == "metres"
+    assert baked.metadata["mm_per_unit"] == 1000.0 and baked.metadata["unit_inferred"] is True
+    assert baked.metadata["up"] == "+y" and np.ptp(baked.points[:, 0]) == pytest.approx(40.0, rel=1e-3)
+    given = translucency.bake([path], tmp_path / "given", unit="m", shadows=False, up="z")
+    metadata = read_baked_ply(given[0].output).metadata
+    assert metadata["unit_inferred"] is False and metadata["up"] == "+z" and metadata["up_inferred"] is False
+
+
+@pytest.mark.slow
+def test_worker_processes_spell_the_flag_as_the_command_line_does(tmp_path, capsys):
+    paths = [write_sphere(tmp_path / f"ball{k}.ply", 2, 0.02) for k in range(2)]
+    assert cli.main(["bake", *map(str, paths), "--no-shadows", "--workers", "2", "-o", str(tmp_path / "out")]) == 0
+    err = capsys.readouterr().err
+    assert err.count("no --unit given") == 2 and "unit=" not in err
+
+
+def test_bad_up_is_one_sentence():
+    with pytest.raises(InvalidParameterError, match="up axis must be one of"):
+        batch.BakeSettings(up="sideways")

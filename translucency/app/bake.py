@@ -31,7 +31,7 @@ import time
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
-from ..errors import InvalidParameterError, TranslucencyError
+from ..errors import InvalidParameterError, TranslucencyError, command_line_active, command_line_spelling
 
 __all__ = ["BakeSettings", "BakeRecord", "BakeProgress", "ConsoleProgress", "bake", "bake_file", "bake_files",
            "output_paths", "format_summary", "exit_code", "DASK_CONNECT_TIMEOUT_S"]
@@ -59,16 +59,18 @@ class BakeSettings:
         Catalogue name, entry or medium (coefficients in 1/mm); stored as a ``Medium``.
     lights : light or sequence of lights, optional
         Default: the pipeline's white directional light (1 W/m²).
-    unit : str or float
-        Length unit of the scan files: ``mm``, ``cm``, ``m``, ``in`` or mm per unit (ignored for the
-        embedded default scan, which has its own size).
-    model, method, tol, resolution, shadows, exposure, per_direction
-        As in :func:`translucency.app.pipeline.shade` (``resolution`` in mm when a number).
+    unit : str or float, optional
+        Length unit of the scan files: ``mm``, ``cm``, ``m``, ``in`` or mm per unit; None: inferred
+        from each file's size (:func:`translucency.io.units.infer_unit`). Ignored for the embedded
+        default scan, which has its own size.
+    model, method, tol, resolution, shadows, exposure, per_direction, up
+        As in :func:`translucency.app.pipeline.shade` (``resolution`` in mm when a number; ``up``
+        places the default light and is recorded).
     """
 
     material: object = "marble"
     lights: tuple | None = None
-    unit: str | float = "mm"
+    unit: str | float | None = None
     model: str = "directional"
     method: str = "tree"
     tol: float = 1e-2
@@ -76,9 +78,11 @@ class BakeSettings:
     shadows: bool = True
     exposure: float | None = None
     per_direction: bool = False
+    up: str = "auto"
 
     def __post_init__(self):
         from ..io.units import parse_unit
+        from ..io.upright import parse_up
         from ..scatter.lights import as_light_list
         from ..scatter.solve import METHODS, MODELS
         from .pipeline import resolve_medium
@@ -86,7 +90,9 @@ class BakeSettings:
         object.__setattr__(self, "material", resolve_medium(self.material))
         if self.lights is not None:
             object.__setattr__(self, "lights", as_light_list(self.lights))
-        parse_unit(self.unit)
+        if self.unit is not None:
+            parse_unit(self.unit)
+        object.__setattr__(self, "up", parse_up(self.up))
         if self.model not in MODELS:
             raise InvalidParameterError(f"unknown model {self.model!r}; choose one of {', '.join(MODELS)}.")
         if self.method not in METHODS:
@@ -207,8 +213,9 @@ class ConsoleProgress(BakeProgress):
 
     def finished(self, index, record):
         """Count the file; print its warnings and its error, if any."""
-        for warning in record.warnings:
-            self._files.write(f"translucency: warning: {record.source}: {warning}", file=self._stream())
+        for warning in record.warnings:  # most sentences start with the file's name already
+            about = "" if warning.startswith(Path(record.source).name) else f"{record.source}: "
+            self._files.write(f"translucency: warning: {about}{warning}", file=self._stream())
         if not record.ok:
             self._files.write(f"translucency: error: {record.source}: {record.error}", file=self._stream())
         self._files.update(1)
@@ -259,7 +266,7 @@ def bake_file(path, output, settings: BakeSettings, progress=None) -> BakeRecord
         mesh, _, _ = load_scan(path, settings.unit, warn=warnings.append)
         vertices = mesh.n_points
         report("loading", 1.0)
-        result = Scene(mesh, shadows=settings.shadows).shade(
+        result = Scene(mesh, shadows=settings.shadows, up=settings.up).shade(
             settings.material, settings.lights, model=settings.model, method=settings.method, tol=settings.tol,
             resolution=settings.resolution, exposure=settings.exposure, per_direction=settings.per_direction,
             progress=report)
@@ -272,6 +279,12 @@ def bake_file(path, output, settings: BakeSettings, progress=None) -> BakeRecord
         return BakeRecord(source, None, vertices, lit, time.perf_counter() - start, failure_sentence(exc),
                           tuple(warnings), threads)
     return BakeRecord(source, str(output), vertices, lit, time.perf_counter() - start, None, tuple(warnings), threads)
+
+
+def _bake_file_spelled(command_line: bool, path, output, settings: BakeSettings) -> BakeRecord:
+    """:func:`bake_file` in a worker process, with its sentences spelling settings as the parent does."""
+    with command_line_spelling(command_line):
+        return bake_file(path, output, settings)
 
 
 def _source_label(path) -> str:
@@ -430,8 +443,8 @@ def bake_files(paths, output, settings: BakeSettings, *, workers: int = 1, sched
                         for source, target in zip(sources, outputs)]
                 _run_on_dask(client, jobs, done)
             elif min(workers, len(sources)) > 1:
-                jobs = [(source, target, settings) for source, target in zip(sources, outputs)]
-                _run_in_processes(bake_file, jobs, min(workers, len(jobs)), done)
+                jobs = [(command_line_active(), source, target, settings) for source, target in zip(sources, outputs)]
+                _run_in_processes(_bake_file_spelled, jobs, min(workers, len(jobs)), done)
             else:
                 for index, (source, target) in enumerate(zip(sources, outputs)):
                     def stage(name, fraction, index=index):
@@ -594,9 +607,9 @@ def exit_code(records) -> int:
     return 0 if all(r.ok for r in records) else 1
 
 
-def bake(meshes=None, output=None, material="marble", lights=None, *, unit="mm", model="directional",
+def bake(meshes=None, output=None, material="marble", lights=None, *, unit=None, model="directional",
          method="tree", tol=1e-2, resolution="full", shadows=True, exposure=None, per_direction=False,
-         workers=1, scheduler=None, progress=None) -> list[BakeRecord]:
+         up="auto", workers=1, scheduler=None, progress=None) -> list[BakeRecord]:
     """Bake scans to PLY files of per-vertex translucent radiance, one file per scan.
 
     Parameters
@@ -610,11 +623,15 @@ def bake(meshes=None, output=None, material="marble", lights=None, *, unit="mm",
         Catalogue name or coefficients (1/mm).
     lights : light or sequence of lights, optional
         Default: one white directional light of 1 W/m².
-    unit : str or float
-        Length unit of the files: ``mm``, ``cm``, ``m``, ``in`` or a number of mm per unit.
+    unit : str or float, optional
+        Length unit of the files: ``mm``, ``cm``, ``m``, ``in`` or a number of mm per unit; None
+        (default): inferred from each file's size, said in one line and recorded in the bake.
     model, method, tol, resolution, shadows, exposure, per_direction
         As in :func:`translucency.shade`; ``resolution`` is ``"full"``, ``"auto"`` or a proxy edge
         length in mm.
+    up : str
+        The scans' up axis (``"x"`` ... ``"-z"``, or ``"auto"``: inferred per scan); it places the
+        default light above and in front, and is recorded in the bake.
     workers : int
         Local processes to bake in (1: in this process).
     scheduler : str or distributed.Client, optional
@@ -631,5 +648,6 @@ def bake(meshes=None, output=None, material="marble", lights=None, *, unit="mm",
     """
     if meshes is not None and isinstance(meshes, (str, os.PathLike)):
         meshes = [meshes]
-    settings = BakeSettings(material, lights, unit, model, method, tol, resolution, shadows, exposure, per_direction)
+    settings = BakeSettings(material, lights, unit, model, method, tol, resolution, shadows, exposure, per_direction,
+                            up)
     return bake_files(meshes, output, settings, workers=workers, scheduler=scheduler, progress=progress)

@@ -85,18 +85,23 @@ def cmd_inspect(args) -> int:
     from ..io.load import load_mesh
     from ..io.save import check_output_path, save_mesh
 
+    from ..io.units import UnitInferredWarning
+    from ..io.upright import infer_up
+
     if args.output:
         check_output_path(args.output, args.mesh)  # before any work: a bad output path fails at once
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         mesh = load_mesh(args.mesh, unit=args.unit)
     for warning in caught:
-        print(f"translucency: warning: {warning.message}", file=sys.stderr)
+        (_note if issubclass(warning.category, UnitInferredWarning) else _warn)(str(warning.message))
     low, high = mesh.bounds
     print(f"{args.mesh}: {mesh.n_points} vertices, {mesh.n_triangles} triangles, "
           f"{mesh.extent:.4g} mm across ({' x '.join(f'{v:.4g}' for v in high - low)} mm), area {mesh.surface_area:.4g} mm^2")
     cleaned, report = clean_mesh(mesh, max_hole_edges=args.max_hole_edges)
     print(report)
+    up, reason = infer_up(cleaned.points, cleaned.triangles)
+    print(f"up axis for --up auto: {up} ({reason})")
     if args.output:
         save_mesh(args.output, cleaned)
         print(f"wrote the repaired mesh to {args.output}")
@@ -110,7 +115,7 @@ def cmd_bake(args) -> int:
     from .bake import BakeSettings, ConsoleProgress, bake_files, exit_code, format_summary
     from .options import lights_from_args, solver_settings
 
-    settings = BakeSettings(lights=lights_from_args(args), unit=args.unit, shadows=not args.no_shadows,
+    settings = BakeSettings(lights=lights_from_args(args), unit=args.unit, up=args.up, shadows=not args.no_shadows,
                             **solver_settings(args))
     start = time.perf_counter()
     records = bake_files(args.meshes, args.output, settings, workers=args.workers, scheduler=args.scheduler,
@@ -132,6 +137,10 @@ def _pixels(text: str, option: str) -> tuple[int, int]:
 
 def _warn(message: str) -> None:
     print(f"translucency: warning: {message}", file=sys.stderr)
+
+
+def _note(message: str) -> None:
+    print(f"translucency: {message}", file=sys.stderr)
 
 
 def cmd_view(args) -> int:
@@ -158,11 +167,11 @@ def cmd_view(args) -> int:
     if interactive:
         settings["resolution"] = "interactive"
     lights = lights_from_args(args)
-    mesh, _, name = load_scan(args.mesh, args.unit, warn=_warn)
+    mesh, _, name = load_scan(args.mesh, args.unit, warn=_warn, note=_note)
     from .viewer import Viewer
 
     viewer = Viewer(mesh, lights=lights, shadows=not args.no_shadows, view_dependent=args.view_dependent,
-                    specular=args.specular, roughness=args.roughness, window_size=window_size,
+                    specular=args.specular, roughness=args.roughness, window_size=window_size, up=args.up,
                     off_screen=args.screenshot is not None, widgets=args.screenshot is None, output=args.output,
                     name=Path(name).stem, **settings)
     print(viewer.status)
@@ -187,9 +196,9 @@ def cmd_compare(args) -> int:
                                             args.models if args.models is not None else args.model)
     cell_size = _pixels(args.cell_size, "--cell-size")
     lights = lights_from_args(args)
-    mesh, _, name = load_scan(args.mesh, args.unit, warn=_warn)
+    mesh, _, name = load_scan(args.mesh, args.unit, warn=_warn, note=_note)
     print(f"{name}: {mesh.n_points} vertices, {mesh.extent:.4g} mm across")
-    result = compare(mesh, materials, models, lights, output=args.output, shadows=not args.no_shadows,
+    result = compare(mesh, materials, models, lights, output=args.output, shadows=not args.no_shadows, up=args.up,
                      cell_size=cell_size, progress=lambda line: print(f"  solved {line}"), **settings)
     print(f"common exposure {result.exposure:.4g}; mean radiance toward the normal over lit vertices, W/(m^2 sr) per W/m^2:")
     for material in result.materials:
@@ -257,9 +266,11 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("report", help="versions of the stack and whether off-screen rendering works")
     p.set_defaults(func=cmd_report)
 
+    from .options import UNIT_HELP
+
     p = sub.add_parser("inspect", help="load a scan, show its defects and repair it")
     p.add_argument("mesh", help="mesh file (PLY, OBJ, STL, OFF, VTK, VTP, ...)")
-    p.add_argument("--unit", default="mm", help="length unit of the file: mm, cm, m, in or mm per unit (default mm)")
+    p.add_argument("--unit", default=None, help=UNIT_HELP)
     p.add_argument("--max-hole-edges", type=int, default=100, help="close holes of at most this many edges")
     p.add_argument("-o", "--output", help="save the repaired mesh (any format PyVista writes)")
     p.set_defaults(func=cmd_inspect)
@@ -286,8 +297,10 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point of ``translucency`` and ``python -m translucency``; returns the exit code."""
+    from .options import join_negative_values
+
     parser = build_parser()
-    args = parser.parse_args(argv)
+    args = parser.parse_args(join_negative_values(sys.argv[1:] if argv is None else list(argv)))
     try:
         with command_line_spelling():
             return int(args.func(args) or 0)

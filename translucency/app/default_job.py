@@ -40,6 +40,6 @@ def run_default_job(output: Path = OUTPUT_FOLDER, material: str = DEFAULT_MATERI
     ply = write_baked_ply(output / f"bunny_{material}.ply", mesh, result.radiance, result.B, result.colors,
                           result.metadata, normals=result.normals)
     png = output / f"bunny_{material}.png"
-    render_colors(mesh, result.colors, png)
+    render_colors(mesh, result.colors, png, up=result.metadata["up"])
     print(f"wrote {ply} and {png} in {time.perf_counter() - total:.1f} s")
     return 0

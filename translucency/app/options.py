@@ -3,8 +3,8 @@
 One place turns the words a user types into the API's objects, so every subcommand accepts and
 rejects the same things with the same sentences:
 
-* :func:`add_scan_options` / :func:`load_scan` -- a mesh file (or the embedded default) and its unit,
-  loaded and cleaned, in mm;
+* :func:`add_scan_options` / :func:`load_scan` -- a mesh file (or the embedded default), its unit
+  (inferred from the size when not given) and its up axis, loaded and cleaned, in mm;
 * :func:`add_light_options` / :func:`lights_from_args` -- ``--light-dir X,Y,Z`` (from the object toward
   the light), ``--light SPEC`` (any mix, see :data:`~translucency.scatter.lights.LIGHT_SPEC_HELP`),
   ``--env FILE`` (an equirectangular HDR map) with ``--env-directions N``;
@@ -27,25 +27,53 @@ MODELS = ("directional", "standard", "better")
 METHODS = ("exact", "cutoff", "tree")
 
 
+#: Help of ``--unit`` (``inspect`` has it too).
+UNIT_HELP = ("length unit of the file: mm, cm, m, in, or mm per unit as a number (default: inferred from the size, "
+             "millimetres for 5 to 5000 units across, metres for 0.005 to 5)")
+
+
 def add_scan_options(parser: argparse.ArgumentParser, *, several: bool = False) -> None:
-    """``MESH`` (optional: the embedded default scan) and ``--unit``."""
+    """``MESH`` (optional: the embedded default scan), ``--unit`` and ``--up``."""
+    from ..io.upright import UP_CHOICES
+
     if several:
         parser.add_argument("meshes", nargs="*", metavar="MESH",
                             help="mesh files (PLY, OBJ, STL, OFF, VTK, ...); none: the embedded default scan")
     else:
         parser.add_argument("mesh", nargs="?", metavar="MESH",
                             help="mesh file (PLY, OBJ, STL, OFF, VTK, ...); none: the embedded default scan")
-    parser.add_argument("--unit", default="mm",
-                        help="length unit of the file: mm, cm, m, in, or mm per unit as a number (default mm)")
+    parser.add_argument("--unit", default=None, help=UNIT_HELP)
+    parser.add_argument("--up", default="auto", choices=UP_CHOICES, metavar="{x,y,z,-x,-y,-z,auto}",
+                        help="the scan's up axis, for the camera and the default light (above and in front); "
+                             "auto (default): the side it stands on, a flat base, else +y")
+
+
+#: Options whose values may start with "-" (``--up -z``), which argparse would take for a flag.
+NEGATIVE_VALUE_OPTIONS = ("--up",)
+
+
+def join_negative_values(argv: list[str], options=NEGATIVE_VALUE_OPTIONS) -> list[str]:
+    """``["--up", "-z"]`` as ``["--up=-z"]``, so that argparse reads a value that starts with "-"."""
+    joined, k = [], 0
+    while k < len(argv):
+        if argv[k] in options and k + 1 < len(argv) and argv[k + 1].startswith("-") and argv[k + 1] != "--":
+            joined.append(f"{argv[k]}={argv[k + 1]}")
+            k += 2
+        else:
+            joined.append(argv[k])
+            k += 1
+    return joined
 
 
 def add_light_options(parser: argparse.ArgumentParser) -> None:
     """``--light-dir``, ``--light``, ``--env`` and ``--env-directions``."""
     from ..scatter.lights import LIGHT_SPEC_HELP
 
-    group = parser.add_argument_group("lights (default: one white directional light of 1 W/m^2)")
+    group = parser.add_argument_group("lights (default: one white directional light of 1 W/m^2 above and in front "
+                                      "of the scan, placed by --up)")
     group.add_argument("--light-dir", metavar="X,Y,Z",
-                       help="direction from the object toward a white directional light of 1 W/m^2")
+                       help="direction from the object toward a white directional light of 1 W/m^2, in the scan's "
+                            "own coordinates (not turned by --up)")
     group.add_argument("--light", metavar="SPEC", help=f"lights in short form: {LIGHT_SPEC_HELP}")
     group.add_argument("--env", metavar="FILE", help="equirectangular HDR environment map (.hdr), W/(m^2 sr)")
     group.add_argument("--env-directions", type=int, default=256, metavar="N",
@@ -80,10 +108,10 @@ def parse_vector(text: str, name: str) -> np.ndarray:
     return values
 
 
-def lights_from_args(args) -> tuple:
-    """The lights the options describe (several options add up), or the pipeline's default light."""
+def lights_from_args(args) -> tuple | None:
+    """The lights the options describe (several options add up); None when none is given (the
+    pipeline then places its default light by the scan's up axis)."""
     from ..scatter.lights import DirectionalLight, parse_light_spec
-    from .pipeline import DEFAULT_LIGHT_DIRECTION
 
     lights = []
     if getattr(args, "light_dir", None) is not None:
@@ -94,9 +122,7 @@ def lights_from_args(args) -> tuple:
         from ..io.envmap import load_environment
 
         lights.append(load_environment(args.env, n_directions=args.env_directions))
-    if not lights:
-        lights.append(DirectionalLight(DEFAULT_LIGHT_DIRECTION, 1.0))
-    return tuple(lights)
+    return tuple(lights) or None
 
 
 def solver_settings(args) -> dict:
@@ -118,12 +144,16 @@ def solver_settings(args) -> dict:
             "resolution": resolution, "exposure": args.exposure, "per_direction": args.per_direction}
 
 
-def load_scan(path, unit="mm", *, warn=None):
+def load_scan(path, unit=None, *, warn=None, note=None):
     """A mesh file (or the embedded default scan when ``path`` is None), loaded in ``unit`` and cleaned.
 
-    Returns ``(mesh in mm, CleanReport or None, name)``. Warnings from loading (an implausible size
-    for the unit, say) go to ``warn(message)`` when given.
+    ``unit`` None: inferred from the size (:func:`translucency.io.units.infer_unit`). Returns
+    ``(mesh in mm, CleanReport or None, name)``. Warnings from loading (the unit inferred, an
+    implausible size for the unit given) go to ``warn(message)`` when given; the line that says
+    which unit was inferred goes to ``note(message)`` instead when that is given.
     """
+    from ..io.units import UnitInferredWarning
+
     from ..io.clean import clean_mesh
     from ..io.load import load_mesh
     from .pipeline import default_scan_path, load_default_scan
@@ -134,8 +164,9 @@ def load_scan(path, unit="mm", *, warn=None):
             mesh, name = load_default_scan(), default_scan_path().stem
         else:
             mesh, name = load_mesh(path, unit=unit), str(path)
-    if warn is not None:
-        for warning in caught:
-            warn(str(warning.message))
+    for warning in caught:
+        say = note if note is not None and issubclass(warning.category, UnitInferredWarning) else warn
+        if say is not None:
+            say(str(warning.message))
     mesh, report = clean_mesh(mesh)
     return mesh, report, name

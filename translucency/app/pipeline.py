@@ -18,12 +18,16 @@ import numpy as np
 from .. import __version__
 from ..errors import TranslucencyError
 from ..io.geometry import mean_edge_length
+from ..io.units import unit_metadata
 
 #: The embedded default scan: the watertight Stanford bunny inside the pymeshlab wheel, stored
 #: normalised to a unit diagonal; it is scaled to this width (mm), the size of the original figurine.
 DEFAULT_SCAN_WIDTH_MM = 155.0
 DEFAULT_MATERIAL = "marble"
-DEFAULT_LIGHT_DIRECTION = (0.35, 1.0, 0.45)  # from the object toward the light; the bunny's +y is up
+#: From the object toward the default light, in the display frame (right, up, front; see
+#: :func:`translucency.io.upright.display_frame`): above, in front and a little to the right. For a
+#: scan whose up is +y (the default bunny) this is the direction in the scan's own coordinates too.
+DEFAULT_LIGHT_DIRECTION = (0.35, 1.0, 0.45)
 
 #: Proxy resolution ("auto"): the solver's mesh needs no edges shorter than
 #: min(PROXY_DIFFUSION_FRACTION / max sigma_tr, PROXY_MEAN_FREE_PATHS / max sigma_t'), the detail the
@@ -34,6 +38,26 @@ DEFAULT_LIGHT_DIRECTION = (0.35, 1.0, 0.45)  # from the object toward the light;
 PROXY_DIFFUSION_FRACTION = 0.5
 PROXY_MEAN_FREE_PATHS = 5.0
 PROXY_MIN_RATIO = 1.5
+#: A proxy keeps at least this many triangles. On an object only a few diffusion lengths across (a
+#: scan read in the wrong unit, say) the "auto" and the viewer's edge lengths are shortened to it,
+#: and a proxy edge length given that leaves fewer is refused with a sentence.
+PROXY_MIN_TRIANGLES = 200
+
+
+def coarsest_proxy_edge(surface_area: float) -> float:
+    """Longest proxy edge (mm) that leaves :data:`PROXY_MIN_TRIANGLES` equilateral triangles on ``surface_area`` (mm²)."""
+    return float(np.sqrt(surface_area / (PROXY_MIN_TRIANGLES * np.sqrt(3.0) / 4.0)))
+
+
+def default_light_direction(up: str = "+y") -> np.ndarray:
+    """Direction (unit-free, scan coordinates) from the object toward the default light for an up axis.
+
+    :data:`DEFAULT_LIGHT_DIRECTION` turned from the display frame into the scan's frame: above the
+    scan along ``up`` (``"+x"`` ... ``"-z"``) and in front of it.
+    """
+    from ..io.upright import to_scan_frame
+
+    return to_scan_frame(DEFAULT_LIGHT_DIRECTION, up)
 
 
 def proxy_edge_length(medium) -> float:
@@ -135,18 +159,34 @@ class Scene:
         A cleaned mesh in mm with outward orientation.
     shadows : bool
         Cast Embree shadow rays (off: every front-facing vertex is lit).
+    up : str
+        The scan's up axis, ``"x"`` ... ``"-z"``, or ``"auto"`` (inferred from the mesh, see
+        :mod:`translucency.io.upright`); it places the default light (above and in front) and is
+        recorded in the metadata. The solver does not use it.
     """
 
-    def __init__(self, mesh, *, shadows: bool = True):
+    def __init__(self, mesh, *, shadows: bool = True, up: str = "auto"):
+        from ..io.upright import parse_up
         from ..scatter.irradiance import VisibilityCache
 
         self.mesh = mesh
         self.shadows = bool(shadows)
+        self.up_requested = parse_up(up)
+        self._up = None if self.up_requested == "auto" else self.up_requested
         self.visibility = VisibilityCache()
         self._solver_meshes: dict = {}
         self._incident: dict = {}
         self._normals = None
         self._mean_edge = None
+
+    @property
+    def up(self) -> str:
+        """The up axis, ``"+x"`` ... ``"-z"`` (inferred on first use when it was ``"auto"``)."""
+        if self._up is None:
+            from ..io.upright import resolve_up
+
+            self._up = resolve_up("auto", self.mesh.points, self.mesh.triangles)
+        return self._up
 
     def solver_mesh(self, medium, resolution="full"):
         """``(solver mesh, Decimation or None, edge or None, SurfaceGeometry, reused)`` for a resolution."""
@@ -154,7 +194,7 @@ class Scene:
 
         if self._mean_edge is None:
             self._mean_edge = mean_edge_length(self.mesh.points, self.mesh.triangles)
-        edge = _proxy_edge(self._mean_edge, medium, resolution)
+        edge = _proxy_edge(self._mean_edge, medium, resolution, self.mesh)
         key = None if edge is None else round(edge, 9)  # decided before decimating: a cache hit costs nothing
         if key in self._solver_meshes:
             return (*self._solver_meshes[key], True)
@@ -196,7 +236,7 @@ class Scene:
         timings = {}
         start = time.perf_counter()
         medium = resolve_medium(material)
-        lights = as_light_list(lights if lights is not None else DirectionalLight(DEFAULT_LIGHT_DIRECTION, 1.0))
+        lights = as_light_list(lights if lights is not None else DirectionalLight(default_light_direction(self.up), 1.0))
         solver_mesh, decimation, edge, geometry, geometry_reused = self.solver_mesh(medium, resolution)
         timings["geometry"] = time.perf_counter() - start
 
@@ -231,8 +271,10 @@ class Scene:
             "shadows": self.shadows,
             "light_summation": "per direction" if per_direction else "aggregated per vertex",
             "exposure": exposure,
-            "unit": "mm",
-            "mm_per_unit": self.mesh.mm_per_unit,
+            **unit_metadata(self.mesh.mm_per_unit, self.mesh.unit_inferred),
+            "geometry_unit": "mm",
+            "up": self.up,
+            "up_inferred": self.up_requested == "auto",
         }
         if self._normals is None:
             self._normals = self.mesh.vertex_normals()
@@ -266,7 +308,7 @@ def _solve_per_direction(geometry, incident, medium, model, method, tol, progres
 
 
 def shade(mesh, material="marble", lights=None, *, model="directional", method="tree", tol=1e-2, shadows=True,
-          resolution="full", exposure=None, per_direction=False, progress=None) -> ShadeResult:
+          resolution="full", exposure=None, per_direction=False, up="auto", progress=None) -> ShadeResult:
     """Translucent shading of one mesh (mm): ``B``, radiance toward the normal and display colours.
 
     The one-call form of :class:`Scene` (nothing is kept between calls; keep a ``Scene`` to reuse work).
@@ -278,7 +320,8 @@ def shade(mesh, material="marble", lights=None, *, model="directional", method="
     material : str or Material or Medium
         Catalogue name, catalogue entry or a :class:`~translucency.scatter.medium.Medium` (1/mm).
     lights : light or sequence of lights, optional
-        Default: one white directional light of 1 W/m² from :data:`DEFAULT_LIGHT_DIRECTION`.
+        Default: one white directional light of 1 W/m² from :func:`default_light_direction` of ``up``
+        (above and in front of the scan). Directions are in the scan's own coordinates.
     model, method, tol
         Passed to :func:`translucency.scatter.solve.solve`.
     shadows : bool
@@ -294,22 +337,25 @@ def shade(mesh, material="marble", lights=None, *, model="directional", method="
         Solve once per light sample with its own refracted direction and add the results (exact for
         several lights; the default aggregates the lights per vertex, see
         :mod:`translucency.scatter.irradiance`).
+    up : str
+        The scan's up axis (``"x"`` ... ``"-z"``, or ``"auto"``: inferred, see :mod:`translucency.io.upright`);
+        only the default light and the metadata depend on it.
     progress : callable, optional
         ``progress(stage, fraction)``.
     """
-    return Scene(mesh, shadows=shadows).shade(material, lights, model=model, method=method, tol=tol,
+    return Scene(mesh, shadows=shadows, up=up).shade(material, lights, model=model, method=method, tol=tol,
                                               resolution=resolution, exposure=exposure, per_direction=per_direction,
                                               progress=progress)
 
 
-def _proxy_edge(mean_edge, medium, resolution):
-    """Proxy edge length (mm) for a resolution on a mesh of ``mean_edge`` (mm), or None for the full mesh."""
-    from ..errors import InvalidParameterError
+def _proxy_edge(mean_edge, medium, resolution, mesh):
+    """Proxy edge length (mm) for a resolution on ``mesh`` of ``mean_edge`` (mm), or None for the full mesh."""
+    from ..errors import InvalidParameterError, option
 
     if resolution == "full":
         return None
     if resolution == "auto":
-        edge = proxy_edge_length(medium)
+        edge = min(proxy_edge_length(medium), coarsest_proxy_edge(mesh.surface_area))
         return edge if edge >= PROXY_MIN_RATIO * mean_edge else None
     try:
         edge = float(resolution)
@@ -317,7 +363,15 @@ def _proxy_edge(mean_edge, medium, resolution):
         edge = float("nan")
     if not (np.isfinite(edge) and edge > 0):
         raise InvalidParameterError(f"resolution must be 'auto', 'full' or a proxy edge length in mm, got {resolution!r}.")
-    return edge if edge > mean_edge else None
+    if edge <= mean_edge:
+        return None
+    coarsest = coarsest_proxy_edge(mesh.surface_area)
+    if edge > coarsest:
+        raise InvalidParameterError(
+            f"a proxy edge of {edge:.3g} mm ({option('resolution', f'{edge:g}')}) would leave fewer than "
+            f"{PROXY_MIN_TRIANGLES} triangles on this {mesh.extent:.3g} mm mesh; pass {option('resolution')} "
+            f"below {coarsest:.3g} mm, or full (and check {option('unit')} if the mesh should be larger).")
+    return edge
 
 
 def _solver_mesh(mesh, edge):

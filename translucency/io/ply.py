@@ -45,6 +45,7 @@ import numpy as np
 
 from ..errors import InvalidParameterError, MeshError, TranslucencyError
 from .mesh import TriangleMesh
+from .units import unit_metadata
 
 __all__ = [
     "BakedPly",
@@ -56,8 +57,9 @@ __all__ = [
     "comments_to_metadata",
 ]
 
-#: Settings every bake must record (DESIGN.md: every result carries its settings); ``unit`` and
-#: ``version`` are filled in from the mesh and the package when absent.
+#: Settings every bake must record (DESIGN.md: every result carries its settings); ``unit`` (with
+#: ``unit_name``, ``mm_per_unit`` and ``unit_inferred``) and ``version`` are filled in from the mesh
+#: and the package when absent.
 REQUIRED_METADATA = ("material", "coefficients", "unit", "lights", "model", "method", "tolerance", "version")
 
 #: Longest header comment line written (unless a metadata key alone is longer); longer values
@@ -334,10 +336,8 @@ def _complete_metadata(metadata, mesh: TriangleMesh, n: int) -> dict:
     if not isinstance(metadata, dict):
         raise InvalidParameterError(f"metadata must be a dict of settings, not {type(metadata).__name__}.")
     settings = dict(metadata)
-    if "unit" not in settings:
-        from .units import unit_label
-
-        settings["unit"] = unit_label(mesh.mm_per_unit)
+    for key, value in unit_metadata(mesh.mm_per_unit, mesh.unit_inferred).items():
+        settings.setdefault(key, value)
     if "version" not in settings:
         from .. import __version__
 
