@@ -243,7 +243,9 @@ def _add_view_and_compare_parsers(sub) -> None:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    from .options import ArgumentParser
+
+    parser = ArgumentParser(
         prog="translucency",
         description="Translucent shading of 3D scans with the directional dipole BSSRDF.",
     )

@@ -10,11 +10,17 @@ rejects the same things with the same sentences:
   ``--env FILE`` (an equirectangular HDR map) with ``--env-directions N``;
 * :func:`add_solver_options` / :func:`solver_settings` -- ``--model``, ``--method``, ``--tol``,
   ``--resolution``, ``--no-shadows``, ``--per-direction``, ``--exposure``.
+
+:class:`ArgumentParser` is argparse's parser, except that a negative number or vector is taken as the
+value of the option before it as written: ``--light-dir -1,0.3,-0.5`` (argparse alone reads
+``-1,0.3,-0.5`` as an unknown option and asks for ``--light-dir=-1,0.3,-0.5``).
 """
 
 from __future__ import annotations
 
 import argparse
+import re
+import sys
 import warnings
 
 import numpy as np
@@ -25,6 +31,40 @@ from ..errors import InvalidParameterError
 # (tests/app/test_options.py checks them against translucency.scatter.solve).
 MODELS = ("directional", "standard", "better")
 METHODS = ("exact", "cutoff", "tree")
+
+
+# one number (integer, decimal, exponent, inf, nan) and a comma-separated list of them, the first negative
+_NUMBER = r"(?:(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?|inf(?:inity)?|nan)"
+_NEGATIVE_VALUE = re.compile(rf"-{_NUMBER}(?:\s*,\s*[-+]?{_NUMBER})*", re.IGNORECASE)
+
+
+def join_negative_values(argv) -> list[str]:
+    """``[..., "--flag", "-1,0.3,-0.5", ...]`` with each negative number or vector after an option
+    joined to it (``"--flag=-1,0.3,-0.5"``), so that argparse reads it as that option's value.
+
+    Only tokens that are numbers or comma-separated numbers are joined (``-1``, ``-0.5e3``,
+    ``-1,0.3,-0.5``, ``-inf``), only right after a token that is an option without a value
+    (``--light-dir``, ``-o``), and nothing after ``--``.
+    """
+    argv = [str(token) for token in argv]
+    joined: list[str] = []
+    for index, token in enumerate(argv):
+        previous = joined[-1] if joined else ""
+        if ("--" not in joined and _NEGATIVE_VALUE.fullmatch(token) and previous.startswith("-")
+                and previous != "--" and "=" not in previous and not _NEGATIVE_VALUE.fullmatch(previous)):
+            joined[-1] = f"{previous}={token}"
+        else:
+            joined.append(token)
+    return joined
+
+
+class ArgumentParser(argparse.ArgumentParser):
+    """argparse's parser that reads a negative number or vector after an option as its value
+    (:func:`join_negative_values`); subcommand parsers made from it are of this class too."""
+
+    def parse_known_args(self, args=None, namespace=None):
+        """As argparse's, after :func:`join_negative_values` (``args`` default: ``sys.argv[1:]``)."""
+        return super().parse_known_args(join_negative_values(sys.argv[1:] if args is None else args), namespace)
 
 
 def add_scan_options(parser: argparse.ArgumentParser, *, several: bool = False) -> None:
@@ -45,7 +85,8 @@ def add_light_options(parser: argparse.ArgumentParser) -> None:
 
     group = parser.add_argument_group("lights (default: one white directional light of 1 W/m^2)")
     group.add_argument("--light-dir", metavar="X,Y,Z",
-                       help="direction from the object toward a white directional light of 1 W/m^2")
+                       help="direction from the object toward a white directional light of 1 W/m^2, in the scan's "
+                            "own frame (the file's axes); any length, negative parts as written (-1,0.3,-0.5)")
     group.add_argument("--light", metavar="SPEC", help=f"lights in short form: {LIGHT_SPEC_HELP}")
     group.add_argument("--env", metavar="FILE", help="equirectangular HDR environment map (.hdr), W/(m^2 sr)")
     group.add_argument("--env-directions", type=int, default=256, metavar="N",
