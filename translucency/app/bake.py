@@ -19,19 +19,29 @@ let numba use the cores, or cap it with ``NUMBA_NUM_THREADS`` in the workers' en
 workers read the scans and write the PLYs themselves: the input files and the output folder must be
 reachable from every worker under the same paths (a shared file system); only the records travel
 back to the client.
+
+Faults: the output folders are checked (and swept of an earlier killed run's temporaries, see
+:mod:`translucency.io.atomic`) before any work, and an output name taken by a folder stops the batch
+then; a write that fails later fails that file with one sentence. Local worker processes end with
+their parent, also when it is killed (:func:`end_with_parent`). On Dask the workers belong to the
+cluster: when the client goes away the scheduler drops its tasks that have not started, and a task
+already running finishes its file, written atomically like every output (a complete PLY or none).
 """
 
 from __future__ import annotations
 
+import contextlib
 import math
 import numbers
 import os
 import re
+import signal
+import sys
 import time
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
-from ..errors import InvalidParameterError, TranslucencyError
+from ..errors import InvalidParameterError, TranslucencyError, option
 
 __all__ = ["BakeSettings", "BakeRecord", "BakeProgress", "ConsoleProgress", "bake", "bake_file", "bake_files",
            "output_paths", "format_summary", "exit_code", "DASK_CONNECT_TIMEOUT_S"]
@@ -394,8 +404,9 @@ def bake_files(paths, output, settings: BakeSettings, *, workers: int = 1, sched
     Raises
     ------
     InvalidParameterError, TranslucencyError
-        Only for problems that stop the whole batch before it starts (output names, ``workers``,
-        the scheduler); problems of single files are in their records.
+        Only for problems that stop the whole batch before it starts (output names, an output
+        folder that cannot be written, ``workers``, the scheduler); problems of single files are in
+        their records.
     """
     progress = progress or BakeProgress()
     sources = list(paths) if paths else [None]
@@ -410,6 +421,7 @@ def bake_files(paths, output, settings: BakeSettings, *, workers: int = 1, sched
         output = OUTPUT_FOLDER
     outputs = output_paths(sources, output, settings.material_name)
     labels = [_source_label(source) for source in sources]
+    _check_outputs(outputs)
     client = None if scheduler is None else _dask_client(scheduler)
     try:
         _make_folders(outputs)
@@ -444,6 +456,21 @@ def bake_files(paths, output, settings: BakeSettings, *, workers: int = 1, sched
         if client is not None and client is not scheduler:
             client.close()
     return records
+
+
+def _check_outputs(outputs) -> None:
+    """Before any work: every output folder writable (or creatable), no output name taken by a folder.
+
+    Stale temporaries of an earlier, killed run in those folders are swept here.
+    """
+    from ..io.atomic import prepare_output_folder
+
+    for folder in sorted({Path(o).parent for o in outputs}):
+        prepare_output_folder(folder, create=True, setting="output")
+    for target in outputs:
+        if Path(target).is_dir():
+            raise InvalidParameterError(f"the output {target} is a folder; remove or rename it, or choose another "
+                                        f"output folder with {option('output')}.")
 
 
 def _make_folders(outputs) -> None:

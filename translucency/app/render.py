@@ -104,7 +104,7 @@ def render_colors(mesh, colors_rgb8, path=None, *, window_size=(800, 800), camer
     colors_rgb8 : (n, 3) uint8
         Display colours per vertex (display transform applied).
     path : path-like, optional
-        PNG to write.
+        PNG to write (atomically, see :func:`translucency.app.outputs.write_png`).
     window_size : (int, int)
         Image width and height, pixels.
     camera_direction : sequence of 3 float
@@ -120,6 +120,10 @@ def render_colors(mesh, colors_rgb8, path=None, *, window_size=(800, 800), camer
     plotter = new_plotter(window_size)
     poly = add_colored_mesh(plotter, mesh, colors_rgb8)
     plotter.camera_position = camera if camera is not None else camera_position(poly.center, poly.length, camera_direction)
-    image = plotter.screenshot(str(path) if path is not None else None, return_img=True)
+    image = plotter.screenshot(return_img=True)
     plotter.close()
+    if path is not None:
+        from .outputs import write_png
+
+        write_png(path, image)
     return image
