@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InvalidParameterError
-from ..io.atomic import atomic_file
+from ..io.atomic import write_bytes
 
 
 def write_png(path, image) -> Path:
@@ -31,6 +31,6 @@ def write_png(path, image) -> Path:
         raise InvalidParameterError(f"{path} is not a .png file name; images are written as PNG.")
     if not path.parent.is_dir():
         raise InvalidParameterError(f"the folder {path.parent} does not exist; create it or choose another path.")
-    with atomic_file(path) as temporary:
-        iio.imwrite(temporary, np.asarray(image, dtype=np.uint8), extension=".png")
+    # encoded in memory, so that a full disk is met by the atomic writer, not inside the image library
+    write_bytes(path, iio.imwrite("<bytes>", np.asarray(image, dtype=np.uint8), extension=".png"))
     return path
