@@ -51,7 +51,12 @@ def command_line_spelling(enabled: bool = True):
 
 
 class TranslucencyError(Exception):
-    """Base class of every error translucency raises on purpose."""
+    """Base class of every error translucency raises on purpose.
+
+    ``exit_code`` is the command line's exit status for it: 2 (the run could not start as asked).
+    """
+
+    exit_code = 2
 
 
 class InvalidParameterError(TranslucencyError, ValueError):
@@ -67,3 +72,12 @@ class UnknownMaterialError(TranslucencyError, KeyError):
 
 class MeshError(TranslucencyError, ValueError):
     """A mesh file or mesh array that cannot be used (unreadable, corrupt, empty, invalid values)."""
+
+
+class WriteError(TranslucencyError):
+    """An output could not be written once the work was done (disk full, quota, read-only file system).
+
+    Nothing is left behind; the command line exits with status 1 (the work ran, its result was lost).
+    """
+
+    exit_code = 1

@@ -121,15 +121,32 @@ def test_a_broken_file_in_the_middle_fails_alone(scans, tmp_path, capsys):
     assert "baked 2 of 3 files" in captured.out and "1 failed" in captured.out
 
 
-def test_a_failure_while_writing_leaves_nothing(scans, tmp_path):
+def test_an_output_name_taken_by_a_folder_stops_the_batch_before_any_work(scans, tmp_path):
     out = tmp_path / "out"
-    (out / "small_marble.ply").mkdir(parents=True)  # the output name is taken by a folder
+    (out / "small_marble.ply").mkdir(parents=True)
+    with pytest.raises(InvalidParameterError, match="small_marble.ply is a folder"):
+        batch.bake_files([scans["small"], scans["large"]], out, batch.BakeSettings(shadows=False))
+    assert sorted(os.listdir(out)) == ["small_marble.ply"] and os.listdir(out / "small_marble.ply") == []
+
+
+def test_a_failure_while_writing_leaves_nothing(scans, tmp_path, monkeypatch):
+    from translucency.io import atomic
+
+    real_fsync = atomic._fsync
+
+    def full_disk_for_the_small_scan(path, *args):
+        if os.path.getsize(path) < 100_000:  # the small sphere's PLY (44 kB), not the large one's (170 kB)
+            raise OSError(28, "No space left on device")
+        real_fsync(path, *args)
+
+    monkeypatch.setattr(atomic, "_fsync", full_disk_for_the_small_scan)
+    out = tmp_path / "out"
     records = batch.bake_files([scans["small"], scans["large"]], out, batch.BakeSettings(shadows=False))
     assert [r.ok for r in records] == [False, True]
-    assert "is a folder" in records[0].error and records[0].output is None
-    assert records[0].vertices == 642  # it failed after loading and solving
-    assert sorted(os.listdir(out)) == ["large_marble.ply", "small_marble.ply"]
-    assert os.listdir(out / "small_marble.ply") == []
+    assert records[0].error == "writing small_marble.ply failed (No space left on device): the disk is full; " \
+                               "free some space or write the output elsewhere."
+    assert records[0].vertices == 642 and records[0].output is None  # it failed after loading and solving
+    assert sorted(os.listdir(out)) == ["large_marble.ply"]  # no temporary file left
     assert batch.exit_code(records) == 1 and batch.exit_code(records[1:]) == 0
 
 

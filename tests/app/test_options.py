@@ -58,11 +58,11 @@ def test_the_parser_offers_exactly_the_solvers_choices():
 def test_up_takes_negative_axes_as_written(value, axis):
     from translucency.app import cli
 
-    args = cli.build_parser().parse_args(options.join_negative_values(["view", "--up", value]))
+    args = cli.build_parser().parse_args(["view", "--up", value])
     assert args.up == axis
 
 
 def test_light_dir_help_says_the_scan_frame():
     parser = argparse.ArgumentParser()
     options.add_light_options(parser)
-    assert "scan's own coordinates" in parser.format_help().replace("\n", " ").replace("  ", " ")
+    assert "scan's own frame" in parser.format_help().replace("\n", " ").replace("  ", " ")

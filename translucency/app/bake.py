@@ -19,19 +19,29 @@ let numba use the cores, or cap it with ``NUMBA_NUM_THREADS`` in the workers' en
 workers read the scans and write the PLYs themselves: the input files and the output folder must be
 reachable from every worker under the same paths (a shared file system); only the records travel
 back to the client.
+
+Faults: the output folders are checked (and swept of an earlier killed run's temporaries, see
+:mod:`translucency.io.atomic`) before any work, and an output name taken by a folder stops the batch
+then; a write that fails later fails that file with one sentence. Local worker processes end with
+their parent, also when it is killed (:func:`end_with_parent`). On Dask the workers belong to the
+cluster: when the client goes away the scheduler drops its tasks that have not started, and a task
+already running finishes its file, written atomically like every output (a complete PLY or none).
 """
 
 from __future__ import annotations
 
+import contextlib
 import math
 import numbers
 import os
 import re
+import signal
+import sys
 import time
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
-from ..errors import InvalidParameterError, TranslucencyError, command_line_active, command_line_spelling
+from ..errors import InvalidParameterError, TranslucencyError, command_line_active, command_line_spelling, option
 
 __all__ = ["BakeSettings", "BakeRecord", "BakeProgress", "ConsoleProgress", "bake", "bake_file", "bake_files",
            "output_paths", "format_summary", "exit_code", "DASK_CONNECT_TIMEOUT_S"]
@@ -407,8 +417,9 @@ def bake_files(paths, output, settings: BakeSettings, *, workers: int = 1, sched
     Raises
     ------
     InvalidParameterError, TranslucencyError
-        Only for problems that stop the whole batch before it starts (output names, ``workers``,
-        the scheduler); problems of single files are in their records.
+        Only for problems that stop the whole batch before it starts (output names, an output
+        folder that cannot be written, ``workers``, the scheduler); problems of single files are in
+        their records.
     """
     progress = progress or BakeProgress()
     sources = list(paths) if paths else [None]
@@ -423,6 +434,7 @@ def bake_files(paths, output, settings: BakeSettings, *, workers: int = 1, sched
         output = OUTPUT_FOLDER
     outputs = output_paths(sources, output, settings.material_name)
     labels = [_source_label(source) for source in sources]
+    _check_outputs(outputs)
     client = None if scheduler is None else _dask_client(scheduler)
     try:
         _make_folders(outputs)
@@ -459,6 +471,21 @@ def bake_files(paths, output, settings: BakeSettings, *, workers: int = 1, sched
     return records
 
 
+def _check_outputs(outputs) -> None:
+    """Before any work: every output folder writable (or creatable), no output name taken by a folder.
+
+    Stale temporaries of an earlier, killed run in those folders are swept here.
+    """
+    from ..io.atomic import prepare_output_folder
+
+    for folder in sorted({Path(o).parent for o in outputs}):
+        prepare_output_folder(folder, create=True, setting="output")
+    for target in outputs:
+        if Path(target).is_dir():
+            raise InvalidParameterError(f"the output {target} is a folder; remove or rename it, or choose another "
+                                        f"output folder with {option('output')}.")
+
+
 def _make_folders(outputs) -> None:
     for folder in {Path(o).parent for o in outputs}:
         try:
@@ -486,11 +513,75 @@ def _use_threads(threads: int) -> None:
     numba.set_num_threads(max(1, min(threads, numba.config.NUMBA_NUM_THREADS)))
 
 
-def _start_worker_process(threads: int) -> None:
-    """Initialiser of a worker process: ``threads`` threads for numba and for the BLAS libraries it loads."""
+def _start_worker_process(threads: int, parent: int | None = None) -> None:
+    """Initialiser of a worker process: ``threads`` threads for numba and for the BLAS libraries it loads.
+
+    With ``parent`` (the pid of the process that started the pool) the worker ends when that process
+    does (:func:`end_with_parent`).
+    """
+    if parent is not None:
+        end_with_parent(parent)
     for name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
         os.environ[name] = str(threads)
     _use_threads(threads)
+
+
+#: Seconds between two looks of a worker's watchdog at its parent.
+WATCHDOG_INTERVAL_S = 0.5
+
+_PR_SET_PDEATHSIG = 1  # linux/prctl.h
+
+
+def end_with_parent(parent: int) -> None:
+    """Make this process (and the processes it starts) end when process ``parent`` ends.
+
+    On Linux the kernel kills this process the moment its parent dies (``prctl(PR_SET_PDEATHSIG,
+    SIGKILL)``, through ctypes), even while a numba kernel holds the GIL. Everywhere a watchdog
+    thread also looks at ``os.getppid()`` every :data:`WATCHDOG_INTERVAL_S` s; when the parent is
+    gone it kills this process's own children, then this process. A parent that died before this
+    call is noticed at once.
+
+    Parameters
+    ----------
+    parent : int
+        The pid of the parent process this one must not outlive.
+    """
+    import threading
+
+    if sys.platform.startswith("linux"):
+        try:
+            import ctypes
+
+            libc = ctypes.CDLL(None, use_errno=True)
+            libc.prctl(_PR_SET_PDEATHSIG, int(signal.SIGKILL), 0, 0, 0)
+        except (OSError, AttributeError):  # no prctl here: the watchdog alone
+            pass
+    if os.getppid() != parent:  # the parent died before the signal was armed
+        os._exit(1)
+    threading.Thread(target=_watch_parent, args=(parent,), name="translucency-watchdog", daemon=True).start()
+
+
+def _watch_parent(parent: int) -> None:
+    while True:
+        time.sleep(WATCHDOG_INTERVAL_S)
+        if os.getppid() != parent:
+            for child in _children(os.getpid()):
+                with contextlib.suppress(OSError):
+                    os.kill(child, signal.SIGKILL)
+            os._exit(1)
+
+
+def _children(pid: int) -> list[int]:
+    """Every descendant of process ``pid`` (Linux ``/proc``; empty elsewhere)."""
+    parents = {}
+    for entry in Path("/proc").glob("[0-9]*/stat"):
+        with contextlib.suppress(OSError, IndexError, ValueError):
+            parents[int(entry.parent.name)] = int(entry.read_bytes().rsplit(b")", 1)[1].split()[1])
+    found, frontier = [], [pid]
+    while frontier:
+        frontier = [child for child, parent in parents.items() if parent in frontier]
+        found += frontier
+    return found
 
 
 def _run_in_processes(function, jobs, workers: int, done) -> None:
@@ -499,7 +590,8 @@ def _run_in_processes(function, jobs, workers: int, done) -> None:
     ``result`` is what the function returned, or the exception it raised. A worker process that
     dies (a crash, out of memory) breaks its pool: the jobs that had not finished are then run again
     in a fresh pool of one process, where the job that dies is the first unfinished one, so that only
-    it is lost (reported as :class:`~concurrent.futures.process.BrokenProcessPool`).
+    it is lost (reported as :class:`~concurrent.futures.process.BrokenProcessPool`). The workers end
+    with this process, even when it is killed (:func:`end_with_parent`).
 
     Spawned, not forked: numba's OpenMP threads and a forked copy of them do not mix.
     """
@@ -512,7 +604,7 @@ def _run_in_processes(function, jobs, workers: int, done) -> None:
     while pending:
         size = min(size, len(pending))
         executor = ProcessPoolExecutor(size, mp_context=context, initializer=_start_worker_process,
-                                       initargs=(max(1, available_cores() // size),))
+                                       initargs=(max(1, available_cores() // size), os.getpid()))
         unfinished = []
         try:
             futures = {executor.submit(function, *jobs[index]): index for index in pending}

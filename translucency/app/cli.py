@@ -11,7 +11,8 @@ Subcommands:
 * ``translucency`` with no subcommand -- the main job on the embedded default scan.
 
 Errors the user can cause are printed as one sentence on stderr with exit code 2 (``bake``: 1 when
-some files failed); no traceback.
+some files failed); an output that cannot be written once the work is done (disk full, quota) is one
+sentence with exit code 1. No traceback.
 """
 
 from __future__ import annotations
@@ -148,6 +149,7 @@ def cmd_view(args) -> int:
     import os
     from pathlib import Path
 
+    from ..io.atomic import prepare_output_file
     from .options import lights_from_args, load_scan, solver_settings
 
     window_size = _pixels(args.window_size, "--window-size")
@@ -155,8 +157,7 @@ def cmd_view(args) -> int:
         screenshot = Path(args.screenshot)
         if screenshot.suffix.lower() != ".png":
             raise TranslucencyError(f"--screenshot {args.screenshot} is not a .png file name; pass e.g. view.png.")
-        if not screenshot.parent.is_dir():
-            raise TranslucencyError(f"the folder {screenshot.parent} for --screenshot does not exist; create it first.")
+        prepare_output_file(screenshot, setting="screenshot")
     elif sys.platform.startswith("linux") and not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
         raise TranslucencyError("there is no display to open the viewer on; pass --screenshot FILE.png to render "
                                 "off-screen, or run it under xvfb-run or on a desktop.")
@@ -186,6 +187,7 @@ def cmd_view(args) -> int:
 
 def cmd_compare(args) -> int:
     """Render and measure a scan in several materials and models into a folder."""
+    from ..io.atomic import prepare_output_folder
     from .compare import compare, validate_choices
     from .options import lights_from_args, load_scan, solver_settings
 
@@ -195,6 +197,7 @@ def cmd_compare(args) -> int:
     materials, models, _ = validate_choices(args.materials if args.materials is not None else args.material,
                                             args.models if args.models is not None else args.model)
     cell_size = _pixels(args.cell_size, "--cell-size")
+    prepare_output_folder(args.output)
     lights = lights_from_args(args)
     mesh, _, name = load_scan(args.mesh, args.unit, warn=_warn, note=_note)
     print(f"{name}: {mesh.n_points} vertices, {mesh.extent:.4g} mm across")
@@ -252,7 +255,9 @@ def _add_view_and_compare_parsers(sub) -> None:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    from .options import ArgumentParser
+
+    parser = ArgumentParser(
         prog="translucency",
         description="Translucent shading of 3D scans with the directional dipole BSSRDF.",
     )
@@ -297,16 +302,14 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point of ``translucency`` and ``python -m translucency``; returns the exit code."""
-    from .options import join_negative_values
-
     parser = build_parser()
-    args = parser.parse_args(join_negative_values(sys.argv[1:] if argv is None else list(argv)))
+    args = parser.parse_args(argv)
     try:
         with command_line_spelling():
             return int(args.func(args) or 0)
     except TranslucencyError as exc:
         print(f"translucency: error: {exc}", file=sys.stderr)
-        return 2
+        return exc.exit_code
     except KeyboardInterrupt:
         print("translucency: interrupted", file=sys.stderr)
         return 130

@@ -34,7 +34,7 @@ that faces the light most (positive toward ``up``). Dotted lines mark where the 
 shadow terminator, and cast shadows), so the plot shows how far light bleeds past it in each material.
 
 Files are written into a temporary folder beside the output folder and moved in only when all are
-complete (:func:`~translucency.app.outputs.staged_folder`): a failed run leaves the folder as it was.
+complete (:func:`~translucency.io.atomic.staged_folder`): a failed run leaves the folder as it was.
 """
 
 from __future__ import annotations
@@ -282,6 +282,10 @@ def compare(mesh=None, materials=("marble",), models=("directional",), lights=No
     from .pipeline import default_light_direction
 
     materials, models, media = validate_choices(materials, models)
+    if output is not None:
+        from ..io.atomic import prepare_output_folder
+
+        prepare_output_folder(output)
     if exposure is not None and not (np.isfinite(exposure) and exposure > 0):
         raise InvalidParameterError(f"exposure must be a positive number, got {exposure!r}.")
     width, height = (int(v) for v in cell_size)
@@ -354,7 +358,8 @@ def compare(mesh=None, materials=("marble",), models=("directional",), lights=No
 
 def _write_files(folder, mesh, comparison, relative, lights, camera_direction, up, cell_size, settings) -> dict:
     """Write every file into a staging folder, then move them into ``folder`` (module docstring)."""
-    from .outputs import staged_folder, write_png
+    from ..io.atomic import staged_folder
+    from .outputs import write_png
 
     names = {"grid": "grid.png", "csv": "statistics.csv", "json": "statistics.json", "profile": "profile.png"}
     if relative:

@@ -10,11 +10,17 @@ rejects the same things with the same sentences:
   ``--env FILE`` (an equirectangular HDR map) with ``--env-directions N``;
 * :func:`add_solver_options` / :func:`solver_settings` -- ``--model``, ``--method``, ``--tol``,
   ``--resolution``, ``--no-shadows``, ``--per-direction``, ``--exposure``.
+
+:class:`ArgumentParser` is argparse's parser, except that a negative number or vector is taken as the
+value of the option before it as written: ``--light-dir -1,0.3,-0.5`` (argparse alone reads
+``-1,0.3,-0.5`` as an unknown option and asks for ``--light-dir=-1,0.3,-0.5``).
 """
 
 from __future__ import annotations
 
 import argparse
+import re
+import sys
 import warnings
 
 import numpy as np
@@ -30,6 +36,46 @@ METHODS = ("exact", "cutoff", "tree")
 #: Help of ``--unit`` (``inspect`` has it too).
 UNIT_HELP = ("length unit of the file: mm, cm, m, in, or mm per unit as a number (default: inferred from the size, "
              "millimetres for 5 to 5000 units across, metres for 0.005 to 5)")
+
+
+# one number (integer, decimal, exponent, inf, nan) and a comma-separated list of them, the first negative
+_NUMBER = r"(?:(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?|inf(?:inity)?|nan)"
+_NEGATIVE_VALUE = re.compile(rf"-{_NUMBER}(?:\s*,\s*[-+]?{_NUMBER})*", re.IGNORECASE)
+
+
+#: Options whose values may start with "-" and are not numbers (``--up -z``).
+NEGATIVE_VALUE_OPTIONS = ("--up",)
+
+
+def join_negative_values(argv) -> list[str]:
+    """``[..., "--flag", "-1,0.3,-0.5", ...]`` with each negative number or vector after an option
+    joined to it (``"--flag=-1,0.3,-0.5"``), so that argparse reads it as that option's value.
+
+    Only tokens that are numbers or comma-separated numbers are joined (``-1``, ``-0.5e3``,
+    ``-1,0.3,-0.5``, ``-inf``), only right after a token that is an option without a value
+    (``--light-dir``, ``-o``), and nothing after ``--``; after an option of
+    :data:`NEGATIVE_VALUE_OPTIONS` any value that starts with "-" is joined (``--up -z``).
+    """
+    argv = [str(token) for token in argv]
+    joined: list[str] = []
+    for index, token in enumerate(argv):
+        previous = joined[-1] if joined else ""
+        negative = _NEGATIVE_VALUE.fullmatch(token) or (previous in NEGATIVE_VALUE_OPTIONS and token.startswith("-"))
+        if ("--" not in joined and negative and previous.startswith("-")
+                and previous != "--" and "=" not in previous and not _NEGATIVE_VALUE.fullmatch(previous)):
+            joined[-1] = f"{previous}={token}"
+        else:
+            joined.append(token)
+    return joined
+
+
+class ArgumentParser(argparse.ArgumentParser):
+    """argparse's parser that reads a negative number or vector after an option as its value
+    (:func:`join_negative_values`); subcommand parsers made from it are of this class too."""
+
+    def parse_known_args(self, args=None, namespace=None):
+        """As argparse's, after :func:`join_negative_values` (``args`` default: ``sys.argv[1:]``)."""
+        return super().parse_known_args(join_negative_values(sys.argv[1:] if args is None else args), namespace)
 
 
 def add_scan_options(parser: argparse.ArgumentParser, *, several: bool = False) -> None:
@@ -48,23 +94,6 @@ def add_scan_options(parser: argparse.ArgumentParser, *, several: bool = False) 
                              "auto (default): the side it stands on, a flat base, else +y")
 
 
-#: Options whose values may start with "-" (``--up -z``), which argparse would take for a flag.
-NEGATIVE_VALUE_OPTIONS = ("--up",)
-
-
-def join_negative_values(argv: list[str], options=NEGATIVE_VALUE_OPTIONS) -> list[str]:
-    """``["--up", "-z"]`` as ``["--up=-z"]``, so that argparse reads a value that starts with "-"."""
-    joined, k = [], 0
-    while k < len(argv):
-        if argv[k] in options and k + 1 < len(argv) and argv[k + 1].startswith("-") and argv[k + 1] != "--":
-            joined.append(f"{argv[k]}={argv[k + 1]}")
-            k += 2
-        else:
-            joined.append(argv[k])
-            k += 1
-    return joined
-
-
 def add_light_options(parser: argparse.ArgumentParser) -> None:
     """``--light-dir``, ``--light``, ``--env`` and ``--env-directions``."""
     from ..scatter.lights import LIGHT_SPEC_HELP
@@ -73,7 +102,8 @@ def add_light_options(parser: argparse.ArgumentParser) -> None:
                                       "of the scan, placed by --up)")
     group.add_argument("--light-dir", metavar="X,Y,Z",
                        help="direction from the object toward a white directional light of 1 W/m^2, in the scan's "
-                            "own coordinates (not turned by --up)")
+                            "own frame (the file's axes, not turned by --up); any length, negative parts "
+                            "as written (-1,0.3,-0.5)")
     group.add_argument("--light", metavar="SPEC", help=f"lights in short form: {LIGHT_SPEC_HELP}")
     group.add_argument("--env", metavar="FILE", help="equirectangular HDR environment map (.hdr), W/(m^2 sr)")
     group.add_argument("--env-directions", type=int, default=256, metavar="N",

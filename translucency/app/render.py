@@ -113,7 +113,7 @@ def render_colors(mesh, colors_rgb8, path=None, *, window_size=(800, 800), camer
     colors_rgb8 : (n, 3) uint8
         Display colours per vertex (display transform applied).
     path : path-like, optional
-        PNG to write.
+        PNG to write (atomically, see :func:`translucency.app.outputs.write_png`).
     window_size : (int, int)
         Image width and height, pixels.
     camera_direction : sequence of 3 float, optional
@@ -139,6 +139,10 @@ def render_colors(mesh, colors_rgb8, path=None, *, window_size=(800, 800), camer
         direction = default_camera_direction(up) if camera_direction is None else camera_direction
         camera = camera_position(poly.center, poly.length, direction, tuple(up_vector(up)))
     plotter.camera_position = camera
-    image = plotter.screenshot(str(path) if path is not None else None, return_img=True)
+    image = plotter.screenshot(return_img=True)
     plotter.close()
+    if path is not None:
+        from .outputs import write_png
+
+        write_png(path, image)
     return image

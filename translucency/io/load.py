@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import os
 import re
+import stat
 import warnings
 from pathlib import Path
 
@@ -265,12 +266,29 @@ def _misnamed(path: Path, suffix: str, sniffed: str) -> str:
 # --------------------------------------------------------------------------------------------------
 # file checks
 # --------------------------------------------------------------------------------------------------
+def _special_kind(mode: int) -> str:
+    """What a file that is not a regular file is, in words ("a FIFO (named pipe)", ...)."""
+    for test, words in ((stat.S_ISFIFO, "a FIFO (named pipe)"), (stat.S_ISCHR, "a character device"),
+                        (stat.S_ISBLK, "a block device"), (stat.S_ISSOCK, "a socket")):
+        if test(mode):
+            return words
+    return "a special file"
+
+
 def _check_readable(path: Path, format: str | None) -> str:
     """Check that the file exists and can be read, and return the suffix of the format to read it as."""
-    if not path.exists():
+    try:
+        mode = os.stat(path).st_mode  # follows links: what would be opened
+    except FileNotFoundError:
+        mode = None
+    except OSError as exc:
+        raise MeshError(f"{path.name} cannot be read ({exc.strerror or exc}); check the file and the disk.") from None
+    if mode is None:
         raise MeshError(f"{path} does not exist; check the path and the file name.")
-    if path.is_dir():
+    if stat.S_ISDIR(mode):
         raise MeshError(f"{path} is a directory, not a mesh file; pass the path of a mesh file inside it.")
+    if not stat.S_ISREG(mode):  # opening a FIFO would wait for a writer, a device would read forever
+        raise MeshError(f"{path} is {_special_kind(mode)}, not a regular file; pass a mesh file stored on disk.")
     try:
         with open(path, "rb") as stream:
             first = stream.read(1)
@@ -442,7 +460,9 @@ def _read_ply_with_plyfile(path: Path, header: _PlyHeader, plyfile):
                 ply = None
     if ply is None:
         try:
-            ply = plyfile.PlyData.read(str(path), mmap="c")
+            with warnings.catch_warnings():  # numpy's loadtxt warns about every empty ascii list (a face "0")
+                warnings.simplefilter("ignore")
+                ply = plyfile.PlyData.read(str(path), mmap="c")
         except errors as exc:
             raise MeshError(
                 f"{path.name} is corrupt or truncated ({_short(exc)}); download or export the file again."
@@ -698,12 +718,8 @@ def _read_with_vtk(path: Path, suffix: str):
         with pyvista.vtk_verbosity("off"), pyvista.VtkErrorCatcher(send_to_logging=False) as catcher:
             reader.Update()
             output = reader.GetOutputDataObject(0)
-    errors = [event.alert for event in catcher.error_events]
-    if errors:
-        first = errors[0].strip().splitlines()[0] if errors[0].strip() else "unknown error"
-        raise MeshError(
-            f"{path.name} is not a readable {description} file ({first[:120]}); check or export the file again."
-        )
+    if catcher.error_events:  # VTK's own text names its classes and addresses: not for the user
+        raise MeshError(f"{path.name} is not a readable {description} file; check or export the file again.")
     if output is None:
         raise MeshError(f"{path.name} is not a readable {description} file; check or export the file again.")
     data = pyvista.wrap(output)
