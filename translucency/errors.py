@@ -62,3 +62,18 @@ class UnknownMaterialError(TranslucencyError, KeyError):
 
 class MeshError(TranslucencyError, ValueError):
     """A mesh file or mesh array that cannot be used (unreadable, corrupt, empty, invalid values)."""
+
+
+class BudgetError(TranslucencyError):
+    """A solve that would need more memory or time than its budget allows (found before the work).
+
+    ``estimate`` holds the :class:`~translucency.scatter.budget.SolveEstimate` that was over budget.
+    """
+
+    def __init__(self, message: str, estimate=None):
+        super().__init__(message)
+        self.estimate = estimate
+
+
+class TranslucencyWarning(UserWarning):
+    """Something the user should know that did not stop the work (a coarser solve to fit a budget, say)."""

@@ -49,6 +49,7 @@ import numpy as np
 
 from .. import __version__
 from ..errors import InvalidParameterError
+from ..scatter.budget import DEFAULT_TIME_LIMIT_S
 from .pipeline import Scene, display_colors, resolve_medium
 from .render import DEFAULT_CAMERA_DIRECTION, DEFAULT_UP, add_colored_mesh, camera_position, new_plotter
 
@@ -238,8 +239,9 @@ def validate_choices(materials, models) -> tuple[list, list, dict]:
 
 
 def compare(mesh=None, materials=("marble",), models=("directional",), lights=None, *, output=None, method="tree",
-            tol=1e-2, resolution="full", shadows=True, per_direction=False, exposure=None,
-            camera_direction=DEFAULT_CAMERA_DIRECTION, up=DEFAULT_UP, cell_size=(480, 480), progress=None) -> Comparison:
+            tol=1e-2, resolution="full", shadows=True, per_direction=False, exposure=None, memory_limit=None,
+            time_limit=DEFAULT_TIME_LIMIT_S, camera_direction=DEFAULT_CAMERA_DIRECTION, up=DEFAULT_UP,
+            cell_size=(480, 480), progress=None) -> Comparison:
     """Render and measure one scan in several materials and models (module docstring for every output).
 
     Parameters
@@ -254,8 +256,8 @@ def compare(mesh=None, materials=("marble",), models=("directional",), lights=No
         Default: the pipeline's white directional light of 1 W/m².
     output : path-like, optional
         Folder for the files (created; files in it are replaced atomically). None: numbers only.
-    method, tol, resolution, shadows, per_direction
-        Solver settings (:meth:`Scene.shade <translucency.app.pipeline.Scene.shade>`).
+    method, tol, resolution, shadows, per_direction, memory_limit, time_limit
+        Solver settings (:meth:`Scene.shade <translucency.app.pipeline.Scene.shade>`; GB, seconds).
     exposure : float, optional
         The common display exposure (default: automatic over all cells).
     camera_direction, up : sequence of 3 float
@@ -290,7 +292,8 @@ def compare(mesh=None, materials=("marble",), models=("directional",), lights=No
         for model in models:
             start = time.perf_counter()
             results[material, model] = scene.shade(media[material], lights, model=model, method=method, tol=tol,
-                                                   resolution=resolution, exposure=1.0, per_direction=per_direction)
+                                                   resolution=resolution, exposure=1.0, per_direction=per_direction,
+                                                   memory_limit=memory_limit, time_limit=time_limit)
             times[material, model] = time.perf_counter() - start
             if progress is not None:
                 progress(f"{material}, {model}: {times[material, model]:.2f} s")

@@ -54,6 +54,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InvalidParameterError
+from ..scatter.budget import DEFAULT_TIME_LIMIT_S
 from .pipeline import DEFAULT_LIGHT_DIRECTION, Scene, display_colors, proxy_edge_length, resolve_medium
 from .render import DEFAULT_CAMERA_DIRECTION, DEFAULT_UP, add_colored_mesh, camera_position, new_plotter
 
@@ -132,8 +133,8 @@ class Viewer:
         Default: one white directional light of 1 W/m² from
         :data:`~translucency.app.pipeline.DEFAULT_LIGHT_DIRECTION`. The light sliders steer the first
         directional light; without one they are not shown.
-    model, method, tol, per_direction
-        Passed to :meth:`Scene.shade <translucency.app.pipeline.Scene.shade>`.
+    model, method, tol, per_direction, memory_limit, time_limit
+        Passed to :meth:`Scene.shade <translucency.app.pipeline.Scene.shade>` (GB, seconds).
     resolution : "interactive", "full", "auto" or float
         Where ``B`` is computed while controls change: ``"interactive"`` (default) is a proxy of about
         :data:`INTERACTIVE_VERTICES` vertices (:func:`interactive_edge_length`); the others are the
@@ -164,7 +165,8 @@ class Viewer:
     """
 
     def __init__(self, mesh=None, material="marble", lights=None, *, model="directional", method="tree", tol=1e-2,
-                 resolution="interactive", shadows=True, per_direction=False, exposure=None, view_dependent=False,
+                 resolution="interactive", shadows=True, per_direction=False, exposure=None, memory_limit=None,
+                 time_limit=DEFAULT_TIME_LIMIT_S, view_dependent=False,
                  specular=False, roughness=0.25, up=DEFAULT_UP, camera_direction=DEFAULT_CAMERA_DIRECTION,
                  window_size=(1024, 768), off_screen=False, widgets=True, output=".", name=None):
         from ..scatter.lights import DirectionalLight, as_light_list
@@ -187,6 +189,7 @@ class Viewer:
         self.model, self.method, self.tol = model, method, float(tol)
         self.resolution = resolution
         self.per_direction = bool(per_direction)
+        self.limits = {"memory_limit": memory_limit, "time_limit": time_limit}
         self.shadows = bool(shadows)
         self.lights = as_light_list(lights if lights is not None else DirectionalLight(DEFAULT_LIGHT_DIRECTION, 1.0))
         self._key_light = next((i for i, light in enumerate(self.lights) if isinstance(light, DirectionalLight)), None)
@@ -378,7 +381,8 @@ class Viewer:
         self._full_next = False
         start = time.perf_counter()
         self.result = self.scene.shade(self.medium, self.lights, model=self.model, method=self.method, tol=self.tol,
-                                       resolution=resolution, exposure=self.exposure, per_direction=self.per_direction)
+                                       resolution=resolution, exposure=self.exposure, per_direction=self.per_direction,
+                                       **self.limits)
         self.solve_seconds = time.perf_counter() - start
         self.n_solves += 1
         if self.exposure is None:
