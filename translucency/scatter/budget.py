@@ -74,7 +74,8 @@ SAMPLE_SAFETY = 1.5
 
 #: Measured rates, per numba thread: far-field evaluations per second by method, near-field
 #: quadrature points per second, near-list entries per second (counting and filling), and the
-#: seconds per vertex of the set-up (ordering, tables, tree). See ``bench/budget.py``.
+#: seconds per vertex of the set-up (ordering, tables, tree); measured on the 2-core machine at a load
+#: of about 4, so pessimistic on a quiet one. See ``bench/budget.py``.
 FAR_RATE = {"exact": 40e6, "cutoff": 15e6, "tree": 12e6}
 NEAR_RATE = 3e6
 LIST_RATE = 60e6
