@@ -81,3 +81,18 @@ class WriteError(TranslucencyError):
     """
 
     exit_code = 1
+
+
+class BudgetError(TranslucencyError):
+    """A solve that would need more memory or time than its budget allows (found before the work).
+
+    ``estimate`` holds the :class:`~translucency.scatter.budget.SolveEstimate` that was over budget.
+    """
+
+    def __init__(self, message: str, estimate=None):
+        super().__init__(message)
+        self.estimate = estimate
+
+
+class TranslucencyWarning(UserWarning):
+    """Something the user should know that did not stop the work (a coarser solve to fit a budget, say)."""

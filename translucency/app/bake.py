@@ -41,7 +41,8 @@ import time
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
-from ..errors import InvalidParameterError, TranslucencyError, command_line_active, command_line_spelling, option
+from ..errors import BudgetError, InvalidParameterError, TranslucencyError, command_line_active, command_line_spelling, option
+from ..scatter.budget import DEFAULT_TIME_LIMIT_S
 
 __all__ = ["BakeSettings", "BakeRecord", "BakeProgress", "ConsoleProgress", "bake", "bake_file", "bake_files",
            "output_paths", "format_summary", "exit_code", "DASK_CONNECT_TIMEOUT_S"]
@@ -73,9 +74,9 @@ class BakeSettings:
         Length unit of the scan files: ``mm``, ``cm``, ``m``, ``in`` or mm per unit; None: inferred
         from each file's size (:func:`translucency.io.units.infer_unit`). Ignored for the embedded
         default scan, which has its own size.
-    model, method, tol, resolution, shadows, exposure, per_direction, up
+    model, method, tol, resolution, shadows, exposure, per_direction, up, memory_limit, time_limit
         As in :func:`translucency.app.pipeline.shade` (``resolution`` in mm when a number; ``up``
-        places the default light and is recorded).
+        places the default light and is recorded; the memory limit in GB, the time limit in seconds).
     """
 
     material: object = "marble"
@@ -89,10 +90,13 @@ class BakeSettings:
     exposure: float | None = None
     per_direction: bool = False
     up: str = "auto"
+    memory_limit: float | None = None
+    time_limit: float | None = DEFAULT_TIME_LIMIT_S
 
     def __post_init__(self):
         from ..io.units import parse_unit
         from ..io.upright import parse_up
+        from ..scatter.budget import check_limits
         from ..scatter.lights import as_light_list
         from ..scatter.solve import METHODS, MODELS
         from .pipeline import resolve_medium
@@ -114,6 +118,7 @@ class BakeSettings:
                 f"resolution must be 'full', 'auto' or a proxy edge length in mm, got {self.resolution!r}.")
         if not (self.exposure is None or _positive(self.exposure)):
             raise InvalidParameterError(f"exposure must be a positive number, got {self.exposure!r}.")
+        check_limits(self.memory_limit, self.time_limit)
 
     @property
     def material_name(self) -> str:
@@ -143,6 +148,8 @@ class BakeRecord:
         Warnings while loading (an implausible size for the unit, say).
     threads : int or None
         numba threads the solver used.
+    over_budget : bool
+        The file failed because its solve would not fit the memory or time budget.
     """
 
     source: str
@@ -153,6 +160,7 @@ class BakeRecord:
     error: str | None = None
     warnings: tuple = field(default=())
     threads: int | None = None
+    over_budget: bool = False
 
     @property
     def ok(self) -> bool:
@@ -279,7 +287,7 @@ def bake_file(path, output, settings: BakeSettings, progress=None) -> BakeRecord
         result = Scene(mesh, shadows=settings.shadows, up=settings.up).shade(
             settings.material, settings.lights, model=settings.model, method=settings.method, tol=settings.tol,
             resolution=settings.resolution, exposure=settings.exposure, per_direction=settings.per_direction,
-            progress=report)
+            progress=report, memory_limit=settings.memory_limit, time_limit=settings.time_limit, warn=warnings.append)
         lit = int(result.stats["incident"]["n_lit"])
         report("writing", 0.0)
         write_baked_ply(output, mesh, result.radiance, result.B, result.colors, result.metadata,
@@ -287,7 +295,7 @@ def bake_file(path, output, settings: BakeSettings, progress=None) -> BakeRecord
         report("writing", 1.0)
     except Exception as exc:  # noqa: BLE001 -- every failure of one file becomes its record
         return BakeRecord(source, None, vertices, lit, time.perf_counter() - start, failure_sentence(exc),
-                          tuple(warnings), threads)
+                          tuple(warnings), threads, isinstance(exc, BudgetError))
     return BakeRecord(source, str(output), vertices, lit, time.perf_counter() - start, None, tuple(warnings), threads)
 
 
@@ -695,13 +703,17 @@ def format_summary(records, seconds: float | None = None) -> str:
 
 
 def exit_code(records) -> int:
-    """0 when every file was baked, 1 when any failed (2, for errors before the batch, is the CLI's)."""
-    return 0 if all(r.ok for r in records) else 1
+    """0 when every file was baked, 1 when any failed, 2 when every file failed for being over the
+    memory or time budget (an option to change, like the errors before the batch)."""
+    if all(r.ok for r in records):
+        return 0
+    return 2 if all(r.over_budget for r in records) else 1
 
 
 def bake(meshes=None, output=None, material="marble", lights=None, *, unit=None, model="directional",
          method="tree", tol=1e-2, resolution="full", shadows=True, exposure=None, per_direction=False,
-         up="auto", workers=1, scheduler=None, progress=None) -> list[BakeRecord]:
+         up="auto", memory_limit=None, time_limit=DEFAULT_TIME_LIMIT_S, workers=1, scheduler=None,
+         progress=None) -> list[BakeRecord]:
     """Bake scans to PLY files of per-vertex translucent radiance, one file per scan.
 
     Parameters
@@ -724,6 +736,9 @@ def bake(meshes=None, output=None, material="marble", lights=None, *, unit=None,
     up : str
         The scans' up axis (``"x"`` ... ``"-z"``, or ``"auto"``: inferred per scan); it places the
         default light above and in front, and is recorded in the bake.
+    memory_limit, time_limit : float, optional
+        GB the process may hold and seconds a solve may take (estimated before it starts; None: no
+        time limit); over them a scan is solved on a coarser proxy, or fails with a sentence.
     workers : int
         Local processes to bake in (1: in this process).
     scheduler : str or distributed.Client, optional
@@ -741,5 +756,5 @@ def bake(meshes=None, output=None, material="marble", lights=None, *, unit=None,
     if meshes is not None and isinstance(meshes, (str, os.PathLike)):
         meshes = [meshes]
     settings = BakeSettings(material, lights, unit, model, method, tol, resolution, shadows, exposure, per_direction,
-                            up)
+                            up, memory_limit, time_limit)
     return bake_files(meshes, output, settings, workers=workers, scheduler=scheduler, progress=progress)

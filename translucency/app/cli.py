@@ -302,10 +302,21 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point of ``translucency`` and ``python -m translucency``; returns the exit code."""
+    import warnings
+
+    from ..errors import TranslucencyWarning
+
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
-        with command_line_spelling():
+        with command_line_spelling(), warnings.catch_warnings():
+            def show(message, category, *rest):  # our own warnings as one line each, like the errors
+                if issubclass(category, TranslucencyWarning):
+                    print(f"translucency: warning: {message}", file=sys.stderr)
+                else:
+                    default_show(message, category, *rest)
+
+            default_show, warnings.showwarning = warnings.showwarning, show
             return int(args.func(args) or 0)
     except TranslucencyError as exc:
         print(f"translucency: error: {exc}", file=sys.stderr)

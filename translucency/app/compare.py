@@ -50,6 +50,7 @@ import numpy as np
 from .. import __version__
 from ..errors import InvalidParameterError
 from ..io.units import unit_metadata
+from ..scatter.budget import DEFAULT_TIME_LIMIT_S
 from .pipeline import Scene, display_colors, resolve_medium
 from .render import (DEFAULT_CAMERA_DIRECTION, DEFAULT_UP, add_colored_mesh, camera_position, default_camera_direction,
                      new_plotter)
@@ -240,8 +241,9 @@ def validate_choices(materials, models) -> tuple[list, list, dict]:
 
 
 def compare(mesh=None, materials=("marble",), models=("directional",), lights=None, *, output=None, method="tree",
-            tol=1e-2, resolution="full", shadows=True, per_direction=False, exposure=None,
-            camera_direction=None, up="auto", cell_size=(480, 480), progress=None) -> Comparison:
+            tol=1e-2, resolution="full", shadows=True, per_direction=False, exposure=None, memory_limit=None,
+            time_limit=DEFAULT_TIME_LIMIT_S, camera_direction=None, up="auto", cell_size=(480, 480),
+            progress=None) -> Comparison:
     """Render and measure one scan in several materials and models (module docstring for every output).
 
     Parameters
@@ -257,8 +259,8 @@ def compare(mesh=None, materials=("marble",), models=("directional",), lights=No
         1 W/m², above and in front of the scan (:func:`~translucency.app.pipeline.default_light_direction`).
     output : path-like, optional
         Folder for the files (created; files in it are replaced atomically). None: numbers only.
-    method, tol, resolution, shadows, per_direction
-        Solver settings (:meth:`Scene.shade <translucency.app.pipeline.Scene.shade>`).
+    method, tol, resolution, shadows, per_direction, memory_limit, time_limit
+        Solver settings (:meth:`Scene.shade <translucency.app.pipeline.Scene.shade>`; GB, seconds).
     exposure : float, optional
         The common display exposure (default: automatic over all cells).
     camera_direction : sequence of 3 float, optional
@@ -307,7 +309,8 @@ def compare(mesh=None, materials=("marble",), models=("directional",), lights=No
         for model in models:
             start = time.perf_counter()
             results[material, model] = scene.shade(media[material], lights, model=model, method=method, tol=tol,
-                                                   resolution=resolution, exposure=1.0, per_direction=per_direction)
+                                                   resolution=resolution, exposure=1.0, per_direction=per_direction,
+                                                   memory_limit=memory_limit, time_limit=time_limit)
             times[material, model] = time.perf_counter() - start
             if progress is not None:
                 progress(f"{material}, {model}: {times[material, model]:.2f} s")

@@ -9,7 +9,7 @@ rejects the same things with the same sentences:
   the light), ``--light SPEC`` (any mix, see :data:`~translucency.scatter.lights.LIGHT_SPEC_HELP`),
   ``--env FILE`` (an equirectangular HDR map) with ``--env-directions N``;
 * :func:`add_solver_options` / :func:`solver_settings` -- ``--model``, ``--method``, ``--tol``,
-  ``--resolution``, ``--no-shadows``, ``--per-direction``, ``--exposure``.
+  ``--resolution``, ``--no-shadows``, ``--per-direction``, ``--exposure``, ``--memory-limit``, ``--time-limit``.
 
 :class:`ArgumentParser` is argparse's parser, except that a negative number or vector is taken as the
 value of the option before it as written: ``--light-dir -1,0.3,-0.5`` (argparse alone reads
@@ -123,6 +123,12 @@ def add_solver_options(parser: argparse.ArgumentParser) -> None:
     group.add_argument("--per-direction", action="store_true",
                        help="solve each light sample with its own refracted direction (exact for several lights)")
     group.add_argument("--exposure", type=float, default=None, help="display exposure (default: automatic)")
+    group.add_argument("--memory-limit", type=float, default=None, metavar="GB",
+                       help="memory the process may use, GB (default: what the machine has available); a solve "
+                            "that would need more runs on a coarser proxy or stops with a message")
+    group.add_argument("--time-limit", type=float, default=None, metavar="S",
+                       help="seconds a solve may take by its estimate (default 300); over it the solve runs on a "
+                            "coarser proxy or stops with a message")
 
 
 def parse_vector(text: str, name: str) -> np.ndarray:
@@ -170,8 +176,13 @@ def solver_settings(args) -> dict:
         raise InvalidParameterError(f"--tol must be a relative error in (0, 1), got {args.tol!r}.")
     if args.exposure is not None and not (np.isfinite(args.exposure) and args.exposure > 0):
         raise InvalidParameterError(f"--exposure must be a positive number, got {args.exposure!r}.")
+    from ..scatter.budget import DEFAULT_TIME_LIMIT_S, check_limits
+
+    time_limit = DEFAULT_TIME_LIMIT_S if args.time_limit is None else args.time_limit
+    check_limits(args.memory_limit, time_limit)
     return {"material": resolve_medium(args.material), "model": args.model, "method": args.method, "tol": args.tol,
-            "resolution": resolution, "exposure": args.exposure, "per_direction": args.per_direction}
+            "resolution": resolution, "exposure": args.exposure, "per_direction": args.per_direction,
+            "memory_limit": args.memory_limit, "time_limit": time_limit}
 
 
 def load_scan(path, unit=None, *, warn=None, note=None):

@@ -54,6 +54,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InvalidParameterError
+from ..scatter.budget import DEFAULT_TIME_LIMIT_S
 from .pipeline import (Scene, coarsest_proxy_edge, default_light_direction, display_colors, proxy_edge_length,
                        resolve_medium)
 from .render import DEFAULT_UP, add_colored_mesh, camera_position, default_camera_direction, new_plotter
@@ -135,8 +136,8 @@ class Viewer:
         Directions in the scan's own coordinates. Default: one white directional light of 1 W/m²
         above and in front of the scan (:func:`~translucency.app.pipeline.default_light_direction` of
         ``up``). The light sliders steer the first directional light; without one they are not shown.
-    model, method, tol, per_direction
-        Passed to :meth:`Scene.shade <translucency.app.pipeline.Scene.shade>`.
+    model, method, tol, per_direction, memory_limit, time_limit
+        Passed to :meth:`Scene.shade <translucency.app.pipeline.Scene.shade>` (GB, seconds).
     resolution : "interactive", "full", "auto" or float
         Where ``B`` is computed while controls change: ``"interactive"`` (default) is a proxy of about
         :data:`INTERACTIVE_VERTICES` vertices (:func:`interactive_edge_length`); the others are the
@@ -170,8 +171,9 @@ class Viewer:
     """
 
     def __init__(self, mesh=None, material="marble", lights=None, *, model="directional", method="tree", tol=1e-2,
-                 resolution="interactive", shadows=True, per_direction=False, exposure=None, view_dependent=False,
-                 specular=False, roughness=0.25, up="auto", camera_direction=None,
+                 resolution="interactive", shadows=True, per_direction=False, exposure=None, memory_limit=None,
+                 time_limit=DEFAULT_TIME_LIMIT_S, view_dependent=False, specular=False, roughness=0.25, up="auto",
+                 camera_direction=None,
                  window_size=(1024, 768), off_screen=False, widgets=True, output=".", name=None):
         from ..io.upright import up_vector
         from ..scatter.lights import DirectionalLight, as_light_list
@@ -194,6 +196,7 @@ class Viewer:
         self.model, self.method, self.tol = model, method, float(tol)
         self.resolution = resolution
         self.per_direction = bool(per_direction)
+        self.limits = {"memory_limit": memory_limit, "time_limit": time_limit}
         self.shadows = bool(shadows)
         self.scene = Scene(mesh, shadows=self.shadows, up=up)
         self.up_axis = self.scene.up
@@ -389,7 +392,8 @@ class Viewer:
         self._full_next = False
         start = time.perf_counter()
         self.result = self.scene.shade(self.medium, self.lights, model=self.model, method=self.method, tol=self.tol,
-                                       resolution=resolution, exposure=self.exposure, per_direction=self.per_direction)
+                                       resolution=resolution, exposure=self.exposure, per_direction=self.per_direction,
+                                       **self.limits)
         self.solve_seconds = time.perf_counter() - start
         self.n_solves += 1
         if self.exposure is None:
