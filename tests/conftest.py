@@ -1,4 +1,8 @@
-"""Shared fixtures: the spec folder and the shared scans, both beside the repository (skipped when absent)."""
+"""Shared fixtures: the reference values (carried in tests/data) and the shared scans beside the repository.
+
+The reference values are numbers computed independently of this code; they travel with the tests so a
+clone alone runs every golden-value test. Only the tests on the real scans skip when the scans are absent.
+"""
 
 import json
 from pathlib import Path
@@ -7,17 +11,14 @@ import pytest
 
 REPO = Path(__file__).resolve().parents[1]
 SHARED = REPO.parent / "shared"
-SPEC = SHARED / "spec"
+DATA = Path(__file__).resolve().parent / "data"
 MESHES = SHARED / "meshes"
 
 
 @pytest.fixture(scope="session")
 def dirpole_vectors():
-    """The independent reference vectors of the directional dipole (shared/spec/dirpole_vectors.json)."""
-    path = SPEC / "dirpole_vectors.json"
-    if not path.exists():
-        pytest.skip(f"reference vectors not found: {path.name} (expected in ../shared/spec)")
-    return json.loads(path.read_text())
+    """The independent reference vectors of the directional dipole (tests/data/dirpole_vectors.json)."""
+    return json.loads((DATA / "dirpole_vectors.json").read_text())
 
 
 @pytest.fixture(scope="session")

@@ -34,6 +34,11 @@ def option(keyword: str, value=None) -> str:
     return f"{keyword}=" if value is None else f"{keyword}={value!r}"
 
 
+def command_line_active() -> bool:
+    """True while :func:`option` spells settings as command-line flags (to pass on to worker processes)."""
+    return _command_line
+
+
 @contextlib.contextmanager
 def command_line_spelling(enabled: bool = True):
     """Within this block, :func:`option` spells settings as command-line flags."""
@@ -46,7 +51,12 @@ def command_line_spelling(enabled: bool = True):
 
 
 class TranslucencyError(Exception):
-    """Base class of every error translucency raises on purpose."""
+    """Base class of every error translucency raises on purpose.
+
+    ``exit_code`` is the command line's exit status for it: 2 (the run could not start as asked).
+    """
+
+    exit_code = 2
 
 
 class InvalidParameterError(TranslucencyError, ValueError):
@@ -62,3 +72,27 @@ class UnknownMaterialError(TranslucencyError, KeyError):
 
 class MeshError(TranslucencyError, ValueError):
     """A mesh file or mesh array that cannot be used (unreadable, corrupt, empty, invalid values)."""
+
+
+class WriteError(TranslucencyError):
+    """An output could not be written once the work was done (disk full, quota, read-only file system).
+
+    Nothing is left behind; the command line exits with status 1 (the work ran, its result was lost).
+    """
+
+    exit_code = 1
+
+
+class BudgetError(TranslucencyError):
+    """A solve that would need more memory or time than its budget allows (found before the work).
+
+    ``estimate`` holds the :class:`~translucency.scatter.budget.SolveEstimate` that was over budget.
+    """
+
+    def __init__(self, message: str, estimate=None):
+        super().__init__(message)
+        self.estimate = estimate
+
+
+class TranslucencyWarning(UserWarning):
+    """Something the user should know that did not stop the work (a coarser solve to fit a budget, say)."""

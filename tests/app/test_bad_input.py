@@ -107,19 +107,17 @@ def test_cli_same_file_through_a_symlink(tmp_path, capsys, good_file):
 
 
 def test_failed_write_leaves_nothing_and_keeps_the_old_output(tmp_path, monkeypatch, good_file):
-    """A writer that dies half-way: the previous output is intact and no temporary file is left."""
-    import pyvista
+    """A write that fails half-way (the disk fills up): the previous output is intact, no temporary file is left."""
+    from translucency.io import atomic
 
     output = tmp_path / "out.ply"
     output.write_bytes(b"previous result")
     mesh = load_mesh(good_file)
 
-    def broken_save(self, filename, *args, **kwargs):
-        with open(filename, "wb") as stream:
-            stream.write(b"ply\nformat binary_little_endian 1.0\n")  # a partial file
+    def full_disk(path, *args):
         raise OSError(28, "No space left on device")
 
-    monkeypatch.setattr(pyvista.PolyData, "save", broken_save)
+    monkeypatch.setattr(atomic, "_fsync", full_disk)
     with pytest.raises(TranslucencyError, match="writing out.ply failed"):
         save_mesh(output, mesh)
     assert output.read_bytes() == b"previous result"

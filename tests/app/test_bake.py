@@ -121,15 +121,32 @@ def test_a_broken_file_in_the_middle_fails_alone(scans, tmp_path, capsys):
     assert "baked 2 of 3 files" in captured.out and "1 failed" in captured.out
 
 
-def test_a_failure_while_writing_leaves_nothing(scans, tmp_path):
+def test_an_output_name_taken_by_a_folder_stops_the_batch_before_any_work(scans, tmp_path):
     out = tmp_path / "out"
-    (out / "small_marble.ply").mkdir(parents=True)  # the output name is taken by a folder
+    (out / "small_marble.ply").mkdir(parents=True)
+    with pytest.raises(InvalidParameterError, match="small_marble.ply is a folder"):
+        batch.bake_files([scans["small"], scans["large"]], out, batch.BakeSettings(shadows=False))
+    assert sorted(os.listdir(out)) == ["small_marble.ply"] and os.listdir(out / "small_marble.ply") == []
+
+
+def test_a_failure_while_writing_leaves_nothing(scans, tmp_path, monkeypatch):
+    from translucency.io import atomic
+
+    real_fsync = atomic._fsync
+
+    def full_disk_for_the_small_scan(path, *args):
+        if os.path.getsize(path) < 100_000:  # the small sphere's PLY (44 kB), not the large one's (170 kB)
+            raise OSError(28, "No space left on device")
+        real_fsync(path, *args)
+
+    monkeypatch.setattr(atomic, "_fsync", full_disk_for_the_small_scan)
+    out = tmp_path / "out"
     records = batch.bake_files([scans["small"], scans["large"]], out, batch.BakeSettings(shadows=False))
     assert [r.ok for r in records] == [False, True]
-    assert "is a folder" in records[0].error and records[0].output is None
-    assert records[0].vertices == 642  # it failed after loading and solving
-    assert sorted(os.listdir(out)) == ["large_marble.ply", "small_marble.ply"]
-    assert os.listdir(out / "small_marble.ply") == []
+    assert records[0].error == "writing small_marble.ply failed (No space left on device): the disk is full; " \
+                               "free some space or write the output elsewhere."
+    assert records[0].vertices == 642 and records[0].output is None  # it failed after loading and solving
+    assert sorted(os.listdir(out)) == ["large_marble.ply"]  # no temporary file left
     assert batch.exit_code(records) == 1 and batch.exit_code(records[1:]) == 0
 
 
@@ -333,3 +350,35 @@ def test_an_unreachable_scheduler_is_exit_2(scans, tmp_path, capsys, monkeypatch
 
 def test_bake_is_in_the_public_api():
     assert "bake" in translucency.__all__ and translucency.bake is batch.bake
+
+
+# --------------------------------------------------------------------------------------------------
+# units and orientation
+# --------------------------------------------------------------------------------------------------
+def test_bake_without_unit_infers_says_it_once_and_records_it(tmp_path, capsys):
+    path = write_sphere(tmp_path / "ball.ply", 3, 0.02)  # 0.04 units across: read as metres, 40 mm
+    out = tmp_path / "out"
+    assert cli.main(["bake", str(path), "--no-shadows", "-o", str(out)]) == 0
+    err = capsys.readouterr().err
+    line = "ball.ply: no --unit given; 0.04 units across, read as metres (40 mm); pass --unit to override"
+    assert err.count(line) == 1 and "ball.ply: ball.ply" not in err
+    baked = read_baked_ply(out / "ball_marble.ply")
+    assert baked.metadata["unit"] == "m" and baked.metadata["unit_name"] == "metres"
+    assert baked.metadata["mm_per_unit"] == 1000.0 and baked.metadata["unit_inferred"] is True
+    assert baked.metadata["up"] == "+y" and np.ptp(baked.points[:, 0]) == pytest.approx(40.0, rel=1e-3)
+    given = translucency.bake([path], tmp_path / "given", unit="m", shadows=False, up="z")
+    metadata = read_baked_ply(given[0].output).metadata
+    assert metadata["unit_inferred"] is False and metadata["up"] == "+z" and metadata["up_inferred"] is False
+
+
+@pytest.mark.slow
+def test_worker_processes_spell_the_flag_as_the_command_line_does(tmp_path, capsys):
+    paths = [write_sphere(tmp_path / f"ball{k}.ply", 2, 0.02) for k in range(2)]
+    assert cli.main(["bake", *map(str, paths), "--no-shadows", "--workers", "2", "-o", str(tmp_path / "out")]) == 0
+    err = capsys.readouterr().err
+    assert err.count("no --unit given") == 2 and "unit=" not in err
+
+
+def test_bad_up_is_one_sentence():
+    with pytest.raises(InvalidParameterError, match="up axis must be one of"):
+        batch.BakeSettings(up="sideways")

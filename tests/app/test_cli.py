@@ -66,6 +66,45 @@ def test_inspect_repairs_a_shared_scan(shared_meshes, tmp_path):
     assert out.exists()
 
 
+def test_inspect_without_unit_says_the_inferred_unit_in_one_line(shared_meshes):
+    code, stdout, err = run_cli("inspect", str(shared_meshes / "stanford_bunny_zipper.ply"))
+    assert code == 0, err
+    assert err.splitlines() == ["translucency: stanford_bunny_zipper.ply: no --unit given; 0.156 units across, "
+                                "read as metres (156 mm); pass --unit to override"]
+    assert "155.7 mm across" in stdout and "up axis for --up auto: +y" in stdout
+
+
+def test_inspect_with_a_wrong_unit_warns_with_the_flag(shared_meshes):
+    code, _, err = run_cli("inspect", str(shared_meshes / "stanford_bunny_zipper.ply"), "--unit", "mm")
+    assert code == 0
+    assert "0.16 mm across, implausible for a scan in mm; if the file is in metres pass --unit m." in err
+    assert "unit='m'" not in err
+
+
+def test_the_same_line_in_python_names_the_keyword(shared_meshes):
+    from translucency.io import load_mesh
+    from translucency.io.units import UnitInferredWarning
+
+    with pytest.warns(UnitInferredWarning) as caught:
+        load_mesh(shared_meshes / "stanford_bunny_zipper.ply")
+    assert str(caught[0].message) == ("stanford_bunny_zipper.ply: no unit= given; 0.156 units across, read as "
+                                      "metres (156 mm); pass unit= to override")
+
+
+def test_a_size_no_unit_makes_plausible_is_refused_and_a_given_unit_only_warns(tmp_path):
+    from tests.synthetic import icosphere
+    from translucency.io.mesh import TriangleMesh
+
+    points, triangles = icosphere(2, 10000.0)  # 20000 units across: 20 m in mm, 20 km in metres
+    path = tmp_path / "huge.ply"
+    TriangleMesh(points, triangles).to_pyvista().save(str(path))
+    code, _, err = run_cli("inspect", str(path))
+    assert code == 2 and len(err.splitlines()) == 1 and "Traceback" not in err
+    assert "huge.ply is 2e+04 units across and no --unit was given" in err and "pass --unit with" in err
+    code, _, err = run_cli("inspect", str(path), "--unit", "mm")
+    assert code == 0 and "translucency: warning: huge.ply is 2e+04 mm across, implausible" in err
+
+
 def test_report_prints_versions_and_offscreen_status():
     code, out, _ = run_cli("report")
     assert "numpy" in out and "pymeshlab" in out and "off-screen rendering" in out
@@ -80,6 +119,9 @@ def test_main_job_bakes_the_embedded_default(tmp_path):
     assert ply.exists() and png.exists()
     baked = read_baked_ply(ply)
     assert baked.metadata["material"] == "marble" and baked.metadata["method"] == "tree"
+    # the embedded default keeps its size (given, not inferred) and stands +y up under the unchanged light
+    assert baked.metadata["up"] == "+y" and baked.metadata["unit_inferred"] is False
+    assert baked.metadata["lights"][0]["direction"] == pytest.approx(np.array([0.35, 1.0, 0.45]) / np.linalg.norm([0.35, 1.0, 0.45]))
     radiance = baked.radiance
     assert np.all(np.isfinite(radiance)) and np.all(radiance >= 0)
     light = np.array(baked.metadata["lights"][0]["direction"])

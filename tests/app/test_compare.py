@@ -151,7 +151,7 @@ def test_the_cli_writes_what_the_api_computes(sphere, tmp_path, capsys):
     sphere.to_pyvista().save(path)
     out = tmp_path / "cli"
     code = cli.main(["compare", str(path), "--materials", "marble,ketchup", "--models", "directional,standard",
-                     "--light-dir", "0,0,1", "--method", "exact", "--cell-size", "64x48", "-o", str(out)])
+                     "--light-dir", "0,0,1", "--method", "exact", "--cell-size", "64x48", "--up", "-x", "-o", str(out)])
     assert code == 0
     stdout = capsys.readouterr().out
     assert "ketchup" in stdout and "statistics.json" in stdout
@@ -166,6 +166,8 @@ def test_the_cli_writes_what_the_api_computes(sphere, tmp_path, capsys):
         for key in ("mean", "median", "p95"):
             assert cli_row[key] == pytest.approx(api_row[key], rel=1e-12, abs=1e-15)
     assert document["settings"]["method"] == "exact"
+    assert document["settings"]["up"] == "-x" and document["settings"]["up_inferred"] is False  # --up -x as written
+    assert document["mesh"]["unit_inferred"] is True  # the 40-unit file was read in millimetres
 
 
 def test_cli_errors_are_one_sentence_with_exit_code_2(tmp_path, capsys):
@@ -174,3 +176,22 @@ def test_cli_errors_are_one_sentence_with_exit_code_2(tmp_path, capsys):
     assert len(err) == 1 and err[0].startswith("translucency: error:") and "nope" in err[0]
     assert cli.main(["compare", "--cell-size", "0x0"]) == 2
     assert "--cell-size" in capsys.readouterr().err
+
+
+def test_json_records_the_unit_and_the_up_axis(two_by_two):
+    _, out = two_by_two
+    document = json.loads((out / "statistics.json").read_text())
+    assert document["mesh"]["unit"] == "mm" and document["mesh"]["mm_per_unit"] == 1.0
+    assert document["mesh"]["unit_inferred"] is False and document["mesh"]["unit_name"] == "millimetres"
+    assert document["settings"]["up"] == "+y" and document["settings"]["up_inferred"] is True  # a ball: the fallback
+
+
+def test_up_sets_the_default_light_and_the_profile_plane(sphere):
+    from translucency.app.pipeline import default_light_direction
+
+    result = compare(sphere, ["marble"], up="z", method="exact")
+    metadata = result.results["marble", "directional"].metadata
+    assert metadata["up"] == "+z"
+    light = default_light_direction("+z") / np.linalg.norm(default_light_direction("+z"))
+    np.testing.assert_allclose(metadata["lights"][0]["direction"], light)
+    assert abs(np.dot(result.profile_plane["normal"], (0, 0, 1))) < 1e-12  # the cut contains the up axis

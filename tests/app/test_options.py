@@ -18,10 +18,10 @@ def parse(*argv):
     return parser.parse_args(list(argv))
 
 
-def test_defaults_give_the_default_light_and_the_tree_method():
+def test_defaults_leave_the_light_to_the_pipeline_and_give_the_tree_method():
     args = parse()
-    (light,) = options.lights_from_args(args)
-    assert isinstance(light, DirectionalLight)
+    assert options.lights_from_args(args) is None  # the pipeline places it by the up axis
+    assert args.unit is None and args.up == "auto"
     settings = options.solver_settings(args)
     assert settings["method"] == "tree" and settings["tol"] == 0.01 and settings["resolution"] == "full"
     assert settings["material"].name == "marble" and args.mesh is None
@@ -52,3 +52,17 @@ def test_the_parser_offers_exactly_the_solvers_choices():
     from translucency.scatter import solve
 
     assert options.MODELS == solve.MODELS and options.METHODS == solve.METHODS
+
+
+@pytest.mark.parametrize("value, axis", [("-z", "-z"), ("x", "x"), ("auto", "auto")])
+def test_up_takes_negative_axes_as_written(value, axis):
+    from translucency.app import cli
+
+    args = cli.build_parser().parse_args(["view", "--up", value])
+    assert args.up == axis
+
+
+def test_light_dir_help_says_the_scan_frame():
+    parser = argparse.ArgumentParser()
+    options.add_light_options(parser)
+    assert "scan's own frame" in parser.format_help().replace("\n", " ").replace("  ", " ")

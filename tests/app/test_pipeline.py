@@ -63,3 +63,57 @@ def test_a_repeated_proxy_resolution_decimates_once(monkeypatch):
     moved = scene.shade("ketchup", DirectionalLight((1, 0, 0), 1.0), method="exact", resolution=3.0)
     assert len(calls) == 1 and "geometry" in moved.stats["reused"]
     assert moved.stats["solver_vertices"] == first.stats["solver_vertices"] < scene.mesh.n_points / 4
+
+
+def _plinth(up_index=2):
+    """A closed stepped solid standing on a wide plinth at its lowest coordinate along ``up_index`` (mm)."""
+    import pyvista
+
+    poly = pyvista.Box((-30, 30, -30, 30, 0, 10)).triangulate().merge(pyvista.Box((-8, 8, -8, 8, 10, 90)).triangulate())
+    poly = poly.subdivide(2)
+    points = np.roll(np.array(poly.points), up_index - 2, axis=1)
+    return TriangleMesh(points, np.asarray(poly.faces).reshape(-1, 4)[:, 1:])
+
+
+def test_default_light_is_above_and_in_front_for_the_up_axis_and_recorded():
+    from translucency.app.pipeline import DEFAULT_LIGHT_DIRECTION, default_light_direction
+
+    np.testing.assert_array_equal(default_light_direction("+y"), DEFAULT_LIGHT_DIRECTION)  # unchanged for +y
+    np.testing.assert_allclose(default_light_direction("+z"), (0.35, -0.45, 1.0))  # above: +z, in front: -y
+    mesh = _plinth()
+    result = Scene(mesh).shade("marble", method="exact")  # up auto: the plinth is at the lowest z
+    assert result.metadata["up"] == "+z" and result.metadata["up_inferred"] is True
+    light = np.asarray(result.metadata["lights"][0]["direction"])
+    np.testing.assert_allclose(light, default_light_direction("+z") / np.linalg.norm(default_light_direction("+z")))
+    given = Scene(mesh, up="y").shade("marble", method="exact")
+    assert given.metadata["up"] == "+y" and given.metadata["up_inferred"] is False
+
+
+def test_the_solver_does_not_depend_on_up():
+    mesh, light = _plinth(), DirectionalLight((0.2, -0.5, 1.0), 1.0)
+    np.testing.assert_array_equal(shade(mesh, "marble", light, method="exact", up="y").B,
+                                  shade(mesh, "marble", light, method="exact", up="-x").B)
+
+
+def test_unit_is_recorded_in_the_metadata():
+    mesh = sphere().replace(mm_per_unit=1000.0, unit_inferred=True)
+    metadata = shade(mesh, "marble", method="exact").metadata
+    assert (metadata["unit"], metadata["unit_name"], metadata["mm_per_unit"], metadata["unit_inferred"]) == (
+        "m", "metres", 1000.0, True)
+    assert metadata["geometry_unit"] == "mm"
+
+
+def test_a_tiny_object_gets_a_proxy_it_allows_and_a_given_edge_too_coarse_is_one_sentence():
+    import pytest
+
+    from translucency.app.pipeline import PROXY_MIN_TRIANGLES
+    from translucency.errors import InvalidParameterError, command_line_spelling
+
+    tiny = sphere(4, 0.08)  # 0.16 mm across (a bunny read in the wrong unit): smaller than marble's diffusion length
+    result = Scene(tiny).shade("marble", method="exact", resolution="auto")
+    assert PROXY_MIN_TRIANGLES / 2 <= result.stats["solver_vertices"] < tiny.n_points
+    with command_line_spelling(), pytest.raises(InvalidParameterError) as info:
+        Scene(tiny).shade("marble", method="exact", resolution=1.66)
+    message = str(info.value)
+    assert "--resolution 1.66" in message and "pass --resolution below" in message and "--unit" in message
+    assert "target_edge_length" not in message

@@ -235,3 +235,44 @@ def test_view_without_a_display_says_how_to_render_off_screen(monkeypatch, capsy
     monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
     assert cli.main(["view"]) == 2
     assert "--screenshot" in capsys.readouterr().err
+
+
+def test_interactive_proxy_of_a_tiny_object_is_one_the_mesh_allows():
+    from translucency.app.pipeline import coarsest_proxy_edge, resolve_medium
+
+    points, triangles = icosphere(4, 0.08)  # 0.16 mm across: the shared bunny read with --unit mm
+    tiny = TriangleMesh(points, triangles)
+    marble = resolve_medium("marble")
+    edge = interactive_edge_length(tiny, marble)
+    assert edge == pytest.approx(coarsest_proxy_edge(tiny.surface_area))
+    result = Scene(tiny).shade(marble, method="exact", resolution=edge)  # used to fail: "pass a length below"
+    assert 0 < result.stats["solver_vertices"] < tiny.n_points
+
+
+@needs_display
+def test_z_up_puts_the_camera_in_front_and_above_and_the_light_above():
+    from tests.app.test_pipeline import _plinth
+
+    view = Viewer(_plinth(2), "marble", window_size=(200, 150), off_screen=True, widgets=False, method="exact")
+    try:
+        assert view.up_axis == "+z" and view.up == (0.0, 0.0, 1.0)
+        eye, focus, view_up = (np.asarray(v) for v in view.plotter.camera_position)
+        np.testing.assert_allclose(view_up, (0, 0, 1), atol=1e-9)
+        offset = eye - focus
+        assert offset[2] > 0 and offset[1] < 0  # above, and in front (-y is the front of a Z-up scan)
+        assert view.elevation == pytest.approx(60.3, abs=0.5) and "up +z" in view.status
+    finally:
+        view.close()
+
+
+@needs_display
+def test_shared_angel_is_shown_z_up_by_default(shared_meshes):
+    from translucency.app.options import load_scan
+
+    mesh, _, _ = load_scan(shared_meshes / "ggg_angel_sfm.ply")
+    view = Viewer(mesh, "marble", window_size=(160, 120), off_screen=True, widgets=False, resolution=12.0)
+    try:
+        assert view.up_axis == "+z"
+        np.testing.assert_allclose(view.plotter.camera_position[2], (0, 0, 1), atol=1e-9)
+    finally:
+        view.close()

@@ -180,7 +180,7 @@ def test_pymeshlab_formats(tmp_path, suffix):
     path = tmp_path / f"s{suffix}"
     mesh_set.save_current_mesh(str(path))
     with pytest.warns(ImplausibleSizeWarning):  # a unit sphere, 2 "mm" across
-        mesh = load_mesh(path)
+        mesh = load_mesh(path, unit="mm")
     assert (mesh.n_points, mesh.n_triangles) == (162, 320)
 
 
@@ -194,7 +194,7 @@ def test_unit_converts_to_mm_and_warns_when_implausible(tmp_path):
     points, triangles = icosphere(1, 0.05)  # 0.1 units across
     path = write_ply(tmp_path / "small.ply", points, triangles)
     with pytest.warns(ImplausibleSizeWarning, match="unit='m'"):
-        load_mesh(path)
+        load_mesh(path, unit="mm")
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         mesh = load_mesh(path, unit="m")
@@ -242,7 +242,7 @@ def test_shared_scans_load_with_their_counts(name, unit, vertices, triangles, ke
 
 def test_shared_bunny_in_mm_warns_with_the_likely_unit():
     with pytest.warns(ImplausibleSizeWarning, match=r"stanford_bunny_zipper.ply is 0.16 mm across.*unit='m'"):
-        load_mesh(shared_scan("stanford_bunny_zipper.ply"))
+        load_mesh(shared_scan("stanford_bunny_zipper.ply"), unit="mm")
 
 
 def test_shared_vtp_and_ply_copies_are_identical():

@@ -63,6 +63,19 @@ def test_round_trip_with_read_baked_ply(bake):
     assert baked.metadata["version"] and baked.metadata["format"] == "translucency-bake"
 
 
+def test_header_records_the_mesh_unit_and_whether_it_was_inferred(tmp_path, sphere_mesh):
+    n = sphere_mesh.n_points
+    inferred = sphere_mesh.replace(points=sphere_mesh.points * 1000.0, mm_per_unit=1000.0, unit_inferred=True)
+    path = write_baked_ply(tmp_path / "m.ply", inferred, np.ones((n, 3)), np.ones((n, 3)),
+                           np.zeros((n, 3), np.uint8), METADATA)
+    metadata = read_baked_ply(path).metadata
+    assert (metadata["unit"], metadata["unit_name"], metadata["mm_per_unit"], metadata["unit_inferred"]) == (
+        "m", "metres", 1000.0, True)
+    given = write_baked_ply(tmp_path / "g.ply", sphere_mesh, np.ones((n, 3)), np.ones((n, 3)),
+                            np.zeros((n, 3), np.uint8), METADATA)
+    assert read_baked_ply(given).metadata["unit_inferred"] is False
+
+
 def test_round_trip_with_plyfile(bake):
     path, _, values = bake
     vertex = plyfile.PlyData.read(str(path))["vertex"]

@@ -4,8 +4,20 @@ import warnings
 
 import pytest
 
-from translucency.errors import InvalidParameterError, MeshError
-from translucency.io.units import ImplausibleSizeWarning, check_extent, likely_unit, parse_unit, unit_label
+from translucency.errors import InvalidParameterError, MeshError, command_line_spelling
+from translucency.io.units import (
+    PLAUSIBLE_EXTENT,
+    UNITS,
+    ImplausibleSizeWarning,
+    UnitInferredWarning,
+    check_extent,
+    infer_unit,
+    inferred_unit_message,
+    likely_unit,
+    parse_unit,
+    unit_label,
+    unit_metadata,
+)
 
 
 @pytest.mark.parametrize(
@@ -51,3 +63,118 @@ def test_huge_mm_file_suggests_nothing_or_smaller_unit():
 def test_absurd_sizes_are_errors(extent):
     with pytest.raises(MeshError, match="absurd|across|one position|larger|smaller"):
         check_extent(extent, 1.0, "x.ply")
+
+
+# --- inference when no unit is given -------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    "extent, unit",
+    [(0.005, "m"), (0.0051, "m"), (0.1557, "m"), (1.0, "m"), (4.99, "m"),
+     (5.0, "mm"), (5.01, "mm"), (321.8, "mm"), (4999.0, "mm"), (5000.0, "mm")],
+)
+def test_infer_unit_around_the_thresholds(extent, unit):
+    assert infer_unit(extent) == unit
+    assert PLAUSIBLE_EXTENT[0] <= extent * UNITS[unit] <= PLAUSIBLE_EXTENT[1]
+
+
+@pytest.mark.parametrize("extent", [0.0049, 1e-4, 5001.0, 2e5])
+def test_a_size_no_unit_makes_plausible_is_refused_with_a_sentence(extent):
+    with pytest.raises(MeshError) as info:
+        infer_unit(extent, "odd.ply")
+    message = str(info.value)
+    assert message.startswith("odd.ply is ") and "no unit makes that a plausible scan" in message
+    assert "pass unit= with the file's unit" in message and message.count(". ") == 0 and message.endswith(".")
+    with command_line_spelling(), pytest.raises(MeshError, match="no --unit was given.*pass --unit with"):
+        infer_unit(extent, "odd.ply")
+
+
+@pytest.mark.parametrize("extent, words", [(1e15, "larger than any"), (1e-12, "smaller than any"), (0.0, "one position")])
+def test_absurd_sizes_keep_their_own_sentence_when_inferring(extent, words):
+    with pytest.raises(MeshError, match=words):
+        infer_unit(extent, "x.ply")
+
+
+def test_inferred_unit_line_names_the_unit_in_words_and_the_setting():
+    assert inferred_unit_message("stanford_bunny_zipper.ply", 0.1557, "m") == (
+        "stanford_bunny_zipper.ply: no unit= given; 0.156 units across, read as metres (156 mm); "
+        "pass unit= to override")
+    with command_line_spelling():
+        assert inferred_unit_message("angel.ply", 321.76, "mm") == (
+            "angel.ply: no --unit given; 322 units across, read as millimetres (322 mm); pass --unit to override")
+
+
+def test_implausible_warning_spells_the_flag_on_the_command_line():
+    with command_line_spelling(), pytest.warns(ImplausibleSizeWarning) as caught:
+        check_extent(0.1557, 1.0, "bunny.ply")
+    assert "pass --unit m." in str(caught[0].message) and "unit='m'" not in str(caught[0].message)
+
+
+def test_unit_metadata_records_name_factor_and_whether_inferred():
+    assert unit_metadata(1000.0, True) == {"unit": "m", "unit_name": "metres", "mm_per_unit": 1000.0,
+                                           "unit_inferred": True}
+    assert unit_metadata(2.5)["unit_name"] == "units of 2.5 mm" and unit_metadata(2.5)["unit_inferred"] is False
+
+
+# the shared scans state no unit; inferred, each comes out at its real size (largest extent, mm)
+SHARED_SIZES = [
+    ("stanford_bunny_zipper.ply", "m", "metres", 155.7),
+    ("cyberware_horse.ply", "m", "metres", 183.3),
+    ("cyberware_igea.ply", "m", "metres", 99.3),
+    ("cyberware_igea_tristrips.ply", "m", "metres", 99.3),
+    ("ggg_angel_sfm.ply", "mm", "millimetres", 321.8),
+    ("ggg_angel_sfm.vtp", "mm", "millimetres", 321.8),
+    ("ggg_birdbath_sfm.ply", "mm", "millimetres", 308.2),
+    ("ggg_birdbath_sfm.vtp", "mm", "millimetres", 308.2),
+]
+
+
+@pytest.mark.parametrize("name, unit, words, extent_mm", SHARED_SIZES, ids=[s[0] for s in SHARED_SIZES])
+def test_shared_scans_are_inferred_at_their_real_size(name, unit, words, extent_mm):
+    from translucency.io import load_mesh
+
+    from .conftest import shared_scan
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        mesh = load_mesh(shared_scan(name))
+    assert mesh.extent == pytest.approx(extent_mm, abs=0.05)
+    assert mesh.mm_per_unit == UNITS[unit] and mesh.unit_inferred
+    lines = [str(w.message) for w in caught]
+    assert [w.category for w in caught] == [UnitInferredWarning]  # one line, and no implausible-size warning
+    assert lines[0].startswith(f"{name}: no unit= given; ") and f"read as {words} ({extent_mm:.3g} mm)" in lines[0]
+
+
+def test_a_given_unit_is_not_inferred_and_says_nothing():
+    from translucency.io import load_mesh
+
+    from .conftest import shared_scan
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        mesh = load_mesh(shared_scan("stanford_bunny_zipper.ply"), unit="m")
+    assert mesh.unit_inferred is False and mesh.mm_per_unit == 1000.0
+
+
+def test_embedded_default_keeps_its_size_and_is_not_inferred():
+    from translucency.app.pipeline import DEFAULT_SCAN_WIDTH_MM, load_default_scan
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        mesh = load_default_scan()
+    assert mesh.extent == pytest.approx(DEFAULT_SCAN_WIDTH_MM) and not mesh.unit_inferred
+
+
+def test_inferred_unit_survives_cleaning_and_decimation(tmp_path):
+    from translucency.io import clean_mesh, decimate_mesh, load_mesh
+
+    from .conftest import icosphere
+    from .test_load import write_ply
+
+    points, triangles = icosphere(3, 0.08)  # 0.16 units across: metres
+    path = write_ply(tmp_path / "ball.ply", points, triangles)
+    with pytest.warns(UnitInferredWarning, match="read as metres"):
+        mesh = load_mesh(path)
+    cleaned, _ = clean_mesh(mesh)
+    proxy = decimate_mesh(cleaned, target_faces=200).proxy
+    assert cleaned.unit_inferred and proxy.unit_inferred and proxy.mm_per_unit == 1000.0

@@ -9,7 +9,7 @@ from scipy import integrate
 from translucency.errors import InvalidParameterError
 from translucency.scatter import dipoles, fresnel
 
-# ---------------------------------------------------------------- golden values from ../shared/spec
+# ---------------------------------------------------------------- golden values (tests/data, computed independently)
 
 
 def _evaluate(case):

@@ -19,19 +19,30 @@ let numba use the cores, or cap it with ``NUMBA_NUM_THREADS`` in the workers' en
 workers read the scans and write the PLYs themselves: the input files and the output folder must be
 reachable from every worker under the same paths (a shared file system); only the records travel
 back to the client.
+
+Faults: the output folders are checked (and swept of an earlier killed run's temporaries, see
+:mod:`translucency.io.atomic`) before any work, and an output name taken by a folder stops the batch
+then; a write that fails later fails that file with one sentence. Local worker processes end with
+their parent, also when it is killed (:func:`end_with_parent`). On Dask the workers belong to the
+cluster: when the client goes away the scheduler drops its tasks that have not started, and a task
+already running finishes its file, written atomically like every output (a complete PLY or none).
 """
 
 from __future__ import annotations
 
+import contextlib
 import math
 import numbers
 import os
 import re
+import signal
+import sys
 import time
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
-from ..errors import InvalidParameterError, TranslucencyError
+from ..errors import BudgetError, InvalidParameterError, TranslucencyError, command_line_active, command_line_spelling, option
+from ..scatter.budget import DEFAULT_TIME_LIMIT_S
 
 __all__ = ["BakeSettings", "BakeRecord", "BakeProgress", "ConsoleProgress", "bake", "bake_file", "bake_files",
            "output_paths", "format_summary", "exit_code", "DASK_CONNECT_TIMEOUT_S"]
@@ -59,16 +70,18 @@ class BakeSettings:
         Catalogue name, entry or medium (coefficients in 1/mm); stored as a ``Medium``.
     lights : light or sequence of lights, optional
         Default: the pipeline's white directional light (1 W/m²).
-    unit : str or float
-        Length unit of the scan files: ``mm``, ``cm``, ``m``, ``in`` or mm per unit (ignored for the
-        embedded default scan, which has its own size).
-    model, method, tol, resolution, shadows, exposure, per_direction
-        As in :func:`translucency.app.pipeline.shade` (``resolution`` in mm when a number).
+    unit : str or float, optional
+        Length unit of the scan files: ``mm``, ``cm``, ``m``, ``in`` or mm per unit; None: inferred
+        from each file's size (:func:`translucency.io.units.infer_unit`). Ignored for the embedded
+        default scan, which has its own size.
+    model, method, tol, resolution, shadows, exposure, per_direction, up, memory_limit, time_limit
+        As in :func:`translucency.app.pipeline.shade` (``resolution`` in mm when a number; ``up``
+        places the default light and is recorded; the memory limit in GB, the time limit in seconds).
     """
 
     material: object = "marble"
     lights: tuple | None = None
-    unit: str | float = "mm"
+    unit: str | float | None = None
     model: str = "directional"
     method: str = "tree"
     tol: float = 1e-2
@@ -76,9 +89,14 @@ class BakeSettings:
     shadows: bool = True
     exposure: float | None = None
     per_direction: bool = False
+    up: str = "auto"
+    memory_limit: float | None = None
+    time_limit: float | None = DEFAULT_TIME_LIMIT_S
 
     def __post_init__(self):
         from ..io.units import parse_unit
+        from ..io.upright import parse_up
+        from ..scatter.budget import check_limits
         from ..scatter.lights import as_light_list
         from ..scatter.solve import METHODS, MODELS
         from .pipeline import resolve_medium
@@ -86,7 +104,9 @@ class BakeSettings:
         object.__setattr__(self, "material", resolve_medium(self.material))
         if self.lights is not None:
             object.__setattr__(self, "lights", as_light_list(self.lights))
-        parse_unit(self.unit)
+        if self.unit is not None:
+            parse_unit(self.unit)
+        object.__setattr__(self, "up", parse_up(self.up))
         if self.model not in MODELS:
             raise InvalidParameterError(f"unknown model {self.model!r}; choose one of {', '.join(MODELS)}.")
         if self.method not in METHODS:
@@ -98,6 +118,7 @@ class BakeSettings:
                 f"resolution must be 'full', 'auto' or a proxy edge length in mm, got {self.resolution!r}.")
         if not (self.exposure is None or _positive(self.exposure)):
             raise InvalidParameterError(f"exposure must be a positive number, got {self.exposure!r}.")
+        check_limits(self.memory_limit, self.time_limit)
 
     @property
     def material_name(self) -> str:
@@ -127,6 +148,8 @@ class BakeRecord:
         Warnings while loading (an implausible size for the unit, say).
     threads : int or None
         numba threads the solver used.
+    over_budget : bool
+        The file failed because its solve would not fit the memory or time budget.
     """
 
     source: str
@@ -137,6 +160,7 @@ class BakeRecord:
     error: str | None = None
     warnings: tuple = field(default=())
     threads: int | None = None
+    over_budget: bool = False
 
     @property
     def ok(self) -> bool:
@@ -207,8 +231,9 @@ class ConsoleProgress(BakeProgress):
 
     def finished(self, index, record):
         """Count the file; print its warnings and its error, if any."""
-        for warning in record.warnings:
-            self._files.write(f"translucency: warning: {record.source}: {warning}", file=self._stream())
+        for warning in record.warnings:  # most sentences start with the file's name already
+            about = "" if warning.startswith(Path(record.source).name) else f"{record.source}: "
+            self._files.write(f"translucency: warning: {about}{warning}", file=self._stream())
         if not record.ok:
             self._files.write(f"translucency: error: {record.source}: {record.error}", file=self._stream())
         self._files.update(1)
@@ -259,10 +284,10 @@ def bake_file(path, output, settings: BakeSettings, progress=None) -> BakeRecord
         mesh, _, _ = load_scan(path, settings.unit, warn=warnings.append)
         vertices = mesh.n_points
         report("loading", 1.0)
-        result = Scene(mesh, shadows=settings.shadows).shade(
+        result = Scene(mesh, shadows=settings.shadows, up=settings.up).shade(
             settings.material, settings.lights, model=settings.model, method=settings.method, tol=settings.tol,
             resolution=settings.resolution, exposure=settings.exposure, per_direction=settings.per_direction,
-            progress=report)
+            progress=report, memory_limit=settings.memory_limit, time_limit=settings.time_limit, warn=warnings.append)
         lit = int(result.stats["incident"]["n_lit"])
         report("writing", 0.0)
         write_baked_ply(output, mesh, result.radiance, result.B, result.colors, result.metadata,
@@ -270,8 +295,14 @@ def bake_file(path, output, settings: BakeSettings, progress=None) -> BakeRecord
         report("writing", 1.0)
     except Exception as exc:  # noqa: BLE001 -- every failure of one file becomes its record
         return BakeRecord(source, None, vertices, lit, time.perf_counter() - start, failure_sentence(exc),
-                          tuple(warnings), threads)
+                          tuple(warnings), threads, isinstance(exc, BudgetError))
     return BakeRecord(source, str(output), vertices, lit, time.perf_counter() - start, None, tuple(warnings), threads)
+
+
+def _bake_file_spelled(command_line: bool, path, output, settings: BakeSettings) -> BakeRecord:
+    """:func:`bake_file` in a worker process, with its sentences spelling settings as the parent does."""
+    with command_line_spelling(command_line):
+        return bake_file(path, output, settings)
 
 
 def _source_label(path) -> str:
@@ -394,8 +425,9 @@ def bake_files(paths, output, settings: BakeSettings, *, workers: int = 1, sched
     Raises
     ------
     InvalidParameterError, TranslucencyError
-        Only for problems that stop the whole batch before it starts (output names, ``workers``,
-        the scheduler); problems of single files are in their records.
+        Only for problems that stop the whole batch before it starts (output names, an output
+        folder that cannot be written, ``workers``, the scheduler); problems of single files are in
+        their records.
     """
     progress = progress or BakeProgress()
     sources = list(paths) if paths else [None]
@@ -410,6 +442,7 @@ def bake_files(paths, output, settings: BakeSettings, *, workers: int = 1, sched
         output = OUTPUT_FOLDER
     outputs = output_paths(sources, output, settings.material_name)
     labels = [_source_label(source) for source in sources]
+    _check_outputs(outputs)
     client = None if scheduler is None else _dask_client(scheduler)
     try:
         _make_folders(outputs)
@@ -430,8 +463,8 @@ def bake_files(paths, output, settings: BakeSettings, *, workers: int = 1, sched
                         for source, target in zip(sources, outputs)]
                 _run_on_dask(client, jobs, done)
             elif min(workers, len(sources)) > 1:
-                jobs = [(source, target, settings) for source, target in zip(sources, outputs)]
-                _run_in_processes(bake_file, jobs, min(workers, len(jobs)), done)
+                jobs = [(command_line_active(), source, target, settings) for source, target in zip(sources, outputs)]
+                _run_in_processes(_bake_file_spelled, jobs, min(workers, len(jobs)), done)
             else:
                 for index, (source, target) in enumerate(zip(sources, outputs)):
                     def stage(name, fraction, index=index):
@@ -444,6 +477,21 @@ def bake_files(paths, output, settings: BakeSettings, *, workers: int = 1, sched
         if client is not None and client is not scheduler:
             client.close()
     return records
+
+
+def _check_outputs(outputs) -> None:
+    """Before any work: every output folder writable (or creatable), no output name taken by a folder.
+
+    Stale temporaries of an earlier, killed run in those folders are swept here.
+    """
+    from ..io.atomic import prepare_output_folder
+
+    for folder in sorted({Path(o).parent for o in outputs}):
+        prepare_output_folder(folder, create=True, setting="output")
+    for target in outputs:
+        if Path(target).is_dir():
+            raise InvalidParameterError(f"the output {target} is a folder; remove or rename it, or choose another "
+                                        f"output folder with {option('output')}.")
 
 
 def _make_folders(outputs) -> None:
@@ -473,11 +521,75 @@ def _use_threads(threads: int) -> None:
     numba.set_num_threads(max(1, min(threads, numba.config.NUMBA_NUM_THREADS)))
 
 
-def _start_worker_process(threads: int) -> None:
-    """Initialiser of a worker process: ``threads`` threads for numba and for the BLAS libraries it loads."""
+def _start_worker_process(threads: int, parent: int | None = None) -> None:
+    """Initialiser of a worker process: ``threads`` threads for numba and for the BLAS libraries it loads.
+
+    With ``parent`` (the pid of the process that started the pool) the worker ends when that process
+    does (:func:`end_with_parent`).
+    """
+    if parent is not None:
+        end_with_parent(parent)
     for name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
         os.environ[name] = str(threads)
     _use_threads(threads)
+
+
+#: Seconds between two looks of a worker's watchdog at its parent.
+WATCHDOG_INTERVAL_S = 0.5
+
+_PR_SET_PDEATHSIG = 1  # linux/prctl.h
+
+
+def end_with_parent(parent: int) -> None:
+    """Make this process (and the processes it starts) end when process ``parent`` ends.
+
+    On Linux the kernel kills this process the moment its parent dies (``prctl(PR_SET_PDEATHSIG,
+    SIGKILL)``, through ctypes), even while a numba kernel holds the GIL. Everywhere a watchdog
+    thread also looks at ``os.getppid()`` every :data:`WATCHDOG_INTERVAL_S` s; when the parent is
+    gone it kills this process's own children, then this process. A parent that died before this
+    call is noticed at once.
+
+    Parameters
+    ----------
+    parent : int
+        The pid of the parent process this one must not outlive.
+    """
+    import threading
+
+    if sys.platform.startswith("linux"):
+        try:
+            import ctypes
+
+            libc = ctypes.CDLL(None, use_errno=True)
+            libc.prctl(_PR_SET_PDEATHSIG, int(signal.SIGKILL), 0, 0, 0)
+        except (OSError, AttributeError):  # no prctl here: the watchdog alone
+            pass
+    if os.getppid() != parent:  # the parent died before the signal was armed
+        os._exit(1)
+    threading.Thread(target=_watch_parent, args=(parent,), name="translucency-watchdog", daemon=True).start()
+
+
+def _watch_parent(parent: int) -> None:
+    while True:
+        time.sleep(WATCHDOG_INTERVAL_S)
+        if os.getppid() != parent:
+            for child in _children(os.getpid()):
+                with contextlib.suppress(OSError):
+                    os.kill(child, signal.SIGKILL)
+            os._exit(1)
+
+
+def _children(pid: int) -> list[int]:
+    """Every descendant of process ``pid`` (Linux ``/proc``; empty elsewhere)."""
+    parents = {}
+    for entry in Path("/proc").glob("[0-9]*/stat"):
+        with contextlib.suppress(OSError, IndexError, ValueError):
+            parents[int(entry.parent.name)] = int(entry.read_bytes().rsplit(b")", 1)[1].split()[1])
+    found, frontier = [], [pid]
+    while frontier:
+        frontier = [child for child, parent in parents.items() if parent in frontier]
+        found += frontier
+    return found
 
 
 def _run_in_processes(function, jobs, workers: int, done) -> None:
@@ -486,7 +598,8 @@ def _run_in_processes(function, jobs, workers: int, done) -> None:
     ``result`` is what the function returned, or the exception it raised. A worker process that
     dies (a crash, out of memory) breaks its pool: the jobs that had not finished are then run again
     in a fresh pool of one process, where the job that dies is the first unfinished one, so that only
-    it is lost (reported as :class:`~concurrent.futures.process.BrokenProcessPool`).
+    it is lost (reported as :class:`~concurrent.futures.process.BrokenProcessPool`). The workers end
+    with this process, even when it is killed (:func:`end_with_parent`).
 
     Spawned, not forked: numba's OpenMP threads and a forked copy of them do not mix.
     """
@@ -499,7 +612,7 @@ def _run_in_processes(function, jobs, workers: int, done) -> None:
     while pending:
         size = min(size, len(pending))
         executor = ProcessPoolExecutor(size, mp_context=context, initializer=_start_worker_process,
-                                       initargs=(max(1, available_cores() // size),))
+                                       initargs=(max(1, available_cores() // size), os.getpid()))
         unfinished = []
         try:
             futures = {executor.submit(function, *jobs[index]): index for index in pending}
@@ -590,13 +703,17 @@ def format_summary(records, seconds: float | None = None) -> str:
 
 
 def exit_code(records) -> int:
-    """0 when every file was baked, 1 when any failed (2, for errors before the batch, is the CLI's)."""
-    return 0 if all(r.ok for r in records) else 1
+    """0 when every file was baked, 1 when any failed, 2 when every file failed for being over the
+    memory or time budget (an option to change, like the errors before the batch)."""
+    if all(r.ok for r in records):
+        return 0
+    return 2 if all(r.over_budget for r in records) else 1
 
 
-def bake(meshes=None, output=None, material="marble", lights=None, *, unit="mm", model="directional",
+def bake(meshes=None, output=None, material="marble", lights=None, *, unit=None, model="directional",
          method="tree", tol=1e-2, resolution="full", shadows=True, exposure=None, per_direction=False,
-         workers=1, scheduler=None, progress=None) -> list[BakeRecord]:
+         up="auto", memory_limit=None, time_limit=DEFAULT_TIME_LIMIT_S, workers=1, scheduler=None,
+         progress=None) -> list[BakeRecord]:
     """Bake scans to PLY files of per-vertex translucent radiance, one file per scan.
 
     Parameters
@@ -610,11 +727,18 @@ def bake(meshes=None, output=None, material="marble", lights=None, *, unit="mm",
         Catalogue name or coefficients (1/mm).
     lights : light or sequence of lights, optional
         Default: one white directional light of 1 W/m².
-    unit : str or float
-        Length unit of the files: ``mm``, ``cm``, ``m``, ``in`` or a number of mm per unit.
+    unit : str or float, optional
+        Length unit of the files: ``mm``, ``cm``, ``m``, ``in`` or a number of mm per unit; None
+        (default): inferred from each file's size, said in one line and recorded in the bake.
     model, method, tol, resolution, shadows, exposure, per_direction
         As in :func:`translucency.shade`; ``resolution`` is ``"full"``, ``"auto"`` or a proxy edge
         length in mm.
+    up : str
+        The scans' up axis (``"x"`` ... ``"-z"``, or ``"auto"``: inferred per scan); it places the
+        default light above and in front, and is recorded in the bake.
+    memory_limit, time_limit : float, optional
+        GB the process may hold and seconds a solve may take (estimated before it starts; None: no
+        time limit); over them a scan is solved on a coarser proxy, or fails with a sentence.
     workers : int
         Local processes to bake in (1: in this process).
     scheduler : str or distributed.Client, optional
@@ -631,5 +755,6 @@ def bake(meshes=None, output=None, material="marble", lights=None, *, unit="mm",
     """
     if meshes is not None and isinstance(meshes, (str, os.PathLike)):
         meshes = [meshes]
-    settings = BakeSettings(material, lights, unit, model, method, tol, resolution, shadows, exposure, per_direction)
+    settings = BakeSettings(material, lights, unit, model, method, tol, resolution, shadows, exposure, per_direction,
+                            up, memory_limit, time_limit)
     return bake_files(meshes, output, settings, workers=workers, scheduler=scheduler, progress=progress)

@@ -11,7 +11,8 @@ Subcommands:
 * ``translucency`` with no subcommand -- the main job on the embedded default scan.
 
 Errors the user can cause are printed as one sentence on stderr with exit code 2 (``bake``: 1 when
-some files failed); no traceback.
+some files failed); an output that cannot be written once the work is done (disk full, quota) is one
+sentence with exit code 1. No traceback.
 """
 
 from __future__ import annotations
@@ -85,18 +86,23 @@ def cmd_inspect(args) -> int:
     from ..io.load import load_mesh
     from ..io.save import check_output_path, save_mesh
 
+    from ..io.units import UnitInferredWarning
+    from ..io.upright import infer_up
+
     if args.output:
         check_output_path(args.output, args.mesh)  # before any work: a bad output path fails at once
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         mesh = load_mesh(args.mesh, unit=args.unit)
     for warning in caught:
-        print(f"translucency: warning: {warning.message}", file=sys.stderr)
+        (_note if issubclass(warning.category, UnitInferredWarning) else _warn)(str(warning.message))
     low, high = mesh.bounds
     print(f"{args.mesh}: {mesh.n_points} vertices, {mesh.n_triangles} triangles, "
           f"{mesh.extent:.4g} mm across ({' x '.join(f'{v:.4g}' for v in high - low)} mm), area {mesh.surface_area:.4g} mm^2")
     cleaned, report = clean_mesh(mesh, max_hole_edges=args.max_hole_edges)
     print(report)
+    up, reason = infer_up(cleaned.points, cleaned.triangles)
+    print(f"up axis for --up auto: {up} ({reason})")
     if args.output:
         save_mesh(args.output, cleaned)
         print(f"wrote the repaired mesh to {args.output}")
@@ -110,7 +116,7 @@ def cmd_bake(args) -> int:
     from .bake import BakeSettings, ConsoleProgress, bake_files, exit_code, format_summary
     from .options import lights_from_args, solver_settings
 
-    settings = BakeSettings(lights=lights_from_args(args), unit=args.unit, shadows=not args.no_shadows,
+    settings = BakeSettings(lights=lights_from_args(args), unit=args.unit, up=args.up, shadows=not args.no_shadows,
                             **solver_settings(args))
     start = time.perf_counter()
     records = bake_files(args.meshes, args.output, settings, workers=args.workers, scheduler=args.scheduler,
@@ -134,11 +140,16 @@ def _warn(message: str) -> None:
     print(f"translucency: warning: {message}", file=sys.stderr)
 
 
+def _note(message: str) -> None:
+    print(f"translucency: {message}", file=sys.stderr)
+
+
 def cmd_view(args) -> int:
     """Open the viewer on a scan; with ``--screenshot`` render its first picture off-screen and exit."""
     import os
     from pathlib import Path
 
+    from ..io.atomic import prepare_output_file
     from .options import lights_from_args, load_scan, solver_settings
 
     window_size = _pixels(args.window_size, "--window-size")
@@ -146,8 +157,7 @@ def cmd_view(args) -> int:
         screenshot = Path(args.screenshot)
         if screenshot.suffix.lower() != ".png":
             raise TranslucencyError(f"--screenshot {args.screenshot} is not a .png file name; pass e.g. view.png.")
-        if not screenshot.parent.is_dir():
-            raise TranslucencyError(f"the folder {screenshot.parent} for --screenshot does not exist; create it first.")
+        prepare_output_file(screenshot, setting="screenshot")
     elif sys.platform.startswith("linux") and not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
         raise TranslucencyError("there is no display to open the viewer on; pass --screenshot FILE.png to render "
                                 "off-screen, or run it under xvfb-run or on a desktop.")
@@ -158,11 +168,11 @@ def cmd_view(args) -> int:
     if interactive:
         settings["resolution"] = "interactive"
     lights = lights_from_args(args)
-    mesh, _, name = load_scan(args.mesh, args.unit, warn=_warn)
+    mesh, _, name = load_scan(args.mesh, args.unit, warn=_warn, note=_note)
     from .viewer import Viewer
 
     viewer = Viewer(mesh, lights=lights, shadows=not args.no_shadows, view_dependent=args.view_dependent,
-                    specular=args.specular, roughness=args.roughness, window_size=window_size,
+                    specular=args.specular, roughness=args.roughness, window_size=window_size, up=args.up,
                     off_screen=args.screenshot is not None, widgets=args.screenshot is None, output=args.output,
                     name=Path(name).stem, **settings)
     print(viewer.status)
@@ -177,6 +187,7 @@ def cmd_view(args) -> int:
 
 def cmd_compare(args) -> int:
     """Render and measure a scan in several materials and models into a folder."""
+    from ..io.atomic import prepare_output_folder
     from .compare import compare, validate_choices
     from .options import lights_from_args, load_scan, solver_settings
 
@@ -186,10 +197,11 @@ def cmd_compare(args) -> int:
     materials, models, _ = validate_choices(args.materials if args.materials is not None else args.material,
                                             args.models if args.models is not None else args.model)
     cell_size = _pixels(args.cell_size, "--cell-size")
+    prepare_output_folder(args.output)
     lights = lights_from_args(args)
-    mesh, _, name = load_scan(args.mesh, args.unit, warn=_warn)
+    mesh, _, name = load_scan(args.mesh, args.unit, warn=_warn, note=_note)
     print(f"{name}: {mesh.n_points} vertices, {mesh.extent:.4g} mm across")
-    result = compare(mesh, materials, models, lights, output=args.output, shadows=not args.no_shadows,
+    result = compare(mesh, materials, models, lights, output=args.output, shadows=not args.no_shadows, up=args.up,
                      cell_size=cell_size, progress=lambda line: print(f"  solved {line}"), **settings)
     print(f"common exposure {result.exposure:.4g}; mean radiance toward the normal over lit vertices, W/(m^2 sr) per W/m^2:")
     for material in result.materials:
@@ -243,7 +255,9 @@ def _add_view_and_compare_parsers(sub) -> None:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    from .options import ArgumentParser
+
+    parser = ArgumentParser(
         prog="translucency",
         description="Translucent shading of 3D scans with the directional dipole BSSRDF.",
     )
@@ -257,9 +271,11 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("report", help="versions of the stack and whether off-screen rendering works")
     p.set_defaults(func=cmd_report)
 
+    from .options import UNIT_HELP
+
     p = sub.add_parser("inspect", help="load a scan, show its defects and repair it")
     p.add_argument("mesh", help="mesh file (PLY, OBJ, STL, OFF, VTK, VTP, ...)")
-    p.add_argument("--unit", default="mm", help="length unit of the file: mm, cm, m, in or mm per unit (default mm)")
+    p.add_argument("--unit", default=None, help=UNIT_HELP)
     p.add_argument("--max-hole-edges", type=int, default=100, help="close holes of at most this many edges")
     p.add_argument("-o", "--output", help="save the repaired mesh (any format PyVista writes)")
     p.set_defaults(func=cmd_inspect)
@@ -297,14 +313,26 @@ def _first_run_notice(solves: bool):
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point of ``translucency`` and ``python -m translucency``; returns the exit code."""
+    import warnings
+
+    from ..errors import TranslucencyWarning
+
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
-        with command_line_spelling(), _first_run_notice(args.func in (cmd_main_job, cmd_bake, cmd_view, cmd_compare)):
+        with command_line_spelling(), warnings.catch_warnings(), \
+                _first_run_notice(args.func in (cmd_main_job, cmd_bake, cmd_view, cmd_compare)):
+            def show(message, category, *rest):  # our own warnings as one line each, like the errors
+                if issubclass(category, TranslucencyWarning):
+                    print(f"translucency: warning: {message}", file=sys.stderr)
+                else:
+                    default_show(message, category, *rest)
+
+            default_show, warnings.showwarning = warnings.showwarning, show
             return int(args.func(args) or 0)
     except TranslucencyError as exc:
         print(f"translucency: error: {exc}", file=sys.stderr)
-        return 2
+        return exc.exit_code
     except KeyboardInterrupt:
         print("translucency: interrupted", file=sys.stderr)
         return 130

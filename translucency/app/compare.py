@@ -34,7 +34,7 @@ that faces the light most (positive toward ``up``). Dotted lines mark where the 
 shadow terminator, and cast shadows), so the plot shows how far light bleeds past it in each material.
 
 Files are written into a temporary folder beside the output folder and moved in only when all are
-complete (:func:`~translucency.app.outputs.staged_folder`): a failed run leaves the folder as it was.
+complete (:func:`~translucency.io.atomic.staged_folder`): a failed run leaves the folder as it was.
 """
 
 from __future__ import annotations
@@ -49,8 +49,11 @@ import numpy as np
 
 from .. import __version__
 from ..errors import InvalidParameterError
+from ..io.units import unit_metadata
+from ..scatter.budget import DEFAULT_TIME_LIMIT_S
 from .pipeline import Scene, display_colors, resolve_medium
-from .render import DEFAULT_CAMERA_DIRECTION, DEFAULT_UP, add_colored_mesh, camera_position, new_plotter
+from .render import (DEFAULT_CAMERA_DIRECTION, DEFAULT_UP, add_colored_mesh, camera_position, default_camera_direction,
+                     new_plotter)
 
 __all__ = ["Comparison", "compare", "validate_choices", "radiance_statistics", "relative_difference", "profile_cut",
            "PERCENTILES"]
@@ -238,8 +241,9 @@ def validate_choices(materials, models) -> tuple[list, list, dict]:
 
 
 def compare(mesh=None, materials=("marble",), models=("directional",), lights=None, *, output=None, method="tree",
-            tol=1e-2, resolution="full", shadows=True, per_direction=False, exposure=None,
-            camera_direction=DEFAULT_CAMERA_DIRECTION, up=DEFAULT_UP, cell_size=(480, 480), progress=None) -> Comparison:
+            tol=1e-2, resolution="full", shadows=True, per_direction=False, exposure=None, memory_limit=None,
+            time_limit=DEFAULT_TIME_LIMIT_S, camera_direction=None, up="auto", cell_size=(480, 480),
+            progress=None) -> Comparison:
     """Render and measure one scan in several materials and models (module docstring for every output).
 
     Parameters
@@ -251,15 +255,21 @@ def compare(mesh=None, materials=("marble",), models=("directional",), lights=No
     models : sequence of str, or str
         Scattering models (the grid's rows; the first is the reference of the difference maps).
     lights : light or sequence of lights, optional
-        Default: the pipeline's white directional light of 1 W/m².
+        Directions in the scan's own coordinates. Default: the pipeline's white directional light of
+        1 W/m², above and in front of the scan (:func:`~translucency.app.pipeline.default_light_direction`).
     output : path-like, optional
         Folder for the files (created; files in it are replaced atomically). None: numbers only.
-    method, tol, resolution, shadows, per_direction
-        Solver settings (:meth:`Scene.shade <translucency.app.pipeline.Scene.shade>`).
+    method, tol, resolution, shadows, per_direction, memory_limit, time_limit
+        Solver settings (:meth:`Scene.shade <translucency.app.pipeline.Scene.shade>`; GB, seconds).
     exposure : float, optional
         The common display exposure (default: automatic over all cells).
-    camera_direction, up : sequence of 3 float
-        From the mesh's centre toward the camera; the view-up (also the second axis of the profile's plane).
+    camera_direction : sequence of 3 float, optional
+        From the mesh's centre toward the camera, in the scan's coordinates (default: in front and a
+        little above, :func:`~translucency.app.render.default_camera_direction` of ``up``).
+    up : str
+        The scan's up axis, ``"x"`` ... ``"-z"`` or ``"auto"`` (inferred from the mesh,
+        :mod:`translucency.io.upright`): the view-up, the second axis of the profile's plane, and
+        where the default camera and light are.
     cell_size : (int, int)
         Width and height of one grid cell, pixels; ``grid.png`` is ``(columns * width, rows * height)``.
     progress : callable, optional
@@ -269,10 +279,15 @@ def compare(mesh=None, materials=("marble",), models=("directional",), lights=No
     -------
     Comparison
     """
+    from ..io.upright import up_vector
     from ..scatter.lights import DirectionalLight, as_light_list
-    from .pipeline import DEFAULT_LIGHT_DIRECTION
+    from .pipeline import default_light_direction
 
     materials, models, media = validate_choices(materials, models)
+    if output is not None:
+        from ..io.atomic import prepare_output_folder
+
+        prepare_output_folder(output)
     if exposure is not None and not (np.isfinite(exposure) and exposure > 0):
         raise InvalidParameterError(f"exposure must be a positive number, got {exposure!r}.")
     width, height = (int(v) for v in cell_size)
@@ -282,15 +297,20 @@ def compare(mesh=None, materials=("marble",), models=("directional",), lights=No
         from .options import load_scan
 
         mesh, _, _ = load_scan(None)
-    lights = as_light_list(lights if lights is not None else DirectionalLight(DEFAULT_LIGHT_DIRECTION, 1.0))
+    scene = Scene(mesh, shadows=shadows, up=up)
+    up_axis = scene.up
+    up = tuple(up_vector(up_axis))
+    if camera_direction is None:
+        camera_direction = default_camera_direction(up_axis)
+    lights = as_light_list(lights if lights is not None else DirectionalLight(default_light_direction(up_axis), 1.0))
 
-    scene = Scene(mesh, shadows=shadows)
     results, times = {}, {}
     for material in materials:
         for model in models:
             start = time.perf_counter()
             results[material, model] = scene.shade(media[material], lights, model=model, method=method, tol=tol,
-                                                   resolution=resolution, exposure=1.0, per_direction=per_direction)
+                                                   resolution=resolution, exposure=1.0, per_direction=per_direction,
+                                                   memory_limit=memory_limit, time_limit=time_limit)
             times[material, model] = time.perf_counter() - start
             if progress is not None:
                 progress(f"{material}, {model}: {times[material, model]:.2f} s")
@@ -334,13 +354,15 @@ def compare(mesh=None, materials=("marble",), models=("directional",), lights=No
     if output is not None:
         comparison.files = _write_files(Path(output), mesh, comparison, relative, lights, camera_direction, up,
                                         (width, height), {"method": method, "tol": tol, "resolution": resolution,
-                                                          "shadows": bool(shadows), "per_direction": bool(per_direction)})
+                                                          "shadows": bool(shadows), "per_direction": bool(per_direction),
+                                                          "up": up_axis, "up_inferred": scene.up_requested == "auto"})
     return comparison
 
 
 def _write_files(folder, mesh, comparison, relative, lights, camera_direction, up, cell_size, settings) -> dict:
     """Write every file into a staging folder, then move them into ``folder`` (module docstring)."""
-    from .outputs import staged_folder, write_png
+    from ..io.atomic import staged_folder
+    from .outputs import write_png
 
     names = {"grid": "grid.png", "csv": "statistics.csv", "json": "statistics.json", "profile": "profile.png"}
     if relative:
@@ -355,7 +377,8 @@ def _write_files(folder, mesh, comparison, relative, lights, camera_direction, u
         document = {
             "format": "translucency-comparison", "version": __version__,
             "mesh": {"source": str(mesh.source) if mesh.source is not None else "embedded default scan",
-                     "vertices": mesh.n_points, "extent_mm": float(mesh.extent)},
+                     "vertices": mesh.n_points, "extent_mm": float(mesh.extent),
+                     **unit_metadata(mesh.mm_per_unit, mesh.unit_inferred)},
             "settings": {**settings, "lights": [light.to_dict() for light in lights]},
             "materials": comparison.materials, "models": comparison.models,
             "exposure": {"value": comparison.exposure, "rule": "common to every cell"},

@@ -10,6 +10,7 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
+from ..io.atomic import prepare_output_folder
 from ..io.clean import clean_mesh
 from ..io.ply import write_baked_ply
 from .pipeline import DEFAULT_MATERIAL, default_scan_path, load_default_scan, shade
@@ -21,6 +22,7 @@ OUTPUT_FOLDER = Path("translucency-output")
 def run_default_job(output: Path = OUTPUT_FOLDER, material: str = DEFAULT_MATERIAL) -> int:
     """Bake the embedded default scan; prints what it does and returns the exit code."""
     total = time.perf_counter()
+    prepare_output_folder(output)
     print(f"embedded default scan: {default_scan_path().name} (the Stanford bunny shipped inside pymeshlab)")
     mesh = load_default_scan()
     print(f"  {mesh.n_points} vertices, {mesh.n_triangles} triangles, {mesh.extent:.1f} mm across")
@@ -40,6 +42,6 @@ def run_default_job(output: Path = OUTPUT_FOLDER, material: str = DEFAULT_MATERI
     ply = write_baked_ply(output / f"bunny_{material}.ply", mesh, result.radiance, result.B, result.colors,
                           result.metadata, normals=result.normals)
     png = output / f"bunny_{material}.png"
-    render_colors(mesh, result.colors, png)
+    render_colors(mesh, result.colors, png, up=result.metadata["up"])
     print(f"wrote {ply} and {png} in {time.perf_counter() - total:.1f} s")
     return 0

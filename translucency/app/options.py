@@ -3,18 +3,24 @@
 One place turns the words a user types into the API's objects, so every subcommand accepts and
 rejects the same things with the same sentences:
 
-* :func:`add_scan_options` / :func:`load_scan` -- a mesh file (or the embedded default) and its unit,
-  loaded and cleaned, in mm;
+* :func:`add_scan_options` / :func:`load_scan` -- a mesh file (or the embedded default), its unit
+  (inferred from the size when not given) and its up axis, loaded and cleaned, in mm;
 * :func:`add_light_options` / :func:`lights_from_args` -- ``--light-dir X,Y,Z`` (from the object toward
   the light), ``--light SPEC`` (any mix, see :data:`~translucency.scatter.lights.LIGHT_SPEC_HELP`),
   ``--env FILE`` (an equirectangular HDR map) with ``--env-directions N``;
 * :func:`add_solver_options` / :func:`solver_settings` -- ``--model``, ``--method``, ``--tol``,
-  ``--resolution``, ``--no-shadows``, ``--per-direction``, ``--exposure``.
+  ``--resolution``, ``--no-shadows``, ``--per-direction``, ``--exposure``, ``--memory-limit``, ``--time-limit``.
+
+:class:`ArgumentParser` is argparse's parser, except that a negative number or vector is taken as the
+value of the option before it as written: ``--light-dir -1,0.3,-0.5`` (argparse alone reads
+``-1,0.3,-0.5`` as an unknown option and asks for ``--light-dir=-1,0.3,-0.5``).
 """
 
 from __future__ import annotations
 
 import argparse
+import re
+import sys
 import warnings
 
 import numpy as np
@@ -27,25 +33,77 @@ MODELS = ("directional", "standard", "better")
 METHODS = ("exact", "cutoff", "tree")
 
 
+#: Help of ``--unit`` (``inspect`` has it too).
+UNIT_HELP = ("length unit of the file: mm, cm, m, in, or mm per unit as a number (default: inferred from the size, "
+             "millimetres for 5 to 5000 units across, metres for 0.005 to 5)")
+
+
+# one number (integer, decimal, exponent, inf, nan) and a comma-separated list of them, the first negative
+_NUMBER = r"(?:(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?|inf(?:inity)?|nan)"
+_NEGATIVE_VALUE = re.compile(rf"-{_NUMBER}(?:\s*,\s*[-+]?{_NUMBER})*", re.IGNORECASE)
+
+
+#: Options whose values may start with "-" and are not numbers (``--up -z``).
+NEGATIVE_VALUE_OPTIONS = ("--up",)
+
+
+def join_negative_values(argv) -> list[str]:
+    """``[..., "--flag", "-1,0.3,-0.5", ...]`` with each negative number or vector after an option
+    joined to it (``"--flag=-1,0.3,-0.5"``), so that argparse reads it as that option's value.
+
+    Only tokens that are numbers or comma-separated numbers are joined (``-1``, ``-0.5e3``,
+    ``-1,0.3,-0.5``, ``-inf``), only right after a token that is an option without a value
+    (``--light-dir``, ``-o``), and nothing after ``--``; after an option of
+    :data:`NEGATIVE_VALUE_OPTIONS` any value that starts with "-" is joined (``--up -z``).
+    """
+    argv = [str(token) for token in argv]
+    joined: list[str] = []
+    for index, token in enumerate(argv):
+        previous = joined[-1] if joined else ""
+        negative = _NEGATIVE_VALUE.fullmatch(token) or (previous in NEGATIVE_VALUE_OPTIONS and token.startswith("-"))
+        if ("--" not in joined and negative and previous.startswith("-")
+                and previous != "--" and "=" not in previous and not _NEGATIVE_VALUE.fullmatch(previous)):
+            joined[-1] = f"{previous}={token}"
+        else:
+            joined.append(token)
+    return joined
+
+
+class ArgumentParser(argparse.ArgumentParser):
+    """argparse's parser that reads a negative number or vector after an option as its value
+    (:func:`join_negative_values`); subcommand parsers made from it are of this class too."""
+
+    def parse_known_args(self, args=None, namespace=None):
+        """As argparse's, after :func:`join_negative_values` (``args`` default: ``sys.argv[1:]``)."""
+        return super().parse_known_args(join_negative_values(sys.argv[1:] if args is None else args), namespace)
+
+
 def add_scan_options(parser: argparse.ArgumentParser, *, several: bool = False) -> None:
-    """``MESH`` (optional: the embedded default scan) and ``--unit``."""
+    """``MESH`` (optional: the embedded default scan), ``--unit`` and ``--up``."""
+    from ..io.upright import UP_CHOICES
+
     if several:
         parser.add_argument("meshes", nargs="*", metavar="MESH",
                             help="mesh files (PLY, OBJ, STL, OFF, VTK, ...); none: the embedded default scan")
     else:
         parser.add_argument("mesh", nargs="?", metavar="MESH",
                             help="mesh file (PLY, OBJ, STL, OFF, VTK, ...); none: the embedded default scan")
-    parser.add_argument("--unit", default="mm",
-                        help="length unit of the file: mm, cm, m, in, or mm per unit as a number (default mm)")
+    parser.add_argument("--unit", default=None, help=UNIT_HELP)
+    parser.add_argument("--up", default="auto", choices=UP_CHOICES, metavar="{x,y,z,-x,-y,-z,auto}",
+                        help="the scan's up axis, for the camera and the default light (above and in front); "
+                             "auto (default): the side it stands on, a flat base, else +y")
 
 
 def add_light_options(parser: argparse.ArgumentParser) -> None:
     """``--light-dir``, ``--light``, ``--env`` and ``--env-directions``."""
     from ..scatter.lights import LIGHT_SPEC_HELP
 
-    group = parser.add_argument_group("lights (default: one white directional light of 1 W/m^2)")
+    group = parser.add_argument_group("lights (default: one white directional light of 1 W/m^2 above and in front "
+                                      "of the scan, placed by --up)")
     group.add_argument("--light-dir", metavar="X,Y,Z",
-                       help="direction from the object toward a white directional light of 1 W/m^2")
+                       help="direction from the object toward a white directional light of 1 W/m^2, in the scan's "
+                            "own frame (the file's axes, not turned by --up); any length, negative parts "
+                            "as written (-1,0.3,-0.5)")
     group.add_argument("--light", metavar="SPEC", help=f"lights in short form: {LIGHT_SPEC_HELP}")
     group.add_argument("--env", metavar="FILE", help="equirectangular HDR environment map (.hdr), W/(m^2 sr)")
     group.add_argument("--env-directions", type=int, default=256, metavar="N",
@@ -65,6 +123,12 @@ def add_solver_options(parser: argparse.ArgumentParser) -> None:
     group.add_argument("--per-direction", action="store_true",
                        help="solve each light sample with its own refracted direction (exact for several lights)")
     group.add_argument("--exposure", type=float, default=None, help="display exposure (default: automatic)")
+    group.add_argument("--memory-limit", type=float, default=None, metavar="GB",
+                       help="memory the process may use, GB (default: what the machine has available); a solve "
+                            "that would need more runs on a coarser proxy or stops with a message")
+    group.add_argument("--time-limit", type=float, default=None, metavar="S",
+                       help="seconds a solve may take by its estimate (default 300); over it the solve runs on a "
+                            "coarser proxy or stops with a message")
 
 
 def parse_vector(text: str, name: str) -> np.ndarray:
@@ -80,10 +144,10 @@ def parse_vector(text: str, name: str) -> np.ndarray:
     return values
 
 
-def lights_from_args(args) -> tuple:
-    """The lights the options describe (several options add up), or the pipeline's default light."""
+def lights_from_args(args) -> tuple | None:
+    """The lights the options describe (several options add up); None when none is given (the
+    pipeline then places its default light by the scan's up axis)."""
     from ..scatter.lights import DirectionalLight, parse_light_spec
-    from .pipeline import DEFAULT_LIGHT_DIRECTION
 
     lights = []
     if getattr(args, "light_dir", None) is not None:
@@ -94,9 +158,7 @@ def lights_from_args(args) -> tuple:
         from ..io.envmap import load_environment
 
         lights.append(load_environment(args.env, n_directions=args.env_directions))
-    if not lights:
-        lights.append(DirectionalLight(DEFAULT_LIGHT_DIRECTION, 1.0))
-    return tuple(lights)
+    return tuple(lights) or None
 
 
 def solver_settings(args) -> dict:
@@ -114,16 +176,25 @@ def solver_settings(args) -> dict:
         raise InvalidParameterError(f"--tol must be a relative error in (0, 1), got {args.tol!r}.")
     if args.exposure is not None and not (np.isfinite(args.exposure) and args.exposure > 0):
         raise InvalidParameterError(f"--exposure must be a positive number, got {args.exposure!r}.")
+    from ..scatter.budget import DEFAULT_TIME_LIMIT_S, check_limits
+
+    time_limit = DEFAULT_TIME_LIMIT_S if args.time_limit is None else args.time_limit
+    check_limits(args.memory_limit, time_limit)
     return {"material": resolve_medium(args.material), "model": args.model, "method": args.method, "tol": args.tol,
-            "resolution": resolution, "exposure": args.exposure, "per_direction": args.per_direction}
+            "resolution": resolution, "exposure": args.exposure, "per_direction": args.per_direction,
+            "memory_limit": args.memory_limit, "time_limit": time_limit}
 
 
-def load_scan(path, unit="mm", *, warn=None):
+def load_scan(path, unit=None, *, warn=None, note=None):
     """A mesh file (or the embedded default scan when ``path`` is None), loaded in ``unit`` and cleaned.
 
-    Returns ``(mesh in mm, CleanReport or None, name)``. Warnings from loading (an implausible size
-    for the unit, say) go to ``warn(message)`` when given.
+    ``unit`` None: inferred from the size (:func:`translucency.io.units.infer_unit`). Returns
+    ``(mesh in mm, CleanReport or None, name)``. Warnings from loading (the unit inferred, an
+    implausible size for the unit given) go to ``warn(message)`` when given; the line that says
+    which unit was inferred goes to ``note(message)`` instead when that is given.
     """
+    from ..io.units import UnitInferredWarning
+
     from ..io.clean import clean_mesh
     from ..io.load import load_mesh
     from .pipeline import default_scan_path, load_default_scan
@@ -134,8 +205,9 @@ def load_scan(path, unit="mm", *, warn=None):
             mesh, name = load_default_scan(), default_scan_path().stem
         else:
             mesh, name = load_mesh(path, unit=unit), str(path)
-    if warn is not None:
-        for warning in caught:
-            warn(str(warning.message))
+    for warning in caught:
+        say = note if note is not None and issubclass(warning.category, UnitInferredWarning) else warn
+        if say is not None:
+            say(str(warning.message))
     mesh, report = clean_mesh(mesh)
     return mesh, report, name

@@ -16,14 +16,19 @@ from pathlib import Path
 import numpy as np
 
 from .. import __version__
-from ..errors import TranslucencyError
+from ..errors import TranslucencyError, option
 from ..io.geometry import mean_edge_length
+from ..io.units import unit_metadata
+from ..scatter.budget import DEFAULT_TIME_LIMIT_S
 
 #: The embedded default scan: the watertight Stanford bunny inside the pymeshlab wheel, stored
 #: normalised to a unit diagonal; it is scaled to this width (mm), the size of the original figurine.
 DEFAULT_SCAN_WIDTH_MM = 155.0
 DEFAULT_MATERIAL = "marble"
-DEFAULT_LIGHT_DIRECTION = (0.35, 1.0, 0.45)  # from the object toward the light; the bunny's +y is up
+#: From the object toward the default light, in the display frame (right, up, front; see
+#: :func:`translucency.io.upright.display_frame`): above, in front and a little to the right. For a
+#: scan whose up is +y (the default bunny) this is the direction in the scan's own coordinates too.
+DEFAULT_LIGHT_DIRECTION = (0.35, 1.0, 0.45)
 
 #: Proxy resolution ("auto"): the solver's mesh needs no edges shorter than
 #: min(PROXY_DIFFUSION_FRACTION / max sigma_tr, PROXY_MEAN_FREE_PATHS / max sigma_t'), the detail the
@@ -34,6 +39,36 @@ DEFAULT_LIGHT_DIRECTION = (0.35, 1.0, 0.45)  # from the object toward the light;
 PROXY_DIFFUSION_FRACTION = 0.5
 PROXY_MEAN_FREE_PATHS = 5.0
 PROXY_MIN_RATIO = 1.5
+#: A proxy keeps at least this many triangles. On an object only a few diffusion lengths across (a
+#: scan read in the wrong unit, say) the "auto" and the viewer's edge lengths are shortened to it,
+#: and a proxy edge length given that leaves fewer is refused with a sentence.
+PROXY_MIN_TRIANGLES = 200
+
+
+def coarsest_proxy_edge(surface_area: float) -> float:
+    """Longest proxy edge (mm) that leaves :data:`PROXY_MIN_TRIANGLES` equilateral triangles on ``surface_area`` (mm²)."""
+    return float(np.sqrt(surface_area / (PROXY_MIN_TRIANGLES * np.sqrt(3.0) / 4.0)))
+
+
+def default_light_direction(up: str = "+y") -> np.ndarray:
+    """Direction (unit-free, scan coordinates) from the object toward the default light for an up axis.
+
+    :data:`DEFAULT_LIGHT_DIRECTION` turned from the display frame into the scan's frame: above the
+    scan along ``up`` (``"+x"`` ... ``"-z"``) and in front of it.
+    """
+    from ..io.upright import to_scan_frame
+
+    return to_scan_frame(DEFAULT_LIGHT_DIRECTION, up)
+
+#: Over budget: attempts at a coarser proxy, the fraction of the budget the proxy aims at (the estimate's
+#: margin), and the fewest vertices a proxy may keep (below: stop with a sentence instead).
+COARSER_ATTEMPTS = 3
+COARSER_MARGIN = 0.5
+MIN_PROXY_VERTICES = 1000
+#: Relative RMS error of B on a proxy against ``exact`` on the full mesh, by the fraction of vertices the
+#: proxy keeps: the worst of the proxy rows of bench/README.md (bunny, horse, Igea; marble, skim milk,
+#: ketchup; tree at 0.01) at that fraction or more.
+PROXY_ERRORS = ((0.45, "2 %"), (0.2, "4 %"), (0.09, "6 %"), (0.05, "7 %"), (0.02, "9 %"))
 
 
 def proxy_edge_length(medium) -> float:
@@ -135,18 +170,34 @@ class Scene:
         A cleaned mesh in mm with outward orientation.
     shadows : bool
         Cast Embree shadow rays (off: every front-facing vertex is lit).
+    up : str
+        The scan's up axis, ``"x"`` ... ``"-z"``, or ``"auto"`` (inferred from the mesh, see
+        :mod:`translucency.io.upright`); it places the default light (above and in front) and is
+        recorded in the metadata. The solver does not use it.
     """
 
-    def __init__(self, mesh, *, shadows: bool = True):
+    def __init__(self, mesh, *, shadows: bool = True, up: str = "auto"):
+        from ..io.upright import parse_up
         from ..scatter.irradiance import VisibilityCache
 
         self.mesh = mesh
         self.shadows = bool(shadows)
+        self.up_requested = parse_up(up)
+        self._up = None if self.up_requested == "auto" else self.up_requested
         self.visibility = VisibilityCache()
         self._solver_meshes: dict = {}
         self._incident: dict = {}
         self._normals = None
         self._mean_edge = None
+
+    @property
+    def up(self) -> str:
+        """The up axis, ``"+x"`` ... ``"-z"`` (inferred on first use when it was ``"auto"``)."""
+        if self._up is None:
+            from ..io.upright import resolve_up
+
+            self._up = resolve_up("auto", self.mesh.points, self.mesh.triangles)
+        return self._up
 
     def solver_mesh(self, medium, resolution="full"):
         """``(solver mesh, Decimation or None, edge or None, SurfaceGeometry, reused)`` for a resolution."""
@@ -154,7 +205,7 @@ class Scene:
 
         if self._mean_edge is None:
             self._mean_edge = mean_edge_length(self.mesh.points, self.mesh.triangles)
-        edge = _proxy_edge(self._mean_edge, medium, resolution)
+        edge = _proxy_edge(self._mean_edge, medium, resolution, self.mesh)
         key = None if edge is None else round(edge, 9)  # decided before decimating: a cache hit costs nothing
         if key in self._solver_meshes:
             return (*self._solver_meshes[key], True)
@@ -187,28 +238,40 @@ class Scene:
         return self.incident(geometry, self.mesh.triangles, as_light_list(lights), medium.eta, per_direction)
 
     def shade(self, material="marble", lights=None, *, model="directional", method="tree", tol=1e-2,
-              resolution="full", exposure=None, per_direction=False, progress=None) -> "ShadeResult":
+              resolution="full", exposure=None, per_direction=False, progress=None, memory_limit=None,
+              time_limit=DEFAULT_TIME_LIMIT_S, warn=None) -> "ShadeResult":
         """Translucent shading: ``B``, radiance toward the normal and display colours (see :func:`shade`)."""
+        from ..errors import BudgetError
         from ..scatter.fresnel import fresnel_transmittance
         from ..scatter.lights import DirectionalLight, as_light_list
-        from ..scatter.solve import solve
+        from ..scatter.budget import check_limits
 
+        check_limits(memory_limit, time_limit)
         timings = {}
-        start = time.perf_counter()
         medium = resolve_medium(material)
-        lights = as_light_list(lights if lights is not None else DirectionalLight(DEFAULT_LIGHT_DIRECTION, 1.0))
-        solver_mesh, decimation, edge, geometry, geometry_reused = self.solver_mesh(medium, resolution)
-        timings["geometry"] = time.perf_counter() - start
-
-        start = time.perf_counter()
-        incident, incident_reused = self.incident(geometry, solver_mesh.triangles, lights, medium.eta, per_direction)
-        timings["incident_light"] = time.perf_counter() - start
-
-        if per_direction:
-            solutions = _solve_per_direction(geometry, incident, medium, model, method, tol, progress)
-        else:
-            solutions = [solve(geometry, incident.phi_rgb, incident.w12, medium, model=model, method=method, tol=tol,
-                               progress=progress)]
+        lights = as_light_list(lights if lights is not None else DirectionalLight(default_light_direction(self.up), 1.0))
+        limits = {"memory_limit": memory_limit, "time_limit": time_limit}
+        coarsened = reason = None
+        for attempt in range(COARSER_ATTEMPTS + 1):
+            start = time.perf_counter()
+            solver_mesh, decimation, edge, geometry, geometry_reused = self.solver_mesh(medium, resolution)
+            timings["geometry"] = timings.get("geometry", 0.0) + time.perf_counter() - start
+            start = time.perf_counter()
+            incident, incident_reused = self.incident(geometry, solver_mesh.triangles, lights, medium.eta,
+                                                      per_direction)
+            timings["incident_light"] = timings.get("incident_light", 0.0) + time.perf_counter() - start
+            try:
+                solutions = _solve(geometry, incident, medium, model, method, tol, progress, per_direction, limits)
+                break
+            except BudgetError as exc:
+                reason = reason or budget_phrase(exc.estimate)  # of the resolution asked for
+                resolution = self._coarser(solver_mesh, exc, attempt)
+        if reason is not None:
+            coarsened = (f"solving on a proxy of {solver_mesh.n_points:,} of the {self.mesh.n_points:,} vertices "
+                         f"(edge {edge:.3g} mm), since the resolution asked for {reason}; expected relative RMS error "
+                         f"about {proxy_error(solver_mesh.n_points / self.mesh.n_points)} (proxy measurements in "
+                         f"bench/README.md); raise the limit to solve every vertex.")
+            (warn or _warn)(coarsened)
         B = sum(solution.B for solution in solutions)
         for solution in solutions:
             for k, v in solution.timings.items():
@@ -231,8 +294,11 @@ class Scene:
             "shadows": self.shadows,
             "light_summation": "per direction" if per_direction else "aggregated per vertex",
             "exposure": exposure,
-            "unit": "mm",
-            "mm_per_unit": self.mesh.mm_per_unit,
+            **unit_metadata(self.mesh.mm_per_unit, self.mesh.unit_inferred),
+            "geometry_unit": "mm",
+            "up": self.up,
+            "up_inferred": self.up_requested == "auto",
+            "budget": {"memory_limit_gb": memory_limit, "time_limit_s": time_limit, "coarser": coarsened},
         }
         if self._normals is None:
             self._normals = self.mesh.vertex_normals()
@@ -243,12 +309,62 @@ class Scene:
         solver_stats = solutions[0].stats if len(solutions) == 1 else {
             "solves": len(solutions), **{k: sum(s.stats.get(k, 0) for s in solutions)
                                           for k in ("pairs_evaluated", "pairs_skipped", "near_points")}}
-        stats = {"incident": incident.stats.as_dict(), "solver": solver_stats, "reused": reused,
+        stats = {"incident": incident.stats.as_dict(), "solver": solver_stats, "reused": reused, "coarser": coarsened,
                  "solver_vertices": solver_mesh.n_points, "vertices": self.mesh.n_points}
         return ShadeResult(self.mesh, B, radiance, colors, exposure, self._normals, stats, timings, metadata)
 
+    def _coarser(self, solver_mesh, exc, attempt):
+        """The edge length (mm) of a proxy whose solve should fit the budget ``exc`` was over;
+        ``exc`` again when that proxy would keep too few vertices or the attempts are spent."""
+        plan = exc.estimate
+        over = max(plan.peak_bytes / max(plan.budget_bytes, 1.0) if plan.over_memory else 1.0,
+                   plan.seconds / plan.time_limit if plan.over_time else 1.0)
+        # the cost grows as n to n^2 with the vertex count n: aim at a part of the budget with the n^2 law
+        target = int(solver_mesh.n_points * (COARSER_MARGIN / over) ** 0.5)
+        if attempt >= COARSER_ATTEMPTS or target < MIN_PROXY_VERTICES:
+            raise exc
+        if self._mean_edge is None:
+            self._mean_edge = mean_edge_length(self.mesh.points, self.mesh.triangles)
+        return self._mean_edge * (self.mesh.n_points / target) ** 0.5
 
-def _solve_per_direction(geometry, incident, medium, model, method, tol, progress):
+
+def budget_phrase(plan) -> str:
+    """``"would need about 25 GB of memory (budget 3.6 GB)"`` or the same for time, from an estimate."""
+    from ..scatter.budget import format_bytes, format_seconds
+
+    if plan.over_memory:
+        return (f"would need about {format_bytes(plan.peak_bytes)} of memory ({option('memory_limit')} budget "
+                f"{format_bytes(plan.budget_bytes)})")
+    return f"would take about {format_seconds(plan.seconds)} ({option('time_limit')} {format_seconds(plan.time_limit)})"
+
+
+def proxy_error(fraction: float) -> str:
+    """Expected relative RMS error of ``B`` on a proxy keeping ``fraction`` of the vertices (:data:`PROXY_ERRORS`)."""
+    for kept, error in PROXY_ERRORS:
+        if fraction >= kept:
+            return error
+    return f"more than {PROXY_ERRORS[-1][1]} (coarser than measured)"
+
+
+def _warn(message: str) -> None:
+    import warnings
+
+    from ..errors import TranslucencyWarning
+
+    warnings.warn(message, TranslucencyWarning, stacklevel=3)
+
+
+def _solve(geometry, incident, medium, model, method, tol, progress, per_direction, limits):
+    """The solver's :class:`Solution` list: one, or one per light sample with ``per_direction``."""
+    from ..scatter.solve import solve
+
+    if per_direction:
+        return _solve_per_direction(geometry, incident, medium, model, method, tol, progress, limits)
+    return [solve(geometry, incident.phi_rgb, incident.w12, medium, model=model, method=method, tol=tol,
+                  progress=progress, **limits)]
+
+
+def _solve_per_direction(geometry, incident, medium, model, method, tol, progress, limits=None):
     """One solve per light sample (each with its own refracted direction); their ``B`` add up."""
     from ..scatter.solve import solve
 
@@ -261,12 +377,14 @@ def _solve_per_direction(geometry, incident, medium, model, method, tol, progres
         w12[part.vertices] = part.w12
         inner = None if progress is None else (
             lambda stage, fraction, k=k: progress(stage, (k + fraction) / len(incident.contributions)))
-        solutions.append(solve(geometry, phi, w12, medium, model=model, method=method, tol=tol, progress=inner))
+        solutions.append(solve(geometry, phi, w12, medium, model=model, method=method, tol=tol, progress=inner,
+                               **(limits or {})))
     return solutions
 
 
 def shade(mesh, material="marble", lights=None, *, model="directional", method="tree", tol=1e-2, shadows=True,
-          resolution="full", exposure=None, per_direction=False, progress=None) -> ShadeResult:
+          resolution="full", exposure=None, per_direction=False, up="auto", progress=None, memory_limit=None,
+          time_limit=DEFAULT_TIME_LIMIT_S, warn=None) -> ShadeResult:
     """Translucent shading of one mesh (mm): ``B``, radiance toward the normal and display colours.
 
     The one-call form of :class:`Scene` (nothing is kept between calls; keep a ``Scene`` to reuse work).
@@ -278,7 +396,8 @@ def shade(mesh, material="marble", lights=None, *, model="directional", method="
     material : str or Material or Medium
         Catalogue name, catalogue entry or a :class:`~translucency.scatter.medium.Medium` (1/mm).
     lights : light or sequence of lights, optional
-        Default: one white directional light of 1 W/m² from :data:`DEFAULT_LIGHT_DIRECTION`.
+        Default: one white directional light of 1 W/m² from :func:`default_light_direction` of ``up``
+        (above and in front of the scan). Directions are in the scan's own coordinates.
     model, method, tol
         Passed to :func:`translucency.scatter.solve.solve`.
     shadows : bool
@@ -294,22 +413,36 @@ def shade(mesh, material="marble", lights=None, *, model="directional", method="
         Solve once per light sample with its own refracted direction and add the results (exact for
         several lights; the default aggregates the lights per vertex, see
         :mod:`translucency.scatter.irradiance`).
+    up : str
+        The scan's up axis (``"x"`` ... ``"-z"``, or ``"auto"``: inferred, see :mod:`translucency.io.upright`);
+        only the default light and the metadata depend on it.
     progress : callable, optional
-        ``progress(stage, fraction)``.
+        ``progress(stage, fraction)``, many times per stage during the solve.
+    memory_limit : float, optional
+        GB (2**30 bytes) the process may hold; the budget is the smaller of this and the available
+        memory less head-room (:mod:`translucency.scatter.budget`).
+    time_limit : float or None
+        Seconds the solve may take by its estimate (default :data:`DEFAULT_TIME_LIMIT_S`; None: no limit).
+        Over either budget the scan is solved on a coarser proxy that fits, said in one line to ``warn``
+        with the expected error, or, when even that would be too coarse, a
+        :class:`~translucency.errors.BudgetError` says what to change.
+    warn : callable, optional
+        ``warn(line)`` receives that line (default: a :class:`~translucency.errors.TranslucencyWarning`).
     """
-    return Scene(mesh, shadows=shadows).shade(material, lights, model=model, method=method, tol=tol,
+    return Scene(mesh, shadows=shadows, up=up).shade(material, lights, model=model, method=method, tol=tol,
                                               resolution=resolution, exposure=exposure, per_direction=per_direction,
-                                              progress=progress)
+                                              progress=progress, memory_limit=memory_limit, time_limit=time_limit,
+                                              warn=warn)
 
 
-def _proxy_edge(mean_edge, medium, resolution):
-    """Proxy edge length (mm) for a resolution on a mesh of ``mean_edge`` (mm), or None for the full mesh."""
-    from ..errors import InvalidParameterError
+def _proxy_edge(mean_edge, medium, resolution, mesh):
+    """Proxy edge length (mm) for a resolution on ``mesh`` of ``mean_edge`` (mm), or None for the full mesh."""
+    from ..errors import InvalidParameterError, option
 
     if resolution == "full":
         return None
     if resolution == "auto":
-        edge = proxy_edge_length(medium)
+        edge = min(proxy_edge_length(medium), coarsest_proxy_edge(mesh.surface_area))
         return edge if edge >= PROXY_MIN_RATIO * mean_edge else None
     try:
         edge = float(resolution)
@@ -317,7 +450,15 @@ def _proxy_edge(mean_edge, medium, resolution):
         edge = float("nan")
     if not (np.isfinite(edge) and edge > 0):
         raise InvalidParameterError(f"resolution must be 'auto', 'full' or a proxy edge length in mm, got {resolution!r}.")
-    return edge if edge > mean_edge else None
+    if edge <= mean_edge:
+        return None
+    coarsest = coarsest_proxy_edge(mesh.surface_area)
+    if edge > coarsest:
+        raise InvalidParameterError(
+            f"a proxy edge of {edge:.3g} mm ({option('resolution', f'{edge:g}')}) would leave fewer than "
+            f"{PROXY_MIN_TRIANGLES} triangles on this {mesh.extent:.3g} mm mesh; pass {option('resolution')} "
+            f"below {coarsest:.3g} mm, or full (and check {option('unit')} if the mesh should be larger).")
+    return edge
 
 
 def _solver_mesh(mesh, edge):

@@ -35,12 +35,21 @@ def offscreen_check() -> tuple[bool, str]:
     return True, f"{window}, {image.shape[1]}x{image.shape[0]} image"
 
 
-#: Default camera: looking at the mesh's centre from this direction (the bunny's front, a little from above).
+#: Default camera: looking at the mesh's centre from this direction of the display frame (right, up,
+#: front; :func:`translucency.io.upright.display_frame`): from the front, a little from the right and
+#: above. For a scan whose up is +y (the default bunny) it is the direction in the scan's coordinates.
 DEFAULT_CAMERA_DIRECTION = (0.6, 0.35, 1.0)
-#: Default view-up vector of the camera (the bunny's +y is up).
+#: View-up vector of the camera for a scan whose up is +y.
 DEFAULT_UP = (0.0, 1.0, 0.0)
 #: Camera distance from the centre, in bounding-box diagonals.
 CAMERA_DISTANCE = 1.7
+
+
+def default_camera_direction(up: str = "+y") -> np.ndarray:
+    """:data:`DEFAULT_CAMERA_DIRECTION` in the scan's coordinates for an up axis ``"+x"`` ... ``"-z"``."""
+    from ..io.upright import to_scan_frame
+
+    return to_scan_frame(DEFAULT_CAMERA_DIRECTION, up)
 
 
 def camera_position(center, diagonal, direction=DEFAULT_CAMERA_DIRECTION, up=DEFAULT_UP) -> list:
@@ -93,8 +102,8 @@ def add_colored_mesh(plotter, mesh, colors_rgb8):
     return poly
 
 
-def render_colors(mesh, colors_rgb8, path=None, *, window_size=(800, 800), camera_direction=DEFAULT_CAMERA_DIRECTION,
-                  camera=None):
+def render_colors(mesh, colors_rgb8, path=None, *, window_size=(800, 800), camera_direction=None, camera=None,
+                  up="auto"):
     """Render a mesh (mm) with per-vertex display colours off-screen; save a PNG when ``path`` is given.
 
     Parameters
@@ -104,22 +113,36 @@ def render_colors(mesh, colors_rgb8, path=None, *, window_size=(800, 800), camer
     colors_rgb8 : (n, 3) uint8
         Display colours per vertex (display transform applied).
     path : path-like, optional
-        PNG to write.
+        PNG to write (atomically, see :func:`translucency.app.outputs.write_png`).
     window_size : (int, int)
         Image width and height, pixels.
-    camera_direction : sequence of 3 float
-        From the mesh's centre toward the eye (used when ``camera`` is None; see :func:`camera_position`).
+    camera_direction : sequence of 3 float, optional
+        From the mesh's centre toward the eye in the scan's coordinates (used when ``camera`` is None;
+        default: :func:`default_camera_direction` of ``up``).
     camera : list, optional
         An explicit PyVista camera position ``[eye, focal point, view up]`` (mm).
+    up : str
+        The scan's up axis, ``"x"`` ... ``"-z"`` or ``"auto"`` (inferred from the mesh,
+        :mod:`translucency.io.upright`): the camera's view-up.
 
     Returns
     -------
     ndarray
         The image, (height, width, 3) uint8.
     """
+    from ..io.upright import resolve_up, up_vector
+
     plotter = new_plotter(window_size)
     poly = add_colored_mesh(plotter, mesh, colors_rgb8)
-    plotter.camera_position = camera if camera is not None else camera_position(poly.center, poly.length, camera_direction)
-    image = plotter.screenshot(str(path) if path is not None else None, return_img=True)
+    if camera is None:
+        up = resolve_up(up, mesh.points, mesh.triangles)
+        direction = default_camera_direction(up) if camera_direction is None else camera_direction
+        camera = camera_position(poly.center, poly.length, direction, tuple(up_vector(up)))
+    plotter.camera_position = camera
+    image = plotter.screenshot(return_img=True)
     plotter.close()
+    if path is not None:
+        from .outputs import write_png
+
+        write_png(path, image)
     return image

@@ -54,8 +54,10 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InvalidParameterError
-from .pipeline import DEFAULT_LIGHT_DIRECTION, Scene, display_colors, proxy_edge_length, resolve_medium
-from .render import DEFAULT_CAMERA_DIRECTION, DEFAULT_UP, add_colored_mesh, camera_position, new_plotter
+from ..scatter.budget import DEFAULT_TIME_LIMIT_S
+from .pipeline import (Scene, coarsest_proxy_edge, default_light_direction, display_colors, proxy_edge_length,
+                       resolve_medium)
+from .render import DEFAULT_UP, add_colored_mesh, camera_position, default_camera_direction, new_plotter
 
 #: Vertices of the interactive proxy (see the module docstring for the measurements behind it).
 INTERACTIVE_VERTICES = 7500
@@ -71,11 +73,13 @@ def interactive_edge_length(mesh, medium, vertices: int = INTERACTIVE_VERTICES) 
 
     A closed mesh has about two triangles per vertex; the edge is that of equilateral triangles covering
     the surface. It is never finer than :func:`~translucency.app.pipeline.proxy_edge_length` of the
-    medium (the detail the light can show after diffusing).
+    medium (the detail the light can show after diffusing), and never coarser than
+    :func:`~translucency.app.pipeline.coarsest_proxy_edge` (an object only a few diffusion lengths
+    across still gets a proxy of some triangles).
     """
     triangle_area = mesh.surface_area / (2.0 * vertices)
     budget = math.sqrt(triangle_area / (math.sqrt(3.0) / 4.0))
-    return max(budget, proxy_edge_length(medium))
+    return min(max(budget, proxy_edge_length(medium)), coarsest_proxy_edge(mesh.surface_area))
 
 
 def _frame(up):
@@ -129,11 +133,11 @@ class Viewer:
     material : str or Material or Medium
         The starting material (catalogue name, 1/mm coefficients).
     lights : light or sequence of lights, optional
-        Default: one white directional light of 1 W/m² from
-        :data:`~translucency.app.pipeline.DEFAULT_LIGHT_DIRECTION`. The light sliders steer the first
-        directional light; without one they are not shown.
-    model, method, tol, per_direction
-        Passed to :meth:`Scene.shade <translucency.app.pipeline.Scene.shade>`.
+        Directions in the scan's own coordinates. Default: one white directional light of 1 W/m²
+        above and in front of the scan (:func:`~translucency.app.pipeline.default_light_direction` of
+        ``up``). The light sliders steer the first directional light; without one they are not shown.
+    model, method, tol, per_direction, memory_limit, time_limit
+        Passed to :meth:`Scene.shade <translucency.app.pipeline.Scene.shade>` (GB, seconds).
     resolution : "interactive", "full", "auto" or float
         Where ``B`` is computed while controls change: ``"interactive"`` (default) is a proxy of about
         :data:`INTERACTIVE_VERTICES` vertices (:func:`interactive_edge_length`); the others are the
@@ -147,10 +151,13 @@ class Viewer:
         Show ``T21(eta, n . w_o) B`` instead of ``T21(eta, 1) B``; add the specular highlight.
     roughness : float
         GGX ``alpha`` of the highlight.
-    up : sequence of 3 float
-        The scan's up axis: the camera's view-up and the axis of the light's azimuth.
-    camera_direction : sequence of 3 float
-        From the mesh's centre toward the camera at the start.
+    up : str
+        The scan's up axis, ``"x"`` ... ``"-z"`` or ``"auto"`` (inferred from the mesh, see
+        :mod:`translucency.io.upright`): the camera's view-up, the axis of the light's azimuth, and
+        where the default camera and light are (above and in front).
+    camera_direction : sequence of 3 float, optional
+        From the mesh's centre toward the camera at the start, in the scan's coordinates (default:
+        :func:`~translucency.app.render.default_camera_direction` of ``up``).
     window_size : (int, int)
         Window size, pixels.
     off_screen : bool
@@ -164,9 +171,11 @@ class Viewer:
     """
 
     def __init__(self, mesh=None, material="marble", lights=None, *, model="directional", method="tree", tol=1e-2,
-                 resolution="interactive", shadows=True, per_direction=False, exposure=None, view_dependent=False,
-                 specular=False, roughness=0.25, up=DEFAULT_UP, camera_direction=DEFAULT_CAMERA_DIRECTION,
+                 resolution="interactive", shadows=True, per_direction=False, exposure=None, memory_limit=None,
+                 time_limit=DEFAULT_TIME_LIMIT_S, view_dependent=False, specular=False, roughness=0.25, up="auto",
+                 camera_direction=None,
                  window_size=(1024, 768), off_screen=False, widgets=True, output=".", name=None):
+        from ..io.upright import up_vector
         from ..scatter.lights import DirectionalLight, as_light_list
         from ..scatter.solve import METHODS, MODELS
 
@@ -187,17 +196,20 @@ class Viewer:
         self.model, self.method, self.tol = model, method, float(tol)
         self.resolution = resolution
         self.per_direction = bool(per_direction)
+        self.limits = {"memory_limit": memory_limit, "time_limit": time_limit}
         self.shadows = bool(shadows)
-        self.lights = as_light_list(lights if lights is not None else DirectionalLight(DEFAULT_LIGHT_DIRECTION, 1.0))
+        self.scene = Scene(mesh, shadows=self.shadows, up=up)
+        self.up_axis = self.scene.up
+        self.up = tuple(float(u) for u in up_vector(self.up_axis))
+        self.lights = as_light_list(lights if lights is not None
+                                    else DirectionalLight(default_light_direction(self.up_axis), 1.0))
         self._key_light = next((i for i, light in enumerate(self.lights) if isinstance(light, DirectionalLight)), None)
-        self.up = tuple(float(u) for u in up)
         self.azimuth, self.elevation = (light_angles(self.lights[self._key_light].direction, self.up)
                                         if self._key_light is not None else (None, None))
         self.mm_per_unit = float(mesh.mm_per_unit)
         self.exposure = exposure
         self.view_dependent, self.specular, self.roughness = bool(view_dependent), bool(specular), float(roughness)
         self.output = Path(output)
-        self.scene = Scene(mesh, shadows=self.shadows)
         self.result = None
         self.solve_seconds = 0.0
         self.n_solves = 0
@@ -211,6 +223,8 @@ class Viewer:
         self.plotter = new_plotter(window_size, off_screen=off_screen)
         self._solve()
         self.poly = add_colored_mesh(self.plotter, self.base_mesh, display_colors(self.result.radiance, self.exposure)[0])
+        if camera_direction is None:
+            camera_direction = default_camera_direction(self.up_axis)
         self.plotter.camera_position = camera_position(self.poly.center, self.poly.length, camera_direction, self.up)
         self._status_actor = self.plotter.add_text(self.status, position="upper_left", font_size=10, color="white",
                                                    name="status")
@@ -275,7 +289,7 @@ class Viewer:
         factor = mm_per_unit / float(self.base_mesh.mm_per_unit)
         mesh = self.base_mesh.replace(points=self.base_mesh.points * factor, mm_per_unit=mm_per_unit)
         self.mm_per_unit = mm_per_unit
-        self.scene = Scene(mesh, shadows=self.shadows)
+        self.scene = Scene(mesh, shadows=self.shadows, up=self.up_axis)
         self._refresh()
 
     def set_exposure(self, exposure) -> None:
@@ -378,7 +392,8 @@ class Viewer:
         self._full_next = False
         start = time.perf_counter()
         self.result = self.scene.shade(self.medium, self.lights, model=self.model, method=self.method, tol=self.tol,
-                                       resolution=resolution, exposure=self.exposure, per_direction=self.per_direction)
+                                       resolution=resolution, exposure=self.exposure, per_direction=self.per_direction,
+                                       **self.limits)
         self.solve_seconds = time.perf_counter() - start
         self.n_solves += 1
         if self.exposure is None:
@@ -396,7 +411,8 @@ class Viewer:
         light = ("" if self.azimuth is None else
                  f"light azimuth {self.azimuth:.0f} deg, elevation {self.elevation:.0f} deg; ")
         tolerance = "exact sum" if self.method == "exact" else f"tolerance {self.tol:.3g}"
-        self.status = (f"{self.medium.name}, {self.model} dipole, {size:.0f} mm ({self.mm_per_unit:.4g} mm per unit)\n"
+        self.status = (f"{self.medium.name}, {self.model} dipole, {size:.3g} mm ({self.mm_per_unit:.4g} mm per unit), "
+                       f"up {self.up_axis}\n"
                        f"{light}exposure {self.exposure:.3g}\n"
                        f"solved in {self.solve_seconds:.2f} s: {self.method}, {tolerance}, "
                        f"{result.stats['solver_vertices']} of {result.stats['vertices']} vertices")

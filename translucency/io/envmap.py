@@ -108,8 +108,9 @@ def read_equirectangular(path) -> np.ndarray:
         With a sentence, for a missing, unreadable, non-float or non-radiance file.
     """
     path = Path(path)
-    if not path.is_file():
-        raise EnvironmentMapError(f"environment map {str(path)!r} does not exist or is not a file.")
+    if not path.is_file():  # a regular file only: a FIFO or a device would never end
+        raise EnvironmentMapError(f"environment map {str(path)!r} does not exist or is not a regular file; "
+                                  "pass an image file stored on disk.")
     suffix = path.suffix.lower()
     if suffix in RADIANCE_EXTENSIONS:
         pixels = _read_radiance_hdr(path)

@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import os
 import re
+import stat
 import warnings
 from pathlib import Path
 
@@ -35,7 +36,7 @@ import numpy as np
 from ..errors import MeshError
 from .mesh import TriangleMesh, validate_mesh_arrays
 from .triangulate import triangulate_polygon_lists, triangulate_polygons, triangulate_strips
-from .units import check_extent, parse_unit
+from .units import UnitInferredWarning, check_extent, infer_unit, inferred_unit_message, parse_unit
 
 __all__ = ["load_mesh", "read_mesh_arrays", "mesh_from_vtk_polydata", "SUPPORTED_FORMATS", "detect_format"]
 
@@ -92,15 +93,18 @@ _XML_FAMILY = {".vtp", ".vtu", ".vtm"}
 # --------------------------------------------------------------------------------------------------
 # public entry points
 # --------------------------------------------------------------------------------------------------
-def load_mesh(path, unit: str | float = "mm", *, format: str | None = None) -> TriangleMesh:
+def load_mesh(path, unit: str | float | None = None, *, format: str | None = None) -> TriangleMesh:
     """Read a mesh file into a triangle mesh in mm.
 
     Parameters
     ----------
     path : str or path-like
         The mesh file (see :data:`SUPPORTED_FORMATS`); it is only read.
-    unit : {"mm", "cm", "m", "in"} or float, default "mm"
-        Length unit of the file's coordinates, or a number of mm per unit.
+    unit : {"mm", "cm", "m", "in"} or float, optional
+        Length unit of the file's coordinates, or a number of mm per unit. None (the default):
+        inferred from the size, millimetres for 5 to 5000 units across and metres for 0.005 to 5
+        (:func:`~translucency.io.units.infer_unit`), said in one :class:`UnitInferredWarning` line
+        and recorded as ``unit_inferred``.
     format : str, optional
         Read the file as this format (a suffix such as ``"ply"`` or ``".obj"``) whatever its name.
 
@@ -108,12 +112,13 @@ def load_mesh(path, unit: str | float = "mm", *, format: str | None = None) -> T
     -------
     TriangleMesh
         Points in mm (float64), triangles (int64), the file's per-vertex properties in
-        ``point_data``, ``source`` the path and ``mm_per_unit`` the unit factor.
+        ``point_data``, ``source`` the path, ``mm_per_unit`` the unit factor and ``unit_inferred``.
 
     Raises
     ------
     MeshError
-        For any file that does not hold a usable triangle mesh (one sentence saying what to do).
+        For any file that does not hold a usable triangle mesh (one sentence saying what to do),
+        and, with no unit given, for a size no unit makes plausible.
     InvalidParameterError
         For an unknown unit.
 
@@ -122,6 +127,9 @@ def load_mesh(path, unit: str | float = "mm", *, format: str | None = None) -> T
     ImplausibleSizeWarning
         When the mesh is smaller than 5 mm or larger than 5 m in the given unit; the message names
         the unit that would make it plausible (a 0.16 mm bunny: "pass unit='m'").
+    UnitInferredWarning
+        With no unit given: the unit chosen ("bunny.ply: no unit= given; 0.156 units across, read
+        as metres (156 mm); pass unit= to override").
 
     Examples
     --------
@@ -129,20 +137,30 @@ def load_mesh(path, unit: str | float = "mm", *, format: str | None = None) -> T
     >>> mesh.extent  # doctest: +SKIP
     155.7
     """
-    mm_per_unit = parse_unit(unit)
+    mm_per_unit = None if unit is None else parse_unit(unit)
     path = Path(path)
     points, triangles, point_data = read_mesh_arrays(path, format=format)
+    if mm_per_unit is None:
+        extent_in_file = _extent(points, triangles)
+        inferred = infer_unit(extent_in_file, path.name)
+        warnings.warn(inferred_unit_message(path.name, extent_in_file, inferred), UnitInferredWarning, stacklevel=2)
+        mm_per_unit = parse_unit(inferred)
     points = points * mm_per_unit
     if not np.isfinite(points).all():
         raise MeshError(
             f"{path.name} has coordinates too large to convert to mm; check the file's unit and coordinates."
         )
+    check_extent(_extent(points, triangles), mm_per_unit, path.name, stacklevel=2)
+    return TriangleMesh(points, triangles, point_data, source=path, mm_per_unit=mm_per_unit,
+                        unit_inferred=unit is None)
+
+
+def _extent(points: np.ndarray, triangles: np.ndarray) -> float:
+    """Largest side of the bounding box of the vertices the triangles use (in the points' unit)."""
     referenced = np.zeros(len(points), dtype=bool)
     referenced[triangles.ravel()] = True
     used = points[referenced]
-    extent = float(np.max(used.max(axis=0) - used.min(axis=0)))
-    check_extent(extent, mm_per_unit, path.name, stacklevel=2)
-    return TriangleMesh(points, triangles, point_data, source=path, mm_per_unit=mm_per_unit)
+    return float(np.max(used.max(axis=0) - used.min(axis=0)))
 
 
 def read_mesh_arrays(path, *, format: str | None = None) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
@@ -248,12 +266,29 @@ def _misnamed(path: Path, suffix: str, sniffed: str) -> str:
 # --------------------------------------------------------------------------------------------------
 # file checks
 # --------------------------------------------------------------------------------------------------
+def _special_kind(mode: int) -> str:
+    """What a file that is not a regular file is, in words ("a FIFO (named pipe)", ...)."""
+    for test, words in ((stat.S_ISFIFO, "a FIFO (named pipe)"), (stat.S_ISCHR, "a character device"),
+                        (stat.S_ISBLK, "a block device"), (stat.S_ISSOCK, "a socket")):
+        if test(mode):
+            return words
+    return "a special file"
+
+
 def _check_readable(path: Path, format: str | None) -> str:
     """Check that the file exists and can be read, and return the suffix of the format to read it as."""
-    if not path.exists():
+    try:
+        mode = os.stat(path).st_mode  # follows links: what would be opened
+    except FileNotFoundError:
+        mode = None
+    except OSError as exc:
+        raise MeshError(f"{path.name} cannot be read ({exc.strerror or exc}); check the file and the disk.") from None
+    if mode is None:
         raise MeshError(f"{path} does not exist; check the path and the file name.")
-    if path.is_dir():
+    if stat.S_ISDIR(mode):
         raise MeshError(f"{path} is a directory, not a mesh file; pass the path of a mesh file inside it.")
+    if not stat.S_ISREG(mode):  # opening a FIFO would wait for a writer, a device would read forever
+        raise MeshError(f"{path} is {_special_kind(mode)}, not a regular file; pass a mesh file stored on disk.")
     try:
         with open(path, "rb") as stream:
             first = stream.read(1)
@@ -425,7 +460,9 @@ def _read_ply_with_plyfile(path: Path, header: _PlyHeader, plyfile):
                 ply = None
     if ply is None:
         try:
-            ply = plyfile.PlyData.read(str(path), mmap="c")
+            with warnings.catch_warnings():  # numpy's loadtxt warns about every empty ascii list (a face "0")
+                warnings.simplefilter("ignore")
+                ply = plyfile.PlyData.read(str(path), mmap="c")
         except errors as exc:
             raise MeshError(
                 f"{path.name} is corrupt or truncated ({_short(exc)}); download or export the file again."
@@ -681,12 +718,8 @@ def _read_with_vtk(path: Path, suffix: str):
         with pyvista.vtk_verbosity("off"), pyvista.VtkErrorCatcher(send_to_logging=False) as catcher:
             reader.Update()
             output = reader.GetOutputDataObject(0)
-    errors = [event.alert for event in catcher.error_events]
-    if errors:
-        first = errors[0].strip().splitlines()[0] if errors[0].strip() else "unknown error"
-        raise MeshError(
-            f"{path.name} is not a readable {description} file ({first[:120]}); check or export the file again."
-        )
+    if catcher.error_events:  # VTK's own text names its classes and addresses: not for the user
+        raise MeshError(f"{path.name} is not a readable {description} file; check or export the file again.")
     if output is None:
         raise MeshError(f"{path.name} is not a readable {description} file; check or export the file again.")
     data = pyvista.wrap(output)

@@ -13,6 +13,7 @@ triangles       vertex indices of each triangle, (m, 3) int64            1
 point_data      per-vertex properties of the file (colours, confidence)  any
 source          the file the mesh was read from, or None                 --
 mm_per_unit     length of one unit of the source file                    mm
+unit_inferred   True when mm_per_unit was inferred from the size         --
 =============== ======================================================== =====
 
 Per-vertex colours are stored under the key ``"colors"`` as (n, 3) or (n, 4) uint8 (RGB or RGBA),
@@ -125,6 +126,9 @@ class TriangleMesh:
     mm_per_unit : float, optional
         Length in mm of one unit of the source file (1 for mm, 1000 for m); ``points`` are already
         multiplied by it.
+    unit_inferred : bool, optional
+        True when the file stated no unit and ``mm_per_unit`` was inferred from its size
+        (:func:`translucency.io.units.infer_unit`).
 
     Raises
     ------
@@ -137,6 +141,7 @@ class TriangleMesh:
     point_data: Mapping[str, np.ndarray] = dataclasses.field(default_factory=dict)
     source: Path | None = None
     mm_per_unit: float = 1.0
+    unit_inferred: bool = False
 
     def __post_init__(self):
         points, triangles = validate_mesh_arrays(self.points, self.triangles)
@@ -157,6 +162,7 @@ class TriangleMesh:
         object.__setattr__(self, "point_data", MappingProxyType(data))
         object.__setattr__(self, "source", None if self.source is None else Path(self.source))
         object.__setattr__(self, "mm_per_unit", mm_per_unit)
+        object.__setattr__(self, "unit_inferred", bool(self.unit_inferred))
 
     # --- sizes -------------------------------------------------------------------------------------
     @property

@@ -26,9 +26,10 @@ line of :data:`MAX_COMMENT_LINE` characters is written as compact JSON and conti
 buffers). Floats are written with ``repr`` precision,
 so :func:`read_baked_ply` returns the metadata exactly as given (tuples come back as lists).
 
-The file is written to a temporary file in the destination folder, flushed to disk, then renamed
-over the destination: an existing bake is only ever replaced by a complete one, and a failed write
-leaves no partial file. Writing over the mesh's own source file is refused.
+The file is written by the atomic writer (:mod:`translucency.io.atomic`): to a temporary file in the
+destination folder, flushed to disk, then renamed over the destination, so an existing bake is only
+ever replaced by a complete one and a failed write leaves no partial file. Writing over the mesh's
+own source file is refused.
 """
 
 from __future__ import annotations
@@ -37,14 +38,15 @@ import dataclasses
 import json
 import os
 import re
-import tempfile
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from ..errors import InvalidParameterError, MeshError, TranslucencyError
+from ..errors import InvalidParameterError, MeshError
+from .atomic import write_bytes
 from .mesh import TriangleMesh
+from .units import unit_metadata
 
 __all__ = [
     "BakedPly",
@@ -56,8 +58,9 @@ __all__ = [
     "comments_to_metadata",
 ]
 
-#: Settings every bake must record (DESIGN.md: every result carries its settings); ``unit`` and
-#: ``version`` are filled in from the mesh and the package when absent.
+#: Settings every bake must record (DESIGN.md: every result carries its settings); ``unit`` (with
+#: ``unit_name``, ``mm_per_unit`` and ``unit_inferred``) and ``version`` are filled in from the mesh
+#: and the package when absent.
 REQUIRED_METADATA = ("material", "coefficients", "unit", "lights", "model", "method", "tolerance", "version")
 
 #: Longest header comment line written (unless a metadata key alone is longer); longer values
@@ -275,7 +278,7 @@ def write_baked_ply(path, mesh: TriangleMesh, radiance, b, colors_rgb8, metadata
     InvalidParameterError
         Wrong shapes, non-finite values, missing settings, a missing folder, or a destination that
         is the mesh's source file.
-    TranslucencyError
+    WriteError
         When the file cannot be written (permissions, disk full); nothing is left behind.
     """
     path = Path(path)
@@ -326,7 +329,7 @@ def write_baked_ply(path, mesh: TriangleMesh, radiance, b, colors_rgb8, metadata
     header += [f"property {_PLY_NAMES[_VERTEX_DTYPE[name].str]} {name}" for name in _VERTEX_DTYPE.names]
     header += [f"element face {mesh.n_triangles}", "property list uchar int vertex_indices", "end_header"]
     header_bytes = ("\n".join(header) + "\n").encode("ascii")
-    _atomic_write(path, [header_bytes, vertices.tobytes(), faces.tobytes()])
+    write_bytes(path, [header_bytes, vertices.tobytes(), faces.tobytes()])
     return path
 
 
@@ -334,10 +337,8 @@ def _complete_metadata(metadata, mesh: TriangleMesh, n: int) -> dict:
     if not isinstance(metadata, dict):
         raise InvalidParameterError(f"metadata must be a dict of settings, not {type(metadata).__name__}.")
     settings = dict(metadata)
-    if "unit" not in settings:
-        from .units import unit_label
-
-        settings["unit"] = unit_label(mesh.mm_per_unit)
+    for key, value in unit_metadata(mesh.mm_per_unit, mesh.unit_inferred).items():
+        settings.setdefault(key, value)
     if "version" not in settings:
         from .. import __version__
 
@@ -358,45 +359,6 @@ def _same_file(a: Path, b: Path) -> bool:
         return os.path.samefile(a, b)
     except OSError:
         return False
-
-
-def _atomic_write(path: Path, parts: list[bytes]) -> None:
-    """Write bytes to a temporary file beside ``path``, fsync, then rename it over ``path``."""
-    parent = path.parent if str(path.parent) else Path(".")
-    try:
-        mode = os.stat(path).st_mode & 0o777 if path.exists() else 0o644
-        handle = tempfile.NamedTemporaryFile(dir=parent, prefix=f".{path.name}.", suffix=".tmp", delete=False)
-    except OSError as exc:
-        raise TranslucencyError(
-            f"cannot write in {parent} ({exc.strerror or exc}); choose a writable output folder."
-        ) from exc
-    temporary = Path(handle.name)
-    try:
-        with handle:
-            for part in parts:
-                handle.write(part)
-            handle.flush()
-            os.fsync(handle.fileno())
-        os.chmod(temporary, mode)
-        os.replace(temporary, path)
-    except BaseException as exc:
-        try:
-            temporary.unlink()
-        except OSError:
-            pass
-        if isinstance(exc, OSError):
-            raise TranslucencyError(
-                f"writing {path.name} failed ({exc.strerror or exc}); check the disk space and permissions."
-            ) from exc
-        raise
-    try:  # make the rename itself durable
-        directory = os.open(parent, os.O_RDONLY)
-        try:
-            os.fsync(directory)
-        finally:
-            os.close(directory)
-    except OSError:
-        pass
 
 
 # --------------------------------------------------------------------------------------------------

@@ -6,6 +6,18 @@ silently makes the object 1000 times too small or too large for the material, so
 is implausible for the given unit gets an :class:`ImplausibleSizeWarning` that names the unit that
 would make it plausible, and a size no object can have is an error.
 
+When no unit is given it is inferred from the size (:func:`infer_unit`), by this rule: the file is
+read in **millimetres** when its largest bounding-box side is 5 to 5000 units (an object of 5 mm to
+5 m), and in **metres** when it is 0.005 to 5 units (again 5 mm to 5 m). Those are the two units scan
+files come in: millimetres from photogrammetry, CAD and 3D printing, metres from scanning
+repositories and glTF (whose unit is the metre). Between the two the switch sits at 5 units, where
+both readings are equally far (in log scale) from a typical 160 mm object; centimetres and inches are
+never inferred, as their sizes overlap those of the two others (pass them). A file outside 0.005 to
+5000 units is plausible in no unit and is refused with a sentence; the shared scans come out at
+their real size (bunny 156 mm, horse 183 mm, Igea 99 mm from metres; angel 322 mm, birdbath 308 mm
+from millimetres). The choice is said in one line (:class:`UnitInferredWarning`) and recorded
+(:attr:`TriangleMesh.unit_inferred <translucency.io.mesh.TriangleMesh.unit_inferred>`).
+
 ================ ========================================================== =====
 name             meaning                                                    unit
 ================ ========================================================== =====
@@ -22,16 +34,21 @@ import math
 import numbers
 import warnings
 
-from ..errors import InvalidParameterError, MeshError
+from ..errors import InvalidParameterError, MeshError, option
 
 __all__ = [
     "UNITS",
     "PLAUSIBLE_EXTENT",
     "ABSURD_EXTENT",
     "ImplausibleSizeWarning",
+    "UnitInferredWarning",
     "parse_unit",
     "unit_label",
+    "unit_words",
     "likely_unit",
+    "infer_unit",
+    "inferred_unit_message",
+    "unit_metadata",
     "implausible_size_message",
     "check_extent",
 ]
@@ -48,8 +65,16 @@ PLAUSIBLE_EXTENT = (5.0, 5000.0)
 ABSURD_EXTENT = (1e-6, 1e9)
 
 
+#: Units :func:`infer_unit` chooses from, tried in this order.
+INFERRED_UNITS = ("mm", "m")
+
+
 class ImplausibleSizeWarning(UserWarning):
     """A mesh whose size is implausible for its length unit (probably the wrong unit was given)."""
+
+
+class UnitInferredWarning(UserWarning):
+    """No unit was given and one was inferred from the size: the line that says which, and how to override it."""
 
 
 def parse_unit(unit: str | float) -> float:
@@ -102,6 +127,73 @@ def unit_label(mm_per_unit: float) -> str:
     return f"{mm_per_unit:g} mm"
 
 
+def unit_words(mm_per_unit: float) -> str:
+    """The unit in words (``"metres"``, ``"millimetres"``, ...), or ``"units of <factor> mm"``."""
+    label = unit_label(mm_per_unit)
+    return _UNIT_WORDS.get(label, f"units of {label}")
+
+
+def infer_unit(extent_in_file_units: float, name: str = "the mesh") -> str:
+    """The unit of a file that states none, from its size (the rule is in the module docstring).
+
+    Parameters
+    ----------
+    extent_in_file_units : float
+        Largest bounding-box side in the file's own unit.
+    name : str
+        How the sentence names the mesh.
+
+    Returns
+    -------
+    str
+        ``"mm"`` for 5 to 5000 units, ``"m"`` for 0.005 to 5 units (an object of 5 mm to 5 m).
+
+    Raises
+    ------
+    MeshError
+        When no unit makes the size plausible (outside 0.005 to 5000 units), or the size is zero or
+        not finite.
+    """
+    low, high = PLAUSIBLE_EXTENT
+    for unit in INFERRED_UNITS:
+        if low <= extent_in_file_units * UNITS[unit] <= high:
+            return unit
+    smallest, largest = min(UNITS[u] for u in INFERRED_UNITS), max(UNITS[u] for u in INFERRED_UNITS)
+    finite = math.isfinite(extent_in_file_units) and extent_in_file_units > 0
+    if not finite or extent_in_file_units * smallest > ABSURD_EXTENT[1]:
+        check_extent(extent_in_file_units * smallest, smallest, name)  # its own sentence: zero, not finite, huge
+    if extent_in_file_units * largest < ABSURD_EXTENT[0]:
+        check_extent(extent_in_file_units * largest, largest, name)  # its own sentence: too small for any object
+    readings = ", ".join(f"as {_UNIT_WORDS[unit]} {_size(extent_in_file_units * UNITS[unit])}" for unit in INFERRED_UNITS)
+    raise MeshError(
+        f"{name} is {extent_in_file_units:.3g} units across and no {option('unit')} was given, but no unit makes "
+        f"that a plausible scan of 5 mm to 5 m ({readings}); pass {option('unit')} with the file's unit "
+        "(mm, cm, m, in or a number of mm per unit)."
+    )
+
+
+def inferred_unit_message(name: str, extent_in_file_units: float, unit: str) -> str:
+    """The line that says which unit was inferred: ``"bunny.ply: no --unit given; 0.156 units across,
+    read as metres (156 mm); pass --unit to override"`` (``unit=`` in a Python call)."""
+    factor = UNITS[unit]
+    return (
+        f"{name}: no {option('unit')} given; {extent_in_file_units:.3g} units across, read as "
+        f"{_UNIT_WORDS[unit]} ({_size(extent_in_file_units * factor)}); pass {option('unit')} to override"
+    )
+
+
+def unit_metadata(mm_per_unit: float, inferred: bool = False) -> dict:
+    """How every output records a mesh's unit: ``unit`` (label), ``unit_name`` (in words),
+    ``mm_per_unit`` (mm) and ``unit_inferred`` (True when it was inferred from the size)."""
+    return {"unit": unit_label(mm_per_unit), "unit_name": unit_words(mm_per_unit),
+            "mm_per_unit": float(mm_per_unit), "unit_inferred": bool(inferred)}
+
+
+def _size(extent_mm: float) -> str:
+    """A length in mm for a sentence: ``"156 mm"``, ``"0.16 mm"``, ``"1.5e+05 mm"``."""
+    return f"{extent_mm:.2g} mm" if extent_mm < 1 else f"{float(f'{extent_mm:.3g}'):g} mm"
+
+
 def likely_unit(extent_in_file_units: float) -> str | None:
     """Name the unit that makes a file extent most plausible for a scanned object.
 
@@ -148,11 +240,11 @@ def implausible_size_message(extent_mm: float, mm_per_unit: float, name: str = "
     if suggestion is not None and not math.isclose(UNITS[suggestion], mm_per_unit):
         return (
             f"{name} is {size} across, implausible for a scan in {unit_label(mm_per_unit)}; "
-            f"if the file is in {_UNIT_WORDS[suggestion]} pass unit={suggestion!r}."
+            f"if the file is in {_UNIT_WORDS[suggestion]} pass {option('unit', suggestion)}."
         )
     return (
         f"{name} is {size} across, implausible for a scanned object (5 mm to 5 m); "
-        "check the file's unit and pass it as unit= (a name or mm per unit)."
+        f"check the file's unit and pass it as {option('unit')} (a name or mm per unit)."
     )
 
 

@@ -98,12 +98,26 @@ def _rgb(value, what: str, name: str, unit: str) -> np.ndarray:
     return v
 
 
+def unit_vector(vector) -> np.ndarray:
+    """``vector`` divided by its length, for any finite non-zero length (1e-300 to 1e300 included).
+
+    The vector is first divided by its largest absolute component, so that the squares summed for
+    the length neither overflow nor underflow. Returns an (n,) float64 array of unit length, or
+    all-NaN for a zero or non-finite vector (the callers refuse those with a sentence).
+    """
+    v = np.asarray(vector, dtype=np.float64)
+    largest = float(np.max(np.abs(v))) if v.size else 0.0
+    if not (np.isfinite(largest) and largest > 0.0):
+        return np.full(v.shape, np.nan)
+    v = v / largest
+    return v / np.linalg.norm(v)
+
+
 def _unit(value, what: str, name: str) -> np.ndarray:
     v = _vector3(value, what, name)
-    length = float(np.linalg.norm(v))
-    if not length > 0.0:
+    if not np.any(v):
         raise InvalidParameterError(f"{what}: {name} must have a non-zero length, got {v.tolist()}.")
-    v = v / length
+    v = unit_vector(v)
     v.setflags(write=False)
     return v
 

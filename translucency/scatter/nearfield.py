@@ -84,6 +84,22 @@ def near_triangles(points, triangles, receivers, radius):
     triangle_ids : (offsets[-1],) int64
         CSR lists: the near triangles of receiver ``r`` are ``triangle_ids[offsets[r]:offsets[r+1]]``.
     """
+    args, counts, stamps = _counted(points, triangles, receivers, radius)
+    offsets = np.zeros(counts.size + 1, dtype=np.int64)
+    np.cumsum(counts, out=offsets[1:])
+    triangle_ids = np.empty(offsets[-1], dtype=np.int64)
+    for_ranges(_near_pass, counts.size, *args, offsets, triangle_ids, counts, stamps, counts.size)
+    return offsets, triangle_ids
+
+
+def near_triangle_counts(points, triangles, receivers, radius):
+    """Number of near triangles of each receiver (:func:`near_triangles` without the lists), ``(n_receivers,)``
+    int64; memory: the grid and one stamp per triangle and thread."""
+    return _counted(points, triangles, receivers, radius)[1]
+
+
+def _counted(points, triangles, receivers, radius):
+    """The grid of :func:`near_triangles` and its counting pass: ``(arguments of _near_pass, counts, stamps)``."""
     points = np.ascontiguousarray(points, dtype=np.float64)
     triangles = np.ascontiguousarray(triangles, dtype=np.int64)
     n = points.shape[0]
@@ -104,16 +120,12 @@ def near_triangles(points, triangles, receivers, radius):
     cell_start = np.append(cell_start, n).astype(np.int64)
     stamps = np.full((thread_count(), triangles.shape[0]), -1, dtype=np.int64)
     counts = np.zeros(receivers.size, dtype=np.int64)
-    none = np.empty(0, dtype=np.int64)
     visit = np.argsort(keys[receivers], kind="stable")  # receivers cell by cell: neighbours share the cells' cache lines
     args = (points, np.ascontiguousarray(points[by_key]), receivers, visit, float(radius), low, cell, dims, cell_keys,
             cell_start, by_key.astype(np.int64), vt_offsets, vt_tris)
+    none = np.empty(0, dtype=np.int64)
     for_ranges(_near_pass, receivers.size, *args, none, none, counts, stamps, 0)
-    offsets = np.zeros(receivers.size + 1, dtype=np.int64)
-    np.cumsum(counts, out=offsets[1:])
-    triangle_ids = np.empty(offsets[-1], dtype=np.int64)
-    for_ranges(_near_pass, receivers.size, *args, offsets, triangle_ids, counts, stamps, receivers.size)
-    return offsets, triangle_ids
+    return args, counts, stamps
 
 
 def _cell_keys(points, low, cell, dims):
@@ -510,7 +522,8 @@ def _corner_of(tri, vertex):
 
 def near_field_correction(model, points, triangles, triangle_areas, normals, w12, phi, receivers, offsets,
                           triangle_ids, params, channel_of, beta, scale_min, tables=None, degree3_ratio=0.0,
-                          rule_points=RULE_POINTS, rule_weights=RULE_WEIGHTS, fan_nodes=(FAN_ANGULAR, FAN_RADIAL)):
+                          rule_points=RULE_POINTS, rule_weights=RULE_WEIGHTS, fan_nodes=(FAN_ANGULAR, FAN_RADIAL),
+                          shared=None, refined_out=None):
     """Correction ``C[r, c]`` of the vertex sum for every receiver ``r`` (see the module docstring).
 
     Receivers are done in blocks of :data:`BLOCK_RECEIVERS`: (1) list each receiver's quadrature
@@ -522,7 +535,9 @@ def near_field_correction(model, points, triangles, triangle_areas, normals, w12
 
     Whole triangles use Dunavant's degree-5 rule, or the cheaper degree-3 rule (shared midpoints and
     centroids) where ``diameter <= degree3_ratio * distance`` (0: never). ``tables`` are the mesh's
-    :class:`TriangleTables` (made here when not given).
+    :class:`TriangleTables` (made here when not given); ``shared`` the :class:`SourcePoints` of the
+    same inputs (made here when not given; pass it to call this on receivers a part at a time).
+    ``refined_out`` (n_receivers,) int64, when given, receives the number of each receiver's own points.
 
     Returns
     -------
@@ -536,7 +551,9 @@ def near_field_correction(model, points, triangles, triangle_areas, normals, w12
     if not np.allclose(rule_points[0], 1.0 / 3.0):
         raise ValueError("the rule's first point must be the centroid (the degree-3 rule shares it)")
     centroid_factor = CENTROID_WEIGHT / float(rule_weights[0])  # its weight is area * w_0 * phi
-    shared = source_point_table(points, normals, w12, phi, triangles, triangle_areas, tables, rule_points, rule_weights)
+    if shared is None:
+        shared = source_point_table(points, normals, w12, phi, triangles, triangle_areas, tables, rule_points,
+                                    rule_weights)
     diameters, centroids = tables.diameters, tables.centroids
     lanes = channel_lanes(params, channel_of, phi.shape[1])
     fan = (*_gauss_legendre_unit(fan_nodes[0]), *_gauss_legendre_unit(fan_nodes[1]))
@@ -564,6 +581,8 @@ def near_field_correction(model, points, triangles, triangle_areas, normals, w12
                    shared.midpoint_column, tables.edge_of_corner, diameters, centroids, fan[0].size, fan[2].size,
                    col_offsets, columns, factors, n_columns, n_refined, start, stamps)
         n_points[block] = n_columns + n_refined
+        if refined_out is not None:
+            refined_out[block] = n_refined
         ref_offsets = np.zeros(rcv.size + 1, dtype=np.int64)
         np.cumsum(n_refined, out=ref_offsets[1:])
         size = int(ref_offsets[-1])

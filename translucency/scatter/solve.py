@@ -35,14 +35,15 @@ B         diffuse radiance factor sum S_d Phi (+ near field)        W/(m^2 sr)
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from dataclasses import dataclass, field
 from typing import Callable
 
 import numpy as np
 
-from ..errors import InvalidParameterError
-from . import cutoff, hierarchy, kernels, nearfield
+from ..errors import BudgetError, InvalidParameterError, option
+from . import budget, cutoff, hierarchy, kernels, nearfield
 from .medium import Medium
 
 __all__ = ["SurfaceGeometry", "Solution", "solve", "METHODS", "MODELS"]
@@ -294,6 +295,8 @@ def solve(
     tol: float = 1e-3,
     receivers: np.ndarray | None = None,
     progress: Callable[[str, float], None] | None = None,
+    memory_limit: float | None = None,
+    time_limit: float | None = None,
 ) -> Solution:
     """Diffuse radiance factor ``B`` at the receiver vertices (DESIGN.md; spec 1.5, 1.7).
 
@@ -320,11 +323,24 @@ def solve(
     receivers : array_like of int, optional
         Vertices to compute ``B`` at (all by default).
     progress : callable, optional
-        Called as ``progress(stage, fraction)`` while the solver runs.
+        Called as ``progress(stage, fraction)`` while the solver runs: stages ``far field`` and
+        ``near field``, each from 0 to 1, many times per stage (after every block of receivers).
+    memory_limit : float, optional
+        GB (2**30 bytes) the process may hold; the solve's memory budget is the smaller of this (less
+        what the process holds already) and the available memory less head-room
+        (:func:`translucency.scatter.budget.memory_budget`).
+    time_limit : float, optional
+        Seconds the solve may take (by the estimate; None: no limit).
 
     Returns
     -------
     Solution
+
+    Raises
+    ------
+    BudgetError
+        Before any large allocation, when the estimated memory or time
+        (:func:`translucency.scatter.budget.estimate`) is over its budget.
     """
     timings: dict[str, float] = {}
     stats: dict[str, object] = {}
@@ -335,6 +351,7 @@ def solve(
         raise InvalidParameterError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}.")
     if not (np.isfinite(tol) and 0 < tol < 1):
         raise InvalidParameterError(f"tol must be a relative error in (0, 1), got {tol!r}.")
+    budget.check_limits(memory_limit, time_limit)
     n = geometry.n_vertices
     phi = _as_array(phi, np.float64, (n, medium.n_channels), "phi")
     w12 = _as_array(w12, np.float64, (n, 3), "w12")
@@ -367,39 +384,174 @@ def solve(
     stats["receivers"] = int(receivers.size)
     timings["setup"] = time.perf_counter() - start
 
-    report("far field", 0.0)
     start = time.perf_counter()
     rcv_points = geometry.points[inner]
     rcv_normals = geometry.normals[inner]
+    radius = near_radius(geometry, medium)
+    shared = nearfield.source_point_table(geometry.points, geometry.normals, w12, phi, geometry.triangles,
+                                          geometry.triangle_areas, geometry.triangle_tables())
+    near_args = dict(model_code=model_code, geometry=geometry, w12=w12, phi=phi, params=params,
+                     channel_of=channel_of, medium=medium, degree3_ratio=0.0 if method == "exact" else NEAR_DEGREE3_RATIO,
+                     shared=shared)
+    far_args = (model, geometry, medium, lit, w12, flux)
+    counts = sample_counts(far_args, near_args, inner, radius, method, params, channel_of, tol)
+    available = budget.available_memory()
+    plan = budget.estimate(counts, budget.memory_budget(memory_limit, available, budget.resident_memory()),
+                           time_limit, keep_lists=None if memory_limit is not None or available is not None else True)
+    stats["budget"] = {**plan.as_dict(), "counts": dataclasses.asdict(counts)}
+    timings["budget"] = time.perf_counter() - start
+    if not plan.fits:
+        raise BudgetError(over_budget_sentence(plan, n), plan)
+
+    report("far field", 0.0)
+    start = time.perf_counter()
     if lit.size == 0:
         B, far_stats = np.zeros((inner.size, medium.n_channels)), {"pairs_evaluated": 0, "pairs_skipped": 0}
     else:
         far_field = {"exact": _far_field_exact, "cutoff": _far_field_cutoff, "tree": _far_field_tree}[method]
-        B, far_stats = far_field(model, geometry, medium, lit, w12, flux, rcv_points, rcv_normals, params,
-                                 channel_of, tol)
+        B, far_stats = np.zeros((inner.size, medium.n_channels)), {}
+        step = FAR_CHUNK * max(1, -(-inner.size // (budget.PROGRESS_STEPS * FAR_CHUNK)))
+        for first in range(0, inner.size, step):
+            part = slice(first, min(inner.size, first + step))
+            B[part], part_stats = far_field(*far_args, rcv_points[part], rcv_normals[part], params, channel_of, tol)
+            far_stats = _merge_stats(far_stats, part_stats)
+            report("far field", part.stop / inner.size)
     stats.update(far_stats)
     timings["far_field"] = time.perf_counter() - start
     report("far field", 1.0)
 
     report("near field", 0.0)
     start = time.perf_counter()
-    radius = near_radius(geometry, medium)
-    offsets, triangle_ids = geometry.near_lists(inner, radius)
-    timings["near_lists"] = time.perf_counter() - start
-    start = time.perf_counter()
-    correction, near_points = nearfield.near_field_correction(
-        model_code, geometry.points, geometry.triangles, geometry.triangle_areas, geometry.normals, w12, phi,
-        inner, offsets, triangle_ids, params, channel_of, NEAR_BETA, float(np.min(medium.D)),
-        tables=geometry.triangle_tables(), degree3_ratio=0.0 if method == "exact" else NEAR_DEGREE3_RATIO)
+    correction, near_triangles, near_points, list_seconds = _near_field(near_args, inner, radius, plan, report)
     B = B + correction
     negative = B < 0
     stats["near_radius_mm"] = radius
-    stats["near_triangles"] = int(triangle_ids.size)
-    stats["near_points"] = int(near_points.sum())
+    stats["near_triangles"] = near_triangles
+    stats["near_points"] = near_points
+    stats["near_lists_kept"] = plan.keep_lists
     stats["negative_clamped"] = int(negative.sum())
     B[negative] = 0.0
     B[visit] = B.copy()  # rows back in the order of ``receivers``
-    timings["near_field"] = time.perf_counter() - start
+    timings["near_lists"] = list_seconds
+    timings["near_field"] = time.perf_counter() - start - list_seconds
     report("near field", 1.0)
     settings = {"model": model, "method": method, "tol": tol, "medium": medium.describe()}
     return Solution(B=B, receivers=receivers, stats=stats, timings=timings, settings=settings)
+
+
+#: Receivers per far-field call are a multiple of this (the tree's block: its groups, and so ``B``,
+#: are the same as in one call).
+FAR_CHUNK = 4096
+#: Receivers sampled for the budget's counts: groups of 4 neighbours (the tree's groups).
+SAMPLE_GROUPS = 64
+#: Most near-triangle entries the near-field sample may list (bounds its memory: ~170 bytes each).
+SAMPLE_NEAR_ENTRIES = 500_000
+
+
+def _merge_stats(total: dict, part: dict) -> dict:
+    """Far-field statistics of receiver chunks: counters add up, settings (radius, theta) stay."""
+    counters = ("pairs_evaluated", "pairs_skipped", "pairs_direct", "cluster_evaluations", "clamped_values")
+    merged = dict(total)
+    for key, value in part.items():
+        merged[key] = merged.get(key, 0) + value if key in counters else value
+    return merged
+
+
+def _near_call(args, receivers, offsets, triangle_ids, own=None):
+    """:func:`translucency.scatter.nearfield.near_field_correction` on some receivers with their lists."""
+    g = args["geometry"]
+    return nearfield.near_field_correction(
+        args["model_code"], g.points, g.triangles, g.triangle_areas, g.normals, args["w12"], args["phi"], receivers,
+        offsets, triangle_ids, args["params"], args["channel_of"], NEAR_BETA, float(np.min(args["medium"].D)),
+        tables=g.triangle_tables(), degree3_ratio=args["degree3_ratio"], shared=args["shared"], refined_out=own)
+
+
+def sample_counts(far_args, near_args, inner, radius, method, params, channel_of, tol) -> "budget.SolveCounts":
+    """The budget's counts from a sample of receivers (:data:`SAMPLE_GROUPS` groups of 4 neighbours, all
+    receivers when there are few): near triangles, near-field points and far-field evaluations per receiver."""
+    import numba
+
+    model, geometry, medium, lit, w12, flux = far_args
+    n_r = inner.size
+    groups = -(-n_r // 4)
+    if groups <= SAMPLE_GROUPS:
+        sample = np.arange(n_r)
+    else:
+        chosen = np.sort(np.random.default_rng(0).choice(groups, SAMPLE_GROUPS, replace=False))
+        sample = np.unique(np.minimum((4 * chosen[:, None] + np.arange(4)).ravel(), n_r - 1))
+    rcv = inner[sample]
+    near = nearfield.near_triangle_counts(geometry.points, geometry.triangles, rcv, radius) if rcv.size else np.zeros(0)
+    # the near field on as many sampled receivers as SAMPLE_NEAR_ENTRIES allows (at least two groups)
+    take = min(rcv.size, max(8, int(SAMPLE_NEAR_ENTRIES // max(1.0, float(near.mean()) if near.size else 1.0))))
+    near_rcv = rcv[np.unique(np.linspace(0, rcv.size - 1, take).astype(np.int64))] if take else rcv
+    points = own = np.zeros(0)
+    if near_rcv.size:
+        offsets, ids = nearfield.near_triangles(geometry.points, geometry.triangles, near_rcv, radius)
+        own = np.zeros(near_rcv.size, dtype=np.int64)
+        _, points = _near_call(near_args, near_rcv, offsets, ids, own)
+    far = 0.0
+    if lit.size and rcv.size:
+        if method == "exact":
+            far = float(lit.size)
+        else:
+            far_field = {"cutoff": _far_field_cutoff, "tree": _far_field_tree}[method]
+            _, far_stats = far_field(*far_args, geometry.points[rcv], geometry.normals[rcv], params, channel_of, tol)
+            far = far_stats["pairs_evaluated"] / rcv.size
+    mean = lambda a: float(a.mean()) if a.size else 0.0  # noqa: E731
+    return budget.SolveCounts(geometry.n_vertices, int(geometry.triangles.shape[0]), int(n_r), int(lit.size),
+                              int(flux.shape[1]), numba.get_num_threads(), method, mean(near), mean(points), mean(own),
+                              far)
+
+
+def over_budget_sentence(plan: "budget.SolveEstimate", n_vertices: int) -> str:
+    """One sentence saying which budget a solve of ``n_vertices`` is over and what to change."""
+    if plan.over_memory:
+        what = (f"needs about {budget.format_bytes(plan.peak_bytes)} of memory beyond what the process holds, over "
+                f"the budget of {budget.format_bytes(plan.budget_bytes)}")
+        more = option("memory_limit")
+    else:
+        what = f"would take about {budget.format_seconds(plan.seconds)}, over the limit of {budget.format_seconds(plan.time_limit)}"
+        more = option("time_limit")
+    return (f"solving at {n_vertices:,} vertices {what}; pass {option('resolution')} with a proxy edge length in mm "
+            f"(coarser), raise {more}, or check the scan's {option('unit')}.")
+
+
+def _near_field(args, inner, radius, plan, report):
+    """Near-field correction of every receiver, in blocks of the plan: ``(correction, near triangles,
+    near points, seconds spent listing)``; the same result whatever the blocks."""
+    geometry = args["geometry"]
+    n_r = inner.size
+    correction = np.zeros((n_r, args["phi"].shape[1]))
+    total_triangles = total_points = 0
+    list_seconds = 0.0
+    start = time.perf_counter()
+    if plan.keep_lists:
+        offsets, triangle_ids = geometry.near_lists(inner, radius)
+        list_seconds += time.perf_counter() - start
+        bounds = list(range(0, n_r, plan.block_receivers)) + [n_r]
+        total_triangles = int(triangle_ids.size)
+        for lo, hi in zip(bounds[:-1], bounds[1:]):
+            correction[lo:hi], points = _near_call(args, inner[lo:hi], offsets[lo:hi + 1], triangle_ids)
+            total_points += int(points.sum())
+            report("near field", hi / n_r)
+        return correction, total_triangles, total_points, list_seconds
+    # blocks with their own lists, cut where their memory reaches what the plan gives a block
+    counts = nearfield.near_triangle_counts(geometry.points, geometry.triangles, inner, radius)
+    own = budget.BYTES_PER_OWN_POINT * budget.SAMPLE_SAFETY * plan.own_points
+    cost = np.cumsum((budget.BYTES_PER_NEAR_ROOM + budget.BYTES_PER_NEAR_TRIANGLE) * counts + own)
+    cap = plan.block_bytes
+    list_seconds += time.perf_counter() - start
+    lo = 0
+    while lo < n_r:
+        hi = int(np.searchsorted(cost, (cost[lo - 1] if lo else 0.0) + cap, side="right"))
+        hi = min(n_r, max(hi, lo + 1))
+        start = time.perf_counter()
+        offsets, triangle_ids = nearfield.near_triangles(geometry.points, geometry.triangles, inner[lo:hi], radius)
+        list_seconds += time.perf_counter() - start
+        correction[lo:hi], points = _near_call(args, inner[lo:hi], offsets, triangle_ids)
+        total_triangles += int(triangle_ids.size)
+        total_points += int(points.sum())
+        del offsets, triangle_ids
+        report("near field", hi / n_r)
+        lo = hi
+    return correction, total_triangles, total_points, list_seconds

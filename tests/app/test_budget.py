@@ -1,0 +1,60 @@
+"""The budget seen from the commands and the pipeline: over it, a coarser proxy that says so, or one
+sentence and exit code 2; ordinary scans untouched."""
+
+import numpy as np
+import pytest
+
+from tests.app.test_bake import write_sphere
+from translucency.app import cli
+from translucency.app.pipeline import Scene, proxy_error
+from translucency.errors import BudgetError
+from translucency.io.mesh import TriangleMesh
+from tests.synthetic import icosphere
+
+
+@pytest.mark.parametrize("command", ["bake", "compare"])
+def test_a_tiny_memory_limit_stops_with_one_sentence_and_exit_2(command, tmp_path, capsys):
+    """--memory-limit below what the process holds: nothing is solved, one sentence names the options."""
+    scan = write_sphere(tmp_path / "sphere.ply", 3)
+    code = cli.main([command, str(scan), "--memory-limit", "0.001", "-o", str(tmp_path / "out")])
+    err = capsys.readouterr().err
+    assert code == 2, err
+    assert "--memory-limit" in err and "--resolution" in err and "Traceback" not in err
+    sentence = next(line for line in err.splitlines() if "--memory-limit" in line)
+    assert sentence.rstrip().endswith(".") and "memory_limit=" not in sentence
+    assert not (tmp_path / "out").exists() or not any((tmp_path / "out").glob("*.p*"))
+
+
+def test_a_bad_limit_is_a_usage_sentence(tmp_path, capsys):
+    """--time-limit 0 is refused before any work, naming the flag."""
+    code = cli.main(["bake", str(write_sphere(tmp_path / "s.ply", 2)), "--time-limit", "0", "-o", str(tmp_path / "o")])
+    assert code == 2 and "--time-limit must be a positive number" in capsys.readouterr().err
+
+
+def test_over_the_time_budget_the_scan_is_solved_on_a_coarser_proxy():
+    """A time limit below the full solve's estimate: a proxy that fits is solved instead, interpolated
+    to every vertex, and one line says so with the expected error."""
+    points, triangles = icosphere(5, 20.0)  # 10242 vertices
+    scene = Scene(TriangleMesh(points, triangles), shadows=False)
+    full = scene.shade("marble", time_limit=None)
+    estimate = full.stats["solver"]["budget"]["seconds"]
+    lines = []
+    result = scene.shade("marble", time_limit=0.3 * estimate, warn=lines.append)
+    assert len(lines) == 1 and "proxy" in lines[0] and "time_limit=" in lines[0] and "expected relative RMS" in lines[0]
+    assert result.stats["solver_vertices"] < full.stats["solver_vertices"] == 10242
+    assert result.stats["solver"]["budget"]["seconds"] <= 0.3 * estimate
+    assert result.B.shape == full.B.shape and np.all(np.isfinite(result.B)) and result.B.max() > 0
+    # a smooth sphere: the proxy's B stays close to the full solve's
+    assert np.sqrt(np.mean((result.B - full.B) ** 2) / np.mean(full.B ** 2)) < 0.1
+    assert result.metadata["budget"]["coarser"] == lines[0] and result.metadata["resolution"].startswith("proxy")
+
+
+def test_too_coarse_a_proxy_is_refused_instead():
+    """When the proxy that would fit keeps too few vertices, the sentence of the solver is raised."""
+    points, triangles = icosphere(3, 20.0)  # 642 vertices: below the fewest a proxy may keep
+    with pytest.raises(BudgetError, match="time_limit="):
+        Scene(TriangleMesh(points, triangles), shadows=False).shade("marble", time_limit=1e-9)
+
+
+def test_proxy_error_reads_the_measured_table():
+    assert proxy_error(0.5) == "2 %" and proxy_error(0.1) == "6 %" and proxy_error(0.001).startswith("more than")

@@ -1,0 +1,119 @@
+"""The solve's memory and time budget: sampled counts against measured ones, blocks that change nothing,
+refusal before the work, and progress during the solve."""
+
+import numpy as np
+import pytest
+
+from tests.synthetic import icosphere
+from translucency.errors import BudgetError, InvalidParameterError
+from translucency.io.geometry import vertex_normals
+from translucency.scatter import budget, fresnel, solve
+from translucency.scatter.materials import material
+
+
+def _scene(level, radius, name="marble"):
+    """An icosphere (mm) lit from +z without shadows: geometry, phi, w12, medium."""
+    medium = material(name).medium()
+    points, triangles = icosphere(level, radius)
+    normals = vertex_normals(points, triangles)
+    light = np.array([0.0, 0.3, 1.0]) / np.hypot(0.3, 1.0)
+    cos = normals @ light
+    phi = np.repeat(np.where(cos > 0, fresnel.fresnel_transmittance(cos, medium.eta) * cos, 0.0)[:, None], 3, axis=1)
+    w12 = fresnel.refract(np.broadcast_to(light, normals.shape), normals, medium.eta)
+    return solve.SurfaceGeometry(points, triangles, normals), phi, w12, medium
+
+
+@pytest.mark.parametrize("level, radius, method", [(4, 20.0, "tree"), (5, 20.0, "tree"), (4, 3.0, "cutoff")])
+def test_sampled_counts_match_the_counts_of_the_whole_solve(level, radius, method):
+    """The counts the budget samples (near triangles, near-field points, far-field evaluations per
+    receiver) are within 25 % of what the whole solve counts on every receiver."""
+    geometry, phi, w12, medium = _scene(level, radius)
+    solution = solve.solve(geometry, phi, w12, medium, method=method, tol=1e-2)
+    n = geometry.n_vertices
+    stats = solution.stats
+    sampled = stats["budget"]["counts"]
+    assert sampled["near_triangles"] == pytest.approx(stats["near_triangles"] / n, rel=0.25)
+    assert sampled["near_points"] == pytest.approx(stats["near_points"] / n, rel=0.25)
+    assert sampled["far_evaluations"] == pytest.approx(stats["pairs_evaluated"] / n, rel=0.25)
+    assert stats["budget"]["fits"] and stats["budget"]["keep_lists"]
+
+
+def test_estimate_is_refused_over_the_time_limit_before_the_work():
+    """A time limit below the estimate stops the solve at once with a sentence naming the options."""
+    geometry, phi, w12, medium = _scene(3, 20.0)
+    calls = []
+    with pytest.raises(BudgetError, match=r"resolution=.*time_limit=") as info:
+        solve.solve(geometry, phi, w12, medium, method="tree", time_limit=1e-9,
+                    progress=lambda stage, fraction: calls.append(stage))
+    assert info.value.estimate.over_time and not info.value.estimate.fits
+    assert calls == []  # refused before the far field started
+
+
+def test_memory_budget_of_zero_is_refused():
+    """No memory left to the solve: refused with the memory sentence (naming memory_limit=)."""
+    geometry, phi, w12, medium = _scene(3, 20.0)
+    with pytest.raises(BudgetError, match=r"memory_limit=") as info:
+        solve.solve(geometry, phi, w12, medium, method="tree", memory_limit=1e-6)
+    assert info.value.estimate.over_memory
+
+
+@pytest.mark.parametrize("value", [0, -1, float("nan"), "a lot", True])
+def test_limits_must_be_positive_numbers(value):
+    """memory_limit and time_limit that are not positive numbers are refused in one sentence."""
+    geometry, phi, w12, medium = _scene(2, 20.0)
+    with pytest.raises(InvalidParameterError, match="must be a positive number"):
+        solve.solve(geometry, phi, w12, medium, memory_limit=value)
+    with pytest.raises(InvalidParameterError, match="must be a positive number"):
+        solve.solve(geometry, phi, w12, medium, time_limit=value)
+
+
+def test_receivers_in_blocks_give_the_same_result_to_the_bit(monkeypatch):
+    """When the near lists of every receiver do not fit, receivers go in blocks with their own lists:
+    B is identical to the solve that keeps every list."""
+    geometry, phi, w12, medium = _scene(4, 8.0, "skim milk")
+    whole = solve.solve(geometry, phi, w12, medium, method="tree", tol=1e-2)
+    plan = whole.stats["budget"]
+    assert plan["keep_lists"]
+    # an available memory that leaves room for a few blocks but not for every list
+    room = plan["base_bytes"] + plan["far_bytes"] + 0.1 * plan["lists_bytes"] + 64 * plan["receiver_bytes"]
+    available = (room + budget.HEADROOM_BYTES) / (1 - budget.HEADROOM_FRACTION) + budget.HEADROOM_BYTES
+    monkeypatch.setattr(budget, "available_memory", lambda: room + budget.HEADROOM_BYTES)
+    calls = []
+    blocked = solve.solve(solve.SurfaceGeometry(geometry.points, geometry.triangles, geometry.normals), phi, w12,
+                          medium, method="tree", tol=1e-2, progress=lambda stage, f: calls.append((stage, f)))
+    assert available > room
+    assert not blocked.stats["near_lists_kept"]
+    assert blocked.stats["budget"]["block_receivers"] < geometry.n_vertices
+    np.testing.assert_array_equal(blocked.B, whole.B)
+    assert blocked.stats["near_triangles"] == whole.stats["near_triangles"]
+    near = [f for stage, f in calls if stage == "near field" and 0 < f < 1]
+    assert len(near) >= 3  # one call per block
+
+
+def test_progress_is_reported_many_times_during_one_solve():
+    """The progress callback moves within the far field and the near field (per block of receivers),
+    not only at their ends, and its fractions never go back."""
+    geometry, phi, w12, medium = _scene(5, 20.0)  # 10242 receivers: 3 far-field chunks, 5 near-field blocks
+    calls = []
+    solve.solve(geometry, phi, w12, medium, method="tree", tol=1e-2, progress=lambda stage, f: calls.append((stage, f)))
+    for stage in ("far field", "near field"):
+        fractions = [f for s, f in calls if s == stage]
+        assert len([f for f in fractions if 0 < f < 1]) >= 2
+        assert fractions == sorted(fractions) and fractions[0] == 0.0 and fractions[-1] == 1.0
+
+
+def test_estimate_arithmetic():
+    """More near triangles per receiver cost memory and time; a budget below the lists of every receiver
+    gives blocks that fit it; the byte and second texts read as expected."""
+    counts = budget.SolveCounts(10_000, 20_000, 10_000, 5_000, 3, 2, "tree", 200.0, 400.0, 50.0, 1_000.0)
+    small = budget.estimate(counts)
+    large = budget.estimate(budget.SolveCounts(*[*counts.__dict__.values()][:7], 20_000.0, 40_000.0, 50.0, 1_000.0))
+    assert large.peak_bytes > small.peak_bytes and large.seconds > small.seconds
+    cap = small.base_bytes + 0.5 * large.lists_bytes
+    blocked = budget.estimate(budget.SolveCounts(*[*counts.__dict__.values()][:7], 20_000.0, 40_000.0, 50.0, 1_000.0),
+                              cap)
+    assert not blocked.keep_lists and blocked.fits and blocked.peak_bytes <= cap
+    assert budget.memory_budget(4, None, budget.GB) == 3 * budget.GB
+    assert budget.memory_budget(None, 10 * budget.GB) == pytest.approx(9 * budget.GB)
+    assert budget.memory_budget(None, None) is None
+    assert budget.format_bytes(3.2 * budget.GB) == "3.2 GB" and budget.format_seconds(720) == "12 min"

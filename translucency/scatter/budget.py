@@ -1,0 +1,309 @@
+"""Memory and time a solve needs, estimated from cheap counts before any large allocation.
+
+:func:`translucency.scatter.solve.solve` counts, on a sample of receivers, what the work depends on
+(near triangles, near-field quadrature points, far-field evaluations per receiver), hands the counts
+to :func:`estimate`, and gets back a plan: whether the near-triangle lists of every receiver can be
+kept at once (as without a budget) or the receivers are processed in blocks whose lists are made
+and dropped one after the other (the same result, to the bit, with the memory of one block), how
+large the blocks are, the peak memory and the seconds the solve should take. A plan that does not
+fit the memory budget even with the smallest blocks, or whose time is over the time budget, is
+refused (:class:`~translucency.errors.BudgetError`, raised by the solver) before the work starts.
+
+The byte counts per vertex, triangle, near triangle and quadrature point follow the arrays the
+solver allocates (listed at each constant); the rates are measured (``bench/budget.py``, where the
+estimates are compared with the measured peak memory and time; summary in ``bench/README.md``).
+
+=================== ================================================================ ======
+symbol              meaning                                                          unit
+=================== ================================================================ ======
+n, m                vertices, triangles of the solver's mesh                         1
+n_near              near triangles of a receiver (a vertex within the near radius)   1
+points              near-field quadrature points evaluated at a receiver             1
+own                 of those, the receiver's own points (fan rule, refined pieces)   1
+far                 far-field evaluations (sources and clusters) of a receiver       1
+budget              memory the solve may take on top of what the process holds       bytes
+=================== ================================================================ ======
+
+Everything here is arithmetic on numbers, except :func:`available_memory` and :func:`resident_memory`,
+which read what the operating system says.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import asdict, dataclass
+
+from ..errors import InvalidParameterError, option
+
+#: One gigabyte as ``memory_limit`` counts it (2**30 bytes, GiB).
+GB = 2 ** 30
+#: Head-room left of the available memory: this fraction of it, and at least this many bytes.
+HEADROOM_FRACTION = 0.10
+HEADROOM_BYTES = 256 * 2 ** 20
+#: Seconds a solve may take unless told otherwise (``time_limit``); the estimate is checked against it.
+DEFAULT_TIME_LIMIT_S = 300.0
+
+#: Bytes per vertex the solve holds throughout: positions and normals (given and Morton-ordered),
+#: flux density and refracted direction (given, ordered, flux), areas, the source tree and its
+#: aggregated table, the near field's shared point table (vertex columns), ``B`` and its correction.
+BYTES_PER_VERTEX = 800
+#: Bytes per triangle: indices (given, ordered), triangle tables (diameters, centroids, edges), the
+#: vertex-to-triangle lists of the near-triangle grid, and the shared table's Dunavant points and
+#: edge midpoints (7 + 1.5 columns of 12 float64 where light enters).
+BYTES_PER_TRIANGLE = 1100
+#: Bytes per triangle and numba thread: the stamps of the near lists (1 int64) and of the listing
+#: of quadrature points (2 int64 per vertex and per edge).
+BYTES_PER_TRIANGLE_THREAD = 8 + 2 * 8 * 1.5 + 2 * 8 * 0.5
+#: Bytes of a near-triangle list entry (int64), kept for every receiver or for one block.
+BYTES_PER_NEAR_TRIANGLE = 8
+#: Bytes per near triangle while a receiver's points are listed: room for 10 columns (3 vertices and
+#: 7 rule points) of an int64 index and a float64 factor.
+BYTES_PER_NEAR_ROOM = 10 * 16
+#: Bytes per own quadrature point: 9 + 3 float64, with a quarter more room.
+BYTES_PER_OWN_POINT = 1.25 * 12 * 8
+#: Far field of ``tree``: the sources and clusters of a block of 4096 receivers (1024 groups), an int64
+#: column and a float64 factor each.
+BYTES_PER_FAR_EVALUATION = 16 * 1024
+#: Receivers a near-field call handles at least (below this the per-call overhead dominates).
+MIN_BLOCK_RECEIVERS = 16
+#: Near-field calls per solve when everything fits (the progress callback is called after each).
+PROGRESS_STEPS = 16
+#: Safety factor on the sampled per-receiver counts (blocks are sized on the sample's mean).
+SAMPLE_SAFETY = 1.5
+
+#: Measured rates, per numba thread: far-field evaluations per second by method, near-field
+#: quadrature points per second, near-list entries per second (counting and filling), and the
+#: seconds per vertex of the set-up (ordering, tables, tree); measured on the 2-core machine at a load
+#: of about 4, so pessimistic on a quiet one. See ``bench/budget.py``.
+FAR_RATE = {"exact": 40e6, "cutoff": 15e6, "tree": 12e6}
+NEAR_RATE = 3e6
+LIST_RATE = 60e6
+SETUP_SECONDS_PER_VERTEX = 2e-6
+
+
+@dataclass(frozen=True)
+class SolveCounts:
+    """What the work of one solve depends on (sampled per receiver where it varies).
+
+    Attributes
+    ----------
+    n_vertices, n_triangles, n_receivers, n_lit, n_channels : int
+        Sizes of the solve (``n_lit``: vertices with flux).
+    threads : int
+        numba threads.
+    method : str
+        Far-field method (``exact``, ``cutoff``, ``tree``).
+    near_triangles, near_points, own_points, far_evaluations : float
+        Per receiver, the sample's means: near triangles, near-field quadrature points evaluated,
+        of those the receiver's own, and far-field evaluations.
+    """
+
+    n_vertices: int
+    n_triangles: int
+    n_receivers: int
+    n_lit: int
+    n_channels: int
+    threads: int
+    method: str
+    near_triangles: float
+    near_points: float
+    own_points: float
+    far_evaluations: float
+
+
+@dataclass(frozen=True)
+class SolveEstimate:
+    """The plan of a solve and what it costs (:func:`estimate`).
+
+    Attributes
+    ----------
+    base_bytes : float
+        Per-vertex and per-triangle arrays held during the whole solve, bytes.
+    far_bytes : float
+        Extra memory of the far field, bytes.
+    lists_bytes : float
+        Near-triangle lists of every receiver at once, bytes.
+    receiver_bytes : float
+        Near-field memory per receiver of a block, bytes.
+    keep_lists : bool
+        The lists of every receiver are made at once and kept (as without a budget); otherwise
+        receivers go in blocks of ``block_receivers``, each with its own lists.
+    block_receivers : int
+        Receivers per near-field call (blocks: of the sample's mean size).
+    block_bytes : float
+        Memory a block of receivers may take in the near field, bytes.
+    own_points : float
+        Own quadrature points per receiver (the sample's mean).
+    peak_bytes : float
+        Estimated peak memory of the solve on top of what the process held before it, bytes.
+    seconds : float
+        Estimated wall time, s.
+    budget_bytes, time_limit : float or None
+        The budgets it was planned for (None: none).
+    fits : bool
+        Within both budgets.
+    """
+
+    base_bytes: float
+    far_bytes: float
+    lists_bytes: float
+    receiver_bytes: float
+    keep_lists: bool
+    block_receivers: int
+    block_bytes: float
+    own_points: float
+    peak_bytes: float
+    seconds: float
+    budget_bytes: float | None
+    time_limit: float | None
+    fits: bool
+
+    def as_dict(self) -> dict:
+        """The estimate as plain numbers (for a result's statistics)."""
+        return asdict(self)
+
+    @property
+    def over_memory(self) -> bool:
+        """The memory needed exceeds the memory budget."""
+        return self.budget_bytes is not None and self.peak_bytes > self.budget_bytes
+
+    @property
+    def over_time(self) -> bool:
+        """The estimated time exceeds the time budget."""
+        return self.time_limit is not None and self.seconds > self.time_limit
+
+
+def solve_seconds(counts: SolveCounts) -> float:
+    """Estimated wall time (s) of a solve from its counts and the measured rates."""
+    threads = max(1, counts.threads)
+    n_r = counts.n_receivers
+    far = n_r * counts.far_evaluations / FAR_RATE.get(counts.method, FAR_RATE["exact"])
+    lists = 2 * n_r * counts.near_triangles / LIST_RATE
+    near = n_r * counts.near_points / NEAR_RATE
+    return (far + lists + near) / threads + SETUP_SECONDS_PER_VERTEX * counts.n_vertices
+
+
+def estimate(counts: SolveCounts, budget_bytes: float | None = None, time_limit: float | None = None,
+             keep_lists: bool | None = None) -> SolveEstimate:
+    """Plan a solve: keep every near list or go in blocks, the block size, peak memory (bytes), time (s).
+
+    Parameters
+    ----------
+    counts : SolveCounts
+    budget_bytes : float, optional
+        Memory the solve may take, bytes (None: no limit).
+    time_limit : float, optional
+        Seconds the solve may take (None: no limit).
+    keep_lists : bool, optional
+        Force keeping every receiver's lists (True) or blocks (False); by default the lists are kept
+        when that fits the budget.
+
+    Returns
+    -------
+    SolveEstimate
+    """
+    n, m, n_r = counts.n_vertices, counts.n_triangles, counts.n_receivers
+    base = (BYTES_PER_VERTEX * n + BYTES_PER_TRIANGLE * m + BYTES_PER_TRIANGLE_THREAD * m * max(1, counts.threads)
+            + 3 * 8 * counts.n_channels * n_r)
+    far = (BYTES_PER_FAR_EVALUATION * counts.far_evaluations if counts.method == "tree"
+           else 9 * 8 * counts.n_lit)
+    near_triangles = SAMPLE_SAFETY * counts.near_triangles
+    lists = BYTES_PER_NEAR_TRIANGLE * n_r * near_triangles
+    per_receiver = BYTES_PER_NEAR_ROOM * near_triangles + BYTES_PER_OWN_POINT * SAMPLE_SAFETY * counts.own_points
+    steps = max(1, math.ceil(n_r / PROGRESS_STEPS))
+    usual = min(n_r, max(2048, -(-steps // 2048) * 2048))  # a multiple of the near field's own blocks
+    keep_peak = base + max(far, lists + per_receiver * usual)
+    if keep_lists is None:
+        keep_lists = budget_bytes is None or keep_peak <= budget_bytes
+    if keep_lists:
+        block, block_bytes, peak = usual, per_receiver * usual, keep_peak
+    else:
+        per_block = per_receiver + BYTES_PER_NEAR_TRIANGLE * near_triangles
+        room = (budget_bytes - base) if budget_bytes is not None else per_block * usual
+        block = int(min(usual, max(MIN_BLOCK_RECEIVERS, room // per_block if per_block > 0 else usual)))
+        block_bytes = per_block * block
+        peak = base + max(far, block_bytes)
+    seconds = solve_seconds(counts)
+    fits = (budget_bytes is None or peak <= budget_bytes) and (time_limit is None or seconds <= time_limit)
+    return SolveEstimate(base, far, lists, per_receiver, bool(keep_lists), max(1, block), block_bytes,
+                         counts.own_points, peak, seconds, budget_bytes, time_limit, bool(fits))
+
+
+def check_limits(memory_limit, time_limit) -> None:
+    """Refuse a ``memory_limit`` (GB) or ``time_limit`` (s) that is not a positive number, in one sentence."""
+    for name, value, unit in (("memory_limit", memory_limit, "GB"), ("time_limit", time_limit, "seconds")):
+        if value is None:
+            continue
+        try:
+            number = float(value)
+        except (TypeError, ValueError):
+            number = float("nan")
+        if isinstance(value, bool) or not (math.isfinite(number) and number > 0):
+            raise InvalidParameterError(f"{option(name)} must be a positive number of {unit}, got {value!r}.")
+
+
+def memory_budget(memory_limit: float | None, available: float | None, resident: float = 0.0) -> float | None:
+    """Bytes a solve may take: the smaller of the available memory less head-room and ``memory_limit``
+    (GB, :data:`GB`) less what the process holds already (``resident``, bytes); None when neither is known."""
+    candidates = []
+    if available is not None:
+        candidates.append(available - max(HEADROOM_FRACTION * available, HEADROOM_BYTES))
+    if memory_limit is not None:
+        candidates.append(memory_limit * GB - resident)
+    return max(0.0, min(candidates)) if candidates else None
+
+
+def format_bytes(size: float) -> str:
+    """``size`` bytes as a short text (``"3.2 GB"``, ``"850 MB"``), in units of 2**30 and 2**20."""
+    return f"{size / GB:.1f} GB" if size >= GB else f"{size / 2 ** 20:.0f} MB"
+
+
+def format_seconds(seconds: float) -> str:
+    """A duration as a short text (``"40 s"``, ``"12 min"``, ``"3.5 h"``)."""
+    if seconds < 10:
+        return f"{seconds:.2g} s"
+    if seconds < 90:
+        return f"{seconds:.0f} s"
+    if seconds < 5400:
+        return f"{seconds / 60:.0f} min"
+    return f"{seconds / 3600:.1f} h"
+
+
+# ----------------------------------------------------------------------------------------------------
+# what the operating system says
+# ----------------------------------------------------------------------------------------------------
+def available_memory() -> float | None:
+    """Bytes this process can still take: ``MemAvailable`` of ``/proc/meminfo``, lowered to what a
+    cgroup memory limit (v2 ``memory.max``, v1 ``memory.limit_in_bytes``) leaves; None where unknown."""
+    values = []
+    try:
+        with open("/proc/meminfo") as f:
+            for line in f:
+                if line.startswith("MemAvailable:"):
+                    values.append(float(line.split()[1]) * 1024)
+                    break
+    except (OSError, ValueError, IndexError):
+        pass
+    for limit_file, usage_file in (("/sys/fs/cgroup/memory.max", "/sys/fs/cgroup/memory.current"),
+                                   ("/sys/fs/cgroup/memory/memory.limit_in_bytes",
+                                    "/sys/fs/cgroup/memory/memory.usage_in_bytes")):
+        try:
+            with open(limit_file) as f:
+                limit = f.read().strip()
+            with open(usage_file) as f:
+                usage = float(f.read().strip())
+        except (OSError, ValueError):
+            continue
+        if limit != "max" and float(limit) < 2 ** 60:  # "max" or a huge number: no limit
+            values.append(max(0.0, float(limit) - usage))
+    return min(values) if values else None
+
+
+def resident_memory() -> float:
+    """Bytes of memory this process holds now (resident set); 0 where unknown."""
+    try:
+        with open("/proc/self/statm") as f:
+            return float(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE")
+    except (OSError, ValueError, IndexError):
+        return 0.0
