@@ -29,7 +29,8 @@ import numpy as np
 from scipy import integrate, optimize
 
 from . import dipoles, fresnel
-from .kernels import channel_lanes, group_inputs, pair_three, source_columns, store_three, table_rows
+from .kernels import (MODEL_DIRECTIONAL, channel_lanes, group_inputs, pair_three, rows_kernel, source_columns, store_three,
+                      table_rows)
 from .medium import Medium
 from .threads import for_ranges
 
@@ -132,12 +133,28 @@ def cutoff_sum(model, grid_order, grid_start, origin, cell, dims, radius, src_po
     n_rcv = rcv_points.shape[0]
     B = np.zeros((n_rcv, weights.shape[0]))
     evaluated = np.zeros(n_rcv, dtype=np.int64)
-    for_ranges(_cutoff_rows, n_rcv, model, table, weights, grid_start, origin, float(cell), dims, float(radius),
+    for_ranges(rows_kernel(model, _cutoff_rows_directional, _cutoff_rows_radial), n_rcv, model, table, weights, grid_start, origin, float(cell), dims, float(radius),
                rcv_points, rcv_normals, lanes, B, evaluated)
     return B, evaluated
 
 
 @numba.njit(cache=True, nogil=True, fastmath=True, error_model="numpy")
+def _cutoff_rows_directional(worker, lo, hi, model, table, weights, grid_start, origin, cell, dims, radius, rcv_points,
+                             rcv_normals, lanes, B, evaluated):
+    """:func:`_cutoff_rows` of the directional dipole (``model`` is ignored: a constant here)."""
+    _cutoff_rows(worker, lo, hi, MODEL_DIRECTIONAL, table, weights, grid_start, origin, cell, dims, radius, rcv_points,
+                 rcv_normals, lanes, B, evaluated)
+
+
+@numba.njit(cache=True, nogil=True, fastmath=True, error_model="numpy")
+def _cutoff_rows_radial(worker, lo, hi, model, table, weights, grid_start, origin, cell, dims, radius, rcv_points,
+                        rcv_normals, lanes, B, evaluated):
+    """:func:`_cutoff_rows` of the standard and better dipoles."""
+    _cutoff_rows(worker, lo, hi, model, table, weights, grid_start, origin, cell, dims, radius, rcv_points,
+                 rcv_normals, lanes, B, evaluated)
+
+
+@numba.njit(cache=True, inline="always", fastmath=True, error_model="numpy")
 def _cutoff_rows(worker, lo, hi, model, table, weights, grid_start, origin, cell, dims, radius, rcv_points, rcv_normals,
                  lanes, B, evaluated):
     """Receivers ``lo .. hi - 1`` of :func:`cutoff_sum`."""
@@ -160,16 +177,33 @@ def _cutoff_rows(worker, lo, hi, model, table, weights, grid_start, origin, cell
             for i in range(max(ci - reach, 0), min(ci + reach + 1, dims[0])):
                 for j in range(max(cj - reach, 0), min(cj + reach + 1, dims[1])):
                     base = (i * dims[1] + j) * dims[2]
-                    for q in range(grid_start[base + max(ck - reach, 0)], grid_start[base + min(ck + reach + 1, dims[2])]):
-                        x0 = px - X0[q]
-                        x1 = py - X1[q]
-                        x2 = pz - X2[q]
-                        inside = x0 * x0 + x1 * x1 + x2 * x2 <= r2max
-                        e0, e1, e2 = pair_three(model, x0, x1, x2, N0[q], N1[q], N2[q], W0[q], W1[q], W2[q], nx, ny, nz,
-                                                p0, p1, p2)
-                        count += inside
-                        a0 += (max(e0, 0.0) if inside else 0.0) * F0[q]
-                        a1 += (max(e1, 0.0) if inside else 0.0) * F1[q]
-                        a2 += (max(e2, 0.0) if inside else 0.0) * F2[q]
+                    first = grid_start[base + max(ck - reach, 0)]
+                    last = grid_start[base + min(ck + reach + 1, dims[2])]
+                    b0, b1, b2, n = _cell_sources(model, first, last, r2max, X0, X1, X2, N0, N1, N2, W0, W1, W2, px,
+                                                  py, pz, nx, ny, nz, p0, p1, p2, F0, F1, F2)
+                    a0 += b0
+                    a1 += b1
+                    a2 += b2
+                    count += n
             store_three(B, o, c0, n_out, a0, a1, a2)
         evaluated[o] = count
+
+
+@numba.njit(cache=True, inline="always", fastmath=True)
+def _cell_sources(model, first, last, r2max, X0, X1, X2, N0, N1, N2, W0, W1, W2, px, py, pz, nx, ny, nz, p0, p1, p2,
+                  F0, F1, F2):
+    """Sum over the sources ``first .. last - 1`` within ``sqrt(r2max)`` mm of three channels' clamped
+    ``S_d`` times flux at one receiver, and how many were within."""
+    a0 = a1 = a2 = 0.0
+    count = 0
+    for q in range(first, last):
+        x0 = px - X0[q]
+        x1 = py - X1[q]
+        x2 = pz - X2[q]
+        inside = x0 * x0 + x1 * x1 + x2 * x2 <= r2max
+        e0, e1, e2 = pair_three(model, x0, x1, x2, N0[q], N1[q], N2[q], W0[q], W1[q], W2[q], nx, ny, nz, p0, p1, p2)
+        count += inside
+        a0 += (max(e0, 0.0) if inside else 0.0) * F0[q]
+        a1 += (max(e1, 0.0) if inside else 0.0) * F1[q]
+        a2 += (max(e2, 0.0) if inside else 0.0) * F2[q]
+    return a0, a1, a2, count

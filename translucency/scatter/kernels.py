@@ -342,11 +342,24 @@ def vertex_sum(model, src_points, src_normals, src_w12, src_flux, rcv_points, rc
     n_rcv = rcv_points.shape[0]
     B = np.zeros((n_rcv, n_out))
     clamped = np.zeros(n_rcv, dtype=np.int64)
-    for_ranges(_vertex_rows, n_rcv, model, table, weights, rcv_points, rcv_normals, lanes, counted, B, clamped)
+    for_ranges(rows_kernel(model, _vertex_rows_directional, _vertex_rows_radial), n_rcv, model, table, weights, rcv_points, rcv_normals, lanes, counted, B, clamped)
     return B, clamped
 
 
 @numba.njit(cache=True, nogil=True, fastmath=True, error_model="numpy")
+def _vertex_rows_directional(worker, lo, hi, model, table, weights, rcv_points, rcv_normals, lanes, counted, B,
+                             clamped):
+    """:func:`_vertex_rows` of the directional dipole (``model`` is ignored: a constant here)."""
+    _vertex_rows(worker, lo, hi, MODEL_DIRECTIONAL, table, weights, rcv_points, rcv_normals, lanes, counted, B, clamped)
+
+
+@numba.njit(cache=True, nogil=True, fastmath=True, error_model="numpy")
+def _vertex_rows_radial(worker, lo, hi, model, table, weights, rcv_points, rcv_normals, lanes, counted, B, clamped):
+    """:func:`_vertex_rows` of the standard and better dipoles."""
+    _vertex_rows(worker, lo, hi, model, table, weights, rcv_points, rcv_normals, lanes, counted, B, clamped)
+
+
+@numba.njit(cache=True, inline="always", fastmath=True, error_model="numpy")
 def _vertex_rows(worker, lo, hi, model, table, weights, rcv_points, rcv_normals, lanes, counted, B, clamped):
     """Receivers ``lo .. hi - 1`` of :func:`vertex_sum`."""
     n_src = table.shape[1]
@@ -360,18 +373,36 @@ def _vertex_rows(worker, lo, hi, model, table, weights, rcv_points, rcv_normals,
             c0 = 3 * group
             F0, F1, F2, p0, p1, p2 = group_inputs(weights, lanes, c0)
             k0, k1, k2 = counted[c0], counted[c0 + 1], counted[c0 + 2]
-            a0 = 0.0
-            a1 = 0.0
-            a2 = 0.0
-            for j in range(n_src):
-                e0, e1, e2 = pair_three(model, px - X0[j], py - X1[j], pz - X2[j], N0[j], N1[j], N2[j], W0[j], W1[j],
-                                        W2[j], nx, ny, nz, p0, p1, p2)
-                count += (e0 < 0.0) * k0 + (e1 < 0.0) * k1 + (e2 < 0.0) * k2
-                a0 += max(e0, 0.0) * F0[j]
-                a1 += max(e1, 0.0) * F1[j]
-                a2 += max(e2, 0.0) * F2[j]
+            a0, a1, a2, n = _vertex_sources(model, n_src, X0, X1, X2, N0, N1, N2, W0, W1, W2, px, py, pz, nx, ny, nz,
+                                            p0, p1, p2, F0, F1, F2, k0, k1, k2)
+            count += n
             store_three(B, o, c0, n_out, a0, a1, a2)
         clamped[o] = count
+
+
+@numba.njit(cache=True, inline="always", fastmath=True)
+def _vertex_sources(model, n_src, X0, X1, X2, N0, N1, N2, W0, W1, W2, px, py, pz, nx, ny, nz, p0, p1, p2, F0, F1, F2,
+                    k0, k1, k2):
+    """Sum over every source of three channels' clamped ``S_d`` times flux at one receiver, and the clamps."""
+    a0 = 0.0
+    a1 = 0.0
+    a2 = 0.0
+    count = 0
+    for j in range(n_src):
+        e0, e1, e2 = pair_three(model, px - X0[j], py - X1[j], pz - X2[j], N0[j], N1[j], N2[j], W0[j], W1[j], W2[j],
+                                nx, ny, nz, p0, p1, p2)
+        count += (e0 < 0.0) * k0 + (e1 < 0.0) * k1 + (e2 < 0.0) * k2
+        a0 += max(e0, 0.0) * F0[j]
+        a1 += max(e1, 0.0) * F1[j]
+        a2 += max(e2, 0.0) * F2[j]
+    return a0, a1, a2, count
+
+
+def rows_kernel(model, directional, radial):
+    """The compiled entry of a traversal for ``model``: each entry inlines the traversal's one body with
+    the model a constant for the directional dipole, so that its loop over sources has no branch on the
+    model and vectorises, and only the entry a run uses is compiled."""
+    return directional if model == MODEL_DIRECTIONAL else radial
 
 
 @numba.njit(cache=True, inline="always")
@@ -410,12 +441,28 @@ def indexed_sum(model, rcv_points, rcv_normals, table, weights, starts, counts, 
     vectorises.
     """
     out = np.zeros((rcv_points.shape[0], weights.shape[0]))
-    for_ranges(_indexed_rows, rcv_points.shape[0], model, rcv_points, rcv_normals, table, weights, starts, counts,
+    for_ranges(rows_kernel(model, _indexed_rows_directional, _indexed_rows_radial), rcv_points.shape[0], model, rcv_points, rcv_normals, table, weights, starts, counts,
                columns, factors, lanes, out)
     return out
 
 
 @numba.njit(cache=True, nogil=True, fastmath=True, error_model="numpy")
+def _indexed_rows_directional(worker, lo, hi, model, rcv_points, rcv_normals, table, weights, starts, counts, columns,
+                              factors, lanes, out):
+    """:func:`_indexed_rows` of the directional dipole (``model`` is ignored: a constant here)."""
+    _indexed_rows(worker, lo, hi, MODEL_DIRECTIONAL, rcv_points, rcv_normals, table, weights, starts, counts, columns,
+                  factors, lanes, out)
+
+
+@numba.njit(cache=True, nogil=True, fastmath=True, error_model="numpy")
+def _indexed_rows_radial(worker, lo, hi, model, rcv_points, rcv_normals, table, weights, starts, counts, columns,
+                         factors, lanes, out):
+    """:func:`_indexed_rows` of the standard and better dipoles."""
+    _indexed_rows(worker, lo, hi, model, rcv_points, rcv_normals, table, weights, starts, counts, columns, factors,
+                  lanes, out)
+
+
+@numba.njit(cache=True, inline="always", fastmath=True, error_model="numpy")
 def _indexed_rows(worker, lo, hi, model, rcv_points, rcv_normals, table, weights, starts, counts, columns, factors,
                   lanes, out):
     """Receivers ``lo .. hi - 1`` of :func:`indexed_sum`."""
@@ -427,15 +474,26 @@ def _indexed_rows(worker, lo, hi, model, rcv_points, rcv_normals, table, weights
         for group in range(lanes.shape[0] // 3):
             c0 = 3 * group
             F0, F1, F2, p0, p1, p2 = group_inputs(weights, lanes, c0)
-            a0 = 0.0
-            a1 = 0.0
-            a2 = 0.0
-            for k in range(starts[r], starts[r] + counts[r]):
-                i = columns[k]
-                e0, e1, e2 = pair_three(model, x0 - X0[i], x1 - X1[i], x2 - X2[i], N0[i], N1[i], N2[i], W0[i], W1[i],
-                                        W2[i], n0, n1, n2, p0, p1, p2)
-                f = factors[k]
-                a0 += max(e0, 0.0) * F0[i] * f
-                a1 += max(e1, 0.0) * F1[i] * f
-                a2 += max(e2, 0.0) * F2[i] * f
+            first, last = starts[r], starts[r] + counts[r]
+            a0, a1, a2 = _indexed_sources(model, first, last, columns, factors, X0, X1, X2, N0, N1, N2, W0, W1, W2,
+                                          x0, x1, x2, n0, n1, n2, p0, p1, p2, F0, F1, F2)
             store_three(out, r, c0, n_out, a0, a1, a2)
+
+
+@numba.njit(cache=True, inline="always", fastmath=True)
+def _indexed_sources(model, first, last, columns, factors, X0, X1, X2, N0, N1, N2, W0, W1, W2, x0, x1, x2, n0, n1, n2,
+                     p0, p1, p2, F0, F1, F2):
+    """Sum over the listed sources ``columns[first:last]`` of three channels' clamped ``S_d`` times flux
+    and factor at one receiver."""
+    a0 = 0.0
+    a1 = 0.0
+    a2 = 0.0
+    for k in range(first, last):
+        i = columns[k]
+        e0, e1, e2 = pair_three(model, x0 - X0[i], x1 - X1[i], x2 - X2[i], N0[i], N1[i], N2[i], W0[i], W1[i], W2[i],
+                                n0, n1, n2, p0, p1, p2)
+        f = factors[k]
+        a0 += max(e0, 0.0) * F0[i] * f
+        a1 += max(e1, 0.0) * F1[i] * f
+        a2 += max(e2, 0.0) * F2[i] * f
+    return a0, a1, a2

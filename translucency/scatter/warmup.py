@@ -24,7 +24,7 @@ import numpy as np
 
 #: Kernels (module, name) the main job's solve calls (``tree`` method, near field).
 MAIN_JOB_KERNELS = (
-    ("translucency.scatter.kernels", "_indexed_rows"),
+    ("translucency.scatter.kernels", "_indexed_rows_directional"),
     ("translucency.scatter.hierarchy", "_traverse"),
     ("translucency.scatter.nearfield", "_near_pass"),
     ("translucency.scatter.nearfield", "_fill_shared_points"),
