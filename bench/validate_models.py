@@ -1,9 +1,9 @@
 """Validate the diffusion models against the Monte Carlo half-space reference.
 
 Reproduces the kind of evidence FHK14 shows, for a semi-infinite medium lit by a collimated beam
-(physics spec 1.10, 3.3, 5.1):
+(docs/physics.md §4.7, §9.3, §9.1):
 
-1. the Monte Carlo itself against the exact index-matched totals of spec 3.3 (eta = 1, g = 0);
+1. the Monte Carlo itself against the exact index-matched totals of docs/physics.md §9.3 (eta = 1, g = 0);
 2. exitance maps and 1D cuts in the plane of incidence at 0, 30, 45 and 60 degrees for catalogue
    materials (red channel), Monte Carlo against the directional, standard and better dipoles, with
    a table of errors (relative RMS over the brightest cells and error of the total);
@@ -12,7 +12,7 @@ Reproduces the kind of evidence FHK14 shows, for a semi-infinite medium lit by a
 
 Everything is per refracted photon (the Monte Carlo launches along the refracted ray with weight
 1); the models' entry transmittance T12 multiplies every model and the MC alike, so it cancels.
-Model exitance per refracted photon (spec 1.5, 5.1 step 7):
+Model exitance per refracted photon (docs/physics.md §6.3, §9.2):
 
 ============================ ======================================== =======
 model                        exitance M(x_o) per refracted photon     unit
@@ -85,7 +85,7 @@ REGION_FRACTION = 0.8  # error region: the brightest MC cells that hold this fra
 
 MC_CHECK_ALBEDOS = (0.3, 0.5, 0.9, 0.99)
 MC_CHECK_PHOTONS = 1_000_000
-SPEC_3_3 = {  # physics spec 3.3: exact R(mu0) = 1 - H(mu0) sqrt(1 - alpha), eta = 1, g = 0
+SPEC_3_3 = {  # docs/physics.md §9.3: exact R(mu0) = 1 - H(mu0) sqrt(1 - alpha), eta = 1, g = 0
     0.3: (0.057214, 0.062152, 0.069298, 0.081716),
     0.5: (0.115226, 0.124479, 0.137688, 0.160144),
     0.9: (0.414947, 0.436124, 0.464423, 0.507939),
@@ -127,7 +127,7 @@ def chandrasekhar_H(albedo, mu, n_nodes=200, tolerance=1e-13, max_iterations=100
 
 
 def exact_total_reflectance(albedo, theta_deg):
-    """Exact total diffuse reflectance of an index-matched isotropic half-space (spec 3.3)."""
+    """Exact total diffuse reflectance of an index-matched isotropic half-space (docs/physics.md §9.3)."""
     mu0 = math.cos(math.radians(theta_deg))
     return float(1.0 - chandrasekhar_H(albedo, mu0)[0] * math.sqrt(1.0 - albedo))
 
@@ -141,7 +141,7 @@ def model_exitance(model, points_xy, theta_deg, sigma_a, sigma_s, g, eta):
     """Model exitance per refracted photon (1/mm^2) at points (..., 2) on the surface (mm)."""
     if model == "directional":
         S_d = dipoles.directional_dipole_profile(points_xy, theta_deg, sigma_a, sigma_s, g, eta)
-        return np.pi * S_d * 4.0 * fresnel.C_phi(1.0 / eta)  # spec 1.5: pi S_d / norm
+        return np.pi * S_d * 4.0 * fresnel.C_phi(1.0 / eta)  # docs/physics.md §5.2: pi S_d / norm
     r = np.hypot(points_xy[..., 0], points_xy[..., 1])
     if model == "standard":
         return dipoles.standard_dipole_profile(r, sigma_a, sigma_s, g, eta) * (1.0 - fresnel.two_C1(1.0 / eta))
@@ -236,7 +236,7 @@ def median_relative_error(model_map, mc_map, region):
 
 
 def mc_self_check(scale, seed):
-    """MC total against the exact index-matched values of spec 3.3."""
+    """MC total against the exact index-matched values of docs/physics.md §9.3."""
     rows = []
     for albedo in MC_CHECK_ALBEDOS:
         for theta, spec_value in zip(ANGLES, SPEC_3_3[albedo]):
@@ -594,7 +594,7 @@ def _material_row(record, with_angle):
 
 
 def markdown_tables(mc_rows, records, sweep_rows, timings):
-    lines = ["### Monte Carlo against the exact index-matched totals (spec 3.3, η = 1, g = 0)", ""]
+    lines = ["### Monte Carlo against the exact index-matched totals (docs/physics.md §9.3, η = 1, g = 0)", ""]
     lines += ["| α | θi | exact | MC ± SE | difference | in SE |", "|---|---|---|---|---|---|"]
     for row in mc_rows:
         lines.append(

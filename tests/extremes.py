@@ -38,7 +38,7 @@ from translucency.scatter.medium import diffusion_coefficient, extrapolation_dis
 
 MODELS = ("directional", "standard", "better")
 
-#: Ranges of the draws (physics spec decisions: eta >= 1, a scattering medium, g in (-1, 1)).
+#: Ranges of the draws (docs/physics.md §2.2: eta >= 1, a scattering medium, g in (-1, 1)).
 ETA_RANGE = (1.0, 2.5)
 ALBEDO_RANGE = (1e-6, 1.0 - 1e-9)  # reduced albedo alpha'
 MFP_OVER_SIZE_RANGE = (1e-4, 1e4)  # reduced mean free path 1/sigma_t' over the block size L
@@ -126,7 +126,7 @@ def coefficients(albedo, mfp_over_size, g, size):
     """``(sigma_a, sigma_s)`` in 1/mm from the reduced albedo, ``1/sigma_t'`` over the size ``L`` (mm) and g.
 
     ``sigma_t' = 1 / (ratio L)``, ``sigma_a = (1 - alpha') sigma_t'``, ``sigma_s = alpha' sigma_t' / (1 - g)``
-    (spec 1.1: ``sigma_s' = sigma_s (1 - g)``).
+    (docs/physics.md §2.1, §2.3: ``sigma_s' = sigma_s (1 - g)``).
     """
     sigma_t_reduced = 1.0 / (mfp_over_size * size)
     return (1.0 - albedo) * sigma_t_reduced, albedo * sigma_t_reduced / (1.0 - g)
@@ -198,7 +198,8 @@ def random_blocks(n_blocks: int, n_sources: int = 8, receivers_per_source: int =
                        np.where(s_tr > 0, 1.0 / np.where(s_tr > 0, s_tr, 1.0), size[:, None]), D], axis=-1)
     r = np.take_along_axis(scales, rng.integers(0, len(DISTANCE_SCALES), (G, R, 1)), -1)[..., 0]
     r = r * 10.0 ** rng.uniform(*DISTANCE_EXPONENTS, (G, R))
-    virtual_height = 2.0 * fresnel.reflection_parameter_A(eta)[:, None] * extrapolation_distance(a, s, gg)  # spec 1.2
+    # virtual-source height 2 A d_e (docs/physics.md §4.2)
+    virtual_height = 2.0 * fresnel.reflection_parameter_A(eta)[:, None] * extrapolation_distance(a, s, gg)
     x_o, n_o = receivers(x_i[:, source_of], n_i[:, source_of], w12[:, source_of],
                          rng.choice(len(OFFSETS), (G, R), p=OFFSET_WEIGHTS), r, _unit(rng.normal(size=(G, R, 3))),
                          virtual_height, rng.choice(len(EXIT_NORMALS), (G, R), p=EXIT_WEIGHTS),
@@ -218,7 +219,7 @@ def single_block(eta, sigma_a, sigma_s, g, x_i, n_i, w12, x_o, n_o) -> Blocks:
 # evaluation
 # --------------------------------------------------------------------------------------------------
 def _radial_scale(model, eta):
-    """Factor from the radial profile (1/mm^2) to ``S_d`` (1/(mm^2 sr)) (spec 3.1, 3.2)."""
+    """Factor from the radial profile (1/mm^2) to ``S_d`` (1/(mm^2 sr)) (docs/physics.md §6.1, §6.2)."""
     if model == "standard":
         return 1.0 / np.pi
     return 1.0 / (np.pi * 4.0 * fresnel.C_phi(1.0 / np.asarray(eta, dtype=np.float64)))

@@ -1,4 +1,4 @@
-"""The reference diffusion models against the spec's independent values and physical properties."""
+"""The reference diffusion models against the independent values of docs/physics.md §10 and physical properties."""
 
 import numpy as np
 import pytest
@@ -52,7 +52,8 @@ def test_reference_vectors_vectorised(dirpole_vectors):
     assert np.all(np.abs(S_d[~nonzero]) <= 1e-15)
 
 
-# Spec 1.9: flat surface, sigma_s = 0.99, sigma_a = 0.01, g = 0, eta = 1.3; S_d at x_o for theta_i 0 and 45 deg.
+# docs/physics.md §10.1: flat surface, sigma_s = 0.99, sigma_a = 0.01, g = 0, eta = 1.3;
+# S_d at x_o for theta_i 0 and 45 deg.
 SPEC_FLAT = [
     ((0, 0, 0), 2.865155e-01, 4.004100e-01),
     ((0.5, 0, 0), 3.015027e-02, 4.201651e-02),
@@ -79,7 +80,7 @@ def test_full_bssrdf_example_of_spec_1_9():
     assert T12 * S_d * T21 == pytest.approx(1.523841e-02, rel=1e-6)
 
 
-# Spec 1.10 (eta = 1.3, sigma_t' = 1, normal incidence): totals per refracted photon, 4 decimals.
+# docs/physics.md §10.4 (eta = 1.3, sigma_t' = 1, normal incidence): totals per refracted photon, 4 decimals.
 SPEC_TOTALS_13 = [  # alpha', directional, standard, better
     (0.3, 0.1825, 0.0355, 0.0085), (0.5, 0.2244, 0.0745, 0.0289), (0.7, 0.2943, 0.1406, 0.0783),
     (0.8, 0.3565, 0.1969, 0.1312), (0.9, 0.4752, 0.2991, 0.2434), (0.95, 0.6021, 0.4066, 0.3703),
@@ -96,7 +97,7 @@ def test_total_reflectance_table_eta_1_3(alpha, directional, standard, better):
 
 
 def test_total_reflectance_index_matched_spec_3_3():
-    # Spec 3.3, eta = 1, normal incidence: standard 0.7465 / 0.3853, better 0.7381 / 0.3441,
+    # docs/physics.md §9.3, eta = 1, normal incidence: standard 0.7465 / 0.3853, better 0.7381 / 0.3441,
     # directional 1.0874 / 0.7103 for alpha = 0.99 / 0.9.
     for alpha, std, bet, direc in [(0.99, 0.7465, 0.7381, 1.0874), (0.9, 0.3853, 0.3441, 0.7103)]:
         assert dipoles.standard_dipole_total_reflectance(alpha, 1.0) == pytest.approx(std, abs=6e-5)
@@ -135,7 +136,7 @@ def test_directional_total_at_normal_incidence_equals_radial_integral():
 
 
 def test_better_dipole_total_tends_to_one_without_absorption():
-    # Spec 3.2: as alpha' -> 1 the better dipole conserves energy, 2 A C_phi + C_E = 1.
+    # docs/physics.md §6.2: as alpha' -> 1 the better dipole conserves energy, 2 A C_phi + C_E = 1.
     for eta in (1.0, 1.3, 1.5):
         assert dipoles.better_dipole_total_reflectance(1.0, eta) == pytest.approx(1.0, abs=1e-12)
 
@@ -188,10 +189,11 @@ def test_continuous_as_r_goes_to_zero():
 
 
 def test_exit_point_on_the_normal_axis_uses_n_i():
-    """On the axis n_i || x the modified tangent plane is undefined and n_i* = n_i is used (spec).
+    """On the axis n_i || x the modified tangent plane is undefined and n_i* = n_i is used (docs/physics.md §4.6).
 
     The limit is not unique (approaching the axis from any side turns n_i* by 90 degrees), so the
-    fallback is a choice, not a continuous extension; the value equals the spec's edge case.
+    fallback is a choice, not a continuous extension; the value equals the edge case in tests/data
+    (docs/physics.md §10.7).
     """
     n = np.array([0.0, 0.0, 1.0])
     w12 = fresnel.refract(_unit([-1, 0, 1]), n, 1.3)

@@ -1,4 +1,4 @@
-"""Fresnel reflectance, refraction and the Fresnel-moment fits against the physics spec (sections 2.1-2.3)."""
+"""Fresnel reflectance, refraction and the Fresnel-moment fits against docs/physics.md (§3; values §10.2-§10.3)."""
 
 import numpy as np
 import pytest
@@ -8,7 +8,7 @@ from scipy import integrate
 
 from translucency.scatter import fresnel
 
-# Spec 2.1: F_r at eta = 1.3, printed to 6 decimals (absolute tolerance: half a unit in the last place).
+# docs/physics.md §10.2: F_r at eta = 1.3, printed to 6 decimals (absolute tolerance: half a unit in the last place).
 SPEC_FR_ETA_13 = {0: 0.017013, 30: 0.017962, 45: 0.023817, 60: 0.053400, 80: 0.336118}
 
 
@@ -18,7 +18,7 @@ def test_reflectance_matches_spec_table(theta_deg, expected):
 
 
 def test_transmittance_matches_spec_1_9():
-    # Spec 1.9: T12 at 45 degrees and T21 at normal exit, eta = 1.3 (6 significant digits).
+    # docs/physics.md §10.1: T12 at 45 degrees and T21 at normal exit, eta = 1.3 (6 significant digits).
     assert fresnel.fresnel_transmittance(np.cos(np.radians(45)), 1.3) == pytest.approx(0.976183, abs=5e-7)
     assert fresnel.fresnel_transmittance(1.0, 1.3) == pytest.approx(0.982987, abs=5e-7)
 
@@ -53,7 +53,7 @@ def _exact_three_C2(eta):
     return 3 * integrate.quad(lambda mu: fresnel.fresnel_reflectance(mu, 1 / eta) * mu**2, 0, 1, limit=200, points=[np.sqrt(max(0, 1 - 1 / eta**2))])[0]
 
 
-# Spec 2.2 table: eta, 2C1(eta) fit, 2C1(1/eta) fit, 3C2(eta) fit, 3C2(1/eta), C_phi(eta), C_phi(1/eta),
+# docs/physics.md §10.3 table: eta, 2C1(eta) fit, 2C1(1/eta) fit, 3C2(eta) fit, 3C2(1/eta), C_phi(eta), C_phi(1/eta),
 # C_E(eta), C_E(1/eta), A, 1/(4 C_phi(1/eta)).
 SPEC_MOMENTS = [
     (1.30, 0.445295, 0.061116, 0.297448, 0.035378, 0.138676, 0.234721, 0.351276, 0.482311, 2.338986, 1.065094),
@@ -76,15 +76,15 @@ def test_moment_fits_match_spec_table(row):
     assert fresnel.C_E(eta) == pytest.approx(ce, abs=tol)
     assert fresnel.C_E(1 / eta) == pytest.approx(ce_inv, abs=tol)
     assert fresnel.reflection_parameter_A(eta) == pytest.approx(A, abs=tol)
-    # the spec's last column is rounded from unrounded intermediates: 5e-6 absolute
+    # the last column of docs/physics.md §10.3 is rounded from unrounded intermediates: 5e-6 absolute
     assert 1 / (4 * fresnel.C_phi(1 / eta)) == pytest.approx(norm, abs=5e-6)
-    # A = (1 + 3C2) / (1 - 2C1) is the same number (spec 1.1)
+    # A = (1 + 3C2) / (1 - 2C1) is the same number (docs/physics.md §2.1)
     assert fresnel.reflection_parameter_A(eta) == pytest.approx((1 + c2) / (1 - c1), rel=1e-5)
 
 
 @pytest.mark.parametrize("eta", [1.3, 1.33, 1.4, 1.5])
 def test_moment_fits_agree_with_quadrature(eta):
-    # Spec 2.2: fit error about 0.2 % for 2C1 and about 1 % for 3C2 (measured here for eta = 1.3-1.5).
+    # docs/physics.md §3.3: fit error about 0.2 % for 2C1 and about 1 % for 3C2 (measured here for eta = 1.3-1.5).
     assert fresnel.two_C1(eta) == pytest.approx(_exact_two_C1(eta), rel=3e-3)
     assert fresnel.three_C2(eta) == pytest.approx(_exact_three_C2(eta), rel=1.5e-2)
     assert fresnel.two_C1(1 / eta) == pytest.approx(_exact_two_C1(1 / eta), rel=3e-3)

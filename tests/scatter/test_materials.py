@@ -38,7 +38,8 @@ def test_unknown_name_lists_close_matches():
 
 
 def test_jensen_values_and_decisions():
-    # Spec decisions: Chicken red sigma_a 0.015 / 0.018, marble eta 1.5; Jensen gives reduced sigma_s, g = 0.
+    # Decisions of docs/physics.md §11.1: Chicken red sigma_a 0.015 / 0.018, marble eta 1.5;
+    # Jensen gives reduced sigma_s, g = 0.
     assert materials.material("chicken1").sigma_a[0] == 0.015
     assert materials.material("chicken2").sigma_a[0] == 0.018
     marble = materials.material("marble")
@@ -54,13 +55,14 @@ def test_narasimhan_values_are_the_published_diluted_ones():
     assert grapefruit.sigma_a == (0.0096, 0.0131, 0.0395)
     assert grapefruit.g == (0.548, 0.545, 0.565)
     assert grapefruit.eta == 1.33
-    # SAMPLE writes sigma_t = (0.3609, 0.3800, 0.5632) for the same material (spec 4.3)
+    # SAMPLE writes sigma_t = (0.3609, 0.3800, 0.5632) for the same material (docs/physics.md §11.2)
     assert np.allclose(np.add(grapefruit.sigma_s, grapefruit.sigma_a), [0.3609, 0.3800, 0.5632], atol=1e-12)
     medium = materials.material("lowfat chocolate milk").medium()
     assert np.allclose(medium.g, [0.934, 0.927, 0.916])
 
 
-# Spec 4.2 last column: total diffuse reflectance computed with the standard dipole at eta = 1.3 (3 decimals).
+# docs/physics.md §11.1, last column (§10.6): total diffuse reflectance computed with the standard
+# dipole at eta = 1.3 (3 decimals).
 SPEC_RD = {
     "apple": (0.846, 0.841, 0.528), "chicken1": (0.314, 0.156, 0.126), "chicken2": (0.321, 0.160, 0.108),
     "cream": (0.976, 0.900, 0.725), "ketchup": (0.164, 0.006, 0.002), "marble": (0.867, 0.834, 0.801),

@@ -1,4 +1,4 @@
-"""Medium: derived quantities (spec 1.1, 1.9) and validation with readable sentences."""
+"""Medium: derived quantities (docs/physics.md §2.1, §10.1) and validation with readable sentences."""
 
 import warnings
 

@@ -1,6 +1,6 @@
 """The Monte Carlo half-space reference (translucency.scatter.montecarlo) against exact results.
 
-Exact references: the Chandrasekhar H-function totals of physics spec 3.3 (eta = 1, isotropic
+Exact references: the Chandrasekhar H-function totals of docs/physics.md §9.3 (eta = 1, isotropic
 scattering), the closed-form single-scattering reflectance of an index-matched half-space, energy
 conservation, and the numpy Fresnel reflectance. Statistical tolerances are stated at each test; the
 seeds are fixed, so every test is deterministic.
@@ -22,7 +22,7 @@ from translucency.scatter.montecarlo import (
     simulate_half_space,
 )
 
-# Physics spec 3.3: exact total diffuse reflectance R(mu0) = 1 - H(mu0) sqrt(1 - alpha), eta = 1, g = 0.
+# docs/physics.md §9.3: exact total diffuse reflectance R(mu0) = 1 - H(mu0) sqrt(1 - alpha), eta = 1, g = 0.
 SPEC_3_3 = {
     0.3: {0: 0.057214, 30: 0.062152, 45: 0.069298, 60: 0.081716},
     0.5: {0: 0.115226, 30: 0.124479, 45: 0.137688, 60: 0.160144},
@@ -66,7 +66,7 @@ def test_fresnel_scalar_total_internal_reflection():
 @pytest.mark.parametrize("albedo", [0.5, 0.9])
 @pytest.mark.parametrize("theta", [0, 30, 45, 60])
 def test_total_reflectance_matches_chandrasekhar_exact_values(albedo, theta):
-    # Spec 3.3; tolerance: within 3 standard errors and within 0.5 %.
+    # docs/physics.md §9.3; tolerance: within 3 standard errors and within 0.5 %.
     tally = _index_matched(albedo, theta)
     exact = SPEC_3_3[albedo][theta]
     difference = tally.total_reflectance - exact

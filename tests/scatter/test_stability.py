@@ -22,14 +22,15 @@ def _on_axis_case(exit_normal_sign):
     sigma_a, sigma_s, g, eta = 0.0021, 2.19, 0.0, 1.5
     n_i = np.array([0.0, 0.0, 1.0])
     w12 = fresnel.refract(extremes.perpendicular(n_i, np.array([1.0, 0, 0])) * 0.6 + n_i * 0.8, n_i, eta)
-    height = 2 * fresnel.reflection_parameter_A(eta) * extrapolation_distance(sigma_a, sigma_s, g)  # spec 1.2
+    # virtual-source height 2 A d_e (docs/physics.md §4.2)
+    height = 2 * fresnel.reflection_parameter_A(eta) * extrapolation_distance(sigma_a, sigma_s, g)
     x_i = np.array([12.0, -3.0, 40.0])
     return x_i, n_i, w12, x_i + height * n_i, exit_normal_sign * n_i, (sigma_a, sigma_s, g, eta)
 
 
 @pytest.mark.parametrize("sign", [1.0, -1.0])
 def test_exit_point_at_the_virtual_source_is_finite(sign):
-    """With ``n_i* = n_i`` on the normal axis (spec decision) the virtual source lies on the exit point at
+    """With ``n_i* = n_i`` on the normal axis (docs/physics.md §4.6) the virtual source lies on the exit point at
     ``x_i + 2 A d_e n_i``: ``d_v = 0``. The reference used to return NaN there and the kernels raised
     ZeroDivisionError; ``d_v`` is now floored like ``d_r``."""
     x_i, n_i, w12, x_o, n_o, coeff = _on_axis_case(sign)
@@ -45,12 +46,13 @@ def test_exit_point_at_the_virtual_source_is_finite(sign):
     if sign < 0:
         # Facing the entry point (a gap between two walls): the virtual source term is
         # (C_phi d_v^2/D - 3 C_E D (1 + s) w_v.n_o) / (4 pi^2 d_v^3) with w_v.n_o = w12.n_i < 0, so it is
-        # positive and dominates as d_v -> 0: the clamp gives 0 (spec 1.3).
+        # positive and dominates as d_v -> 0: the clamp gives 0 (docs/physics.md §4.5).
         assert reference == 0.0 and out[0] == 0.0 and summed[0, 0] == 0.0
 
 
 def test_virtual_source_floor_changes_nothing_off_the_axis():
-    """Off the axis ``n_i*`` is perpendicular to ``x`` and ``d_v >= 2 A d_e``: the values are those of spec 1.9."""
+    """Off the axis ``n_i*`` is perpendicular to ``x`` and ``d_v >= 2 A d_e``: the values are those of
+    docs/physics.md §10.1."""
     args = (0.01, 0.99, 0.0, 1.3)
     assert dipoles.directional_dipole_profile(np.array([1.0, 0, 0]), 45.0, *args) == pytest.approx(1.588037e-02, rel=1e-6)
     assert dipoles.directional_dipole_profile(np.zeros(3), 0.0, *args) == pytest.approx(2.865155e-01, rel=1e-6)

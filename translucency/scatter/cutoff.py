@@ -1,8 +1,9 @@
 """The ``cutoff`` method: skip source/receiver pairs beyond a radius where the kernel is negligible.
 
-The radius comes from a bound of ``S_d`` that holds for every geometry. Each ray source of the
-directional dipole (spec 1.3) has ``|x . w|, |x . n_o| <= d`` and ``d >= r`` (``d_r^2 >= r^2``,
-``d_v^2 = r^2 + (2 A d_e)^2``), and every term of ``S'_d`` decreases with ``d``, so::
+The radius comes from a bound of ``S_d`` that holds for every geometry (docs/physics.md §8.4). Each
+ray source of the directional dipole (docs/physics.md §4.4) has ``|x . w|, |x . n_o| <= d`` and
+``d >= r`` (``d_r^2 >= r^2``, ``d_v^2 = r^2 + (2 A d_e)^2``), and every term of ``S'_d`` decreases
+with ``d``, so::
 
     S_d(r) <= 2 b(r),  b(r) = norm e^{-s} / (4 pi^2) [C_phi (1/(D r) + 3 (1+s)/r^2)
                                   + C_E ((1+s)/r^2 + 3 D (4 (1+s) + s^2)/r^3)],   s = sigma_tr r.

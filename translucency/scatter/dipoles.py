@@ -1,9 +1,9 @@
 """Reference (float64, vectorised numpy) formulas of the three diffusion models.
 
 * :func:`directional_dipole` -- the directional dipole BSSRDF ``S_d`` of Frisvad, Hachisuka &
-  Kjeldsen 2014 (FHK14), exactly as in physics spec 1.1-1.3;
-* :func:`standard_dipole_profile` -- the radial profile ``R_d(r)`` of Jensen et al. 2001 (spec 3.1);
-* :func:`better_dipole_profile` -- the radial profile ``R(r)`` of d'Eon 2012 (spec 3.2);
+  Kjeldsen 2014 (FHK14), exactly as in docs/physics.md §4;
+* :func:`standard_dipole_profile` -- the radial profile ``R_d(r)`` of Jensen et al. 2001 (docs/physics.md §6.1);
+* :func:`better_dipole_profile` -- the radial profile ``R(r)`` of d'Eon 2012 (docs/physics.md §6.2);
 * closed-form (standard, better) and quadrature (directional) total diffuse reflectances.
 
 These functions are the truth every fast kernel is tested against; they favour clarity and float64
@@ -25,7 +25,7 @@ S_d       diffusive BSSRDF (norm included, no Fresnel T12/T21)               1/(
 R_d, R    radial exitance profiles per unit flux                             1/mm^2
 ========= ================================================================== ============
 
-Numerical conventions (spec "Decisions" and 1.8): when ``r`` is ~0 or ``n_i`` is parallel to ``x``
+Numerical conventions (docs/physics.md §4.6): when ``r`` is ~0 or ``n_i`` is parallel to ``x``
 the modified tangent plane is undefined and ``n_i* = n_i`` is used; ``mu0 > 0`` is frontlit and
 ``mu0 <= 0`` backlit; the result is clamped at 0 after subtracting the virtual source; exponentials
 that underflow give 0, never NaN; ``d_r`` and ``d_v`` are floored at ``D_R_FLOOR * D`` (the only other
@@ -58,7 +58,7 @@ __all__ = [
 ]
 
 #: ``r = 0`` or ``|n_i - (n_i . x_hat) x_hat|`` below this counts as degenerate: the modified tangent
-#: plane falls back to ``n_i* = n_i`` (spec 1.8).
+#: plane falls back to ``n_i* = n_i`` (docs/physics.md §4.6).
 PARALLEL_TOLERANCE = 1e-12
 
 #: Lower bound of the corrected real-source distance, as a fraction of D. ``d_r`` reaches 0 only when
@@ -76,7 +76,7 @@ def _dot(a, b):
 
 
 def _ray_source_term(x, w, d, n_o, D, sigma_tr_, C_phi, C_E, norm):
-    """One ray source of the directional dipole, ``S'_d(x, w, d)`` (spec 1.3), 1/(mm^2 sr).
+    """One ray source of the directional dipole, ``S'_d(x, w, d)`` (docs/physics.md §4.4), 1/(mm^2 sr).
 
     ``norm exp(-s) / (4 pi^2 d^3) [C_phi (d^2/D + 3 (1+s) x.w)
     - C_E (3 D (1+s) w.n_o - ((1+s) + 3 D (3 (1+s) + s^2) x.w / d^2) x.n_o)]`` with ``s = sigma_tr d``.
@@ -95,7 +95,7 @@ def _ray_source_term(x, w, d, n_o, D, sigma_tr_, C_phi, C_E, norm):
 
 
 def directional_dipole(x_i, n_i, w12, x_o, n_o, sigma_a, sigma_s, g, eta):
-    """Directional dipole diffusive BSSRDF ``S_d(x_i, w12; x_o)`` of FHK14 (spec 1.1-1.3).
+    """Directional dipole diffusive BSSRDF ``S_d(x_i, w12; x_o)`` of FHK14 (docs/physics.md §4.1-§4.5).
 
     Parameters
     ----------
@@ -129,20 +129,20 @@ def directional_dipole(x_i, n_i, w12, x_o, n_o, sigma_a, sigma_s, g, eta):
     sigma_a, sigma_s, g, eta = validate_coefficients(sigma_a, sigma_s, g, eta, what="directional_dipole")
     x_i, n_i, w12, x_o, n_o = (np.asarray(v, dtype=np.float64) for v in (x_i, n_i, w12, x_o, n_o))
 
-    D = diffusion_coefficient(sigma_a, sigma_s, g)  # spec 1.1: D = 1/(3 sigma_t')
+    D = diffusion_coefficient(sigma_a, sigma_s, g)  # docs/physics.md §2.1: D = 1/(3 sigma_t')
     sigma_tr_ = sigma_tr(sigma_a, sigma_s, g)  # sqrt(sigma_a / D)
     d_e = extrapolation_distance(sigma_a, sigma_s, g)  # 2.131 D / sqrt(alpha')
     C_phi = fresnel.C_phi(eta)
     C_E = fresnel.C_E(eta)
-    A = (1.0 - C_E) / (2.0 * C_phi)  # spec 1.1
-    norm = 1.0 / (4.0 * fresnel.C_phi(1.0 / eta))  # spec 1.1, 1.5
-    backlit_depth = 1.0 / (3.0 * sigma_t(sigma_a, sigma_s))  # spec 1.2: unreduced sigma_t
+    A = (1.0 - C_E) / (2.0 * C_phi)  # docs/physics.md §2.1
+    norm = 1.0 / (4.0 * fresnel.C_phi(1.0 / eta))  # docs/physics.md §2.1, §5.2
+    backlit_depth = 1.0 / (3.0 * sigma_t(sigma_a, sigma_s))  # docs/physics.md §4.3: unreduced sigma_t
 
     x = x_o - x_i
     r2 = _dot(x, x)
     r = np.sqrt(r2)
 
-    # Modified tangent-plane normal n_i* = normalize(n_i - (n_i . x_hat) x_hat)   (spec 1.2, item 2)
+    # Modified tangent-plane normal n_i* = normalize(n_i - (n_i . x_hat) x_hat)   (docs/physics.md §4.1)
     with np.errstate(divide="ignore", invalid="ignore"):
         x_hat = x / r[..., None]
         tangent = n_i - _dot(n_i, x_hat)[..., None] * x_hat
@@ -151,13 +151,13 @@ def directional_dipole(x_i, n_i, w12, x_o, n_o, sigma_a, sigma_s, g, eta):
     degenerate = ~(r > 0.0) | ~(tangent_norm > PARALLEL_TOLERANCE)
     n_star = np.where(degenerate[..., None], n_i, n_star)
 
-    # Virtual source: mirrored direction and position above the surface   (spec 1.2, items 3-4)
+    # Virtual source: mirrored direction and position above the surface   (docs/physics.md §4.2)
     w_v = w12 - 2.0 * _dot(w12, n_star)[..., None] * n_star
     x_v = x_i + (2.0 * A * d_e)[..., None] * n_star
     x_from_v = x_o - x_v
     d_v = np.maximum(np.sqrt(_dot(x_from_v, x_from_v)), D_R_FLOOR * D)  # explicit clamp, only on the n_i axis
 
-    # Real source: corrected distance d_r   (spec 1.2, item 5)
+    # Real source: corrected distance d_r   (docs/physics.md §4.3)
     mu0 = -_dot(n_o, w12)
     x_dot_w12 = _dot(x, w12)
     cos_beta = -np.sqrt(np.maximum(r2 - x_dot_w12 * x_dot_w12, 0.0) / (r2 + d_e * d_e))
@@ -169,11 +169,11 @@ def directional_dipole(x_i, n_i, w12, x_o, n_o, sigma_a, sigma_s, g, eta):
     with np.errstate(over="ignore", under="ignore"):
         real = _ray_source_term(x, w12, d_r, n_o, D, sigma_tr_, C_phi, C_E, norm)
         virtual = _ray_source_term(x_from_v, w_v, d_v, n_o, D, sigma_tr_, C_phi, C_E, norm)
-    return np.maximum(real - virtual, 0.0)  # spec 1.3: clamp after subtracting the virtual source
+    return np.maximum(real - virtual, 0.0)  # docs/physics.md §4.5: clamp after subtracting the virtual source
 
 
 def directional_dipole_profile(x_o, theta_i_deg, sigma_a, sigma_s, g, eta):
-    """``S_d`` on the flat surface z = 0 for light arriving in the x-z plane (spec 1.9 set-up).
+    """``S_d`` on the flat surface z = 0 for light arriving in the x-z plane (docs/physics.md §10.1 set-up).
 
     The point of incidence is the origin, ``n_i = n_o = +z``, and the light arrives from
     ``(-sin theta_i, 0, cos theta_i)``, so the refracted ray travels toward +x.
@@ -201,7 +201,7 @@ def directional_dipole_profile(x_o, theta_i_deg, sigma_a, sigma_s, g, eta):
 
 
 def standard_dipole_profile(r, sigma_a, sigma_s, g, eta):
-    """Radial diffuse reflectance ``R_d(r)`` of the standard dipole (Jensen et al. 2001; spec 3.1).
+    """Radial diffuse reflectance ``R_d(r)`` of the standard dipole (Jensen et al. 2001; docs/physics.md §6.1).
 
     ``R_d(r) = alpha'/(4 pi) [z_r (1 + sigma_tr d_r) e^{-sigma_tr d_r} / d_r^3
     + z_v (1 + sigma_tr d_v) e^{-sigma_tr d_v} / d_v^3]`` with ``z_r = 1/sigma_t'``,
@@ -238,7 +238,7 @@ def standard_dipole_profile(r, sigma_a, sigma_s, g, eta):
 
 
 def better_dipole_profile(r, sigma_a, sigma_s, g, eta):
-    """Radial exitance ``R(r)`` of the better dipole (d'Eon 2012; spec 3.2).
+    """Radial exitance ``R(r)`` of the better dipole (d'Eon 2012; docs/physics.md §6.2).
 
     Grosjean's ``D = (2 sigma_a + sigma_s') / (3 sigma_t'^2)``, ``sigma_tr = sqrt(sigma_a / D)``,
     ``A = (1 + 3 C2) / (1 - 2 C1)``, ``z_r = 1/sigma_t'``, ``z_v = -z_r - 4 A D`` and
@@ -273,7 +273,7 @@ def better_dipole_profile(r, sigma_a, sigma_s, g, eta):
 
 
 def standard_dipole_total_reflectance(alpha_reduced_, eta):
-    """Total diffuse reflectance of the standard dipole (Jensen 2001; spec 3.1), closed form.
+    """Total diffuse reflectance of the standard dipole (Jensen 2001; docs/physics.md §6.1), closed form.
 
     ``R_d = (alpha'/2) (1 + exp(-(4/3) A sqrt(3 (1 - alpha')))) exp(-sqrt(3 (1 - alpha')))`` with the
     Egan-Hilgeman ``A``; equals the integral of :func:`standard_dipole_profile` over the plane.
@@ -286,7 +286,7 @@ def standard_dipole_total_reflectance(alpha_reduced_, eta):
 
 
 def better_dipole_total_reflectance(alpha_reduced_, eta):
-    """Total diffuse reflectance of the better dipole (Hery's closed form; spec 3.2).
+    """Total diffuse reflectance of the better dipole (Hery's closed form; docs/physics.md §6.2).
 
     ``R_d = (alpha'^2 / 2) exp(-sqrt(3 (1 - alpha') / (2 - alpha'))) [C_E (1 + e^{-4 A mu})
     + (C_phi / mu)(1 - e^{-4 A mu})]`` with ``mu = sqrt((1 - alpha')(2 - alpha') / 3)``; the limit
@@ -307,8 +307,8 @@ def better_dipole_total_reflectance(alpha_reduced_, eta):
 def directional_dipole_total_reflectance(sigma_a, sigma_s, g, eta, theta_i_deg=0.0, n_radii=400, n_angles=64):
     """Total diffuse reflectance of the directional dipole per refracted photon, by quadrature.
 
-    ``R = integral over the plane of pi S_d / norm dA`` (spec 1.5, 1.10: the model's exitance per unit
-    flux that entered the medium; multiply by ``T12`` for per incident flux). Polar quadrature about
+    ``R = integral over the plane of pi S_d / norm dA`` (docs/physics.md §5.2, values §10.4: the model's
+    exitance per unit flux that entered the medium; multiply by ``T12`` for per incident flux). Polar quadrature about
     the point of incidence: trapezoid rule in ``log r`` from ``1e-6 / sigma_t'`` to ``60`` diffusion
     lengths, trapezoid (spectral for a periodic integrand) in the azimuth. Relative accuracy is
     about 1e-6 with the default resolution. Scalar coefficients only.

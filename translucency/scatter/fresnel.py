@@ -1,8 +1,8 @@
 """Fresnel terms of a smooth dielectric boundary and the diffuse Fresnel moments.
 
 All functions are float64, vectorised and broadcast over their arguments. ``eta`` is always the
-relative index of refraction ``n_inside / n_outside`` of the medium the light enters (physics spec
-section 0.2); an argument ``1 / eta`` describes light leaving the medium.
+relative index of refraction ``n_inside / n_outside`` of the medium the light enters
+(docs/physics.md §1.2); an argument ``1 / eta`` describes light leaving the medium.
 
 ========== ======================================================================= ======
 symbol     meaning                                                                 unit
@@ -39,7 +39,7 @@ __all__ = [
 
 
 def fresnel_reflectance(cos_i, eta):
-    """Unpolarised Fresnel reflectance of a smooth dielectric boundary (physics spec 2.1).
+    """Unpolarised Fresnel reflectance of a smooth dielectric boundary (docs/physics.md §3.1).
 
     Parameters
     ----------
@@ -73,7 +73,7 @@ def fresnel_reflectance(cos_i, eta):
 
 
 def fresnel_transmittance(cos_i, eta):
-    """Fresnel transmittance ``T = 1 - F_r(cos_i, eta)`` (physics spec 1.4, 2.1).
+    """Fresnel transmittance ``T = 1 - F_r(cos_i, eta)`` (docs/physics.md §3.1, §5.1).
 
     ``T12 = fresnel_transmittance(n_i . w_i, eta)`` at entry and
     ``T21 = fresnel_transmittance(n_o . w_o, eta)`` at exit (both with the outside cosine).
@@ -82,7 +82,7 @@ def fresnel_transmittance(cos_i, eta):
 
 
 def refract(w_i, n, eta):
-    """Refracted direction ``w12`` of light arriving from outside (physics spec 1.2, item 1).
+    """Refracted direction ``w12`` of light arriving from outside (docs/physics.md §3.2).
 
     ``w12 = -e w_i + (e c - sqrt(1 - e^2 (1 - c^2))) n`` with ``c = n . w_i`` and ``e = 1 / eta``.
 
@@ -110,7 +110,7 @@ def refract(w_i, n, eta):
 
 
 def two_C1(eta):
-    """Twice the first Fresnel moment, ``2 C1(eta)`` (d'Eon & Irving 2011 fit; spec 2.2).
+    """Twice the first Fresnel moment, ``2 C1(eta)`` (d'Eon & Irving 2011 fit; docs/physics.md §3.3).
 
     ``2 C1(eta)`` is the cosine-weighted diffuse reflectance, total internal reflection included, of
     light inside a medium of relative index ``eta`` hitting its boundary; ``2 C1(1 / eta)`` is the
@@ -123,7 +123,7 @@ def two_C1(eta):
 
 
 def three_C2(eta):
-    """Three times the second Fresnel moment, ``3 C2(eta)`` (d'Eon & Irving 2011 fit; spec 2.2)."""
+    """Three times the second Fresnel moment, ``3 C2(eta)`` (d'Eon & Irving 2011 fit; docs/physics.md §3.3)."""
     eta = np.asarray(eta, dtype=np.float64)
     low = 0.828421 + eta * (-2.62051 + eta * (3.36231 + eta * (-1.95284 + eta * (0.236494 + 0.145787 * eta))))
     inv = 1.0 / eta
@@ -136,17 +136,17 @@ def three_C2(eta):
 
 
 def C_phi(eta):
-    """Fluence boundary coefficient ``C_phi(eta) = (1 - 2 C1(eta)) / 4`` (spec 1.1, 2.2)."""
+    """Fluence boundary coefficient ``C_phi(eta) = (1 - 2 C1(eta)) / 4`` (docs/physics.md §2.1, §3.3)."""
     return 0.25 * (1.0 - two_C1(eta))
 
 
 def C_E(eta):
-    """Flux boundary coefficient ``C_E(eta) = (1 - 3 C2(eta)) / 2`` (spec 1.1, 2.2)."""
+    """Flux boundary coefficient ``C_E(eta) = (1 - 3 C2(eta)) / 2`` (docs/physics.md §2.1, §3.3)."""
     return 0.5 * (1.0 - three_C2(eta))
 
 
 def reflection_parameter_A(eta):
-    """Boundary reflection parameter ``A = (1 - C_E(eta)) / (2 C_phi(eta))`` (spec 1.1).
+    """Boundary reflection parameter ``A = (1 - C_E(eta)) / (2 C_phi(eta))`` (docs/physics.md §2.1).
 
     Equal to ``(1 + 3 C2) / (1 - 2 C1)``; used by the directional and the better dipole.
     """
@@ -154,7 +154,7 @@ def reflection_parameter_A(eta):
 
 
 def F_dr_egan_hilgeman(eta):
-    """Internal diffuse Fresnel reflectance, Egan-Hilgeman fit used by Jensen 2001 (spec 2.3).
+    """Internal diffuse Fresnel reflectance, Egan-Hilgeman fit used by Jensen 2001 (docs/physics.md §3.4).
 
     ``F_dr = -1.440 / eta^2 + 0.710 / eta + 0.668 + 0.0636 eta``.
     """

@@ -3,7 +3,7 @@
 The structure depends on the geometry only and is reused when the light or the material changes;
 the aggregated sources at the nodes depend on the incident flux and are recomputed per solve (cheap,
 bottom-up). A node seen from a receiver under a small enough angle is replaced by one aggregated
-source (Jensen & Buhler 2002; physics spec 6.1): total flux per channel, flux-weighted position,
+source (Jensen & Buhler 2002; docs/physics.md §8.3): total flux per channel, flux-weighted position,
 flux-weighted normal and refracted direction (both renormalised).
 
 Criterion: a node is accepted when the receiver is outside its bounding sphere and

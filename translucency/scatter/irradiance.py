@@ -3,7 +3,7 @@
 For every vertex ``i`` and every light sample ``k`` (a directional light, one environment sample, or
 a point light) with ``c_ik = n_i . w_ik > 0`` and the way to the light free (``V_ik``), light enters
 the medium with flux density ``T12(c_ik) E_k c_ik`` along the refracted direction ``w12_ik``
-(physics spec 1.2 item 1, 1.4, 1.7). :func:`incident_flux` sums the samples per vertex:
+(docs/physics.md §3.2, §5.1, §7.2). :func:`incident_flux` sums the samples per vertex:
 
 * ``phi_i = sum_k T12 E_k c_ik V_ik`` (flux density) and ``Phi_i = A_i phi_i`` (flux);
 * ``w12_mean_i = sum_k |phi_ik| w12_ik / sum_k |phi_ik|`` with ``|.|`` the channel sum, and its
@@ -430,7 +430,7 @@ def incident_flux(points, normals, areas, lights, eta, *, triangles=None, occlud
         w = np.concatenate([np.broadcast_to(job.w, (len(job.front), 3)) for job in batch])
         irradiance = np.concatenate([_irradiance(job, stats) for job in batch])
         phi_pairs = (fresnel_transmittance(c, eta) * c)[:, None] * irradiance  # T12 E cos(theta) V
-        w12_pairs = refract(w, normals[front], eta)  # spec 1.2 item 1
+        w12_pairs = refract(w, normals[front], eta)  # docs/physics.md §3.2
         weight = phi_pairs.sum(axis=1)
         for channel in range(3):
             phi[:, channel] += np.bincount(front, weights=phi_pairs[:, channel], minlength=n)

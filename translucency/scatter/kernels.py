@@ -53,7 +53,7 @@ def channel_parameters(sigma_a, sigma_s, g, eta, model: str = "directional") -> 
 
     ``model`` is ``"directional"`` (FHK14), ``"standard"`` (Jensen 2001) or ``"better"`` (d'Eon 2012);
     for the radial models ``S_d = R(r) / pi`` (standard) and ``R(r) / (pi 4 C_phi(1/eta))`` (better),
-    the Fresnel transmittances excluded (spec 3.1, 3.2).
+    the Fresnel transmittances excluded (docs/physics.md §6.1, §6.2).
     """
     sigma_a, sigma_s, g = (np.atleast_1d(np.asarray(v, dtype=np.float64)) for v in (sigma_a, sigma_s, g))
     eta = float(eta)
@@ -80,14 +80,14 @@ def _radial_parameters(sigma_a, sigma_s, g, eta, model):
     alpha = alpha_reduced(sigma_a, sigma_s, g)
     params = np.zeros((sigma_a.shape[0], N_PARAMS))
     z_r = 1.0 / sigma_t_red
-    if model == "standard":  # spec 3.1
+    if model == "standard":  # docs/physics.md §6.1
         F_dr = float(fresnel.F_dr_egan_hilgeman(eta))
         A = (1.0 + F_dr) / (1.0 - F_dr)
         params[:, R_Z_R] = z_r
         params[:, R_Z_V] = z_r * (1.0 + 4.0 * A / 3.0)
         params[:, R_SIGMA_TR] = sigma_tr(sigma_a, sigma_s, g)
         params[:, R_SCALE] = alpha / (4.0 * math.pi) / math.pi
-    elif model == "better":  # spec 3.2
+    elif model == "better":  # docs/physics.md §6.2
         C_phi = float(fresnel.C_phi(eta))
         C_E = float(fresnel.C_E(eta))
         A = (1.0 - C_E) / (2.0 * C_phi)
@@ -122,7 +122,7 @@ def exp_nonpositive(x):
 
 @numba.njit(cache=True, inline="always", fastmath=True)
 def _ray_source(x_dot_w, x_dot_n, w_dot_n, d, D, inv_D, sigma_tr_, C_phi, C_E, norm_over_4pi2):
-    """``S'_d`` of one ray source from its dot products and distance (spec 1.3), 1/(mm^2 sr).
+    """``S'_d`` of one ray source from its dot products and distance (docs/physics.md §4.4), 1/(mm^2 sr).
 
     ``norm exp(-s) / (4 pi^2 d^3) [C_phi (d^2/D + 3 (1+s) x.w) - C_E (3 D (1+s) w.n_o
     - ((1+s) + 3 D (3 (1+s) + s^2) x.w / d^2) x.n_o)]`` with ``s = sigma_tr d``; written with
@@ -161,8 +161,8 @@ def _channel(p, r2, perp2, mu0, x_dot_w, x_dot_n, x_dot_v, s_dot_v, s_dot_n, v_d
 def pair_geometry(x0, x1, x2, ni0, ni1, ni2, w0, w1, w2, nx, ny, nz):
     """The channel-independent part of the directional dipole for the pair offset ``x = x_o - x_i``.
 
-    Modified tangent-plane normal ``n_i*`` (``n_i`` when ``r = 0`` or ``n_i || x``; spec 1.2 item 2),
-    virtual direction ``w_v`` (item 3), and the dot products the channels need (branch-free, so that
+    Modified tangent-plane normal ``n_i*`` (``n_i`` when ``r = 0`` or ``n_i || x``; docs/physics.md §4.1),
+    virtual direction ``w_v`` (§4.2), and the dot products the channels need (branch-free, so that
     loops using it vectorise). Returns ``(r2, perp2, mu0, x.w12, x.n_o, x.w_v, n*.w_v, n*.n_o, w_v.n_o,
     x.n*)`` with ``perp2 = r^2 - (x.w12)^2`` (>= 0) and ``mu0 = -n_o.w12``.
     """
@@ -250,7 +250,8 @@ def model_pair(model, xi0, xi1, xi2, ni0, ni1, ni2, w0, w1, w2, xo0, xo1, xo2, n
     """``S_d`` of one source/receiver pair for every channel of ``params`` and the chosen model
     (0 directional, 1 standard, 2 better), written into ``out`` (1/(mm^2 sr)).
 
-    Same formulas and conventions as :mod:`translucency.scatter.dipoles` (spec 1.1-1.3, 3.1, 3.2):
+    Same formulas and conventions as :mod:`translucency.scatter.dipoles` (docs/physics.md §4,
+    §6.1, §6.2; the edge cases of §4.6):
     ``n_i* = n_i`` when ``r = 0`` or ``n_i || x``, ``d_r`` and ``d_v`` floored at ``D_R_FLOOR * D``,
     clamp at 0 after subtracting the virtual source.
 

@@ -2,7 +2,7 @@
 
 A :class:`Medium` holds, per colour channel, the absorption and scattering coefficients, the
 Henyey-Greenstein mean cosine and the relative index of refraction, validated once. The derived
-quantities of the diffusion models (physics spec 1.1) are small pure functions on arrays, used both
+quantities of the diffusion models (docs/physics.md §2.1) are small pure functions on arrays, used both
 by :class:`Medium` and by the reference formulas in :mod:`translucency.scatter.dipoles`.
 
 =============== ======================================================== =====
@@ -48,37 +48,37 @@ CHANNELS = ("red", "green", "blue")
 
 
 def sigma_s_reduced(sigma_s, g):
-    """Reduced scattering coefficient ``sigma_s' = sigma_s (1 - g)`` in 1/mm (spec 1.1, 1.6)."""
+    """Reduced scattering coefficient ``sigma_s' = sigma_s (1 - g)`` in 1/mm (docs/physics.md §2.1, §2.3)."""
     return np.asarray(sigma_s, dtype=np.float64) * (1.0 - np.asarray(g, dtype=np.float64))
 
 
 def sigma_t(sigma_a, sigma_s):
-    """Unreduced extinction coefficient ``sigma_t = sigma_s + sigma_a`` in 1/mm (spec 1.1)."""
+    """Unreduced extinction coefficient ``sigma_t = sigma_s + sigma_a`` in 1/mm (docs/physics.md §2.1)."""
     return np.asarray(sigma_s, dtype=np.float64) + np.asarray(sigma_a, dtype=np.float64)
 
 
 def sigma_t_reduced(sigma_a, sigma_s, g):
-    """Reduced extinction coefficient ``sigma_t' = sigma_s (1 - g) + sigma_a`` in 1/mm (spec 1.1)."""
+    """Reduced extinction coefficient ``sigma_t' = sigma_s (1 - g) + sigma_a`` in 1/mm (docs/physics.md §2.1)."""
     return sigma_s_reduced(sigma_s, g) + np.asarray(sigma_a, dtype=np.float64)
 
 
 def alpha_reduced(sigma_a, sigma_s, g):
-    """Reduced albedo ``alpha' = sigma_s' / sigma_t'`` (dimensionless, spec 1.1)."""
+    """Reduced albedo ``alpha' = sigma_s' / sigma_t'`` (dimensionless, docs/physics.md §2.1)."""
     return sigma_s_reduced(sigma_s, g) / sigma_t_reduced(sigma_a, sigma_s, g)
 
 
 def diffusion_coefficient(sigma_a, sigma_s, g):
-    """Classical diffusion coefficient ``D = 1 / (3 sigma_t')`` in mm (spec 1.1)."""
+    """Classical diffusion coefficient ``D = 1 / (3 sigma_t')`` in mm (docs/physics.md §2.1)."""
     return 1.0 / (3.0 * sigma_t_reduced(sigma_a, sigma_s, g))
 
 
 def sigma_tr(sigma_a, sigma_s, g):
-    """Effective transport coefficient ``sigma_tr = sqrt(3 sigma_a sigma_t')`` in 1/mm (spec 1.1)."""
+    """Effective transport coefficient ``sigma_tr = sqrt(3 sigma_a sigma_t')`` in 1/mm (docs/physics.md §2.1)."""
     return np.sqrt(3.0 * np.asarray(sigma_a, dtype=np.float64) * sigma_t_reduced(sigma_a, sigma_s, g))
 
 
 def extrapolation_distance(sigma_a, sigma_s, g):
-    """Extrapolation distance ``d_e = 2.131 D / sqrt(alpha')`` in mm (spec 1.1, FHK14)."""
+    """Extrapolation distance ``d_e = 2.131 D / sqrt(alpha')`` in mm (docs/physics.md §2.1; FHK14 eq. 21)."""
     return 2.131 * diffusion_coefficient(sigma_a, sigma_s, g) / np.sqrt(alpha_reduced(sigma_a, sigma_s, g))
 
 
@@ -131,7 +131,7 @@ class Medium:
 
     Build it from unreduced coefficients ``Medium(sigma_a, sigma_s, g, eta)`` or from reduced ones
     with :meth:`from_reduced` (``g = 0``). Scalars broadcast to the three RGB channels. Derived
-    quantities (spec 1.1) are available as properties.
+    quantities (docs/physics.md §2.1) are available as properties.
 
     Parameters
     ----------

@@ -3,8 +3,8 @@
 The medium fills ``z < 0`` below a smooth boundary ``z = 0`` (outward normal ``+z``) with relative
 index of refraction ``eta = n_inside / n_outside``. A collimated pencil beam hits the origin from
 the direction ``w_i = (-sin theta_i, 0, cos theta_i)`` (toward the light), so the refracted ray
-``w12`` travels toward ``+x``, the convention of the directional dipole tables (physics spec 1.9,
-1.10). The walk follows physics spec 5.1:
+``w12`` travels toward ``+x``, the convention of the directional dipole tables (docs/physics.md
+§10.1, §9.1). The walk follows docs/physics.md §9.1:
 
 1. launch at the origin along ``w12`` with weight 1 (``launch="refracted"``: tallies per unit
    flux that entered the medium) or with weight ``T12 = 1 - F_r(cos theta_i, eta)``
@@ -39,7 +39,7 @@ R                total diffuse reflectance (escaped fraction of launched flux)  
 A                absorbed fraction of launched flux                                 1
 ================ ================================================================== ===========
 
-Comparison with the diffusion models (physics spec 1.5, 5.1 step 7), per refracted photon:
+Comparison with the diffusion models (docs/physics.md §6.3, §9.2), per refracted photon:
 directional dipole ``M = pi S_d / norm = pi S_d 4 C_phi(1/eta)``; standard dipole
 ``M = R_d(r) (1 - 2 C1(1/eta))``; better dipole ``M = R(r)``. Per incident photon multiply each by
 ``T12``.
@@ -62,7 +62,7 @@ __all__ = ["HalfSpaceTally", "simulate_half_space", "fresnel_reflectance_scalar"
 #: Accepted values of ``launch``: per refracted photon or per incident photon.
 LAUNCH_MODES = ("refracted", "incident")
 
-#: Russian roulette threshold, survival probability (MCML's values; spec 5.1 step 4).
+#: Russian roulette threshold, survival probability (MCML's values; docs/physics.md §9.1 item 5).
 ROULETTE_WEIGHT = 1e-4
 ROULETTE_SURVIVAL = 0.1
 
@@ -139,7 +139,7 @@ def _uniform(state):
 
 @numba.njit(cache=True)
 def fresnel_reflectance_scalar(cos_i, eta):
-    """Unpolarised Fresnel reflectance of a smooth boundary, scalar njit version (physics spec 2.1).
+    """Unpolarised Fresnel reflectance of a smooth boundary, scalar njit version (docs/physics.md §3.1).
 
     Same convention as :func:`translucency.scatter.fresnel.fresnel_reflectance`: ``eta`` is
     ``n_transmitted / n_incident`` (``eta`` for light entering the medium, ``1 / eta`` for light
@@ -173,7 +173,7 @@ def fresnel_reflectance_scalar(cos_i, eta):
 
 @numba.njit(cache=True, inline="always")
 def _sample_hg_cosine(g, xi):
-    """Cosine of the deflection angle sampled from Henyey-Greenstein (spec 5.1 step 3)."""
+    """Cosine of the deflection angle sampled from Henyey-Greenstein (docs/physics.md §9.1 item 4)."""
     if abs(g) < 1e-6:
         return 1.0 - 2.0 * xi
     ratio = (1.0 - g * g) / (1.0 - g + 2.0 * g * xi)
@@ -250,7 +250,7 @@ def _random_walk_batches(
             w = start_weight
             events = 0
             while True:
-                step = -math.log(_uniform(state)) / sigma_t  # free flight, spec 5.1 step 2
+                step = -math.log(_uniform(state)) / sigma_t  # free flight, docs/physics.md §9.1 item 2
                 if uz > 0.0 and z + step * uz >= 0.0:
                     # Reaches the boundary: move there, split the weight by Fresnel.
                     to_boundary = -z / uz
@@ -279,7 +279,7 @@ def _random_walk_batches(
                     x += step * ux
                     y += step * uy
                     z += step * uz
-                    # Interaction: implicit capture, then a new direction (spec 5.1 step 3).
+                    # Interaction: implicit capture, then a new direction (docs/physics.md §9.1 item 4).
                     absorbed[batch] += w * (1.0 - albedo)
                     w *= albedo
                     events += 1
@@ -305,7 +305,7 @@ def _random_walk_batches(
                     if events >= max_interactions:
                         truncated[batch] += w
                         break
-                # Russian roulette (spec 5.1 step 4).
+                # Russian roulette (docs/physics.md §9.1 item 5).
                 if w < ROULETTE_WEIGHT:
                     if _uniform(state) <= ROULETTE_SURVIVAL:
                         w /= ROULETTE_SURVIVAL
@@ -499,7 +499,7 @@ def simulate_half_space(
     launch="refracted",
     max_interactions=10_000_000,
 ) -> HalfSpaceTally:
-    """Monte Carlo exitance of a semi-infinite medium lit by a collimated pencil beam (spec 5.1).
+    """Monte Carlo exitance of a semi-infinite medium lit by a collimated pencil beam (docs/physics.md §9.1).
 
     Parameters
     ----------
@@ -596,7 +596,7 @@ def simulate_half_space(
                 "radii starting at 0 (mm)."
             )
 
-    # Entry: Snell refraction of w_i = (-sin, 0, cos) into the medium (spec 1.2 item 1).
+    # Entry: Snell refraction of w_i = (-sin, 0, cos) into the medium (docs/physics.md §3.2).
     theta = math.radians(theta_i_deg)
     cos_i = math.cos(theta)
     sin_t = math.sin(theta) / eta

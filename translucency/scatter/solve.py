@@ -12,10 +12,10 @@ Methods for the far field (each with a tolerance where it has one):
     every (source, receiver) pair, numba-parallel, blocked; the reference.
 ``cutoff``
     pairs farther apart than a radius ``R(tol)`` are skipped: ``R`` is where the tail of a
-    geometry-independent bound of ``S_d`` holds less than ``tol`` of the total reflectance (spec 6.2).
+    geometry-independent bound of ``S_d`` holds less than ``tol`` of the total reflectance (docs/physics.md §8.4).
 ``tree``
     a hierarchy over the sources (:mod:`translucency.scatter.hierarchy`): a cluster that is small
-    seen from the receiver is replaced by one aggregated source (Jensen & Buhler 2002, spec 6.1);
+    seen from the receiver is replaced by one aggregated source (Jensen & Buhler 2002, docs/physics.md §8.3);
     clusters wholly beyond the ``cutoff`` radius ``R(tol)`` are skipped (on the bunny in marble this
     drops a quarter of the evaluations and changes ``B`` by 5e-6 relative, in ketchup 45 % and 3e-4).
 
@@ -298,7 +298,7 @@ def solve(
     memory_limit: float | None = None,
     time_limit: float | None = None,
 ) -> Solution:
-    """Diffuse radiance factor ``B`` at the receiver vertices (DESIGN.md; spec 1.5, 1.7).
+    """Diffuse radiance factor ``B`` at the receiver vertices (DESIGN.md; docs/physics.md §5.3, integrated as in §8).
 
     Parameters
     ----------
