@@ -203,7 +203,7 @@ def test_view_screenshot_equals_the_api_image(sphere, tmp_path):
 
     image = iio.imread(out).astype(float)
     from translucency.app.options import load_scan
-    from translucency.app.pipeline import proxy_edge_length, resolve_medium
+    from translucency.app.pipeline import resolve_medium
 
     mesh, _, _ = load_scan(path)
     medium = resolve_medium("skim_milk")

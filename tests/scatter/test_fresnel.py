@@ -116,7 +116,6 @@ def test_refraction_obeys_snell(w_i, n, eta):
         w_i = w_i - 2 * np.dot(w_i, n) * n  # put the light on the outside
     w12 = fresnel.refract(w_i, n, eta)
     assert np.linalg.norm(w12) == pytest.approx(1.0, abs=1e-12)
-    cos_i = np.dot(w_i, n)
     cos_t = -np.dot(w12, n)
     assert cos_t > -1e-12  # into the medium (grazing light at eta = 1 stays along the surface, to rounding)
     sin_i = np.linalg.norm(np.cross(w_i, n))
