@@ -8,7 +8,8 @@ module               concept
 ==================== ==================================================================
 mesh                 :class:`TriangleMesh`, the one triangle-mesh type (points in mm)
 units                length units, conversion to mm, size plausibility
-load                 reading every mesh format into a :class:`TriangleMesh`
+load                 every mesh file to a :class:`TriangleMesh`: dispatch, units, size
+formats              one reader per file format (PLY, OFF, OBJ, STL, VTK, pymeshlab)
 triangulate          polygons and triangle strips to triangle lists
 geometry             triangle areas/normals, vertex normals and areas (plain arrays)
 defects              counts of mesh defects (what repair has to fix)

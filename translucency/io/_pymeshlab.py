@@ -4,7 +4,7 @@ pymeshlab loads the filter plugins that need OpenGL only when the system has ``l
 ``libOpenGL``; without them it imports fine but silently lacks filters such as
 ``meshing_close_holes``, and the repair would fail later with an AttributeError. This helper turns
 that into one clear sentence. Used by :mod:`translucency.io.clean`, :mod:`translucency.io.decimate`
-and the pymeshlab-based readers of :mod:`translucency.io.load`.
+and the pymeshlab-based reader :mod:`translucency.io.formats.pymeshlab`.
 """
 
 from __future__ import annotations

@@ -381,11 +381,12 @@ def read_baked_ply(path) -> BakedPly:
     MeshError
         When the file is not a readable PLY or lacks the bake's properties.
     """
-    from .load import _PlyHeader, read_mesh_arrays
+    from .formats.ply import PlyHeader
+    from .load import read_mesh_arrays
 
     path = Path(path)
     points, triangles, point_data = read_mesh_arrays(path, format="ply")
-    comments = _PlyHeader(path).comments
+    comments = PlyHeader(path).comments
     needed = [f"{prefix}_{c}" for prefix in ("radiance", "b") for c in "rgb"]
     missing = [name for name in needed if name not in point_data]
     if missing or "colors" not in point_data or "normals" not in point_data:
