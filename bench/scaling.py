@@ -14,7 +14,7 @@ label     how it is made
 
 Each mesh is written to a temporary PLY and baked in a child process, as a user would bake it:
 load -> clean -> ``Scene.shade()`` with the default settings (marble, one directional light with
-Embree shadows, ``tree`` at tolerance 1 %, every vertex) -> :func:`translucency.io.ply.write_baked_ply`,
+Embree shadows, ``tree`` at tolerance 1 %, every vertex) -> :func:`translucency.io.baked.write_baked_ply`,
 with the wall time of every stage; the solver's own stages (incident light and visibility, far
 field, near lists, near field) come from the shade's timings. That first shade builds every cache
 (Embree scene, source tree, near-triangle lists); a viewer's later solves reuse them, so warm shades
@@ -146,7 +146,7 @@ def bake(path, out_ply):
     from translucency.app.pipeline import Scene
     from translucency.io.clean import clean_mesh
     from translucency.io.load import load_mesh
-    from translucency.io.ply import write_baked_ply
+    from translucency.io.baked import write_baked_ply
 
     stages = {}
     start = time.perf_counter()

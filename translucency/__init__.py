@@ -29,8 +29,8 @@ _LAZY = {
     "load_mesh": "translucency.io.load",
     "clean_mesh": "translucency.io.clean",
     "decimate_mesh": "translucency.io.decimate",
-    "write_baked_ply": "translucency.io.ply",
-    "read_baked_ply": "translucency.io.ply",
+    "write_baked_ply": "translucency.io.baked",
+    "read_baked_ply": "translucency.io.baked",
     # lights and the solver
     "DirectionalLight": "translucency.scatter.lights",
     "PointLight": "translucency.scatter.lights",

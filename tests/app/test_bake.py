@@ -11,7 +11,7 @@ import translucency
 from translucency.app import bake as batch
 from translucency.app import cli
 from translucency.errors import InvalidParameterError, UnknownMaterialError
-from translucency.io.ply import read_baked_ply
+from translucency.io.baked import read_baked_ply
 
 BROKEN_PLY = b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nend_header\n1\n"
 

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from translucency.app import cli
-from translucency.io.ply import read_baked_ply
+from translucency.io.baked import read_baked_ply
 from translucency.scatter.materials import catalogue
 
 

@@ -24,7 +24,7 @@ def test_compare_materials(tmp_path, monkeypatch, capsys):
 
 
 def test_bake_and_render(tmp_path, monkeypatch, capsys):
-    from translucency.io.ply import read_baked_ply
+    from translucency.io.baked import read_baked_ply
 
     run_example("bake_and_render.py", tmp_path, "--material", "marble", "--quick", monkeypatch=monkeypatch)
     baked = read_baked_ply(tmp_path / "marble.ply")

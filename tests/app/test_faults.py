@@ -23,7 +23,7 @@ import pytest
 from tests.app.test_bake import write_sphere
 from translucency.app import cli
 from translucency.io import atomic
-from translucency.io.ply import read_baked_ply
+from translucency.io.baked import read_baked_ply
 
 pytestmark = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="process and mount checks use Linux")
 

@@ -12,7 +12,7 @@ from translucency.app.render import render_colors
 from translucency.app.viewer import Viewer, interactive_edge_length, light_angles, light_direction
 from translucency.errors import InvalidParameterError
 from translucency.io.mesh import TriangleMesh
-from translucency.io.ply import read_baked_ply
+from translucency.io.baked import read_baked_ply
 from translucency.scatter.lights import DirectionalLight, EnvironmentLight
 
 needs_display = pytest.mark.skipif(not os.environ.get("DISPLAY"), reason="needs an X display (run under xvfb-run)")

@@ -10,7 +10,7 @@
 
 Output names are ``<stem>_<material>.ply`` in the output folder; a stem met twice (``a/scan.ply``,
 ``b/scan.obj``) gets ``-2``, ``-3``, ... and a name is never that of an input, so no input is ever
-written over. Each PLY is written atomically (:func:`translucency.io.ply.write_baked_ply`): a
+written over. Each PLY is written atomically (:func:`translucency.io.baked.write_baked_ply`): a
 failed file leaves no partial output.
 
 Threads: ``workers`` processes each run numba with ``cores // workers`` threads. On Dask every task
@@ -267,7 +267,7 @@ def bake_file(path, output, settings: BakeSettings, progress=None) -> BakeRecord
     -------
     BakeRecord
     """
-    from ..io.ply import write_baked_ply
+    from ..io.baked import write_baked_ply
     from .options import load_scan
     from .pipeline import Scene
 

@@ -12,7 +12,7 @@ from pathlib import Path
 
 from ..io.atomic import prepare_output_folder
 from ..io.clean import clean_mesh
-from ..io.ply import write_baked_ply
+from ..io.baked import write_baked_ply
 from .pipeline import DEFAULT_MATERIAL, default_scan_path, load_default_scan, shade
 from .render import render_colors
 

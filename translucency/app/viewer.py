@@ -351,7 +351,7 @@ class Viewer:
         not depend on the view). File names are ``<name>_<material>_<model>_<n>`` with the first free
         ``n``. Returns ``(png, ply)``.
         """
-        from ..io.ply import write_baked_ply
+        from ..io.baked import write_baked_ply
 
         folder = Path(folder) if folder is not None else self.output
         folder.mkdir(parents=True, exist_ok=True)

@@ -17,7 +17,7 @@ orientation          coherent and outward orientation
 clean                scan repair with a report of what changed
 proximity            exact closest points on a triangle mesh
 decimate             proxy meshes and the mapping of proxy values back to the full mesh
-ply                  baked PLY output and input, atomic, with every setting in the header
+baked                baked PLY output and input, atomic, with every setting in the header
 save                 any mesh to a mesh file, atomic, never over its source
 ==================== ==================================================================
 """
@@ -65,10 +65,10 @@ _LAZY = {
     "closest_points_on_triangles": "translucency.io.proximity",
     "vertex_hausdorff_distance": "translucency.io.proximity",
     # baked PLY
-    "BakedPly": "translucency.io.ply",
-    "write_baked_ply": "translucency.io.ply",
-    "read_baked_ply": "translucency.io.ply",
-    "REQUIRED_METADATA": "translucency.io.ply",
+    "BakedPly": "translucency.io.baked",
+    "write_baked_ply": "translucency.io.baked",
+    "read_baked_ply": "translucency.io.baked",
+    "REQUIRED_METADATA": "translucency.io.baked",
     # any mesh file
     "save_mesh": "translucency.io.save",
     "check_output_path": "translucency.io.save",

@@ -34,7 +34,8 @@ into it in a process, so the next run writing into the same folder cleans up aft
 * :func:`staged_folder` -- a set of files that replace their namesakes in a folder only when all
   were written;
 * :func:`prepare_output_folder`, :func:`prepare_output_file` -- before any work: is the output
-  writable? (and the stale temporaries of an earlier run there are swept);
+  writable? (and the stale temporaries of an earlier run there are swept); :func:`same_file` -- is
+  the output the input itself (inputs are never written over)?;
 * :func:`write_error` -- the one sentence for an ``OSError`` while writing (disk full, quota,
   read-only file system).
 """
@@ -54,7 +55,8 @@ from pathlib import Path
 from ..errors import InvalidParameterError, WriteError, option
 
 __all__ = ["TEMPORARY_PREFIX", "temporary_name", "parse_temporary_name", "is_stale", "sweep", "atomic_file",
-           "write_bytes", "staged_folder", "prepare_output_folder", "prepare_output_file", "write_error"]
+           "write_bytes", "staged_folder", "prepare_output_folder", "prepare_output_file", "same_file",
+           "write_error"]
 
 #: Every temporary file or folder of translucency starts with this.
 TEMPORARY_PREFIX = ".translucency-"
@@ -285,6 +287,14 @@ def prepare_output_file(path, *, create_folder: bool = False, setting: str = "ou
         raise InvalidParameterError(f"{path} is a folder; give {option(setting)} a file name such as "
                                     f"{path / ('output' + (path.suffix or '.ply'))}.")
     return path
+
+
+def same_file(a, b) -> bool:
+    """Whether two paths name the same existing file (through links too); False when either is missing."""
+    try:
+        return os.path.samefile(a, b)
+    except OSError:
+        return False
 
 
 # --------------------------------------------------------------------------------------------------

@@ -1,5 +1,6 @@
 """Baked PLY: round trips through plyfile, trimesh, pymeshlab and PyVista; atomic writes; metadata."""
 
+import io
 import json
 import os
 
@@ -11,7 +12,7 @@ from hypothesis import strategies as st
 
 from translucency.errors import InvalidParameterError, MeshError, TranslucencyError
 from translucency.io import read_baked_ply, write_baked_ply
-from translucency.io.ply import comments_to_metadata, metadata_to_comments
+from translucency.io.baked import comments_to_metadata, metadata_to_comments
 
 METADATA = {
     "material": "marble",
@@ -83,6 +84,13 @@ def test_round_trip_with_plyfile(bake):
         np.testing.assert_array_equal(vertex[f"radiance_{channel}"], values["radiance"][:, i].astype(np.float32))
         np.testing.assert_array_equal(vertex[f"b_{channel}"], values["b"][:, i].astype(np.float32))
         np.testing.assert_array_equal(vertex[("red", "green", "blue")[i]], values["colors_rgb8"][:, i])
+
+
+def test_the_file_is_what_plyfile_writes(bake):
+    path, _, _ = bake
+    stream = io.BytesIO()
+    plyfile.PlyData.read(str(path)).write(stream)
+    assert stream.getvalue() == path.read_bytes()
 
 
 def test_round_trip_with_trimesh(bake):

@@ -26,7 +26,8 @@ line of :data:`MAX_COMMENT_LINE` characters is written as compact JSON and conti
 buffers). Floats are written with ``repr`` precision,
 so :func:`read_baked_ply` returns the metadata exactly as given (tuples come back as lists).
 
-The file is written by the atomic writer (:mod:`translucency.io.atomic`): to a temporary file in the
+The header is written by plyfile, from the record layout above. The file is
+written by the atomic writer (:mod:`translucency.io.atomic`): to a temporary file in the
 destination folder, flushed to disk, then renamed over the destination, so an existing bake is only
 ever replaced by a complete one and a failed write leaves no partial file. Writing over the mesh's
 own source file is refused.
@@ -36,7 +37,6 @@ from __future__ import annotations
 
 import dataclasses
 import json
-import os
 import re
 from pathlib import Path
 from typing import Any
@@ -44,7 +44,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InvalidParameterError, MeshError
-from .atomic import write_bytes
+from .atomic import same_file, write_bytes
 from .mesh import TriangleMesh
 from .units import unit_metadata
 
@@ -82,7 +82,6 @@ _VERTEX_DTYPE = np.dtype(
     ]
 )  # fmt: skip
 _FACE_DTYPE = np.dtype([("count", "u1"), ("vertex_indices", "<i4", (3,))])
-_PLY_NAMES = {"<f4": "float", "|u1": "uchar"}
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -287,7 +286,7 @@ def write_baked_ply(path, mesh: TriangleMesh, radiance, b, colors_rgb8, metadata
     n = mesh.n_points
     if mesh.n_points >= 2**31 or mesh.n_triangles >= 2**31:
         raise InvalidParameterError("the mesh is too large for a PLY with 32-bit indices; decimate it first.")
-    if mesh.source is not None and path.exists() and _same_file(path, mesh.source):
+    if mesh.source is not None and path.exists() and same_file(path, mesh.source):
         raise InvalidParameterError(
             f"{path} is the scan the mesh was read from; write the bake to another file (inputs are never modified)."
         )
@@ -323,14 +322,24 @@ def write_baked_ply(path, mesh: TriangleMesh, radiance, b, colors_rgb8, metadata
     faces["count"] = 3
     faces["vertex_indices"] = mesh.triangles.astype(np.int32)
 
-    header = ["ply", "format binary_little_endian 1.0"]
-    header += [f"comment {line}" for line in comments]
-    header.append(f"element vertex {n}")
-    header += [f"property {_PLY_NAMES[_VERTEX_DTYPE[name].str]} {name}" for name in _VERTEX_DTYPE.names]
-    header += [f"element face {mesh.n_triangles}", "property list uchar int vertex_indices", "end_header"]
-    header_bytes = ("\n".join(header) + "\n").encode("ascii")
-    write_bytes(path, [header_bytes, vertices.tobytes(), faces.tobytes()])
+    write_bytes(path, [_ply_header(vertices, faces, comments), vertices.tobytes(), faces.tobytes()])
     return path
+
+
+def _ply_header(vertices: np.ndarray, faces: np.ndarray, comments: list[str]) -> bytes:
+    """The PLY header of a bake, written by plyfile for these vertex and face records.
+
+    plyfile declares the elements and checks the comments; the records are written as whole arrays,
+    the same bytes plyfile's own writer gives (which writes list properties one face at a time).
+    """
+    import plyfile
+
+    elements = [
+        plyfile.PlyElement.describe(vertices, "vertex"),
+        plyfile.PlyElement("face", [plyfile.PlyListProperty("vertex_indices", "uchar", "int")], len(faces)),
+    ]
+    ply = plyfile.PlyData(elements, text=False, byte_order="<", comments=comments)
+    return (ply.header + "\n").encode("ascii")
 
 
 def _complete_metadata(metadata, mesh: TriangleMesh, n: int) -> dict:
@@ -352,13 +361,6 @@ def _complete_metadata(metadata, mesh: TriangleMesh, n: int) -> dict:
     settings.setdefault("source", mesh.source.name if mesh.source is not None else None)
     settings.setdefault("source_mm_per_unit", mesh.mm_per_unit)
     return settings
-
-
-def _same_file(a: Path, b: Path) -> bool:
-    try:
-        return os.path.samefile(a, b)
-    except OSError:
-        return False
 
 
 # --------------------------------------------------------------------------------------------------
