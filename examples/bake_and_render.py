@@ -26,11 +26,11 @@ def main():
     if args.quick:
         mesh = tl.decimate_mesh(mesh, target_faces=4000).proxy
     light = tl.DirectionalLight((-0.6, 0.8, 0.4), 1.0)  # from the object toward the light; E = 1 W/m^2
-    result = tl.Scene(mesh).shade(args.material, light, method="tree", tol=1e-2)
+    settings = tl.ShadeSettings(args.material)  # the tree method at 1 % per vertex; every default in one place
+    result = tl.shade_scan(mesh, settings, light)
     print(f"solved {mesh.n_points} vertices in {sum(result.timings.values()):.2f} s")
 
-    ply = tl.write_baked_ply(output / f"{args.material}.ply", mesh, result.radiance, result.B, result.colors,
-                             result.metadata, normals=result.normals)
+    ply = tl.write_result(result, output / f"{args.material}.ply")
     png = output / f"{args.material}.png"
     tl.render_colors(mesh, result.colors, png, window_size=(320, 320) if args.quick else (800, 800))
 

@@ -42,6 +42,9 @@ _LAZY = {
     "shade": "translucency.app.pipeline",
     "Scene": "translucency.app.pipeline",
     "load_default_scan": "translucency.app.pipeline",
+    "ShadeSettings": "translucency.app.settings",
+    "shade_scan": "translucency.app.pipeline",
+    "write_result": "translucency.app.pipeline",
     # many scans to baked PLY files
     "bake": "translucency.app.bake",
     "display_colors": "translucency.app.pipeline",

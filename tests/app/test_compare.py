@@ -156,7 +156,7 @@ def test_the_cli_writes_what_the_api_computes(sphere, tmp_path, capsys):
     stdout = capsys.readouterr().out
     assert "ketchup" in stdout and "statistics.json" in stdout
     document = json.loads((out / "statistics.json").read_text())
-    from translucency.app.options import load_scan
+    from translucency.app.pipeline import load_scan
 
     mesh, _, _ = load_scan(path)
     api = compare(mesh, ["marble", "ketchup"], ["directional", "standard"], DirectionalLight((0, 0, 1), 1.0),

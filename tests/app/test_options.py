@@ -23,8 +23,8 @@ def test_defaults_leave_the_light_to_the_pipeline_and_give_the_tree_method():
     assert options.lights_from_args(args) is None  # the pipeline places it by the up axis
     assert args.unit is None and args.up == "auto"
     settings = options.solver_settings(args)
-    assert settings["method"] == "tree" and settings["tol"] == 0.01 and settings["resolution"] == "full"
-    assert settings["material"].name == "marble" and args.mesh is None
+    assert settings.method == "tree" and settings.tol == 0.01 and settings.resolution == "full"
+    assert settings.material.name == "marble" and args.mesh is None
 
 
 def test_light_options_add_up():
@@ -49,9 +49,9 @@ def test_bad_solver_settings_are_one_sentence(flag, value, words):
 
 
 def test_the_parser_offers_exactly_the_solvers_choices():
-    from translucency.scatter import solve
+    from translucency.scatter import kernels, solve
 
-    assert options.MODELS == solve.MODELS and options.METHODS == solve.METHODS
+    assert options.MODELS == solve.MODELS == tuple(kernels.MODELS) and options.METHODS == solve.METHODS
 
 
 @pytest.mark.parametrize("value, axis", [("-z", "-z"), ("x", "x"), ("auto", "auto")])

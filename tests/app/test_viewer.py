@@ -202,7 +202,7 @@ def test_view_screenshot_equals_the_api_image(sphere, tmp_path):
     import imageio.v3 as iio
 
     image = iio.imread(out).astype(float)
-    from translucency.app.options import load_scan
+    from translucency.app.pipeline import load_scan
     from translucency.app.pipeline import resolve_medium
 
     mesh, _, _ = load_scan(path)
@@ -267,7 +267,7 @@ def test_z_up_puts_the_camera_in_front_and_above_and_the_light_above():
 
 @needs_display
 def test_shared_angel_is_shown_z_up_by_default(shared_meshes):
-    from translucency.app.options import load_scan
+    from translucency.app.pipeline import load_scan
 
     mesh, _, _ = load_scan(shared_meshes / "ggg_angel_sfm.ply")
     view = Viewer(mesh, "marble", window_size=(160, 120), off_screen=True, widgets=False, resolution=12.0)

@@ -31,18 +31,18 @@ already running finishes its file, written atomically like every output (a compl
 from __future__ import annotations
 
 import contextlib
-import math
-import numbers
 import os
 import re
 import signal
 import sys
 import time
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 
 from ..errors import BudgetError, InvalidParameterError, TranslucencyError, command_line_active, command_line_spelling, option
 from ..scatter.budget import DEFAULT_TIME_LIMIT_S
+from ..scatter.names import DEFAULT_METHOD, DEFAULT_MODEL, DEFAULT_TOL
+from .settings import DEFAULT_MATERIAL, ShadeSettings
 
 __all__ = ["BakeSettings", "BakeRecord", "BakeProgress", "ConsoleProgress", "bake", "bake_file", "bake_files",
            "output_paths", "format_summary", "exit_code", "DASK_CONNECT_TIMEOUT_S"]
@@ -55,70 +55,41 @@ _CRASHED = ("the worker process stopped while baking this file (a crash, or the 
             "bake it alone to see more.")
 
 
-def _positive(value) -> bool:
-    """True for a finite real number > 0 (not a bool)."""
-    return isinstance(value, numbers.Real) and not isinstance(value, bool) and math.isfinite(value) and value > 0
-
-
 @dataclass(frozen=True)
-class BakeSettings:
-    """Everything a bake needs besides the file names; validated on construction.
+class BakeSettings(ShadeSettings):
+    """Everything a bake needs besides the file names: the shading settings, the lights and the files'
+    unit; validated on construction.
 
     Parameters
     ----------
-    material : str or Material or Medium
-        Catalogue name, entry or medium (coefficients in 1/mm); stored as a ``Medium``.
+    material, model, method, tol, resolution, shadows, per_direction, exposure, memory_limit, time_limit, up
+        As in :class:`~translucency.app.settings.ShadeSettings` (``up`` places the default light and is
+        recorded; the memory limit in GB, the time limit in seconds).
     lights : light or sequence of lights, optional
         Default: the pipeline's white directional light (1 W/m²).
     unit : str or float, optional
         Length unit of the scan files: ``mm``, ``cm``, ``m``, ``in`` or mm per unit; None: inferred
         from each file's size (:func:`translucency.io.units.infer_unit`). Ignored for the embedded
         default scan, which has its own size.
-    model, method, tol, resolution, shadows, exposure, per_direction, up, memory_limit, time_limit
-        As in :func:`translucency.app.pipeline.shade` (``resolution`` in mm when a number; ``up``
-        places the default light and is recorded; the memory limit in GB, the time limit in seconds).
     """
 
-    material: object = "marble"
     lights: tuple | None = None
     unit: str | float | None = None
-    model: str = "directional"
-    method: str = "tree"
-    tol: float = 1e-2
-    resolution: str | float = "full"
-    shadows: bool = True
-    exposure: float | None = None
-    per_direction: bool = False
-    up: str = "auto"
-    memory_limit: float | None = None
-    time_limit: float | None = DEFAULT_TIME_LIMIT_S
 
     def __post_init__(self):
         from ..io.units import parse_unit
-        from ..io.upright import parse_up
-        from ..scatter.budget import check_limits
         from ..scatter.lights import as_light_list
-        from ..scatter.solve import METHODS, MODELS
-        from .pipeline import resolve_medium
 
-        object.__setattr__(self, "material", resolve_medium(self.material))
+        super().__post_init__()
         if self.lights is not None:
             object.__setattr__(self, "lights", as_light_list(self.lights))
         if self.unit is not None:
             parse_unit(self.unit)
-        object.__setattr__(self, "up", parse_up(self.up))
-        if self.model not in MODELS:
-            raise InvalidParameterError(f"unknown model {self.model!r}; choose one of {', '.join(MODELS)}.")
-        if self.method not in METHODS:
-            raise InvalidParameterError(f"unknown method {self.method!r}; choose one of {', '.join(METHODS)}.")
-        if not (_positive(self.tol) and self.tol < 1):
-            raise InvalidParameterError(f"tol must be a relative error in (0, 1), got {self.tol!r}.")
-        if not (self.resolution in ("full", "auto") or _positive(self.resolution)):
-            raise InvalidParameterError(
-                f"resolution must be 'full', 'auto' or a proxy edge length in mm, got {self.resolution!r}.")
-        if not (self.exposure is None or _positive(self.exposure)):
-            raise InvalidParameterError(f"exposure must be a positive number, got {self.exposure!r}.")
-        check_limits(self.memory_limit, self.time_limit)
+
+    @classmethod
+    def of(cls, settings: ShadeSettings, lights=None, unit=None) -> "BakeSettings":
+        """The bake of ``settings`` under ``lights`` for files in ``unit``."""
+        return cls(**{f.name: getattr(settings, f.name) for f in fields(ShadeSettings)}, lights=lights, unit=unit)
 
     @property
     def material_name(self) -> str:
@@ -267,9 +238,7 @@ def bake_file(path, output, settings: BakeSettings, progress=None) -> BakeRecord
     -------
     BakeRecord
     """
-    from ..io.baked import write_baked_ply
-    from .options import load_scan
-    from .pipeline import Scene
+    from .pipeline import load_scan, shade_scan, write_result
 
     report = progress or (lambda stage, fraction: None)
     start = time.perf_counter()
@@ -284,14 +253,10 @@ def bake_file(path, output, settings: BakeSettings, progress=None) -> BakeRecord
         mesh, _, _ = load_scan(path, settings.unit, warn=warnings.append)
         vertices = mesh.n_points
         report("loading", 1.0)
-        result = Scene(mesh, shadows=settings.shadows, up=settings.up).shade(
-            settings.material, settings.lights, model=settings.model, method=settings.method, tol=settings.tol,
-            resolution=settings.resolution, exposure=settings.exposure, per_direction=settings.per_direction,
-            progress=report, memory_limit=settings.memory_limit, time_limit=settings.time_limit, warn=warnings.append)
+        result = shade_scan(mesh, settings, settings.lights, progress=report, warn=warnings.append)
         lit = int(result.stats["incident"]["n_lit"])
         report("writing", 0.0)
-        write_baked_ply(output, mesh, result.radiance, result.B, result.colors, result.metadata,
-                        normals=result.normals)
+        write_result(result, output)
         report("writing", 1.0)
     except Exception as exc:  # noqa: BLE001 -- every failure of one file becomes its record
         return BakeRecord(source, None, vertices, lit, time.perf_counter() - start, failure_sentence(exc),
@@ -710,8 +675,8 @@ def exit_code(records) -> int:
     return 2 if all(r.over_budget for r in records) else 1
 
 
-def bake(meshes=None, output=None, material="marble", lights=None, *, unit=None, model="directional",
-         method="tree", tol=1e-2, resolution="full", shadows=True, exposure=None, per_direction=False,
+def bake(meshes=None, output=None, material=DEFAULT_MATERIAL, lights=None, *, unit=None, model=DEFAULT_MODEL,
+         method=DEFAULT_METHOD, tol=DEFAULT_TOL, resolution="full", shadows=True, exposure=None, per_direction=False,
          up="auto", memory_limit=None, time_limit=DEFAULT_TIME_LIMIT_S, workers=1, scheduler=None,
          progress=None) -> list[BakeRecord]:
     """Bake scans to PLY files of per-vertex translucent radiance, one file per scan.
@@ -755,6 +720,6 @@ def bake(meshes=None, output=None, material="marble", lights=None, *, unit=None,
     """
     if meshes is not None and isinstance(meshes, (str, os.PathLike)):
         meshes = [meshes]
-    settings = BakeSettings(material, lights, unit, model, method, tol, resolution, shadows, exposure, per_direction,
-                            up, memory_limit, time_limit)
+    settings = BakeSettings(material, model, method, tol, resolution, shadows, per_direction, exposure, memory_limit,
+                            time_limit, up, lights=lights, unit=unit)
     return bake_files(meshes, output, settings, workers=workers, scheduler=scheduler, progress=progress)

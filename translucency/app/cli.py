@@ -116,8 +116,7 @@ def cmd_bake(args) -> int:
     from .bake import BakeSettings, ConsoleProgress, bake_files, exit_code, format_summary
     from .options import lights_from_args, solver_settings
 
-    settings = BakeSettings(lights=lights_from_args(args), unit=args.unit, up=args.up, shadows=not args.no_shadows,
-                            **solver_settings(args))
+    settings = BakeSettings.of(solver_settings(args), lights=lights_from_args(args), unit=args.unit)
     start = time.perf_counter()
     records = bake_files(args.meshes, args.output, settings, workers=args.workers, scheduler=args.scheduler,
                          progress=ConsoleProgress())
@@ -150,7 +149,8 @@ def cmd_view(args) -> int:
     from pathlib import Path
 
     from ..io.atomic import prepare_output_file
-    from .options import lights_from_args, load_scan, solver_settings
+    from .options import lights_from_args, solver_settings
+    from .pipeline import load_scan
 
     window_size = _pixels(args.window_size, "--window-size")
     if args.screenshot is not None:
@@ -164,9 +164,10 @@ def cmd_view(args) -> int:
     if not (0 < args.roughness <= 1):
         raise TranslucencyError(f"--roughness must be a GGX alpha in (0, 1], got {args.roughness!r}.")
     interactive = args.resolution == "interactive"
-    settings = solver_settings(argparse.Namespace(**{**vars(args), "resolution": "full"}) if interactive else args)
+    settings = solver_settings(args, resolution="full") if interactive else solver_settings(args)
+    keywords = settings.solver_keywords()
     if interactive:
-        settings["resolution"] = "interactive"
+        keywords["resolution"] = "interactive"
     lights = lights_from_args(args)
     mesh, _, name = load_scan(args.mesh, args.unit, warn=_warn, note=_note)
     from .viewer import Viewer
@@ -174,7 +175,7 @@ def cmd_view(args) -> int:
     viewer = Viewer(mesh, lights=lights, shadows=not args.no_shadows, view_dependent=args.view_dependent,
                     specular=args.specular, roughness=args.roughness, window_size=window_size, up=args.up,
                     off_screen=args.screenshot is not None, widgets=args.screenshot is None, output=args.output,
-                    name=Path(name).stem, **settings)
+                    name=Path(name).stem, **keywords)
     print(viewer.status)
     if args.screenshot is not None:
         viewer.screenshot(args.screenshot)
@@ -189,9 +190,10 @@ def cmd_compare(args) -> int:
     """Render and measure a scan in several materials and models into a folder."""
     from ..io.atomic import prepare_output_folder
     from .compare import compare, validate_choices
-    from .options import lights_from_args, load_scan, solver_settings
+    from .options import lights_from_args, solver_settings
+    from .pipeline import load_scan
 
-    settings = solver_settings(args)
+    settings = solver_settings(args).solver_keywords()
     settings.pop("material")
     settings.pop("model")
     materials, models, _ = validate_choices(args.materials if args.materials is not None else args.material,

@@ -51,7 +51,9 @@ from .. import __version__
 from ..errors import InvalidParameterError
 from ..io.units import unit_metadata
 from ..scatter.budget import DEFAULT_TIME_LIMIT_S
+from ..scatter.names import DEFAULT_METHOD, DEFAULT_MODEL, DEFAULT_TOL
 from .pipeline import Scene, display_colors, resolve_medium
+from .settings import DEFAULT_MATERIAL, ShadeSettings
 from .render import (DEFAULT_CAMERA_DIRECTION, DEFAULT_UP, add_colored_mesh, camera_position, default_camera_direction,
                      new_plotter)
 
@@ -233,15 +235,15 @@ def validate_choices(materials, models) -> tuple[list, list, dict]:
     Raises a :class:`~translucency.errors.TranslucencyError` with one sentence for an empty or repeated
     list, an unknown model or an unknown or non-scattering material.
     """
-    from ..scatter.solve import MODELS
+    from ..scatter.names import MODELS
 
     materials = _names(materials, "material")
     models = _names(models, "model", MODELS)
     return materials, models, {name: resolve_medium(name) for name in materials}
 
 
-def compare(mesh=None, materials=("marble",), models=("directional",), lights=None, *, output=None, method="tree",
-            tol=1e-2, resolution="full", shadows=True, per_direction=False, exposure=None, memory_limit=None,
+def compare(mesh=None, materials=(DEFAULT_MATERIAL,), models=(DEFAULT_MODEL,), lights=None, *, output=None,
+            method=DEFAULT_METHOD, tol=DEFAULT_TOL, resolution="full", shadows=True, per_direction=False, exposure=None, memory_limit=None,
             time_limit=DEFAULT_TIME_LIMIT_S, camera_direction=None, up="auto", cell_size=(480, 480),
             progress=None) -> Comparison:
     """Render and measure one scan in several materials and models (module docstring for every output).
@@ -288,16 +290,17 @@ def compare(mesh=None, materials=("marble",), models=("directional",), lights=No
         from ..io.atomic import prepare_output_folder
 
         prepare_output_folder(output)
-    if exposure is not None and not (np.isfinite(exposure) and exposure > 0):
-        raise InvalidParameterError(f"exposure must be a positive number, got {exposure!r}.")
+    # every solver setting checked once, before the scan is loaded; each cell changes material and model
+    settings = ShadeSettings(materials[0], models[0], method, tol, resolution, shadows, per_direction, exposure,
+                             memory_limit, time_limit, up)
     width, height = (int(v) for v in cell_size)
     if width < 16 or height < 16:
         raise InvalidParameterError(f"cell_size must be at least 16 x 16 pixels, got {cell_size!r}.")
     if mesh is None:
-        from .options import load_scan
+        from .pipeline import load_scan
 
         mesh, _, _ = load_scan(None)
-    scene = Scene(mesh, shadows=shadows, up=up)
+    scene = Scene(mesh, shadows=settings.shadows, up=settings.up)
     up_axis = scene.up
     up = tuple(up_vector(up_axis))
     if camera_direction is None:
@@ -308,9 +311,8 @@ def compare(mesh=None, materials=("marble",), models=("directional",), lights=No
     for material in materials:
         for model in models:
             start = time.perf_counter()
-            results[material, model] = scene.shade(media[material], lights, model=model, method=method, tol=tol,
-                                                   resolution=resolution, exposure=1.0, per_direction=per_direction,
-                                                   memory_limit=memory_limit, time_limit=time_limit)
+            cell = settings.replace(material=media[material], model=model, exposure=1.0)
+            results[material, model] = scene.shade_with(cell, lights)
             times[material, model] = time.perf_counter() - start
             if progress is not None:
                 progress(f"{material}, {model}: {times[material, model]:.2f} s")

@@ -12,9 +12,9 @@ from pathlib import Path
 
 from ..io.atomic import prepare_output_folder
 from ..io.clean import clean_mesh
-from ..io.baked import write_baked_ply
-from .pipeline import DEFAULT_MATERIAL, default_scan_path, load_default_scan, shade
+from .pipeline import default_scan_path, load_default_scan, shade_scan, write_result
 from .render import render_colors
+from .settings import DEFAULT_MATERIAL, ShadeSettings
 
 OUTPUT_FOLDER = Path("translucency-output")
 
@@ -28,8 +28,10 @@ def run_default_job(output: Path = OUTPUT_FOLDER, material: str = DEFAULT_MATERI
     print(f"  {mesh.n_points} vertices, {mesh.n_triangles} triangles, {mesh.extent:.1f} mm across")
     mesh, report = clean_mesh(mesh)
     print("  repair: " + ("nothing to change" if not report.changed else report.summary().replace("\n", "\n  ")))
-    print(f"shading with {material} (directional dipole, tree method, tol 1e-2, Embree shadows) ...")
-    result = shade(mesh, material)
+    settings = ShadeSettings(material)
+    print(f"shading with {material} ({settings.model} dipole, {settings.method} method, tol {settings.tol:g}, "
+          "Embree shadows) ...")
+    result = shade_scan(mesh, settings)
     solver = result.stats["solver"]
     print(f"  sources lit: {solver['sources']} of {mesh.n_points}; pairs evaluated {solver['pairs_evaluated']:,}, "
           f"skipped {solver['pairs_skipped']:,}; near-field triangles {solver['near_triangles']:,}")
@@ -39,8 +41,7 @@ def run_default_job(output: Path = OUTPUT_FOLDER, material: str = DEFAULT_MATERI
     print(f"  mean radiance toward the normal over lit vertices (W/(m^2 sr) per W/m^2): "
           f"R {mean[0]:.4f}, G {mean[1]:.4f}, B {mean[2]:.4f}")
     output.mkdir(parents=True, exist_ok=True)
-    ply = write_baked_ply(output / f"bunny_{material}.ply", mesh, result.radiance, result.B, result.colors,
-                          result.metadata, normals=result.normals)
+    ply = write_result(result, output / f"bunny_{material}.ply")
     png = output / f"bunny_{material}.png"
     render_colors(mesh, result.colors, png, up=result.metadata["up"])
     print(f"wrote {ply} and {png} in {time.perf_counter() - total:.1f} s")

@@ -3,13 +3,14 @@
 One place turns the words a user types into the API's objects, so every subcommand accepts and
 rejects the same things with the same sentences:
 
-* :func:`add_scan_options` / :func:`load_scan` -- a mesh file (or the embedded default), its unit
-  (inferred from the size when not given) and its up axis, loaded and cleaned, in mm;
+* :func:`add_scan_options` (read by :func:`translucency.app.pipeline.load_scan`) -- a mesh file (or
+  the embedded default), its unit (inferred from the size when not given) and its up axis;
 * :func:`add_light_options` / :func:`lights_from_args` -- ``--light-dir X,Y,Z`` (from the object toward
-  the light), ``--light SPEC`` (any mix, see :data:`~translucency.scatter.lights.LIGHT_SPEC_HELP`),
+  the light), ``--light SPEC`` (any mix, see :data:`~translucency.app.lightspec.LIGHT_SPEC_HELP`),
   ``--env FILE`` (an equirectangular HDR map) with ``--env-directions N``;
 * :func:`add_solver_options` / :func:`solver_settings` -- ``--model``, ``--method``, ``--tol``,
-  ``--resolution``, ``--no-shadows``, ``--per-direction``, ``--exposure``, ``--memory-limit``, ``--time-limit``.
+  ``--resolution``, ``--no-shadows``, ``--per-direction``, ``--exposure``, ``--memory-limit``, ``--time-limit``,
+  made from and read into :class:`~translucency.app.settings.ShadeSettings` (help texts, defaults, checks).
 
 :class:`ArgumentParser` is argparse's parser, except that a negative number or vector is taken as the
 value of the option before it as written: ``--light-dir -1,0.3,-0.5`` (argparse alone reads
@@ -21,16 +22,11 @@ from __future__ import annotations
 import argparse
 import re
 import sys
-import warnings
 
 import numpy as np
 
 from ..errors import InvalidParameterError
-
-# The solver's choices, spelled here so that building the parser does not import numba
-# (tests/app/test_options.py checks them against translucency.scatter.solve).
-MODELS = ("directional", "standard", "better")
-METHODS = ("exact", "cutoff", "tree")
+from ..scatter.names import METHODS, MODELS
 
 
 #: Help of ``--unit`` (``inspect`` has it too).
@@ -96,7 +92,7 @@ def add_scan_options(parser: argparse.ArgumentParser, *, several: bool = False) 
 
 def add_light_options(parser: argparse.ArgumentParser) -> None:
     """``--light-dir``, ``--light``, ``--env`` and ``--env-directions``."""
-    from ..scatter.lights import LIGHT_SPEC_HELP
+    from .lightspec import LIGHT_SPEC_HELP
 
     group = parser.add_argument_group("lights (default: one white directional light of 1 W/m^2 above and in front "
                                       "of the scan, placed by --up)")
@@ -111,24 +107,24 @@ def add_light_options(parser: argparse.ArgumentParser) -> None:
 
 
 def add_solver_options(parser: argparse.ArgumentParser) -> None:
-    """``--material`` and the solver's settings."""
+    """``--material`` and the solver's settings (help texts and defaults: :mod:`translucency.app.settings`)."""
+    from .settings import HELP, ShadeSettings
+
+    default = ShadeSettings.__dataclass_fields__
     group = parser.add_argument_group("material and solver")
-    group.add_argument("--material", default="marble", help="catalogue name (see 'translucency materials')")
-    group.add_argument("--model", default="directional", choices=MODELS, help="scattering model (default directional)")
-    group.add_argument("--method", default="tree", choices=METHODS, help="far-field method (default tree)")
-    group.add_argument("--tol", type=float, default=1e-2, help="relative error allowed to cutoff/tree (default 0.01)")
-    group.add_argument("--resolution", default="full",
-                       help="where B is computed: full (every vertex), auto, or a proxy edge length in mm")
-    group.add_argument("--no-shadows", action="store_true", help="no shadow rays: every front-facing vertex is lit")
-    group.add_argument("--per-direction", action="store_true",
-                       help="solve each light sample with its own refracted direction (exact for several lights)")
-    group.add_argument("--exposure", type=float, default=None, help="display exposure (default: automatic)")
-    group.add_argument("--memory-limit", type=float, default=None, metavar="GB",
-                       help="memory the process may use, GB (default: what the machine has available); a solve "
-                            "that would need more runs on a coarser proxy or stops with a message")
-    group.add_argument("--time-limit", type=float, default=None, metavar="S",
-                       help="seconds a solve may take by its estimate (default 300); over it the solve runs on a "
-                            "coarser proxy or stops with a message")
+    group.add_argument("--material", default=default["material"].default, help=HELP["material"])
+    group.add_argument("--model", default=default["model"].default, choices=MODELS,
+                       help=f"{HELP['model']} (default {default['model'].default})")
+    group.add_argument("--method", default=default["method"].default, choices=METHODS,
+                       help=f"{HELP['method']} (default {default['method'].default})")
+    group.add_argument("--tol", type=float, default=default["tol"].default,
+                       help=f"{HELP['tol']} (default {default['tol'].default:g})")
+    group.add_argument("--resolution", default=default["resolution"].default, help=HELP["resolution"])
+    group.add_argument("--no-shadows", action="store_true", help=HELP["shadows"])
+    group.add_argument("--per-direction", action="store_true", help=HELP["per_direction"])
+    group.add_argument("--exposure", type=float, default=None, help=HELP["exposure"])
+    group.add_argument("--memory-limit", type=float, default=None, metavar="GB", help=HELP["memory_limit"])
+    group.add_argument("--time-limit", type=float, default=None, metavar="S", help=HELP["time_limit"])
 
 
 def parse_vector(text: str, name: str) -> np.ndarray:
@@ -147,7 +143,8 @@ def parse_vector(text: str, name: str) -> np.ndarray:
 def lights_from_args(args) -> tuple | None:
     """The lights the options describe (several options add up); None when none is given (the
     pipeline then places its default light by the scan's up axis)."""
-    from ..scatter.lights import DirectionalLight, parse_light_spec
+    from ..scatter.lights import DirectionalLight
+    from .lightspec import parse_light_spec
 
     lights = []
     if getattr(args, "light_dir", None) is not None:
@@ -161,53 +158,17 @@ def lights_from_args(args) -> tuple | None:
     return tuple(lights) or None
 
 
-def solver_settings(args) -> dict:
-    """Keyword arguments of :meth:`translucency.app.pipeline.Scene.shade` from the options."""
-    from .pipeline import resolve_medium
+def solver_settings(args, **changes):
+    """The :class:`~translucency.app.settings.ShadeSettings` the options describe (``changes`` replace
+    fields before the check, e.g. ``resolution="full"``); a bad value is a sentence naming its flag."""
+    from ..errors import command_line_spelling
+    from ..scatter.budget import DEFAULT_TIME_LIMIT_S
+    from .settings import ShadeSettings
 
-    resolution = args.resolution
-    if resolution not in ("full", "auto"):
-        try:
-            resolution = float(resolution)
-        except ValueError:
-            raise InvalidParameterError(
-                f"--resolution must be full, auto or a proxy edge length in mm, got {args.resolution!r}.") from None
-    if not (np.isfinite(args.tol) and 0 < args.tol < 1):
-        raise InvalidParameterError(f"--tol must be a relative error in (0, 1), got {args.tol!r}.")
-    if args.exposure is not None and not (np.isfinite(args.exposure) and args.exposure > 0):
-        raise InvalidParameterError(f"--exposure must be a positive number, got {args.exposure!r}.")
-    from ..scatter.budget import DEFAULT_TIME_LIMIT_S, check_limits
-
-    time_limit = DEFAULT_TIME_LIMIT_S if args.time_limit is None else args.time_limit
-    check_limits(args.memory_limit, time_limit)
-    return {"material": resolve_medium(args.material), "model": args.model, "method": args.method, "tol": args.tol,
-            "resolution": resolution, "exposure": args.exposure, "per_direction": args.per_direction,
-            "memory_limit": args.memory_limit, "time_limit": time_limit}
-
-
-def load_scan(path, unit=None, *, warn=None, note=None):
-    """A mesh file (or the embedded default scan when ``path`` is None), loaded in ``unit`` and cleaned.
-
-    ``unit`` None: inferred from the size (:func:`translucency.io.units.infer_unit`). Returns
-    ``(mesh in mm, CleanReport or None, name)``. Warnings from loading (the unit inferred, an
-    implausible size for the unit given) go to ``warn(message)`` when given; the line that says
-    which unit was inferred goes to ``note(message)`` instead when that is given.
-    """
-    from ..io.units import UnitInferredWarning
-
-    from ..io.clean import clean_mesh
-    from ..io.load import load_mesh
-    from .pipeline import default_scan_path, load_default_scan
-
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        if path is None:
-            mesh, name = load_default_scan(), default_scan_path().stem
-        else:
-            mesh, name = load_mesh(path, unit=unit), str(path)
-    for warning in caught:
-        say = note if note is not None and issubclass(warning.category, UnitInferredWarning) else warn
-        if say is not None:
-            say(str(warning.message))
-    mesh, report = clean_mesh(mesh)
-    return mesh, report, name
+    fields = {"material": args.material, "model": args.model, "method": args.method, "tol": args.tol,
+              "resolution": args.resolution, "shadows": not args.no_shadows, "per_direction": args.per_direction,
+              "exposure": args.exposure, "memory_limit": args.memory_limit,
+              "time_limit": DEFAULT_TIME_LIMIT_S if args.time_limit is None else args.time_limit,
+              "up": getattr(args, "up", "auto")}
+    with command_line_spelling():
+        return ShadeSettings(**{**fields, **changes})

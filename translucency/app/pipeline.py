@@ -15,16 +15,16 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import __version__
 from ..errors import TranslucencyError, option
 from ..io.geometry import mean_edge_length
 from ..io.units import unit_metadata
 from ..scatter.budget import DEFAULT_TIME_LIMIT_S
+from ..scatter.names import DEFAULT_METHOD, DEFAULT_MODEL, DEFAULT_TOL
+from .settings import DEFAULT_MATERIAL, ShadeSettings, parse_resolution
 
 #: The embedded default scan: the watertight Stanford bunny inside the pymeshlab wheel, stored
 #: normalised to a unit diagonal; it is scaled to this width (mm), the size of the original figurine.
 DEFAULT_SCAN_WIDTH_MM = 155.0
-DEFAULT_MATERIAL = "marble"
 #: From the object toward the default light, in the display frame (right, up, front; see
 #: :func:`translucency.io.upright.display_frame`): above, in front and a little to the right. For a
 #: scan whose up is +y (the default bunny) this is the direction in the scan's own coordinates too.
@@ -237,18 +237,25 @@ class Scene:
         _, _, _, geometry, _ = self.solver_mesh(medium, "full")
         return self.incident(geometry, self.mesh.triangles, as_light_list(lights), medium.eta, per_direction)
 
-    def shade(self, material="marble", lights=None, *, model="directional", method="tree", tol=1e-2,
-              resolution="full", exposure=None, per_direction=False, progress=None, memory_limit=None,
+    def shade(self, material=DEFAULT_MATERIAL, lights=None, *, model=DEFAULT_MODEL, method=DEFAULT_METHOD,
+              tol=DEFAULT_TOL, resolution="full", exposure=None, per_direction=False, progress=None, memory_limit=None,
               time_limit=DEFAULT_TIME_LIMIT_S, warn=None) -> "ShadeResult":
         """Translucent shading: ``B``, radiance toward the normal and display colours (see :func:`shade`)."""
-        from ..errors import BudgetError
+        settings = ShadeSettings(material, model, method, tol, resolution, self.shadows, per_direction, exposure,
+                                 memory_limit, time_limit, self.up_requested)
+        return self.shade_with(settings, lights, progress=progress, warn=warn)
+
+    def shade_with(self, settings: ShadeSettings, lights=None, *, progress=None, warn=None) -> "ShadeResult":
+        """:meth:`shade` with validated :class:`~translucency.app.settings.ShadeSettings` (their ``shadows``
+        and ``up`` are this Scene's, see :func:`scene_for`)."""
         from ..scatter.fresnel import fresnel_transmittance
         from ..scatter.lights import DirectionalLight, as_light_list
-        from ..scatter.budget import check_limits
+        from ..errors import BudgetError
 
-        check_limits(memory_limit, time_limit)
+        medium, model, method, tol = settings.material, settings.model, settings.method, settings.tol
+        resolution, exposure, per_direction = settings.resolution, settings.exposure, settings.per_direction
+        memory_limit, time_limit = settings.memory_limit, settings.time_limit
         timings = {}
-        medium = resolve_medium(material)
         lights = as_light_list(lights if lights is not None else DirectionalLight(default_light_direction(self.up), 1.0))
         limits = {"memory_limit": memory_limit, "time_limit": time_limit}
         coarsened = reason = None
@@ -283,16 +290,9 @@ class Scene:
         radiance = float(fresnel_transmittance(1.0, medium.eta)) * B  # L toward the normal, T21(eta, 1) B
         colors, exposure = display_colors(radiance, exposure)
         metadata = {
-            "version": __version__,
-            "material": medium.name,
-            "coefficients": medium.describe(),
-            "lights": [light.to_dict() for light in lights],
-            "model": model,
-            "method": method,
-            "tolerance": tol,
-            "resolution": "full" if decimation is None else f"proxy, {solver_mesh.n_points} vertices, edge {edge:.3g} mm",
+            **settings.metadata(
+                lights, "full" if decimation is None else f"proxy, {solver_mesh.n_points} vertices, edge {edge:.3g} mm"),
             "shadows": self.shadows,
-            "light_summation": "per direction" if per_direction else "aggregated per vertex",
             "exposure": exposure,
             **unit_metadata(self.mesh.mm_per_unit, self.mesh.unit_inferred),
             "geometry_unit": "mm",
@@ -382,9 +382,9 @@ def _solve_per_direction(geometry, incident, medium, model, method, tol, progres
     return solutions
 
 
-def shade(mesh, material="marble", lights=None, *, model="directional", method="tree", tol=1e-2, shadows=True,
-          resolution="full", exposure=None, per_direction=False, up="auto", progress=None, memory_limit=None,
-          time_limit=DEFAULT_TIME_LIMIT_S, warn=None) -> ShadeResult:
+def shade(mesh, material=DEFAULT_MATERIAL, lights=None, *, model=DEFAULT_MODEL, method=DEFAULT_METHOD,
+          tol=DEFAULT_TOL, shadows=True, resolution="full", exposure=None, per_direction=False, up="auto",
+          progress=None, memory_limit=None, time_limit=DEFAULT_TIME_LIMIT_S, warn=None) -> ShadeResult:
     """Translucent shading of one mesh (mm): ``B``, radiance toward the normal and display colours.
 
     The one-call form of :class:`Scene` (nothing is kept between calls; keep a ``Scene`` to reuse work).
@@ -399,7 +399,8 @@ def shade(mesh, material="marble", lights=None, *, model="directional", method="
         Default: one white directional light of 1 W/m² from :func:`default_light_direction` of ``up``
         (above and in front of the scan). Directions are in the scan's own coordinates.
     model, method, tol
-        Passed to :func:`translucency.scatter.solve.solve`.
+        Passed to :func:`translucency.scatter.solve.solve` (defaults and checks:
+        :class:`~translucency.app.settings.ShadeSettings`).
     shadows : bool
         Cast Embree shadow rays (off: every front-facing vertex is lit).
     resolution : "auto", "full" or float
@@ -435,6 +436,78 @@ def shade(mesh, material="marble", lights=None, *, model="directional", method="
                                               warn=warn)
 
 
+def load_scan(path, unit=None, *, warn=None, note=None):
+    """A mesh file (or the embedded default scan when ``path`` is None), loaded in ``unit`` and cleaned.
+
+    ``unit`` None: inferred from the size (:func:`translucency.io.units.infer_unit`). Returns
+    ``(mesh in mm, CleanReport or None, name)``. Warnings from loading (the unit inferred, an
+    implausible size for the unit given) go to ``warn(message)`` when given; the line that says
+    which unit was inferred goes to ``note(message)`` instead when that is given.
+    """
+    import warnings
+
+    from ..io.clean import clean_mesh
+    from ..io.load import load_mesh
+    from ..io.units import UnitInferredWarning
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        if path is None:
+            mesh, name = load_default_scan(), default_scan_path().stem
+        else:
+            mesh, name = load_mesh(path, unit=unit), str(path)
+    for warning in caught:
+        say = note if note is not None and issubclass(warning.category, UnitInferredWarning) else warn
+        if say is not None:
+            say(str(warning.message))
+    mesh, report = clean_mesh(mesh)
+    return mesh, report, name
+
+
+def scene_for(mesh, settings: ShadeSettings) -> Scene:
+    """A :class:`Scene` of ``mesh`` with the settings' shadows and up axis."""
+    return Scene(mesh, shadows=settings.shadows, up=settings.up)
+
+
+def shade_scan(scan, settings: ShadeSettings | None = None, lights=None, *, unit=None, progress=None, warn=None,
+               note=None) -> ShadeResult:
+    """A scan shaded with every setting of ``settings``: the pipeline's first half (:func:`write_result`
+    is the second).
+
+    Parameters
+    ----------
+    scan : path-like, TriangleMesh or None
+        A scan file in ``unit`` (None: inferred from its size), loaded and cleaned by :func:`load_scan`;
+        None for the embedded default scan; or a mesh already cleaned, in mm, used as it is.
+    settings : ShadeSettings, optional
+        Every setting of the solve (default: :class:`~translucency.app.settings.ShadeSettings`'s defaults).
+    lights : light or sequence of lights, optional
+        Default: the white directional light above and in front (:func:`default_light_direction`).
+    progress, warn
+        As in :func:`shade`; ``warn`` also receives the loader's warnings, and ``note`` the line that
+        says which unit was inferred (default: ``warn``).
+
+    Returns
+    -------
+    ShadeResult
+        ``result.mesh`` is the cleaned mesh in mm.
+    """
+    from ..io.mesh import TriangleMesh
+
+    settings = ShadeSettings() if settings is None else settings
+    mesh = scan if isinstance(scan, TriangleMesh) else load_scan(scan, unit, warn=warn, note=note)[0]
+    return scene_for(mesh, settings).shade_with(settings, lights, progress=progress, warn=warn)
+
+
+def write_result(result: ShadeResult, path) -> Path:
+    """Write a result as a baked PLY (radiance, ``B``, colours, normals, every setting in the header),
+    atomically (:func:`translucency.io.baked.write_baked_ply`); the pipeline's second half. Returns the path."""
+    from ..io.baked import write_baked_ply
+
+    return write_baked_ply(path, result.mesh, result.radiance, result.B, result.colors, result.metadata,
+                           normals=result.normals)
+
+
 def _proxy_edge(mean_edge, medium, resolution, mesh):
     """Proxy edge length (mm) for a resolution on ``mesh`` of ``mean_edge`` (mm), or None for the full mesh."""
     from ..errors import InvalidParameterError, option
@@ -444,12 +517,7 @@ def _proxy_edge(mean_edge, medium, resolution, mesh):
     if resolution == "auto":
         edge = min(proxy_edge_length(medium), coarsest_proxy_edge(mesh.surface_area))
         return edge if edge >= PROXY_MIN_RATIO * mean_edge else None
-    try:
-        edge = float(resolution)
-    except (TypeError, ValueError):
-        edge = float("nan")
-    if not (np.isfinite(edge) and edge > 0):
-        raise InvalidParameterError(f"resolution must be 'auto', 'full' or a proxy edge length in mm, got {resolution!r}.")
+    edge = parse_resolution(resolution)
     if edge <= mean_edge:
         return None
     coarsest = coarsest_proxy_edge(mesh.surface_area)

@@ -47,6 +47,7 @@ stay within a few percent. ``Return`` solves what is on screen on every vertex; 
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from pathlib import Path
@@ -55,9 +56,11 @@ import numpy as np
 
 from ..errors import InvalidParameterError
 from ..scatter.budget import DEFAULT_TIME_LIMIT_S
+from ..scatter.names import DEFAULT_METHOD, DEFAULT_MODEL, DEFAULT_TOL
 from .pipeline import (Scene, coarsest_proxy_edge, default_light_direction, display_colors, proxy_edge_length,
-                       resolve_medium)
+                       resolve_medium, write_result)
 from .render import DEFAULT_UP, add_colored_mesh, camera_position, default_camera_direction, new_plotter
+from .settings import DEFAULT_MATERIAL, ShadeSettings
 
 #: Vertices of the interactive proxy (see the module docstring for the measurements behind it).
 INTERACTIVE_VERTICES = 7500
@@ -170,29 +173,25 @@ class Viewer:
         Stem of the saved files (default: the mesh's file name, or ``scan``).
     """
 
-    def __init__(self, mesh=None, material="marble", lights=None, *, model="directional", method="tree", tol=1e-2,
+    def __init__(self, mesh=None, material=DEFAULT_MATERIAL, lights=None, *, model=DEFAULT_MODEL, method=DEFAULT_METHOD,
+                 tol=DEFAULT_TOL,
                  resolution="interactive", shadows=True, per_direction=False, exposure=None, memory_limit=None,
                  time_limit=DEFAULT_TIME_LIMIT_S, view_dependent=False, specular=False, roughness=0.25, up="auto",
                  camera_direction=None,
                  window_size=(1024, 768), off_screen=False, widgets=True, output=".", name=None):
         from ..io.upright import up_vector
         from ..scatter.lights import DirectionalLight, as_light_list
-        from ..scatter.solve import METHODS, MODELS
+        from .pipeline import load_scan
 
+        # every setting checked once, before the scan is loaded ("interactive" is the viewer's own resolution)
+        settings = ShadeSettings(material, model, method, tol, "full" if resolution == "interactive" else resolution,
+                                 shadows, per_direction, exposure, memory_limit, time_limit, up)
         if mesh is None:
-            from .options import load_scan
-
             mesh, _, default_name = load_scan(None)
             name = name or default_name
-        if model not in MODELS:
-            raise InvalidParameterError(f"unknown model {model!r}; choose one of {', '.join(MODELS)}.")
-        if method not in METHODS:
-            raise InvalidParameterError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}.")
-        if exposure is not None and not (np.isfinite(exposure) and exposure > 0):
-            raise InvalidParameterError(f"exposure must be a positive number, got {exposure!r}.")
         self.base_mesh = mesh
         self.name = name or (Path(mesh.source).stem if mesh.source is not None else "scan")
-        self.medium = resolve_medium(material)
+        self.medium = settings.material
         self.model, self.method, self.tol = model, method, float(tol)
         self.resolution = resolution
         self.per_direction = bool(per_direction)
@@ -270,7 +269,7 @@ class Viewer:
 
     def set_model(self, model: str) -> None:
         """Change the scattering model (``directional``, ``standard``, ``better``) and solve."""
-        from ..scatter.solve import MODELS
+        from ..scatter.names import MODELS
 
         if model not in MODELS:
             raise InvalidParameterError(f"unknown model {model!r}; choose one of {', '.join(MODELS)}.")
@@ -351,8 +350,6 @@ class Viewer:
         not depend on the view). File names are ``<name>_<material>_<model>_<n>`` with the first free
         ``n``. Returns ``(png, ply)``.
         """
-        from ..io.baked import write_baked_ply
-
         folder = Path(folder) if folder is not None else self.output
         folder.mkdir(parents=True, exist_ok=True)
         stem = f"{Path(self.name).stem}_{self.medium.name}_{self.model}"
@@ -363,8 +360,8 @@ class Viewer:
         self.screenshot(png, widgets=True)
         result = self.result
         colors, _ = display_colors(result.radiance, self.exposure)
-        metadata = dict(result.metadata, exposure=self.exposure)
-        write_baked_ply(ply, self.scene.mesh, result.radiance, result.B, colors, metadata, normals=result.normals)
+        write_result(dataclasses.replace(result, colors=colors, exposure=self.exposure,
+                                         metadata=dict(result.metadata, exposure=self.exposure)), ply)
         self.status = self.status.split("\nsaved")[0] + f"\nsaved {png.name} and {ply.name}"
         self._status_actor.set_text("upper_left", self.status)
         return png, ply
@@ -476,7 +473,7 @@ class Viewer:
         self.poly.point_data["colors"][:] = self._display_colors()
 
     def _add_widgets(self) -> None:
-        from ..scatter.solve import MODELS
+        from ..scatter.names import MODELS
 
         plotter = self.plotter
         style = {"style": "modern", "interaction_event": "end"}
@@ -526,7 +523,7 @@ class Viewer:
 
     def _sync_widgets(self) -> None:
         """Put the widgets where the state is (after a change made from code)."""
-        from ..scatter.solve import MODELS
+        from ..scatter.names import MODELS
 
         values = {"scale": self.mm_per_unit, "exposure": math.log2(self.exposure),
                   "azimuth": self.azimuth, "elevation": self.elevation}

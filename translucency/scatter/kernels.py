@@ -33,7 +33,7 @@ import math
 import numba
 import numpy as np
 
-from . import fresnel
+from . import fresnel, names
 from .dipoles import D_R_FLOOR, PARALLEL_TOLERANCE
 from .medium import alpha_reduced, diffusion_coefficient, extrapolation_distance, sigma_t, sigma_t_reduced, sigma_tr
 from .threads import for_ranges
@@ -44,7 +44,7 @@ N_PARAMS = 8
 R_Z_R, R_Z_V, R_SIGMA_TR, R_SCALE, R_D, R_C_PHI, R_C_E = range(7)
 
 MODEL_DIRECTIONAL, MODEL_STANDARD, MODEL_BETTER = 0, 1, 2
-MODELS = {"directional": MODEL_DIRECTIONAL, "standard": MODEL_STANDARD, "better": MODEL_BETTER}
+MODELS = dict(zip(names.MODELS, (MODEL_DIRECTIONAL, MODEL_STANDARD, MODEL_BETTER)))  # name -> code
 FOUR_PI_SQUARED = 4.0 * math.pi * math.pi
 
 

@@ -44,12 +44,11 @@ import numpy as np
 
 from ..errors import BudgetError, InvalidParameterError, option
 from . import budget, cutoff, hierarchy, kernels, nearfield
+from .names import DEFAULT_MODEL, METHODS, MODELS
 from .medium import Medium
 
 __all__ = ["SurfaceGeometry", "Solution", "solve", "METHODS", "MODELS"]
 
-METHODS = ("exact", "cutoff", "tree")
-MODELS = tuple(kernels.MODELS)
 
 #: Near field: triangles with a vertex within max(NEAR_EDGES * mean edge, NEAR_MEAN_FREE_PATHS / min sigma_t')
 #: of the receiver are integrated with sub-triangle quadrature (:mod:`translucency.scatter.nearfield`).
@@ -290,7 +289,7 @@ def solve(
     w12: np.ndarray,
     medium: Medium,
     *,
-    model: str = "directional",
+    model: str = DEFAULT_MODEL,
     method: str = "exact",
     tol: float = 1e-3,
     receivers: np.ndarray | None = None,

@@ -100,6 +100,7 @@ def warm_up(force: bool = False) -> float:
     if not force and not cold_kernels():
         return 0.0
     from .materials import material
+    from .names import DEFAULT_METHOD, DEFAULT_TOL
     from .solve import SurfaceGeometry, solve
 
     start = time.perf_counter()
@@ -108,7 +109,7 @@ def warm_up(force: bool = False) -> float:
     phi = np.ones((points.shape[0], medium.n_channels))
     phi[::5] = 0.0  # unlit vertices too, as under shadows
     w12 = np.tile([0.0, 0.0, -1.0], (points.shape[0], 1))
-    solve(SurfaceGeometry(points, triangles, normals), phi, w12, medium, method="tree", tol=1e-2)
+    solve(SurfaceGeometry(points, triangles, normals), phi, w12, medium, method=DEFAULT_METHOD, tol=DEFAULT_TOL)
     return time.perf_counter() - start
 
 

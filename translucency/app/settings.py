@@ -1,0 +1,168 @@
+"""The shading settings: every choice a solve takes, its default, its check and its help text, once.
+
+:class:`ShadeSettings` is what the command line (:mod:`translucency.app.options`), the viewer, batch
+baking (:class:`~translucency.app.bake.BakeSettings` adds the files' unit and the lights) and
+``compare`` build; it is validated on construction, with one sentence that names the setting as the
+user wrote it (``--tol`` on the command line, ``tol`` in Python). :data:`HELP` holds the help text of
+each field, from which the parser's ``--help`` is written; the bake's metadata records the same fields.
+The model and method names and their defaults are :mod:`translucency.scatter.names`'.
+
+========================= ============================================================== ==========
+field                     meaning                                                        unit
+========================= ============================================================== ==========
+material                  catalogue name, entry or medium, stored as a ``Medium``         1/mm
+model                     scattering model (:data:`~translucency.scatter.names.MODELS`)   --
+method                    far-field method (:data:`~translucency.scatter.names.METHODS`)  --
+tol                       relative error allowed to ``cutoff`` and ``tree``               1
+resolution                ``"full"``, ``"auto"`` or a proxy edge length                    mm
+shadows                   Embree shadow rays                                              --
+per_direction             one solve per light sample (else aggregated per vertex)         --
+exposure                  display exposure (None: automatic)                              1
+memory_limit              memory the process may hold (None: what is available)           GB
+time_limit                seconds a solve may take by its estimate (None: no limit)       s
+up                        the scan's up axis, ``"x"`` ... ``"-z"`` or ``"auto"``           --
+========================= ============================================================== ==========
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import numbers
+from dataclasses import dataclass
+
+from ..errors import InvalidParameterError, command_line_active
+from ..scatter.budget import DEFAULT_TIME_LIMIT_S
+from ..scatter.names import DEFAULT_METHOD, DEFAULT_MODEL, DEFAULT_TOL, METHODS, MODELS
+
+__all__ = ["ShadeSettings", "HELP", "DEFAULT_MATERIAL", "RESOLUTIONS", "parse_resolution"]
+
+DEFAULT_MATERIAL = "marble"
+#: The named resolutions (besides a proxy edge length in mm).
+RESOLUTIONS = ("full", "auto")
+
+#: Help text of each field (the command line's ``--help``, for ``shadows`` its ``--no-shadows`` flag; the
+#: defaults are added where the option is made).
+HELP = {
+    "material": "catalogue name (see 'translucency materials')",
+    "model": "scattering model",
+    "method": "far-field method",
+    "tol": "relative error allowed to cutoff/tree",
+    "resolution": "where B is computed: full (every vertex), auto, or a proxy edge length in mm",
+    "shadows": "no shadow rays: every front-facing vertex is lit",
+    "per_direction": "solve each light sample with its own refracted direction (exact for several lights)",
+    "exposure": "display exposure (default: automatic)",
+    "memory_limit": "memory the process may use, GB (default: what the machine has available); a solve "
+                    "that would need more runs on a coarser proxy or stops with a message",
+    "time_limit": f"seconds a solve may take by its estimate (default {DEFAULT_TIME_LIMIT_S:g}); over it the solve "
+                  "runs on a coarser proxy or stops with a message",
+}
+
+
+def _name(keyword: str) -> str:
+    """The setting as the user wrote it: ``--per-direction`` on the command line, ``per_direction`` in Python."""
+    return "--" + keyword.replace("_", "-") if command_line_active() else keyword
+
+
+def _positive(value) -> bool:
+    """True for a finite real number > 0 (not a bool)."""
+    return isinstance(value, numbers.Real) and not isinstance(value, bool) and math.isfinite(value) and value > 0
+
+
+def parse_resolution(value):
+    """``"full"``, ``"auto"`` or a proxy edge length in mm (a positive number, or text of one), checked."""
+    if value in RESOLUTIONS:
+        return value
+    edge = value
+    if isinstance(value, str):
+        try:
+            edge = float(value)
+        except ValueError:
+            edge = None
+    if not _positive(edge):
+        raise InvalidParameterError(
+            f"{_name('resolution')} must be full, auto or a proxy edge length in mm, got {value!r}.")
+    return float(edge)
+
+
+@dataclass(frozen=True)
+class ShadeSettings:
+    """Every setting of a solve, validated on construction (module docstring for the fields and units).
+
+    Parameters
+    ----------
+    material : str or Material or Medium
+        Catalogue name, entry or medium (coefficients in 1/mm); stored as a ``Medium``.
+    model : {"directional", "standard", "better"}
+        The BSSRDF (FHK14, Jensen 2001, d'Eon 2012).
+    method : {"exact", "cutoff", "tree"}
+        How the far field is summed (:func:`translucency.scatter.solve.solve`).
+    tol : float
+        Relative error per vertex allowed to ``cutoff`` and ``tree``, in (0, 1).
+    resolution : "full", "auto" or float
+        Where ``B`` is computed (:func:`translucency.app.pipeline.shade`); a number is a proxy edge in mm.
+    shadows : bool
+        Cast Embree shadow rays (off: every front-facing vertex is lit).
+    per_direction : bool
+        Solve once per light sample with its own refracted direction and add the results.
+    exposure : float, optional
+        Display exposure (automatic by default).
+    memory_limit : float, optional
+        GB the process may hold.
+    time_limit : float or None
+        Seconds a solve may take by its estimate (None: no limit).
+    up : str
+        The scan's up axis, ``"x"`` ... ``"-z"``, or ``"auto"`` (inferred); stored as ``"+x"`` ... or ``"auto"``.
+    """
+
+    material: object = DEFAULT_MATERIAL
+    model: str = DEFAULT_MODEL
+    method: str = DEFAULT_METHOD
+    tol: float = DEFAULT_TOL
+    resolution: str | float = "full"
+    shadows: bool = True
+    per_direction: bool = False
+    exposure: float | None = None
+    memory_limit: float | None = None
+    time_limit: float | None = DEFAULT_TIME_LIMIT_S
+    up: str = "auto"
+
+    def __post_init__(self):
+        from ..io.upright import parse_up
+        from ..scatter.budget import check_limits
+        from .pipeline import resolve_medium
+
+        object.__setattr__(self, "material", resolve_medium(self.material))
+        if self.model not in MODELS:
+            raise InvalidParameterError(f"unknown model {self.model!r}; choose one of {', '.join(MODELS)}.")
+        if self.method not in METHODS:
+            raise InvalidParameterError(f"unknown method {self.method!r}; choose one of {', '.join(METHODS)}.")
+        if not (_positive(self.tol) and self.tol < 1):
+            raise InvalidParameterError(f"{_name('tol')} must be a relative error in (0, 1), got {self.tol!r}.")
+        object.__setattr__(self, "resolution", parse_resolution(self.resolution))
+        if not (self.exposure is None or _positive(self.exposure)):
+            raise InvalidParameterError(f"{_name('exposure')} must be a positive number, got {self.exposure!r}.")
+        check_limits(self.memory_limit, self.time_limit)
+        object.__setattr__(self, "up", parse_up(self.up))
+        object.__setattr__(self, "shadows", bool(self.shadows))
+        object.__setattr__(self, "per_direction", bool(self.per_direction))
+
+    def replace(self, **changes) -> "ShadeSettings":
+        """A copy with some fields changed (validated again)."""
+        return dataclasses.replace(self, **changes)
+
+    def solver_keywords(self) -> dict:
+        """Keyword arguments of :meth:`translucency.app.pipeline.Scene.shade` (all but ``shadows`` and
+        ``up``, which are the :class:`~translucency.app.pipeline.Scene`'s)."""
+        return {name: getattr(self, name) for name in ("material", "model", "method", "tol", "resolution", "exposure",
+                                                       "per_direction", "memory_limit", "time_limit")}
+
+    def metadata(self, lights, resolution: str) -> dict:
+        """The settings as a result and a bake record them, with the ``lights`` and the ``resolution``
+        used (a description); the exposure used, the unit and the up axis are the result's."""
+        from .. import __version__
+
+        return {"version": __version__, "material": self.material.name, "coefficients": self.material.describe(),
+                "lights": [light.to_dict() for light in lights], "model": self.model, "method": self.method,
+                "tolerance": self.tol, "resolution": resolution, "shadows": self.shadows,
+                "light_summation": "per direction" if self.per_direction else "aggregated per vertex"}
