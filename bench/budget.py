@@ -39,7 +39,7 @@ def run_case(scan: str, unit: str, material: str, memory_limit: float | None) ->
 
     from translucency.app.options import load_scan
     from translucency.app.pipeline import Scene
-    from translucency.io.geometry import mean_edge_length
+    from translucency.geometry.measure import mean_edge_length
 
     mesh, _, _ = load_scan(str(MESHES / SCANS[scan]), unit)
     scene = Scene(mesh)

@@ -116,7 +116,7 @@ def split_longest_edges(points, triangles, vertices):
 
 def write_mesh(path, points, triangles):
     """Write a plain triangle mesh (mm) as a PLY with :func:`translucency.io.save.save_mesh` (as ``inspect -o`` does)."""
-    from translucency.io.mesh import TriangleMesh
+    from translucency.geometry.mesh import TriangleMesh
     from translucency.io.save import save_mesh
 
     save_mesh(path, TriangleMesh(points, triangles))

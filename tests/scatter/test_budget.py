@@ -6,7 +6,7 @@ import pytest
 
 from tests.synthetic import icosphere
 from translucency.errors import BudgetError, InvalidParameterError
-from translucency.io.geometry import vertex_normals
+from translucency.geometry.measure import vertex_normals
 from translucency.scatter import budget, fresnel, solve
 from translucency.scatter.materials import material
 

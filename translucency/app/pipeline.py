@@ -17,7 +17,7 @@ import numpy as np
 
 from .. import __version__
 from ..errors import TranslucencyError, option
-from ..io.geometry import mean_edge_length
+from ..geometry.measure import mean_edge_length
 from ..io.units import unit_metadata
 from ..scatter.budget import DEFAULT_TIME_LIMIT_S
 

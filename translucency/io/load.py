@@ -1,4 +1,4 @@
-"""Read mesh files of every common format into a :class:`~translucency.io.mesh.TriangleMesh` in mm.
+"""Read mesh files of every common format into a :class:`~translucency.geometry.mesh.TriangleMesh` in mm.
 
 =========================== ====================================================================
 format                      reader
@@ -34,7 +34,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import MeshError
-from .mesh import TriangleMesh, validate_mesh_arrays
+from ..geometry.mesh import TriangleMesh, validate_mesh_arrays
 from .triangulate import triangulate_polygon_lists, triangulate_polygons, triangulate_strips
 from .units import UnitInferredWarning, check_extent, infer_unit, inferred_unit_message, parse_unit
 
