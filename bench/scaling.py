@@ -72,7 +72,7 @@ GOAL_ERROR = 0.01
 
 def build_mesh(label, igea):
     """``(points, triangles, how)``: the cleaned Igea ``igea`` at the density ``label`` (module table)."""
-    from tests.synthetic import subdivide
+    from translucency.geometry.synthetic import subdivide
     from translucency.io.decimate import simplify_arrays
 
     points, triangles = igea.points, igea.triangles
@@ -182,7 +182,7 @@ def exact_at(scene, receivers):
 
 def warm_up(folder):
     """Load numba's compiled code and the libraries: the whole bake and ``exact`` on a small sphere."""
-    from tests.synthetic import icosphere
+    from translucency.geometry.synthetic import icosphere
 
     points, triangles = icosphere(3, radius=20.0)
     write_mesh(folder / "warm_up.ply", points, triangles)

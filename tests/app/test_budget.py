@@ -9,7 +9,7 @@ from translucency.app import cli
 from translucency.app.pipeline import Scene, proxy_error
 from translucency.errors import BudgetError
 from translucency.geometry.mesh import TriangleMesh
-from tests.synthetic import icosphere
+from translucency.geometry.synthetic import icosphere
 
 
 @pytest.mark.parametrize("command", ["bake", "compare"])

@@ -92,7 +92,7 @@ def test_the_same_line_in_python_names_the_keyword(shared_meshes):
 
 
 def test_a_size_no_unit_makes_plausible_is_refused_and_a_given_unit_only_warns(tmp_path):
-    from tests.synthetic import icosphere
+    from translucency.geometry.synthetic import icosphere
     from translucency.geometry.mesh import TriangleMesh
     from translucency.io.polydata import to_pyvista
 
@@ -134,7 +134,7 @@ def test_main_job_bakes_the_embedded_default(tmp_path):
 
 
 def test_shade_on_a_proxy_interpolates_back_to_every_vertex():
-    from tests.synthetic import icosphere
+    from translucency.geometry.synthetic import icosphere
     from translucency.app.pipeline import shade
     from translucency.geometry.mesh import TriangleMesh
     from translucency.io.polydata import to_pyvista

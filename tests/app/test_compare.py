@@ -6,7 +6,7 @@ import json
 import numpy as np
 import pytest
 
-from tests.synthetic import icosphere
+from translucency.geometry.synthetic import icosphere
 from translucency.app import cli, compare as compare_module
 from translucency.app.compare import compare, profile_cut, radiance_statistics, relative_difference
 from translucency.app.pipeline import Scene

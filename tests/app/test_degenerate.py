@@ -9,7 +9,7 @@ import pytest
 from scipy import integrate
 
 from tests.io.test_load import write_ply
-from tests.synthetic import icosphere
+from translucency.geometry.synthetic import icosphere
 from translucency.app.pipeline import shade
 from translucency.errors import MeshError
 from translucency.io import TriangleMesh, clean_mesh, load_mesh

@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from tests.synthetic import icosphere
+from translucency.geometry.synthetic import icosphere
 from translucency.app.pipeline import Scene, shade
 from translucency.geometry.mesh import TriangleMesh
 from translucency.scatter.lights import DirectionalLight

@@ -5,7 +5,7 @@ import os
 import numpy as np
 import pytest
 
-from tests.synthetic import icosphere
+from translucency.geometry.synthetic import icosphere
 from translucency.app import cli
 from translucency.app.pipeline import Scene
 from translucency.app.render import render_colors

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from tests.synthetic import disc, grid, icosphere, subdivide
+from translucency.geometry.synthetic import disc, grid, icosphere, subdivide
 from translucency.errors import InvalidParameterError
 from translucency.geometry.measure import vertex_normals
 from translucency.scatter import dipoles, fresnel, solve

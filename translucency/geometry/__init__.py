@@ -14,5 +14,6 @@ topology    unique edges, connected components, boundary loops, vertex fans
 orientation coherent and outward orientation
 proximity   exact closest points on a triangle mesh
 morton      Morton (Z-order) curve of a point set
+synthetic   generated meshes (icosphere, subdivision, grids, discs) for tests and benchmarks
 =========== ====================================================================
 """

@@ -333,7 +333,7 @@ _PLY_TYPES = {
 }  # fmt: skip
 
 
-class _PlyHeader:
+class PlyHeader:
     """The parts of a PLY header the reader needs: format, elements and their properties."""
 
     def __init__(self, path: Path):
@@ -401,7 +401,7 @@ class _PlyHeader:
 def _read_ply(path: Path):
     import plyfile
 
-    header = _PlyHeader(path)
+    header = PlyHeader(path)
     body = header.file_size - header.size
     needed = header.minimum_body_size()
     if body < needed:
@@ -431,7 +431,7 @@ def _read_ply(path: Path):
     return points, triangles, point_data
 
 
-def _face_list_property(header: _PlyHeader):
+def _face_list_property(header: PlyHeader):
     """The (element name, list property name) of the polygons, if any."""
     for name in ("face", "faces", "polygon"):
         element = header.element(name)
@@ -446,7 +446,7 @@ def _face_list_property(header: _PlyHeader):
     return None
 
 
-def _read_ply_with_plyfile(path: Path, header: _PlyHeader, plyfile):
+def _read_ply_with_plyfile(path: Path, header: PlyHeader, plyfile):
     face = _face_list_property(header)
     errors = (plyfile.PlyParseError, ValueError, TypeError, IndexError, EOFError, UnicodeDecodeError, MemoryError,
               OverflowError)  # OverflowError: an ascii list length beyond its count type (300 for uchar)
@@ -490,7 +490,7 @@ def _read_ply_with_plyfile(path: Path, header: _PlyHeader, plyfile):
     return vertex_data, polygons, strips
 
 
-def _read_ply_ascii_fast(path: Path, header: _PlyHeader):
+def _read_ply_ascii_fast(path: Path, header: PlyHeader):
     """Read an ascii PLY of one scalar vertex element and one triangle face element with numpy; None if not that."""
     face = _face_list_property(header)
     if face is None or len(header.elements) != 2 or header.elements[0][0] != "vertex":

@@ -287,7 +287,7 @@ def write_baked_ply(path, mesh: TriangleMesh, radiance, b, colors_rgb8, metadata
     n = mesh.n_points
     if mesh.n_points >= 2**31 or mesh.n_triangles >= 2**31:
         raise InvalidParameterError("the mesh is too large for a PLY with 32-bit indices; decimate it first.")
-    if mesh.source is not None and path.exists() and _same_file(path, mesh.source):
+    if mesh.source is not None and path.exists() and same_file(path, mesh.source):
         raise InvalidParameterError(
             f"{path} is the scan the mesh was read from; write the bake to another file (inputs are never modified)."
         )
@@ -354,7 +354,8 @@ def _complete_metadata(metadata, mesh: TriangleMesh, n: int) -> dict:
     return settings
 
 
-def _same_file(a: Path, b: Path) -> bool:
+def same_file(a: Path, b: Path) -> bool:
+    """True when ``a`` and ``b`` name the same existing file (through links too); False when either is missing."""
     try:
         return os.path.samefile(a, b)
     except OSError:
@@ -381,11 +382,11 @@ def read_baked_ply(path) -> BakedPly:
     MeshError
         When the file is not a readable PLY or lacks the bake's properties.
     """
-    from .load import _PlyHeader, read_mesh_arrays
+    from .load import PlyHeader, read_mesh_arrays
 
     path = Path(path)
     points, triangles, point_data = read_mesh_arrays(path, format="ply")
-    comments = _PlyHeader(path).comments
+    comments = PlyHeader(path).comments
     needed = [f"{prefix}_{c}" for prefix in ("radiance", "b") for c in "rgb"]
     missing = [name for name in needed if name not in point_data]
     if missing or "colors" not in point_data or "normals" not in point_data:

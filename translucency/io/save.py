@@ -23,7 +23,7 @@ import numpy as np
 
 from ..errors import InvalidParameterError, WriteError
 from .atomic import prepare_output_file, write_bytes
-from .ply import _same_file
+from .ply import same_file
 from .polydata import to_pyvista
 
 __all__ = ["WRITABLE_FORMATS", "check_output_path", "save_mesh"]
@@ -52,7 +52,7 @@ def check_output_path(path, source=None) -> Path:
     if path.suffix.lower() not in WRITABLE_FORMATS:
         raise InvalidParameterError(f"cannot write {path}: use a {', '.join(WRITABLE_FORMATS[:-1])} or .obj name.")
     prepare_output_file(path)
-    if source is not None and path.exists() and _same_file(path, Path(source)):
+    if source is not None and path.exists() and same_file(path, Path(source)):
         raise InvalidParameterError(
             f"{path} is the input file; write the result to another file (inputs are never modified)."
         )
