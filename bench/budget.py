@@ -38,7 +38,7 @@ def run_case(scan: str, unit: str, material: str, memory_limit: float | None) ->
     import numba
 
     from translucency.app.pipeline import Scene, load_scan
-    from translucency.io.geometry import mean_edge_length
+    from translucency.geometry.measure import mean_edge_length
 
     mesh, _, _ = load_scan(str(MESHES / SCANS[scan]), unit)
     scene = Scene(mesh)

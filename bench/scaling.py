@@ -72,7 +72,7 @@ GOAL_ERROR = 0.01
 
 def build_mesh(label, igea):
     """``(points, triangles, how)``: the cleaned Igea ``igea`` at the density ``label`` (module table)."""
-    from tests.synthetic import subdivide
+    from translucency.geometry.synthetic import subdivide
     from translucency.io.decimate import simplify_arrays
 
     points, triangles = igea.points, igea.triangles
@@ -116,7 +116,7 @@ def split_longest_edges(points, triangles, vertices):
 
 def write_mesh(path, points, triangles):
     """Write a plain triangle mesh (mm) as a PLY with :func:`translucency.io.save.save_mesh` (as ``inspect -o`` does)."""
-    from translucency.io.mesh import TriangleMesh
+    from translucency.geometry.mesh import TriangleMesh
     from translucency.io.save import save_mesh
 
     save_mesh(path, TriangleMesh(points, triangles))
@@ -182,7 +182,7 @@ def exact_at(scene, receivers):
 
 def warm_up(folder):
     """Load numba's compiled code and the libraries: the whole bake and ``exact`` on a small sphere."""
-    from tests.synthetic import icosphere
+    from translucency.geometry.synthetic import icosphere
 
     points, triangles = icosphere(3, radius=20.0)
     write_mesh(folder / "warm_up.ply", points, triangles)

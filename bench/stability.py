@@ -3,14 +3,14 @@
 Every implementation -- the float64 reference formulas of :mod:`translucency.scatter.dipoles` and the
 numba kernels of :mod:`translucency.scatter.kernels` (``model_pair`` per pair, ``vertex_sum`` as the solver's ``exact`` method
 calls it) -- is evaluated on
-the same configurations (``tests/extremes.py``: eta 1 to 2.5, reduced albedo 1e-6 to 1 - 1e-9,
+the same configurations (``translucency/scatter/extremes.py``: eta 1 to 2.5, reduced albedo 1e-6 to 1 - 1e-9,
 reduced mean free path 1e-4 to 1e4 times the mesh size, r from 0 to the far field, grazing and
 backlit incidence, exit points on the normal axis and at the virtual source, exact coordinate-axis
 normals), once with float64 input and once with the same input rounded to float32. Counted: NaN, inf
 and negative values (all must be 0). Measured: the float32-vs-float64 relative difference where the
 value matters, ``|S(float32 input) - S(float64 input)| / S(float64 input)`` over values at least
 ``THRESHOLD`` times the material's peak (``S_d`` at ``r = 0`` under normal incidence on a flat surface),
-over *regular* pairs (away from the model's discontinuities, see ``tests/extremes.py``) and over all.
+over *regular* pairs (away from the model's discontinuities, see ``translucency/scatter/extremes.py``) and over all.
 
 Writes ``bench/results/stability.json`` and ``bench/results/stability.md``.
 
@@ -34,7 +34,7 @@ from translucency import __version__  # noqa: E402  (first: it selects numba's t
 
 import numba  # noqa: E402
 import numpy as np  # noqa: E402
-from tests import extremes  # noqa: E402
+from translucency.scatter import extremes  # noqa: E402
 
 RESULTS = ROOT / "bench" / "results"
 THRESHOLD = 1e-6  # values compared: at least this fraction of the material's peak

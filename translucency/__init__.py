@@ -25,7 +25,7 @@ _LAZY = {
     "standard_dipole_profile": "translucency.scatter.dipoles",
     "better_dipole_profile": "translucency.scatter.dipoles",
     # meshes
-    "TriangleMesh": "translucency.io.mesh",
+    "TriangleMesh": "translucency.geometry.mesh",
     "load_mesh": "translucency.io.load",
     "clean_mesh": "translucency.io.clean",
     "decimate_mesh": "translucency.io.decimate",

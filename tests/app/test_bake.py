@@ -18,11 +18,12 @@ BROKEN_PLY = b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nend_he
 
 def write_sphere(path, level=3, radius=20.0):
     """An icosphere (radius in mm) written as a PLY; returns the path."""
-    from tests.synthetic import icosphere
-    from translucency.io.mesh import TriangleMesh
+    from translucency.geometry.synthetic import icosphere
+    from translucency.geometry.mesh import TriangleMesh
+    from translucency.io.polydata import to_pyvista
 
     points, triangles = icosphere(level, radius)
-    TriangleMesh(points, triangles).to_pyvista().save(str(path))
+    to_pyvista(TriangleMesh(points, triangles)).save(str(path))
     return path
 
 

@@ -8,8 +8,8 @@ from tests.app.test_bake import write_sphere
 from translucency.app import cli
 from translucency.app.pipeline import Scene, proxy_error
 from translucency.errors import BudgetError
-from translucency.io.mesh import TriangleMesh
-from tests.synthetic import icosphere
+from translucency.geometry.mesh import TriangleMesh
+from translucency.geometry.synthetic import icosphere
 
 
 @pytest.mark.parametrize("command", ["bake", "compare"])

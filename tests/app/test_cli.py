@@ -92,12 +92,13 @@ def test_the_same_line_in_python_names_the_keyword(shared_meshes):
 
 
 def test_a_size_no_unit_makes_plausible_is_refused_and_a_given_unit_only_warns(tmp_path):
-    from tests.synthetic import icosphere
-    from translucency.io.mesh import TriangleMesh
+    from translucency.geometry.synthetic import icosphere
+    from translucency.geometry.mesh import TriangleMesh
+    from translucency.io.polydata import to_pyvista
 
     points, triangles = icosphere(2, 10000.0)  # 20000 units across: 20 m in mm, 20 km in metres
     path = tmp_path / "huge.ply"
-    TriangleMesh(points, triangles).to_pyvista().save(str(path))
+    to_pyvista(TriangleMesh(points, triangles)).save(str(path))
     code, _, err = run_cli("inspect", str(path))
     assert code == 2 and len(err.splitlines()) == 1 and "Traceback" not in err
     assert "huge.ply is 2e+04 units across and no --unit was given" in err and "pass --unit with" in err
@@ -133,9 +134,9 @@ def test_main_job_bakes_the_embedded_default(tmp_path):
 
 
 def test_shade_on_a_proxy_interpolates_back_to_every_vertex():
-    from tests.synthetic import icosphere
+    from translucency.geometry.synthetic import icosphere
     from translucency.app.pipeline import shade
-    from translucency.io.mesh import TriangleMesh
+    from translucency.geometry.mesh import TriangleMesh
 
     points, triangles = icosphere(5, 20.0)  # 0.6 mm edges
     mesh = TriangleMesh(points, triangles)

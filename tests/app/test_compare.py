@@ -6,12 +6,13 @@ import json
 import numpy as np
 import pytest
 
-from tests.synthetic import icosphere
+from translucency.geometry.synthetic import icosphere
 from translucency.app import cli, compare as compare_module
 from translucency.app.compare import compare, profile_cut, radiance_statistics, relative_difference
 from translucency.app.pipeline import Scene
 from translucency.errors import TranslucencyError
-from translucency.io.mesh import TriangleMesh
+from translucency.geometry.mesh import TriangleMesh
+from translucency.io.polydata import to_pyvista
 from translucency.scatter.lights import DirectionalLight
 
 CELL = (120, 100)
@@ -148,7 +149,7 @@ def test_bad_arguments_are_refused_before_any_work(sphere, kwargs, fragment, tmp
 
 def test_the_cli_writes_what_the_api_computes(sphere, tmp_path, capsys):
     path = tmp_path / "sphere.ply"
-    sphere.to_pyvista().save(path)
+    to_pyvista(sphere).save(path)
     out = tmp_path / "cli"
     code = cli.main(["compare", str(path), "--materials", "marble,ketchup", "--models", "directional,standard",
                      "--light-dir", "0,0,1", "--method", "exact", "--cell-size", "64x48", "--up", "-x", "-o", str(out)])

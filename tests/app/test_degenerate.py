@@ -9,11 +9,11 @@ import pytest
 from scipy import integrate
 
 from tests.io.test_load import write_ply
-from tests.synthetic import icosphere
+from translucency.geometry.synthetic import icosphere
 from translucency.app.pipeline import shade
 from translucency.errors import MeshError
 from translucency.io import TriangleMesh, clean_mesh, load_mesh
-from translucency.io.geometry import signed_volume
+from translucency.geometry.measure import signed_volume
 from translucency.io.units import ImplausibleSizeWarning
 from translucency.scatter import dipoles, fresnel
 from translucency.scatter.lights import DirectionalLight

@@ -2,9 +2,9 @@
 
 import numpy as np
 
-from tests.synthetic import icosphere
+from translucency.geometry.synthetic import icosphere
 from translucency.app.pipeline import Scene, shade
-from translucency.io.mesh import TriangleMesh
+from translucency.geometry.mesh import TriangleMesh
 from translucency.scatter.lights import DirectionalLight
 
 

@@ -5,14 +5,15 @@ import os
 import numpy as np
 import pytest
 
-from tests.synthetic import icosphere
+from translucency.geometry.synthetic import icosphere
 from translucency.app import cli
 from translucency.app.pipeline import Scene
 from translucency.app.render import render_colors
 from translucency.app.viewer import Viewer, interactive_edge_length, light_angles, light_direction
 from translucency.errors import InvalidParameterError
-from translucency.io.mesh import TriangleMesh
+from translucency.geometry.mesh import TriangleMesh
 from translucency.io.baked import read_baked_ply
+from translucency.io.polydata import to_pyvista
 from translucency.scatter.lights import DirectionalLight, EnvironmentLight
 
 needs_display = pytest.mark.skipif(not os.environ.get("DISPLAY"), reason="needs an X display (run under xvfb-run)")
@@ -194,7 +195,7 @@ def test_without_a_directional_light_there_is_nothing_to_steer(sphere):
 
 def test_view_screenshot_equals_the_api_image(sphere, tmp_path):
     path = tmp_path / "sphere.ply"
-    sphere.to_pyvista().save(path)
+    to_pyvista(sphere).save(path)
     out = tmp_path / "view.png"
     code = cli.main(["view", str(path), "--material", "skim_milk", "--light-dir", "1,0.5,0.2",
                      "--screenshot", str(out), "--window-size", "320x240"])

@@ -5,7 +5,7 @@ import pytest
 
 from translucency.errors import InvalidParameterError
 from translucency.io import clean_mesh, decimate_mesh, map_to_proxy, simplify_arrays, target_face_count
-from translucency.io.proximity import vertex_hausdorff_distance
+from translucency.geometry.proximity import vertex_hausdorff_distance
 
 from .conftest import icosphere, load_scan
 

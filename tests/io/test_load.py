@@ -8,7 +8,7 @@ import plyfile
 import pytest
 
 from translucency.errors import MeshError
-from translucency.io import TriangleMesh, load_mesh, read_mesh_arrays
+from translucency.io import TriangleMesh, load_mesh, read_mesh_arrays, to_pyvista
 from translucency.io.units import ImplausibleSizeWarning
 
 from .conftest import icosphere, load_scan, shared_scan
@@ -152,7 +152,7 @@ def test_vtk_formats(tmp_path, sphere_arrays, suffix):
     points, triangles, _ = sphere_arrays
     mesh = TriangleMesh(points, triangles, {"confidence": np.arange(len(points), dtype=float)})
     path = tmp_path / f"s{suffix}"
-    mesh.to_pyvista().save(str(path))
+    to_pyvista(mesh).save(str(path))
     loaded = load_mesh(path)
     assert loaded.n_triangles == len(triangles)
     assert loaded.surface_area == pytest.approx(mesh.surface_area, rel=1e-6)

@@ -4,9 +4,9 @@ refusal before the work, and progress during the solve."""
 import numpy as np
 import pytest
 
-from tests.synthetic import icosphere
+from translucency.geometry.synthetic import icosphere
 from translucency.errors import BudgetError, InvalidParameterError
-from translucency.io.geometry import vertex_normals
+from translucency.geometry.measure import vertex_normals
 from translucency.scatter import budget, fresnel, solve
 from translucency.scatter.materials import material
 

@@ -99,7 +99,7 @@ def test_degree3_rule_is_exact_for_cubics():
 @pytest.mark.parametrize("radius", [0.0, 0.3, 1.0, 50.0])
 def test_near_triangles_are_those_with_a_vertex_within_the_radius(radius):
     """The grid search equals a brute-force distance check (every receiver, every vertex)."""
-    from tests.synthetic import icosphere
+    from translucency.geometry.synthetic import icosphere
 
     points, triangles = icosphere(2, 5.0)
     points = points * np.array([1.0, 0.7, 1.3])  # not a sphere: cells fill unevenly

@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
-from tests.synthetic import disc, grid, icosphere, subdivide
+from translucency.geometry.synthetic import disc, grid, icosphere, subdivide
 from translucency.errors import InvalidParameterError
-from translucency.io.geometry import vertex_normals
+from translucency.geometry.measure import vertex_normals
 from translucency.scatter import dipoles, fresnel, solve
 from translucency.scatter.materials import material
 from translucency.scatter.medium import Medium

@@ -10,8 +10,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from tests import extremes
-from translucency.scatter import dipoles, fresnel, kernels
+from translucency.scatter import dipoles, extremes, fresnel, kernels
 from translucency.scatter.medium import diffusion_coefficient, extrapolation_distance, sigma_tr
 
 # ----------------------------------------------------------- the exit point at the virtual source

@@ -49,6 +49,7 @@ import numpy as np
 
 from .. import __version__
 from ..errors import InvalidParameterError
+from ..io.polydata import to_pyvista
 from ..io.units import unit_metadata
 from ..scatter.budget import DEFAULT_TIME_LIMIT_S
 from ..scatter.names import DEFAULT_METHOD, DEFAULT_MODEL, DEFAULT_TOL
@@ -185,7 +186,7 @@ def profile_cut(mesh, values, light_direction, up=DEFAULT_UP, camera_direction=D
             break
     center = 0.5 * (mesh.points.min(axis=0) + mesh.points.max(axis=0))
     normal = np.cross(d, second)
-    poly = mesh.to_pyvista()
+    poly = to_pyvista(mesh)
     for name, value in values.items():
         poly.point_data[name] = np.asarray(value, dtype=np.float64)
     cut = poly.slice(normal=normal, origin=center).strip(join=True)
@@ -441,7 +442,7 @@ def _difference_image(mesh, comparison, relative, camera_direction, up, cell_siz
     camera, actor = None, None
     for row, column in _cells(plotter, rows, columns):
         material, model = comparison.materials[column], comparison.models[row + 1]
-        poly = mesh.to_pyvista()
+        poly = to_pyvista(mesh)
         poly.point_data["relative difference"] = relative[material, model]
         actor = plotter.add_mesh(poly, scalars="relative difference", cmap="RdBu_r", clim=(-limit, limit),
                                  lighting=False, show_scalar_bar=False)

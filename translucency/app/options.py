@@ -152,7 +152,7 @@ def lights_from_args(args) -> tuple | None:
     if getattr(args, "light", None) is not None:
         lights.extend(parse_light_spec(args.light))
     if getattr(args, "env", None):
-        from ..io.envmap import load_environment
+        from .environment import load_environment
 
         lights.append(load_environment(args.env, n_directions=args.env_directions))
     return tuple(lights) or None

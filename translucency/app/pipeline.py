@@ -1,7 +1,7 @@
 """One scan from mesh to translucent colours: geometry, incident light, solver, display transform.
 
 This is the glue between :mod:`translucency.io` and :mod:`translucency.scatter` that the command line,
-the viewer and batch baking share: :func:`shade` takes a cleaned :class:`~translucency.io.mesh.TriangleMesh`
+the viewer and batch baking share: :func:`shade` takes a cleaned :class:`~translucency.geometry.mesh.TriangleMesh`
 in mm, a material and lights, and returns the per-vertex diffuse radiance factor ``B``, the radiance
 toward the normal ``L = T21(eta, 1) B`` (linear) and display colours (exposure + sRGB).
 """
@@ -16,11 +16,11 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import TranslucencyError, option
-from ..io.geometry import mean_edge_length
+from ..geometry.measure import mean_edge_length
 from ..io.units import unit_metadata
 from ..scatter.budget import DEFAULT_TIME_LIMIT_S
 from ..scatter.names import DEFAULT_METHOD, DEFAULT_MODEL, DEFAULT_TOL
-from .settings import DEFAULT_MATERIAL, ShadeSettings, parse_resolution
+from .settings import DEFAULT_MATERIAL, ShadeSettings, parse_resolution, resolve_medium  # noqa: F401  (resolve_medium re-exported)
 
 #: The embedded default scan: the watertight Stanford bunny inside the pymeshlab wheel, stored
 #: normalised to a unit diagonal; it is scaled to this width (mm), the size of the original figurine.
@@ -89,7 +89,7 @@ def default_scan_path() -> Path:
 
 
 def load_default_scan():
-    """The embedded default scan as a :class:`~translucency.io.mesh.TriangleMesh`, 155 mm across."""
+    """The embedded default scan as a :class:`~translucency.geometry.mesh.TriangleMesh`, 155 mm across."""
     from ..io.load import load_mesh, read_mesh_arrays
 
     path = default_scan_path()
@@ -135,18 +135,6 @@ class ShadeResult:
     stats: dict
     timings: dict
     metadata: dict = field(default_factory=dict)
-
-
-def resolve_medium(material):
-    """A :class:`~translucency.scatter.medium.Medium` from a catalogue name, catalogue entry or medium."""
-    from ..scatter.materials import Material, material as lookup
-    from ..scatter.medium import Medium
-
-    if isinstance(material, Medium):
-        return material
-    if isinstance(material, Material):
-        return material.medium()
-    return lookup(material).medium()
 
 
 class Scene:
@@ -492,7 +480,7 @@ def shade_scan(scan, settings: ShadeSettings | None = None, lights=None, *, unit
     ShadeResult
         ``result.mesh`` is the cleaned mesh in mm.
     """
-    from ..io.mesh import TriangleMesh
+    from ..geometry.mesh import TriangleMesh
 
     settings = ShadeSettings() if settings is None else settings
     mesh = scan if isinstance(scan, TriangleMesh) else load_scan(scan, unit, warn=warn, note=note)[0]

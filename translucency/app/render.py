@@ -10,6 +10,8 @@ import os
 
 import numpy as np
 
+from ..io.polydata import to_pyvista
+
 
 def configure_offscreen() -> None:
     """Select VTK's EGL render window when there is no X display (call before importing pyvista)."""
@@ -96,7 +98,7 @@ def add_colored_mesh(plotter, mesh, colors_rgb8):
     The colours are the array ``"colors"`` of the returned PolyData: change it in place and call
     ``plotter.render()`` to show new colours.
     """
-    poly = mesh.to_pyvista()
+    poly = to_pyvista(mesh)
     poly.point_data["colors"] = np.asarray(colors_rgb8, dtype=np.uint8)
     plotter.add_mesh(poly, scalars="colors", rgb=True, lighting=False)
     return poly

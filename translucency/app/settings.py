@@ -35,7 +35,7 @@ from ..errors import InvalidParameterError, command_line_active
 from ..scatter.budget import DEFAULT_TIME_LIMIT_S
 from ..scatter.names import DEFAULT_METHOD, DEFAULT_MODEL, DEFAULT_TOL, METHODS, MODELS
 
-__all__ = ["ShadeSettings", "HELP", "DEFAULT_MATERIAL", "RESOLUTIONS", "parse_resolution"]
+__all__ = ["ShadeSettings", "HELP", "DEFAULT_MATERIAL", "RESOLUTIONS", "parse_resolution", "resolve_medium"]
 
 DEFAULT_MATERIAL = "marble"
 #: The named resolutions (besides a proxy edge length in mm).
@@ -130,7 +130,6 @@ class ShadeSettings:
     def __post_init__(self):
         from ..io.upright import parse_up
         from ..scatter.budget import check_limits
-        from .pipeline import resolve_medium
 
         object.__setattr__(self, "material", resolve_medium(self.material))
         if self.model not in MODELS:
@@ -166,3 +165,15 @@ class ShadeSettings:
                 "lights": [light.to_dict() for light in lights], "model": self.model, "method": self.method,
                 "tolerance": self.tol, "resolution": resolution, "shadows": self.shadows,
                 "light_summation": "per direction" if self.per_direction else "aggregated per vertex"}
+
+
+def resolve_medium(material):
+    """A :class:`~translucency.scatter.medium.Medium` from a catalogue name, catalogue entry or medium."""
+    from ..scatter.materials import Material, material as lookup
+    from ..scatter.medium import Medium
+
+    if isinstance(material, Medium):
+        return material
+    if isinstance(material, Material):
+        return material.medium()
+    return lookup(material).medium()

@@ -6,28 +6,28 @@ VTK nor pymeshlab; each loads when a function that needs it is first called.
 ==================== ==================================================================
 module               concept
 ==================== ==================================================================
-mesh                 :class:`TriangleMesh`, the one triangle-mesh type (points in mm)
 units                length units, conversion to mm, size plausibility
 load                 every mesh file to a :class:`TriangleMesh`: dispatch, units, size
 formats              one reader per file format (PLY, OFF, OBJ, STL, VTK, pymeshlab)
+polydata             a :class:`TriangleMesh` to and from a ``pyvista.PolyData``
 triangulate          polygons and triangle strips to triangle lists
-geometry             triangle areas/normals, vertex normals and areas (plain arrays)
 defects              counts of mesh defects (what repair has to fix)
-orientation          coherent and outward orientation
 clean                scan repair with a report of what changed
-proximity            exact closest points on a triangle mesh
 decimate             proxy meshes and the mapping of proxy values back to the full mesh
 baked                baked PLY output and input, atomic, with every setting in the header
 save                 any mesh to a mesh file, atomic, never over its source
 ==================== ==================================================================
+
+The mesh record and the array geometry (areas, normals, edges, orientation, closest points) live in
+:mod:`translucency.geometry`; the names below re-export them for convenience.
 """
 
 import importlib
 
 _LAZY = {
     # the mesh type and units
-    "TriangleMesh": "translucency.io.mesh",
-    "validate_mesh_arrays": "translucency.io.mesh",
+    "TriangleMesh": "translucency.geometry.mesh",
+    "validate_mesh_arrays": "translucency.geometry.mesh",
     "parse_unit": "translucency.io.units",
     "unit_label": "translucency.io.units",
     "ImplausibleSizeWarning": "translucency.io.units",
@@ -35,17 +35,19 @@ _LAZY = {
     # loading
     "load_mesh": "translucency.io.load",
     "read_mesh_arrays": "translucency.io.load",
+    "to_pyvista": "translucency.io.polydata",
+    "from_pyvista": "translucency.io.polydata",
     "detect_format": "translucency.io.load",
     "SUPPORTED_FORMATS": "translucency.io.load",
     "triangulate_polygons": "translucency.io.triangulate",
     "triangulate_strips": "translucency.io.triangulate",
     # per-vertex geometry for the solver
-    "triangle_areas": "translucency.io.geometry",
-    "triangle_normals": "translucency.io.geometry",
-    "vertex_normals": "translucency.io.geometry",
-    "vertex_areas": "translucency.io.geometry",
-    "mean_edge_length": "translucency.io.geometry",
-    "signed_volume": "translucency.io.geometry",
+    "triangle_areas": "translucency.geometry.measure",
+    "triangle_normals": "translucency.geometry.measure",
+    "vertex_normals": "translucency.geometry.measure",
+    "vertex_areas": "translucency.geometry.measure",
+    "mean_edge_length": "translucency.geometry.measure",
+    "signed_volume": "translucency.geometry.measure",
     # repair
     "MeshDefects": "translucency.io.defects",
     "find_defects": "translucency.io.defects",
@@ -53,8 +55,8 @@ _LAZY = {
     "clean_mesh": "translucency.io.clean",
     "clean_arrays": "translucency.io.clean",
     "smooth_vertex_normals": "translucency.io.clean",
-    "coherent_orientation": "translucency.io.orientation",
-    "outward_flips": "translucency.io.orientation",
+    "coherent_orientation": "translucency.geometry.orientation",
+    "outward_flips": "translucency.geometry.orientation",
     # decimation and the proxy mapping
     "Decimation": "translucency.io.decimate",
     "ProxyMapping": "translucency.io.decimate",
@@ -62,8 +64,8 @@ _LAZY = {
     "simplify_arrays": "translucency.io.decimate",
     "map_to_proxy": "translucency.io.decimate",
     "target_face_count": "translucency.io.decimate",
-    "closest_points_on_triangles": "translucency.io.proximity",
-    "vertex_hausdorff_distance": "translucency.io.proximity",
+    "closest_points_on_triangles": "translucency.geometry.proximity",
+    "vertex_hausdorff_distance": "translucency.geometry.proximity",
     # baked PLY
     "BakedPly": "translucency.io.baked",
     "write_baked_ply": "translucency.io.baked",

@@ -44,8 +44,8 @@ from typing import Any
 import numpy as np
 
 from ..errors import InvalidParameterError, MeshError
+from ..geometry.mesh import TriangleMesh
 from .atomic import same_file, write_bytes
-from .mesh import TriangleMesh
 from .units import unit_metadata
 
 __all__ = [

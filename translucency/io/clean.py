@@ -21,7 +21,7 @@ step what                           tool        how
                                                 vertex, one copy per fan)
 7    small islands                  numpy       components with less than ``min_island_fraction``
                                                 of the area of the largest are removed
-8    coherent orientation           numpy       :mod:`translucency.io.orientation`
+8    coherent orientation           numpy       :mod:`translucency.geometry.orientation`
 9    holes                          pymeshlab   ``meshing_close_holes`` on boundary loops of at most
                                                 ``max_hole_edges`` edges (a pass that refuses
                                                 self-intersecting patches, then one that does not)
@@ -45,19 +45,11 @@ import time
 import numpy as np
 
 from ..errors import InvalidParameterError, MeshError
-from .defects import (
-    ZERO_AREA_RATIO,
-    MeshDefects,
-    _count_non_manifold_vertices,
-    face_components,
-    find_defects,
-    triangle_keys,
-    unique_edges,
-    zero_area_mask,
-)
-from .geometry import triangle_areas, vertex_normals
-from .mesh import TriangleMesh, validate_mesh_arrays
-from .orientation import coherent_orientation, flip_triangles, outward_flips
+from ..geometry.measure import triangle_areas, vertex_normals
+from ..geometry.mesh import TriangleMesh, validate_mesh_arrays
+from ..geometry.orientation import coherent_orientation, flip_triangles, outward_flips
+from ..geometry.topology import count_non_manifold_vertices, face_components, unique_edges
+from .defects import ZERO_AREA_RATIO, MeshDefects, find_defects, triangle_keys, zero_area_mask
 
 __all__ = ["CleanReport", "clean_mesh", "clean_arrays", "smooth_vertex_normals"]
 
@@ -228,7 +220,7 @@ def clean_mesh(
         scans are loops too: keep this below their length to leave them open.
     orient_outward : bool, default True
         Make the orientation coherent and the normals point outward (see
-        :mod:`translucency.io.orientation`).
+        :mod:`translucency.geometry.orientation`).
     smooth_normals : int, default 0
         Iterations of light normal smoothing (each averages a vertex normal with its neighbours'
         and renormalises); 0 keeps the plain area-weighted normals.
@@ -521,7 +513,7 @@ def _non_manifold_counts(triangles: np.ndarray, n: int) -> tuple[int, int]:
     _, edge_of_corner = unique_edges(triangles)
     faces_per_edge = np.bincount(edge_of_corner.ravel())
     edges = int(np.count_nonzero(faces_per_edge > 2))
-    vertices = _count_non_manifold_vertices(triangles, edge_of_corner, faces_per_edge, n)
+    vertices = count_non_manifold_vertices(triangles, edge_of_corner, faces_per_edge, n)
     return edges, vertices
 
 

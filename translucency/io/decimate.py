@@ -18,7 +18,7 @@ Target
 
 Mapping back
     every full-mesh vertex is projected on the proxy surface (exact closest point, see
-    :mod:`translucency.io.proximity`) and keeps the proxy triangle and the barycentric weights of
+    :mod:`translucency.geometry.proximity`) and keeps the proxy triangle and the barycentric weights of
     its projection; a value is interpolated as ``sum_i w_i value[proxy vertex i]``. The
     interpolation is continuous across proxy edges, linear inside proxy triangles, and exact where a
     full vertex coincides with a proxy vertex (weights one-hot).
@@ -40,9 +40,9 @@ import time
 import numpy as np
 
 from ..errors import InvalidParameterError, MeshError
-from .geometry import triangle_areas
-from .mesh import TriangleMesh, validate_mesh_arrays
-from .proximity import closest_points_on_triangles
+from ..geometry.measure import triangle_areas
+from ..geometry.mesh import TriangleMesh, validate_mesh_arrays
+from ..geometry.proximity import closest_points_on_triangles
 
 __all__ = [
     "METHODS",
@@ -361,7 +361,7 @@ def decimate_mesh(
                 name: np.asarray(values)[nearest] for name, values in mesh.point_data.items() if name != "normals"
             }
             if "normals" in mesh.point_data:
-                from .geometry import vertex_normals
+                from ..geometry.measure import vertex_normals
 
                 point_data["normals"] = vertex_normals(points, triangles)
         proxy = TriangleMesh(points, triangles, point_data, source=mesh.source, mm_per_unit=mesh.mm_per_unit,

@@ -13,7 +13,8 @@ Readers, by file extension:
 Pixel values are taken as linear radiance in W/(m² sr) (scale them with ``scale`` if the map is in
 another unit). The axes of the image are those of
 :class:`translucency.scatter.lights.EnvironmentLight`: row 0 is the zenith, columns run with the
-azimuth.
+azimuth. This module returns arrays; :func:`translucency.app.environment.load_environment` builds the
+light from them (``io`` and ``scatter`` do not import each other).
 
 ========= ====================================================== =========
 name      meaning                                                unit
@@ -30,9 +31,8 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import TranslucencyError
-from ..scatter.lights import EnvironmentLight
 
-__all__ = ["EnvironmentMapError", "read_equirectangular", "load_environment", "RADIANCE_EXTENSIONS"]
+__all__ = ["EnvironmentMapError", "read_equirectangular", "RADIANCE_EXTENSIONS"]
 
 RADIANCE_EXTENSIONS = (".hdr", ".pic")
 IMPLAUSIBLE_RADIANCE = 1e30  # RGBE goes up to ~1.7e38; anything this large is a decoding failure
@@ -138,32 +138,3 @@ def read_equirectangular(path) -> np.ndarray:
     if pixels.min() < 0:
         raise EnvironmentMapError(f"{path.name} has negative pixels (min {pixels.min():g}); radiance must be >= 0.")
     return pixels
-
-
-def load_environment(
-    path,
-    *,
-    n_directions: int = 256,
-    sampling: str = "importance",
-    seed: int = 0,
-    up=(0.0, 0.0, 1.0),
-    scale: float = 1.0,
-) -> EnvironmentLight:
-    """An :class:`~translucency.scatter.lights.EnvironmentLight` from an equirectangular map file.
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-        The map (see :func:`read_equirectangular`).
-    n_directions, sampling, seed, up
-        As in :class:`~translucency.scatter.lights.EnvironmentLight` (importance sampling by default:
-        real maps have small bright regions such as the sun).
-    scale : float, optional
-        Factor turning pixel values into W/(m² sr).
-    """
-    if not (np.isfinite(scale) and scale >= 0):
-        raise EnvironmentMapError(f"scale must be a finite number >= 0, got {scale!r}.")
-    radiance = read_equirectangular(path) * float(scale)
-    return EnvironmentLight(
-        radiance_map=radiance, n_directions=n_directions, sampling=sampling, seed=seed, up=up, name=Path(path).name
-    )

@@ -1,4 +1,4 @@
-"""Read mesh files of every common format into a :class:`~translucency.io.mesh.TriangleMesh` in mm.
+"""Read mesh files of every common format into a :class:`~translucency.geometry.mesh.TriangleMesh` in mm.
 
 This module dispatches: it checks that the file can be read, tells the format from the content
 (a file whose content is of another format than its extension says is refused with the name it
@@ -31,7 +31,7 @@ from .formats.ply import read_ply
 from .formats.pymeshlab import PYMESHLAB_FORMATS, read_with_pymeshlab
 from .formats.stl import read_stl
 from .formats.vtk import VTK_FORMATS, mesh_from_vtk_polydata, read_with_vtk
-from .mesh import TriangleMesh, validate_mesh_arrays
+from ..geometry.mesh import TriangleMesh, validate_mesh_arrays
 from .units import UnitInferredWarning, check_extent, infer_unit, inferred_unit_message, parse_unit
 
 __all__ = ["load_mesh", "read_mesh_arrays", "mesh_from_vtk_polydata", "SUPPORTED_FORMATS", "detect_format"]

@@ -1,4 +1,4 @@
-"""Write a :class:`~translucency.io.mesh.TriangleMesh` to a mesh file, atomically, never over its source.
+"""Write a :class:`~translucency.geometry.mesh.TriangleMesh` to a mesh file, atomically, never over its source.
 
 The file is encoded in memory -- binary PLY, binary STL and OBJ by numpy, VTK legacy and VTK XML by
 VTK's writers to a string -- and written by the atomic writer (:mod:`translucency.io.atomic`): an
@@ -23,6 +23,7 @@ import numpy as np
 
 from ..errors import InvalidParameterError, WriteError
 from .atomic import prepare_output_file, same_file, write_bytes
+from .polydata import to_pyvista
 
 __all__ = ["WRITABLE_FORMATS", "check_output_path", "save_mesh"]
 
@@ -116,7 +117,7 @@ def _ply_bytes(mesh, suffix) -> list[bytes]:
 
 def _stl_bytes(mesh, suffix) -> list[bytes]:
     """Binary STL: an 80-byte header, the triangle count, per triangle its unit normal and corners (mm)."""
-    from .geometry import triangle_normals
+    from ..geometry.measure import triangle_normals
 
     records = np.zeros(mesh.n_triangles, dtype=[("normal", "<f4", (3,)), ("corners", "<f4", (3, 3)), ("attribute", "<u2")])
     records["normal"] = np.nan_to_num(triangle_normals(mesh.points, mesh.triangles))
@@ -138,7 +139,7 @@ def _vtk_bytes(mesh, suffix) -> list[bytes]:
     from vtkmodules.vtkIOXML import vtkXMLPolyDataWriter
 
     writer = vtkPolyDataWriter() if suffix == ".vtk" else vtkXMLPolyDataWriter()
-    writer.SetInputData(mesh.to_pyvista())
+    writer.SetInputData(to_pyvista(mesh))
     if suffix == ".vtk":
         writer.SetFileTypeToBinary()
     writer.WriteToOutputStringOn()

@@ -16,7 +16,7 @@ never inferred, as their sizes overlap those of the two others (pass them). A fi
 5000 units is plausible in no unit and is refused with a sentence; the shared scans come out at
 their real size (bunny 156 mm, horse 183 mm, Igea 99 mm from metres; angel 322 mm, birdbath 308 mm
 from millimetres). The choice is said in one line (:class:`UnitInferredWarning`) and recorded
-(:attr:`TriangleMesh.unit_inferred <translucency.io.mesh.TriangleMesh.unit_inferred>`).
+(:attr:`TriangleMesh.unit_inferred <translucency.geometry.mesh.TriangleMesh.unit_inferred>`).
 
 ================ ========================================================== =====
 name             meaning                                                    unit

@@ -43,6 +43,8 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
+from ..geometry.measure import edge_lengths
+from ..geometry.topology import unique_edges
 from .kernels import channel_lanes, indexed_sum
 from .threads import for_ranges, thread_count
 
@@ -293,9 +295,6 @@ class TriangleTables:
 
 def triangle_tables(points, triangles) -> TriangleTables:
     """:class:`TriangleTables` of a mesh (``points`` in mm)."""
-    from ..io.defects import unique_edges
-    from ..io.geometry import edge_lengths
-
     edges, edge_of_corner = unique_edges(triangles)
     return TriangleTables(edge_lengths(points, triangles).max(axis=1), points[triangles].mean(axis=1), edges,
                           np.ascontiguousarray(edge_of_corner))

@@ -43,6 +43,8 @@ from typing import Callable
 import numpy as np
 
 from ..errors import BudgetError, InvalidParameterError, option
+from ..geometry.measure import barycentric_vertex_areas, mean_edge_length, triangle_areas
+from ..geometry.morton import morton_order
 from . import budget, cutoff, hierarchy, kernels, nearfield
 from .names import DEFAULT_MODEL, METHODS, MODELS
 from .medium import Medium
@@ -111,8 +113,6 @@ class SurfaceGeometry:
     def triangle_areas(self) -> np.ndarray:
         """Area of each triangle, mm^2."""
         if "triangle_areas" not in self._cache:
-            from ..io.geometry import triangle_areas
-
             self._cache["triangle_areas"] = triangle_areas(self.points, self.triangles)
         return self._cache["triangle_areas"]
 
@@ -124,17 +124,13 @@ class SurfaceGeometry:
         field correction subtracts.
         """
         if "vertex_areas" not in self._cache:
-            areas = np.zeros(self.n_vertices)
-            np.add.at(areas, self.triangles.ravel(), np.repeat(self.triangle_areas / 3.0, 3))
-            self._cache["vertex_areas"] = areas
+            self._cache["vertex_areas"] = barycentric_vertex_areas(self.triangles, self.triangle_areas, self.n_vertices)
         return self._cache["vertex_areas"]
 
     @property
     def mean_edge_length(self) -> float:
         """Mean edge length, mm."""
         if "mean_edge" not in self._cache:
-            from ..io.geometry import mean_edge_length
-
             self._cache["mean_edge"] = float(mean_edge_length(self.points, self.triangles))
         return self._cache["mean_edge"]
 
@@ -159,13 +155,11 @@ class SurfaceGeometry:
 
     def spatial_order(self) -> tuple["SurfaceGeometry", np.ndarray, np.ndarray]:
         """``(ordered, order, rank)``: the same surface with its vertices along a Morton curve
-        (:func:`translucency.io.geometry.morton_order`) and its triangles by first vertex, so that
+        (:func:`translucency.geometry.morton.morton_order`) and its triangles by first vertex, so that
         neighbours sit close in memory whatever order the mesh came in (subdivided or merged meshes
         append vertices far from their neighbours); ``ordered.points == points[order]``,
         ``rank[order] == arange(n)``. The solver works on it; cached, with its own caches."""
         if "ordered" not in self._cache:
-            from ..io.geometry import morton_order
-
             order = morton_order(self.points)
             rank = np.empty_like(order)
             rank[order] = np.arange(order.size)

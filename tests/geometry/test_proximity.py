@@ -4,9 +4,9 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from translucency.io.proximity import closest_point_barycentric, closest_points_on_triangles, vertex_hausdorff_distance
+from translucency.geometry.proximity import closest_point_barycentric, closest_points_on_triangles, vertex_hausdorff_distance
 
-from .conftest import grid, icosphere
+from ..io.conftest import grid, icosphere
 
 
 def brute_force(query, points, triangles):

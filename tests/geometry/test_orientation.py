@@ -5,9 +5,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from translucency.io import find_defects, signed_volume
-from translucency.io.orientation import coherent_orientation, flip_triangles, outward_flips
+from translucency.geometry.orientation import coherent_orientation, flip_triangles, outward_flips
 
-from .conftest import grid, icosphere
+from ..io.conftest import grid, icosphere
 
 
 @settings(max_examples=25, deadline=None)

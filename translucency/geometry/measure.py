@@ -1,7 +1,7 @@
 """Per-triangle and per-vertex geometry of a triangle mesh, as plain numpy arrays (the solver's input).
 
 Pure functions of ``points`` (n, 3) float64 in mm and ``triangles`` (m, 3) int64; nothing here
-validates (validation happens where meshes are built, :mod:`translucency.io.mesh`).
+validates (validation happens where meshes are built, :mod:`translucency.geometry.mesh`).
 
 ================ ================================================================ ======
 name             meaning                                                          unit
@@ -33,6 +33,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import InvalidParameterError
+from .topology import unique_edges
 
 __all__ = [
     "triangle_cross_products",
@@ -40,6 +41,7 @@ __all__ = [
     "triangle_normals",
     "vertex_normals",
     "vertex_areas",
+    "barycentric_vertex_areas",
     "edge_lengths",
     "mean_edge_length",
     "signed_volume",
@@ -154,11 +156,32 @@ def vertex_areas(points, triangles, method: str = "barycentric") -> np.ndarray:
     points = np.asarray(points, dtype=np.float64)
     triangles = np.asarray(triangles, dtype=np.int64)
     if method == "barycentric":
-        areas = triangle_areas(points, triangles)
-        return _accumulate(triangles, np.repeat(areas[:, None] / 3.0, 3, axis=1), len(points))
+        return barycentric_vertex_areas(triangles, triangle_areas(points, triangles), len(points))
     if method == "mixed_voronoi":
         return _accumulate(triangles, _mixed_voronoi_corner_areas(points, triangles), len(points))
     raise InvalidParameterError(f"unknown vertex area method {method!r}; use 'barycentric' or 'mixed_voronoi'.")
+
+
+def barycentric_vertex_areas(triangles, triangle_areas, n_points: int) -> np.ndarray:
+    """One third of the area of every adjacent triangle, from areas already computed.
+
+    Parameters
+    ----------
+    triangles : array_like of int, shape (m, 3)
+        Vertex indices of each triangle.
+    triangle_areas : array_like, shape (m,)
+        Area of each triangle in mm² (:func:`triangle_areas`).
+    n_points : int
+        Number of vertices.
+
+    Returns
+    -------
+    ndarray, shape (n_points,), float64
+        Areas in mm² (zero for unreferenced vertices).
+    """
+    triangles = np.asarray(triangles, dtype=np.int64)
+    areas = np.asarray(triangle_areas, dtype=np.float64)
+    return _accumulate(triangles, np.repeat(areas[:, None] / 3.0, 3, axis=1), int(n_points))
 
 
 def _mixed_voronoi_corner_areas(points: np.ndarray, triangles: np.ndarray) -> np.ndarray:
@@ -192,8 +215,6 @@ def edge_lengths(points, triangles) -> np.ndarray:
 
 def mean_edge_length(points, triangles) -> float:
     """Mean length of the unique edges, in mm."""
-    from .defects import unique_edges
-
     edges, _ = unique_edges(triangles)
     p = np.asarray(points, dtype=np.float64)
     return float(np.linalg.norm(p[edges[:, 0]] - p[edges[:, 1]], axis=1).mean())
@@ -221,27 +242,3 @@ def signed_volume(points, triangles, origin=None) -> float:
     p = points - np.asarray(origin, dtype=np.float64)
     p0, p1, p2 = p[triangles[:, 0]], p[triangles[:, 1]], p[triangles[:, 2]]
     return float(np.einsum("ij,ij->i", p0, np.cross(p1, p2)).sum() / 6.0)
-
-
-def morton_order(points, bits: int = 16) -> np.ndarray:
-    """Permutation that sorts points along a Morton (Z-order) curve of their bounding box.
-
-    Points close in space end up close in the order, so that work over neighbours reads nearby
-    memory. ``bits`` per axis (a ``2^bits`` grid; at most 21 so that the code fits 63 bits).
-
-    Returns
-    -------
-    ndarray of int64, shape (n,)
-        ``points[order]`` is the curve's order.
-    """
-    points = np.asarray(points, dtype=np.float64).reshape(-1, 3)
-    if len(points) == 0:
-        return np.zeros(0, dtype=np.int64)
-    low = points.min(axis=0)
-    size = float(np.ptp(points, axis=0).max()) or 1.0
-    cells = np.minimum(((points - low) / size * (1 << bits)).astype(np.uint64), np.uint64((1 << bits) - 1))
-    code = np.zeros(len(points), dtype=np.uint64)
-    for bit in range(bits):
-        for axis in range(3):
-            code |= ((cells[:, axis] >> np.uint64(bit)) & np.uint64(1)) << np.uint64(3 * bit + axis)
-    return np.argsort(code, kind="stable").astype(np.int64)

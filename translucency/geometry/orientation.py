@@ -26,7 +26,7 @@ import numpy as np
 from scipy import sparse
 from scipy.sparse import csgraph
 
-from .defects import face_components, unique_edges
+from .topology import face_components, unique_edges
 
 __all__ = ["coherent_orientation", "outward_flips", "flip_triangles"]
 

@@ -1,7 +1,8 @@
 """The one triangle-mesh type of translucency: points in mm, triangles, per-vertex properties.
 
 Every loader returns a :class:`TriangleMesh`, every repair and decimation step takes one and returns
-a new one, and the solver receives its plain arrays (``points``, ``triangles``). A mesh is immutable:
+a new one, and the solver receives its plain arrays (``points``, ``triangles``). The record holds
+arrays only; its conversions to and from ``pyvista.PolyData`` live in :mod:`translucency.io.polydata`. A mesh is immutable:
 its arrays are private read-only copies, so a mesh handed to the solver cannot change under it, and
 "changing" a mesh means building a new one with :meth:`TriangleMesh.replace`.
 
@@ -32,6 +33,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import MeshError
+from .measure import triangle_areas, vertex_areas, vertex_normals
 
 __all__ = ["TriangleMesh", "validate_mesh_arrays"]
 
@@ -192,21 +194,15 @@ class TriangleMesh:
     @property
     def surface_area(self) -> float:
         """Total area of the triangles, in mm²."""
-        from .geometry import triangle_areas
-
         return float(triangle_areas(self.points, self.triangles).sum())
 
     # --- per-vertex geometry -------------------------------------------------------------------------
     def vertex_normals(self) -> np.ndarray:
-        """Area-weighted unit vertex normals, (n, 3) float64 (see :func:`translucency.io.geometry.vertex_normals`)."""
-        from .geometry import vertex_normals
-
+        """Area-weighted unit vertex normals, (n, 3) float64 (see :func:`translucency.geometry.measure.vertex_normals`)."""
         return vertex_normals(self.points, self.triangles)
 
     def vertex_areas(self, method: str = "barycentric") -> np.ndarray:
-        """Area of each vertex's share of the surface in mm², (n,) float64 (see :func:`translucency.io.geometry.vertex_areas`)."""
-        from .geometry import vertex_areas
-
+        """Area of each vertex's share of the surface in mm², (n,) float64 (see :func:`translucency.geometry.measure.vertex_areas`)."""
         return vertex_areas(self.points, self.triangles, method=method)
 
     # --- building new meshes -------------------------------------------------------------------------
@@ -221,34 +217,3 @@ class TriangleMesh:
             f"TriangleMesh({self.n_points} points, {self.n_triangles} triangles, extent {self.extent:.4g} mm, "
             f"point_data: {keys}, source: {name})"
         )
-
-    # --- PyVista ------------------------------------------------------------------------------------
-    def to_pyvista(self):
-        """Return a ``pyvista.PolyData`` with the same points (mm), triangles and point data."""
-        import pyvista
-
-        faces = np.empty((self.n_triangles, 4), dtype=np.int64)
-        faces[:, 0] = 3
-        faces[:, 1:] = self.triangles
-        poly = pyvista.PolyData(np.array(self.points), faces.ravel())
-        for name, values in self.point_data.items():
-            poly.point_data[name] = np.array(values)
-        return poly
-
-    @classmethod
-    def from_pyvista(cls, poly, *, source=None, mm_per_unit: float = 1.0) -> TriangleMesh:
-        """Build a mesh from a ``pyvista.PolyData`` (polygons are triangulated, lines and points dropped).
-
-        Parameters
-        ----------
-        poly : pyvista.PolyData
-            Surface with points already in mm.
-        source : path, optional
-            Recorded as :attr:`source`.
-        mm_per_unit : float
-            Recorded as :attr:`mm_per_unit`.
-        """
-        from .load import mesh_from_vtk_polydata
-
-        points, triangles, point_data = mesh_from_vtk_polydata(poly, what="the PolyData")
-        return cls(points, triangles, point_data, source=source, mm_per_unit=mm_per_unit)

@@ -1,12 +1,12 @@
-"""The triangle-mesh type: validation, immutability, PyVista round trip."""
+"""The triangle-mesh record: validation, immutability."""
 
 import numpy as np
 import pytest
 
 from translucency.errors import MeshError
-from translucency.io import TriangleMesh, validate_mesh_arrays
+from translucency.geometry.mesh import TriangleMesh, validate_mesh_arrays
 
-from .conftest import icosphere
+from ..io.conftest import icosphere
 
 
 def test_arrays_are_converted_copied_and_read_only():
@@ -65,25 +65,3 @@ def test_point_data_must_match_vertices():
 def test_bad_unit_factor():
     with pytest.raises(MeshError, match="mm_per_unit"):
         TriangleMesh(np.eye(3), [[0, 1, 2]], mm_per_unit=0)
-
-
-def test_pyvista_round_trip(sphere_mesh):
-    poly = sphere_mesh.to_pyvista()
-    assert poly.n_points == sphere_mesh.n_points and poly.n_cells == sphere_mesh.n_triangles
-    back = TriangleMesh.from_pyvista(poly)
-    np.testing.assert_array_equal(back.points, sphere_mesh.points)
-    np.testing.assert_array_equal(back.triangles, sphere_mesh.triangles)
-    np.testing.assert_array_equal(back.point_data["colors"], sphere_mesh.point_data["colors"])
-    np.testing.assert_array_equal(back.point_data["confidence"], sphere_mesh.point_data["confidence"])
-
-
-def test_from_pyvista_triangulates_polygons_and_strips():
-    import pyvista
-
-    quads = pyvista.Plane(i_resolution=3, j_resolution=2)  # 6 quads
-    mesh = TriangleMesh.from_pyvista(quads)
-    assert mesh.n_triangles == 12
-    assert mesh.surface_area == pytest.approx(1.0)
-    strips = quads.triangulate().strip()
-    assert strips.n_strips > 0
-    assert TriangleMesh.from_pyvista(strips).surface_area == pytest.approx(1.0)

@@ -7,7 +7,7 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
 from translucency.errors import InvalidParameterError
-from translucency.io.geometry import (
+from translucency.geometry.measure import (
     mean_edge_length,
     signed_volume,
     triangle_areas,
@@ -16,7 +16,7 @@ from translucency.io.geometry import (
     vertex_normals,
 )
 
-from .conftest import grid, icosphere
+from ..io.conftest import grid, icosphere
 
 coordinates = arrays(np.float64, (12, 3), elements=st.floats(-100, 100, allow_nan=False, width=64))
 triangle_lists = arrays(np.int64, (15, 3), elements=st.integers(0, 11))

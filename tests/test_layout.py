@@ -1,0 +1,126 @@
+"""The package's layout: which module may import which, read from the source with ``ast``.
+
+Every ``import`` and ``from ... import`` counts, at module level or inside a function.
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import pytest
+
+PACKAGE = Path(__file__).resolve().parents[1] / "translucency"
+
+
+def _module_name(path: Path) -> str:
+    parts = path.relative_to(PACKAGE.parent).with_suffix("").parts
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+def _modules() -> dict[str, Path]:
+    return {_module_name(path): path for path in sorted(PACKAGE.rglob("*.py"))}
+
+
+MODULES = _modules()
+
+
+def _imports(name: str, path: Path):
+    """``(target module, imported names, line)`` of every import of the package in one module."""
+    package = name if path.name == "__init__.py" else name.rpartition(".")[0]
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if isinstance(node, ast.Import):
+            for alias in node.names:
+                yield alias.name, (), node.lineno
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                base = package.split(".")[: len(package.split(".")) - (node.level - 1)]
+                target = ".".join(base + ([node.module] if node.module else []))
+            else:
+                target = node.module or ""
+            yield target, tuple(alias.name for alias in node.names), node.lineno
+
+
+def _edges():
+    """``(importer, imported module, names, line)``; ``from package import submodule`` is an edge to the submodule."""
+    for name, path in MODULES.items():
+        for target, names, line in _imports(name, path):
+            if target != "translucency" and not target.startswith("translucency."):
+                continue
+            submodules = [f"{target}.{n}" for n in names if f"{target}.{n}" in MODULES]
+            if submodules:
+                for module in submodules:
+                    yield name, module, (), line
+                names = tuple(n for n in names if f"{target}.{n}" not in MODULES)
+                if not names:
+                    continue
+            yield name, target, names, line
+
+
+EDGES = list(_edges())
+
+
+def _layer(module: str) -> str:
+    return module.split(".")[1] if module.count(".") >= 1 else ""
+
+
+def test_the_package_is_read():
+    assert {"translucency.geometry.mesh", "translucency.io.load", "translucency.scatter.solve"} <= set(MODULES)
+    assert len(EDGES) > 50
+
+
+@pytest.mark.parametrize("a, b", [("scatter", "io"), ("io", "scatter")])
+def test_io_and_scatter_never_import_each_other(a, b):
+    crossing = [f"{m}:{line} imports {t}" for m, t, _, line in EDGES if _layer(m) == a and _layer(t) == b]
+    assert not crossing, crossing
+
+
+def test_geometry_imports_neither_io_scatter_nor_app():
+    upward = [f"{m}:{line} imports {t}" for m, t, _, line in EDGES
+              if _layer(m) == "geometry" and _layer(t) in ("io", "scatter", "app")]
+    assert not upward, upward
+
+
+def test_no_private_name_is_imported_from_another_module():
+    private = [f"{m}:{line} imports {t}.{n}" for m, t, names, line in EDGES for n in names
+               if n.startswith("_") and not n.startswith("__") and t != m]
+    assert not private, private
+
+
+def test_no_import_cycle():
+    graph: dict[str, set[str]] = {name: set() for name in MODULES}
+    for importer, target, _, _ in EDGES:
+        if target in MODULES and target != importer:
+            graph[importer].add(target)
+    # Tarjan's strongly connected components; a component of more than one module is a cycle
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on_stack: set[str] = set()
+    cycles = []
+
+    def visit(node: str) -> None:
+        index[node] = low[node] = len(index)
+        stack.append(node)
+        on_stack.add(node)
+        for other in graph[node]:
+            if other not in index:
+                visit(other)
+                low[node] = min(low[node], low[other])
+            elif other in on_stack:
+                low[node] = min(low[node], index[other])
+        if low[node] == index[node]:
+            component = []
+            while True:
+                member = stack.pop()
+                on_stack.discard(member)
+                component.append(member)
+                if member == node:
+                    break
+            if len(component) > 1:
+                cycles.append(sorted(component))
+
+    for node in graph:
+        if node not in index:
+            visit(node)
+    assert not cycles, cycles
