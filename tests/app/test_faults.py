@@ -39,7 +39,7 @@ DRIVER = textwrap.dedent("""
         return waiting
     if point == "shade":
         from translucency.app import pipeline
-        pipeline.Scene.shade = pause(pipeline.Scene.shade)
+        pipeline.Scene.shade_with = pause(pipeline.Scene.shade_with)
     elif point == "fsync":
         from translucency.io import atomic
         atomic._fsync = pause(atomic._fsync)

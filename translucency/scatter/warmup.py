@@ -32,7 +32,7 @@ MAIN_JOB_KERNELS = (
     ("translucency.scatter.nearfield", "_refined_points"),
 )
 
-NOTICE = "compiling the solver's kernels (first run only, about 10-20 s) ..."
+NOTICE = "compiling the solver's kernels (first run only, about 15-30 s) ..."
 
 
 @contextlib.contextmanager
