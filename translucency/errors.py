@@ -29,9 +29,14 @@ def option(keyword: str, value=None) -> str:
         A value to suggest; written as typed on the command line and as a Python literal otherwise.
     """
     if _command_line:
-        flag = "--" + keyword.replace("_", "-")
+        flag = setting_name(keyword)
         return flag if value is None else f"{flag} {value}"
     return f"{keyword}=" if value is None else f"{keyword}={value!r}"
+
+
+def setting_name(keyword: str) -> str:
+    """A setting as the subject of a sentence: ``--per-direction`` on the command line, ``per_direction`` in Python."""
+    return "--" + keyword.replace("_", "-") if _command_line else keyword
 
 
 def command_line_active() -> bool:

@@ -31,7 +31,7 @@ import math
 import numbers
 from dataclasses import dataclass
 
-from ..errors import InvalidParameterError, command_line_active
+from ..errors import InvalidParameterError, setting_name
 from ..scatter.budget import DEFAULT_TIME_LIMIT_S
 from ..scatter.names import DEFAULT_METHOD, DEFAULT_MODEL, DEFAULT_TOL, METHODS, MODELS
 
@@ -59,11 +59,6 @@ HELP = {
 }
 
 
-def _name(keyword: str) -> str:
-    """The setting as the user wrote it: ``--per-direction`` on the command line, ``per_direction`` in Python."""
-    return "--" + keyword.replace("_", "-") if command_line_active() else keyword
-
-
 def _positive(value) -> bool:
     """True for a finite real number > 0 (not a bool)."""
     return isinstance(value, numbers.Real) and not isinstance(value, bool) and math.isfinite(value) and value > 0
@@ -81,7 +76,7 @@ def parse_resolution(value):
             edge = None
     if not _positive(edge):
         raise InvalidParameterError(
-            f"{_name('resolution')} must be full, auto or a proxy edge length in mm, got {value!r}.")
+            f"{setting_name('resolution')} must be full, auto or a proxy edge length in mm, got {value!r}.")
     return float(edge)
 
 
@@ -137,10 +132,10 @@ class ShadeSettings:
         if self.method not in METHODS:
             raise InvalidParameterError(f"unknown method {self.method!r}; choose one of {', '.join(METHODS)}.")
         if not (_positive(self.tol) and self.tol < 1):
-            raise InvalidParameterError(f"{_name('tol')} must be a relative error in (0, 1), got {self.tol!r}.")
+            raise InvalidParameterError(f"{setting_name('tol')} must be a relative error in (0, 1), got {self.tol!r}.")
         object.__setattr__(self, "resolution", parse_resolution(self.resolution))
         if not (self.exposure is None or _positive(self.exposure)):
-            raise InvalidParameterError(f"{_name('exposure')} must be a positive number, got {self.exposure!r}.")
+            raise InvalidParameterError(f"{setting_name('exposure')} must be a positive number, got {self.exposure!r}.")
         check_limits(self.memory_limit, self.time_limit)
         object.__setattr__(self, "up", parse_up(self.up))
         object.__setattr__(self, "shadows", bool(self.shadows))
