@@ -1,0 +1,399 @@
+"""What the viewer shows, without a window: the settings, the Scene that solves again, the colours, the status.
+
+:class:`ViewerState` holds every choice the controls change (light angles, material, model, scale,
+exposure, the two view-dependent layers) and one persistent :class:`~translucency.app.pipeline.Scene`.
+Its ``set_*`` methods solve again when the change needs it and say whether the picture changed; it
+hands out the per-vertex display colours ``sRGB(exposure L)`` and a status text. It never imports
+PyVista or VTK: a window (:mod:`translucency.app.viewer.widgets`) or a test drives it the same way,
+passing the camera position as a plain array when a view-dependent layer needs it.
+
+By default ``L`` is the radiance toward the normal, ``T21(eta, 1) B`` (docs/physics.md §5.3), exactly
+what a bake stores. Two optional layers depend on the view (recomputed when the camera moves; no new
+solve):
+
+* **view-dependent transmission** -- ``L = T21(eta, n . w_o) B`` with ``w_o`` toward the camera
+  (darker at grazing angles, :func:`translucency.scatter.outgoing.subsurface_radiance`, §5.3);
+* **specular highlight** -- the boundary's reflection of every directional light and environment
+  sample (GGX, roughness ``alpha``; :func:`translucency.scatter.outgoing.specular_radiance`, §5.5), with
+  the same Embree shadows as the solve. Point lights give no highlight.
+
+Interactive resolution. Every change re-solves on the one ``Scene`` (geometry, Embree scene and
+visibility are reused) on a proxy of about :data:`INTERACTIVE_VERTICES` vertices
+(:func:`interactive_edge_length`), interpolated back to every vertex: small enough to answer in a
+fraction of a second, fine enough that the error stays at a few percent away from the shadow
+terminator, which the proxy moves by up to an edge (single vertices just past it can be many times
+too bright). The measurements behind the default are in bench/README.md ("Interactive proxy").
+:meth:`ViewerState.solve_full` solves what is shown on every vertex.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+from pathlib import Path
+
+import numpy as np
+
+from ...errors import InvalidParameterError
+from ...scatter.budget import DEFAULT_TIME_LIMIT_S
+from ...scatter.names import DEFAULT_METHOD, DEFAULT_MODEL, DEFAULT_TOL
+from ..pipeline import (Scene, coarsest_proxy_edge, default_light_direction, display_colors, proxy_edge_length,
+                        resolve_medium, write_result)
+from ..render import DEFAULT_UP
+from ..settings import DEFAULT_MATERIAL, ShadeSettings
+
+#: Vertices of the interactive proxy (the measurements behind it: bench/README.md, "Interactive proxy").
+INTERACTIVE_VERTICES = 7500
+
+
+def interactive_edge_length(mesh, medium, vertices: int = INTERACTIVE_VERTICES) -> float:
+    """Proxy edge length (mm) that answers interactively: a proxy of about ``vertices`` vertices.
+
+    A closed mesh has about two triangles per vertex; the edge is that of equilateral triangles covering
+    the surface, ``l = sqrt(4 A / (sqrt(3) 2 N))`` for area ``A`` (mm²) and ``N`` vertices. It is never
+    finer than :func:`~translucency.app.pipeline.proxy_edge_length` of the medium (the detail the light
+    can show after diffusing, docs/physics.md §8.6), and never coarser than
+    :func:`~translucency.app.pipeline.coarsest_proxy_edge` (an object only a few diffusion lengths
+    across still gets a proxy of some triangles).
+    """
+    triangle_area = mesh.surface_area / (2.0 * vertices)
+    budget = math.sqrt(triangle_area / (math.sqrt(3.0) / 4.0))  # area of an equilateral triangle: sqrt(3)/4 l²
+    return min(max(budget, proxy_edge_length(medium)), coarsest_proxy_edge(mesh.surface_area))
+
+
+def _frame(up):
+    """Unit ``up`` and two unit axes ``e1, e2`` perpendicular to it (``e1``: +z made orthogonal, or +x)."""
+    up = np.asarray(up, dtype=np.float64)
+    up = up / np.linalg.norm(up)
+    seed = np.array([0.0, 0.0, 1.0]) if abs(up[2]) < 0.9 else np.array([1.0, 0.0, 0.0])
+    e1 = seed - (seed @ up) * up
+    e1 /= np.linalg.norm(e1)
+    return up, e1, np.cross(up, e1)
+
+
+def light_direction(azimuth, elevation, up=DEFAULT_UP) -> np.ndarray:
+    """Unit direction toward a light at ``azimuth``, ``elevation`` (degrees) around ``up``.
+
+    ``d = cos(e) (cos(a) e1 + sin(a) e2) + sin(e) up``: elevation is the angle above the plane
+    perpendicular to ``up``; azimuth 0 is the world +z made perpendicular to ``up`` (+x when ``up`` is
+    along z) and 90 is ``up x`` that (+x for ``up`` = +y).
+    """
+    up, e1, e2 = _frame(up)
+    a, e = math.radians(azimuth), math.radians(elevation)
+    return math.cos(e) * (math.cos(a) * e1 + math.sin(a) * e2) + math.sin(e) * up
+
+
+def light_angles(direction, up=DEFAULT_UP) -> tuple[float, float]:
+    """``(azimuth, elevation)`` in degrees of a direction (inverse of :func:`light_direction`)."""
+    up, e1, e2 = _frame(up)
+    d = np.asarray(direction, dtype=np.float64)
+    d = d / np.linalg.norm(d)
+    elevation = math.degrees(math.asin(float(np.clip(d @ up, -1.0, 1.0))))
+    azimuth = math.degrees(math.atan2(float(d @ e2), float(d @ e1)))
+    return azimuth, elevation
+
+
+def diffusive_materials() -> list[str]:
+    """Keys of the catalogue entries every diffusion model can represent (they scatter in every channel)."""
+    from ...scatter.materials import catalogue
+
+    return [entry.key for entry in catalogue() if entry.is_diffusive]
+
+
+class ViewerState:
+    """The viewer's settings and solution, with no window: what to show and how to change it.
+
+    Every ``set_*`` method checks its value (a sentence on a bad one), solves again on the persistent
+    :attr:`scene` when the change needs it, and returns whether the picture changed; :meth:`colors`
+    and :attr:`status` are then what to draw. See the module docstring for what is shown.
+
+    Parameters
+    ----------
+    mesh : TriangleMesh, optional
+        A cleaned mesh in mm (default: the embedded default scan, cleaned).
+    material : str or Material or Medium
+        The starting material (catalogue name, 1/mm coefficients).
+    lights : light or sequence of lights, optional
+        Directions in the scan's own coordinates. Default: one white directional light of 1 W/m²
+        above and in front of the scan (:func:`~translucency.app.pipeline.default_light_direction` of
+        ``up``). :meth:`set_light` steers the first directional light.
+    model, method, tol, per_direction, memory_limit, time_limit
+        Passed to :meth:`Scene.shade <translucency.app.pipeline.Scene.shade>` (GB, seconds).
+    resolution : "interactive", "full", "auto" or float
+        Where ``B`` is computed on a change: ``"interactive"`` (default) is a proxy of about
+        :data:`INTERACTIVE_VERTICES` vertices (:func:`interactive_edge_length`); the others are the
+        pipeline's (a number is a proxy edge length in mm).
+    shadows : bool
+        Embree shadow rays.
+    exposure : float, optional
+        Display exposure (linear factor); automatic from the first solve by default, then kept, so that
+        brightness changes between materials and lights stay visible.
+    view_dependent, specular : bool
+        Show ``T21(eta, n . w_o) B`` instead of ``T21(eta, 1) B``; add the specular highlight.
+    roughness : float
+        GGX ``alpha`` of the highlight.
+    up : str
+        The scan's up axis, ``"x"`` ... ``"-z"`` or ``"auto"`` (inferred from the mesh, see
+        :mod:`translucency.io.upright`): the axis of the light's azimuth and where the default light is.
+    name : str, optional
+        Stem of saved files (default: the mesh's file name, or ``scan``).
+    solve : bool
+        Solve now (default); with ``False`` call :meth:`solve` before reading :attr:`result` or colours.
+    """
+
+    def __init__(self, mesh=None, material=DEFAULT_MATERIAL, lights=None, *, model=DEFAULT_MODEL, method=DEFAULT_METHOD,
+                 tol=DEFAULT_TOL, resolution="interactive", shadows=True, per_direction=False, exposure=None,
+                 memory_limit=None, time_limit=DEFAULT_TIME_LIMIT_S, view_dependent=False, specular=False,
+                 roughness=0.25, up="auto", name=None, solve=True):
+        from ...io.upright import up_vector
+        from ...scatter.lights import DirectionalLight, as_light_list
+        from ..pipeline import load_scan
+
+        # every setting checked once, before the scan is loaded ("interactive" is the viewer's own resolution)
+        settings = ShadeSettings(material, model, method, tol, "full" if resolution == "interactive" else resolution,
+                                 shadows, per_direction, exposure, memory_limit, time_limit, up)
+        if mesh is None:
+            mesh, _, default_name = load_scan(None)
+            name = name or default_name
+        self.base_mesh = mesh
+        self.name = name or (Path(mesh.source).stem if mesh.source is not None else "scan")
+        self.medium = settings.material
+        self.model, self.method, self.tol = model, method, float(tol)
+        self.resolution = resolution
+        self.per_direction = bool(per_direction)
+        self.limits = {"memory_limit": memory_limit, "time_limit": time_limit}
+        self.shadows = bool(shadows)
+        self.scene = Scene(mesh, shadows=self.shadows, up=up)
+        self.up_axis = self.scene.up
+        self.up = tuple(float(u) for u in up_vector(self.up_axis))
+        self.lights = as_light_list(lights if lights is not None
+                                    else DirectionalLight(default_light_direction(self.up_axis), 1.0))
+        #: Index in :attr:`lights` of the directional light :meth:`set_light` steers, or None.
+        self.key_light = next((i for i, light in enumerate(self.lights) if isinstance(light, DirectionalLight)), None)
+        self.azimuth, self.elevation = (light_angles(self.lights[self.key_light].direction, self.up)
+                                        if self.key_light is not None else (None, None))
+        self.mm_per_unit = float(mesh.mm_per_unit)
+        self.exposure = exposure
+        self.view_dependent, self.specular, self.roughness = bool(view_dependent), bool(specular), float(roughness)
+        #: Camera position (mm, scan coordinates) the view-dependent layers use; None: not known yet.
+        self.eye = None
+        self.result = None
+        self.solve_seconds = 0.0
+        self.n_solves = 0
+        self.status = ""
+        self._highlight_inputs = None
+        if solve:
+            self.solve()
+
+    # ------------------------------------------------------------------------------------------------
+    # changes; each returns whether the picture changed
+
+    def set_light(self, azimuth, elevation) -> bool:
+        """Move the first directional light to ``azimuth``, ``elevation`` (degrees around ``up``) and solve.
+
+        The new direction is :func:`light_direction` of the angles; its irradiance stays. Returns False
+        (and does nothing) when the angles are the current ones.
+        """
+        from ...scatter.lights import DirectionalLight
+
+        if self.key_light is None:
+            raise InvalidParameterError("the lights hold no directional light to steer; add one (--light-dir X,Y,Z).")
+        azimuth, elevation = float(azimuth), float(elevation)
+        if not (np.isfinite(azimuth) and np.isfinite(elevation) and -90.0 <= elevation <= 90.0):
+            raise InvalidParameterError(f"light angles must be finite with elevation in [-90, 90] degrees, "
+                                        f"got azimuth {azimuth!r}, elevation {elevation!r}.")
+        if (azimuth, elevation) == (self.azimuth, self.elevation):
+            return False
+        self.azimuth, self.elevation = azimuth, elevation
+        lights = list(self.lights)
+        old = lights[self.key_light]
+        lights[self.key_light] = DirectionalLight(light_direction(azimuth, elevation, self.up), old.irradiance_rgb)
+        self.lights = tuple(lights)
+        self.solve()
+        return True
+
+    def set_material(self, material) -> bool:
+        """Change the material (catalogue name, entry or Medium, 1/mm) and solve; False if it is the same."""
+        medium = resolve_medium(material)
+        if medium.describe() == self.medium.describe():
+            return False
+        self.medium = medium
+        self.solve()
+        return True
+
+    def set_model(self, model: str) -> bool:
+        """Change the scattering model (``directional``, ``standard``, ``better``) and solve; False if the same."""
+        from ...scatter.names import MODELS
+
+        if model not in MODELS:
+            raise InvalidParameterError(f"unknown model {model!r}; choose one of {', '.join(MODELS)}.")
+        if model == self.model:
+            return False
+        self.model = model
+        self.solve()
+        return True
+
+    def set_scale(self, mm_per_unit) -> bool:
+        """Size of one unit of the mesh's file in mm: scale the mesh, make a new Scene and solve.
+
+        The points become ``p * mm_per_unit / m0`` with ``m0`` the mesh's own mm per unit; False if the
+        scale is the current one.
+        """
+        mm_per_unit = float(mm_per_unit)
+        if not (np.isfinite(mm_per_unit) and mm_per_unit > 0):
+            raise InvalidParameterError(f"the scale must be a positive number of mm per unit, got {mm_per_unit!r}.")
+        if mm_per_unit == self.mm_per_unit:
+            return False
+        factor = mm_per_unit / float(self.base_mesh.mm_per_unit)
+        mesh = self.base_mesh.replace(points=self.base_mesh.points * factor, mm_per_unit=mm_per_unit)
+        self.mm_per_unit = mm_per_unit
+        self.scene = Scene(mesh, shadows=self.shadows, up=self.up_axis)
+        self.solve()
+        return True
+
+    def set_exposure(self, exposure) -> bool:
+        """Display exposure (linear factor on ``L`` before sRGB): new colours from the same solution, no solve."""
+        exposure = float(exposure)
+        if not (np.isfinite(exposure) and exposure > 0):
+            raise InvalidParameterError(f"exposure must be a positive number, got {exposure!r}.")
+        changed = exposure != self.exposure
+        self.exposure = exposure
+        self.update_status()
+        return changed
+
+    def set_view_dependent(self, on: bool) -> bool:
+        """Show ``T21(eta, n . w_o) B`` (on) or ``T21(eta, 1) B`` (off; docs/physics.md §5.3); no solve."""
+        changed = bool(on) != self.view_dependent
+        self.view_dependent = bool(on)
+        self.update_status()
+        return changed
+
+    def set_specular(self, on: bool) -> bool:
+        """Add (on) or remove the specular highlight (docs/physics.md §5.5); no solve."""
+        changed = bool(on) != self.specular
+        self.specular = bool(on)
+        self.update_status()
+        return changed
+
+    def set_eye(self, eye) -> bool:
+        """Camera position (3 floats, mm, scan coordinates) for the view-dependent layers; no solve.
+
+        Returns True when a view-dependent layer is on and the position moved (the colours change).
+        """
+        eye = tuple(float(v) for v in eye)
+        moved = eye != self.eye
+        self.eye = eye
+        return moved and (self.view_dependent or self.specular)
+
+    def solve_full(self) -> None:
+        """Solve the current state on every vertex of the mesh (slow; see the module docstring)."""
+        self.solve("full")
+
+    def solve(self, resolution=None) -> None:
+        """Solve the current settings on :attr:`scene`, at ``resolution`` (default: the state's own).
+
+        Sets :attr:`result`, :attr:`solve_seconds` (wall time) and :attr:`status`, counts
+        :attr:`n_solves`, and fixes the exposure from the first solve when none was given.
+        """
+        if resolution is None:
+            resolution = (interactive_edge_length(self.scene.mesh, self.medium) if self.resolution == "interactive"
+                          else self.resolution)
+        start = time.perf_counter()
+        self.result = self.scene.shade(self.medium, self.lights, model=self.model, method=self.method, tol=self.tol,
+                                       resolution=resolution, exposure=self.exposure, per_direction=self.per_direction,
+                                       **self.limits)
+        self.solve_seconds = time.perf_counter() - start
+        self.n_solves += 1
+        if self.exposure is None:
+            self.exposure = self.result.exposure
+        self._highlight_inputs = None
+        self.update_status()
+
+    # ------------------------------------------------------------------------------------------------
+    # what is shown
+
+    def radiance_shown(self, eye=None) -> np.ndarray:
+        """Linear radiance per vertex as displayed, W/(m² sr), (n, 3): ``T21 B`` plus the layers that are on.
+
+        ``T21(eta, 1) B`` (the bake's), or ``T21(eta, n . w_o) B`` with the view-dependent layer, plus
+        the GGX highlight with the specular one (docs/physics.md §5.3, §5.5). ``eye`` (camera position,
+        mm) is kept as :meth:`set_eye` does; with no camera position known yet the layers are left out.
+        """
+        from ...scatter.outgoing import specular_radiance, subsurface_radiance, view_directions
+
+        if eye is not None:
+            self.set_eye(eye)
+        result = self.result
+        if not (self.view_dependent or self.specular) or self.eye is None:
+            return result.radiance
+        w_o = view_directions(self.base_mesh.points, np.asarray(self.eye, dtype=np.float64))
+        radiance = subsurface_radiance(result.B, result.normals, w_o, self.medium.eta) if self.view_dependent \
+            else result.radiance.copy()
+        if self.specular:
+            for vertices, direction, irradiance in self._highlights():
+                radiance[vertices] += specular_radiance(result.normals[vertices], w_o[vertices], direction, irradiance,
+                                                        self.medium.eta, self.roughness)
+        return radiance
+
+    def colors(self, eye=None) -> np.ndarray:
+        """Display colours per vertex, (n, 3) uint8: ``sRGB(exposure L)`` of :meth:`radiance_shown`."""
+        colors, _ = display_colors(self.radiance_shown(eye), self.exposure)
+        return colors
+
+    def update_status(self) -> None:
+        """Write :attr:`status` from the current state (three lines: material and size, light, last solve)."""
+        result = self.result
+        if result is None:  # nothing solved yet
+            return
+        size = float(self.scene.mesh.extent)
+        light = ("" if self.azimuth is None else
+                 f"light azimuth {self.azimuth:.0f} deg, elevation {self.elevation:.0f} deg; ")
+        tolerance = "exact sum" if self.method == "exact" else f"tolerance {self.tol:.3g}"
+        self.status = (f"{self.medium.name}, {self.model} dipole, {size:.3g} mm ({self.mm_per_unit:.4g} mm per unit), "
+                       f"up {self.up_axis}\n"
+                       f"{light}exposure {self.exposure:.3g}\n"
+                       f"solved in {self.solve_seconds:.2f} s: {self.method}, {tolerance}, "
+                       f"{result.stats['solver_vertices']} of {result.stats['vertices']} vertices")
+
+    def add_note(self, line: str) -> None:
+        """Append one line to :attr:`status` (it replaces an earlier note and lasts until the next change)."""
+        self.update_status()
+        self.status += f"\n{line}"
+
+    # ------------------------------------------------------------------------------------------------
+    # output
+
+    @property
+    def file_stem(self) -> str:
+        """Stem of saved files: ``<name>_<material>_<model>``."""
+        return f"{Path(self.name).stem}_{self.medium.name}_{self.model}"
+
+    def write_bake(self, path) -> Path:
+        """Write the current result as a baked PLY with colours at the current exposure; returns the path.
+
+        A bake holds the radiance toward the normal, ``T21(eta, 1) B`` (docs/physics.md §5.3): it does
+        not depend on the view.
+        """
+        result = self.result
+        colors, _ = display_colors(result.radiance, self.exposure)
+        return write_result(dataclasses.replace(result, colors=colors, exposure=self.exposure,
+                                                metadata=dict(result.metadata, exposure=self.exposure)), path)
+
+    def _highlights(self) -> list:
+        """Per directional sample: (vertices it reaches, direction, irradiance on the surface E cos V)."""
+        from ...scatter.fresnel import fresnel_transmittance
+
+        if self._highlight_inputs is None:
+            incident, _ = self.scene.incident_on_mesh(self.medium, self.lights, per_direction=True)
+            normals = self.result.normals
+            inputs = []
+            for part in incident.contributions:
+                if part.direction is None:  # a point light: no highlight
+                    continue
+                cos_i = normals[part.vertices] @ part.direction
+                # phi = T12 E cos V (irradiance.py), so E cos V = phi / T12
+                inputs.append((part.vertices, part.direction,
+                               part.phi_rgb / fresnel_transmittance(cos_i, self.medium.eta)[:, None]))
+            self._highlight_inputs = inputs
+        return self._highlight_inputs
