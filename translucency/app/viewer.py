@@ -269,10 +269,9 @@ class Viewer:
 
     def set_model(self, model: str) -> None:
         """Change the scattering model (``directional``, ``standard``, ``better``) and solve."""
-        from ..scatter.names import MODELS
+        from ..scatter.names import check_model
 
-        if model not in MODELS:
-            raise InvalidParameterError(f"unknown model {model!r}; choose one of {', '.join(MODELS)}.")
+        check_model(model)
         if model == self.model:
             return
         self.model = model

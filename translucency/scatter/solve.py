@@ -46,7 +46,7 @@ from ..errors import BudgetError, InvalidParameterError, option
 from ..geometry.measure import barycentric_vertex_areas, mean_edge_length, triangle_areas
 from ..geometry.morton import morton_order
 from . import budget, cutoff, hierarchy, kernels, nearfield
-from .names import DEFAULT_MODEL, METHODS, MODELS
+from .names import DEFAULT_MODEL, METHODS, MODELS, check_method, check_model, check_tol
 from .medium import Medium
 
 __all__ = ["SurfaceGeometry", "Solution", "solve", "METHODS", "MODELS"]
@@ -338,12 +338,9 @@ def solve(
     timings: dict[str, float] = {}
     stats: dict[str, object] = {}
     report = progress or (lambda stage, fraction: None)
-    if model not in kernels.MODELS:
-        raise InvalidParameterError(f"unknown model {model!r}; choose one of {', '.join(MODELS)}.")
-    if method not in METHODS:
-        raise InvalidParameterError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}.")
-    if not (np.isfinite(tol) and 0 < tol < 1):
-        raise InvalidParameterError(f"tol must be a relative error in (0, 1), got {tol!r}.")
+    check_model(model)
+    check_method(method)
+    check_tol(tol)
     budget.check_limits(memory_limit, time_limit)
     n = geometry.n_vertices
     phi = _as_array(phi, np.float64, (n, medium.n_channels), "phi")
