@@ -595,7 +595,7 @@ def _non_manifold_counts(triangles: np.ndarray, n: int) -> tuple[int, int]:
 
 
 def _repair_non_manifold(points, triangles, origin, input_points, counts):
-    from ._pymeshlab import import_pymeshlab
+    from .meshlab import import_pymeshlab
 
     bad_edges, bad_vertices = _non_manifold_counts(triangles, len(points))
     if bad_edges == 0 and bad_vertices == 0:
@@ -649,7 +649,7 @@ def _repair_zero_area_faces(points, triangles, origin, input_points, zero):
     the same triangle again). It needs a manifold mesh; the triangles it cannot fix are removed.
     """
     if _is_manifold(triangles, len(points)):
-        from ._pymeshlab import import_pymeshlab
+        from .meshlab import import_pymeshlab
 
         pymeshlab = import_pymeshlab()
         mesh_set = _to_meshset(pymeshlab, points, triangles, origin)
@@ -666,7 +666,7 @@ def _repair_zero_area_faces(points, triangles, origin, input_points, zero):
 
 
 def _close_holes(points, triangles, origin, input_points, max_hole_edges, counts):
-    from ._pymeshlab import import_pymeshlab
+    from .meshlab import import_pymeshlab
 
     edges, edge_of_corner = unique_edges(triangles)
     faces_per_edge = np.bincount(edge_of_corner.ravel(), minlength=len(edges))
