@@ -97,7 +97,7 @@ def split_longest_edges(points, triangles, vertices):
     around it are split. The threshold is the edge length that as many edges exceed as vertices are
     missing. Returns ``(points, triangles, share of the edges split)``.
     """
-    from translucency.io._pymeshlab import import_pymeshlab
+    from translucency.io.meshlab import import_pymeshlab
 
     pymeshlab = import_pymeshlab()
     edges = np.unique(np.sort(np.concatenate([triangles[:, [0, 1]], triangles[:, [1, 2]], triangles[:, [2, 0]]]), axis=1),

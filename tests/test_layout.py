@@ -1,6 +1,8 @@
 """The package's layout: which module may import which, read from the source with ``ast``.
 
-Every ``import`` and ``from ... import`` counts, at module level or inside a function.
+Every ``import`` and ``from ... import`` counts, at module level or inside a function. The tests and the
+benchmarks are read too, for one rule: no module whose name starts with an underscore is imported from
+anywhere but itself.
 """
 
 from __future__ import annotations
@@ -10,7 +12,8 @@ from pathlib import Path
 
 import pytest
 
-PACKAGE = Path(__file__).resolve().parents[1] / "translucency"
+ROOT = Path(__file__).resolve().parents[1]
+PACKAGE = ROOT / "translucency"
 
 
 def _module_name(path: Path) -> str:
@@ -84,6 +87,45 @@ def test_geometry_imports_neither_io_scatter_nor_app():
 def test_no_private_name_is_imported_from_another_module():
     private = [f"{m}:{line} imports {t}.{n}" for m, t, names, line in EDGES for n in names
                if n.startswith("_") and not n.startswith("__") and t != m]
+    assert not private, private
+
+
+def _private_module(module: str) -> bool:
+    """Whether a module's own name, or a package's above it, starts with one underscore (``__init__`` does not)."""
+    return any(part.startswith("_") and not part.startswith("__") for part in module.split("."))
+
+
+def test_a_private_module_is_recognised():
+    assert _private_module("translucency.io._pymeshlab") and _private_module("translucency._lib.kernels")
+    assert not _private_module("translucency.io.meshlab") and not _private_module("translucency.__main__")
+
+
+def test_no_private_module_is_imported_from_another_module():
+    private = [f"{m}:{line} imports {t}" for m, t, _, line in EDGES if _private_module(t) and t != m]
+    assert not private, private
+
+
+def _outside_imports():
+    """``(file, line, module)`` of every import of the package in the tests and the benchmarks
+    (``from translucency.x import y`` names ``translucency.x.y`` too where that is a module)."""
+    for path in sorted((ROOT / "tests").rglob("*.py")) + sorted((ROOT / "bench").rglob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.Import):
+                targets = [alias.name for alias in node.names]
+            elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
+                targets = [node.module] + [f"{node.module}.{a.name}" for a in node.names
+                                           if f"{node.module}.{a.name}" in MODULES]
+            else:
+                continue
+            for target in targets:
+                if target == "translucency" or target.startswith("translucency."):
+                    yield path.relative_to(ROOT), node.lineno, target
+
+
+def test_tests_and_benchmarks_import_no_private_module():
+    imports = list(_outside_imports())
+    assert len(imports) > 100
+    private = [f"{path}:{line} imports {t}" for path, line, t in imports if _private_module(t)]
     assert not private, private
 
 

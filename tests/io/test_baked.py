@@ -105,7 +105,7 @@ def test_round_trip_with_trimesh(bake):
 
 
 def test_round_trip_with_pymeshlab(bake):
-    from translucency.io._pymeshlab import import_pymeshlab
+    from translucency.io.meshlab import import_pymeshlab
 
     path, mesh, values = bake
     mesh_set = import_pymeshlab().MeshSet()

@@ -172,7 +172,7 @@ def test_vtu_surface_is_extracted(tmp_path):
 
 @pytest.mark.parametrize("suffix", [".wrl", ".x3d", ".dae", ".3ds", ".ctm"])
 def test_pymeshlab_formats(tmp_path, suffix):
-    from translucency.io._pymeshlab import import_pymeshlab
+    from translucency.io.meshlab import import_pymeshlab
 
     mesh_set = import_pymeshlab().MeshSet()
     mesh_set.create_sphere(subdiv=2)

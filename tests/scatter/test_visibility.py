@@ -1,11 +1,11 @@
-"""Shadow rays: analytic shadows of a box, no self-hits, segments, threads, validation."""
+"""Shadow rays: analytic shadows of a box, no self-hits, segments, threads, validation, the cache."""
 
 import numpy as np
 import pytest
 import trimesh
 
 from translucency.errors import InvalidParameterError, MeshError
-from translucency.scatter.visibility import RELATIVE_OFFSET, Occluder
+from translucency.scatter.visibility import RELATIVE_OFFSET, Occluder, VisibilityCache
 
 BOX_CENTRE = np.array([1.0, -2.0, 30.0])
 BOX_EXTENTS = np.array([12.0, 9.0, 4.0])
@@ -113,6 +113,22 @@ def test_threads_give_the_same_answer_as_one():
 def test_no_triangles_occlude_nothing():
     occluder = Occluder(np.zeros((3, 3)), np.zeros((0, 3), dtype=np.int64))
     assert occluder.visible(np.zeros((4, 3)), np.ones((4, 3)), (0, 0, 1)).all()
+
+
+def test_cache_keeps_the_most_recent_scenes_and_visibility():
+    cache = VisibilityCache(max_entries=2, max_scenes=1)
+    points, triangles, _ = sphere(subdivisions=1)
+    first, reused = cache.occluder(points, triangles)
+    assert not reused and cache.occluder(points, triangles) == (first, True)
+    other, reused = cache.occluder(points + 1.0, triangles)
+    assert not reused and other is not first
+    assert cache.occluder(points, triangles)[1] is False  # one scene kept: the first was dropped
+    cache.put("a", [True, False])
+    cache.put("b", [True])
+    assert cache.get("a").tolist() == [True, False]  # "a" is now the most recent
+    cache.put("c", [False])
+    assert cache.get("b") is None and len(cache) == 2 and not cache.get("c").flags.writeable
+    assert (cache.hits, cache.misses) == (2, 1)
 
 
 @pytest.mark.parametrize(

@@ -166,7 +166,7 @@ class Scene:
 
     def __init__(self, mesh, *, shadows: bool = True, up: str = "auto"):
         from ..io.upright import parse_up
-        from ..scatter.irradiance import VisibilityCache
+        from ..scatter.visibility import VisibilityCache
 
         self.mesh = mesh
         self.shadows = bool(shadows)

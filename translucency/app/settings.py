@@ -5,7 +5,7 @@ baking (:class:`~translucency.app.bake.BakeSettings` adds the files' unit and th
 ``compare`` build; it is validated on construction, with one sentence that names the setting as the
 user wrote it (``--tol`` on the command line, ``tol`` in Python). :data:`HELP` holds the help text of
 each field, from which the parser's ``--help`` is written; the bake's metadata records the same fields.
-The model and method names and their defaults are :mod:`translucency.scatter.names`'.
+The model and method names, their defaults and their checks are :mod:`translucency.scatter.names`'.
 
 ========================= ============================================================== ==========
 field                     meaning                                                        unit
@@ -33,7 +33,7 @@ from dataclasses import dataclass
 
 from ..errors import InvalidParameterError, setting_name
 from ..scatter.budget import DEFAULT_TIME_LIMIT_S
-from ..scatter.names import DEFAULT_METHOD, DEFAULT_MODEL, DEFAULT_TOL, METHODS, MODELS
+from ..scatter.names import DEFAULT_METHOD, DEFAULT_MODEL, DEFAULT_TOL, check_method, check_model, check_tol
 
 __all__ = ["ShadeSettings", "HELP", "DEFAULT_MATERIAL", "RESOLUTIONS", "parse_resolution", "resolve_medium"]
 
@@ -127,12 +127,9 @@ class ShadeSettings:
         from ..scatter.budget import check_limits
 
         object.__setattr__(self, "material", resolve_medium(self.material))
-        if self.model not in MODELS:
-            raise InvalidParameterError(f"unknown model {self.model!r}; choose one of {', '.join(MODELS)}.")
-        if self.method not in METHODS:
-            raise InvalidParameterError(f"unknown method {self.method!r}; choose one of {', '.join(METHODS)}.")
-        if not (_positive(self.tol) and self.tol < 1):
-            raise InvalidParameterError(f"{setting_name('tol')} must be a relative error in (0, 1), got {self.tol!r}.")
+        check_model(self.model)
+        check_method(self.method)
+        check_tol(self.tol)
         object.__setattr__(self, "resolution", parse_resolution(self.resolution))
         if not (self.exposure is None or _positive(self.exposure)):
             raise InvalidParameterError(f"{setting_name('exposure')} must be a positive number, got {self.exposure!r}.")

@@ -14,6 +14,7 @@ triangulate          polygons and triangle strips to triangle lists
 defects              counts of mesh defects (what repair has to fix)
 clean                scan repair with a report of what changed
 decimate             proxy meshes and the mapping of proxy values back to the full mesh
+meshlab              pymeshlab, imported once with its OpenGL-dependent filters checked
 baked                baked PLY output and input, atomic, with every setting in the header
 save                 any mesh to a mesh file, atomic, never over its source
 ==================== ==================================================================

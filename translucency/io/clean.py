@@ -295,132 +295,40 @@ def clean_arrays(
     """
     started = time.perf_counter()
     points, triangles = validate_mesh_arrays(points, triangles)
-    min_island_fraction = float(min_island_fraction)
-    if not (0.0 <= min_island_fraction < 1.0):
-        raise InvalidParameterError(
-            f"min_island_fraction is {min_island_fraction}; pass a fraction in [0, 1), e.g. 0.01."
-        )
-    if int(max_hole_edges) != max_hole_edges or max_hole_edges < 0:
-        raise InvalidParameterError(
-            f"max_hole_edges is {max_hole_edges!r}; pass a whole number of edges >= 0, e.g. 100."
-        )
-    if int(smooth_normals) != smooth_normals or smooth_normals < 0:
-        raise InvalidParameterError(f"smooth_normals is {smooth_normals!r}; pass a number of iterations >= 0.")
-    settings = dict(
-        merge_duplicate_vertices=bool(merge_duplicate_vertices),
-        remove_degenerate_faces=bool(remove_degenerate_faces),
-        repair_non_manifold=bool(repair_non_manifold),
-        min_island_fraction=min_island_fraction,
-        max_hole_edges=int(max_hole_edges),
-        orient_outward=bool(orient_outward),
-        smooth_normals=int(smooth_normals),
-    )
+    settings = _clean_settings(merge_duplicate_vertices, remove_degenerate_faces, repair_non_manifold,
+                               min_island_fraction, max_hole_edges, orient_outward, smooth_normals)
     before = find_defects(points, triangles)
-    counts: dict[str, int] = {}
-    origin = np.arange(len(points), dtype=np.int64)
-    input_points, validated_triangles = points, triangles
+    repair = _Repair(points, triangles, np.arange(len(points), dtype=np.int64), points, triangles)
+    if settings["merge_duplicate_vertices"]:
+        _merge_vertices(repair, before)  # 1
+    if settings["remove_degenerate_faces"]:
+        _remove_null_and_duplicate_faces(repair, before)  # 2-3
+    if settings["repair_non_manifold"]:
+        _make_manifold(repair, before)  # 5-6
+    if settings["remove_degenerate_faces"]:
+        _remove_zero_area_faces(repair, before)  # 4, after 5-6: collapsing them needs a manifold mesh
+    if settings["min_island_fraction"] > 0:
+        _remove_small_islands(repair, before, settings["min_island_fraction"])  # 7
+    if settings["orient_outward"]:
+        _orient_coherently(repair, before)  # 8 (hole filling follows the orientation of the border)
+    if settings["max_hole_edges"] > 0:
+        _fill_holes(repair, before, settings["max_hole_edges"], settings["remove_degenerate_faces"])  # 9
+    if settings["orient_outward"]:
+        _orient_outward(repair)  # 10
+    _remove_unreferenced_vertices(repair)  # 11
+    normals = smooth_vertex_normals(repair.points, repair.triangles, iterations=settings["smooth_normals"])  # 12
+    repair.counts["normal_smoothing_iterations"] = settings["smooth_normals"]
 
-    def pristine():
-        """Whether the arrays are still the input's: then ``before`` tells which steps find nothing."""
-        return points is input_points and triangles is validated_triangles
-
-    # 1. duplicate vertices
-    if merge_duplicate_vertices and before.duplicate_vertices:
-        points, triangles, origin, counts["duplicate_vertices_merged"] = _merge_duplicate_vertices(
-            points, triangles, origin
-        )
-    elif merge_duplicate_vertices:
-        counts["duplicate_vertices_merged"] = 0
-
-    # 2-3. null and duplicate faces
-    if remove_degenerate_faces and pristine() and before.null_faces == 0 and before.duplicate_faces == 0:
-        counts["null_faces_removed"] = counts["duplicate_faces_removed"] = 0
-    elif remove_degenerate_faces:
-        null = (
-            (triangles[:, 0] == triangles[:, 1])
-            | (triangles[:, 1] == triangles[:, 2])
-            | (triangles[:, 0] == triangles[:, 2])
-        )
-        triangles = triangles[~null]
-        counts["null_faces_removed"] = int(np.count_nonzero(null))
-        _, first = np.unique(triangle_keys(triangles, len(points)), return_index=True)
-        counts["duplicate_faces_removed"] = len(triangles) - len(first)
-        triangles = triangles[np.sort(first)]
-        _require_triangles(triangles, "removing degenerate faces")
-
-    # 5-6. non-manifold edges and vertices
-    if repair_non_manifold and not (pristine() and before.non_manifold_edges == 0 and before.non_manifold_vertices == 0):
-        points, triangles, origin = _repair_non_manifold(points, triangles, origin, input_points, counts)
-
-    # 4. zero-area faces (after 5-6: collapsing them needs a manifold mesh)
-    if remove_degenerate_faces and not (pristine() and before.zero_area_faces == 0):
-        zero = zero_area_mask(points, triangles)
-        if zero.any():
-            points, triangles, origin = _repair_zero_area_faces(points, triangles, origin, input_points, zero)
-            counts["zero_area_faces_removed"] = int(np.count_nonzero(zero))
-            _require_triangles(triangles, "removing zero-area faces")
-
-    # 7. small islands
-    if min_island_fraction > 0 and not (pristine() and before.components <= 1):
-        count, component = face_components(triangles)
-        if count > 1:
-            area = np.bincount(component, weights=triangle_areas(points, triangles), minlength=count)
-            small = area < min_island_fraction * area.max()
-            counts["islands_removed"] = int(np.count_nonzero(small))
-            keep = ~small[component]
-            counts["island_faces_removed"] = int(np.count_nonzero(~keep))
-            triangles = triangles[keep]
-
-    # 8. coherent orientation (hole filling follows the orientation of the border)
-    non_orientable = 0
-    if orient_outward and pristine() and before.inconsistent_edges == 0 and before.non_manifold_edges == 0:
-        counts["faces_flipped_coherent"] = 0  # every edge already runs both ways
-    elif orient_outward:
-        flip, non_orientable = coherent_orientation(triangles)
-        triangles = flip_triangles(triangles, flip)
-        counts["faces_flipped_coherent"] = int(np.count_nonzero(flip))
-
-    # 9. holes (a patch over a border with collinear edges can hold zero-area faces: repaired too)
-    if max_hole_edges > 0 and not (pristine() and before.boundary_edges == 0):
-        faces_before = len(triangles)
-        points, triangles, origin = _close_holes(points, triangles, origin, input_points, int(max_hole_edges), counts)
-        if remove_degenerate_faces and counts.get("holes_closed", 0):
-            zero = zero_area_mask(points, triangles)
-            if zero.any():
-                points, triangles, origin = _repair_zero_area_faces(points, triangles, origin, input_points, zero)
-        counts["hole_faces_added"] = len(triangles) - faces_before
-
-    # 10. coherent again (when holes were closed) and outward
-    if orient_outward:
-        if counts.get("holes_closed", 0):
-            flip, non_orientable = coherent_orientation(triangles)
-            triangles = flip_triangles(triangles, flip)
-            counts["faces_flipped_coherent"] = counts.get("faces_flipped_coherent", 0) + int(np.count_nonzero(flip))
-        flip, components_flipped = outward_flips(points, triangles)
-        triangles = flip_triangles(triangles, flip)
-        counts["components_flipped_outward"] = components_flipped
-        counts["faces_flipped_outward"] = int(np.count_nonzero(flip))
-
-    # 11. unreferenced vertices
-    used = np.zeros(len(points), dtype=bool)
-    used[triangles.ravel()] = True
-    counts["unreferenced_vertices_removed"] = int(np.count_nonzero(~used))
-    new_index = np.cumsum(used) - 1
-    points, origin, triangles = points[used], origin[used], new_index[triangles]
-
-    # 12. normals
-    normals = smooth_vertex_normals(points, triangles, iterations=int(smooth_normals))
-    counts["normal_smoothing_iterations"] = int(smooth_normals)
-
-    unchanged = points.shape == input_points.shape and np.array_equal(triangles, validated_triangles)
+    points, triangles, origin = repair.points, repair.triangles, repair.origin
+    unchanged = points.shape == repair.input_points.shape and np.array_equal(triangles, repair.input_triangles)
     after = before if unchanged else find_defects(points, triangles)
     report = CleanReport(
         before=before,
         after=after,
-        non_orientable_components=int(non_orientable),
+        non_orientable_components=int(repair.non_orientable),
         settings=settings,
         seconds=time.perf_counter() - started,
-        **counts,
+        **repair.counts,
     )
     return points, triangles, origin, normals, report
 
@@ -463,6 +371,175 @@ def smooth_vertex_normals(points, triangles, iterations: int = 1) -> np.ndarray:
 
 
 # --------------------------------------------------------------------------------------------------
+# The steps of clean_arrays, in the order it runs them (module docstring's table).
+
+
+def _clean_settings(merge_duplicate_vertices, remove_degenerate_faces, repair_non_manifold, min_island_fraction,
+                    max_hole_edges, orient_outward, smooth_normals) -> dict:
+    """The options of :func:`clean_arrays`, checked, as the report records them."""
+    min_island_fraction = float(min_island_fraction)
+    if not (0.0 <= min_island_fraction < 1.0):
+        raise InvalidParameterError(
+            f"min_island_fraction is {min_island_fraction}; pass a fraction in [0, 1), e.g. 0.01."
+        )
+    if int(max_hole_edges) != max_hole_edges or max_hole_edges < 0:
+        raise InvalidParameterError(
+            f"max_hole_edges is {max_hole_edges!r}; pass a whole number of edges >= 0, e.g. 100."
+        )
+    if int(smooth_normals) != smooth_normals or smooth_normals < 0:
+        raise InvalidParameterError(f"smooth_normals is {smooth_normals!r}; pass a number of iterations >= 0.")
+    return dict(
+        merge_duplicate_vertices=bool(merge_duplicate_vertices),
+        remove_degenerate_faces=bool(remove_degenerate_faces),
+        repair_non_manifold=bool(repair_non_manifold),
+        min_island_fraction=min_island_fraction,
+        max_hole_edges=int(max_hole_edges),
+        orient_outward=bool(orient_outward),
+        smooth_normals=int(smooth_normals),
+    )
+
+
+@dataclasses.dataclass
+class _Repair:
+    """The mesh as the repair steps leave it, with what they counted.
+
+    ``origin`` is, for each current vertex, the input vertex it comes from; ``counts`` become the
+    :class:`CleanReport`'s fields; ``non_orientable`` the components no flip makes coherent.
+    """
+
+    points: np.ndarray
+    triangles: np.ndarray
+    origin: np.ndarray
+    input_points: np.ndarray
+    input_triangles: np.ndarray
+    counts: dict = dataclasses.field(default_factory=dict)
+    non_orientable: int = 0
+
+    def pristine(self) -> bool:
+        """Whether the arrays are still the input's: then the defects found before tell which steps find nothing."""
+        return self.points is self.input_points and self.triangles is self.input_triangles
+
+    def replace(self, points, triangles, origin) -> None:
+        """Take the arrays a step returns."""
+        self.points, self.triangles, self.origin = points, triangles, origin
+
+
+def _merge_vertices(repair: _Repair, before: MeshDefects) -> None:
+    """Step 1: merge vertices at exactly the same position."""
+    if not before.duplicate_vertices:
+        repair.counts["duplicate_vertices_merged"] = 0
+        return
+    points, triangles, origin, merged = _merge_duplicate_vertices(repair.points, repair.triangles, repair.origin)
+    repair.replace(points, triangles, origin)
+    repair.counts["duplicate_vertices_merged"] = merged
+
+
+def _remove_null_and_duplicate_faces(repair: _Repair, before: MeshDefects) -> None:
+    """Steps 2-3: remove triangles with a repeated index, then those on the same vertices as an earlier one."""
+    counts = repair.counts
+    if repair.pristine() and before.null_faces == 0 and before.duplicate_faces == 0:
+        counts["null_faces_removed"] = counts["duplicate_faces_removed"] = 0
+        return
+    triangles = repair.triangles
+    null = (
+        (triangles[:, 0] == triangles[:, 1])
+        | (triangles[:, 1] == triangles[:, 2])
+        | (triangles[:, 0] == triangles[:, 2])
+    )
+    triangles = triangles[~null]
+    counts["null_faces_removed"] = int(np.count_nonzero(null))
+    _, first = np.unique(triangle_keys(triangles, len(repair.points)), return_index=True)
+    counts["duplicate_faces_removed"] = len(triangles) - len(first)
+    repair.triangles = triangles[np.sort(first)]
+    _require_triangles(repair.triangles, "removing degenerate faces")
+
+
+def _make_manifold(repair: _Repair, before: MeshDefects) -> None:
+    """Steps 5-6: repair non-manifold edges and vertices (pymeshlab)."""
+    if repair.pristine() and before.non_manifold_edges == 0 and before.non_manifold_vertices == 0:
+        return
+    repair.replace(*_repair_non_manifold(repair.points, repair.triangles, repair.origin, repair.input_points,
+                                         repair.counts))
+
+
+def _remove_zero_area_faces(repair: _Repair, before: MeshDefects) -> None:
+    """Step 4: collapse or remove triangles with collinear corners."""
+    if repair.pristine() and before.zero_area_faces == 0:
+        return
+    zero = zero_area_mask(repair.points, repair.triangles)
+    if zero.any():
+        repair.replace(*_repair_zero_area_faces(repair.points, repair.triangles, repair.origin, repair.input_points,
+                                                zero))
+        repair.counts["zero_area_faces_removed"] = int(np.count_nonzero(zero))
+        _require_triangles(repair.triangles, "removing zero-area faces")
+
+
+def _remove_small_islands(repair: _Repair, before: MeshDefects, min_island_fraction: float) -> None:
+    """Step 7: remove components with less than ``min_island_fraction`` of the largest one's area."""
+    if repair.pristine() and before.components <= 1:
+        return
+    count, component = face_components(repair.triangles)
+    if count > 1:
+        area = np.bincount(component, weights=triangle_areas(repair.points, repair.triangles), minlength=count)
+        small = area < min_island_fraction * area.max()
+        repair.counts["islands_removed"] = int(np.count_nonzero(small))
+        keep = ~small[component]
+        repair.counts["island_faces_removed"] = int(np.count_nonzero(~keep))
+        repair.triangles = repair.triangles[keep]
+
+
+def _orient_coherently(repair: _Repair, before: MeshDefects) -> None:
+    """Step 8: flip triangles so that every edge runs both ways (:func:`coherent_orientation`)."""
+    if repair.pristine() and before.inconsistent_edges == 0 and before.non_manifold_edges == 0:
+        repair.counts["faces_flipped_coherent"] = 0  # every edge already runs both ways
+        return
+    flip, repair.non_orientable = coherent_orientation(repair.triangles)
+    repair.triangles = flip_triangles(repair.triangles, flip)
+    repair.counts["faces_flipped_coherent"] = int(np.count_nonzero(flip))
+
+
+def _fill_holes(repair: _Repair, before: MeshDefects, max_hole_edges: int, remove_degenerate_faces: bool) -> None:
+    """Step 9: close boundary loops of at most ``max_hole_edges`` edges (a patch over a border with
+    collinear edges can hold zero-area faces: repaired too)."""
+    if repair.pristine() and before.boundary_edges == 0:
+        return
+    faces_before = len(repair.triangles)
+    repair.replace(*_close_holes(repair.points, repair.triangles, repair.origin, repair.input_points,
+                                 int(max_hole_edges), repair.counts))
+    if remove_degenerate_faces and repair.counts.get("holes_closed", 0):
+        zero = zero_area_mask(repair.points, repair.triangles)
+        if zero.any():
+            repair.replace(*_repair_zero_area_faces(repair.points, repair.triangles, repair.origin,
+                                                    repair.input_points, zero))
+    repair.counts["hole_faces_added"] = len(repair.triangles) - faces_before
+
+
+def _orient_outward(repair: _Repair) -> None:
+    """Step 10: coherent again (when holes were closed), then every component flipped to face outward."""
+    counts = repair.counts
+    if counts.get("holes_closed", 0):
+        flip, repair.non_orientable = coherent_orientation(repair.triangles)
+        repair.triangles = flip_triangles(repair.triangles, flip)
+        counts["faces_flipped_coherent"] = counts.get("faces_flipped_coherent", 0) + int(np.count_nonzero(flip))
+    flip, components_flipped = outward_flips(repair.points, repair.triangles)
+    repair.triangles = flip_triangles(repair.triangles, flip)
+    counts["components_flipped_outward"] = components_flipped
+    counts["faces_flipped_outward"] = int(np.count_nonzero(flip))
+
+
+def _remove_unreferenced_vertices(repair: _Repair) -> None:
+    """Step 11: drop the vertices no triangle uses."""
+    used = np.zeros(len(repair.points), dtype=bool)
+    used[repair.triangles.ravel()] = True
+    repair.counts["unreferenced_vertices_removed"] = int(np.count_nonzero(~used))
+    new_index = np.cumsum(used) - 1
+    repair.replace(repair.points[used], new_index[repair.triangles], repair.origin[used])
+
+
+# --------------------------------------------------------------------------------------------------
+# Helpers of the steps.
+
+
 def _require_triangles(triangles: np.ndarray, step: str) -> None:
     if len(triangles) == 0:
         raise MeshError(f"no triangle is left after {step}; the mesh is entirely degenerate, check the file.")
@@ -518,7 +595,7 @@ def _non_manifold_counts(triangles: np.ndarray, n: int) -> tuple[int, int]:
 
 
 def _repair_non_manifold(points, triangles, origin, input_points, counts):
-    from ._pymeshlab import import_pymeshlab
+    from .meshlab import import_pymeshlab
 
     bad_edges, bad_vertices = _non_manifold_counts(triangles, len(points))
     if bad_edges == 0 and bad_vertices == 0:
@@ -572,7 +649,7 @@ def _repair_zero_area_faces(points, triangles, origin, input_points, zero):
     the same triangle again). It needs a manifold mesh; the triangles it cannot fix are removed.
     """
     if _is_manifold(triangles, len(points)):
-        from ._pymeshlab import import_pymeshlab
+        from .meshlab import import_pymeshlab
 
         pymeshlab = import_pymeshlab()
         mesh_set = _to_meshset(pymeshlab, points, triangles, origin)
@@ -589,7 +666,7 @@ def _repair_zero_area_faces(points, triangles, origin, input_points, zero):
 
 
 def _close_holes(points, triangles, origin, input_points, max_hole_edges, counts):
-    from ._pymeshlab import import_pymeshlab
+    from .meshlab import import_pymeshlab
 
     edges, edge_of_corner = unique_edges(triangles)
     faces_per_edge = np.bincount(edge_of_corner.ravel(), minlength=len(edges))

@@ -130,7 +130,7 @@ def simplify_arrays(
         except (ValueError, RuntimeError) as exc:
             raise MeshError(f"fast-simplification failed on the mesh ({exc}); try method='pymeshlab'.") from exc
     else:
-        from ._pymeshlab import import_pymeshlab
+        from .meshlab import import_pymeshlab
 
         pymeshlab = import_pymeshlab()
         mesh_set = pymeshlab.MeshSet()

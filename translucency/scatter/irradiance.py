@@ -15,15 +15,16 @@ direction (its distance ``d_v`` does not depend on it), so feeding it ``w12_mean
 per-sample sum exactly (channel by channel when all lights share one colour, before the clamp at 0);
 the real-source term is not (``d_r`` depends on the direction), so the unit ``w12`` is an
 approximation there. ``per_direction=True`` keeps every sample's contribution
-(:class:`LightContribution`) for per-direction summation, and :func:`aggregation_error` measures the
+(:class:`LightContribution`) for per-direction summation; ``bench/aggregation.py`` measures the
 difference on a mesh with the reference dipole.
 
 Units: with ``E`` in W/m² and areas in mm², ``phi`` is in W/m² and ``Phi`` in W mm²/m² (= 1e-6 W);
 ``S_d`` (1/(mm² sr)) times ``Phi`` is then in W/(m² sr) (see :mod:`translucency.scatter.lights`).
 
-Visibility is optional (``occluder`` or ``triangles``); with a :class:`VisibilityCache` the Embree
-scene and every sample's visibility are kept, keyed by mesh, ray origins and light geometry, so a
-material change (only ``eta`` and the coefficients differ) traces no ray again.
+Visibility is optional (``occluder`` or ``triangles``); with a
+:class:`~translucency.scatter.visibility.VisibilityCache` the Embree scene and every sample's
+visibility are kept, keyed by mesh, ray origins and light geometry, so a material change (only
+``eta`` and the coefficients differ) traces no ray again.
 
 ========== ============================================================== ============
 symbol     meaning                                                        unit
@@ -47,7 +48,6 @@ eta        relative index of refraction n_inside / n_outside              1
 from __future__ import annotations
 
 import time
-from collections import OrderedDict
 from dataclasses import asdict, dataclass, field
 
 import numpy as np
@@ -55,15 +55,13 @@ import numpy as np
 from ..errors import InvalidParameterError
 from .fresnel import fresnel_transmittance, refract
 from .lights import POINT_LIGHT_MIN_DISTANCE_MM, PointLight, as_light_list, point_light_irradiance
-from .visibility import Occluder, array_digest
+from .visibility import Occluder, VisibilityCache, array_digest
 
 __all__ = [
     "IncidentLight",
     "IncidentStats",
     "LightContribution",
-    "VisibilityCache",
     "incident_flux",
-    "aggregation_error",
 ]
 
 
@@ -165,64 +163,6 @@ class IncidentLight:
     lights: tuple
     stats: IncidentStats
     contributions: tuple | None = None
-
-
-class VisibilityCache:
-    """Memo of Embree scenes (per mesh) and visibility (per mesh, ray origins and light geometry).
-
-    Keep one across solves of the same mesh and lights: changing only the material (coefficients,
-    ``eta``) then traces no ray and builds no scene. Entries are dropped least recently used first.
-
-    Parameters
-    ----------
-    max_entries : int, optional
-        Most visibility arrays kept (one per light sample and mesh).
-    max_scenes : int, optional
-        Most Embree scenes kept.
-    """
-
-    def __init__(self, max_entries: int = 4096, max_scenes: int = 4):
-        self.max_entries = int(max_entries)
-        self.max_scenes = int(max_scenes)
-        self._scenes: OrderedDict[str, Occluder] = OrderedDict()
-        self._visibility: OrderedDict[tuple, np.ndarray] = OrderedDict()
-        self.hits = 0
-        self.misses = 0
-
-    def occluder(self, points, triangles, **options) -> tuple[Occluder, bool]:
-        """The :class:`Occluder` of a mesh, and whether it was reused (True) or built now."""
-        key = array_digest(np.asarray(points, dtype=np.float64), np.asarray(triangles, dtype=np.int64)) + repr(
-            sorted(options.items())
-        )
-        if key in self._scenes:
-            self._scenes.move_to_end(key)
-            return self._scenes[key], True
-        occluder = Occluder(points, triangles, **options)
-        self._scenes[key] = occluder
-        while len(self._scenes) > self.max_scenes:
-            self._scenes.popitem(last=False)
-        return occluder, False
-
-    def get(self, key: tuple):
-        """Stored visibility for ``key``, or None."""
-        value = self._visibility.get(key)
-        if value is None:
-            self.misses += 1
-            return None
-        self.hits += 1
-        self._visibility.move_to_end(key)
-        return value
-
-    def put(self, key: tuple, value: np.ndarray) -> None:
-        """Store a visibility array (read-only) under ``key``."""
-        value = np.asarray(value, dtype=bool)
-        value.setflags(write=False)
-        self._visibility[key] = value
-        while len(self._visibility) > self.max_entries:
-            self._visibility.popitem(last=False)
-
-    def __len__(self) -> int:
-        return len(self._visibility)
 
 
 def _validated_arrays(points, normals, areas):
@@ -465,68 +405,3 @@ def incident_flux(points, normals, areas, lights, eta, *, triangles=None, occlud
         stats=stats,
         contributions=tuple(contributions) if contributions is not None else None,
     )
-
-
-def aggregation_error(points, normals, incident: IncidentLight, medium, receivers) -> dict:
-    """Error of the aggregated sources against per-direction summation, with the reference dipole.
-
-    Evaluates ``B(x_o) = sum_i S_d(x_i, w12; x_o) Phi`` at the receiver vertices twice, with the
-    float64 :func:`~translucency.scatter.dipoles.directional_dipole`: once per source vertex with
-    the aggregated ``(Phi_i, w12_i)``, once per source vertex and light sample with
-    ``(Phi_ik, w12_ik)``. The receiver's own vertex is left out of both sums (r = 0). It is a plain
-    vertex sum, so it measures the aggregation, not the solver's quadrature. Cost: receivers x
-    sources x samples dipole evaluations; meant for small meshes and benchmarks.
-
-    Parameters
-    ----------
-    points, normals : array_like, shape (n, 3)
-        The vertices and unit normals given to :func:`incident_flux`.
-    incident : IncidentLight
-        Result of :func:`incident_flux` with ``per_direction=True``.
-    medium : Medium
-        Optical coefficients (:class:`~translucency.scatter.medium.Medium`).
-    receivers : array_like of int
-        Vertex indices where ``B`` is compared.
-
-    Returns
-    -------
-    dict
-        ``B_aggregated``, ``B_per_direction`` (receivers x 3, W/(m² sr) for E in W/m²),
-        ``max_relative_error`` and ``rms_relative_error`` over receivers and channels with
-        ``B_per_direction > 0``.
-    """
-    from .dipoles import directional_dipole
-
-    if incident.contributions is None:
-        raise InvalidParameterError("aggregation_error needs incident_flux(..., per_direction=True).")
-    points = np.asarray(points, dtype=np.float64)
-    normals = np.asarray(normals, dtype=np.float64)
-    receivers = np.asarray(receivers, dtype=np.int64)
-    lit = np.flatnonzero(incident.flux_rgb.sum(axis=1) > 0.0)
-    vertices = np.concatenate([c.vertices for c in incident.contributions])
-    flux = np.concatenate([c.flux_rgb for c in incident.contributions])
-    w12 = np.concatenate([c.w12 for c in incident.contributions])
-
-    def sum_at(receiver, sources, source_w12, source_flux, channel):
-        keep = sources != receiver
-        s = sources[keep]
-        S_d = directional_dipole(
-            points[s], normals[s], source_w12[keep], points[receiver], normals[receiver],
-            medium.sigma_a[channel], medium.sigma_s[channel], medium.g[channel], medium.eta,
-        )
-        return float(S_d @ source_flux[keep, channel])
-
-    aggregated = np.zeros((len(receivers), 3))
-    per_direction = np.zeros((len(receivers), 3))
-    for j, receiver in enumerate(receivers):
-        for channel in range(3):
-            aggregated[j, channel] = sum_at(receiver, lit, incident.w12[lit], incident.flux_rgb[lit], channel)
-            per_direction[j, channel] = sum_at(receiver, vertices, w12, flux, channel)
-    positive = per_direction > 0.0
-    relative = np.abs(aggregated[positive] - per_direction[positive]) / per_direction[positive]
-    return {
-        "B_aggregated": aggregated,
-        "B_per_direction": per_direction,
-        "max_relative_error": float(relative.max()) if relative.size else 0.0,
-        "rms_relative_error": float(np.sqrt(np.mean(relative**2))) if relative.size else 0.0,
-    }

@@ -1,11 +1,21 @@
-"""The solver's choices by name: scattering models and far-field methods, with their defaults.
+"""The solver's choices by name: scattering models and far-field methods, their defaults and their checks.
 
 Plain data with no numba behind it, so that the command line and the settings can offer and check the
 choices without compiling or importing the kernels; :mod:`translucency.scatter.kernels` maps each model
-name to its code and :mod:`translucency.scatter.solve` accepts exactly these names.
+name to its code and :mod:`translucency.scatter.solve` accepts exactly these names. :func:`check_model`,
+:func:`check_method` and :func:`check_tol` are the one check of each choice, used by the solver and by
+:class:`~translucency.app.settings.ShadeSettings` alike.
 """
 
 from __future__ import annotations
+
+import math
+import numbers
+
+from ..errors import InvalidParameterError, setting_name
+
+__all__ = ["MODELS", "METHODS", "DEFAULT_MODEL", "DEFAULT_METHOD", "DEFAULT_TOL", "check_model", "check_method",
+           "check_tol"]
 
 #: Scattering models (the BSSRDF): FHK14's directional dipole, Jensen 2001's standard dipole, d'Eon 2012's better dipole.
 MODELS = ("directional", "standard", "better")
@@ -16,3 +26,29 @@ DEFAULT_MODEL = "directional"
 DEFAULT_METHOD = "tree"
 #: Relative error per vertex allowed to ``cutoff`` and ``tree`` (ignored by ``exact``).
 DEFAULT_TOL = 1e-2
+
+
+def check_model(model) -> str:
+    """The model name, checked to be one of :data:`MODELS`; else an ``InvalidParameterError`` sentence."""
+    if model not in MODELS:
+        raise InvalidParameterError(f"unknown model {model!r}; choose one of {', '.join(MODELS)}.")
+    return model
+
+
+def check_method(method) -> str:
+    """The method name, checked to be one of :data:`METHODS`; else an ``InvalidParameterError`` sentence."""
+    if method not in METHODS:
+        raise InvalidParameterError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}.")
+    return method
+
+
+def check_tol(tol):
+    """The tolerance (relative error per vertex, 1), checked to be a real number in (0, 1).
+
+    Else an ``InvalidParameterError`` sentence naming the setting as the user wrote it
+    (``--tol`` or ``tol``, :func:`translucency.errors.setting_name`).
+    """
+    real = isinstance(tol, numbers.Real) and not isinstance(tol, bool)
+    if not (real and math.isfinite(tol) and 0 < tol < 1):
+        raise InvalidParameterError(f"{setting_name('tol')} must be a relative error in (0, 1), got {tol!r}.")
+    return tol

@@ -46,7 +46,7 @@ from ..errors import BudgetError, InvalidParameterError, option
 from ..geometry.measure import barycentric_vertex_areas, mean_edge_length, triangle_areas
 from ..geometry.morton import morton_order
 from . import budget, cutoff, hierarchy, kernels, nearfield
-from .names import DEFAULT_MODEL, METHODS, MODELS
+from .names import DEFAULT_MODEL, METHODS, MODELS, check_method, check_model, check_tol
 from .medium import Medium
 
 __all__ = ["SurfaceGeometry", "Solution", "solve", "METHODS", "MODELS"]
@@ -293,6 +293,13 @@ def solve(
 ) -> Solution:
     """Diffuse radiance factor ``B`` at the receiver vertices (DESIGN.md; docs/physics.md §5.3, integrated as in §8).
 
+    This is the low-level reference: its own defaults are ``method="exact"`` and ``tol=1e-3``, not
+    the shading defaults of :mod:`translucency.scatter.names` (``tree``, 1e-2) that
+    :class:`~translucency.app.settings.ShadeSettings` and the pipeline use. The steps: the inputs are
+    checked, moved onto the spatially ordered surface, the memory and time of the solve are estimated
+    against the budget, then the far field (``method``) and the near-field correction are summed and
+    clamped at 0.
+
     Parameters
     ----------
     geometry : SurfaceGeometry
@@ -309,10 +316,10 @@ def solve(
     model : {"directional", "standard", "better"}
         The BSSRDF (FHK14, Jensen 2001, d'Eon 2012).
     method : {"exact", "cutoff", "tree"}
-        How the far field is summed (module docstring).
+        How the far field is summed (module docstring); ``exact`` by default (the reference).
     tol : float
-        Relative error allowed to the far-field approximation (``cutoff``, ``tree``); ignored by
-        ``exact``.
+        Relative error allowed to the far-field approximation (``cutoff``, ``tree``), in (0, 1);
+        ignored by ``exact``; 1e-3 by default.
     receivers : array_like of int, optional
         Vertices to compute ``B`` at (all by default).
     progress : callable, optional
@@ -338,12 +345,46 @@ def solve(
     timings: dict[str, float] = {}
     stats: dict[str, object] = {}
     report = progress or (lambda stage, fraction: None)
-    if model not in kernels.MODELS:
-        raise InvalidParameterError(f"unknown model {model!r}; choose one of {', '.join(MODELS)}.")
-    if method not in METHODS:
-        raise InvalidParameterError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}.")
-    if not (np.isfinite(tol) and 0 < tol < 1):
-        raise InvalidParameterError(f"tol must be a relative error in (0, 1), got {tol!r}.")
+    phi, w12, receivers = _checked_inputs(geometry, phi, w12, medium, model, method, tol, receivers, memory_limit,
+                                          time_limit)
+
+    start = time.perf_counter()
+    work = _ordered_work(geometry, phi, w12, medium, model, receivers, stats)
+    timings["setup"] = time.perf_counter() - start
+
+    start = time.perf_counter()
+    plan, near_args, radius = _plan(work, method, tol, memory_limit, time_limit, stats)
+    timings["budget"] = time.perf_counter() - start
+    if not plan.fits:
+        raise BudgetError(over_budget_sentence(plan, geometry.n_vertices), plan)
+
+    report("far field", 0.0)
+    start = time.perf_counter()
+    B, far_stats = _far_field(work, method, tol, report)
+    stats.update(far_stats)
+    timings["far_field"] = time.perf_counter() - start
+    report("far field", 1.0)
+
+    report("near field", 0.0)
+    start = time.perf_counter()
+    correction, near_triangles, near_points, list_seconds = _near_field(near_args, work.inner, radius, plan, report)
+    stats["near_radius_mm"] = radius
+    stats["near_triangles"] = near_triangles
+    stats["near_points"] = near_points
+    stats["near_lists_kept"] = plan.keep_lists
+    B = _assembled(B, correction, work.visit, stats)
+    timings["near_lists"] = list_seconds
+    timings["near_field"] = time.perf_counter() - start - list_seconds
+    report("near field", 1.0)
+    settings = {"model": model, "method": method, "tol": tol, "medium": medium.describe()}
+    return Solution(B=B, receivers=receivers, stats=stats, timings=timings, settings=settings)
+
+
+def _checked_inputs(geometry, phi, w12, medium, model, method, tol, receivers, memory_limit, time_limit):
+    """Validation at the solver's boundary: ``(phi, w12, receivers)`` as float64 / int64 arrays, checked."""
+    check_model(model)
+    check_method(method)
+    check_tol(tol)
     budget.check_limits(memory_limit, time_limit)
     n = geometry.n_vertices
     phi = _as_array(phi, np.float64, (n, medium.n_channels), "phi")
@@ -356,9 +397,41 @@ def solve(
         receivers = np.asarray(receivers, dtype=np.int64).ravel()
         if receivers.size and (receivers.min() < 0 or receivers.max() >= n):
             raise InvalidParameterError(f"receivers must be vertex indices in 0..{n - 1}.")
+    return phi, w12, receivers
 
-    start = time.perf_counter()
+
+@dataclass
+class _Work:
+    """A solve's inputs on the spatially ordered surface (:meth:`SurfaceGeometry.spatial_order`).
+
+    ``inner`` are the receivers in that surface's numbering, sorted; ``visit`` puts the rows of ``B``
+    back in the caller's order (``B[visit] = B_inner``). ``params`` and ``channel_of`` are the kernels'
+    coefficients of the distinct channels and each channel's row among them; ``flux = phi A`` and
+    ``lit`` the vertices with any flux.
+    """
+
+    model: str
+    medium: Medium
+    geometry: SurfaceGeometry
+    phi: np.ndarray
+    w12: np.ndarray
+    flux: np.ndarray
+    lit: np.ndarray
+    inner: np.ndarray
+    visit: np.ndarray
+    params: np.ndarray
+    channel_of: np.ndarray
+
+    @property
+    def far_args(self) -> tuple:
+        """The leading arguments of the far-field methods: ``(model, geometry, medium, lit, w12, flux)``."""
+        return (self.model, self.geometry, self.medium, self.lit, self.w12, self.flux)
+
+
+def _ordered_work(geometry, phi, w12, medium, model, receivers, stats) -> _Work:
+    """The inputs moved onto the spatially ordered surface, identical channels merged, sources with flux."""
     # work on the spatially ordered copy, receivers in its order; B goes back to the caller's order
+    n = geometry.n_vertices
     geometry, order, rank = geometry.spatial_order()
     phi, w12 = phi[order], w12[order]
     inner = rank[receivers]
@@ -366,7 +439,6 @@ def solve(
     inner = inner[visit]
     rows, channel_of = unique_channels(medium)
     params = kernels.channel_parameters(rows[:, 0], rows[:, 1], rows[:, 2], medium.eta, model)
-    model_code = kernels.MODELS[model]
     stats["channels_computed"] = int(rows.shape[0])
     stats["channels_skipped_identical"] = int(medium.n_channels - rows.shape[0])
 
@@ -375,61 +447,56 @@ def solve(
     stats["sources"] = int(lit.size)
     stats["sources_skipped_no_flux"] = int(n - lit.size)
     stats["receivers"] = int(receivers.size)
-    timings["setup"] = time.perf_counter() - start
+    return _Work(model, medium, geometry, phi, w12, flux, lit, inner, visit, params, channel_of)
 
-    start = time.perf_counter()
-    rcv_points = geometry.points[inner]
-    rcv_normals = geometry.normals[inner]
-    radius = near_radius(geometry, medium)
-    shared = nearfield.source_point_table(geometry.points, geometry.normals, w12, phi, geometry.triangles,
+
+def _plan(work: _Work, method, tol, memory_limit, time_limit, stats):
+    """The memory and time plan (:func:`translucency.scatter.budget.estimate`) from a sample of receivers:
+    ``(plan, near_args, near radius in mm)``; the plan goes into ``stats["budget"]``."""
+    geometry = work.geometry
+    radius = near_radius(geometry, work.medium)
+    shared = nearfield.source_point_table(geometry.points, geometry.normals, work.w12, work.phi, geometry.triangles,
                                           geometry.triangle_areas, geometry.triangle_tables())
-    near_args = dict(model_code=model_code, geometry=geometry, w12=w12, phi=phi, params=params,
-                     channel_of=channel_of, medium=medium, degree3_ratio=0.0 if method == "exact" else NEAR_DEGREE3_RATIO,
-                     shared=shared)
-    far_args = (model, geometry, medium, lit, w12, flux)
-    counts = sample_counts(far_args, near_args, inner, radius, method, params, channel_of, tol)
+    near_args = dict(model_code=kernels.MODELS[work.model], geometry=geometry, w12=work.w12, phi=work.phi,
+                     params=work.params, channel_of=work.channel_of, medium=work.medium,
+                     degree3_ratio=0.0 if method == "exact" else NEAR_DEGREE3_RATIO, shared=shared)
+    counts = sample_counts(work.far_args, near_args, work.inner, radius, method, work.params, work.channel_of, tol)
     available = budget.available_memory()
     plan = budget.estimate(counts, budget.memory_budget(memory_limit, available, budget.resident_memory()),
                            time_limit, keep_lists=None if memory_limit is not None or available is not None else True)
     stats["budget"] = {**plan.as_dict(), "counts": dataclasses.asdict(counts)}
-    timings["budget"] = time.perf_counter() - start
-    if not plan.fits:
-        raise BudgetError(over_budget_sentence(plan, n), plan)
+    return plan, near_args, radius
 
-    report("far field", 0.0)
-    start = time.perf_counter()
-    if lit.size == 0:
-        B, far_stats = np.zeros((inner.size, medium.n_channels)), {"pairs_evaluated": 0, "pairs_skipped": 0}
-    else:
-        far_field = {"exact": _far_field_exact, "cutoff": _far_field_cutoff, "tree": _far_field_tree}[method]
-        B, far_stats = np.zeros((inner.size, medium.n_channels)), {}
-        step = FAR_CHUNK * max(1, -(-inner.size // (budget.PROGRESS_STEPS * FAR_CHUNK)))
-        for first in range(0, inner.size, step):
-            part = slice(first, min(inner.size, first + step))
-            B[part], part_stats = far_field(*far_args, rcv_points[part], rcv_normals[part], params, channel_of, tol)
-            far_stats = _merge_stats(far_stats, part_stats)
-            report("far field", part.stop / inner.size)
-    stats.update(far_stats)
-    timings["far_field"] = time.perf_counter() - start
-    report("far field", 1.0)
 
-    report("near field", 0.0)
-    start = time.perf_counter()
-    correction, near_triangles, near_points, list_seconds = _near_field(near_args, inner, radius, plan, report)
-    B = B + correction
+def _far_field(work: _Work, method, tol, report):
+    """The far field of every receiver by ``method``, in chunks of :data:`FAR_CHUNK` multiples (with
+    progress): ``(B in the ordered receivers' rows, statistics)``."""
+    inner, n_channels = work.inner, work.medium.n_channels
+    if work.lit.size == 0:
+        return np.zeros((inner.size, n_channels)), {"pairs_evaluated": 0, "pairs_skipped": 0}
+    rcv_points = work.geometry.points[inner]
+    rcv_normals = work.geometry.normals[inner]
+    far_field = {"exact": _far_field_exact, "cutoff": _far_field_cutoff, "tree": _far_field_tree}[method]
+    B, far_stats = np.zeros((inner.size, n_channels)), {}
+    step = FAR_CHUNK * max(1, -(-inner.size // (budget.PROGRESS_STEPS * FAR_CHUNK)))
+    for first in range(0, inner.size, step):
+        part = slice(first, min(inner.size, first + step))
+        B[part], part_stats = far_field(*work.far_args, rcv_points[part], rcv_normals[part], work.params,
+                                        work.channel_of, tol)
+        far_stats = _merge_stats(far_stats, part_stats)
+        report("far field", part.stop / inner.size)
+    return B, far_stats
+
+
+def _assembled(far, correction, visit, stats):
+    """``B = far field + near-field correction``, negative sums clamped to 0 (counted in
+    ``stats["negative_clamped"]``), rows back in the caller's order of receivers."""
+    B = far + correction
     negative = B < 0
-    stats["near_radius_mm"] = radius
-    stats["near_triangles"] = near_triangles
-    stats["near_points"] = near_points
-    stats["near_lists_kept"] = plan.keep_lists
     stats["negative_clamped"] = int(negative.sum())
     B[negative] = 0.0
     B[visit] = B.copy()  # rows back in the order of ``receivers``
-    timings["near_lists"] = list_seconds
-    timings["near_field"] = time.perf_counter() - start - list_seconds
-    report("near field", 1.0)
-    settings = {"model": model, "method": method, "tol": tol, "medium": medium.describe()}
-    return Solution(B=B, receivers=receivers, stats=stats, timings=timings, settings=settings)
+    return B
 
 
 #: Receivers per far-field call are a multiple of this (the tree's block: its groups, and so ``B``,

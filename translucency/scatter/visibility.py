@@ -19,6 +19,9 @@ its mean edge) is far above rounding, removes a quarter to half of those termina
 too small to leak light through any feature a scan resolves. It is floored at 64 float32 ulps of
 the largest coordinate, so a mesh far from the origin still gets a working offset.
 
+A :class:`VisibilityCache` keeps Embree scenes (per mesh) and every light sample's visibility (per
+mesh, ray origins and light geometry) across calls, so a material change traces no ray again.
+
 ========== ========================================================== ======
 symbol     meaning                                                    unit
 ========== ========================================================== ======
@@ -35,13 +38,14 @@ from __future__ import annotations
 
 import hashlib
 import os
+from collections import OrderedDict
 from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 
 from ..errors import InvalidParameterError, MeshError, TranslucencyError
 
-__all__ = ["Occluder", "RELATIVE_OFFSET", "array_digest"]
+__all__ = ["Occluder", "VisibilityCache", "RELATIVE_OFFSET", "array_digest"]
 
 RELATIVE_OFFSET = 1e-4
 """Default ray-origin offset as a fraction of the mesh's bounding-box diagonal (module docstring)."""
@@ -206,3 +210,61 @@ class Occluder:
                 lambda s: self._scene.run(origins[s], directions[s], dists=tfar[s], query="OCCLUDED"), chunks
             )
             return np.concatenate(list(parts))
+
+
+class VisibilityCache:
+    """Memo of Embree scenes (per mesh) and visibility (per mesh, ray origins and light geometry).
+
+    Keep one across solves of the same mesh and lights: changing only the material (coefficients,
+    ``eta``) then traces no ray and builds no scene. Entries are dropped least recently used first.
+
+    Parameters
+    ----------
+    max_entries : int, optional
+        Most visibility arrays kept (one per light sample and mesh).
+    max_scenes : int, optional
+        Most Embree scenes kept.
+    """
+
+    def __init__(self, max_entries: int = 4096, max_scenes: int = 4):
+        self.max_entries = int(max_entries)
+        self.max_scenes = int(max_scenes)
+        self._scenes: OrderedDict[str, Occluder] = OrderedDict()
+        self._visibility: OrderedDict[tuple, np.ndarray] = OrderedDict()
+        self.hits = 0
+        self.misses = 0
+
+    def occluder(self, points, triangles, **options) -> tuple[Occluder, bool]:
+        """The :class:`Occluder` of a mesh, and whether it was reused (True) or built now."""
+        key = array_digest(np.asarray(points, dtype=np.float64), np.asarray(triangles, dtype=np.int64)) + repr(
+            sorted(options.items())
+        )
+        if key in self._scenes:
+            self._scenes.move_to_end(key)
+            return self._scenes[key], True
+        occluder = Occluder(points, triangles, **options)
+        self._scenes[key] = occluder
+        while len(self._scenes) > self.max_scenes:
+            self._scenes.popitem(last=False)
+        return occluder, False
+
+    def get(self, key: tuple):
+        """Stored visibility for ``key``, or None."""
+        value = self._visibility.get(key)
+        if value is None:
+            self.misses += 1
+            return None
+        self.hits += 1
+        self._visibility.move_to_end(key)
+        return value
+
+    def put(self, key: tuple, value: np.ndarray) -> None:
+        """Store a visibility array (read-only) under ``key``."""
+        value = np.asarray(value, dtype=bool)
+        value.setflags(write=False)
+        self._visibility[key] = value
+        while len(self._visibility) > self.max_entries:
+            self._visibility.popitem(last=False)
+
+    def __len__(self) -> int:
+        return len(self._visibility)

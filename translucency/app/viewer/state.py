@@ -224,10 +224,9 @@ class ViewerState:
 
     def set_model(self, model: str) -> bool:
         """Change the scattering model (``directional``, ``standard``, ``better``) and solve; False if the same."""
-        from ...scatter.names import MODELS
+        from ...scatter.names import check_model
 
-        if model not in MODELS:
-            raise InvalidParameterError(f"unknown model {model!r}; choose one of {', '.join(MODELS)}.")
+        check_model(model)
         if model == self.model:
             return False
         self.model = model

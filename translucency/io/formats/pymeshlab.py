@@ -38,7 +38,11 @@ PYMESHLAB_FORMATS = {
 
 
 def read_with_pymeshlab(path: Path, suffix: str):
-    from .._pymeshlab import import_pymeshlab
+    """Points (file units), triangles and per-vertex data (``colors``, ``quality``) of a file pymeshlab reads.
+
+    ``suffix`` is one of :data:`PYMESHLAB_FORMATS` (it names the format in the error sentence).
+    """
+    from ..meshlab import import_pymeshlab
 
     pymeshlab = import_pymeshlab()
     mesh_set = pymeshlab.MeshSet()

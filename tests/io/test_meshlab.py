@@ -6,7 +6,7 @@ import types
 import pytest
 
 from translucency.errors import TranslucencyError
-from translucency.io._pymeshlab import import_pymeshlab
+from translucency.io.meshlab import import_pymeshlab
 
 
 def test_real_pymeshlab_has_the_filters():

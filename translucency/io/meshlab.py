@@ -3,8 +3,9 @@
 pymeshlab loads the filter plugins that need OpenGL only when the system has ``libGL`` and
 ``libOpenGL``; without them it imports fine but silently lacks filters such as
 ``meshing_close_holes``, and the repair would fail later with an AttributeError. This helper turns
-that into one clear sentence. Used by :mod:`translucency.io.clean`, :mod:`translucency.io.decimate`
-and the pymeshlab-based reader :mod:`translucency.io.formats.pymeshlab`.
+that into one clear sentence. Every use of pymeshlab goes through :func:`import_pymeshlab`: the repair
+(:mod:`translucency.io.clean`), the decimation (:mod:`translucency.io.decimate`) and the pymeshlab-based
+reader (:mod:`translucency.io.formats.pymeshlab`).
 """
 
 from __future__ import annotations
