@@ -82,8 +82,15 @@ def aggregation_error(points, normals, incident, medium, receivers) -> dict:
         keep = sources != receiver
         s = sources[keep]
         S_d = directional_dipole(
-            points[s], normals[s], source_w12[keep], points[receiver], normals[receiver],
-            medium.sigma_a[channel], medium.sigma_s[channel], medium.g[channel], medium.eta,
+            points[s],
+            normals[s],
+            source_w12[keep],
+            points[receiver],
+            normals[receiver],
+            medium.sigma_a[channel],
+            medium.sigma_s[channel],
+            medium.g[channel],
+            medium.eta,
         )
         return float(S_d @ source_flux[keep, channel])
 

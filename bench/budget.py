@@ -53,27 +53,44 @@ def run_case(scan: str, unit: str, material: str, memory_limit: float | None) ->
     seconds = time.perf_counter() - start
     peak = _status("VmHWM") - before
     plan = result.stats["solver"]["budget"]
-    return {"scan": scan, "unit": unit, "material": material, "memory_limit_gb": memory_limit,
-            "vertices": mesh.n_points, "solver_vertices": result.stats["solver_vertices"], "coarser": lines,
-            "keep_lists": plan["keep_lists"], "block_receivers": plan["block_receivers"],
-            "estimated_peak_mb": plan["peak_bytes"] / 2 ** 20, "measured_peak_mb": peak / 2 ** 20,
-            "estimated_s": plan["seconds"], "measured_s": seconds,
-            "solve_s": sum(v for k, v in result.timings.items() if k.startswith("solve_")),
-            "threads": numba.get_num_threads(), "load": os.getloadavg()[0]}
+    return {
+        "scan": scan,
+        "unit": unit,
+        "material": material,
+        "memory_limit_gb": memory_limit,
+        "vertices": mesh.n_points,
+        "solver_vertices": result.stats["solver_vertices"],
+        "coarser": lines,
+        "keep_lists": plan["keep_lists"],
+        "block_receivers": plan["block_receivers"],
+        "estimated_peak_mb": plan["peak_bytes"] / 2**20,
+        "measured_peak_mb": peak / 2**20,
+        "estimated_s": plan["seconds"],
+        "measured_s": seconds,
+        "solve_s": sum(v for k, v in result.timings.items() if k.startswith("solve_")),
+        "threads": numba.get_num_threads(),
+        "load": os.getloadavg()[0],
+    }
 
 
 def table(rows) -> str:
     """The Markdown table of bench/README.md."""
-    head = ("| scan | unit | material | limit | vertices solved | lists | estimated peak (MB) | measured peak (MB) "
-            "| estimated (s) | measured (s) | load |\n|---|---|---|---:|---:|---|---:|---:|---:|---:|---:|")
+    head = (
+        "| scan | unit | material | limit | vertices solved | lists | estimated peak (MB) | measured peak (MB) "
+        "| estimated (s) | measured (s) | load |\n|---|---|---|---:|---:|---|---:|---:|---:|---:|---:|"
+    )
     lines = [head]
     for r in rows:
         lists = "kept" if r["keep_lists"] else f"blocks of {r['block_receivers']}"
         limit = "" if r["memory_limit_gb"] is None else f"{r['memory_limit_gb']:g} GB"
-        solved = f"{r['solver_vertices']:,}" + ("" if r["solver_vertices"] == r["vertices"] else f" of {r['vertices']:,}")
-        lines.append(f"| {r['scan']} | {r['unit']} | {r['material']} | {limit} | {solved} | {lists} | "
-                     f"{r['estimated_peak_mb']:.0f} | {r['measured_peak_mb']:.0f} | {r['estimated_s']:.1f} | "
-                     f"{r['solve_s']:.1f} | {r['load']:.1f} |")
+        solved = f"{r['solver_vertices']:,}" + (
+            "" if r["solver_vertices"] == r["vertices"] else f" of {r['vertices']:,}"
+        )
+        lines.append(
+            f"| {r['scan']} | {r['unit']} | {r['material']} | {limit} | {solved} | {lists} | "
+            f"{r['estimated_peak_mb']:.0f} | {r['measured_peak_mb']:.0f} | {r['estimated_s']:.1f} | "
+            f"{r['solve_s']:.1f} | {r['load']:.1f} |"
+        )
     return "\n".join(lines) + "\n"
 
 
@@ -86,9 +103,14 @@ def main(argv=None) -> int:
         scan, unit, material, limit = args.case
         print(json.dumps(run_case(scan, unit, material, None if limit == "none" else float(limit))))
         return 0
-    cases = [("bunny", "m", "marble", "none")] if args.quick else (
-        [(scan, "m", material, "none") for scan in SCANS for material in MATERIALS]
-        + [("bunny", "mm", "marble", "4")])
+    cases = (
+        [("bunny", "m", "marble", "none")]
+        if args.quick
+        else (
+            [(scan, "m", material, "none") for scan in SCANS for material in MATERIALS]
+            + [("bunny", "mm", "marble", "4")]
+        )
+    )
     out = HERE / "results" / ("tmp" if args.quick else "")
     out.mkdir(parents=True, exist_ok=True)
     rows = []

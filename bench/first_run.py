@@ -31,7 +31,13 @@ JOBS = {
     "main job (`translucency`)": [],
     "`translucency bake`": ["bake", "-o", "baked"],
     "`translucency view --screenshot x.png`": ["view", "--screenshot", "x.png"],
-    "`translucency compare --materials marble,skim_milk -o d`": ["compare", "--materials", "marble,skim_milk", "-o", "d"],
+    "`translucency compare --materials marble,skim_milk -o d`": [
+        "compare",
+        "--materials",
+        "marble,skim_milk",
+        "-o",
+        "d",
+    ],
 }
 WARMUP = "`python -m translucency.scatter.warmup` (set-up)"
 AFTER_WARMUP = "main job after the set-up's warm-up"
@@ -76,8 +82,14 @@ def run(args, cache: Path, folder: Path) -> dict:
     command = [sys.executable, "-c", DRIVER, str(split)] + (["warmup"] if args == "warmup" else list(args))
     done = subprocess.run(command, cwd=folder, env=env, capture_output=True, text=True)
     wall = time.perf_counter() - start
-    row = {"seconds": wall, "load_average": load, "returncode": done.returncode,
-           "notice_lines": sum("compiling the solver's kernels" in line for line in (done.stdout + done.stderr).splitlines())}
+    row = {
+        "seconds": wall,
+        "load_average": load,
+        "returncode": done.returncode,
+        "notice_lines": sum(
+            "compiling the solver's kernels" in line for line in (done.stdout + done.stderr).splitlines()
+        ),
+    }
     if split.exists():
         row.update(json.loads(split.read_text()))
         split.unlink()
@@ -113,9 +125,11 @@ def _median(rows, key):
 
 def table(rows: dict) -> str:
     """The Markdown table: medians of cold and warm wall times and the split of the cold time."""
-    lines = ["| command | cold (s) | warm (s) | cold − warm (s) | cold: numba compile (s) | cold: imports (s) | "
-             "cold: the rest (s) | notice lines cold / warm | load average (1 min) |",
-             "|---|---:|---:|---:|---:|---:|---:|---|---|"]
+    lines = [
+        "| command | cold (s) | warm (s) | cold − warm (s) | cold: numba compile (s) | cold: imports (s) | "
+        "cold: the rest (s) | notice lines cold / warm | load average (1 min) |",
+        "|---|---:|---:|---:|---:|---:|---:|---|---|",
+    ]
     for name, pair in rows.items():
         cold, warm = pair["cold"], pair["warm"]
         if name == WARMUP:
@@ -127,13 +141,18 @@ def table(rows: dict) -> str:
         rest = c - compile_s - imports
         notices = f"{max(r['notice_lines'] for r in cold)} / {max(r['notice_lines'] for r in warm)}"
         loads = [r["load_average"][0] for r in cold + warm]
-        lines.append(f"| {label} | {c:.1f} | {w:.1f} | {c - w:.1f} | {compile_s:.1f} | {imports:.1f} | {rest:.1f} | "
-                     f"{notices} | {min(loads):.1f}–{max(loads):.1f} |")
+        lines.append(
+            f"| {label} | {c:.1f} | {w:.1f} | {c - w:.1f} | {compile_s:.1f} | {imports:.1f} | {rest:.1f} | "
+            f"{notices} | {min(loads):.1f}–{max(loads):.1f} |"
+        )
     n = len(next(iter(rows.values()))["cold"])
-    lines += ["", f"Medians of {n} runs each (cold: a fresh empty `NUMBA_CACHE_DIR`; warm: the same cache again). "
-              "*Imports*: numba, SciPy, PyVista/VTK, pymeshlab, Embree and Matplotlib; *the rest*: the work itself "
-              "(and translucency's own imports). The warm-up row's warm column is the main job on the cache the "
-              "set-up filled."]
+    lines += [
+        "",
+        f"Medians of {n} runs each (cold: a fresh empty `NUMBA_CACHE_DIR`; warm: the same cache again). "
+        "*Imports*: numba, SciPy, PyVista/VTK, pymeshlab, Embree and Matplotlib; *the rest*: the work itself "
+        "(and translucency's own imports). The warm-up row's warm column is the main job on the cache the "
+        "set-up filled.",
+    ]
     return "\n".join(lines)
 
 

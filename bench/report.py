@@ -45,9 +45,15 @@ def machine_info() -> dict:
 
     from translucency import __version__
 
-    return {"version": __version__, "python": platform.python_version(), "machine": platform.machine(),
-            "cpu": cpu_model(), "cpu_count": os.cpu_count(), "threads": numba.get_num_threads(),
-            "load_average_start": load_average()}
+    return {
+        "version": __version__,
+        "python": platform.python_version(),
+        "machine": platform.machine(),
+        "cpu": cpu_model(),
+        "cpu_count": os.cpu_count(),
+        "threads": numba.get_num_threads(),
+        "load_average_start": load_average(),
+    }
 
 
 def output_dir(quick: bool) -> Path:

@@ -14,7 +14,8 @@ validate_models.py  the diffusion models against Monte Carlo (slow)           wi
 =================== ========================================================= ==================
 
 Each script writes its JSON, Markdown tables and PNG plots into ``bench/results`` (with ``--quick``:
-small sizes, into ``bench/results/tmp``; :data:`SUITE` holds each script's quick arguments). Afterwards the suite writes ``suite.json`` (what ran, how
+small sizes, into ``bench/results/tmp``; :data:`SUITE` holds each script's quick arguments).
+Afterwards the suite writes ``suite.json`` (what ran, how
 long, the load average) and ``goals.md`` (the issue's speed goals against the measurements), and
 replaces every generated block of ``bench/README.md`` -- the text between
 ``<!-- NAME-table:start -->`` and ``<!-- NAME-table:end -->`` -- with ``bench/results/NAME.md``.
@@ -38,10 +39,13 @@ from report import RESULTS, ROOT, load_average, machine_info, output_dir, update
 
 BENCH = ROOT / "bench"
 #: (name, script, arguments of a quick run, takes --repeats, optional): the suite in the order it runs.
-SUITE = [("solver", "solver.py", ["--quick"], True, False), ("scaling", "scaling.py", ["--quick"], True, False),
-         ("stability", "stability.py", ["--blocks", "256", "--out", "bench/results/tmp"], False, False),
-         ("validate_models", "validate_models.py", ["--quick"], False, True),
-         ("first_run", "first_run.py", ["--quick"], True, False)]
+SUITE = [
+    ("solver", "solver.py", ["--quick"], True, False),
+    ("scaling", "scaling.py", ["--quick"], True, False),
+    ("stability", "stability.py", ["--blocks", "256", "--out", "bench/results/tmp"], False, False),
+    ("validate_models", "validate_models.py", ["--quick"], False, True),
+    ("first_run", "first_run.py", ["--quick"], True, False),
+]
 
 
 def run_script(script, quick_arguments, repeats):
@@ -56,8 +60,12 @@ def run_script(script, quick_arguments, repeats):
     before = load_average()
     start = time.perf_counter()
     returncode = subprocess.run(command, cwd=ROOT).returncode
-    return {"returncode": returncode, "seconds": time.perf_counter() - start, "load_average_start": before,
-            "load_average_end": load_average()}
+    return {
+        "returncode": returncode,
+        "seconds": time.perf_counter() - start,
+        "load_average_start": before,
+        "load_average_end": load_average(),
+    }
 
 
 def fastest_within(rows, scan, error):
@@ -82,38 +90,51 @@ def goals_markdown(results):
         if not best:
             lines.append(f"| {scan}: ≤ {GOALS[scan]:g} s per solve at ≤ 1 % | not measured | |")
             continue
-        parts = [f"{m} {r['seconds']:.1f} s ({r['method']} {r['tol']:g}, {r.get('resolution', 'full')}, "
-                 f"{100 * r['error_rms']:.2f} %)"
-                 for m, r in best.items()]
+        parts = [
+            f"{m} {r['seconds']:.1f} s ({r['method']} {r['tol']:g}, {r.get('resolution', 'full')}, "
+            f"{100 * r['error_rms']:.2f} %)"
+            for m, r in best.items()
+        ]
         ok = all(r["seconds"] <= GOALS[scan] for r in best.values())
-        lines.append(f"| {scan}: ≤ {GOALS[scan]:g} s per solve at ≤ 1 % | fastest setting within 1 %: {'; '.join(parts)} "
-                     f"| {'met' if ok else 'missed'} |")
+        lines.append(
+            f"| {scan}: ≤ {GOALS[scan]:g} s per solve at ≤ 1 % | fastest setting within 1 %: {'; '.join(parts)} "
+            f"| {'met' if ok else 'missed'} |"
+        )
     scaling = results / "scaling.json"
     bakes = [r for r in json.loads(scaling.read_text())["rows"] if r["label"] == "1M"] if scaling.exists() else []
     if bakes and "bake_seconds" in bakes[0] and "error_rms" in bakes[0]:
         r = bakes[0]
         ok = r["bake_seconds"] <= GOALS["bake_1M"] and r["error_rms"] <= GOAL_ERROR
-        lines.append(f"| 1M-vertex bake ≤ {GOALS['bake_1M']:g} s at ≤ 1 % | {r['bake_seconds']:.0f} s, "
-                     f"{100 * r['error_rms']:.2f} %, peak RSS {r['ru_maxrss_mb'] / 1024:.1f} GB | {'met' if ok else 'missed'} |")
+        lines.append(
+            f"| 1M-vertex bake ≤ {GOALS['bake_1M']:g} s at ≤ 1 % | {r['bake_seconds']:.0f} s, "
+            f"{100 * r['error_rms']:.2f} %, peak RSS {r['ru_maxrss_mb'] / 1024:.1f} GB | {'met' if ok else 'missed'} |"
+        )
     else:
         status = bakes[0]["status"] if bakes else "not measured"
         lines.append(f"| 1M-vertex bake ≤ {GOALS['bake_1M']:g} s at ≤ 1 % | {status} | {'missed' if bakes else ''} |")
     lines.append("")
-    lines.append("Times are wall times on the machine of the run; the load average in each table shows how much "
-                 "other work shared it.")
+    lines.append(
+        "Times are wall times on the machine of the run; the load average in each table shows how much "
+        "other work shared it."
+    )
     return "\n".join(lines)
 
 
 def main(argv=None):
     """Command line: run the suite, write ``suite.json`` and ``goals.md``, update the README's tables."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true", help="a smoke run: small sizes, into results/tmp, README untouched")
+    parser.add_argument(
+        "--quick", action="store_true", help="a smoke run: small sizes, into results/tmp, README untouched"
+    )
     parser.add_argument("--validate", action="store_true", help="also run validate_models.py (slow)")
     parser.add_argument("--only", nargs="+", choices=[name for name, *_ in SUITE], help="run only these scripts")
     parser.add_argument("--repeats", type=int, help="timed warm runs per setting for solver.py and scaling.py")
     parser.add_argument("--no-readme", action="store_true", help="leave bench/README.md as it is")
-    parser.add_argument("--tables-only", action="store_true",
-                        help="run nothing: rewrite goals.md and the README's tables from the results there are")
+    parser.add_argument(
+        "--tables-only",
+        action="store_true",
+        help="run nothing: rewrite goals.md and the README's tables from the results there are",
+    )
     args = parser.parse_args(argv)
     out = output_dir(args.quick)
     info = machine_info()

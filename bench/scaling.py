@@ -51,11 +51,11 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from translucency import __version__  # noqa: E402,F401  (first: it selects numba's threading layer)
-
 import numpy as np  # noqa: E402
 from report import load_average, machine_info, output_dir, write_results  # noqa: E402
 from solver import MESHES, SCANS, errors, prepare  # noqa: E402
+
+from translucency import __version__  # noqa: E402,F401  (first: it selects numba's threading layer)
 
 SIZES = ("10k", "30k", "134k", "537k", "1M")
 QUICK_SIZES = ("10k", "30k")
@@ -63,8 +63,12 @@ RECEIVERS = 2000
 #: Warm shades are repeated (median) on meshes up to this many vertices, run once above.
 REPEAT_MAX_VERTICES = 200_000
 #: What the solver's stages are called in ``ShadeResult.timings``, and in the tables.
-SOLVER_STAGES = {"incident_light": "incident light + visibility", "solve_far_field": "far field",
-                 "solve_near_lists": "near lists", "solve_near_field": "near field"}
+SOLVER_STAGES = {
+    "incident_light": "incident light + visibility",
+    "solve_far_field": "far field",
+    "solve_near_lists": "near lists",
+    "solve_near_field": "near field",
+}
 #: Goals of the issue: seconds per solve at <= 1 % error.
 GOALS = {"bunny": 0.5, "igea": 2.0, "bake_1M": 60.0}
 GOAL_ERROR = 0.01
@@ -86,7 +90,11 @@ def build_mesh(label, igea):
     if label == "537k":
         return points, triangles, "midpoint-subdivided once"
     points, triangles, share = split_longest_edges(points, triangles, 1_000_000)
-    return points, triangles, f"midpoint-subdivided once, then its longest {100 * share:.0f} % of edges split at their midpoints"
+    return (
+        points,
+        triangles,
+        f"midpoint-subdivided once, then its longest {100 * share:.0f} % of edges split at their midpoints",
+    )
 
 
 def split_longest_edges(points, triangles, vertices):
@@ -100,22 +108,29 @@ def split_longest_edges(points, triangles, vertices):
     from translucency.io.meshlab import import_pymeshlab
 
     pymeshlab = import_pymeshlab()
-    edges = np.unique(np.sort(np.concatenate([triangles[:, [0, 1]], triangles[:, [1, 2]], triangles[:, [2, 0]]]), axis=1),
-                      axis=0)
+    edges = np.unique(
+        np.sort(np.concatenate([triangles[:, [0, 1]], triangles[:, [1, 2]], triangles[:, [2, 0]]]), axis=1), axis=0
+    )
     lengths = np.sort(np.linalg.norm(points[edges[:, 0]] - points[edges[:, 1]], axis=1))
     missing = min(max(vertices - len(points), 1), len(lengths))
     mesh_set = pymeshlab.MeshSet()
-    mesh_set.add_mesh(pymeshlab.Mesh(vertex_matrix=np.asarray(points, np.float64),
-                                     face_matrix=np.asarray(triangles, np.int32)))
-    mesh_set.meshing_surface_subdivision_midpoint(iterations=1,
-                                                  threshold=pymeshlab.PureValue(float(lengths[len(lengths) - missing])))
+    mesh_set.add_mesh(
+        pymeshlab.Mesh(vertex_matrix=np.asarray(points, np.float64), face_matrix=np.asarray(triangles, np.int32))
+    )
+    mesh_set.meshing_surface_subdivision_midpoint(
+        iterations=1, threshold=pymeshlab.PureValue(float(lengths[len(lengths) - missing]))
+    )
     mesh = mesh_set.current_mesh()
-    return (np.asarray(mesh.vertex_matrix(), np.float64), np.asarray(mesh.face_matrix(), np.int64),
-            missing / len(lengths))
+    return (
+        np.asarray(mesh.vertex_matrix(), np.float64),
+        np.asarray(mesh.face_matrix(), np.int64),
+        missing / len(lengths),
+    )
 
 
 def write_mesh(path, points, triangles):
-    """Write a plain triangle mesh (mm) as a PLY with :func:`translucency.io.save.save_mesh` (as ``inspect -o`` does)."""
+    """Write a plain triangle mesh (mm) as a PLY with :func:`translucency.io.save.save_mesh`
+    (as ``inspect -o`` does)."""
     from translucency.geometry.mesh import TriangleMesh
     from translucency.io.save import save_mesh
 
@@ -142,11 +157,14 @@ def current_rss_mb(pid) -> float:
 
 
 def bake(path, out_ply):
-    """Load -> clean -> shade (default settings) -> write the baked PLY; ``(scene, result, mesh, seconds per stage)``."""
+    """Load -> clean -> shade (default settings) -> write the baked PLY.
+
+    Returns ``(scene, result, mesh, seconds per stage)``.
+    """
     from translucency.app.pipeline import Scene
+    from translucency.io.baked import write_baked_ply
     from translucency.io.clean import clean_mesh
     from translucency.io.load import load_mesh
-    from translucency.io.baked import write_baked_ply
 
     stages = {}
     start = time.perf_counter()
@@ -173,8 +191,9 @@ def exact_at(scene, receivers):
 
     medium = resolve_medium(DEFAULT_MATERIAL)
     solver_mesh, _, _, geometry, _ = scene.solver_mesh(medium, "full")
-    incident, _ = scene.incident(geometry, solver_mesh.triangles, [DirectionalLight(DEFAULT_LIGHT_DIRECTION, 1.0)],
-                                 medium.eta)
+    incident, _ = scene.incident(
+        geometry, solver_mesh.triangles, [DirectionalLight(DEFAULT_LIGHT_DIRECTION, 1.0)], medium.eta
+    )
     start = time.perf_counter()
     exact = solve(geometry, incident.phi_rgb, incident.w12, medium, method="exact", receivers=receivers)
     return exact.B, time.perf_counter() - start
@@ -206,10 +225,17 @@ def child(path, out_json, repeats):
     save(phase="bake", load_average_start=load_average())
     scene, result, mesh, stages = bake(path, folder / (Path(path).stem + "_baked.ply"))
     stages.update({SOLVER_STAGES[k]: result.timings.get(k, 0.0) for k in SOLVER_STAGES})
-    save(phase="warm shades", vertices=mesh.n_points, triangles=mesh.n_triangles, stages=stages,
-         bake_seconds=stages["load"] + stages["clean"] + stages["shade"] + stages["write"],
-         peak_rss_bake_mb=peak_rss_mb(), load_average_bake=load_average(), solver_stats=result.stats["solver"],
-         shade_timings=result.timings)
+    save(
+        phase="warm shades",
+        vertices=mesh.n_points,
+        triangles=mesh.n_triangles,
+        stages=stages,
+        bake_seconds=stages["load"] + stages["clean"] + stages["shade"] + stages["write"],
+        peak_rss_bake_mb=peak_rss_mb(),
+        load_average_bake=load_average(),
+        solver_stats=result.stats["solver"],
+        shade_timings=result.timings,
+    )
     runs = repeats if mesh.n_points <= REPEAT_MAX_VERTICES else 1
     warm = []
     for _ in range(runs):
@@ -217,13 +243,24 @@ def child(path, out_json, repeats):
         again = scene.shade()
         warm.append((time.perf_counter() - start, again.timings))
     seconds, timings = sorted(warm, key=lambda item: item[0])[len(warm) // 2]
-    save(phase="exact", warm_seconds=seconds, warm_runs=runs,
-         warm_stages={SOLVER_STAGES[k]: timings.get(k, 0.0) for k in SOLVER_STAGES})
+    save(
+        phase="exact",
+        warm_seconds=seconds,
+        warm_runs=runs,
+        warm_stages={SOLVER_STAGES[k]: timings.get(k, 0.0) for k in SOLVER_STAGES},
+    )
     receivers = np.sort(np.random.default_rng(0).choice(mesh.n_points, min(RECEIVERS, mesh.n_points), replace=False))
     exact, exact_seconds = exact_at(scene, receivers)
     rms, worst = errors(result.B[receivers], exact)
-    save(phase="done", exact_seconds=exact_seconds, receivers=int(receivers.size), error_rms=rms, error_worst=worst,
-         peak_rss_mb=peak_rss_mb(), load_average_end=load_average())
+    save(
+        phase="done",
+        exact_seconds=exact_seconds,
+        receivers=int(receivers.size),
+        error_rms=rms,
+        error_worst=worst,
+        peak_rss_mb=peak_rss_mb(),
+        load_average_end=load_average(),
+    )
 
 
 def run_child(path, out_json, repeats, time_limit, memory_limit_gb):
@@ -236,14 +273,21 @@ def run_child(path, out_json, repeats, time_limit, memory_limit_gb):
         pid, code, ru = os.wait4(process.pid, os.WNOHANG)
         if pid:
             usage = ru
-            status = "finished" if os.waitstatus_to_exitcode(code) == 0 else f"failed (exit {os.waitstatus_to_exitcode(code)})"
+            status = (
+                "finished"
+                if os.waitstatus_to_exitcode(code) == 0
+                else f"failed (exit {os.waitstatus_to_exitcode(code)})"
+            )
             break
         rss = current_rss_mb(process.pid)
         peak_seen = max(peak_seen, rss)
         record = json.loads(Path(out_json).read_text()) if Path(out_json).exists() else {}
         in_bake = record.get("phase") in (None, "warm-up", "bake")
         if rss > memory_limit_gb * 1024:
-            status = f"stopped: resident set {rss / 1024:.1f} GB above the {memory_limit_gb:g} GB limit (phase {record.get('phase')})"
+            status = (
+                f"stopped: resident set {rss / 1024:.1f} GB above the {memory_limit_gb:g} GB limit "
+                f"(phase {record.get('phase')})"
+            )
         elif time.perf_counter() - start > (time_limit if in_bake else 2 * time_limit):
             status = f"stopped: over the {time_limit:g} s limit (phase {record.get('phase')})"
         else:
@@ -252,8 +296,12 @@ def run_child(path, out_json, repeats, time_limit, memory_limit_gb):
         process.kill()
         _, _, usage = os.wait4(process.pid, 0)
     record = json.loads(Path(out_json).read_text()) if Path(out_json).exists() else {}
-    record.update(status=status, child_seconds=time.perf_counter() - start, peak_rss_polled_mb=peak_seen,
-                  ru_maxrss_mb=usage.ru_maxrss / 1024.0)
+    record.update(
+        status=status,
+        child_seconds=time.perf_counter() - start,
+        peak_rss_polled_mb=peak_seen,
+        ru_maxrss_mb=usage.ru_maxrss / 1024.0,
+    )
     return record
 
 
@@ -271,11 +319,13 @@ def curves(rows):
     get = lambda key: [r.get(key, float("nan")) for r in rows]  # noqa: E731
     exact = np.array(get("exact_seconds"), float)
     scale = np.array([r.get("vertices", np.nan) / r.get("receivers", np.nan) for r in rows], float)
-    return {"bake (load to write)": get("bake_seconds"),
-            "tree 1e-2, first shade": [r.get("stages", {}).get("shade", float("nan")) for r in rows],
-            "tree 1e-2, warm shade": get("warm_seconds"),
-            f"exact at {RECEIVERS} receivers": list(exact),
-            "exact at every vertex (extrapolated)": list(exact * scale)}
+    return {
+        "bake (load to write)": get("bake_seconds"),
+        "tree 1e-2, first shade": [r.get("stages", {}).get("shade", float("nan")) for r in rows],
+        "tree 1e-2, warm shade": get("warm_seconds"),
+        f"exact at {RECEIVERS} receivers": list(exact),
+        "exact at every vertex (extrapolated)": list(exact * scale),
+    }
 
 
 def plot(rows, exponents, path):
@@ -290,8 +340,13 @@ def plot(rows, exponents, path):
     fig, axes = plt.subplots(1, 3, figsize=(17, 4.8))
     ax = axes[0]
     for (name, seconds), style in zip(curves(done).items(), ("k-o", "C0-o", "C1-s", "C3-^", "C3:^")):
-        ax.plot(n, seconds, style, label=f"{name}: n^{exponents[name]:.2f}" if exponents.get(name) else name,
-                mfc="none" if "extrapolated" in name else None)
+        ax.plot(
+            n,
+            seconds,
+            style,
+            label=f"{name}: n^{exponents[name]:.2f}" if exponents.get(name) else name,
+            mfc="none" if "extrapolated" in name else None,
+        )
     ax.axhline(GOALS["bake_1M"], color="grey", ls="--", lw=0.8)
     ax.text(n.min(), GOALS["bake_1M"] * 1.1, "goal: 1M bake in 60 s", fontsize=7, color="grey")
     ax.set(xscale="log", yscale="log", xlabel="vertices", ylabel="wall time (s)", title="time against vertex count")
@@ -307,13 +362,21 @@ def plot(rows, exponents, path):
         bottom += values
     for x, total in enumerate(totals):
         ax.text(x, 1.01, f"{total:.0f} s" if total >= 10 else f"{total:.1f} s", ha="center", fontsize=8)
-    ax.set(ylabel="share of the bake's wall time", ylim=(0, 1.45), yticks=np.linspace(0, 1, 6),
-           title="the bake's stages (first shade, caches cold)")
+    ax.set(
+        ylabel="share of the bake's wall time",
+        ylim=(0, 1.45),
+        yticks=np.linspace(0, 1, 6),
+        title="the bake's stages (first shade, caches cold)",
+    )
     ax.legend(fontsize=7, loc="upper center", ncol=3)
     ax = axes[2]
     memory = fit_exponent(n, [r.get("peak_rss_bake_mb", np.nan) for r in done])
-    ax.plot(n, [r.get("peak_rss_bake_mb", np.nan) for r in done], "k-o",
-            label=f"peak RSS of the bake: n^{memory:.2f}" if memory else "peak RSS of the bake")
+    ax.plot(
+        n,
+        [r.get("peak_rss_bake_mb", np.nan) for r in done],
+        "k-o",
+        label=f"peak RSS of the bake: n^{memory:.2f}" if memory else "peak RSS of the bake",
+    )
     ax.plot(n, [r.get("ru_maxrss_mb", np.nan) for r in done], "C3:s", label="peak RSS of the child (exact included)")
     ax.set(xscale="log", yscale="log", xlabel="vertices", ylabel="MB", title="memory against vertex count")
     ax.grid(True, which="both", alpha=0.3)
@@ -334,9 +397,12 @@ def stage_seconds(row, name):
 
 def markdown(rows, exponents):
     """The scaling table (one row per size) and the fitted exponents."""
-    lines = ["| mesh | vertices | how | bake (s) | first shade (s) | incident light (s) | far field (s) | near lists (s) "
-             "| near field (s) | warm shade (s) | exact at 2000 (s) | rel. RMS error | worst lit-vertex error | peak RSS (MB) | load | status |",
-             "|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|"]
+    lines = [
+        "| mesh | vertices | how | bake (s) | first shade (s) | incident light (s) | far field (s) | near lists (s) "
+        "| near field (s) | warm shade (s) | exact at 2000 (s) | rel. RMS error | worst lit-vertex error | "
+        "peak RSS (MB) | load | status |",
+        "|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|",
+    ]
     fmt = lambda value, spec: "" if value is None or value != value else format(value, spec)  # noqa: E731
     for r in rows:
         stages = r.get("stages", {})
@@ -345,12 +411,17 @@ def markdown(rows, exponents):
             f"{fmt(stages.get('shade'), '.1f')} | "
             + " | ".join(fmt(stages.get(s), ".2f") for s in SOLVER_STAGES.values())
             + f" | {fmt(r.get('warm_seconds'), '.1f')} | {fmt(r.get('exact_seconds'), '.1f')} | "
-            f"{fmt(r.get('error_rms'), '.1e')} | {fmt(r.get('error_worst'), '.1e')} | {fmt(r.get('ru_maxrss_mb'), '.0f')} | "
-            f"{fmt((r.get('load_average_bake') or [None])[0], '.1f')} | {r['status']} |")
+            f"{fmt(r.get('error_rms'), '.1e')} | {fmt(r.get('error_worst'), '.1e')} | "
+            f"{fmt(r.get('ru_maxrss_mb'), '.0f')} | "
+            f"{fmt((r.get('load_average_bake') or [None])[0], '.1f')} | {r['status']} |"
+        )
     lines.append("")
     fitted = "; ".join(f"{name}: k = {k:.2f}" for name, k in exponents.items() if k is not None)
-    lines.append("Fitted exponents (time or memory ∝ vertices^k, least squares over the sizes measured): "
-                 + (fitted or "none (fewer than two sizes)") + ".")
+    lines.append(
+        "Fitted exponents (time or memory ∝ vertices^k, least squares over the sizes measured): "
+        + (fitted or "none (fewer than two sizes)")
+        + "."
+    )
     return "\n".join(lines)
 
 
@@ -359,28 +430,43 @@ def bake_markdown(row):
     if row is None or "stages" not in row:
         return f"(the bake did not finish: {row['status'] if row else 'not run'})"
     s = row["stages"]
-    lines = [f"Mesh: {row['label']} ({row['vertices']:,} vertices, {row['triangles']:,} triangles; {row['how']}).",
-             "", "| stage | wall time (s) |", "|---|---:|",
-             f"| load (PLY) | {s['load']:.1f} |", f"| clean | {s['clean']:.1f} |"]
+    lines = [
+        f"Mesh: {row['label']} ({row['vertices']:,} vertices, {row['triangles']:,} triangles; {row['how']}).",
+        "",
+        "| stage | wall time (s) |",
+        "|---|---:|",
+        f"| load (PLY) | {s['load']:.1f} |",
+        f"| clean | {s['clean']:.1f} |",
+    ]
     lines += [f"| shade: {name} | {s[name]:.1f} |" for name in SOLVER_STAGES.values()]
-    lines += [f"| shade: other (geometry, set-up, colours) | {stage_seconds(row, 'other (shade)'):.1f} |",
-              f"| write (baked PLY) | {s['write']:.1f} |",
-              f"| **bake, load to write** | **{row['bake_seconds']:.1f}** |", "",
-              "| measure | value | goal |", "|---|---:|---|"]
+    lines += [
+        f"| shade: other (geometry, set-up, colours) | {stage_seconds(row, 'other (shade)'):.1f} |",
+        f"| write (baked PLY) | {s['write']:.1f} |",
+        f"| **bake, load to write** | **{row['bake_seconds']:.1f}** |",
+        "",
+        "| measure | value | goal |",
+        "|---|---:|---|",
+    ]
     met = lambda ok: "met" if ok else "missed"  # noqa: E731
     judged = row["label"] == "1M"  # the goals are for the 1M-vertex bake
-    lines.append(f"| bake time | {row['bake_seconds']:.0f} s | ≤ {GOALS['bake_1M']:.0f} s at 1M vertices"
-                 + (f": {met(row['bake_seconds'] <= GOALS['bake_1M'])} |" if judged else " |"))
+    lines.append(
+        f"| bake time | {row['bake_seconds']:.0f} s | ≤ {GOALS['bake_1M']:.0f} s at 1M vertices"
+        + (f": {met(row['bake_seconds'] <= GOALS['bake_1M'])} |" if judged else " |")
+    )
     if "error_rms" in row:
-        lines.append(f"| error against `exact` at {row['receivers']} random vertices: rel. RMS | {100 * row['error_rms']:.2f} % "
-                     f"| ≤ 1 %: {met(row['error_rms'] <= GOAL_ERROR)} |")
+        lines.append(
+            f"| error against `exact` at {row['receivers']} random vertices: rel. RMS | {100 * row['error_rms']:.2f} % "
+            f"| ≤ 1 %: {met(row['error_rms'] <= GOAL_ERROR)} |"
+        )
         lines.append(f"| worst lit-vertex error | {100 * row['error_worst']:.1f} % | |")
     lines.append(f"| peak RSS of the bake (VmHWM after writing) | {row['peak_rss_bake_mb'] / 1024:.2f} GB | |")
     lines.append(f"| peak RSS of the child (exact included, ru_maxrss) | {row['ru_maxrss_mb'] / 1024:.2f} GB | |")
     if "warm_seconds" in row:
         lines.append(f"| a later shade of the same scene (caches warm) | {row['warm_seconds']:.0f} s | |")
-    lines.append(f"| load average (1 min) at the start / end of the bake | {row['load_average_start'][0]:.1f} / "
-                 f"{row['load_average_bake'][0]:.1f} | |")
+    lines.append(
+        f"| load average (1 min) at the start / end of the bake | {row['load_average_start'][0]:.1f} / "
+        f"{row['load_average_bake'][0]:.1f} | |"
+    )
     return "\n".join(lines)
 
 
@@ -399,8 +485,10 @@ def run(labels, repeats, time_limit, memory_limit_gb):
             record = run_child(path, folder / f"igea_{label}.json", repeats, time_limit, memory_limit_gb)
             record.update(label=label, how=how, built_vertices=len(points))
             rows.append(record)
-            print(f"{label}: {record['status']}; bake {record.get('bake_seconds', float('nan')):.1f} s, "
-                  f"error {record.get('error_rms', float('nan')):.2e}, peak RSS {record['ru_maxrss_mb']:.0f} MB")
+            print(
+                f"{label}: {record['status']}; bake {record.get('bake_seconds', float('nan')):.1f} s, "
+                f"error {record.get('error_rms', float('nan')):.2e}, peak RSS {record['ru_maxrss_mb']:.0f} MB"
+            )
             for stale in folder.glob(f"igea_{label}*.ply"):
                 stale.unlink()
     finally:
@@ -430,14 +518,18 @@ def main(argv=None):
     rows = run(labels, args.repeats, args.time_limit, args.memory_limit)
     info["seconds_total"] = time.perf_counter() - start
     done = [r for r in rows if "vertices" in r]
-    exponents = {name: fit_exponent([r["vertices"] for r in done], seconds)
-                 for name, seconds in curves(done).items()}
-    exponents["peak RSS of the bake"] = fit_exponent([r["vertices"] for r in done],
-                                                     [r.get("peak_rss_bake_mb", np.nan) for r in done])
+    exponents = {name: fit_exponent([r["vertices"] for r in done], seconds) for name, seconds in curves(done).items()}
+    exponents["peak RSS of the bake"] = fit_exponent(
+        [r["vertices"] for r in done], [r.get("peak_rss_bake_mb", np.nan) for r in done]
+    )
     out = output_dir(args.quick)
     largest = rows[-1] if rows else None
-    write_results(out, "scaling", {"info": info, "receivers": RECEIVERS, "goals": GOALS, "exponents": exponents,
-                                   "rows": rows}, markdown(rows, exponents))
+    write_results(
+        out,
+        "scaling",
+        {"info": info, "receivers": RECEIVERS, "goals": GOALS, "exponents": exponents, "rows": rows},
+        markdown(rows, exponents),
+    )
     (out / "bake.md").write_text(bake_markdown(largest) + "\n")
     if done:
         plot(rows, exponents, out / "scaling.png")

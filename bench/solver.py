@@ -39,11 +39,11 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from translucency import __version__  # noqa: E402,F401  (first: it selects numba's threading layer)
-
 import numba  # noqa: E402
 import numpy as np  # noqa: E402
 from report import load_average, machine_info, output_dir, write_results  # noqa: E402
+
+from translucency import __version__  # noqa: E402,F401  (first: it selects numba's threading layer)
 from translucency.app.pipeline import Scene  # noqa: E402
 from translucency.io.clean import clean_mesh  # noqa: E402
 from translucency.io.load import load_mesh  # noqa: E402
@@ -144,35 +144,74 @@ def throughput(geometry, incident, medium):
     receivers = np.arange(min(6000, geometry.n_vertices))
     rows = kernels.channel_parameters(medium.sigma_a, medium.sigma_s, medium.g, medium.eta)
     flux = incident.phi_rgb * geometry.vertex_areas[:, None]
-    cols = [np.ascontiguousarray(a[lit, i]) for a in (geometry.points, geometry.normals, incident.w12) for i in range(3)]
-    run = lambda: kernels.vertex_sum(0, geometry.points[lit], geometry.normals[lit], incident.w12[lit], flux[lit],  # noqa: E731
-                                     geometry.points[receivers], geometry.normals[receivers], rows, np.arange(3))
+    cols = [
+        np.ascontiguousarray(a[lit, i]) for a in (geometry.points, geometry.normals, incident.w12) for i in range(3)
+    ]
+
+    def run():
+        return kernels.vertex_sum(
+            0,
+            geometry.points[lit],
+            geometry.normals[lit],
+            incident.w12[lit],
+            flux[lit],
+            geometry.points[receivers],
+            geometry.normals[receivers],
+            rows,
+            np.arange(3),
+        )
+
     _, seconds = timed(run, 3)
     pairs = lit.size * receivers.size
-    ref = lambda: _reference_loop(cols[0], cols[1], cols[2], *[np.ascontiguousarray(geometry.points[receivers, i]) for i in range(3)])  # noqa: E731
+
+    def ref():
+        return _reference_loop(
+            cols[0], cols[1], cols[2], *[np.ascontiguousarray(geometry.points[receivers, i]) for i in range(3)]
+        )
+
     _, ref_seconds = timed(ref, 3)
     xs = np.linspace(0.05, 0.45, 4096)
     fma_rows = 20000
     _, fma_seconds = timed(lambda: _fma_loop(xs, fma_rows), 3)
     fma_flops = 2.0 * FMA_DEGREE * xs.size * fma_rows / fma_seconds
     reference_flops = REFERENCE_FLOP_PER_PAIR * pairs / ref_seconds
-    return {"pairs": pairs, "seconds": seconds, "pairs_per_second": pairs / seconds,
-            "reference_loop_pairs_per_second": pairs / ref_seconds,
-            "fraction_of_reference": (pairs / seconds) / (pairs / ref_seconds),
-            "reference_flop_per_pair": REFERENCE_FLOP_PER_PAIR, "reference_loop_flops": reference_flops,
-            "fma_loop_flops": fma_flops, "reference_fraction_of_fma_peak": reference_flops / fma_flops,
-            "load_average": load_average()}
+    return {
+        "pairs": pairs,
+        "seconds": seconds,
+        "pairs_per_second": pairs / seconds,
+        "reference_loop_pairs_per_second": pairs / ref_seconds,
+        "fraction_of_reference": (pairs / seconds) / (pairs / ref_seconds),
+        "reference_flop_per_pair": REFERENCE_FLOP_PER_PAIR,
+        "reference_loop_flops": reference_flops,
+        "fma_loop_flops": fma_flops,
+        "reference_fraction_of_fma_peak": reference_flops / fma_flops,
+        "load_average": load_average(),
+    }
 
 
 def make_row(scan, n, name, method, tol, resolution, seconds, repeats, rms, worst, receivers, stats, timings, **extra):
     """One result row (every benchmark row has the same keys; ``extra`` adds what a setting has beyond them)."""
-    return dict(scan=scan, vertices=n, material=name, lights=LIGHTS_LABEL, method=method, tol=tol,
-                resolution=resolution, seconds=seconds, repeats=repeats, error_rms=rms, error_worst=worst,
-                receivers=int(receivers), pairs_evaluated=int(stats.get("pairs_evaluated", 0)),
-                pairs_skipped=int(stats.get("pairs_skipped", 0)),
-                sources_skipped=int(stats.get("sources_skipped_no_flux", 0)),
-                vertices_solved=int(extra.pop("vertices_solved", n)), timings=timings, load_average=load_average(),
-                **extra)
+    return dict(
+        scan=scan,
+        vertices=n,
+        material=name,
+        lights=LIGHTS_LABEL,
+        method=method,
+        tol=tol,
+        resolution=resolution,
+        seconds=seconds,
+        repeats=repeats,
+        error_rms=rms,
+        error_worst=worst,
+        receivers=int(receivers),
+        pairs_evaluated=int(stats.get("pairs_evaluated", 0)),
+        pairs_skipped=int(stats.get("pairs_skipped", 0)),
+        sources_skipped=int(stats.get("sources_skipped_no_flux", 0)),
+        vertices_solved=int(extra.pop("vertices_solved", n)),
+        timings=timings,
+        load_average=load_average(),
+        **extra,
+    )
 
 
 def method_rows(scan, name, geometry, incident, medium, receivers, exact, settings, repeats):
@@ -183,14 +222,32 @@ def method_rows(scan, name, geometry, incident, medium, receivers, exact, settin
         solve(geometry, incident.phi_rgb, incident.w12, medium, method=method, tol=0.5)  # compile, fill caches
     for method, tol in settings:
         # time the solve at every vertex (warm); measure the error at the exact's receivers
-        full, seconds = timed(lambda: solve(geometry, incident.phi_rgb, incident.w12, medium, method=method,
-                                            tol=tol), repeats, warm=False)
+        full, seconds = timed(
+            lambda: solve(geometry, incident.phi_rgb, incident.w12, medium, method=method, tol=tol), repeats, warm=False
+        )
         rms, worst = errors(full.B[receivers], exact.B)
-        rows.append(make_row(scan, n, name, method, tol, "full", seconds, repeats, rms, worst, receivers.size,
-                             full.stats, full.timings))
-        print(f"{scan:6s} {n:7d} {name:10s} {method:6s} tol {tol:<6g} {seconds:7.2f} s  "
-              f"rms {rms:.2e}  worst {worst:.2e}  far {full.timings['far_field']:.2f} s  "
-              f"near {full.timings['near_field']:.2f} s")
+        rows.append(
+            make_row(
+                scan,
+                n,
+                name,
+                method,
+                tol,
+                "full",
+                seconds,
+                repeats,
+                rms,
+                worst,
+                receivers.size,
+                full.stats,
+                full.timings,
+            )
+        )
+        print(
+            f"{scan:6s} {n:7d} {name:10s} {method:6s} tol {tol:<6g} {seconds:7.2f} s  "
+            f"rms {rms:.2e}  worst {worst:.2e}  far {full.timings['far_field']:.2f} s  "
+            f"near {full.timings['near_field']:.2f} s"
+        )
     return rows
 
 
@@ -203,17 +260,34 @@ def proxy_rows(scan, name, scene, medium, receivers, exact, resolutions, repeats
     rows = []
     n = scene.mesh.n_points
     for resolution in resolutions:
-        result, seconds = timed(lambda: scene.shade(medium, LIGHT, method=PROXY_METHOD, tol=PROXY_TOL,
-                                                    resolution=resolution), repeats)
+        result, seconds = timed(
+            lambda: scene.shade(medium, LIGHT, method=PROXY_METHOD, tol=PROXY_TOL, resolution=resolution), repeats
+        )
         solver_mesh, decimation, edge, _, _ = scene.solver_mesh(medium, resolution)
         rms, worst = errors(result.B[receivers], exact.B)
         label = f"{resolution:g} mm" if isinstance(resolution, float) else resolution
         label += f": {solver_mesh.n_points} vertices" if decimation is not None else ": full (no proxy)"
-        rows.append(make_row(scan, n, name, PROXY_METHOD, PROXY_TOL, label, seconds, repeats, rms, worst,
-                             receivers.size, result.stats["solver"], result.timings,
-                             vertices_solved=solver_mesh.n_points, proxy_edge_mm=edge,
-                             proxy_seconds=None if decimation is None else decimation.seconds,
-                             resolution_setting=resolution))
+        rows.append(
+            make_row(
+                scan,
+                n,
+                name,
+                PROXY_METHOD,
+                PROXY_TOL,
+                label,
+                seconds,
+                repeats,
+                rms,
+                worst,
+                receivers.size,
+                result.stats["solver"],
+                result.timings,
+                vertices_solved=solver_mesh.n_points,
+                proxy_edge_mm=edge,
+                proxy_seconds=None if decimation is None else decimation.seconds,
+                resolution_setting=resolution,
+            )
+        )
         print(f"{scan:6s} {n:7d} {name:10s} proxy {label:28s} {seconds:7.2f} s  rms {rms:.2e}  worst {worst:.2e}")
     return rows
 
@@ -238,19 +312,37 @@ def run(scans, materials, settings, repeats, resolutions=PROXY_RESOLUTIONS, subs
         receivers = np.arange(n) if everywhere else np.sort(rng.choice(n, min(subset, n), replace=False))
         for name in materials:
             medium = material(name).medium()
-            incident = incident_flux(mesh.points, geometry.normals, geometry.vertex_areas, LIGHT, medium.eta,
-                                     triangles=mesh.triangles)
+            incident = incident_flux(
+                mesh.points, geometry.normals, geometry.vertex_areas, LIGHT, medium.eta, triangles=mesh.triangles
+            )
             if kernel_speed is None:
                 kernel_speed = throughput(geometry, incident, medium)
-                print(f"exact kernel: {kernel_speed['pairs_per_second'] / 1e6:.1f} M pairs/s "
-                      f"({kernel_speed['fraction_of_reference']:.2f} of the reference loop's "
-                      f"{kernel_speed['reference_loop_pairs_per_second'] / 1e6:.1f} M/s); "
-                      f"FMA loop {kernel_speed['fma_loop_flops'] / 1e9:.1f} GFLOP/s")
+                print(
+                    f"exact kernel: {kernel_speed['pairs_per_second'] / 1e6:.1f} M pairs/s "
+                    f"({kernel_speed['fraction_of_reference']:.2f} of the reference loop's "
+                    f"{kernel_speed['reference_loop_pairs_per_second'] / 1e6:.1f} M/s); "
+                    f"FMA loop {kernel_speed['fma_loop_flops'] / 1e9:.1f} GFLOP/s"
+                )
             start = time.perf_counter()
             exact = solve(geometry, incident.phi_rgb, incident.w12, medium, method="exact", receivers=receivers)
             exact_seconds = time.perf_counter() - start
-            rows.append(make_row(scan, n, name, "exact", None, "full", exact_seconds, 1, 0.0, 0.0, receivers.size,
-                                 exact.stats, exact.timings))
+            rows.append(
+                make_row(
+                    scan,
+                    n,
+                    name,
+                    "exact",
+                    None,
+                    "full",
+                    exact_seconds,
+                    1,
+                    0.0,
+                    0.0,
+                    receivers.size,
+                    exact.stats,
+                    exact.timings,
+                )
+            )
             print(f"{scan:6s} {n:7d} {name:10s} exact            {exact_seconds:7.2f} s (receivers {receivers.size})")
             rows += method_rows(scan, name, geometry, incident, medium, receivers, exact, settings, repeats)
             rows += proxy_rows(scan, name, scene, medium, receivers, exact, resolutions, repeats)
@@ -282,11 +374,19 @@ def plot(rows, path):
     for ax, scan in zip(axes[0], scans):
         for name in colours:
             for key in names:
-                sel = [r for r in rows if r["scan"] == scan and r["material"] == name and r["method"] != "exact"
-                       and series(r) == key]
+                sel = [
+                    r
+                    for r in rows
+                    if r["scan"] == scan and r["material"] == name and r["method"] != "exact" and series(r) == key
+                ]
                 if sel:
-                    ax.plot([max(r["error_rms"], 1e-7) for r in sel], [r["seconds"] for r in sel], marker=markers[key],
-                            color=colours[name], ls="-" if len(sel) > 1 else "none")
+                    ax.plot(
+                        [max(r["error_rms"], 1e-7) for r in sel],
+                        [r["seconds"] for r in sel],
+                        marker=markers[key],
+                        color=colours[name],
+                        ls="-" if len(sel) > 1 else "none",
+                    )
             ex = [r for r in rows if r["scan"] == scan and r["material"] == name and r["method"] == "exact"]
             if ex and ex[0]["receivers"] == ex[0]["vertices"]:
                 ax.axhline(ex[0]["seconds"], color=colours[name], lw=0.8, ls=":")
@@ -303,8 +403,9 @@ def plot(rows, path):
     handles = [Line2D([], [], color=c, label=m) for m, c in colours.items() if m in present]
     handles += [Line2D([], [], color="k", marker=markers[k], ls="none", label=k) for k in names]
     axes[0][0].legend(handles=handles, fontsize=7)
-    fig.suptitle("translucency solver: time against error\n(one directional light, Embree shadows; dotted: exact)",
-                 fontsize=10)
+    fig.suptitle(
+        "translucency solver: time against error\n(one directional light, Embree shadows; dotted: exact)", fontsize=10
+    )
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
@@ -312,16 +413,22 @@ def plot(rows, path):
 
 def markdown(rows):
     """The Markdown table of the rows."""
-    lines = ["| scan | vertices | material | lights | method | tol | resolution | time (s) | runs | rel. RMS error "
-             "| worst lit-vertex error | pairs evaluated | pairs skipped | sources skipped (no flux) | vertices skipped (proxy) | load |",
-             "|---|---:|---|---|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
+    lines = [
+        "| scan | vertices | material | lights | method | tol | resolution | time (s) | runs | rel. RMS error "
+        "| worst lit-vertex error | pairs evaluated | pairs skipped | sources skipped (no flux) | vertices "
+        "skipped (proxy) | load |",
+        "|---|---:|---|---|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
+    ]
     for r in rows:
         tol = "" if r["tol"] is None else f"{r['tol']:g}"
         note = "" if r["method"] != "exact" or r["receivers"] == r["vertices"] else f" ({r['receivers']} receivers)"
-        lines.append(f"| {r['scan']} | {r['vertices']} | {r['material']} | {r['lights']} | {r['method']}{note} | {tol} | "
-                     f"{r['resolution']} | {r['seconds']:.2f} | {r['repeats']} | {r['error_rms']:.1e} | {r['error_worst']:.1e} | "
-                     f"{r['pairs_evaluated']:,} | {r['pairs_skipped']:,} | {r['sources_skipped']:,} | "
-                     f"{r['vertices'] - r['vertices_solved']:,} | {r['load_average'][0]:.1f} |")
+        lines.append(
+            f"| {r['scan']} | {r['vertices']} | {r['material']} | {r['lights']} | {r['method']}{note} | {tol} | "
+            f"{r['resolution']} | {r['seconds']:.2f} | {r['repeats']} | {r['error_rms']:.1e} | "
+            f"{r['error_worst']:.1e} | "
+            f"{r['pairs_evaluated']:,} | {r['pairs_skipped']:,} | {r['sources_skipped']:,} | "
+            f"{r['vertices'] - r['vertices_solved']:,} | {r['load_average'][0]:.1f} |"
+        )
     return "\n".join(lines)
 
 
@@ -330,24 +437,31 @@ def kernel_markdown(speed):
     if not speed:
         return "(not measured: no scan available)"
     fma = speed["fma_loop_flops"]
-    return "\n".join([
-        "| loop | pairs/s | GFLOP/s | fraction |",
-        "|---|---:|---:|---|",
-        f"| `exact` kernel (directional dipole, 3 channels) | {speed['pairs_per_second'] / 1e6:.1f} M | | "
-        f"{speed['fraction_of_reference']:.3f} of the reference loop |",
-        f"| reference loop (one sqrt + one exp per pair, ≈ {speed['reference_flop_per_pair']} FLOP) | "
-        f"{speed['reference_loop_pairs_per_second'] / 1e6:.1f} M | {speed['reference_loop_flops'] / 1e9:.1f} | "
-        f"{speed['reference_fraction_of_fma_peak']:.2f} of the FMA loop |",
-        f"| FMA loop (degree-{FMA_DEGREE} Horner polynomial, L1-resident) | | {fma / 1e9:.1f} | the machine's measured peak |",
-        "",
-        f"Load average during the measurement: {speed['load_average'][0]:.1f} (1 min).",
-    ])
+    return "\n".join(
+        [
+            "| loop | pairs/s | GFLOP/s | fraction |",
+            "|---|---:|---:|---|",
+            f"| `exact` kernel (directional dipole, 3 channels) | {speed['pairs_per_second'] / 1e6:.1f} M | | "
+            f"{speed['fraction_of_reference']:.3f} of the reference loop |",
+            f"| reference loop (one sqrt + one exp per pair, ≈ {speed['reference_flop_per_pair']} FLOP) | "
+            f"{speed['reference_loop_pairs_per_second'] / 1e6:.1f} M | {speed['reference_loop_flops'] / 1e9:.1f} | "
+            f"{speed['reference_fraction_of_fma_peak']:.2f} of the FMA loop |",
+            f"| FMA loop (degree-{FMA_DEGREE} Horner polynomial, L1-resident) | | {fma / 1e9:.1f} | the "
+            "machine's measured peak |",
+            "",
+            f"Load average during the measurement: {speed['load_average'][0]:.1f} (1 min).",
+        ]
+    )
 
 
 def main(argv=None):
     """Command line: run the benchmark, write the JSON, the tables and the plot."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true", help="bunny in marble only, fewer settings, error at 1000 vertices, one repeat, into results/tmp")
+    parser.add_argument(
+        "--quick",
+        action="store_true",
+        help="bunny in marble only, fewer settings, error at 1000 vertices, one repeat, into results/tmp",
+    )
     parser.add_argument("--repeats", type=int, default=3, help="timed warm solves per setting (median reported)")
     parser.add_argument("--scans", nargs="+", choices=list(SCANS), help="scans to run (default: all; --quick: bunny)")
     args = parser.parse_args(argv)
@@ -360,8 +474,9 @@ def main(argv=None):
     info = {**machine_info(), "light": LIGHT.to_dict()}
     start = time.perf_counter()
     materials = MATERIALS[:1] if args.quick else MATERIALS
-    rows, kernel_speed = run(scans, materials, settings, 1 if args.quick else args.repeats, resolutions,
-                             subset=1000 if args.quick else 4000)
+    rows, kernel_speed = run(
+        scans, materials, settings, 1 if args.quick else args.repeats, resolutions, subset=1000 if args.quick else 4000
+    )
     info["seconds_total"] = time.perf_counter() - start
     out = output_dir(args.quick)
     table = markdown(rows)

@@ -364,8 +364,15 @@ def albedo_sweep(scale, seed):
         for albedo in SWEEP_ALBEDOS:
             sigma_a, sigma_s = 1.0 - albedo, albedo
             tally = simulate_half_space(
-                sigma_a, sigma_s, 0.0, eta, 0.0, n_photons=max(int(SWEEP_PHOTONS * scale), 64), seed=seed,
-                grid_cells=3, radial_bins=3,
+                sigma_a,
+                sigma_s,
+                0.0,
+                eta,
+                0.0,
+                n_photons=max(int(SWEEP_PHOTONS * scale), 64),
+                seed=seed,
+                grid_cells=3,
+                radial_bins=3,
             )
             row = {
                 "eta": eta,
@@ -409,9 +416,13 @@ def figure_cuts(key, records, out):
         mc = np.asarray(cut["mc"])
         se = np.asarray(cut["mc_se"])
         positive = mc > 0
-        ax.errorbar(x[positive], mc[positive], yerr=2 * se[positive], fmt="o", ms=3, color="k", label="MC (all orders, ±2 SE)")
+        ax.errorbar(
+            x[positive], mc[positive], yerr=2 * se[positive], fmt="o", ms=3, color="k", label="MC (all orders, ±2 SE)"
+        )
         multiple = np.asarray(cut["mc_multiple"])
-        ax.plot(x[multiple > 0], multiple[multiple > 0], "o", ms=3, mfc="none", color="0.45", label="MC multiple scattering")
+        ax.plot(
+            x[multiple > 0], multiple[multiple > 0], "o", ms=3, mfc="none", color="0.45", label="MC multiple scattering"
+        )
         for model in MODELS:
             ax.plot(x, cut[model], label=MODEL_LABELS[model], **MODEL_STYLES[model])
         ax.set_yscale("log")
@@ -457,10 +468,15 @@ def figure_maps(key, records, all_maps, regions, out):
                 )
             else:
                 image = ax.imshow(
-                    np.where(maps[name] > 0, maps[name], np.nan), origin="lower", extent=extent, cmap="magma",
+                    np.where(maps[name] > 0, maps[name], np.nan),
+                    origin="lower",
+                    extent=extent,
+                    cmap="magma",
                     norm=exitance_norm,
                 )
-                ax.set_title(("MC" if name == "mc" else MODEL_LABELS[name]) + f", θi = {record['theta_i_deg']:.0f}°", fontsize=8)
+                ax.set_title(
+                    ("MC" if name == "mc" else MODEL_LABELS[name]) + f", θi = {record['theta_i_deg']:.0f}°", fontsize=8
+                )
             ax.tick_params(labelsize=6)
             if col in (1, 4):
                 fig.colorbar(image, ax=ax, fraction=0.046, pad=0.02).ax.tick_params(labelsize=6)
@@ -476,8 +492,9 @@ def figure_maps(key, records, all_maps, regions, out):
 
 
 def figure_albedo(rows, out):
-    fig, axes = plt.subplots(2, len(SWEEP_ETAS), figsize=(5.0 * len(SWEEP_ETAS), 7.5), sharex=True,
-                             gridspec_kw={"height_ratios": [2.2, 1]})
+    fig, axes = plt.subplots(
+        2, len(SWEEP_ETAS), figsize=(5.0 * len(SWEEP_ETAS), 7.5), sharex=True, gridspec_kw={"height_ratios": [2.2, 1]}
+    )
     fine = 1.0 - np.geomspace(0.99, 5e-4, 160)  # reduced albedo, dense toward 1
     ticks = (0.05, 0.5, 0.8, 0.9, 0.95, 0.98, 0.99, 0.995, 0.999)
     for col, eta in enumerate(SWEEP_ETAS):
@@ -485,24 +502,43 @@ def figure_albedo(rows, out):
         albedo = np.array([r["alpha_reduced"] for r in sub])
         mc = np.array([r["mc"] for r in sub])
         ax = axes[0, col]
-        ax.errorbar(1 - albedo, mc, yerr=[2 * r["mc_se"] for r in sub], fmt="o", color="k", ms=4,
-                    label="MC (all orders, ±2 SE)")
-        ax.plot(1 - albedo, [r["mc_multiple"] for r in sub], "o", mfc="none", color="0.45", ms=4,
-                label="MC multiple scattering")
+        ax.errorbar(
+            1 - albedo, mc, yerr=[2 * r["mc_se"] for r in sub], fmt="o", color="k", ms=4, label="MC (all orders, ±2 SE)"
+        )
+        ax.plot(
+            1 - albedo,
+            [r["mc_multiple"] for r in sub],
+            "o",
+            mfc="none",
+            color="0.45",
+            ms=4,
+            label="MC multiple scattering",
+        )
         for model in MODELS:
             curve = [model_total(model, 0.0, 1.0 - a, a, 0.0, eta) for a in fine]
             ax.plot(1 - fine, curve, label=MODEL_LABELS[model], **MODEL_STYLES[model])
         if eta == 1.0:
-            ax.plot(1 - fine, [exact_total_reflectance(a, 0.0) for a in fine], color="0.3", lw=3, alpha=0.35,
-                    label="exact (Chandrasekhar H)")
+            ax.plot(
+                1 - fine,
+                [exact_total_reflectance(a, 0.0) for a in fine],
+                color="0.3",
+                lw=3,
+                alpha=0.35,
+                label="exact (Chandrasekhar H)",
+            )
         ax.set_title(f"η = {eta}, normal incidence, g = 0")
         ax.set_ylabel("total diffuse reflectance per refracted photon")
         ax.grid(alpha=0.3)
         ax.set_ylim(0, 1.3)
         ratio_ax = axes[1, col]
         for model in MODELS:
-            ratio_ax.plot(1 - albedo, np.array([r[model] for r in sub]) / mc, marker=".", label=MODEL_LABELS[model],
-                          **MODEL_STYLES[model])
+            ratio_ax.plot(
+                1 - albedo,
+                np.array([r[model] for r in sub]) / mc,
+                marker=".",
+                label=MODEL_LABELS[model],
+                **MODEL_STYLES[model],
+            )
         ratio_ax.axhline(1.0, color="k", lw=0.8)
         ratio_ax.set_yscale("log")
         ratio_ax.set_ylim(0.05, 40)
@@ -585,7 +621,9 @@ def _material_row(record, with_angle):
     median = " / ".join(_fraction(m[k]["median_cell_relative_error"]) for k in MODELS)
     total = " / ".join(_percent(m[k]["total_relative_error"]) for k in MODELS)
     where = f"{record['theta_i_deg']:.0f}°" if with_angle else record["channel"]
-    floors = f"{100 * m['directional']['relative_rms_noise_floor']:.1f} / {100 * record['median_cell_noise_floor']:.0f} %"
+    floors = (
+        f"{100 * m['directional']['relative_rms_noise_floor']:.1f} / {100 * record['median_cell_noise_floor']:.0f} %"
+    )
     return (
         f"| {record['material']} | {record['alpha_reduced']:.4f} | {where} | "
         f"{mc['total_reflectance']:.4g} ± {mc['total_reflectance_se']:.2g} | "
@@ -606,7 +644,8 @@ def markdown_tables(mc_rows, records, sweep_rows, timings):
         "Columns per model (dir. / std. / better): relative RMS over the error region (exitance-weighted, MC noise "
         "removed); median over the region's cells of |model − MC| / MC; error of the total reflectance.",
         "",
-        "| material | α′ | θi | MC total ± SE | MC single | rel. RMS | median cell error | total error | noise RMS / median |",
+        "| material | α′ | θi | MC total ± SE | MC single | rel. RMS | median cell error | total error | "
+        "noise RMS / median |",
         "|---|---|---|---|---|---|---|---|---|",
     ]
     for record in records:
@@ -614,7 +653,8 @@ def markdown_tables(mc_rows, records, sweep_rows, timings):
             lines.append(_material_row(record, with_angle=True))
     lines += ["", "### Normal incidence, all channels", ""]
     lines += [
-        "| material | α′ | channel | MC total ± SE | MC single | rel. RMS | median cell error | total error | noise RMS / median |",
+        "| material | α′ | channel | MC total ± SE | MC single | rel. RMS | median cell error | total error | "
+        "noise RMS / median |",
         "|---|---|---|---|---|---|---|---|---|",
     ]
     for record in records:
@@ -641,7 +681,8 @@ def markdown_tables(mc_rows, records, sweep_rows, timings):
     for row in sweep_rows:
         exact = f"{row['exact']:.4f}" if "exact" in row else "—"
         lines.append(
-            f"| {row['eta']} | {row['alpha_reduced']} | {row['mc']:.4f} ± {row['mc_se']:.4f} | {row['mc_single']:.4f} | "
+            f"| {row['eta']} | {row['alpha_reduced']} | {row['mc']:.4f} ± {row['mc_se']:.4f} | "
+            f"{row['mc_single']:.4f} | "
             f"{exact} | {row['directional']:.4f} | {row['standard']:.4f} | {row['better']:.4f} |"
         )
     lines += ["", "Run time (s): " + ", ".join(f"{k} {v:.0f}" for k, v in timings.items())]

@@ -35,8 +35,10 @@ def main():
     tl.render_colors(mesh, result.colors, png, window_size=(320, 320) if args.quick else (800, 800))
 
     baked = tl.read_baked_ply(ply)
-    print(f"wrote {ply} ({baked.metadata['material']}, {baked.metadata['model']} dipole, "
-          f"exposure {baked.metadata['exposure']:.3g}) and {png}")
+    print(
+        f"wrote {ply} ({baked.metadata['material']}, {baked.metadata['model']} dipole, "
+        f"exposure {baked.metadata['exposure']:.3g}) and {png}"
+    )
 
 
 if __name__ == "__main__":

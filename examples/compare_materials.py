@@ -23,8 +23,12 @@ def main():
     parser.add_argument("--quick", action="store_true", help="a decimated scan and small images (a few seconds)")
     args = parser.parse_args()
 
-    result = tl.compare(default_scan(args.quick), ["marble", "skim_milk", "ketchup"], output=args.output,
-                        cell_size=(240, 240) if args.quick else (480, 480))
+    result = tl.compare(
+        default_scan(args.quick),
+        ["marble", "skim_milk", "ketchup"],
+        output=args.output,
+        cell_size=(240, 240) if args.quick else (480, 480),
+    )
     for material in result.materials:
         r, g, b = result.mean(material, "directional")
         print(f"{material:<10} mean radiance over lit vertices R {r:.4f} G {g:.4f} B {b:.4f} W/(m^2 sr) per W/m^2")

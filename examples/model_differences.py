@@ -23,12 +23,20 @@ def main():
     if args.quick:
         mesh = tl.decimate_mesh(mesh, target_faces=4000).proxy
     grazing = tl.DirectionalLight((1.0, 0.15, 0.2), 1.0)
-    result = tl.compare(mesh, ["skim_milk"], ["directional", "standard", "better"], grazing, output=args.output,
-                        cell_size=(240, 240) if args.quick else (480, 480))
+    result = tl.compare(
+        mesh,
+        ["skim_milk"],
+        ["directional", "standard", "better"],
+        grazing,
+        output=args.output,
+        cell_size=(240, 240) if args.quick else (480, 480),
+    )
     for row in result.differences:
         if row["subset"] == "lit":
-            print(f"{row['model']:<9} vs {row['reference']}: mean relative difference {row['mean']:+.3f} "
-                  f"(5-95 %: {row['p5']:+.3f} to {row['p95']:+.3f})")
+            print(
+                f"{row['model']:<9} vs {row['reference']}: mean relative difference {row['mean']:+.3f} "
+                f"(5-95 %: {row['p5']:+.3f} to {row['p95']:+.3f})"
+            )
     print(f"wrote {result.files['differences']}")
 
 

@@ -79,14 +79,21 @@ def test_io_and_scatter_never_import_each_other(a, b):
 
 
 def test_geometry_imports_neither_io_scatter_nor_app():
-    upward = [f"{m}:{line} imports {t}" for m, t, _, line in EDGES
-              if _layer(m) == "geometry" and _layer(t) in ("io", "scatter", "app")]
+    upward = [
+        f"{m}:{line} imports {t}"
+        for m, t, _, line in EDGES
+        if _layer(m) == "geometry" and _layer(t) in ("io", "scatter", "app")
+    ]
     assert not upward, upward
 
 
 def test_no_private_name_is_imported_from_another_module():
-    private = [f"{m}:{line} imports {t}.{n}" for m, t, names, line in EDGES for n in names
-               if n.startswith("_") and not n.startswith("__") and t != m]
+    private = [
+        f"{m}:{line} imports {t}.{n}"
+        for m, t, names, line in EDGES
+        for n in names
+        if n.startswith("_") and not n.startswith("__") and t != m
+    ]
     assert not private, private
 
 
@@ -113,8 +120,9 @@ def _outside_imports():
             if isinstance(node, ast.Import):
                 targets = [alias.name for alias in node.names]
             elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
-                targets = [node.module] + [f"{node.module}.{a.name}" for a in node.names
-                                           if f"{node.module}.{a.name}" in MODULES]
+                targets = [node.module] + [
+                    f"{node.module}.{a.name}" for a in node.names if f"{node.module}.{a.name}" in MODULES
+                ]
             else:
                 continue
             for target in targets:

@@ -85,12 +85,16 @@ def good_file(tmp_path):
     return path
 
 
-@pytest.mark.parametrize("output, named, expected", [
-    ("scan.ply", "scan.ply", "is the input file"),
-    ("missing/out.ply", "missing", "does not exist"),
-    ("folder.ply", "folder.ply", "is a folder"),
-    ("out.xyz", "out.xyz", "cannot write"),
-], ids=["same-as-input", "missing-folder", "folder", "unknown-suffix"])
+@pytest.mark.parametrize(
+    "output, named, expected",
+    [
+        ("scan.ply", "scan.ply", "is the input file"),
+        ("missing/out.ply", "missing", "does not exist"),
+        ("folder.ply", "folder.ply", "is a folder"),
+        ("out.xyz", "out.xyz", "cannot write"),
+    ],
+    ids=["same-as-input", "missing-folder", "folder", "unknown-suffix"],
+)
 def test_cli_bad_output_path(tmp_path, capsys, good_file, output, named, expected):
     (tmp_path / "folder.ply").mkdir()
     before = sorted(p.name for p in tmp_path.iterdir())
@@ -136,15 +140,19 @@ def test_cli_good_file_writes_the_repaired_mesh(tmp_path, capsys, good_file):
 
 
 def _run(*args):
-    done = subprocess.run([sys.executable, "-m", "translucency", *map(str, args)], capture_output=True, text=True,
-                          timeout=300)
+    done = subprocess.run(
+        [sys.executable, "-m", "translucency", *map(str, args)], capture_output=True, text=True, timeout=300
+    )
     return done.returncode, done.stdout, done.stderr
 
 
-@pytest.mark.parametrize("name, content, expected", [
-    ("cut.stl", binary_stl(POINTS, TRIANGLES)[:2084], "is truncated"),
-    ("scan.obj", binary_ply(POINTS, TRIANGLES), "but PLY data"),
-])
+@pytest.mark.parametrize(
+    "name, content, expected",
+    [
+        ("cut.stl", binary_stl(POINTS, TRIANGLES)[:2084], "is truncated"),
+        ("scan.obj", binary_ply(POINTS, TRIANGLES), "but PLY data"),
+    ],
+)
 def test_subprocess_bad_file(tmp_path, name, content, expected):
     path = tmp_path / name
     path.write_bytes(content)
@@ -158,19 +166,33 @@ def test_subprocess_bad_file(tmp_path, name, content, expected):
 # ------------------------------------------------------------------- material parameters (Python API)
 
 
-@pytest.mark.parametrize("make, error, expected", [
-    (lambda: Medium(-0.01, 1.0, 0.0, 1.3), InvalidParameterError, "sigma_a must be >= 0"),
-    (lambda: Medium(0.01, -1.0, 0.0, 1.3), InvalidParameterError, "sigma_s must be >= 0"),
-    (lambda: Medium(0.01, 1.0, 0.0, 0.9), InvalidParameterError, "eta = n_inside / n_outside must be >= 1"),
-    (lambda: Medium(0.01, [1.0, np.nan, 1.0], 0.0, 1.3), InvalidParameterError, "sigma_s must be finite"),
-    (lambda: Medium(0.01, 1.0, 0.0, np.nan), InvalidParameterError, "eta must be finite"),
-    (lambda: Medium(0.01, 1.0, 1.0, 1.3), InvalidParameterError, r"g must lie in \(-1, 1\)"),
-    (lambda: Medium(0.01, 0.0, 0.0, 1.3), InvalidParameterError, "must scatter"),
-    (lambda: material("unobtainium"), UnknownMaterialError, "unknown material 'unobtainium'"),
-    (lambda: material("coke").medium(), TranslucencyError, "does not scatter"),
-    (lambda: material("marble").medium().scaled(-1.0), InvalidParameterError, "positive number"),
-], ids=["negative-sigma_a", "negative-sigma_s", "eta-below-1", "nan-sigma_s", "nan-eta", "g-1", "no-scattering",
-        "unknown-name", "non-scattering-preset", "negative-scale"])
+@pytest.mark.parametrize(
+    "make, error, expected",
+    [
+        (lambda: Medium(-0.01, 1.0, 0.0, 1.3), InvalidParameterError, "sigma_a must be >= 0"),
+        (lambda: Medium(0.01, -1.0, 0.0, 1.3), InvalidParameterError, "sigma_s must be >= 0"),
+        (lambda: Medium(0.01, 1.0, 0.0, 0.9), InvalidParameterError, "eta = n_inside / n_outside must be >= 1"),
+        (lambda: Medium(0.01, [1.0, np.nan, 1.0], 0.0, 1.3), InvalidParameterError, "sigma_s must be finite"),
+        (lambda: Medium(0.01, 1.0, 0.0, np.nan), InvalidParameterError, "eta must be finite"),
+        (lambda: Medium(0.01, 1.0, 1.0, 1.3), InvalidParameterError, r"g must lie in \(-1, 1\)"),
+        (lambda: Medium(0.01, 0.0, 0.0, 1.3), InvalidParameterError, "must scatter"),
+        (lambda: material("unobtainium"), UnknownMaterialError, "unknown material 'unobtainium'"),
+        (lambda: material("coke").medium(), TranslucencyError, "does not scatter"),
+        (lambda: material("marble").medium().scaled(-1.0), InvalidParameterError, "positive number"),
+    ],
+    ids=[
+        "negative-sigma_a",
+        "negative-sigma_s",
+        "eta-below-1",
+        "nan-sigma_s",
+        "nan-eta",
+        "g-1",
+        "no-scattering",
+        "unknown-name",
+        "non-scattering-preset",
+        "negative-scale",
+    ],
+)
 def test_bad_material_parameters(make, error, expected):
     with pytest.raises(error, match=expected) as info:
         make()

@@ -18,8 +18,8 @@ BROKEN_PLY = b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nend_he
 
 def write_sphere(path, level=3, radius=20.0):
     """An icosphere (radius in mm) written as a PLY; returns the path."""
-    from translucency.geometry.synthetic import icosphere
     from translucency.geometry.mesh import TriangleMesh
+    from translucency.geometry.synthetic import icosphere
     from translucency.io.polydata import to_pyvista
 
     points, triangles = icosphere(level, radius)
@@ -32,8 +32,11 @@ def scans(tmp_path_factory):
     """Two small spheres and a broken file, in one folder."""
     folder = tmp_path_factory.mktemp("scans")
     (folder / "broken.ply").write_bytes(BROKEN_PLY)
-    return {"small": write_sphere(folder / "small.ply", 3), "large": write_sphere(folder / "large.ply", 4, 30.0),
-            "broken": folder / "broken.ply"}
+    return {
+        "small": write_sphere(folder / "small.ply", 3),
+        "large": write_sphere(folder / "large.ply", 4, 30.0),
+        "broken": folder / "broken.ply",
+    }
 
 
 def error_lines(text):
@@ -51,8 +54,24 @@ def test_cli_bake_equals_shade_on_the_same_mesh(scans, tmp_path, capsys):
     from translucency.scatter.lights import DirectionalLight
 
     out = tmp_path / "sphere.ply"
-    code = cli.main(["bake", str(scans["large"]), "--unit", "cm", "--material", "skim milk", "--light-dir", "0,2,1",
-                     "--method", "cutoff", "--tol", "0.02", "-o", str(out)])
+    code = cli.main(
+        [
+            "bake",
+            str(scans["large"]),
+            "--unit",
+            "cm",
+            "--material",
+            "skim milk",
+            "--light-dir",
+            "0,2,1",
+            "--method",
+            "cutoff",
+            "--tol",
+            "0.02",
+            "-o",
+            str(out),
+        ]
+    )
     assert code == 0, capsys.readouterr().err
     baked = read_baked_ply(out)
 
@@ -144,8 +163,10 @@ def test_a_failure_while_writing_leaves_nothing(scans, tmp_path, monkeypatch):
     out = tmp_path / "out"
     records = batch.bake_files([scans["small"], scans["large"]], out, batch.BakeSettings(shadows=False))
     assert [r.ok for r in records] == [False, True]
-    assert records[0].error == "writing small_marble.ply failed (No space left on device): the disk is full; " \
-                               "free some space or write the output elsewhere."
+    assert (
+        records[0].error == "writing small_marble.ply failed (No space left on device): the disk is full; "
+        "free some space or write the output elsewhere."
+    )
     assert records[0].vertices == 642 and records[0].output is None  # it failed after loading and solving
     assert sorted(os.listdir(out)) == ["large_marble.ply"]  # no temporary file left
     assert batch.exit_code(records) == 1 and batch.exit_code(records[1:]) == 0
@@ -175,8 +196,10 @@ def test_a_bad_light_direction_is_exit_2_and_one_sentence(scans, tmp_path, capsy
 def test_output_is_a_file_for_one_input_and_a_folder_otherwise(tmp_path):
     a, b = tmp_path / "a.ply", tmp_path / "b.obj"
     assert batch.output_paths([a], tmp_path / "x.PLY", "marble") == [tmp_path / "x.PLY"]
-    assert batch.output_paths([a, b], tmp_path / "o", "skim_milk") == [tmp_path / "o" / "a_skim_milk.ply",
-                                                                      tmp_path / "o" / "b_skim_milk.ply"]
+    assert batch.output_paths([a, b], tmp_path / "o", "skim_milk") == [
+        tmp_path / "o" / "a_skim_milk.ply",
+        tmp_path / "o" / "b_skim_milk.ply",
+    ]
     assert batch.output_paths([a], str(tmp_path / "x.ply") + os.sep, "m") == [tmp_path / "x.ply" / "a_m.ply"]
     (tmp_path / "dir.ply").mkdir()
     assert batch.output_paths([a], tmp_path / "dir.ply", "m") == [tmp_path / "dir.ply" / "a_m.ply"]
@@ -184,8 +207,12 @@ def test_output_is_a_file_for_one_input_and_a_folder_otherwise(tmp_path):
 
 
 def test_same_stems_and_input_names_are_never_overwritten(tmp_path):
-    inputs = [tmp_path / "one" / "scan.ply", tmp_path / "two" / "scan.obj", tmp_path / "scan_m.ply",
-              tmp_path / "scan-2.ply"]
+    inputs = [
+        tmp_path / "one" / "scan.ply",
+        tmp_path / "two" / "scan.obj",
+        tmp_path / "scan_m.ply",
+        tmp_path / "scan-2.ply",
+    ]
     names = [p.name for p in batch.output_paths(inputs, tmp_path, "m")]
     # scan_m.ply is an input in the output folder: the first scan gets another name
     assert names == ["scan-2_m.ply", "scan-3_m.ply", "scan_m_m.ply", "scan-2-2_m.ply"]
@@ -268,8 +295,10 @@ def test_console_progress_prints_failures_and_warnings(tmp_path):
 
 
 def test_summary_table():
-    records = [batch.BakeRecord("a.ply", "o/a_m.ply", 642, 300, 1.26),
-               batch.BakeRecord("long/name/b.ply", None, None, None, 0.04, "b.ply is empty; export it again.")]
+    records = [
+        batch.BakeRecord("a.ply", "o/a_m.ply", 642, 300, 1.26),
+        batch.BakeRecord("long/name/b.ply", None, None, None, 0.04, "b.ply is empty; export it again."),
+    ]
     lines = batch.format_summary(records, 3.0).splitlines()
     assert lines[0].split() == ["file", "vertices", "lit", "sources", "time", "[s]", "output", "status"]
     assert lines[2].split() == ["a.ply", "642", "300", "1.3", "o/a_m.ply", "baked"]
@@ -316,7 +345,9 @@ def test_dask_cluster_bakes_the_same_files(scans, tmp_path, capsys):
     distributed = pytest.importorskip("distributed")
     inputs = [str(scans["small"]), str(scans["broken"]), str(scans["large"])]
     serial = batch.bake_files(inputs, tmp_path / "serial", batch.BakeSettings())
-    with distributed.LocalCluster(n_workers=1, processes=False, threads_per_worker=1, dashboard_address=None) as cluster:
+    with distributed.LocalCluster(
+        n_workers=1, processes=False, threads_per_worker=1, dashboard_address=None
+    ) as cluster:
         code = cli.main(["bake", *inputs, "-o", str(tmp_path / "dask"), "--scheduler", cluster.scheduler_address])
     captured = capsys.readouterr()
     assert code == 1 and len(error_lines(captured.err)) == 1 and "broken.ply" in error_lines(captured.err)[0]
@@ -330,7 +361,9 @@ def test_dask_cluster_bakes_the_same_files(scans, tmp_path, capsys):
 
 def test_dask_records_come_back_through_a_client(scans, tmp_path):
     distributed = pytest.importorskip("distributed")
-    with distributed.LocalCluster(n_workers=1, processes=False, threads_per_worker=1, dashboard_address=None) as cluster:
+    with distributed.LocalCluster(
+        n_workers=1, processes=False, threads_per_worker=1, dashboard_address=None
+    ) as cluster:
         with distributed.Client(cluster) as client:
             records = translucency.bake([scans["small"]], tmp_path, scheduler=client, shadows=False)
             assert client.status == "running"  # a client passed in stays open

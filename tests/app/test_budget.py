@@ -45,7 +45,7 @@ def test_over_the_time_budget_the_scan_is_solved_on_a_coarser_proxy():
     assert result.stats["solver"]["budget"]["seconds"] <= 0.3 * estimate
     assert result.B.shape == full.B.shape and np.all(np.isfinite(result.B)) and result.B.max() > 0
     # a smooth sphere: the proxy's B stays close to the full solve's
-    assert np.sqrt(np.mean((result.B - full.B) ** 2) / np.mean(full.B ** 2)) < 0.1
+    assert np.sqrt(np.mean((result.B - full.B) ** 2) / np.mean(full.B**2)) < 0.1
     assert result.metadata["budget"]["coarser"] == lines[0] and result.metadata["resolution"].startswith("proxy")
 
 

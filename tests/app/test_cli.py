@@ -13,7 +13,9 @@ from translucency.scatter.materials import catalogue
 
 def run_cli(*args, cwd=None):
     """Run ``python -m translucency`` in a fresh process; returns (exit code, stdout, stderr)."""
-    done = subprocess.run([sys.executable, "-m", "translucency", *args], capture_output=True, text=True, cwd=cwd, timeout=300)
+    done = subprocess.run(
+        [sys.executable, "-m", "translucency", *args], capture_output=True, text=True, cwd=cwd, timeout=300
+    )
     return done.returncode, done.stdout, done.stderr
 
 
@@ -60,7 +62,9 @@ def test_inspect_missing_file():
 
 def test_inspect_repairs_a_shared_scan(shared_meshes, tmp_path):
     out = tmp_path / "fixed.ply"
-    code, stdout, err = run_cli("inspect", str(shared_meshes / "stanford_bunny_zipper.ply"), "--unit", "m", "-o", str(out))
+    code, stdout, err = run_cli(
+        "inspect", str(shared_meshes / "stanford_bunny_zipper.ply"), "--unit", "m", "-o", str(out)
+    )
     assert code == 0, err
     assert "unreferenced vertices removed            1113" in stdout
     assert out.exists()
@@ -69,8 +73,10 @@ def test_inspect_repairs_a_shared_scan(shared_meshes, tmp_path):
 def test_inspect_without_unit_says_the_inferred_unit_in_one_line(shared_meshes):
     code, stdout, err = run_cli("inspect", str(shared_meshes / "stanford_bunny_zipper.ply"))
     assert code == 0, err
-    assert err.splitlines() == ["translucency: stanford_bunny_zipper.ply: no --unit given; 0.156 units across, "
-                                "read as metres (156 mm); pass --unit to override"]
+    assert err.splitlines() == [
+        "translucency: stanford_bunny_zipper.ply: no --unit given; 0.156 units across, "
+        "read as metres (156 mm); pass --unit to override"
+    ]
     assert "155.7 mm across" in stdout and "up axis for --up auto: +y" in stdout
 
 
@@ -87,13 +93,14 @@ def test_the_same_line_in_python_names_the_keyword(shared_meshes):
 
     with pytest.warns(UnitInferredWarning) as caught:
         load_mesh(shared_meshes / "stanford_bunny_zipper.ply")
-    assert str(caught[0].message) == ("stanford_bunny_zipper.ply: no unit= given; 0.156 units across, read as "
-                                      "metres (156 mm); pass unit= to override")
+    assert str(caught[0].message) == (
+        "stanford_bunny_zipper.ply: no unit= given; 0.156 units across, read as metres (156 mm); pass unit= to override"
+    )
 
 
 def test_a_size_no_unit_makes_plausible_is_refused_and_a_given_unit_only_warns(tmp_path):
-    from translucency.geometry.synthetic import icosphere
     from translucency.geometry.mesh import TriangleMesh
+    from translucency.geometry.synthetic import icosphere
     from translucency.io.polydata import to_pyvista
 
     points, triangles = icosphere(2, 10000.0)  # 20000 units across: 20 m in mm, 20 km in metres
@@ -122,7 +129,9 @@ def test_main_job_bakes_the_embedded_default(tmp_path):
     assert baked.metadata["material"] == "marble" and baked.metadata["method"] == "tree"
     # the embedded default keeps its size (given, not inferred) and stands +y up under the unchanged light
     assert baked.metadata["up"] == "+y" and baked.metadata["unit_inferred"] is False
-    assert baked.metadata["lights"][0]["direction"] == pytest.approx(np.array([0.35, 1.0, 0.45]) / np.linalg.norm([0.35, 1.0, 0.45]))
+    assert baked.metadata["lights"][0]["direction"] == pytest.approx(
+        np.array([0.35, 1.0, 0.45]) / np.linalg.norm([0.35, 1.0, 0.45])
+    )
     radiance = baked.radiance
     assert np.all(np.isfinite(radiance)) and np.all(radiance >= 0)
     light = np.array(baked.metadata["lights"][0]["direction"])
@@ -134,9 +143,9 @@ def test_main_job_bakes_the_embedded_default(tmp_path):
 
 
 def test_shade_on_a_proxy_interpolates_back_to_every_vertex():
-    from translucency.geometry.synthetic import icosphere
     from translucency.app.pipeline import shade
     from translucency.geometry.mesh import TriangleMesh
+    from translucency.geometry.synthetic import icosphere
 
     points, triangles = icosphere(5, 20.0)  # 0.6 mm edges
     mesh = TriangleMesh(points, triangles)

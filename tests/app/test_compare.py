@@ -6,12 +6,13 @@ import json
 import numpy as np
 import pytest
 
-from translucency.geometry.synthetic import icosphere
-from translucency.app import cli, compare as compare_module
+from translucency.app import cli
+from translucency.app import compare as compare_module
 from translucency.app.compare import compare, profile_cut, radiance_statistics, relative_difference
 from translucency.app.pipeline import Scene
 from translucency.errors import TranslucencyError
 from translucency.geometry.mesh import TriangleMesh
+from translucency.geometry.synthetic import icosphere
 from translucency.io.polydata import to_pyvista
 from translucency.scatter.lights import DirectionalLight
 
@@ -34,8 +35,13 @@ def test_files_and_the_grid_size(two_by_two):
     import imageio.v3 as iio
 
     result, out = two_by_two
-    assert sorted(p.name for p in out.iterdir()) == ["differences.png", "grid.png", "profile.png", "statistics.csv",
-                                                     "statistics.json"]
+    assert sorted(p.name for p in out.iterdir()) == [
+        "differences.png",
+        "grid.png",
+        "profile.png",
+        "statistics.csv",
+        "statistics.json",
+    ]
     assert result.files["grid"] == out / "grid.png"
     grid = iio.imread(out / "grid.png")
     assert grid.shape[:2] == (2 * CELL[1], 2 * CELL[0])  # rows: models, columns: materials
@@ -56,7 +62,11 @@ def test_statistics_tell_the_materials_apart(two_by_two):
     assert document["exposure"]["value"] == result.exposure
     marble, ketchup = result.mean("marble", "directional"), result.mean("ketchup", "directional")
     assert ketchup[0] / ketchup[2] > 1.5 * marble[0] / marble[2]  # ketchup is red, marble white
-    row = next(r for r in rows if (r["material"], r["model"], r["subset"], r["channel"]) == ("marble", "directional", "lit", "R"))
+    row = next(
+        r
+        for r in rows
+        if (r["material"], r["model"], r["subset"], r["channel"]) == ("marble", "directional", "lit", "R")
+    )
     assert np.isclose(float(row["mean"]), marble[0]) and float(row["time_s"]) > 0
     assert int(row["n_vertices"]) < 642  # only the lit half
     # the statistics are those of the returned radiance
@@ -68,8 +78,9 @@ def test_the_difference_maps_measure_the_model_change(two_by_two):
     result, _ = two_by_two
     rows = {(r["material"], r["subset"]): r for r in result.differences}
     assert len(rows) == 4 and all(r["model"] == "standard" and r["reference"] == "directional" for r in rows.values())
-    d = relative_difference(result.results["marble", "standard"].radiance,
-                            result.results["marble", "directional"].radiance)
+    d = relative_difference(
+        result.results["marble", "standard"].radiance, result.results["marble", "directional"].radiance
+    )
     assert np.isclose(rows["marble", "all"]["mean"], d.mean())
     assert rows["marble", "lit"]["n_vertices"] < rows["marble", "all"]["n_vertices"] == 642
     # at high albedo the standard dipole is darker than the directional one on the lit side
@@ -133,14 +144,17 @@ def test_one_model_gives_no_difference_map_and_reuses_the_scene(sphere, tmp_path
     assert iio.imread(result.files["grid"]).shape[:2] == (CELL[1], 3 * CELL[0])
 
 
-@pytest.mark.parametrize("kwargs, fragment", [
-    ({"materials": []}, "at least one material"),
-    ({"materials": ["marble", "marble"]}, "repeat"),
-    ({"models": ["directional", "photon"]}, "unknown model"),
-    ({"materials": ["no such thing"]}, "unknown material"),
-    ({"exposure": -1.0}, "exposure"),
-    ({"cell_size": (8, 8)}, "cell_size"),
-])
+@pytest.mark.parametrize(
+    "kwargs, fragment",
+    [
+        ({"materials": []}, "at least one material"),
+        ({"materials": ["marble", "marble"]}, "repeat"),
+        ({"models": ["directional", "photon"]}, "unknown model"),
+        ({"materials": ["no such thing"]}, "unknown material"),
+        ({"exposure": -1.0}, "exposure"),
+        ({"cell_size": (8, 8)}, "cell_size"),
+    ],
+)
 def test_bad_arguments_are_refused_before_any_work(sphere, kwargs, fragment, tmp_path):
     with pytest.raises(TranslucencyError, match=fragment):
         compare(sphere, **{"materials": ["marble"], **kwargs}, output=tmp_path / "o")
@@ -151,8 +165,26 @@ def test_the_cli_writes_what_the_api_computes(sphere, tmp_path, capsys):
     path = tmp_path / "sphere.ply"
     to_pyvista(sphere).save(path)
     out = tmp_path / "cli"
-    code = cli.main(["compare", str(path), "--materials", "marble,ketchup", "--models", "directional,standard",
-                     "--light-dir", "0,0,1", "--method", "exact", "--cell-size", "64x48", "--up", "-x", "-o", str(out)])
+    code = cli.main(
+        [
+            "compare",
+            str(path),
+            "--materials",
+            "marble,ketchup",
+            "--models",
+            "directional,standard",
+            "--light-dir",
+            "0,0,1",
+            "--method",
+            "exact",
+            "--cell-size",
+            "64x48",
+            "--up",
+            "-x",
+            "-o",
+            str(out),
+        ]
+    )
     assert code == 0
     stdout = capsys.readouterr().out
     assert "ketchup" in stdout and "statistics.json" in stdout
@@ -160,8 +192,9 @@ def test_the_cli_writes_what_the_api_computes(sphere, tmp_path, capsys):
     from translucency.app.pipeline import load_scan
 
     mesh, _, _ = load_scan(path)
-    api = compare(mesh, ["marble", "ketchup"], ["directional", "standard"], DirectionalLight((0, 0, 1), 1.0),
-                  method="exact")
+    api = compare(
+        mesh, ["marble", "ketchup"], ["directional", "standard"], DirectionalLight((0, 0, 1), 1.0), method="exact"
+    )
     for cli_row, api_row in zip(document["statistics"], api.statistics):
         assert cli_row["material"] == api_row["material"] and cli_row["subset"] == api_row["subset"]
         for key in ("mean", "median", "p95"):

@@ -9,11 +9,11 @@ import pytest
 from scipy import integrate
 
 from tests.io.test_load import write_ply
-from translucency.geometry.synthetic import icosphere
 from translucency.app.pipeline import shade
 from translucency.errors import MeshError
-from translucency.io import TriangleMesh, clean_mesh, load_mesh
 from translucency.geometry.measure import signed_volume
+from translucency.geometry.synthetic import icosphere
+from translucency.io import TriangleMesh, clean_mesh, load_mesh
 from translucency.io.units import ImplausibleSizeWarning
 from translucency.scatter import dipoles, fresnel
 from translucency.scatter.lights import DirectionalLight
@@ -129,7 +129,11 @@ def test_sliver_box(model):
     sliver = box((100.0, 100.0, 0.001), divisions=4)
     assert signed_volume(sliver.points, sliver.triangles) > 0
     result = _shade(sliver, model=model)
-    top = (sliver.points[:, 2] > 0.0005) & (np.abs(sliver.points[:, 0] - 50) < 30) & (np.abs(sliver.points[:, 1] - 50) < 30)
+    top = (
+        (sliver.points[:, 2] > 0.0005)
+        & (np.abs(sliver.points[:, 0] - 50) < 30)
+        & (np.abs(sliver.points[:, 1] - 50) < 30)
+    )
     assert np.all(result.B[top] > 0)
 
 
@@ -154,8 +158,9 @@ def _triangle_integral(medium, channel, leg, w_i):
         x_i = np.array([r * np.cos(theta), r * np.sin(theta), 0.0])
         return r * float(dipoles.directional_dipole(x_i, n, w12, np.zeros(3), n, *args))
 
-    value, _ = integrate.dblquad(integrand, 0.0, np.pi / 2, 0.0, lambda t: leg / (np.cos(t) + np.sin(t)),
-                                 epsabs=0.0, epsrel=1e-7)
+    value, _ = integrate.dblquad(
+        integrand, 0.0, np.pi / 2, 0.0, lambda t: leg / (np.cos(t) + np.sin(t)), epsabs=0.0, epsrel=1e-7
+    )
     return value
 
 
@@ -198,9 +203,13 @@ def test_metre_file_shades_like_the_millimetre_file(tmp_path):
 
 def _ascii_ply(path, points, triangles):
     """An ascii PLY with every coordinate written exactly (17 significant digits)."""
-    header = (f"ply\nformat ascii 1.0\nelement vertex {len(points)}\nproperty double x\nproperty double y\n"
-              f"property double z\nelement face {len(triangles)}\nproperty list uchar int vertex_indices\nend_header\n")
-    body = "".join("%.17g %.17g %.17g\n" % tuple(p) for p in points) + "".join("3 %d %d %d\n" % tuple(t) for t in triangles)
+    header = (
+        f"ply\nformat ascii 1.0\nelement vertex {len(points)}\nproperty double x\nproperty double y\n"
+        f"property double z\nelement face {len(triangles)}\nproperty list uchar int vertex_indices\nend_header\n"
+    )
+    body = "".join(f"{p[0]:.17g} {p[1]:.17g} {p[2]:.17g}\n" for p in points) + "".join(
+        f"3 {t[0]} {t[1]} {t[2]}\n" for t in triangles
+    )
     path.write_text(header + body)
     return path
 
@@ -212,13 +221,17 @@ def _shade_quietly(mesh):
 # --------------------------------------------------------------------------- extreme materials
 
 
-@pytest.mark.parametrize("medium, method", [
-    (Medium(0.01, 1.0, 0.0, 1.0), "exact"),  # eta = 1: the refracted ray can graze the exit surface
-    (Medium.from_reduced(1.0, 1e-6, 1.3), "tree"),  # reduced albedo 1e-6
-    (Medium.from_reduced(0.0, 1.0, 1.3), "cutoff"),  # no absorption: sigma_tr = 0, infinite diffusion length
-    (Medium.from_reduced(1e-6, 1e-4, 2.5), "exact"),  # mean free path 1000 x the 20 mm sphere
-    (Medium.from_reduced(1e-2, 1e3, 1.0), "tree"),  # mean free path 1 um, 1e-4 of the edge length
-], ids=["eta1", "albedo-1e-6", "no-absorption", "huge-mfp", "tiny-mfp"])
+@pytest.mark.parametrize(
+    "medium, method",
+    [
+        (Medium(0.01, 1.0, 0.0, 1.0), "exact"),  # eta = 1: the refracted ray can graze the exit surface
+        (Medium.from_reduced(1.0, 1e-6, 1.3), "tree"),  # reduced albedo 1e-6
+        (Medium.from_reduced(0.0, 1.0, 1.3), "cutoff"),  # no absorption: sigma_tr = 0, infinite diffusion length
+        (Medium.from_reduced(1e-6, 1e-4, 2.5), "exact"),  # mean free path 1000 x the 20 mm sphere
+        (Medium.from_reduced(1e-2, 1e3, 1.0), "tree"),  # mean free path 1 um, 1e-4 of the edge length
+    ],
+    ids=["eta1", "albedo-1e-6", "no-absorption", "huge-mfp", "tiny-mfp"],
+)
 def test_extreme_materials_on_a_sphere(medium, method):
     lights = [LIGHT, DirectionalLight((1.0, 0.0, 0.0), 2.0)]  # the second grazes a great circle
     result = _shade(_sphere(), medium, lights=lights, method=method)

@@ -77,8 +77,13 @@ def leftovers(*folders):
 
 
 def start_driver(point, *argv, cwd):
-    return subprocess.Popen([sys.executable, "-c", DRIVER, point, *map(str, argv)], cwd=cwd, stdout=subprocess.PIPE,
-                            stderr=subprocess.DEVNULL, text=True)
+    return subprocess.Popen(
+        [sys.executable, "-c", DRIVER, point, *map(str, argv)],
+        cwd=cwd,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.DEVNULL,
+        text=True,
+    )
 
 
 def wait_for_pause(process, timeout=180):
@@ -104,8 +109,9 @@ def kill(process):
 @pytest.mark.parametrize("point", ["start", "shade", "fsync"], ids=["at-start", "during-solve", "during-write"])
 def test_a_killed_bake_leaves_nothing_the_next_run_keeps(sphere, tmp_path, capsys, point):
     out = tmp_path / "out"
-    process = start_driver("none" if point == "start" else point, "bake", sphere, "-o", out, "--no-shadows",
-                           cwd=tmp_path)
+    process = start_driver(
+        "none" if point == "start" else point, "bake", sphere, "-o", out, "--no-shadows", cwd=tmp_path
+    )
     if point == "start":
         time.sleep(1.0)
     else:
@@ -165,7 +171,9 @@ def test_the_workers_end_within_5_s_of_their_parents_kill(tmp_path):
     out = tmp_path / "out"
     process = start_driver("none", "bake", *scans, "-o", out, "--workers", "2", cwd=tmp_path)
     deadline = time.monotonic() + 180
-    while len([p for p in descendants(process.pid) if b"multiprocessing" in Path(f"/proc/{p}/cmdline").read_bytes()]) < 2:
+    while (
+        len([p for p in descendants(process.pid) if b"multiprocessing" in Path(f"/proc/{p}/cmdline").read_bytes()]) < 2
+    ):
         assert time.monotonic() < deadline and process.poll() is None, "the workers did not start"
         time.sleep(0.2)
     time.sleep(3.0)  # the workers import the package and start on their files
@@ -184,6 +192,7 @@ def test_the_workers_end_within_5_s_of_their_parents_kill(tmp_path):
 @contextlib.contextmanager
 def deadline(seconds):
     """Fail instead of hanging (opening a FIFO blocks until a writer comes)."""
+
     def expired(*_):
         raise TimeoutError(f"still running after {seconds} s")
 
@@ -204,8 +213,10 @@ def test_a_fifo_fails_at_once_and_the_batch_goes_on(sphere, tmp_path, capsys):
         code = cli.main(["bake", str(fifo), str(sphere), "-o", str(out), "--no-shadows"])
     assert code == 1
     line = one_sentence(capsys.readouterr().err)
-    assert line == (f"translucency: error: {fifo}: {fifo} is a FIFO (named pipe), not a regular file; "
-                    "pass a mesh file stored on disk.")
+    assert line == (
+        f"translucency: error: {fifo}: {fifo} is a FIFO (named pipe), not a regular file; "
+        "pass a mesh file stored on disk."
+    )
     assert os.listdir(out) == ["sphere_marble.ply"]
     with deadline(60):
         assert cli.main(["inspect", str(fifo)]) == 2
@@ -222,8 +233,11 @@ def test_a_fifo_fails_at_once_and_the_batch_goes_on(sphere, tmp_path, capsys):
 def mounted_tmpfs(folder, options):
     """A small tmpfs at ``folder`` (root only; the test is skipped where mounting is not allowed)."""
     folder.mkdir()
-    if os.geteuid() != 0 or subprocess.run(["mount", "-t", "tmpfs", "-o", options, "tmpfs", str(folder)],
-                                           capture_output=True).returncode != 0:
+    if (
+        os.geteuid() != 0
+        or subprocess.run(["mount", "-t", "tmpfs", "-o", options, "tmpfs", str(folder)], capture_output=True).returncode
+        != 0
+    ):
         pytest.skip("mounting a tmpfs needs root")
     try:
         yield folder
@@ -237,8 +251,15 @@ def commands(sphere, output):
         "bake": ["bake", str(sphere), "-o", str(output / "baked"), "--no-shadows"],
         "compare": ["compare", str(sphere), "-o", str(output / "cmp"), "--cell-size", "64x64", "--no-shadows"],
         "inspect": ["inspect", str(sphere), "-o", str(output / "repaired.ply")],
-        "view": ["view", str(sphere), "--screenshot", str(output / "view.png"), "--window-size", "64x64",
-                 "--no-shadows"],
+        "view": [
+            "view",
+            str(sphere),
+            "--screenshot",
+            str(output / "view.png"),
+            "--window-size",
+            "64x64",
+            "--no-shadows",
+        ],
         "main job": [],
     }
 
@@ -255,8 +276,9 @@ def test_a_full_disk_is_one_sentence_with_exit_1_and_leaves_nothing(sphere, tmp_
         code = cli.main(commands(sphere, disk)[command])
         line = one_sentence(capsys.readouterr().err)
         assert code == 1, line
-        assert "failed (No space left on device): the disk is full; free some space or write the output " \
-               "elsewhere." in line
+        assert (
+            "failed (No space left on device): the disk is full; free some space or write the output elsewhere." in line
+        )
         assert leftovers(disk) == []
         assert [p for p in disk.rglob("*") if p.is_file()] == [filler]
 
@@ -305,8 +327,11 @@ def test_a_240_character_stem_bakes(sphere, tmp_path, capsys):
 
 def test_a_huge_or_tiny_light_vector_bakes_the_same_as_the_unit_vector(sphere, tmp_path, capsys):
     radiance = {}
-    for name, vector in (("unit", "0.7071067811865476,0.7071067811865476,0"), ("huge", "1e300,1e300,0"),
-                         ("tiny", "1e-300,1e-300,0")):
+    for name, vector in (
+        ("unit", "0.7071067811865476,0.7071067811865476,0"),
+        ("huge", "1e300,1e300,0"),
+        ("tiny", "1e-300,1e-300,0"),
+    ):
         output = tmp_path / f"{name}.ply"
         assert cli.main(["bake", str(sphere), "-o", str(output), "--light-dir", vector]) == 0
         radiance[name] = read_baked_ply(output).radiance
@@ -343,8 +368,10 @@ def test_the_help_says_the_frame_and_how_to_write_a_negative_direction(capsys):
 # --------------------------------------------------------------------------------------------------
 def test_five_faces_without_vertices_give_one_sentence_and_no_warnings(tmp_path, capsys):
     path = tmp_path / "five.ply"
-    path.write_text("ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\nproperty float y\nproperty float z\n"
-                    "element face 5\nproperty list uchar int vertex_indices\nend_header\n" + "0\n" * 5)
+    path.write_text(
+        "ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\nproperty float y\nproperty float z\n"
+        "element face 5\nproperty list uchar int vertex_indices\nend_header\n" + "0\n" * 5
+    )
     import warnings
 
     with warnings.catch_warnings(record=True) as caught:

@@ -41,8 +41,15 @@ def test_bad_light_direction_is_one_sentence(text):
         options.lights_from_args(parse("--light-dir", text))
 
 
-@pytest.mark.parametrize("flag, value, words", [("--tol", "2", "--tol"), ("--resolution", "fine", "--resolution"),
-                                                ("--exposure", "-1", "--exposure"), ("--material", "plutonium", "plutonium")])
+@pytest.mark.parametrize(
+    "flag, value, words",
+    [
+        ("--tol", "2", "--tol"),
+        ("--resolution", "fine", "--resolution"),
+        ("--exposure", "-1", "--exposure"),
+        ("--material", "plutonium", "plutonium"),
+    ],
+)
 def test_bad_solver_settings_are_one_sentence(flag, value, words):
     with pytest.raises(TranslucencyError, match=words):
         options.solver_settings(parse(flag, value))

@@ -2,9 +2,9 @@
 
 import numpy as np
 
-from translucency.geometry.synthetic import icosphere
 from translucency.app.pipeline import Scene, shade
 from translucency.geometry.mesh import TriangleMesh
+from translucency.geometry.synthetic import icosphere
 from translucency.scatter.lights import DirectionalLight
 
 
@@ -91,15 +91,20 @@ def test_default_light_is_above_and_in_front_for_the_up_axis_and_recorded():
 
 def test_the_solver_does_not_depend_on_up():
     mesh, light = _plinth(), DirectionalLight((0.2, -0.5, 1.0), 1.0)
-    np.testing.assert_array_equal(shade(mesh, "marble", light, method="exact", up="y").B,
-                                  shade(mesh, "marble", light, method="exact", up="-x").B)
+    np.testing.assert_array_equal(
+        shade(mesh, "marble", light, method="exact", up="y").B, shade(mesh, "marble", light, method="exact", up="-x").B
+    )
 
 
 def test_unit_is_recorded_in_the_metadata():
     mesh = sphere().replace(mm_per_unit=1000.0, unit_inferred=True)
     metadata = shade(mesh, "marble", method="exact").metadata
     assert (metadata["unit"], metadata["unit_name"], metadata["mm_per_unit"], metadata["unit_inferred"]) == (
-        "m", "metres", 1000.0, True)
+        "m",
+        "metres",
+        1000.0,
+        True,
+    )
     assert metadata["geometry_unit"] == "mm"
 
 

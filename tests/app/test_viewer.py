@@ -5,13 +5,13 @@ import os
 import numpy as np
 import pytest
 
-from translucency.geometry.synthetic import icosphere
 from translucency.app import cli
 from translucency.app.pipeline import Scene
 from translucency.app.render import render_colors
 from translucency.app.viewer import Viewer, interactive_edge_length, light_angles, light_direction
 from translucency.errors import InvalidParameterError
 from translucency.geometry.mesh import TriangleMesh
+from translucency.geometry.synthetic import icosphere
 from translucency.io.baked import read_baked_ply
 from translucency.io.polydata import to_pyvista
 from translucency.scatter.lights import DirectionalLight, EnvironmentLight
@@ -197,32 +197,47 @@ def test_view_screenshot_equals_the_api_image(sphere, tmp_path):
     path = tmp_path / "sphere.ply"
     to_pyvista(sphere).save(path)
     out = tmp_path / "view.png"
-    code = cli.main(["view", str(path), "--material", "skim_milk", "--light-dir", "1,0.5,0.2",
-                     "--screenshot", str(out), "--window-size", "320x240"])
+    code = cli.main(
+        [
+            "view",
+            str(path),
+            "--material",
+            "skim_milk",
+            "--light-dir",
+            "1,0.5,0.2",
+            "--screenshot",
+            str(out),
+            "--window-size",
+            "320x240",
+        ]
+    )
     assert code == 0 and out.exists()
     import imageio.v3 as iio
 
     image = iio.imread(out).astype(float)
-    from translucency.app.pipeline import load_scan
-    from translucency.app.pipeline import resolve_medium
+    from translucency.app.pipeline import load_scan, resolve_medium
 
     mesh, _, _ = load_scan(path)
     medium = resolve_medium("skim_milk")
-    result = Scene(mesh).shade(medium, DirectionalLight((1, 0.5, 0.2), 1.0),
-                               resolution=interactive_edge_length(mesh, medium))
+    result = Scene(mesh).shade(
+        medium, DirectionalLight((1, 0.5, 0.2), 1.0), resolution=interactive_edge_length(mesh, medium)
+    )
     expected = render_colors(mesh, result.colors, window_size=(320, 240)).astype(float)
     assert image.shape == expected.shape == (240, 320, 3)
     assert image.max() > 100  # the object is there
     assert np.abs(image - expected).mean() < PIXEL_TOLERANCE
 
 
-@pytest.mark.parametrize("args, fragment", [
-    (["--screenshot", "view.jpg"], "not a .png"),
-    (["--screenshot", "missing-folder/view.png"], "does not exist"),
-    (["--screenshot", "v.png", "--window-size", "big"], "WIDTHxHEIGHT"),
-    (["--screenshot", "v.png", "--roughness", "0"], "roughness"),
-    (["--screenshot", "v.png", "--material", "no such thing"], "unknown material"),
-])
+@pytest.mark.parametrize(
+    "args, fragment",
+    [
+        (["--screenshot", "view.jpg"], "not a .png"),
+        (["--screenshot", "missing-folder/view.png"], "does not exist"),
+        (["--screenshot", "v.png", "--window-size", "big"], "WIDTHxHEIGHT"),
+        (["--screenshot", "v.png", "--roughness", "0"], "roughness"),
+        (["--screenshot", "v.png", "--material", "no such thing"], "unknown material"),
+    ],
+)
 def test_view_errors_are_one_sentence_with_exit_code_2(args, fragment, tmp_path, monkeypatch, capsys):
     monkeypatch.chdir(tmp_path)
     assert cli.main(["view", *args]) == 2

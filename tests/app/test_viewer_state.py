@@ -68,8 +68,9 @@ def test_set_light_solves_again_and_the_bright_side_follows_the_light(state, sph
     assert state.set_light(-140.0, -20.0) is True
     assert len(solves) == 1 and state.n_solves == 2
     assert (state.azimuth, state.elevation) == (-140.0, -20.0)
-    np.testing.assert_allclose(state.lights[state.key_light].direction, light_direction(-140.0, -20.0, state.up),
-                               atol=1e-12)
+    np.testing.assert_allclose(
+        state.lights[state.key_light].direction, light_direction(-140.0, -20.0, state.up), atol=1e-12
+    )
     after = state.colors().astype(float)
     assert np.abs(after - before).mean() > 10
     facing = sphere.vertex_normals() @ light_direction(-140.0, -20.0, state.up)

@@ -4,8 +4,8 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from translucency.io import find_defects, signed_volume
 from translucency.geometry.orientation import coherent_orientation, flip_triangles, outward_flips
+from translucency.io import find_defects, signed_volume
 
 from ..io.conftest import grid, icosphere
 

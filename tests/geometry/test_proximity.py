@@ -4,7 +4,11 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from translucency.geometry.proximity import closest_point_barycentric, closest_points_on_triangles, vertex_hausdorff_distance
+from translucency.geometry.proximity import (
+    closest_point_barycentric,
+    closest_points_on_triangles,
+    vertex_hausdorff_distance,
+)
 
 from ..io.conftest import grid, icosphere
 

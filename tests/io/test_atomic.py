@@ -13,10 +13,13 @@ from translucency.io import atomic
 
 def names_of_a_dead_process(*kinds):
     """Temporary names made by a process that has ended (one per kind)."""
-    code = ("import sys; from translucency.io.atomic import temporary_name; "
-            "print(' '.join(temporary_name(k) for k in sys.argv[1:]))")
-    return subprocess.run([sys.executable, "-c", code, *kinds], check=True, capture_output=True,
-                          text=True).stdout.split()
+    code = (
+        "import sys; from translucency.io.atomic import temporary_name; "
+        "print(' '.join(temporary_name(k) for k in sys.argv[1:]))"
+    )
+    return subprocess.run(
+        [sys.executable, "-c", code, *kinds], check=True, capture_output=True, text=True
+    ).stdout.split()
 
 
 def test_names_carry_the_pid_and_stay_short_and_are_recognised():
@@ -44,8 +47,13 @@ def test_sweep_removes_only_stale_temporaries_of_this_tool(tmp_path):
     (tmp_path / dead_folder / "grid.png").write_bytes(b"png")
     alive = atomic.temporary_name()
     (tmp_path / alive).write_bytes(b"being written")
-    others = [".bunny_marble.ply.abc123.tmp", ".out.q1w2e3.partial", ".translucency-1-0-00000000-0000000000000000.tmp",
-              "notes.txt", dead_file[:-4] + ".partial"]  # the last: the right shape, the check of another kind
+    others = [
+        ".bunny_marble.ply.abc123.tmp",
+        ".out.q1w2e3.partial",
+        ".translucency-1-0-00000000-0000000000000000.tmp",
+        "notes.txt",
+        dead_file[:-4] + ".partial",
+    ]  # the last: the right shape, the check of another kind
     for name in others:
         (tmp_path / name).write_bytes(b"not ours")
     removed = atomic.sweep(tmp_path)
@@ -74,8 +82,14 @@ def test_a_240_character_stem_is_written(tmp_path):
     assert path.read_bytes() == b"data" and os.listdir(tmp_path) == [path.name]
 
 
-@pytest.mark.parametrize("code, words", [(errno.ENOSPC, "the disk is full"), (errno.EROFS, "read-only"),
-                                         (getattr(errno, "EDQUOT", errno.ENOSPC), "free some space")])
+@pytest.mark.parametrize(
+    "code, words",
+    [
+        (errno.ENOSPC, "the disk is full"),
+        (errno.EROFS, "read-only"),
+        (getattr(errno, "EDQUOT", errno.ENOSPC), "free some space"),
+    ],
+)
 def test_a_failed_write_is_one_sentence_and_leaves_the_old_file(tmp_path, monkeypatch, code, words):
     path = tmp_path / "out.ply"
     path.write_bytes(b"old")

@@ -67,13 +67,19 @@ def test_round_trip_with_read_baked_ply(bake):
 def test_header_records_the_mesh_unit_and_whether_it_was_inferred(tmp_path, sphere_mesh):
     n = sphere_mesh.n_points
     inferred = sphere_mesh.replace(points=sphere_mesh.points * 1000.0, mm_per_unit=1000.0, unit_inferred=True)
-    path = write_baked_ply(tmp_path / "m.ply", inferred, np.ones((n, 3)), np.ones((n, 3)),
-                           np.zeros((n, 3), np.uint8), METADATA)
+    path = write_baked_ply(
+        tmp_path / "m.ply", inferred, np.ones((n, 3)), np.ones((n, 3)), np.zeros((n, 3), np.uint8), METADATA
+    )
     metadata = read_baked_ply(path).metadata
     assert (metadata["unit"], metadata["unit_name"], metadata["mm_per_unit"], metadata["unit_inferred"]) == (
-        "m", "metres", 1000.0, True)
-    given = write_baked_ply(tmp_path / "g.ply", sphere_mesh, np.ones((n, 3)), np.ones((n, 3)),
-                            np.zeros((n, 3), np.uint8), METADATA)
+        "m",
+        "metres",
+        1000.0,
+        True,
+    )
+    given = write_baked_ply(
+        tmp_path / "g.ply", sphere_mesh, np.ones((n, 3)), np.ones((n, 3)), np.zeros((n, 3), np.uint8), METADATA
+    )
     assert read_baked_ply(given).metadata["unit_inferred"] is False
 
 
@@ -209,7 +215,8 @@ def test_missing_folder(tmp_path, sphere_mesh):
 def test_a_plain_ply_is_not_a_bake(tmp_path):
     path = tmp_path / "plain.ply"
     path.write_text("ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
-                    "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n10 0 0\n0 10 0\n3 0 1 2\n")  # fmt: skip
+                    "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n10 0 0\n0 10 "
+                    "0\n3 0 1 2\n")  # fmt: skip
     with pytest.raises(MeshError, match="not a translucency bake"):
         read_baked_ply(path)
 

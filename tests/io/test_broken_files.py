@@ -37,15 +37,19 @@ def binary_stl(points, triangles, *, count=None):
 def ascii_stl(points, triangles):
     """Bytes of an ASCII STL."""
     corners = np.asarray(points)[triangles]
-    facets = "".join("facet normal 0 0 0\nouter loop\n" + "".join(f"vertex {x} {y} {z}\n" for x, y, z in c)
-                     + "endloop\nendfacet\n" for c in corners)
+    facets = "".join(
+        "facet normal 0 0 0\nouter loop\n" + "".join(f"vertex {x} {y} {z}\n" for x, y, z in c) + "endloop\nendfacet\n"
+        for c in corners
+    )
     return f"solid s\n{facets}endsolid s\n".encode()
 
 
 def obj_text(points, triangles):
     """Bytes of a Wavefront OBJ (1-based indices)."""
-    return ("".join(f"v {x} {y} {z}\n" for x, y, z in points)
-            + "".join(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in triangles)).encode()
+    return (
+        "".join(f"v {x} {y} {z}\n" for x, y, z in points)
+        + "".join(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in triangles)
+    ).encode()
 
 
 POINTS, TRIANGLES = icosphere(1, 20.0)
@@ -78,7 +82,8 @@ CORPUS = [
     ("no_xyz.ply", b"ply\nformat ascii 1.0\nelement vertex 1\nproperty float u\nend_header\n0\n", "x, y, z"),
     (
         "points_only.ply",
-        b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nend_header\n0 0 0\n10 0 0\n0 10 0\n",
+        b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float "
+        b"z\nend_header\n0 0 0\n10 0 0\n0 10 0\n",
         "point cloud",
     ),
     ("zero_faces.ply", binary_ply(POINTS, TRIANGLES[:0]), "point cloud"),
@@ -93,7 +98,8 @@ CORPUS = [
     ("out_of_range.off", b"OFF\n3 1 0\n0 0 0\n10 0 0\n0 10 0\n3 0 1 3\n", "refers to vertex 3"),
     (
         "ascii_garbage.ply",
-        b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 zero 0\n",
+        b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float "
+        b"z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 zero 0\n",
         "corrupt",
     ),
     ("absurd.ply", binary_ply(POINTS * 1e14, TRIANGLES), "larger than any scanned object"),
@@ -108,12 +114,25 @@ CORPUS = [
     ("mesh.abc", b"v 0 0 0\n", "unknown mesh format '.abc'"),
     ("noextension", b"ply\nformat ascii 1.0\n", "unknown mesh format"),
     # a list length beyond its count type (plyfile raises OverflowError; found by tests/io/test_fuzz_ply.py)
-    ("list_overflow.ply", (
+    (
+        "list_overflow.ply",
+        (
+            b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+            b"element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n300 0 1 2\n"
+        ),
+        "corrupt",
+    ),
+    (
+        "ply_index_overflow.ply",
+        binary_ply(POINTS, np.where(TRIANGLES == 7, 2**31 - 1, TRIANGLES)),
+        "refers to vertex 2147483647",
+    ),
+    (
+        "ascii_nan.ply",
         b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
-        b"element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n300 0 1 2\n"), "corrupt"),
-    ("ply_index_overflow.ply", binary_ply(POINTS, np.where(TRIANGLES == 7, 2**31 - 1, TRIANGLES)), "refers to vertex 2147483647"),
-    ("ascii_nan.ply", b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
-     b"element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\nnan 0 0\n0 1 0\n3 0 1 2\n", "NaN or infinite"),
+        b"element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\nnan 0 0\n0 1 0\n3 0 1 2\n",
+        "NaN or infinite",
+    ),
     # cut at a record boundary: VTK alone would read the 40 whole triangles and say nothing
     ("truncated_half.stl", binary_stl(POINTS, TRIANGLES)[: 84 + 25 * len(TRIANGLES)], "announces 80 triangles"),
     ("count_too_large.stl", binary_stl(POINTS, TRIANGLES, count=10**6), "truncated"),

@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 from translucency.errors import InvalidParameterError
-from translucency.io import clean_mesh, decimate_mesh, map_to_proxy, simplify_arrays, target_face_count
 from translucency.geometry.proximity import vertex_hausdorff_distance
+from translucency.io import clean_mesh, decimate_mesh, map_to_proxy, simplify_arrays, target_face_count
 
 from .conftest import icosphere, load_scan
 

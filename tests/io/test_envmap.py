@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from translucency.errors import TranslucencyError
 from translucency.app.environment import load_environment
+from translucency.errors import TranslucencyError
 from translucency.io.envmap import EnvironmentMapError, read_equirectangular
 from translucency.scatter.lights import EnvironmentLight
 

@@ -27,9 +27,31 @@ HANG_S = 60  # one load taking longer than this is a hang (a tiny file loads in 
 POINTS, TRIANGLES = icosphere(1, 20.0)
 HEADER_NUMBERS = [0, 1, 2, 3, 4, 255, 256, 65535, 2**31 - 1, 2**32, 10**12, -1]
 BODY_TOKENS = [b"300", b"256", b"0", b"-1", b"2147483648", b"4", b"nan", b"inf", b"-inf", b"1e39", b"3.5", b"x", b""]
-HEADER_WORDS = [b"float", b"double", b"uchar", b"int", b"uint", b"char", b"short", b"int64", b"list", b"vertex",
-                b"face", b"tristrips", b"x", b"ascii", b"binary_little_endian", b"binary_big_endian", b"property",
-                b"element", b"end_header", b"comment", b"\n", b" ", b"\r\n"]
+HEADER_WORDS = [
+    b"float",
+    b"double",
+    b"uchar",
+    b"int",
+    b"uint",
+    b"char",
+    b"short",
+    b"int64",
+    b"list",
+    b"vertex",
+    b"face",
+    b"tristrips",
+    b"x",
+    b"ascii",
+    b"binary_little_endian",
+    b"binary_big_endian",
+    b"property",
+    b"element",
+    b"end_header",
+    b"comment",
+    b"\n",
+    b" ",
+    b"\r\n",
+]
 
 
 @pytest.fixture(scope="module")
@@ -44,8 +66,15 @@ def seeds(tmp_path_factory):
     for k, (text, order) in enumerate([(True, "="), (False, "<"), (False, ">")]):
         path = folder / f"{k}.ply"
         kind = "ascii" if text else "binary"
-        write_ply(path, POINTS, [list(t) for t in TRIANGLES], text=text, byte_order=order, colors=colors,
-                  extra={"confidence": confidence})
+        write_ply(
+            path,
+            POINTS,
+            [list(t) for t in TRIANGLES],
+            text=text,
+            byte_order=order,
+            colors=colors,
+            extra={"confidence": confidence},
+        )
         files[kind].append(path.read_bytes())
         write_ply(path, POINTS, polygons, text=text, byte_order=order)
         files[kind].append(path.read_bytes())
@@ -79,27 +108,27 @@ def mutate(data: bytes, operations) -> bytes:
             at = int(args[0] * (header if op == "flip_header" else len(data)))
             data[at] ^= 1 << args[1]
         elif op == "truncate":
-            del data[int(args[0] * len(data)):]
+            del data[int(args[0] * len(data)) :]
         elif op == "insert":
             at = int(args[0] * (len(data) + 1))
             data[at:at] = args[1]
         elif op == "delete" and data:
             at = int(args[0] * len(data))
-            del data[at:at + args[1]]
+            del data[at : at + args[1]]
         elif op == "header_number":
             numbers = list(re.finditer(rb"-?\d+", bytes(data[:header])))
             if numbers:
                 m = numbers[args[0] % len(numbers)]
-                data[m.start():m.end()] = str(args[1]).encode()
+                data[m.start() : m.end()] = str(args[1]).encode()
         elif op == "header_word":
             at = int(args[0] * header)
-            data[at:at + args[2]] = args[1]
+            data[at : at + args[2]] = args[1]
         elif op in ("body_token", "line_start"):
             pattern = rb"\S+" if op == "body_token" else rb"(?m)^[ \t]*\S+"
             tokens = list(re.finditer(pattern, bytes(data[header:])))
             if tokens:
                 m = tokens[int(args[0] * len(tokens))]
-                data[header + m.start():header + m.end()] = args[1]
+                data[header + m.start() : header + m.end()] = args[1]
     return bytes(data)
 
 
@@ -115,7 +144,9 @@ _started = {}
 
 
 @pytest.mark.parametrize("encoding", ["ascii", "binary"])
-@settings(max_examples=150, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@settings(
+    max_examples=150, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.function_scoped_fixture]
+)
 @given(which=st.integers(0, 63), operations=st.lists(mutations, min_size=1, max_size=3))
 def test_mutated_ply_loads_or_raises_a_translucency_error(tmp_path, seeds, encoding, which, operations):
     started = _started.setdefault(encoding, time.monotonic())

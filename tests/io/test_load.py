@@ -137,7 +137,8 @@ def test_obj_index_zero_is_out_of_range(tmp_path):
 def test_off_and_coff(tmp_path):
     path = tmp_path / "c.off"
     path.write_text(
-        "COFF\n# comment\n4 2 0\n0 0 0 255 0 0 255\n10 0 0 0 255 0 255\n10 10 0 0 0 255 255\n0 10 0 9 9 9 255\n4 0 1 2 3\n3 0 2 1 1 0 0\n"
+        "COFF\n# comment\n4 2 0\n0 0 0 255 0 0 255\n10 0 0 0 255 0 255\n10 10 0 0 0 255 255\n0 10 0 9 9 9 "
+        "255\n4 0 1 2 3\n3 0 2 1 1 0 0\n"
     )
     mesh = load_mesh(path)
     np.testing.assert_array_equal(mesh.triangles, [[0, 1, 2], [0, 2, 3], [0, 2, 1]])

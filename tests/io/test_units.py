@@ -70,8 +70,18 @@ def test_absurd_sizes_are_errors(extent):
 
 @pytest.mark.parametrize(
     "extent, unit",
-    [(0.005, "m"), (0.0051, "m"), (0.1557, "m"), (1.0, "m"), (4.99, "m"),
-     (5.0, "mm"), (5.01, "mm"), (321.8, "mm"), (4999.0, "mm"), (5000.0, "mm")],
+    [
+        (0.005, "m"),
+        (0.0051, "m"),
+        (0.1557, "m"),
+        (1.0, "m"),
+        (4.99, "m"),
+        (5.0, "mm"),
+        (5.01, "mm"),
+        (321.8, "mm"),
+        (4999.0, "mm"),
+        (5000.0, "mm"),
+    ],
 )
 def test_infer_unit_around_the_thresholds(extent, unit):
     assert infer_unit(extent) == unit
@@ -89,7 +99,9 @@ def test_a_size_no_unit_makes_plausible_is_refused_with_a_sentence(extent):
         infer_unit(extent, "odd.ply")
 
 
-@pytest.mark.parametrize("extent, words", [(1e15, "larger than any"), (1e-12, "smaller than any"), (0.0, "one position")])
+@pytest.mark.parametrize(
+    "extent, words", [(1e15, "larger than any"), (1e-12, "smaller than any"), (0.0, "one position")]
+)
 def test_absurd_sizes_keep_their_own_sentence_when_inferring(extent, words):
     with pytest.raises(MeshError, match=words):
         infer_unit(extent, "x.ply")
@@ -97,11 +109,12 @@ def test_absurd_sizes_keep_their_own_sentence_when_inferring(extent, words):
 
 def test_inferred_unit_line_names_the_unit_in_words_and_the_setting():
     assert inferred_unit_message("stanford_bunny_zipper.ply", 0.1557, "m") == (
-        "stanford_bunny_zipper.ply: no unit= given; 0.156 units across, read as metres (156 mm); "
-        "pass unit= to override")
+        "stanford_bunny_zipper.ply: no unit= given; 0.156 units across, read as metres (156 mm); pass unit= to override"
+    )
     with command_line_spelling():
         assert inferred_unit_message("angel.ply", 321.76, "mm") == (
-            "angel.ply: no --unit given; 322 units across, read as millimetres (322 mm); pass --unit to override")
+            "angel.ply: no --unit given; 322 units across, read as millimetres (322 mm); pass --unit to override"
+        )
 
 
 def test_implausible_warning_spells_the_flag_on_the_command_line():
@@ -111,8 +124,12 @@ def test_implausible_warning_spells_the_flag_on_the_command_line():
 
 
 def test_unit_metadata_records_name_factor_and_whether_inferred():
-    assert unit_metadata(1000.0, True) == {"unit": "m", "unit_name": "metres", "mm_per_unit": 1000.0,
-                                           "unit_inferred": True}
+    assert unit_metadata(1000.0, True) == {
+        "unit": "m",
+        "unit_name": "metres",
+        "mm_per_unit": 1000.0,
+        "unit_inferred": True,
+    }
     assert unit_metadata(2.5)["unit_name"] == "units of 2.5 mm" and unit_metadata(2.5)["unit_inferred"] is False
 
 

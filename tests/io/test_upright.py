@@ -79,13 +79,16 @@ def test_flat_meshes_and_given_axes():
     assert resolve_up("-x", points, [[0, 1, 2]]) == "-x" and resolve_up("auto") == FALLBACK_UP
 
 
-@pytest.mark.parametrize("name, unit, expected", [
-    ("ggg_angel_sfm.ply", "mm", "+z"),  # Z-up: the file's +z is up (it stands on its pedestal)
-    ("stanford_bunny_zipper.ply", "m", "+y"),
-    ("ggg_birdbath_sfm.ply", "mm", "+z"),
-    ("cyberware_horse.ply", "m", "+z"),
-    ("cyberware_igea.ply", "m", "+y"),  # a bust: no base, the fallback
-])
+@pytest.mark.parametrize(
+    "name, unit, expected",
+    [
+        ("ggg_angel_sfm.ply", "mm", "+z"),  # Z-up: the file's +z is up (it stands on its pedestal)
+        ("stanford_bunny_zipper.ply", "m", "+y"),
+        ("ggg_birdbath_sfm.ply", "mm", "+z"),
+        ("cyberware_horse.ply", "m", "+z"),
+        ("cyberware_igea.ply", "m", "+y"),  # a bust: no base, the fallback
+    ],
+)
 def test_shared_scans_stand_the_right_way_up(name, unit, expected):
     from translucency.io import clean_mesh
 
@@ -93,7 +96,9 @@ def test_shared_scans_stand_the_right_way_up(name, unit, expected):
     assert infer_up(mesh.points, mesh.triangles)[0] == expected
 
 
-@pytest.mark.parametrize("name, unit, expected", [("ggg_angel_sfm.ply", "mm", "+z"), ("stanford_bunny_zipper.ply", "m", "+y")])
+@pytest.mark.parametrize(
+    "name, unit, expected", [("ggg_angel_sfm.ply", "mm", "+z"), ("stanford_bunny_zipper.ply", "m", "+y")]
+)
 def test_shared_scans_keep_their_up_when_tilted_a_little(name, unit, expected):
     from scipy.spatial.transform import Rotation
 

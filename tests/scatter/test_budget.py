@@ -4,9 +4,9 @@ refusal before the work, and progress during the solve."""
 import numpy as np
 import pytest
 
-from translucency.geometry.synthetic import icosphere
 from translucency.errors import BudgetError, InvalidParameterError
 from translucency.geometry.measure import vertex_normals
+from translucency.geometry.synthetic import icosphere
 from translucency.scatter import budget, fresnel, solve
 from translucency.scatter.materials import material
 
@@ -43,8 +43,15 @@ def test_estimate_is_refused_over_the_time_limit_before_the_work():
     geometry, phi, w12, medium = _scene(3, 20.0)
     calls = []
     with pytest.raises(BudgetError, match=r"resolution=.*time_limit=") as info:
-        solve.solve(geometry, phi, w12, medium, method="tree", time_limit=1e-9,
-                    progress=lambda stage, fraction: calls.append(stage))
+        solve.solve(
+            geometry,
+            phi,
+            w12,
+            medium,
+            method="tree",
+            time_limit=1e-9,
+            progress=lambda stage, fraction: calls.append(stage),
+        )
     assert info.value.estimate.over_time and not info.value.estimate.fits
     assert calls == []  # refused before the far field started
 
@@ -79,8 +86,15 @@ def test_receivers_in_blocks_give_the_same_result_to_the_bit(monkeypatch):
     available = (room + budget.HEADROOM_BYTES) / (1 - budget.HEADROOM_FRACTION) + budget.HEADROOM_BYTES
     monkeypatch.setattr(budget, "available_memory", lambda: room + budget.HEADROOM_BYTES)
     calls = []
-    blocked = solve.solve(solve.SurfaceGeometry(geometry.points, geometry.triangles, geometry.normals), phi, w12,
-                          medium, method="tree", tol=1e-2, progress=lambda stage, f: calls.append((stage, f)))
+    blocked = solve.solve(
+        solve.SurfaceGeometry(geometry.points, geometry.triangles, geometry.normals),
+        phi,
+        w12,
+        medium,
+        method="tree",
+        tol=1e-2,
+        progress=lambda stage, f: calls.append((stage, f)),
+    )
     assert available > room
     assert not blocked.stats["near_lists_kept"]
     assert blocked.stats["budget"]["block_receivers"] < geometry.n_vertices
@@ -110,8 +124,9 @@ def test_estimate_arithmetic():
     large = budget.estimate(budget.SolveCounts(*[*counts.__dict__.values()][:7], 20_000.0, 40_000.0, 50.0, 1_000.0))
     assert large.peak_bytes > small.peak_bytes and large.seconds > small.seconds
     cap = small.base_bytes + 0.5 * large.lists_bytes
-    blocked = budget.estimate(budget.SolveCounts(*[*counts.__dict__.values()][:7], 20_000.0, 40_000.0, 50.0, 1_000.0),
-                              cap)
+    blocked = budget.estimate(
+        budget.SolveCounts(*[*counts.__dict__.values()][:7], 20_000.0, 40_000.0, 50.0, 1_000.0), cap
+    )
     assert not blocked.keep_lists and blocked.fits and blocked.peak_bytes <= cap
     assert budget.memory_budget(4, None, budget.GB) == 3 * budget.GB
     assert budget.memory_budget(None, 10 * budget.GB) == pytest.approx(9 * budget.GB)

@@ -15,8 +15,15 @@ from translucency.scatter import dipoles, fresnel
 def _evaluate(case):
     w12 = fresnel.refract(case["w_i"], case["n_i"], case["eta"])
     S_d = dipoles.directional_dipole(
-        case["x_i"], case["n_i"], w12, case["x_o"], case["n_o"],
-        case["sigma_a"], case["sigma_s"], case["g"], case["eta"],
+        case["x_i"],
+        case["n_i"],
+        w12,
+        case["x_o"],
+        case["n_o"],
+        case["sigma_a"],
+        case["sigma_s"],
+        case["g"],
+        case["eta"],
     )
     return w12, S_d
 
@@ -42,10 +49,22 @@ def test_every_reference_vector(dirpole_vectors):
 def test_reference_vectors_vectorised(dirpole_vectors):
     """The same vectors evaluated in one broadcast call give the same answers."""
     cases = dirpole_vectors["random"]
-    stack = {k: np.array([c[k] for c in cases]) for k in ("x_i", "n_i", "w_i", "x_o", "n_o", "sigma_a", "sigma_s", "g", "eta", "S_d")}
+    stack = {
+        k: np.array([c[k] for c in cases])
+        for k in ("x_i", "n_i", "w_i", "x_o", "n_o", "sigma_a", "sigma_s", "g", "eta", "S_d")
+    }
     w12 = fresnel.refract(stack["w_i"], stack["n_i"], stack["eta"])
-    S_d = dipoles.directional_dipole(stack["x_i"], stack["n_i"], w12, stack["x_o"], stack["n_o"],
-                                     stack["sigma_a"], stack["sigma_s"], stack["g"], stack["eta"])
+    S_d = dipoles.directional_dipole(
+        stack["x_i"],
+        stack["n_i"],
+        w12,
+        stack["x_o"],
+        stack["n_o"],
+        stack["sigma_a"],
+        stack["sigma_s"],
+        stack["g"],
+        stack["eta"],
+    )
     assert S_d.shape == (len(cases),)
     nonzero = stack["S_d"] > 0
     assert np.allclose(S_d[nonzero], stack["S_d"][nonzero], rtol=1e-9, atol=0)
@@ -82,16 +101,23 @@ def test_full_bssrdf_example_of_spec_1_9():
 
 # docs/physics.md §10.4 (eta = 1.3, sigma_t' = 1, normal incidence): totals per refracted photon, 4 decimals.
 SPEC_TOTALS_13 = [  # alpha', directional, standard, better
-    (0.3, 0.1825, 0.0355, 0.0085), (0.5, 0.2244, 0.0745, 0.0289), (0.7, 0.2943, 0.1406, 0.0783),
-    (0.8, 0.3565, 0.1969, 0.1312), (0.9, 0.4752, 0.2991, 0.2434), (0.95, 0.6021, 0.4066, 0.3703),
-    (0.99, 0.8717, 0.6445, 0.6421), (0.999, 1.1032, 0.8639, 0.8693),
+    (0.3, 0.1825, 0.0355, 0.0085),
+    (0.5, 0.2244, 0.0745, 0.0289),
+    (0.7, 0.2943, 0.1406, 0.0783),
+    (0.8, 0.3565, 0.1969, 0.1312),
+    (0.9, 0.4752, 0.2991, 0.2434),
+    (0.95, 0.6021, 0.4066, 0.3703),
+    (0.99, 0.8717, 0.6445, 0.6421),
+    (0.999, 1.1032, 0.8639, 0.8693),
 ]
 
 
 @pytest.mark.parametrize("alpha, directional, standard, better", SPEC_TOTALS_13)
 def test_total_reflectance_table_eta_1_3(alpha, directional, standard, better):
     tol = 1e-4  # the table prints 4 decimals (its standard dipole at alpha' = 0.3 differs by 5.3e-5)
-    assert dipoles.directional_dipole_total_reflectance(1 - alpha, alpha, 0.0, 1.3) == pytest.approx(directional, abs=tol)
+    assert dipoles.directional_dipole_total_reflectance(1 - alpha, alpha, 0.0, 1.3) == pytest.approx(
+        directional, abs=tol
+    )
     assert dipoles.standard_dipole_total_reflectance(alpha, 1.3) == pytest.approx(standard, abs=tol)
     assert dipoles.better_dipole_total_reflectance(alpha, 1.3) == pytest.approx(better, abs=tol)
 
@@ -102,7 +128,9 @@ def test_total_reflectance_index_matched_spec_3_3():
     for alpha, std, bet, direc in [(0.99, 0.7465, 0.7381, 1.0874), (0.9, 0.3853, 0.3441, 0.7103)]:
         assert dipoles.standard_dipole_total_reflectance(alpha, 1.0) == pytest.approx(std, abs=6e-5)
         assert dipoles.better_dipole_total_reflectance(alpha, 1.0) == pytest.approx(bet, abs=6e-5)
-        assert dipoles.directional_dipole_total_reflectance(1 - alpha, alpha, 0.0, 1.0) == pytest.approx(direc, abs=6e-5)
+        assert dipoles.directional_dipole_total_reflectance(1 - alpha, alpha, 0.0, 1.0) == pytest.approx(
+            direc, abs=6e-5
+        )
 
 
 # ------------------------------------------------------ closed forms against the integral of the profile
@@ -110,7 +138,9 @@ def test_total_reflectance_index_matched_spec_3_3():
 
 def _plane_integral(profile, *args):
     """Integral of a radial profile over the plane, 2 pi int_0^inf R(r) r dr, by adaptive quadrature."""
-    value, _ = integrate.quad(lambda r: 2 * np.pi * r * float(profile(r, *args)), 0, np.inf, limit=500, epsabs=0, epsrel=1e-10)
+    value, _ = integrate.quad(
+        lambda r: 2 * np.pi * r * float(profile(r, *args)), 0, np.inf, limit=500, epsabs=0, epsrel=1e-10
+    )
     return value
 
 
@@ -120,9 +150,11 @@ def test_closed_form_totals_equal_integrals(alpha, eta):
     sigma_t = 2.5  # any scale: the totals depend on alpha' only
     sigma_s, sigma_a = alpha * sigma_t, (1 - alpha) * sigma_t
     assert dipoles.standard_dipole_total_reflectance(alpha, eta) == pytest.approx(
-        _plane_integral(dipoles.standard_dipole_profile, sigma_a, sigma_s, 0.0, eta), rel=1e-7)
+        _plane_integral(dipoles.standard_dipole_profile, sigma_a, sigma_s, 0.0, eta), rel=1e-7
+    )
     assert dipoles.better_dipole_total_reflectance(alpha, eta) == pytest.approx(
-        _plane_integral(dipoles.better_dipole_profile, sigma_a, sigma_s, 0.0, eta), rel=1e-7)
+        _plane_integral(dipoles.better_dipole_profile, sigma_a, sigma_s, 0.0, eta), rel=1e-7
+    )
 
 
 def test_directional_total_at_normal_incidence_equals_radial_integral():
@@ -130,8 +162,13 @@ def test_directional_total_at_normal_incidence_equals_radial_integral():
     # pi S_d / norm checks the polar quadrature of directional_dipole_total_reflectance.
     sigma_a, sigma_s, eta = 0.02, 1.1, 1.4
     norm = 1 / (4 * fresnel.C_phi(1 / eta))
-    radial = lambda r: np.pi / norm * dipoles.directional_dipole_profile(np.array([r, 0.0, 0.0]), 0.0, sigma_a, sigma_s, 0.0, eta)  # noqa: E731
-    expected = _plane_integral(lambda r: radial(r))
+
+    def radial(r):
+        return (
+            np.pi / norm * dipoles.directional_dipole_profile(np.array([r, 0.0, 0.0]), 0.0, sigma_a, sigma_s, 0.0, eta)
+        )
+
+    expected = _plane_integral(radial)
     assert dipoles.directional_dipole_total_reflectance(sigma_a, sigma_s, 0.0, eta) == pytest.approx(expected, rel=1e-5)
 
 
@@ -149,7 +186,9 @@ def _unit(v):
     return v / np.linalg.norm(v)
 
 
-vectors = st.tuples(*[st.floats(-1, 1, allow_subnormal=False)] * 3).filter(lambda v: np.linalg.norm(v) > 1e-3).map(_unit)
+vectors = (
+    st.tuples(*[st.floats(-1, 1, allow_subnormal=False)] * 3).filter(lambda v: np.linalg.norm(v) > 1e-3).map(_unit)
+)
 axis_vectors = st.sampled_from([np.array(v, float) for v in [(0, 0, 1), (0, 0, -1), (1, 0, 0), (0, 1, 0), (0, -1, 0)]])
 directions = st.one_of(vectors, axis_vectors)
 log_floats = lambda lo, hi: st.floats(np.log10(lo), np.log10(hi)).map(lambda e: 10.0**e)  # noqa: E731
@@ -157,11 +196,15 @@ log_floats = lambda lo, hi: st.floats(np.log10(lo), np.log10(hi)).map(lambda e: 
 
 @settings(max_examples=400, deadline=None)
 @given(
-    n_i=directions, light=directions, n_o=directions,
+    n_i=directions,
+    light=directions,
+    n_o=directions,
     offset=st.one_of(st.just(np.zeros(3)), vectors.map(lambda v: v * 0.0), vectors),
     distance=st.one_of(st.just(0.0), log_floats(1e-12, 1e4)),
-    sigma_s=log_floats(1e-4, 1e4), albedo=st.floats(1e-6, 1 - 1e-9),
-    g=st.floats(-0.95, 0.95), eta=st.floats(1.0, 2.5),
+    sigma_s=log_floats(1e-4, 1e4),
+    albedo=st.floats(1e-6, 1 - 1e-9),
+    g=st.floats(-0.95, 0.95),
+    eta=st.floats(1.0, 2.5),
 )
 def test_finite_and_non_negative(n_i, light, n_o, offset, distance, sigma_s, albedo, g, eta):
     """No NaN, no inf and S_d >= 0 over wide ranges, degenerate geometry included (r = 0, n_i || x)."""
@@ -204,7 +247,9 @@ def test_exit_point_on_the_normal_axis_uses_n_i():
 
 
 @settings(max_examples=100, deadline=None)
-@given(scale=log_floats(1e-3, 1e3), n_i=vectors, light=vectors, n_o=vectors, offset=vectors, distance=st.floats(0.0, 10.0))
+@given(
+    scale=log_floats(1e-3, 1e3), n_i=vectors, light=vectors, n_o=vectors, offset=vectors, distance=st.floats(0.0, 10.0)
+)
 def test_scale_invariance(scale, n_i, light, n_o, offset, distance):
     """x -> s x with sigma -> sigma / s multiplies S_d by 1 / s^2."""
     w_i = light if np.dot(light, n_i) > 0 else light - 2 * np.dot(light, n_i) * n_i
@@ -216,22 +261,27 @@ def test_scale_invariance(scale, n_i, light, n_o, offset, distance):
     assert scaled * scale**2 == pytest.approx(base, rel=1e-9, abs=1e-300)
     for profile in (dipoles.standard_dipole_profile, dipoles.better_dipole_profile):
         assert profile(distance * scale, 0.05 / scale, 1.2 / scale, 0.3, 1.4) * scale**2 == pytest.approx(
-            profile(distance, 0.05, 1.2, 0.3, 1.4), rel=1e-9)
+            profile(distance, 0.05, 1.2, 0.3, 1.4), rel=1e-9
+        )
 
 
 def test_broadcasting_matches_loops():
     rng = np.random.default_rng(7)
     x_i = rng.normal(size=(5, 1, 3))
-    n_i = rng.normal(size=(5, 1, 3)); n_i /= np.linalg.norm(n_i, axis=-1, keepdims=True)
+    n_i = rng.normal(size=(5, 1, 3))
+    n_i /= np.linalg.norm(n_i, axis=-1, keepdims=True)
     x_o = rng.normal(size=(1, 4, 3))
-    n_o = rng.normal(size=(1, 4, 3)); n_o /= np.linalg.norm(n_o, axis=-1, keepdims=True)
+    n_o = rng.normal(size=(1, 4, 3))
+    n_o /= np.linalg.norm(n_o, axis=-1, keepdims=True)
     w12 = -n_i
     sigma_a = np.array([0.01, 0.02, 0.03, 0.04])
     out = dipoles.directional_dipole(x_i, n_i, w12, x_o, n_o, sigma_a, 1.0, 0.0, 1.3)
     assert out.shape == (5, 4)
     for i in range(5):
         for j in range(4):
-            single = dipoles.directional_dipole(x_i[i, 0], n_i[i, 0], w12[i, 0], x_o[0, j], n_o[0, j], sigma_a[j], 1.0, 0.0, 1.3)
+            single = dipoles.directional_dipole(
+                x_i[i, 0], n_i[i, 0], w12[i, 0], x_o[0, j], n_o[0, j], sigma_a[j], 1.0, 0.0, 1.3
+            )
             assert out[i, j] == pytest.approx(single, rel=1e-14)
 
 

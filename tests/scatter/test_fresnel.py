@@ -46,11 +46,29 @@ def test_reflectance_is_a_probability(cos_i, eta):
 
 def _exact_two_C1(eta):
     """2 C1 by quadrature of the Fresnel formula for light inside a medium of relative index eta."""
-    return 2 * integrate.quad(lambda mu: fresnel.fresnel_reflectance(mu, 1 / eta) * mu, 0, 1, limit=200, points=[np.sqrt(max(0, 1 - 1 / eta**2))])[0]
+    return (
+        2
+        * integrate.quad(
+            lambda mu: fresnel.fresnel_reflectance(mu, 1 / eta) * mu,
+            0,
+            1,
+            limit=200,
+            points=[np.sqrt(max(0, 1 - 1 / eta**2))],
+        )[0]
+    )
 
 
 def _exact_three_C2(eta):
-    return 3 * integrate.quad(lambda mu: fresnel.fresnel_reflectance(mu, 1 / eta) * mu**2, 0, 1, limit=200, points=[np.sqrt(max(0, 1 - 1 / eta**2))])[0]
+    return (
+        3
+        * integrate.quad(
+            lambda mu: fresnel.fresnel_reflectance(mu, 1 / eta) * mu**2,
+            0,
+            1,
+            limit=200,
+            points=[np.sqrt(max(0, 1 - 1 / eta**2))],
+        )[0]
+    )
 
 
 # docs/physics.md §10.3 table: eta, 2C1(eta) fit, 2C1(1/eta) fit, 3C2(eta) fit, 3C2(1/eta), C_phi(eta), C_phi(1/eta),
@@ -104,9 +122,11 @@ def test_egan_hilgeman_matches_spec_2_3():
         assert (1 + value) / (1 - value) == pytest.approx(A, abs=1e-5)
 
 
-unit_vectors = st.tuples(st.floats(-1, 1), st.floats(-1, 1), st.floats(-1, 1)).filter(
-    lambda v: 1e-3 < np.linalg.norm(v)
-).map(lambda v: np.array(v) / np.linalg.norm(v))
+unit_vectors = (
+    st.tuples(st.floats(-1, 1), st.floats(-1, 1), st.floats(-1, 1))
+    .filter(lambda v: 1e-3 < np.linalg.norm(v))
+    .map(lambda v: np.array(v) / np.linalg.norm(v))
+)
 
 
 @settings(max_examples=200)

@@ -113,7 +113,11 @@ def test_several_lights_add():
 
 def test_convex_mesh_with_and_without_visibility_agree():
     points, triangles, normals, areas = icosphere(subdivisions=4)
-    lights = [DirectionalLight((0.2, -0.5, 1.0), 2.0), PointLight((30, 20, -25), 5.0), EnvironmentLight(0.3, n_directions=64)]
+    lights = [
+        DirectionalLight((0.2, -0.5, 1.0), 2.0),
+        PointLight((30, 20, -25), 5.0),
+        EnvironmentLight(0.3, n_directions=64),
+    ]
     on = incident_flux(points, normals, areas, lights, ETA, triangles=triangles)
     off = incident_flux(points, normals, areas, lights, ETA)
     assert on.stats.n_rays > 0 and on.stats.n_shadowed == 0 and off.stats.scene == "off"
@@ -156,7 +160,11 @@ def test_cache_reuses_scene_and_visibility_when_only_the_material_changes():
 
 def test_per_direction_contributions_sum_to_the_aggregate():
     points, _, normals, areas = icosphere()
-    lights = [DirectionalLight((0, 0, 1), 1.0), DirectionalLight((1, 0, 0.2), (0.2, 0.4, 0.9)), PointLight((0, 0, -50), 3.0)]
+    lights = [
+        DirectionalLight((0, 0, 1), 1.0),
+        DirectionalLight((1, 0, 0.2), (0.2, 0.4, 0.9)),
+        PointLight((0, 0, -50), 3.0),
+    ]
     result = incident_flux(points, normals, areas, lights, ETA, per_direction=True)
     assert len(result.contributions) == 3
     flux = np.zeros_like(result.flux_rgb)

@@ -66,8 +66,17 @@ def test_vertex_sum_equals_dense_reference_sum():
     params = kernels.channel_parameters(medium.sigma_a, medium.sigma_s, medium.g, medium.eta)
     B, clamped = kernels.vertex_sum(0, x_i, n_i, w12, flux, x_o, n_o, params, np.arange(3))
     for c in range(3):
-        S = dipoles.directional_dipole(x_i[None], n_i[None], w12[None], x_o[:, None], n_o[:, None],
-                                       medium.sigma_a[c], medium.sigma_s[c], medium.g[c], medium.eta)
+        S = dipoles.directional_dipole(
+            x_i[None],
+            n_i[None],
+            w12[None],
+            x_o[:, None],
+            n_o[:, None],
+            medium.sigma_a[c],
+            medium.sigma_s[c],
+            medium.g[c],
+            medium.eta,
+        )
         assert np.allclose(B[:, c], S @ flux[:, c], rtol=1e-12, atol=0)
     assert clamped.shape == (120,) and clamped.min() >= 0
 
@@ -94,12 +103,18 @@ def test_one_kernel_for_every_model_and_channel_map(model):
     x_i, n_i, light, _, _ = _pairs(rng, 400, 2.0)
     x_i[:3] = x_i[3]  # coincident sources and receivers (r = 0)
     w12 = fresnel.refract(light, n_i, medium.eta)
-    profiles = {"directional": None, "standard": dipoles.standard_dipole_profile, "better": dipoles.better_dipole_profile}
+    profiles = {
+        "directional": None,
+        "standard": dipoles.standard_dipole_profile,
+        "better": dipoles.better_dipole_profile,
+    }
     reference = []
     for c in range(3):
         coefficients = (medium.sigma_a[c], medium.sigma_s[c], medium.g[c], medium.eta)
         if model == "directional":
-            S = dipoles.directional_dipole(x_i[None], n_i[None], w12[None], x_i[:150, None], n_i[:150, None], *coefficients)
+            S = dipoles.directional_dipole(
+                x_i[None], n_i[None], w12[None], x_i[:150, None], n_i[:150, None], *coefficients
+            )
         else:
             r = np.linalg.norm(x_i[:150, None] - x_i[None], axis=2)
             scale = 1.0 / np.pi if model == "standard" else 1.0 / (np.pi * 4.0 * fresnel.C_phi(1.0 / medium.eta))
@@ -110,17 +125,22 @@ def test_one_kernel_for_every_model_and_channel_map(model):
     for rows, channel_of in ((3, [0, 1, 2]), (1, [0, 0, 0]), (2, [0, 1, 1]), (3, [0, 1, 2, 2, 0])):
         channel_of = np.array(channel_of, dtype=np.int64)
         flux = rng.random((400, channel_of.size))
-        params = kernels.channel_parameters(medium.sigma_a[:rows], medium.sigma_s[:rows], medium.g[:rows], medium.eta,
-                                            model)
+        params = kernels.channel_parameters(
+            medium.sigma_a[:rows], medium.sigma_s[:rows], medium.g[:rows], medium.eta, model
+        )
         B, clamped = kernels.vertex_sum(code, x_i, n_i, w12, flux, x_i[:150], n_i[:150], params, channel_of)
         for c, row in enumerate(channel_of):
             assert np.allclose(B[:, c], reference[row] @ flux[:, c], rtol=1e-12, atol=0)
         if rows == 3 and channel_of.size == 3:
             for c in range(3):
-                one = kernels.channel_parameters(medium.sigma_a[c:c + 1], medium.sigma_s[c:c + 1], medium.g[c:c + 1],
-                                                 medium.eta, model)
-                single.append(kernels.vertex_sum(code, x_i, n_i, w12, flux[:, :1], x_i[:150], n_i[:150], one,
-                                                 np.zeros(1, dtype=np.int64))[1])
+                one = kernels.channel_parameters(
+                    medium.sigma_a[c : c + 1], medium.sigma_s[c : c + 1], medium.g[c : c + 1], medium.eta, model
+                )
+                single.append(
+                    kernels.vertex_sum(
+                        code, x_i, n_i, w12, flux[:, :1], x_i[:150], n_i[:150], one, np.zeros(1, dtype=np.int64)
+                    )[1]
+                )
             assert np.array_equal(clamped, sum(single))
         else:
             assert np.array_equal(clamped, sum(single[:rows]))

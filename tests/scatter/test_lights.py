@@ -69,7 +69,9 @@ def test_constant_environment_samples_cover_the_sphere():
 
 
 def test_stratified_cosine_error_is_small_and_falls_with_n():
-    errors = [cosine_integral_error(EnvironmentLight(1.0, n_directions=n).directional_samples()) for n in (16, 64, 256, 1024)]
+    errors = [
+        cosine_integral_error(EnvironmentLight(1.0, n_directions=n).directional_samples()) for n in (16, 64, 256, 1024)
+    ]
     assert errors[2] < 0.005  # 256 directions: irradiance of a plane within 0.5 %
     assert errors[3] < 0.001
     assert all(a > b for a, b in zip(errors, errors[1:]))
@@ -80,7 +82,7 @@ def _plane_irradiance(samples, normal):
     return cos @ samples.irradiance_rgb
 
 
-def _exact_map_irradiance(image, normal, up=np.array([0.0, 0.0, 1.0])):
+def _exact_map_irradiance(image, normal, up=(0.0, 0.0, 1.0)):
     """int L cos+ dw over an equirectangular map with +z up, by fine quadrature inside every pixel."""
     h, w, _ = image.shape
     sub = 8
@@ -101,7 +103,9 @@ def test_map_sampling_importance_finds_the_sun():
     theta, phi = (5.5 / 32) * np.pi, (10.5 / 64) * 2 * np.pi
     normal = np.array([np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.cos(theta)])
     exact = _exact_map_irradiance(image, normal)
-    importance = _plane_irradiance(EnvironmentLight(radiance_map=image, n_directions=256, sampling="importance").directional_samples(), normal)
+    importance = _plane_irradiance(
+        EnvironmentLight(radiance_map=image, n_directions=256, sampling="importance").directional_samples(), normal
+    )
     stratified = _plane_irradiance(EnvironmentLight(radiance_map=image, n_directions=256).directional_samples(), normal)
     assert np.allclose(importance, exact, rtol=0.03)
     assert np.abs(importance - exact).max() < np.abs(stratified - exact).max()
@@ -118,7 +122,9 @@ def test_constant_map_equals_constant_environment():
 def test_map_up_axis_turns_the_zenith():
     image = np.zeros((8, 16, 3))
     image[0] = 1.0  # only the top row (around the zenith) is bright
-    samples = EnvironmentLight(radiance_map=image, n_directions=64, sampling="importance", up=(0, 1, 0)).directional_samples()
+    samples = EnvironmentLight(
+        radiance_map=image, n_directions=64, sampling="importance", up=(0, 1, 0)
+    ).directional_samples()
     assert np.all(samples.directions[:, 1] > np.cos(np.pi / 8) - 1e-12)
 
 

@@ -46,7 +46,11 @@ def test_jensen_values_and_decisions():
     assert marble.eta == 1.5
     assert marble.sigma_s == (2.19, 2.62, 3.00) and marble.sigma_a == (0.0021, 0.0041, 0.0071)
     assert materials.material("ketchup").sigma_s == (0.18, 0.07, 0.03)
-    assert all(m.g == (0.0, 0.0, 0.0) and (m.eta == 1.3 or m.key == "marble") for m in materials.catalogue() if m.table == "jensen2001")
+    assert all(
+        m.g == (0.0, 0.0, 0.0) and (m.eta == 1.3 or m.key == "marble")
+        for m in materials.catalogue()
+        if m.table == "jensen2001"
+    )
 
 
 def test_narasimhan_values_are_the_published_diluted_ones():
@@ -64,10 +68,18 @@ def test_narasimhan_values_are_the_published_diluted_ones():
 # docs/physics.md §11.1, last column (§10.6): total diffuse reflectance computed with the standard
 # dipole at eta = 1.3 (3 decimals).
 SPEC_RD = {
-    "apple": (0.846, 0.841, 0.528), "chicken1": (0.314, 0.156, 0.126), "chicken2": (0.321, 0.160, 0.108),
-    "cream": (0.976, 0.900, 0.725), "ketchup": (0.164, 0.006, 0.002), "marble": (0.867, 0.834, 0.801),
-    "potato": (0.764, 0.613, 0.213), "skim_milk": (0.815, 0.813, 0.682), "skin1": (0.436, 0.227, 0.131),
-    "skin2": (0.623, 0.433, 0.343), "spectralon": (1.0, 1.0, 1.0), "whole_milk": (0.908, 0.881, 0.759),
+    "apple": (0.846, 0.841, 0.528),
+    "chicken1": (0.314, 0.156, 0.126),
+    "chicken2": (0.321, 0.160, 0.108),
+    "cream": (0.976, 0.900, 0.725),
+    "ketchup": (0.164, 0.006, 0.002),
+    "marble": (0.867, 0.834, 0.801),
+    "potato": (0.764, 0.613, 0.213),
+    "skim_milk": (0.815, 0.813, 0.682),
+    "skin1": (0.436, 0.227, 0.131),
+    "skin2": (0.623, 0.433, 0.343),
+    "spectralon": (1.0, 1.0, 1.0),
+    "whole_milk": (0.908, 0.881, 0.759),
 }
 
 
@@ -80,7 +92,9 @@ def test_computed_total_reflectance_of_jensen_materials(name, expected):
 
 def test_marble_at_its_own_index():
     medium = materials.material("marble").medium()
-    assert np.allclose(dipoles.standard_dipole_total_reflectance(medium.alpha_reduced, medium.eta), (0.830, 0.791, 0.753), atol=5.1e-4)
+    assert np.allclose(
+        dipoles.standard_dipole_total_reflectance(medium.alpha_reduced, medium.eta), (0.830, 0.791, 0.753), atol=5.1e-4
+    )
 
 
 def test_non_scattering_channels_are_refused_with_a_sentence():

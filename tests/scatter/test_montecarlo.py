@@ -137,7 +137,13 @@ def test_non_absorbing_medium_reflects_everything_it_does_not_truncate():
 
 def test_tallies_are_consistent_and_non_negative():
     tally = simulate_half_space(0.05, 0.95, 0.0, 1.3, 30.0, n_photons=100_000, seed=2, grid_cells=41, radial_bins=20)
-    for array in (tally.exitance, tally.exitance_single, tally.exitance_multiple, tally.radial_exitance, tally.exitance_se):
+    for array in (
+        tally.exitance,
+        tally.exitance_single,
+        tally.exitance_multiple,
+        tally.radial_exitance,
+        tally.exitance_se,
+    ):
         assert np.all(np.isfinite(array)) and np.all(array >= 0.0)
     assert np.allclose(tally.exitance, tally.exitance_single + tally.exitance_multiple, rtol=1e-12, atol=0)
     on_grid = tally.exitance.sum() * tally.cell_area_mm2

@@ -14,15 +14,18 @@ def test_every_choice_passes_unchanged():
         assert check_tol(tol) is tol
 
 
-@pytest.mark.parametrize("check, value, words", [
-    (check_model, "photon", "unknown model 'photon'; choose one of directional, standard, better."),
-    (check_method, "fmm", "unknown method 'fmm'; choose one of exact, cutoff, tree."),
-    (check_tol, 0.0, "tol must be a relative error in (0, 1), got 0.0."),
-    (check_tol, 1.0, "tol must be a relative error in (0, 1), got 1.0."),
-    (check_tol, float("nan"), "tol must be a relative error in (0, 1), got nan."),
-    (check_tol, True, "tol must be a relative error in (0, 1), got True."),
-    (check_tol, "0.01", "tol must be a relative error in (0, 1), got '0.01'."),
-])
+@pytest.mark.parametrize(
+    "check, value, words",
+    [
+        (check_model, "photon", "unknown model 'photon'; choose one of directional, standard, better."),
+        (check_method, "fmm", "unknown method 'fmm'; choose one of exact, cutoff, tree."),
+        (check_tol, 0.0, "tol must be a relative error in (0, 1), got 0.0."),
+        (check_tol, 1.0, "tol must be a relative error in (0, 1), got 1.0."),
+        (check_tol, float("nan"), "tol must be a relative error in (0, 1), got nan."),
+        (check_tol, True, "tol must be a relative error in (0, 1), got True."),
+        (check_tol, "0.01", "tol must be a relative error in (0, 1), got '0.01'."),
+    ],
+)
 def test_a_wrong_choice_is_one_sentence(check, value, words):
     with pytest.raises(InvalidParameterError) as info:
         check(value)

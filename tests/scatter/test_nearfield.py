@@ -59,9 +59,19 @@ def test_fan_rule_integrates_the_peak_at_the_receiver(material_name, name, corne
 
     def f(x):
         x = np.atleast_2d(x)
-        return np.squeeze(dipoles.directional_dipole(x, np.broadcast_to(normal, x.shape), np.broadcast_to(w12, x.shape),
-                                                     receiver, normal, medium.sigma_a[2], medium.sigma_s[2], 0.0,
-                                                     medium.eta))
+        return np.squeeze(
+            dipoles.directional_dipole(
+                x,
+                np.broadcast_to(normal, x.shape),
+                np.broadcast_to(w12, x.shape),
+                receiver,
+                normal,
+                medium.sigma_a[2],
+                medium.sigma_s[2],
+                0.0,
+                medium.eta,
+            )
+        )
 
     reference = _scipy_integral(triangle, corner, f)
     points, weights = _fan_points(triangle, corner, float(medium.D.min()))
@@ -86,7 +96,9 @@ def test_degree3_rule_is_exact_for_cubics():
     mids = 0.5 * (corners + np.roll(corners, -1, axis=0))
     centroid = corners.mean(axis=0)
     points = np.vstack([corners, mids, centroid])
-    weights = 0.5 * np.array([nearfield.CORNER_WEIGHT] * 3 + [nearfield.MIDPOINT_WEIGHT] * 3 + [nearfield.CENTROID_WEIGHT])
+    weights = 0.5 * np.array(
+        [nearfield.CORNER_WEIGHT] * 3 + [nearfield.MIDPOINT_WEIGHT] * 3 + [nearfield.CENTROID_WEIGHT]
+    )
     for a in range(5):
         for b in range(5 - a):
             exact = factorial(a) * factorial(b) / factorial(a + b + 2)
@@ -108,6 +120,6 @@ def test_near_triangles_are_those_with_a_vertex_within_the_radius(radius):
     for q, v in enumerate(receivers):
         close = np.linalg.norm(points - points[v], axis=1) <= radius
         expected = np.flatnonzero(close[triangles].any(axis=1))
-        found = ids[offsets[q]:offsets[q + 1]]
+        found = ids[offsets[q] : offsets[q + 1]]
         assert len(found) == len(set(found.tolist()))  # each triangle once
         assert np.array_equal(np.sort(found), expected)

@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
-from translucency.geometry.synthetic import disc, grid, icosphere, subdivide
 from translucency.errors import InvalidParameterError
 from translucency.geometry.measure import vertex_normals
+from translucency.geometry.synthetic import disc, grid, icosphere, subdivide
 from translucency.scatter import dipoles, fresnel, solve
 from translucency.scatter.materials import material
 from translucency.scatter.medium import Medium
@@ -39,12 +39,25 @@ def test_flat_plane_matches_the_integral_of_the_model(spacing):
     geometry = solve.SurfaceGeometry(points, triangles, normals)
     B = solve.solve(geometry, phi, w12, medium, receivers=centre).B[0]
     norm = 1 / (4 * fresnel.C_phi(1 / medium.eta))
-    expected = [dipoles.directional_dipole_total_reflectance(medium.sigma_a[c], medium.sigma_s[c], 0.0, medium.eta, 30.0)
-                * norm / np.pi for c in range(3)]
+    expected = [
+        dipoles.directional_dipole_total_reflectance(medium.sigma_a[c], medium.sigma_s[c], 0.0, medium.eta, 30.0)
+        * norm
+        / np.pi
+        for c in range(3)
+    ]
     # red has a 4.8 mm diffusion length: the 60 mm square misses ~0.1 % of the infinite plane
     assert np.allclose(B, expected, rtol=5e-3)
     plain = (phi * geometry.vertex_areas[:, None]).T @ dipoles.directional_dipole(
-        points, normals, w12, points[centre[0]], normals[centre[0]], medium.sigma_a[2], medium.sigma_s[2], 0.0, medium.eta)
+        points,
+        normals,
+        w12,
+        points[centre[0]],
+        normals[centre[0]],
+        medium.sigma_a[2],
+        medium.sigma_s[2],
+        0.0,
+        medium.eta,
+    )
     assert plain[2] / expected[2] > 3.0  # the point-sampled self term makes the plain sum several times too bright
 
 
@@ -77,8 +90,10 @@ def test_energy_of_a_flat_disc_lit_normally():
     areas = geometry.vertex_areas
     exitance = (solution.B * areas[:, None]).sum(axis=0) * 4 * np.pi * fresnel.C_phi(1 / medium.eta)
     incident = (phi * areas[:, None]).sum(axis=0)
-    expected = [dipoles.directional_dipole_total_reflectance(medium.sigma_a[c], medium.sigma_s[c], 0.0, medium.eta)
-                for c in range(3)]
+    expected = [
+        dipoles.directional_dipole_total_reflectance(medium.sigma_a[c], medium.sigma_s[c], 0.0, medium.eta)
+        for c in range(3)
+    ]
     assert np.allclose(exitance / incident, expected, rtol=0.02)
 
 
@@ -198,13 +213,35 @@ def test_cutoff_kernel_is_the_sum_over_pairs_within_the_radius(model):
     o, j = np.meshgrid(np.arange(len(points)), lit, indexing="ij")
     inside = np.linalg.norm(points[o] - points[j], axis=2) <= radius
     for rows, channel_of in ((3, np.arange(3)), (1, np.zeros(3, dtype=np.int64))):
-        params = kernels.channel_parameters(medium.sigma_a[:rows], medium.sigma_s[:rows], medium.g[:rows], medium.eta,
-                                            model)
-        B, evaluated = cutoff.cutoff_sum(code, grid.order, grid.start, grid.origin, grid.cell, grid.dims, radius,
-                                         points[lit], normals[lit], w12[lit], flux[lit], points, normals, params,
-                                         channel_of)
-        S = kernels.model_pairs(code, points[j].reshape(-1, 3), normals[j].reshape(-1, 3), w12[j].reshape(-1, 3),
-                                points[o].reshape(-1, 3), normals[o].reshape(-1, 3), params).reshape(*o.shape, rows)
+        params = kernels.channel_parameters(
+            medium.sigma_a[:rows], medium.sigma_s[:rows], medium.g[:rows], medium.eta, model
+        )
+        B, evaluated = cutoff.cutoff_sum(
+            code,
+            grid.order,
+            grid.start,
+            grid.origin,
+            grid.cell,
+            grid.dims,
+            radius,
+            points[lit],
+            normals[lit],
+            w12[lit],
+            flux[lit],
+            points,
+            normals,
+            params,
+            channel_of,
+        )
+        S = kernels.model_pairs(
+            code,
+            points[j].reshape(-1, 3),
+            normals[j].reshape(-1, 3),
+            w12[j].reshape(-1, 3),
+            points[o].reshape(-1, 3),
+            normals[o].reshape(-1, 3),
+            params,
+        ).reshape(*o.shape, rows)
         brute = np.einsum("oj,ojc,jc->oc", inside, S[:, :, channel_of], flux[lit])
         assert np.allclose(B, brute, rtol=1e-12, atol=1e-300)
         assert np.array_equal(evaluated, inside.sum(axis=1)) and evaluated.sum() < len(lit) * len(points)

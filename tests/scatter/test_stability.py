@@ -38,8 +38,9 @@ def test_exit_point_at_the_virtual_source_is_finite(sign):
     params = kernels.channel_parameters(*coeff[:3], coeff[3])
     out = np.empty(1)
     kernels.directional_dipole_pair(*x_i, *n_i, *w12, *x_o, *n_o, params, out)
-    summed, _ = kernels.vertex_sum(0, x_i[None], n_i[None], w12[None], np.ones((1, 1)), x_o[None], n_o[None], params,
-                                   np.zeros(1, dtype=np.int64))
+    summed, _ = kernels.vertex_sum(
+        0, x_i[None], n_i[None], w12[None], np.ones((1, 1)), x_o[None], n_o[None], params, np.zeros(1, dtype=np.int64)
+    )
     for value in (reference, out[0], summed[0, 0]):
         assert np.isfinite(value) and value >= 0.0
     if sign < 0:
@@ -53,7 +54,9 @@ def test_virtual_source_floor_changes_nothing_off_the_axis():
     """Off the axis ``n_i*`` is perpendicular to ``x`` and ``d_v >= 2 A d_e``: the values are those of
     docs/physics.md §10.1."""
     args = (0.01, 0.99, 0.0, 1.3)
-    assert dipoles.directional_dipole_profile(np.array([1.0, 0, 0]), 45.0, *args) == pytest.approx(1.588037e-02, rel=1e-6)
+    assert dipoles.directional_dipole_profile(np.array([1.0, 0, 0]), 45.0, *args) == pytest.approx(
+        1.588037e-02, rel=1e-6
+    )
     assert dipoles.directional_dipole_profile(np.zeros(3), 0.0, *args) == pytest.approx(2.865155e-01, rel=1e-6)
 
 
@@ -94,24 +97,32 @@ def test_sweep_has_no_nan_inf_or_negative_value(sweep, model):
     # differs (reciprocals, polynomial exp: relative 5e-13), amplified where real and virtual source
     # nearly cancel, hence 1e-8 rather than 1e-12
     peak = extremes.peak(blocks, model)[:, None, None, :]
-    rel = extremes.relative_differences(np.where(regular[..., None], kernel["float64"], np.nan), reference["float64"],
-                                        peak)
+    rel = extremes.relative_differences(
+        np.where(regular[..., None], kernel["float64"], np.nan), reference["float64"], peak
+    )
     assert rel.size > 100_000 and rel.max() < 1e-8
     # float32 input: each coordinate carries a relative rounding of 6e-8, so a typical value moves by
     # about that much (the tail, where D is far below the coordinates' magnitude, is measured by the bench)
-    rel32 = extremes.relative_differences(np.where(regular[..., None], reference["float32"], np.nan),
-                                          reference["float64"], peak)
+    rel32 = extremes.relative_differences(
+        np.where(regular[..., None], reference["float32"], np.nan), reference["float64"], peak
+    )
     assert np.median(rel32) < 1e-6
 
 
 # --------------------------------------------------------------------- bounded property test
 
 log_floats = lambda lo, hi: st.floats(np.log10(lo), np.log10(hi)).map(lambda e: 10.0**e)  # noqa: E731
-unit_vectors = st.tuples(*[st.floats(-1, 1)] * 3).filter(lambda v: np.linalg.norm(v) > 1e-3).map(
-    lambda v: np.asarray(v) / np.linalg.norm(v))
+unit_vectors = (
+    st.tuples(*[st.floats(-1, 1)] * 3)
+    .filter(lambda v: np.linalg.norm(v) > 1e-3)
+    .map(lambda v: np.asarray(v) / np.linalg.norm(v))
+)
 directions = st.one_of(st.sampled_from(list(extremes.AXES)), unit_vectors)
-albedos = st.one_of(st.floats(*extremes.ALBEDO_RANGE), log_floats(extremes.ALBEDO_RANGE[0], 0.1),
-                    log_floats(1 - extremes.ALBEDO_RANGE[1], 0.1).map(lambda d: 1.0 - d))
+albedos = st.one_of(
+    st.floats(*extremes.ALBEDO_RANGE),
+    log_floats(extremes.ALBEDO_RANGE[0], 0.1),
+    log_floats(1 - extremes.ALBEDO_RANGE[1], 0.1).map(lambda d: 1.0 - d),
+)
 
 
 @st.composite
@@ -131,9 +142,18 @@ def configurations(draw):
     scale = draw(st.sampled_from([size, 3 * D, D] + ([1 / s_tr] if s_tr > 0 else [])))
     r = scale * 10.0 ** draw(st.floats(*extremes.DISTANCE_EXPONENTS))
     height = 2 * fresnel.reflection_parameter_A(eta) * extrapolation_distance(sigma_a, sigma_s, g)
-    x_o, n_o = extremes.receivers(x_i, n_i, w12, np.array(draw(st.integers(0, len(extremes.OFFSETS) - 1))), r,
-                                  draw(directions), height, np.array(draw(st.integers(0, len(extremes.EXIT_NORMALS) - 1))),
-                                  draw(directions), draw(unit_vectors))
+    x_o, n_o = extremes.receivers(
+        x_i,
+        n_i,
+        w12,
+        np.array(draw(st.integers(0, len(extremes.OFFSETS) - 1))),
+        r,
+        draw(directions),
+        height,
+        np.array(draw(st.integers(0, len(extremes.EXIT_NORMALS) - 1))),
+        draw(directions),
+        draw(unit_vectors),
+    )
     return extremes.single_block(eta, sigma_a, sigma_s, g, x_i, n_i, w12, x_o, n_o)
 
 

@@ -52,10 +52,19 @@ def test_warm_up_fills_the_cache_in_numba_cache_dir_once(tmp_path):
     assert any((tmp_path / "cache").rglob("*.nbi"))
     second = subprocess.run(command, env=env, capture_output=True, text=True, timeout=600)
     assert second.returncode == 0 and second.stdout == ""
-    check = subprocess.run([sys.executable, "-c", "from translucency.scatter.warmup import cold_kernels; "
-                            "print(cold_kernels())"], env=env, capture_output=True, text=True, timeout=600)
+    check = subprocess.run(
+        [sys.executable, "-c", "from translucency.scatter.warmup import cold_kernels; print(cold_kernels())"],
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
     assert check.stdout.strip() == "[]"
-    empty = subprocess.run([sys.executable, "-c", "from translucency.scatter.warmup import cold_kernels; "
-                            "print(len(cold_kernels()))"], env={**env, "NUMBA_CACHE_DIR": str(tmp_path / "other")},
-                           capture_output=True, text=True, timeout=600)
+    empty = subprocess.run(
+        [sys.executable, "-c", "from translucency.scatter.warmup import cold_kernels; print(len(cold_kernels()))"],
+        env={**env, "NUMBA_CACHE_DIR": str(tmp_path / "other")},
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
     assert int(empty.stdout) == len(warmup.MAIN_JOB_KERNELS)

@@ -39,20 +39,40 @@ import time
 from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 
-from ..errors import BudgetError, InvalidParameterError, TranslucencyError, command_line_active, command_line_spelling, option
+from ..errors import (
+    BudgetError,
+    InvalidParameterError,
+    TranslucencyError,
+    command_line_active,
+    command_line_spelling,
+    option,
+)
 from ..scatter.budget import DEFAULT_TIME_LIMIT_S
 from ..scatter.names import DEFAULT_METHOD, DEFAULT_MODEL, DEFAULT_TOL
 from .settings import DEFAULT_MATERIAL, ShadeSettings
 
-__all__ = ["BakeSettings", "BakeRecord", "BakeProgress", "ConsoleProgress", "bake", "bake_file", "bake_files",
-           "output_paths", "format_summary", "exit_code", "DASK_CONNECT_TIMEOUT_S"]
+__all__ = [
+    "BakeSettings",
+    "BakeRecord",
+    "BakeProgress",
+    "ConsoleProgress",
+    "bake",
+    "bake_file",
+    "bake_files",
+    "output_paths",
+    "format_summary",
+    "exit_code",
+    "DASK_CONNECT_TIMEOUT_S",
+]
 
 #: Seconds to wait for a Dask scheduler to answer before giving up.
 DASK_CONNECT_TIMEOUT_S = 20.0
 
 #: Message of a file whose worker process died (see :func:`_run_in_processes`).
-_CRASHED = ("the worker process stopped while baking this file (a crash, or the machine ran out of memory); "
-            "bake it alone to see more.")
+_CRASHED = (
+    "the worker process stopped while baking this file (a crash, or the machine ran out of memory); "
+    "bake it alone to see more."
+)
 
 
 @dataclass(frozen=True)
@@ -87,7 +107,7 @@ class BakeSettings(ShadeSettings):
             parse_unit(self.unit)
 
     @classmethod
-    def of(cls, settings: ShadeSettings, lights=None, unit=None) -> "BakeSettings":
+    def of(cls, settings: ShadeSettings, lights=None, unit=None) -> BakeSettings:
         """The bake of ``settings`` under ``lights`` for files in ``unit``."""
         return cls(**{f.name: getattr(settings, f.name) for f in fields(ShadeSettings)}, lights=lights, unit=unit)
 
@@ -186,16 +206,24 @@ class ConsoleProgress(BakeProgress):
         from tqdm import tqdm
 
         self._sources = list(sources)
-        self._files = tqdm(total=len(sources), desc="baking", unit="file", file=self._stream(), position=0,
-                           dynamic_ncols=True)
+        self._files = tqdm(
+            total=len(sources), desc="baking", unit="file", file=self._stream(), position=0, dynamic_ncols=True
+        )
 
     def stage(self, index, stage, fraction):
         """Show the stage of the file baked in this process."""
         from tqdm import tqdm
 
         if self._stage is None:
-            self._stage = tqdm(total=100, unit="%", file=self._stream(), position=1, leave=False,
-                               dynamic_ncols=True, bar_format="{desc}: {percentage:3.0f}%|{bar}|")
+            self._stage = tqdm(
+                total=100,
+                unit="%",
+                file=self._stream(),
+                position=1,
+                leave=False,
+                dynamic_ncols=True,
+                bar_format="{desc}: {percentage:3.0f}%|{bar}|",
+            )
         self._stage.set_description_str(f"{Path(self._sources[index]).name}: {stage}", refresh=False)
         self._stage.n = round(100 * min(max(fraction, 0.0), 1.0))
         self._stage.refresh()
@@ -259,8 +287,17 @@ def bake_file(path, output, settings: BakeSettings, progress=None) -> BakeRecord
         write_result(result, output)
         report("writing", 1.0)
     except Exception as exc:  # noqa: BLE001 -- every failure of one file becomes its record
-        return BakeRecord(source, None, vertices, lit, time.perf_counter() - start, failure_sentence(exc),
-                          tuple(warnings), threads, isinstance(exc, BudgetError))
+        return BakeRecord(
+            source,
+            None,
+            vertices,
+            lit,
+            time.perf_counter() - start,
+            failure_sentence(exc),
+            tuple(warnings),
+            threads,
+            isinstance(exc, BudgetError),
+        )
     return BakeRecord(source, str(output), vertices, lit, time.perf_counter() - start, None, tuple(warnings), threads)
 
 
@@ -287,8 +324,10 @@ def failure_sentence(exc: BaseException) -> str:
     elif isinstance(exc, BrokenProcessPool):
         text = _CRASHED
     elif isinstance(exc, ImportError):  # a Dask worker without the package
-        text = (f"the worker cannot import {exc.name or 'a module'} ({exc}); install translucency, the same "
-                "version, on every worker.")
+        text = (
+            f"the worker cannot import {exc.name or 'a module'} ({exc}); install translucency, the same "
+            "version, on every worker."
+        )
     elif isinstance(exc, MemoryError):
         text = "ran out of memory; bake it with --resolution auto or on a machine with more memory."
     elif isinstance(exc, OSError):
@@ -323,21 +362,23 @@ def output_paths(sources, output, material_name: str) -> list[Path]:
     """
     text = os.fspath(output)
     output = Path(text)
-    as_file = (output.suffix.lower() == ".ply" and not output.is_dir()
-               and not text.endswith(("/", os.sep)))
+    as_file = output.suffix.lower() == ".ply" and not output.is_dir() and not text.endswith(("/", os.sep))
     inputs = {_key(path) for path in sources if path is not None}
     if as_file:
         if len(sources) != 1:
             raise InvalidParameterError(
                 f"the output {text} names one file, but {len(sources)} meshes were given; "
-                f"pass a folder to bake several (e.g. -o {output.with_suffix('')}/).")
+                f"pass a folder to bake several (e.g. -o {output.with_suffix('')}/)."
+            )
         if _key(output) in inputs:
-            raise InvalidParameterError(f"the output {text} is the input scan; inputs are never written over, "
-                                        "choose another name.")
+            raise InvalidParameterError(
+                f"the output {text} is the input scan; inputs are never written over, choose another name."
+            )
         return [output]
     if output.exists() and not output.is_dir():
-        raise InvalidParameterError(f"the output {text} is an existing file, not a folder; pass a folder, "
-                                    "or a .ply name when baking one mesh.")
+        raise InvalidParameterError(
+            f"the output {text} is an existing file, not a folder; pass a folder, or a .ply name when baking one mesh."
+        )
     taken = set(inputs)
     paths = []
     for source in sources:
@@ -363,8 +404,9 @@ def _default_stem() -> str:
 # --------------------------------------------------------------------------------------------------
 # a batch
 # --------------------------------------------------------------------------------------------------
-def bake_files(paths, output, settings: BakeSettings, *, workers: int = 1, scheduler=None,
-               progress: BakeProgress | None = None) -> list[BakeRecord]:
+def bake_files(
+    paths, output, settings: BakeSettings, *, workers: int = 1, scheduler=None, progress: BakeProgress | None = None
+) -> list[BakeRecord]:
     """Bake every scan of ``paths`` with the same settings; one failed file does not stop the others.
 
     Parameters
@@ -397,8 +439,7 @@ def bake_files(paths, output, settings: BakeSettings, *, workers: int = 1, sched
     progress = progress or BakeProgress()
     sources = list(paths) if paths else [None]
     if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
-        raise InvalidParameterError(
-            f"the number of workers (--workers) must be a whole number >= 1, got {workers!r}.")
+        raise InvalidParameterError(f"the number of workers (--workers) must be a whole number >= 1, got {workers!r}.")
     if scheduler is not None and workers > 1:
         raise InvalidParameterError("pass either workers (local processes) or a Dask scheduler, not both.")
     if output is None:
@@ -424,14 +465,17 @@ def bake_files(paths, output, settings: BakeSettings, *, workers: int = 1, sched
         progress.start(labels, [str(o) for o in outputs])
         try:
             if client is not None:  # the workers may run elsewhere: absolute paths
-                jobs = [(None if source is None else os.path.abspath(source), os.path.abspath(target), settings)
-                        for source, target in zip(sources, outputs)]
+                jobs = [
+                    (None if source is None else os.path.abspath(source), os.path.abspath(target), settings)
+                    for source, target in zip(sources, outputs)
+                ]
                 _run_on_dask(client, jobs, done)
             elif min(workers, len(sources)) > 1:
                 jobs = [(command_line_active(), source, target, settings) for source, target in zip(sources, outputs)]
                 _run_in_processes(_bake_file_spelled, jobs, min(workers, len(jobs)), done)
             else:
                 for index, (source, target) in enumerate(zip(sources, outputs)):
+
                     def stage(name, fraction, index=index):
                         progress.stage(index, name, fraction)
 
@@ -455,8 +499,10 @@ def _check_outputs(outputs) -> None:
         prepare_output_folder(folder, create=True, setting="output")
     for target in outputs:
         if Path(target).is_dir():
-            raise InvalidParameterError(f"the output {target} is a folder; remove or rename it, or choose another "
-                                        f"output folder with {option('output')}.")
+            raise InvalidParameterError(
+                f"the output {target} is a folder; remove or rename it, or choose another "
+                f"output folder with {option('output')}."
+            )
 
 
 def _make_folders(outputs) -> None:
@@ -464,8 +510,9 @@ def _make_folders(outputs) -> None:
         try:
             folder.mkdir(parents=True, exist_ok=True)
         except OSError as exc:
-            raise TranslucencyError(f"cannot create the output folder {folder} ({exc.strerror or exc}); "
-                                    "choose a writable place.") from exc
+            raise TranslucencyError(
+                f"cannot create the output folder {folder} ({exc.strerror or exc}); choose a writable place."
+            ) from exc
 
 
 # --------------------------------------------------------------------------------------------------
@@ -576,8 +623,12 @@ def _run_in_processes(function, jobs, workers: int, done) -> None:
     pending, size = list(range(len(jobs))), workers
     while pending:
         size = min(size, len(pending))
-        executor = ProcessPoolExecutor(size, mp_context=context, initializer=_start_worker_process,
-                                       initargs=(max(1, available_cores() // size), os.getpid()))
+        executor = ProcessPoolExecutor(
+            size,
+            mp_context=context,
+            initializer=_start_worker_process,
+            initargs=(max(1, available_cores() // size), os.getpid()),
+        )
         unfinished = []
         try:
             futures = {executor.submit(function, *jobs[index]): index for index in pending}
@@ -611,14 +662,18 @@ def _dask_client(scheduler):
     try:
         from distributed import Client
     except ImportError:
-        raise TranslucencyError("baking on a Dask cluster needs the 'distributed' package; "
-                                "install it with: pip install 'translucency[dask]'.") from None
+        raise TranslucencyError(
+            "baking on a Dask cluster needs the 'distributed' package; "
+            "install it with: pip install 'translucency[dask]'."
+        ) from None
     try:
         return Client(str(scheduler), timeout=DASK_CONNECT_TIMEOUT_S)
     except (OSError, TimeoutError, ValueError, TypeError) as exc:
-        raise TranslucencyError(f"cannot reach the Dask scheduler at {scheduler} "
-                                f"({' '.join(str(exc).split()) or type(exc).__name__}); "
-                                "check the address (tcp://host:8786) and that the scheduler runs.") from None
+        raise TranslucencyError(
+            f"cannot reach the Dask scheduler at {scheduler} "
+            f"({' '.join(str(exc).split()) or type(exc).__name__}); "
+            "check the address (tcp://host:8786) and that the scheduler runs."
+        ) from None
 
 
 def _dask_task(path, output, settings):
@@ -653,11 +708,22 @@ def _run_on_dask(client, jobs, done) -> None:
 def format_summary(records, seconds: float | None = None) -> str:
     """The summary table of a batch: file, vertices, lit sources, time, output, status; and a total line."""
     header = ("file", "vertices", "lit sources", "time [s]", "output", "status")
-    rows = [(r.source, "-" if r.vertices is None else str(r.vertices), "-" if r.lit_sources is None else str(r.lit_sources),
-             f"{r.seconds:.1f}", r.output or "-", r.status) for r in records]
+    rows = [
+        (
+            r.source,
+            "-" if r.vertices is None else str(r.vertices),
+            "-" if r.lit_sources is None else str(r.lit_sources),
+            f"{r.seconds:.1f}",
+            r.output or "-",
+            r.status,
+        )
+        for r in records
+    ]
     widths = [max(len(row[i]) for row in rows + [header]) for i in range(len(header) - 1)]
-    lines = ["  ".join(cell.ljust(w) for cell, w in zip(row, widths + [0])).rstrip()
-             for row in [header, tuple("-" * w for w in widths) + ("------",)] + rows]
+    lines = [
+        "  ".join(cell.ljust(w) for cell, w in zip(row, widths + [0])).rstrip()
+        for row in [header, tuple("-" * w for w in widths) + ("------",)] + rows
+    ]
     failed = sum(not r.ok for r in records)
     total = f"baked {len(records) - failed} of {len(records)} files"
     if seconds is not None:
@@ -675,10 +741,27 @@ def exit_code(records) -> int:
     return 2 if all(r.over_budget for r in records) else 1
 
 
-def bake(meshes=None, output=None, material=DEFAULT_MATERIAL, lights=None, *, unit=None, model=DEFAULT_MODEL,
-         method=DEFAULT_METHOD, tol=DEFAULT_TOL, resolution="full", shadows=True, exposure=None, per_direction=False,
-         up="auto", memory_limit=None, time_limit=DEFAULT_TIME_LIMIT_S, workers=1, scheduler=None,
-         progress=None) -> list[BakeRecord]:
+def bake(
+    meshes=None,
+    output=None,
+    material=DEFAULT_MATERIAL,
+    lights=None,
+    *,
+    unit=None,
+    model=DEFAULT_MODEL,
+    method=DEFAULT_METHOD,
+    tol=DEFAULT_TOL,
+    resolution="full",
+    shadows=True,
+    exposure=None,
+    per_direction=False,
+    up="auto",
+    memory_limit=None,
+    time_limit=DEFAULT_TIME_LIMIT_S,
+    workers=1,
+    scheduler=None,
+    progress=None,
+) -> list[BakeRecord]:
     """Bake scans to PLY files of per-vertex translucent radiance, one file per scan.
 
     Parameters
@@ -720,6 +803,19 @@ def bake(meshes=None, output=None, material=DEFAULT_MATERIAL, lights=None, *, un
     """
     if meshes is not None and isinstance(meshes, (str, os.PathLike)):
         meshes = [meshes]
-    settings = BakeSettings(material, model, method, tol, resolution, shadows, per_direction, exposure, memory_limit,
-                            time_limit, up, lights=lights, unit=unit)
+    settings = BakeSettings(
+        material,
+        model,
+        method,
+        tol,
+        resolution,
+        shadows,
+        per_direction,
+        exposure,
+        memory_limit,
+        time_limit,
+        up,
+        lights=lights,
+        unit=unit,
+    )
     return bake_files(meshes, output, settings, workers=workers, scheduler=scheduler, progress=progress)

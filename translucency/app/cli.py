@@ -43,8 +43,18 @@ def cmd_materials(args) -> int:
             diffusion = _format_triplet(medium.diffusion_length, "{:.3g}")
         else:
             mfp = diffusion = "(does not scatter in every channel)"
-        rows.append((entry.key, entry.table, f"{entry.eta:g}", _format_triplet(entry.sigma_a), _format_triplet(entry.sigma_s),
-                     _format_triplet(entry.g, "{:g}"), mfp, diffusion))
+        rows.append(
+            (
+                entry.key,
+                entry.table,
+                f"{entry.eta:g}",
+                _format_triplet(entry.sigma_a),
+                _format_triplet(entry.sigma_s),
+                _format_triplet(entry.g, "{:g}"),
+                mfp,
+                diffusion,
+            )
+        )
     header = ("name", "table", "eta", "sigma_a [1/mm]", "sigma_s [1/mm]", "g", "1/sigma_t' [mm]", "1/sigma_tr [mm]")
     widths = [max(len(str(r[i])) for r in rows + [header]) for i in range(len(header))]
     for row in [header, tuple("-" * w for w in widths)] + rows:
@@ -60,12 +70,25 @@ def cmd_materials(args) -> int:
 
 def cmd_report(args) -> int:
     """Print the versions of the stack and check off-screen rendering."""
-    from importlib import metadata
     import platform
+    from importlib import metadata
 
     print(f"translucency {__version__} on Python {platform.python_version()} ({platform.platform()})")
-    for package in ("numpy", "scipy", "numba", "llvmlite", "pyvista", "vtk", "pymeshlab", "fast-simplification",
-                    "embreex", "plyfile", "matplotlib", "imageio", "tqdm"):
+    for package in (
+        "numpy",
+        "scipy",
+        "numba",
+        "llvmlite",
+        "pyvista",
+        "vtk",
+        "pymeshlab",
+        "fast-simplification",
+        "embreex",
+        "plyfile",
+        "matplotlib",
+        "imageio",
+        "tqdm",
+    ):
         try:
             version = metadata.version(package)
         except metadata.PackageNotFoundError:
@@ -85,7 +108,6 @@ def cmd_inspect(args) -> int:
     from ..io.clean import clean_mesh
     from ..io.load import load_mesh
     from ..io.save import check_output_path, save_mesh
-
     from ..io.units import UnitInferredWarning
     from ..io.upright import infer_up
 
@@ -97,8 +119,11 @@ def cmd_inspect(args) -> int:
     for warning in caught:
         (_note if issubclass(warning.category, UnitInferredWarning) else _warn)(str(warning.message))
     low, high = mesh.bounds
-    print(f"{args.mesh}: {mesh.n_points} vertices, {mesh.n_triangles} triangles, "
-          f"{mesh.extent:.4g} mm across ({' x '.join(f'{v:.4g}' for v in high - low)} mm), area {mesh.surface_area:.4g} mm^2")
+    print(
+        f"{args.mesh}: {mesh.n_points} vertices, {mesh.n_triangles} triangles, "
+        f"{mesh.extent:.4g} mm across ({' x '.join(f'{v:.4g}' for v in high - low)} mm), area "
+        f"{mesh.surface_area:.4g} mm^2"
+    )
     cleaned, report = clean_mesh(mesh, max_hole_edges=args.max_hole_edges)
     print(report)
     up, reason = infer_up(cleaned.points, cleaned.triangles)
@@ -118,8 +143,9 @@ def cmd_bake(args) -> int:
 
     settings = BakeSettings.of(solver_settings(args), lights=lights_from_args(args), unit=args.unit)
     start = time.perf_counter()
-    records = bake_files(args.meshes, args.output, settings, workers=args.workers, scheduler=args.scheduler,
-                         progress=ConsoleProgress())
+    records = bake_files(
+        args.meshes, args.output, settings, workers=args.workers, scheduler=args.scheduler, progress=ConsoleProgress()
+    )
     print(format_summary(records, time.perf_counter() - start))
     return exit_code(records)
 
@@ -131,7 +157,9 @@ def _pixels(text: str, option: str) -> tuple[int, int]:
     except ValueError:
         width = height = 0
     if not (16 <= width <= 8192 and 16 <= height <= 8192):
-        raise TranslucencyError(f"{option} must be WIDTHxHEIGHT in pixels, each 16 to 8192 (e.g. 1024x768), got {text!r}.")
+        raise TranslucencyError(
+            f"{option} must be WIDTHxHEIGHT in pixels, each 16 to 8192 (e.g. 1024x768), got {text!r}."
+        )
     return width, height
 
 
@@ -159,8 +187,10 @@ def cmd_view(args) -> int:
             raise TranslucencyError(f"--screenshot {args.screenshot} is not a .png file name; pass e.g. view.png.")
         prepare_output_file(screenshot, setting="screenshot")
     elif sys.platform.startswith("linux") and not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
-        raise TranslucencyError("there is no display to open the viewer on; pass --screenshot FILE.png to render "
-                                "off-screen, or run it under xvfb-run or on a desktop.")
+        raise TranslucencyError(
+            "there is no display to open the viewer on; pass --screenshot FILE.png to render "
+            "off-screen, or run it under xvfb-run or on a desktop."
+        )
     if not (0 < args.roughness <= 1):
         raise TranslucencyError(f"--roughness must be a GGX alpha in (0, 1], got {args.roughness!r}.")
     interactive = args.resolution == "interactive"
@@ -172,10 +202,21 @@ def cmd_view(args) -> int:
     mesh, _, name = load_scan(args.mesh, args.unit, warn=_warn, note=_note)
     from .viewer import Viewer
 
-    viewer = Viewer(mesh, lights=lights, shadows=not args.no_shadows, view_dependent=args.view_dependent,
-                    specular=args.specular, roughness=args.roughness, window_size=window_size, up=args.up,
-                    off_screen=args.screenshot is not None, widgets=args.screenshot is None, output=args.output,
-                    name=Path(name).stem, **keywords)
+    viewer = Viewer(
+        mesh,
+        lights=lights,
+        shadows=not args.no_shadows,
+        view_dependent=args.view_dependent,
+        specular=args.specular,
+        roughness=args.roughness,
+        window_size=window_size,
+        up=args.up,
+        off_screen=args.screenshot is not None,
+        widgets=args.screenshot is None,
+        output=args.output,
+        name=Path(name).stem,
+        **keywords,
+    )
     print(viewer.status)
     if args.screenshot is not None:
         viewer.screenshot(args.screenshot)
@@ -196,16 +237,31 @@ def cmd_compare(args) -> int:
     settings = solver_settings(args).solver_keywords()
     settings.pop("material")
     settings.pop("model")
-    materials, models, _ = validate_choices(args.materials if args.materials is not None else args.material,
-                                            args.models if args.models is not None else args.model)
+    materials, models, _ = validate_choices(
+        args.materials if args.materials is not None else args.material,
+        args.models if args.models is not None else args.model,
+    )
     cell_size = _pixels(args.cell_size, "--cell-size")
     prepare_output_folder(args.output)
     lights = lights_from_args(args)
     mesh, _, name = load_scan(args.mesh, args.unit, warn=_warn, note=_note)
     print(f"{name}: {mesh.n_points} vertices, {mesh.extent:.4g} mm across")
-    result = compare(mesh, materials, models, lights, output=args.output, shadows=not args.no_shadows, up=args.up,
-                     cell_size=cell_size, progress=lambda line: print(f"  solved {line}"), **settings)
-    print(f"common exposure {result.exposure:.4g}; mean radiance toward the normal over lit vertices, W/(m^2 sr) per W/m^2:")
+    result = compare(
+        mesh,
+        materials,
+        models,
+        lights,
+        output=args.output,
+        shadows=not args.no_shadows,
+        up=args.up,
+        cell_size=cell_size,
+        progress=lambda line: print(f"  solved {line}"),
+        **settings,
+    )
+    print(
+        f"common exposure {result.exposure:.4g}; mean radiance toward the normal over lit vertices, W/(m^2 sr) "
+        "per W/m^2:"
+    )
     for material in result.materials:
         for model in result.models:
             r, g, b = result.mean(material, model)
@@ -231,10 +287,13 @@ def _add_view_and_compare_parsers(sub) -> None:
             add_options(parser)
         return parser
 
-    p = scene_parser("view", "show a scan as a translucent object, with controls that solve again",
-                     "Open the interactive viewer (sliders for light, material, model, scale and exposure; key s "
-                     "saves a screenshot and the bake, Return solves on every vertex). Here --resolution defaults "
-                     "to 'interactive': a proxy of about 7,500 vertices.")
+    p = scene_parser(
+        "view",
+        "show a scan as a translucent object, with controls that solve again",
+        "Open the interactive viewer (sliders for light, material, model, scale and exposure; key s "
+        "saves a screenshot and the bake, Return solves on every vertex). Here --resolution defaults "
+        "to 'interactive': a proxy of about 7,500 vertices.",
+    )
     p.set_defaults(resolution="interactive")
     p.add_argument("--screenshot", metavar="FILE.png", help="render the first picture off-screen to FILE.png and exit")
     p.add_argument("--view-dependent", action="store_true", help="show T21(eta, n.w_o) B toward the camera")
@@ -244,15 +303,24 @@ def _add_view_and_compare_parsers(sub) -> None:
     p.add_argument("-o", "--output", default=".", help="folder for what key s saves (default: here)")
     p.set_defaults(func=cmd_view)
 
-    p = scene_parser("compare", "one scan in several materials and models: image grid, differences, statistics",
-                     "Solve a scan in several materials and models with the same view and light; write grid.png "
-                     "(common exposure), differences.png (models against the first), statistics.csv/.json and "
-                     "profile.png into the output folder.")
+    p = scene_parser(
+        "compare",
+        "one scan in several materials and models: image grid, differences, statistics",
+        "Solve a scan in several materials and models with the same view and light; write grid.png "
+        "(common exposure), differences.png (models against the first), statistics.csv/.json and "
+        "profile.png into the output folder.",
+    )
     p.add_argument("--materials", metavar="A,B,C", help="catalogue names, comma-separated (default: --material)")
-    p.add_argument("--models", metavar="M1,M2", help="models, comma-separated; the first is the reference (default: --model)")
+    p.add_argument(
+        "--models", metavar="M1,M2", help="models, comma-separated; the first is the reference (default: --model)"
+    )
     p.add_argument("--cell-size", default="480x480", metavar="WxH", help="pixels of one grid cell (default 480x480)")
-    p.add_argument("-o", "--output", default="translucency-output/compare", help="output folder (created; default "
-                                                                                 "translucency-output/compare)")
+    p.add_argument(
+        "-o",
+        "--output",
+        default="translucency-output/compare",
+        help="output folder (created; default translucency-output/compare)",
+    )
     p.set_defaults(func=cmd_compare)
 
 
@@ -284,17 +352,26 @@ def build_parser() -> argparse.ArgumentParser:
 
     from .options import add_light_options, add_scan_options, add_solver_options
 
-    p = sub.add_parser("bake", help="bake scans to PLY files of translucent radiance",
-                       description="Bake each MESH to <stem>_<material>.ply. Exit code 0: every file baked; "
-                                   "1: some files failed (see the summary); 2: nothing could start.")
+    p = sub.add_parser(
+        "bake",
+        help="bake scans to PLY files of translucent radiance",
+        description="Bake each MESH to <stem>_<material>.ply. Exit code 0: every file baked; "
+        "1: some files failed (see the summary); 2: nothing could start.",
+    )
     add_scan_options(p, several=True)
     add_light_options(p)
     add_solver_options(p)
-    p.add_argument("-o", "--output",
-                   help="a .ply file for one mesh, else a folder, created when missing (default translucency-output)")
+    p.add_argument(
+        "-o",
+        "--output",
+        help="a .ply file for one mesh, else a folder, created when missing (default translucency-output)",
+    )
     p.add_argument("--workers", type=int, default=1, metavar="N", help="bake N files at a time in local processes")
-    p.add_argument("--scheduler", metavar="ADDRESS",
-                   help="bake on a Dask cluster (tcp://host:8786); its workers must reach the meshes and the output folder")
+    p.add_argument(
+        "--scheduler",
+        metavar="ADDRESS",
+        help="bake on a Dask cluster (tcp://host:8786); its workers must reach the meshes and the output folder",
+    )
     p.set_defaults(func=cmd_bake)
 
     _add_view_and_compare_parsers(sub)
@@ -322,8 +399,12 @@ def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
-        with command_line_spelling(), warnings.catch_warnings(), \
-                _first_run_notice(args.func in (cmd_main_job, cmd_bake, cmd_view, cmd_compare)):
+        with (
+            command_line_spelling(),
+            warnings.catch_warnings(),
+            _first_run_notice(args.func in (cmd_main_job, cmd_bake, cmd_view, cmd_compare)),
+        ):
+
             def show(message, category, *rest):  # our own warnings as one line each, like the errors
                 if issubclass(category, TranslucencyWarning):
                     print(f"translucency: warning: {message}", file=sys.stderr)

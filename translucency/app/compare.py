@@ -54,12 +54,25 @@ from ..io.units import unit_metadata
 from ..scatter.budget import DEFAULT_TIME_LIMIT_S
 from ..scatter.names import DEFAULT_METHOD, DEFAULT_MODEL, DEFAULT_TOL
 from .pipeline import Scene, display_colors, resolve_medium
+from .render import (
+    DEFAULT_CAMERA_DIRECTION,
+    DEFAULT_UP,
+    add_colored_mesh,
+    camera_position,
+    default_camera_direction,
+    new_plotter,
+)
 from .settings import DEFAULT_MATERIAL, ShadeSettings
-from .render import (DEFAULT_CAMERA_DIRECTION, DEFAULT_UP, add_colored_mesh, camera_position, default_camera_direction,
-                     new_plotter)
 
-__all__ = ["Comparison", "compare", "validate_choices", "radiance_statistics", "relative_difference", "profile_cut",
-           "PERCENTILES"]
+__all__ = [
+    "Comparison",
+    "compare",
+    "validate_choices",
+    "radiance_statistics",
+    "relative_difference",
+    "profile_cut",
+    "PERCENTILES",
+]
 
 #: Percentiles reported besides the mean and the median.
 PERCENTILES = (5, 25, 75, 95, 99)
@@ -116,8 +129,11 @@ class Comparison:
 
     def mean(self, material: str, model: str, subset: str = "lit") -> np.ndarray:
         """Mean radiance per channel (R, G, B) of one cell over ``subset`` (``"lit"`` or ``"all"``)."""
-        rows = {row["channel"]: row["mean"] for row in self.statistics
-                if (row["material"], row["model"], row["subset"]) == (material, model, subset)}
+        rows = {
+            row["channel"]: row["mean"]
+            for row in self.statistics
+            if (row["material"], row["model"], row["subset"]) == (material, model, subset)
+        }
         return np.array([rows[c] if rows[c] is not None else np.nan for c in CHANNELS])
 
 
@@ -132,8 +148,11 @@ def radiance_statistics(radiance, mask=None) -> dict:
     for c, channel in enumerate(CHANNELS):
         v = values[:, c]
         empty = v.size == 0
-        row = {"n_vertices": int(v.size), "mean": None if empty else float(v.mean()),
-               "median": None if empty else float(np.median(v))}
+        row = {
+            "n_vertices": int(v.size),
+            "mean": None if empty else float(v.mean()),
+            "median": None if empty else float(np.median(v)),
+        }
         for p in PERCENTILES:
             row[f"p{p}"] = None if empty else float(np.percentile(v, p))
         out[channel] = row
@@ -193,7 +212,7 @@ def profile_cut(mesh, values, light_direction, up=DEFAULT_UP, camera_direction=D
     plane = {"center_mm": center.tolist(), "normal": normal.tolist(), "light_direction": d.tolist(), "length_mm": 0.0}
     lines, longest, i = np.asarray(cut.lines), np.zeros(0, dtype=np.int64), 0
     while i < len(lines):  # the VTK cell array: count, ids, count, ids, ...
-        ids = lines[i + 1:i + 1 + lines[i]]
+        ids = lines[i + 1 : i + 1 + lines[i]]
         longest = ids if len(ids) > len(longest) else longest
         i += lines[i] + 1
     if len(longest) < 2:
@@ -243,10 +262,26 @@ def validate_choices(materials, models) -> tuple[list, list, dict]:
     return materials, models, {name: resolve_medium(name) for name in materials}
 
 
-def compare(mesh=None, materials=(DEFAULT_MATERIAL,), models=(DEFAULT_MODEL,), lights=None, *, output=None,
-            method=DEFAULT_METHOD, tol=DEFAULT_TOL, resolution="full", shadows=True, per_direction=False, exposure=None, memory_limit=None,
-            time_limit=DEFAULT_TIME_LIMIT_S, camera_direction=None, up="auto", cell_size=(480, 480),
-            progress=None) -> Comparison:
+def compare(
+    mesh=None,
+    materials=(DEFAULT_MATERIAL,),
+    models=(DEFAULT_MODEL,),
+    lights=None,
+    *,
+    output=None,
+    method=DEFAULT_METHOD,
+    tol=DEFAULT_TOL,
+    resolution="full",
+    shadows=True,
+    per_direction=False,
+    exposure=None,
+    memory_limit=None,
+    time_limit=DEFAULT_TIME_LIMIT_S,
+    camera_direction=None,
+    up="auto",
+    cell_size=(480, 480),
+    progress=None,
+) -> Comparison:
     """Render and measure one scan in several materials and models (module docstring for every output).
 
     Parameters
@@ -292,8 +327,9 @@ def compare(mesh=None, materials=(DEFAULT_MATERIAL,), models=(DEFAULT_MODEL,), l
 
         prepare_output_folder(output)
     # every solver setting checked once, before the scan is loaded; each cell changes material and model
-    settings = ShadeSettings(materials[0], models[0], method, tol, resolution, shadows, per_direction, exposure,
-                             memory_limit, time_limit, up)
+    settings = ShadeSettings(
+        materials[0], models[0], method, tol, resolution, shadows, per_direction, exposure, memory_limit, time_limit, up
+    )
     width, height = (int(v) for v in cell_size)
     if width < 16 or height < 16:
         raise InvalidParameterError(f"cell_size must be at least 16 x 16 pixels, got {cell_size!r}.")
@@ -321,26 +357,44 @@ def compare(mesh=None, materials=(DEFAULT_MATERIAL,), models=(DEFAULT_MODEL,), l
         _, exposure = display_colors(np.concatenate([r.radiance for r in results.values()]))
     exposure = float(exposure)
 
-    lit = {material: scene.incident_on_mesh(media[material], lights)[0].phi_rgb.max(axis=1) > 0
-           for material in materials}
+    lit = {
+        material: scene.incident_on_mesh(media[material], lights)[0].phi_rgb.max(axis=1) > 0 for material in materials
+    }
     statistics, differences = [], []
     for (material, model), result in results.items():
         for subset, mask in (("all", None), ("lit", lit[material])):
             for channel, row in radiance_statistics(result.radiance, mask).items():
-                statistics.append({"material": material, "model": model, "subset": subset, "channel": channel, **row,
-                                   "time_s": times[material, model]})
+                statistics.append(
+                    {
+                        "material": material,
+                        "model": model,
+                        "subset": subset,
+                        "channel": channel,
+                        **row,
+                        "time_s": times[material, model],
+                    }
+                )
     relative = {}
     for material in materials:
         for model in models[1:]:
-            relative[material, model] = difference = relative_difference(results[material, model].radiance,
-                                                                         results[material, models[0]].radiance)
+            relative[material, model] = difference = relative_difference(
+                results[material, model].radiance, results[material, models[0]].radiance
+            )
             for subset, mask in (("all", slice(None)), ("lit", lit[material])):
                 values = difference[mask]
-                row = {"material": material, "model": model, "reference": models[0], "subset": subset,
-                       "n_vertices": int(values.size)}
+                row = {
+                    "material": material,
+                    "model": model,
+                    "reference": models[0],
+                    "subset": subset,
+                    "n_vertices": int(values.size),
+                }
                 if values.size:
-                    row.update(mean=float(values.mean()), mean_abs=float(np.abs(values).mean()),
-                               **{f"p{p}": float(np.percentile(values, p)) for p in (5, 50, 95)})
+                    row.update(
+                        mean=float(values.mean()),
+                        mean_abs=float(np.abs(values).mean()),
+                        **{f"p{p}": float(np.percentile(values, p)) for p in (5, 50, 95)},
+                    )
                 differences.append(row)
 
     key_light = next((light for light in lights if isinstance(light, DirectionalLight)), None)
@@ -355,10 +409,25 @@ def compare(mesh=None, materials=(DEFAULT_MATERIAL,), models=(DEFAULT_MODEL,), l
 
     comparison = Comparison(materials, models, exposure, results, times, statistics, differences, profiles, plane)
     if output is not None:
-        comparison.files = _write_files(Path(output), mesh, comparison, relative, lights, camera_direction, up,
-                                        (width, height), {"method": method, "tol": tol, "resolution": resolution,
-                                                          "shadows": bool(shadows), "per_direction": bool(per_direction),
-                                                          "up": up_axis, "up_inferred": scene.up_requested == "auto"})
+        comparison.files = _write_files(
+            Path(output),
+            mesh,
+            comparison,
+            relative,
+            lights,
+            camera_direction,
+            up,
+            (width, height),
+            {
+                "method": method,
+                "tol": tol,
+                "resolution": resolution,
+                "shadows": bool(shadows),
+                "per_direction": bool(per_direction),
+                "up": up_axis,
+                "up_inferred": scene.up_requested == "auto",
+            },
+        )
     return comparison
 
 
@@ -373,30 +442,42 @@ def _write_files(folder, mesh, comparison, relative, lights, camera_direction, u
     with staged_folder(folder) as staging:
         write_png(staging / names["grid"], _grid_image(mesh, comparison, camera_direction, up, cell_size))
         if relative:
-            write_png(staging / names["differences"],
-                      _difference_image(mesh, comparison, relative, camera_direction, up, cell_size))
+            write_png(
+                staging / names["differences"],
+                _difference_image(mesh, comparison, relative, camera_direction, up, cell_size),
+            )
         _profile_plot(comparison, staging / names["profile"])
         _write_csv(comparison.statistics, staging / names["csv"])
         document = {
-            "format": "translucency-comparison", "version": __version__,
-            "mesh": {"source": str(mesh.source) if mesh.source is not None else "embedded default scan",
-                     "vertices": mesh.n_points, "extent_mm": float(mesh.extent),
-                     **unit_metadata(mesh.mm_per_unit, mesh.unit_inferred)},
+            "format": "translucency-comparison",
+            "version": __version__,
+            "mesh": {
+                "source": str(mesh.source) if mesh.source is not None else "embedded default scan",
+                "vertices": mesh.n_points,
+                "extent_mm": float(mesh.extent),
+                **unit_metadata(mesh.mm_per_unit, mesh.unit_inferred),
+            },
             "settings": {**settings, "lights": [light.to_dict() for light in lights]},
-            "materials": comparison.materials, "models": comparison.models,
+            "materials": comparison.materials,
+            "models": comparison.models,
             "exposure": {"value": comparison.exposure, "rule": "common to every cell"},
             "radiance_unit": "W/(m^2 sr) per W/m^2 of irradiance, toward the normal",
             "times_s": [{"material": m, "model": k, "seconds": t} for (m, k), t in comparison.times.items()],
-            "statistics": comparison.statistics, "differences": comparison.differences,
-            "profile_plane": comparison.profile_plane, "files": names,
+            "statistics": comparison.statistics,
+            "differences": comparison.differences,
+            "profile_plane": comparison.profile_plane,
+            "files": names,
         }
         (staging / names["json"]).write_text(json.dumps(document, indent=1) + "\n", encoding="utf-8")
     return {key: folder / name for key, name in names.items()}
 
 
 def _write_csv(rows, path) -> None:
-    columns = ["material", "model", "subset", "channel", "n_vertices", "mean", "median"] + \
-              [f"p{p}" for p in PERCENTILES] + ["time_s"]
+    columns = (
+        ["material", "model", "subset", "channel", "n_vertices", "mean", "median"]
+        + [f"p{p}" for p in PERCENTILES]
+        + ["time_s"]
+    )
     with open(path, "w", newline="", encoding="utf-8") as handle:
         writer = csv.DictWriter(handle, fieldnames=columns)
         writer.writeheader()
@@ -424,8 +505,9 @@ def _grid_image(mesh, comparison, camera_direction, up, cell_size) -> np.ndarray
         plotter.camera_position = camera
         plotter.add_text(f"{material}, {model}", position="upper_left", font_size=10, color="white")
     plotter.subplot(0, 0)
-    plotter.add_text(f"exposure {comparison.exposure:.3g} (all cells)", position="lower_left", font_size=7,
-                     color="white")
+    plotter.add_text(
+        f"exposure {comparison.exposure:.3g} (all cells)", position="lower_left", font_size=7, color="white"
+    )
     image = plotter.screenshot(return_img=True)
     plotter.close()
     return image
@@ -437,23 +519,42 @@ def _difference_image(mesh, comparison, relative, camera_direction, up, cell_siz
     reference = comparison.models[0]
     limit = max(float(np.percentile(np.abs(np.concatenate(list(relative.values()))), 99)), 1e-3)
     band = COLOUR_BAR_BAND
-    plotter = new_plotter((columns * cell_size[0], int(round((rows + band) * cell_size[1]))), shape=(rows + 1, columns),
-                          row_weights=[1.0] * rows + [band], groups=[(rows, np.s_[:])])
+    plotter = new_plotter(
+        (columns * cell_size[0], int(round((rows + band) * cell_size[1]))),
+        shape=(rows + 1, columns),
+        row_weights=[1.0] * rows + [band],
+        groups=[(rows, np.s_[:])],
+    )
     camera, actor = None, None
     for row, column in _cells(plotter, rows, columns):
         material, model = comparison.materials[column], comparison.models[row + 1]
         poly = to_pyvista(mesh)
         poly.point_data["relative difference"] = relative[material, model]
-        actor = plotter.add_mesh(poly, scalars="relative difference", cmap="RdBu_r", clim=(-limit, limit),
-                                 lighting=False, show_scalar_bar=False)
+        actor = plotter.add_mesh(
+            poly,
+            scalars="relative difference",
+            cmap="RdBu_r",
+            clim=(-limit, limit),
+            lighting=False,
+            show_scalar_bar=False,
+        )
         camera = camera or camera_position(poly.center, poly.length, camera_direction, up)
         plotter.camera_position = camera
         plotter.add_text(f"{material}: {model} vs {reference}", position="upper_left", font_size=10, color="white")
     plotter.subplot(rows, 0)
     font = int(np.clip(columns * cell_size[0] / 40, 8, 14))  # the title fits the band's width
-    plotter.add_scalar_bar(title=f"(Y - Y_{reference}) / Y_{reference}", mapper=actor.mapper, color="white",
-                           fmt="%.2f", position_x=0.1, position_y=0.05, width=0.8, height=0.6, title_font_size=font,
-                           label_font_size=font - 2)
+    plotter.add_scalar_bar(
+        title=f"(Y - Y_{reference}) / Y_{reference}",
+        mapper=actor.mapper,
+        color="white",
+        fmt="%.2f",
+        position_x=0.1,
+        position_y=0.05,
+        width=0.8,
+        height=0.6,
+        title_font_size=font,
+        label_font_size=font - 2,
+    )
     image = plotter.screenshot(return_img=True)
     plotter.close()
     return image
@@ -473,9 +574,14 @@ def _profile_plot(comparison, path) -> None:
     plane = comparison.profile_plane
     for c, (ax, channel) in enumerate(zip(axes, ("red", "green", "blue"))):
         for (material, model), (position, radiance) in comparison.profiles.items():
-            ax.plot(position, np.maximum(radiance[:, c], PROFILE_RANGE * top),
-                    styles[comparison.models.index(model) % len(styles)],
-                    color=colours[comparison.materials.index(material)], lw=1.0, label=f"{material}, {model}")
+            ax.plot(
+                position,
+                np.maximum(radiance[:, c], PROFILE_RANGE * top),
+                styles[comparison.models.index(model) % len(styles)],
+                color=colours[comparison.materials.index(material)],
+                lw=1.0,
+                label=f"{material}, {model}",
+            )
         for x in plane["light_boundaries_mm"]:
             ax.axvline(x, color="0.6", lw=0.6, ls=":")
         ax.set_yscale("log")
@@ -484,6 +590,9 @@ def _profile_plot(comparison, path) -> None:
         ax.set_title(f"{channel} channel")
     axes[0].set_ylabel("radiance toward the normal, W/(m² sr) per W/m²")
     axes[-1].legend(fontsize=7, loc="lower center")
-    figure.suptitle(f"profile across the light boundary: the plane through the centre containing the light cuts the "
-                    f"surface in a line of {plane['length_mm']:.0f} mm; dotted: where the direct light ends", fontsize=9)
+    figure.suptitle(
+        f"profile across the light boundary: the plane through the centre containing the light cuts the "
+        f"surface in a line of {plane['length_mm']:.0f} mm; dotted: where the direct light ends",
+        fontsize=9,
+    )
     figure.savefig(path, format="png")

@@ -29,17 +29,23 @@ def run_default_job(output: Path = OUTPUT_FOLDER, material: str = DEFAULT_MATERI
     mesh, report = clean_mesh(mesh)
     print("  repair: " + ("nothing to change" if not report.changed else report.summary().replace("\n", "\n  ")))
     settings = ShadeSettings(material)
-    print(f"shading with {material} ({settings.model} dipole, {settings.method} method, tol {settings.tol:g}, "
-          "Embree shadows) ...")
+    print(
+        f"shading with {material} ({settings.model} dipole, {settings.method} method, tol {settings.tol:g}, "
+        "Embree shadows) ..."
+    )
     result = shade_scan(mesh, settings)
     solver = result.stats["solver"]
-    print(f"  sources lit: {solver['sources']} of {mesh.n_points}; pairs evaluated {solver['pairs_evaluated']:,}, "
-          f"skipped {solver['pairs_skipped']:,}; near-field triangles {solver['near_triangles']:,}")
+    print(
+        f"  sources lit: {solver['sources']} of {mesh.n_points}; pairs evaluated {solver['pairs_evaluated']:,}, "
+        f"skipped {solver['pairs_skipped']:,}; near-field triangles {solver['near_triangles']:,}"
+    )
     print("  time: " + ", ".join(f"{k} {v:.2f} s" for k, v in result.timings.items()))
     lit = result.radiance.max(axis=1) > 0
     mean = result.radiance[lit].mean(axis=0)
-    print(f"  mean radiance toward the normal over lit vertices (W/(m^2 sr) per W/m^2): "
-          f"R {mean[0]:.4f}, G {mean[1]:.4f}, B {mean[2]:.4f}")
+    print(
+        f"  mean radiance toward the normal over lit vertices (W/(m^2 sr) per W/m^2): "
+        f"R {mean[0]:.4f}, G {mean[1]:.4f}, B {mean[2]:.4f}"
+    )
     output.mkdir(parents=True, exist_ok=True)
     ply = write_result(result, output / f"bunny_{material}.ply")
     png = output / f"bunny_{material}.png"

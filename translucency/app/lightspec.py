@@ -64,7 +64,9 @@ def parse_light_spec(text: str) -> tuple:
                 try:
                     n = int(parts[1])
                 except ValueError:
-                    raise InvalidParameterError(f"light {spec!r}: the number of directions must be an integer; {LIGHT_SPEC_HELP}.") from None
+                    raise InvalidParameterError(
+                        f"light {spec!r}: the number of directions must be an integer; {LIGHT_SPEC_HELP}."
+                    ) from None
             lights.append(EnvironmentLight(value, n_directions=n))
         else:
             raise InvalidParameterError(f"light {spec!r} is not understood; {LIGHT_SPEC_HELP}.")

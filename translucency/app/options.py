@@ -28,10 +28,11 @@ import numpy as np
 from ..errors import InvalidParameterError
 from ..scatter.names import METHODS, MODELS
 
-
 #: Help of ``--unit`` (``inspect`` has it too).
-UNIT_HELP = ("length unit of the file: mm, cm, m, in, or mm per unit as a number (default: inferred from the size, "
-             "millimetres for 5 to 5000 units across, metres for 0.005 to 5)")
+UNIT_HELP = (
+    "length unit of the file: mm, cm, m, in, or mm per unit as a number (default: inferred from the size, "
+    "millimetres for 5 to 5000 units across, metres for 0.005 to 5)"
+)
 
 
 # one number (integer, decimal, exponent, inf, nan) and a comma-separated list of them, the first negative
@@ -54,11 +55,17 @@ def join_negative_values(argv) -> list[str]:
     """
     argv = [str(token) for token in argv]
     joined: list[str] = []
-    for index, token in enumerate(argv):
+    for token in argv:
         previous = joined[-1] if joined else ""
         negative = _NEGATIVE_VALUE.fullmatch(token) or (previous in NEGATIVE_VALUE_OPTIONS and token.startswith("-"))
-        if ("--" not in joined and negative and previous.startswith("-")
-                and previous != "--" and "=" not in previous and not _NEGATIVE_VALUE.fullmatch(previous)):
+        if (
+            "--" not in joined
+            and negative
+            and previous.startswith("-")
+            and previous != "--"
+            and "=" not in previous
+            and not _NEGATIVE_VALUE.fullmatch(previous)
+        ):
             joined[-1] = f"{previous}={token}"
         else:
             joined.append(token)
@@ -79,31 +86,53 @@ def add_scan_options(parser: argparse.ArgumentParser, *, several: bool = False) 
     from ..io.upright import UP_CHOICES
 
     if several:
-        parser.add_argument("meshes", nargs="*", metavar="MESH",
-                            help="mesh files (PLY, OBJ, STL, OFF, VTK, ...); none: the embedded default scan")
+        parser.add_argument(
+            "meshes",
+            nargs="*",
+            metavar="MESH",
+            help="mesh files (PLY, OBJ, STL, OFF, VTK, ...); none: the embedded default scan",
+        )
     else:
-        parser.add_argument("mesh", nargs="?", metavar="MESH",
-                            help="mesh file (PLY, OBJ, STL, OFF, VTK, ...); none: the embedded default scan")
+        parser.add_argument(
+            "mesh",
+            nargs="?",
+            metavar="MESH",
+            help="mesh file (PLY, OBJ, STL, OFF, VTK, ...); none: the embedded default scan",
+        )
     parser.add_argument("--unit", default=None, help=UNIT_HELP)
-    parser.add_argument("--up", default="auto", choices=UP_CHOICES, metavar="{x,y,z,-x,-y,-z,auto}",
-                        help="the scan's up axis, for the camera and the default light (above and in front); "
-                             "auto (default): the side it stands on, a flat base, else +y")
+    parser.add_argument(
+        "--up",
+        default="auto",
+        choices=UP_CHOICES,
+        metavar="{x,y,z,-x,-y,-z,auto}",
+        help="the scan's up axis, for the camera and the default light (above and in front); "
+        "auto (default): the side it stands on, a flat base, else +y",
+    )
 
 
 def add_light_options(parser: argparse.ArgumentParser) -> None:
     """``--light-dir``, ``--light``, ``--env`` and ``--env-directions``."""
     from .lightspec import LIGHT_SPEC_HELP
 
-    group = parser.add_argument_group("lights (default: one white directional light of 1 W/m^2 above and in front "
-                                      "of the scan, placed by --up)")
-    group.add_argument("--light-dir", metavar="X,Y,Z",
-                       help="direction from the object toward a white directional light of 1 W/m^2, in the scan's "
-                            "own frame (the file's axes, not turned by --up); any length, negative parts "
-                            "as written (-1,0.3,-0.5)")
+    group = parser.add_argument_group(
+        "lights (default: one white directional light of 1 W/m^2 above and in front of the scan, placed by --up)"
+    )
+    group.add_argument(
+        "--light-dir",
+        metavar="X,Y,Z",
+        help="direction from the object toward a white directional light of 1 W/m^2, in the scan's "
+        "own frame (the file's axes, not turned by --up); any length, negative parts "
+        "as written (-1,0.3,-0.5)",
+    )
     group.add_argument("--light", metavar="SPEC", help=f"lights in short form: {LIGHT_SPEC_HELP}")
     group.add_argument("--env", metavar="FILE", help="equirectangular HDR environment map (.hdr), W/(m^2 sr)")
-    group.add_argument("--env-directions", type=int, default=256, metavar="N",
-                       help="directions sampled from the environment map (default 256)")
+    group.add_argument(
+        "--env-directions",
+        type=int,
+        default=256,
+        metavar="N",
+        help="directions sampled from the environment map (default 256)",
+    )
 
 
 def add_solver_options(parser: argparse.ArgumentParser) -> None:
@@ -113,12 +142,21 @@ def add_solver_options(parser: argparse.ArgumentParser) -> None:
     default = ShadeSettings.__dataclass_fields__
     group = parser.add_argument_group("material and solver")
     group.add_argument("--material", default=default["material"].default, help=HELP["material"])
-    group.add_argument("--model", default=default["model"].default, choices=MODELS,
-                       help=f"{HELP['model']} (default {default['model'].default})")
-    group.add_argument("--method", default=default["method"].default, choices=METHODS,
-                       help=f"{HELP['method']} (default {default['method'].default})")
-    group.add_argument("--tol", type=float, default=default["tol"].default,
-                       help=f"{HELP['tol']} (default {default['tol'].default:g})")
+    group.add_argument(
+        "--model",
+        default=default["model"].default,
+        choices=MODELS,
+        help=f"{HELP['model']} (default {default['model'].default})",
+    )
+    group.add_argument(
+        "--method",
+        default=default["method"].default,
+        choices=METHODS,
+        help=f"{HELP['method']} (default {default['method'].default})",
+    )
+    group.add_argument(
+        "--tol", type=float, default=default["tol"].default, help=f"{HELP['tol']} (default {default['tol'].default:g})"
+    )
     group.add_argument("--resolution", default=default["resolution"].default, help=HELP["resolution"])
     group.add_argument("--no-shadows", action="store_true", help=HELP["shadows"])
     group.add_argument("--per-direction", action="store_true", help=HELP["per_direction"])
@@ -165,10 +203,18 @@ def solver_settings(args, **changes):
     from ..scatter.budget import DEFAULT_TIME_LIMIT_S
     from .settings import ShadeSettings
 
-    fields = {"material": args.material, "model": args.model, "method": args.method, "tol": args.tol,
-              "resolution": args.resolution, "shadows": not args.no_shadows, "per_direction": args.per_direction,
-              "exposure": args.exposure, "memory_limit": args.memory_limit,
-              "time_limit": DEFAULT_TIME_LIMIT_S if args.time_limit is None else args.time_limit,
-              "up": getattr(args, "up", "auto")}
+    fields = {
+        "material": args.material,
+        "model": args.model,
+        "method": args.method,
+        "tol": args.tol,
+        "resolution": args.resolution,
+        "shadows": not args.no_shadows,
+        "per_direction": args.per_direction,
+        "exposure": args.exposure,
+        "memory_limit": args.memory_limit,
+        "time_limit": DEFAULT_TIME_LIMIT_S if args.time_limit is None else args.time_limit,
+        "up": getattr(args, "up", "auto"),
+    }
     with command_line_spelling():
         return ShadeSettings(**{**fields, **changes})

@@ -46,7 +46,8 @@ PROXY_MIN_TRIANGLES = 200
 
 
 def coarsest_proxy_edge(surface_area: float) -> float:
-    """Longest proxy edge (mm) that leaves :data:`PROXY_MIN_TRIANGLES` equilateral triangles on ``surface_area`` (mm²)."""
+    """Longest proxy edge (mm) that leaves :data:`PROXY_MIN_TRIANGLES` equilateral triangles on
+    ``surface_area`` (mm²)."""
     return float(np.sqrt(surface_area / (PROXY_MIN_TRIANGLES * np.sqrt(3.0) / 4.0)))
 
 
@@ -59,6 +60,7 @@ def default_light_direction(up: str = "+y") -> np.ndarray:
     from ..io.upright import to_scan_frame
 
     return to_scan_frame(DEFAULT_LIGHT_DIRECTION, up)
+
 
 #: Over budget: attempts at a coarser proxy, the fraction of the budget the proxy aims at (the estimate's
 #: margin), and the fewest vertices a proxy may keep (below: stop with a sentence instead).
@@ -73,8 +75,9 @@ PROXY_ERRORS = ((0.45, "2 %"), (0.2, "4 %"), (0.09, "6 %"), (0.05, "7 %"), (0.02
 
 def proxy_edge_length(medium) -> float:
     """Edge length (mm) the solver needs for this medium (see :data:`PROXY_DIFFUSION_FRACTION`)."""
-    return float(min(PROXY_DIFFUSION_FRACTION / np.max(medium.sigma_tr),
-                     PROXY_MEAN_FREE_PATHS / np.max(medium.sigma_t_reduced)))
+    return float(
+        min(PROXY_DIFFUSION_FRACTION / np.max(medium.sigma_tr), PROXY_MEAN_FREE_PATHS / np.max(medium.sigma_t_reduced))
+    )
 
 
 def default_scan_path() -> Path:
@@ -83,7 +86,8 @@ def default_scan_path() -> Path:
     if not path.is_file():
         raise TranslucencyError(
             "the embedded default scan (pymeshlab/tests/sample_meshes/bunny.obj) is missing from the "
-            "installed pymeshlab; reinstall it (pip install --force-reinstall 'pymeshlab==2025.7.*') or pass a mesh file."
+            "installed pymeshlab; reinstall it (pip install --force-reinstall 'pymeshlab==2025.7.*') or pass "
+            "a mesh file."
         )
     return Path(str(path))
 
@@ -210,9 +214,16 @@ class Scene:
         key = (id(geometry), repr([light.to_dict() for light in lights]), float(eta), per_direction)
         if key in self._incident:
             return self._incident[key], True
-        light = incident_flux(geometry.points, geometry.normals, geometry.vertex_areas, lights, eta,
-                              triangles=triangles if self.shadows else None, cache=self.visibility,
-                              per_direction=per_direction)
+        light = incident_flux(
+            geometry.points,
+            geometry.normals,
+            geometry.vertex_areas,
+            lights,
+            eta,
+            triangles=triangles if self.shadows else None,
+            cache=self.visibility,
+            per_direction=per_direction,
+        )
         while len(self._incident) >= 8:  # a few recent light set-ups; the oldest goes first
             self._incident.pop(next(iter(self._incident)))
         self._incident[key] = light
@@ -225,26 +236,52 @@ class Scene:
         _, _, _, geometry, _ = self.solver_mesh(medium, "full")
         return self.incident(geometry, self.mesh.triangles, as_light_list(lights), medium.eta, per_direction)
 
-    def shade(self, material=DEFAULT_MATERIAL, lights=None, *, model=DEFAULT_MODEL, method=DEFAULT_METHOD,
-              tol=DEFAULT_TOL, resolution="full", exposure=None, per_direction=False, progress=None, memory_limit=None,
-              time_limit=DEFAULT_TIME_LIMIT_S, warn=None) -> "ShadeResult":
+    def shade(
+        self,
+        material=DEFAULT_MATERIAL,
+        lights=None,
+        *,
+        model=DEFAULT_MODEL,
+        method=DEFAULT_METHOD,
+        tol=DEFAULT_TOL,
+        resolution="full",
+        exposure=None,
+        per_direction=False,
+        progress=None,
+        memory_limit=None,
+        time_limit=DEFAULT_TIME_LIMIT_S,
+        warn=None,
+    ) -> ShadeResult:
         """Translucent shading: ``B``, radiance toward the normal and display colours (see :func:`shade`)."""
-        settings = ShadeSettings(material, model, method, tol, resolution, self.shadows, per_direction, exposure,
-                                 memory_limit, time_limit, self.up_requested)
+        settings = ShadeSettings(
+            material,
+            model,
+            method,
+            tol,
+            resolution,
+            self.shadows,
+            per_direction,
+            exposure,
+            memory_limit,
+            time_limit,
+            self.up_requested,
+        )
         return self.shade_with(settings, lights, progress=progress, warn=warn)
 
-    def shade_with(self, settings: ShadeSettings, lights=None, *, progress=None, warn=None) -> "ShadeResult":
+    def shade_with(self, settings: ShadeSettings, lights=None, *, progress=None, warn=None) -> ShadeResult:
         """:meth:`shade` with validated :class:`~translucency.app.settings.ShadeSettings` (their ``shadows``
         and ``up`` are this Scene's, see :func:`scene_for`)."""
+        from ..errors import BudgetError
         from ..scatter.fresnel import fresnel_transmittance
         from ..scatter.lights import DirectionalLight, as_light_list
-        from ..errors import BudgetError
 
         medium, model, method, tol = settings.material, settings.model, settings.method, settings.tol
         resolution, exposure, per_direction = settings.resolution, settings.exposure, settings.per_direction
         memory_limit, time_limit = settings.memory_limit, settings.time_limit
         timings = {}
-        lights = as_light_list(lights if lights is not None else DirectionalLight(default_light_direction(self.up), 1.0))
+        lights = as_light_list(
+            lights if lights is not None else DirectionalLight(default_light_direction(self.up), 1.0)
+        )
         limits = {"memory_limit": memory_limit, "time_limit": time_limit}
         coarsened = reason = None
         for attempt in range(COARSER_ATTEMPTS + 1):
@@ -252,8 +289,9 @@ class Scene:
             solver_mesh, decimation, edge, geometry, geometry_reused = self.solver_mesh(medium, resolution)
             timings["geometry"] = timings.get("geometry", 0.0) + time.perf_counter() - start
             start = time.perf_counter()
-            incident, incident_reused = self.incident(geometry, solver_mesh.triangles, lights, medium.eta,
-                                                      per_direction)
+            incident, incident_reused = self.incident(
+                geometry, solver_mesh.triangles, lights, medium.eta, per_direction
+            )
             timings["incident_light"] = timings.get("incident_light", 0.0) + time.perf_counter() - start
             try:
                 solutions = _solve(geometry, incident, medium, model, method, tol, progress, per_direction, limits)
@@ -262,10 +300,12 @@ class Scene:
                 reason = reason or budget_phrase(exc.estimate)  # of the resolution asked for
                 resolution = self._coarser(solver_mesh, exc, attempt)
         if reason is not None:
-            coarsened = (f"solving on a proxy of {solver_mesh.n_points:,} of the {self.mesh.n_points:,} vertices "
-                         f"(edge {edge:.3g} mm), since the resolution asked for {reason}; expected relative RMS error "
-                         f"about {proxy_error(solver_mesh.n_points / self.mesh.n_points)} (proxy measurements in "
-                         f"bench/README.md); raise the limit to solve every vertex.")
+            coarsened = (
+                f"solving on a proxy of {solver_mesh.n_points:,} of the {self.mesh.n_points:,} vertices "
+                f"(edge {edge:.3g} mm), since the resolution asked for {reason}; expected relative RMS error "
+                f"about {proxy_error(solver_mesh.n_points / self.mesh.n_points)} (proxy measurements in "
+                f"bench/README.md); raise the limit to solve every vertex."
+            )
             (warn or _warn)(coarsened)
         B = sum(solution.B for solution in solutions)
         for solution in solutions:
@@ -279,7 +319,8 @@ class Scene:
         colors, exposure = display_colors(radiance, exposure)
         metadata = {
             **settings.metadata(
-                lights, "full" if decimation is None else f"proxy, {solver_mesh.n_points} vertices, edge {edge:.3g} mm"),
+                lights, "full" if decimation is None else f"proxy, {solver_mesh.n_points} vertices, edge {edge:.3g} mm"
+            ),
             "shadows": self.shadows,
             "exposure": exposure,
             **unit_metadata(self.mesh.mm_per_unit, self.mesh.unit_inferred),
@@ -290,23 +331,46 @@ class Scene:
         }
         if self._normals is None:
             self._normals = self.mesh.vertex_normals()
-        reused = [name for name, flag in (("geometry", geometry_reused), ("incident light", incident_reused),
-                                          ("Embree scene", incident.stats.scene == "reused")) if flag]
+        reused = [
+            name
+            for name, flag in (
+                ("geometry", geometry_reused),
+                ("incident light", incident_reused),
+                ("Embree scene", incident.stats.scene == "reused"),
+            )
+            if flag
+        ]
         if incident.stats.n_visibility_reused:
             reused.append(f"visibility of {incident.stats.n_visibility_reused} light samples")
-        solver_stats = solutions[0].stats if len(solutions) == 1 else {
-            "solves": len(solutions), **{k: sum(s.stats.get(k, 0) for s in solutions)
-                                          for k in ("pairs_evaluated", "pairs_skipped", "near_points")}}
-        stats = {"incident": incident.stats.as_dict(), "solver": solver_stats, "reused": reused, "coarser": coarsened,
-                 "solver_vertices": solver_mesh.n_points, "vertices": self.mesh.n_points}
+        solver_stats = (
+            solutions[0].stats
+            if len(solutions) == 1
+            else {
+                "solves": len(solutions),
+                **{
+                    k: sum(s.stats.get(k, 0) for s in solutions)
+                    for k in ("pairs_evaluated", "pairs_skipped", "near_points")
+                },
+            }
+        )
+        stats = {
+            "incident": incident.stats.as_dict(),
+            "solver": solver_stats,
+            "reused": reused,
+            "coarser": coarsened,
+            "solver_vertices": solver_mesh.n_points,
+            "vertices": self.mesh.n_points,
+        }
         return ShadeResult(self.mesh, B, radiance, colors, exposure, self._normals, stats, timings, metadata)
 
     def _coarser(self, solver_mesh, exc, attempt):
         """The edge length (mm) of a proxy whose solve should fit the budget ``exc`` was over;
         ``exc`` again when that proxy would keep too few vertices or the attempts are spent."""
         plan = exc.estimate
-        over = max(plan.peak_bytes / max(plan.budget_bytes, 1.0) if plan.over_memory else 1.0,
-                   plan.seconds / plan.time_limit if plan.over_time else 1.0)
+        over = max(
+            plan.peak_bytes / max(plan.budget_bytes, 1.0) if plan.over_memory else 1.0,
+            plan.seconds / plan.time_limit if plan.over_time else 1.0,
+        )
         # the cost grows as n to n^2 with the vertex count n: aim at a part of the budget with the n^2 law
         target = int(solver_mesh.n_points * (COARSER_MARGIN / over) ** 0.5)
         if attempt >= COARSER_ATTEMPTS or target < MIN_PROXY_VERTICES:
@@ -321,8 +385,10 @@ def budget_phrase(plan) -> str:
     from ..scatter.budget import format_bytes, format_seconds
 
     if plan.over_memory:
-        return (f"would need about {format_bytes(plan.peak_bytes)} of memory ({option('memory_limit')} budget "
-                f"{format_bytes(plan.budget_bytes)})")
+        return (
+            f"would need about {format_bytes(plan.peak_bytes)} of memory ({option('memory_limit')} budget "
+            f"{format_bytes(plan.budget_bytes)})"
+        )
     return f"would take about {format_seconds(plan.seconds)} ({option('time_limit')} {format_seconds(plan.time_limit)})"
 
 
@@ -348,8 +414,19 @@ def _solve(geometry, incident, medium, model, method, tol, progress, per_directi
 
     if per_direction:
         return _solve_per_direction(geometry, incident, medium, model, method, tol, progress, limits)
-    return [solve(geometry, incident.phi_rgb, incident.w12, medium, model=model, method=method, tol=tol,
-                  progress=progress, **limits)]
+    return [
+        solve(
+            geometry,
+            incident.phi_rgb,
+            incident.w12,
+            medium,
+            model=model,
+            method=method,
+            tol=tol,
+            progress=progress,
+            **limits,
+        )
+    ]
 
 
 def _solve_per_direction(geometry, incident, medium, model, method, tol, progress, limits=None):
@@ -363,16 +440,35 @@ def _solve_per_direction(geometry, incident, medium, model, method, tol, progres
         w12 = np.tile((0.0, 0.0, -1.0), (n, 1))
         phi[part.vertices] = part.phi_rgb
         w12[part.vertices] = part.w12
-        inner = None if progress is None else (
-            lambda stage, fraction, k=k: progress(stage, (k + fraction) / len(incident.contributions)))
-        solutions.append(solve(geometry, phi, w12, medium, model=model, method=method, tol=tol, progress=inner,
-                               **(limits or {})))
+        inner = (
+            None
+            if progress is None
+            else (lambda stage, fraction, k=k: progress(stage, (k + fraction) / len(incident.contributions)))
+        )
+        solutions.append(
+            solve(geometry, phi, w12, medium, model=model, method=method, tol=tol, progress=inner, **(limits or {}))
+        )
     return solutions
 
 
-def shade(mesh, material=DEFAULT_MATERIAL, lights=None, *, model=DEFAULT_MODEL, method=DEFAULT_METHOD,
-          tol=DEFAULT_TOL, shadows=True, resolution="full", exposure=None, per_direction=False, up="auto",
-          progress=None, memory_limit=None, time_limit=DEFAULT_TIME_LIMIT_S, warn=None) -> ShadeResult:
+def shade(
+    mesh,
+    material=DEFAULT_MATERIAL,
+    lights=None,
+    *,
+    model=DEFAULT_MODEL,
+    method=DEFAULT_METHOD,
+    tol=DEFAULT_TOL,
+    shadows=True,
+    resolution="full",
+    exposure=None,
+    per_direction=False,
+    up="auto",
+    progress=None,
+    memory_limit=None,
+    time_limit=DEFAULT_TIME_LIMIT_S,
+    warn=None,
+) -> ShadeResult:
     """Translucent shading of one mesh (mm): ``B``, radiance toward the normal and display colours.
 
     The one-call form of :class:`Scene` (nothing is kept between calls; keep a ``Scene`` to reuse work).
@@ -418,10 +514,20 @@ def shade(mesh, material=DEFAULT_MATERIAL, lights=None, *, model=DEFAULT_MODEL, 
     warn : callable, optional
         ``warn(line)`` receives that line (default: a :class:`~translucency.errors.TranslucencyWarning`).
     """
-    return Scene(mesh, shadows=shadows, up=up).shade(material, lights, model=model, method=method, tol=tol,
-                                              resolution=resolution, exposure=exposure, per_direction=per_direction,
-                                              progress=progress, memory_limit=memory_limit, time_limit=time_limit,
-                                              warn=warn)
+    return Scene(mesh, shadows=shadows, up=up).shade(
+        material,
+        lights,
+        model=model,
+        method=method,
+        tol=tol,
+        resolution=resolution,
+        exposure=exposure,
+        per_direction=per_direction,
+        progress=progress,
+        memory_limit=memory_limit,
+        time_limit=time_limit,
+        warn=warn,
+    )
 
 
 def load_scan(path, unit=None, *, warn=None, note=None):
@@ -457,8 +563,9 @@ def scene_for(mesh, settings: ShadeSettings) -> Scene:
     return Scene(mesh, shadows=settings.shadows, up=settings.up)
 
 
-def shade_scan(scan, settings: ShadeSettings | None = None, lights=None, *, unit=None, progress=None, warn=None,
-               note=None) -> ShadeResult:
+def shade_scan(
+    scan, settings: ShadeSettings | None = None, lights=None, *, unit=None, progress=None, warn=None, note=None
+) -> ShadeResult:
     """A scan shaded with every setting of ``settings``: the pipeline's first half (:func:`write_result`
     is the second).
 
@@ -492,8 +599,9 @@ def write_result(result: ShadeResult, path) -> Path:
     atomically (:func:`translucency.io.baked.write_baked_ply`); the pipeline's second half. Returns the path."""
     from ..io.baked import write_baked_ply
 
-    return write_baked_ply(path, result.mesh, result.radiance, result.B, result.colors, result.metadata,
-                           normals=result.normals)
+    return write_baked_ply(
+        path, result.mesh, result.radiance, result.B, result.colors, result.metadata, normals=result.normals
+    )
 
 
 def _proxy_edge(mean_edge, medium, resolution, mesh):
@@ -513,7 +621,8 @@ def _proxy_edge(mean_edge, medium, resolution, mesh):
         raise InvalidParameterError(
             f"a proxy edge of {edge:.3g} mm ({option('resolution', f'{edge:g}')}) would leave fewer than "
             f"{PROXY_MIN_TRIANGLES} triangles on this {mesh.extent:.3g} mm mesh; pass {option('resolution')} "
-            f"below {coarsest:.3g} mm, or full (and check {option('unit')} if the mesh should be larger).")
+            f"below {coarsest:.3g} mm, or full (and check {option('unit')} if the mesh should be larger)."
+        )
     return edge
 
 

@@ -104,8 +104,9 @@ def add_colored_mesh(plotter, mesh, colors_rgb8):
     return poly
 
 
-def render_colors(mesh, colors_rgb8, path=None, *, window_size=(800, 800), camera_direction=None, camera=None,
-                  up="auto"):
+def render_colors(
+    mesh, colors_rgb8, path=None, *, window_size=(800, 800), camera_direction=None, camera=None, up="auto"
+):
     """Render a mesh (mm) with per-vertex display colours off-screen; save a PNG when ``path`` is given.
 
     Parameters

@@ -53,9 +53,9 @@ HELP = {
     "per_direction": "solve each light sample with its own refracted direction (exact for several lights)",
     "exposure": "display exposure (default: automatic)",
     "memory_limit": "memory the process may use, GB (default: what the machine has available); a solve "
-                    "that would need more runs on a coarser proxy or stops with a message",
+    "that would need more runs on a coarser proxy or stops with a message",
     "time_limit": f"seconds a solve may take by its estimate (default {DEFAULT_TIME_LIMIT_S:g}); over it the solve "
-                  "runs on a coarser proxy or stops with a message",
+    "runs on a coarser proxy or stops with a message",
 }
 
 
@@ -76,7 +76,8 @@ def parse_resolution(value):
             edge = None
     if not _positive(edge):
         raise InvalidParameterError(
-            f"{setting_name('resolution')} must be full, auto or a proxy edge length in mm, got {value!r}.")
+            f"{setting_name('resolution')} must be full, auto or a proxy edge length in mm, got {value!r}."
+        )
     return float(edge)
 
 
@@ -138,30 +139,51 @@ class ShadeSettings:
         object.__setattr__(self, "shadows", bool(self.shadows))
         object.__setattr__(self, "per_direction", bool(self.per_direction))
 
-    def replace(self, **changes) -> "ShadeSettings":
+    def replace(self, **changes) -> ShadeSettings:
         """A copy with some fields changed (validated again)."""
         return dataclasses.replace(self, **changes)
 
     def solver_keywords(self) -> dict:
         """Keyword arguments of :meth:`translucency.app.pipeline.Scene.shade` (all but ``shadows`` and
         ``up``, which are the :class:`~translucency.app.pipeline.Scene`'s)."""
-        return {name: getattr(self, name) for name in ("material", "model", "method", "tol", "resolution", "exposure",
-                                                       "per_direction", "memory_limit", "time_limit")}
+        return {
+            name: getattr(self, name)
+            for name in (
+                "material",
+                "model",
+                "method",
+                "tol",
+                "resolution",
+                "exposure",
+                "per_direction",
+                "memory_limit",
+                "time_limit",
+            )
+        }
 
     def metadata(self, lights, resolution: str) -> dict:
         """The settings as a result and a bake record them, with the ``lights`` and the ``resolution``
         used (a description); the exposure used, the unit and the up axis are the result's."""
         from .. import __version__
 
-        return {"version": __version__, "material": self.material.name, "coefficients": self.material.describe(),
-                "lights": [light.to_dict() for light in lights], "model": self.model, "method": self.method,
-                "tolerance": self.tol, "resolution": resolution, "shadows": self.shadows,
-                "light_summation": "per direction" if self.per_direction else "aggregated per vertex"}
+        return {
+            "version": __version__,
+            "material": self.material.name,
+            "coefficients": self.material.describe(),
+            "lights": [light.to_dict() for light in lights],
+            "model": self.model,
+            "method": self.method,
+            "tolerance": self.tol,
+            "resolution": resolution,
+            "shadows": self.shadows,
+            "light_summation": "per direction" if self.per_direction else "aggregated per vertex",
+        }
 
 
 def resolve_medium(material):
     """A :class:`~translucency.scatter.medium.Medium` from a catalogue name, catalogue entry or medium."""
-    from ..scatter.materials import Material, material as lookup
+    from ..scatter.materials import Material
+    from ..scatter.materials import material as lookup
     from ..scatter.medium import Medium
 
     if isinstance(material, Medium):

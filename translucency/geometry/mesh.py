@@ -2,7 +2,8 @@
 
 Every loader returns a :class:`TriangleMesh`, every repair and decimation step takes one and returns
 a new one, and the solver receives its plain arrays (``points``, ``triangles``). The record holds
-arrays only; its conversions to and from ``pyvista.PolyData`` live in :mod:`translucency.io.polydata`. A mesh is immutable:
+arrays only; its conversions to and from ``pyvista.PolyData`` live in :mod:`translucency.io.polydata`.
+A mesh is immutable:
 its arrays are private read-only copies, so a mesh handed to the solver cannot change under it, and
 "changing" a mesh means building a new one with :meth:`TriangleMesh.replace`.
 
@@ -198,11 +199,17 @@ class TriangleMesh:
 
     # --- per-vertex geometry -------------------------------------------------------------------------
     def vertex_normals(self) -> np.ndarray:
-        """Area-weighted unit vertex normals, (n, 3) float64 (see :func:`translucency.geometry.measure.vertex_normals`)."""
+        """Area-weighted unit vertex normals, (n, 3) float64.
+
+        See :func:`translucency.geometry.measure.vertex_normals`.
+        """
         return vertex_normals(self.points, self.triangles)
 
     def vertex_areas(self, method: str = "barycentric") -> np.ndarray:
-        """Area of each vertex's share of the surface in mm², (n,) float64 (see :func:`translucency.geometry.measure.vertex_areas`)."""
+        """Area of each vertex's share of the surface in mm², (n,) float64.
+
+        See :func:`translucency.geometry.measure.vertex_areas`.
+        """
         return vertex_areas(self.points, self.triangles, method=method)
 
     # --- building new meshes -------------------------------------------------------------------------

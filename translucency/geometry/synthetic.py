@@ -11,7 +11,7 @@ def subdivide(points, triangles):
     inverse = inverse.ravel() + len(points)
     mids = 0.5 * (points[unique[:, 0]] + points[unique[:, 1]])
     a, b, c = triangles.T
-    ab, bc, ca = inverse[:m], inverse[m:2 * m], inverse[2 * m:]
+    ab, bc, ca = inverse[:m], inverse[m : 2 * m], inverse[2 * m :]
     tris = np.concatenate([np.stack(t, 1) for t in ((a, ab, ca), (ab, b, bc), (ca, bc, c), (ab, bc, ca))])
     return np.concatenate([points, mids]), tris
 
@@ -19,11 +19,47 @@ def subdivide(points, triangles):
 def icosphere(level, radius=1.0, centre=(0.0, 0.0, 0.0)):
     """Icosahedron subdivided ``level`` times and projected on a sphere; outward counter-clockwise triangles."""
     t = (1 + 5**0.5) / 2
-    points = np.array([[-1, t, 0], [1, t, 0], [-1, -t, 0], [1, -t, 0], [0, -1, t], [0, 1, t], [0, -1, -t], [0, 1, -t],
-                       [t, 0, -1], [t, 0, 1], [-t, 0, -1], [-t, 0, 1]], float)
-    triangles = np.array([[0, 11, 5], [0, 5, 1], [0, 1, 7], [0, 7, 10], [0, 10, 11], [1, 5, 9], [5, 11, 4], [11, 10, 2],
-                          [10, 7, 6], [7, 1, 8], [3, 9, 4], [3, 4, 2], [3, 2, 6], [3, 6, 8], [3, 8, 9], [4, 9, 5],
-                          [2, 4, 11], [6, 2, 10], [8, 6, 7], [9, 8, 1]])
+    points = np.array(
+        [
+            [-1, t, 0],
+            [1, t, 0],
+            [-1, -t, 0],
+            [1, -t, 0],
+            [0, -1, t],
+            [0, 1, t],
+            [0, -1, -t],
+            [0, 1, -t],
+            [t, 0, -1],
+            [t, 0, 1],
+            [-t, 0, -1],
+            [-t, 0, 1],
+        ],
+        float,
+    )
+    triangles = np.array(
+        [
+            [0, 11, 5],
+            [0, 5, 1],
+            [0, 1, 7],
+            [0, 7, 10],
+            [0, 10, 11],
+            [1, 5, 9],
+            [5, 11, 4],
+            [11, 10, 2],
+            [10, 7, 6],
+            [7, 1, 8],
+            [3, 9, 4],
+            [3, 4, 2],
+            [3, 2, 6],
+            [3, 6, 8],
+            [3, 8, 9],
+            [4, 9, 5],
+            [2, 4, 11],
+            [6, 2, 10],
+            [8, 6, 7],
+            [9, 8, 1],
+        ]
+    )
     points /= np.linalg.norm(points, axis=1, keepdims=True)
     for _ in range(level):
         points, triangles = subdivide(points, triangles)

@@ -54,16 +54,29 @@ from pathlib import Path
 
 from ..errors import InvalidParameterError, WriteError, option
 
-__all__ = ["TEMPORARY_PREFIX", "temporary_name", "parse_temporary_name", "is_stale", "sweep", "atomic_file",
-           "write_bytes", "staged_folder", "prepare_output_folder", "prepare_output_file", "same_file",
-           "write_error"]
+__all__ = [
+    "TEMPORARY_PREFIX",
+    "temporary_name",
+    "parse_temporary_name",
+    "is_stale",
+    "sweep",
+    "atomic_file",
+    "write_bytes",
+    "staged_folder",
+    "prepare_output_folder",
+    "prepare_output_file",
+    "same_file",
+    "write_error",
+]
 
 #: Every temporary file or folder of translucency starts with this.
 TEMPORARY_PREFIX = ".translucency-"
 
 _KINDS = ("tmp", "partial")
-_NAME = re.compile(r"\.translucency-(\d{1,10})-(\d{1,20})-([0-9a-f]{8})-([0-9a-f]{8})([0-9a-f]{8})"
-                   r"\.(tmp|partial)(\.[A-Za-z0-9]{1,10})?")
+_NAME = re.compile(
+    r"\.translucency-(\d{1,10})-(\d{1,20})-([0-9a-f]{8})-([0-9a-f]{8})([0-9a-f]{8})"
+    r"\.(tmp|partial)(\.[A-Za-z0-9]{1,10})?"
+)
 _KEY = b"translucency temporary name v1"
 
 # folders swept by this process already (a batch writes many files into one folder)
@@ -117,8 +130,9 @@ def temporary_name(kind: str = "tmp", suffix: str = "") -> str:
     pid = os.getpid()
     started = _start_time(pid) or 0
     host, nonce = _host(), secrets.token_hex(4)
-    return f"{TEMPORARY_PREFIX}{pid}-{started}-{host}-{nonce}{_signature(pid, started, host, nonce, kind)}.{kind}" + \
-        (suffix if kind == "tmp" else "")
+    return f"{TEMPORARY_PREFIX}{pid}-{started}-{host}-{nonce}{_signature(pid, started, host, nonce, kind)}.{kind}" + (
+        suffix if kind == "tmp" else ""
+    )
 
 
 def parse_temporary_name(name: str) -> dict | None:
@@ -230,8 +244,9 @@ def _probe(folder: Path, setting: str) -> None:
         os.close(os.open(probe, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600))
     except OSError as exc:
         advice = _ADVICE.get(exc.errno, "check the folder")
-        raise InvalidParameterError(f"cannot write into {folder} ({_reason(exc)}): {advice} "
-                                    f"(choose another with {option(setting)}).") from None
+        raise InvalidParameterError(
+            f"cannot write into {folder} ({_reason(exc)}): {advice} (choose another with {option(setting)})."
+        ) from None
     with contextlib.suppress(OSError):
         os.unlink(probe)
 
@@ -267,10 +282,13 @@ def prepare_output_folder(folder, *, create: bool = True, setting: str = "output
     while not existing.exists() and existing != existing.parent:
         if not create:
             raise InvalidParameterError(
-                f"the folder {folder} does not exist; create it or choose another with {option(setting)}.")
+                f"the folder {folder} does not exist; create it or choose another with {option(setting)}."
+            )
         existing = existing.parent
     if not existing.is_dir():
-        raise InvalidParameterError(f"{existing} is a file, not a folder; choose another output with {option(setting)}.")
+        raise InvalidParameterError(
+            f"{existing} is a file, not a folder; choose another output with {option(setting)}."
+        )
     _probe(existing, setting)
     for place in (folder, folder.parent):
         if place.is_dir():
@@ -284,8 +302,10 @@ def prepare_output_file(path, *, create_folder: bool = False, setting: str = "ou
     path = Path(path)
     prepare_output_folder(path.parent if str(path.parent) else Path("."), create=create_folder, setting=setting)
     if path.is_dir():
-        raise InvalidParameterError(f"{path} is a folder; give {option(setting)} a file name such as "
-                                    f"{path / ('output' + (path.suffix or '.ply'))}.")
+        raise InvalidParameterError(
+            f"{path} is a folder; give {option(setting)} a file name such as "
+            f"{path / ('output' + (path.suffix or '.ply'))}."
+        )
     return path
 
 

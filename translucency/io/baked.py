@@ -229,7 +229,8 @@ def _per_vertex(name: str, values, n: int, dtype) -> np.ndarray:
         if array.dtype != np.uint8:
             if array.dtype.kind not in "iu" or array.min(initial=0) < 0 or array.max(initial=0) > 255:
                 raise InvalidParameterError(
-                    f"{name} must be 8-bit colours (uint8, 0-255), not {array.dtype}; apply the display transform and convert first."
+                    f"{name} must be 8-bit colours (uint8, 0-255), not {array.dtype}; apply the display "
+                    "transform and convert first."
                 )
             array = array.astype(np.uint8)
         return array
@@ -239,7 +240,8 @@ def _per_vertex(name: str, values, n: int, dtype) -> np.ndarray:
     if not np.all(np.isfinite(as_stored)):
         bad = int(np.count_nonzero(~np.all(np.isfinite(as_stored), axis=1)))
         raise InvalidParameterError(
-            f"{name} has {bad} vertices with NaN, infinite or float32-overflowing values; fix the computation before baking."
+            f"{name} has {bad} vertices with NaN, infinite or float32-overflowing values; fix the computation "
+            "before baking."
         )
     return as_stored
 
@@ -355,7 +357,8 @@ def _complete_metadata(metadata, mesh: TriangleMesh, n: int) -> dict:
     missing = [key for key in REQUIRED_METADATA if key not in settings]
     if missing:
         raise InvalidParameterError(
-            f"the bake's metadata lacks {', '.join(missing)}; pass every setting of the run ({', '.join(REQUIRED_METADATA)})."
+            f"the bake's metadata lacks {', '.join(missing)}; pass every setting of the run "
+            f"({', '.join(REQUIRED_METADATA)})."
         )
     settings.setdefault("geometry_unit", "mm")
     settings.setdefault("source", mesh.source.name if mesh.source is not None else None)
@@ -393,7 +396,8 @@ def read_baked_ply(path) -> BakedPly:
     missing = [name for name in needed if name not in point_data]
     if missing or "colors" not in point_data or "normals" not in point_data:
         raise MeshError(
-            f"{path.name} is not a translucency bake (it lacks {', '.join(missing) or 'colours or normals'}); bake the mesh first."
+            f"{path.name} is not a translucency bake (it lacks {', '.join(missing) or 'colours or normals'}); "
+            "bake the mesh first."
         )
     stack = lambda prefix: np.stack([np.asarray(point_data[f"{prefix}_{c}"], dtype=np.float64) for c in "rgb"], axis=1)  # noqa: E731
     return BakedPly(

@@ -256,8 +256,14 @@ def clean_mesh(
     )
     point_data = {name: np.asarray(values)[origin] for name, values in mesh.point_data.items() if name != "normals"}
     point_data["normals"] = normals
-    cleaned = TriangleMesh(points, triangles, point_data, source=mesh.source, mm_per_unit=mesh.mm_per_unit,
-                          unit_inferred=mesh.unit_inferred)
+    cleaned = TriangleMesh(
+        points,
+        triangles,
+        point_data,
+        source=mesh.source,
+        mm_per_unit=mesh.mm_per_unit,
+        unit_inferred=mesh.unit_inferred,
+    )
     return cleaned, report
 
 
@@ -295,8 +301,15 @@ def clean_arrays(
     """
     started = time.perf_counter()
     points, triangles = validate_mesh_arrays(points, triangles)
-    settings = _clean_settings(merge_duplicate_vertices, remove_degenerate_faces, repair_non_manifold,
-                               min_island_fraction, max_hole_edges, orient_outward, smooth_normals)
+    settings = _clean_settings(
+        merge_duplicate_vertices,
+        remove_degenerate_faces,
+        repair_non_manifold,
+        min_island_fraction,
+        max_hole_edges,
+        orient_outward,
+        smooth_normals,
+    )
     before = find_defects(points, triangles)
     repair = _Repair(points, triangles, np.arange(len(points), dtype=np.int64), points, triangles)
     if settings["merge_duplicate_vertices"]:
@@ -374,8 +387,15 @@ def smooth_vertex_normals(points, triangles, iterations: int = 1) -> np.ndarray:
 # The steps of clean_arrays, in the order it runs them (module docstring's table).
 
 
-def _clean_settings(merge_duplicate_vertices, remove_degenerate_faces, repair_non_manifold, min_island_fraction,
-                    max_hole_edges, orient_outward, smooth_normals) -> dict:
+def _clean_settings(
+    merge_duplicate_vertices,
+    remove_degenerate_faces,
+    repair_non_manifold,
+    min_island_fraction,
+    max_hole_edges,
+    orient_outward,
+    smooth_normals,
+) -> dict:
     """The options of :func:`clean_arrays`, checked, as the report records them."""
     min_island_fraction = float(min_island_fraction)
     if not (0.0 <= min_island_fraction < 1.0):
@@ -458,8 +478,9 @@ def _make_manifold(repair: _Repair, before: MeshDefects) -> None:
     """Steps 5-6: repair non-manifold edges and vertices (pymeshlab)."""
     if repair.pristine() and before.non_manifold_edges == 0 and before.non_manifold_vertices == 0:
         return
-    repair.replace(*_repair_non_manifold(repair.points, repair.triangles, repair.origin, repair.input_points,
-                                         repair.counts))
+    repair.replace(
+        *_repair_non_manifold(repair.points, repair.triangles, repair.origin, repair.input_points, repair.counts)
+    )
 
 
 def _remove_zero_area_faces(repair: _Repair, before: MeshDefects) -> None:
@@ -468,8 +489,9 @@ def _remove_zero_area_faces(repair: _Repair, before: MeshDefects) -> None:
         return
     zero = zero_area_mask(repair.points, repair.triangles)
     if zero.any():
-        repair.replace(*_repair_zero_area_faces(repair.points, repair.triangles, repair.origin, repair.input_points,
-                                                zero))
+        repair.replace(
+            *_repair_zero_area_faces(repair.points, repair.triangles, repair.origin, repair.input_points, zero)
+        )
         repair.counts["zero_area_faces_removed"] = int(np.count_nonzero(zero))
         _require_triangles(repair.triangles, "removing zero-area faces")
 
@@ -504,13 +526,17 @@ def _fill_holes(repair: _Repair, before: MeshDefects, max_hole_edges: int, remov
     if repair.pristine() and before.boundary_edges == 0:
         return
     faces_before = len(repair.triangles)
-    repair.replace(*_close_holes(repair.points, repair.triangles, repair.origin, repair.input_points,
-                                 int(max_hole_edges), repair.counts))
+    repair.replace(
+        *_close_holes(
+            repair.points, repair.triangles, repair.origin, repair.input_points, int(max_hole_edges), repair.counts
+        )
+    )
     if remove_degenerate_faces and repair.counts.get("holes_closed", 0):
         zero = zero_area_mask(repair.points, repair.triangles)
         if zero.any():
-            repair.replace(*_repair_zero_area_faces(repair.points, repair.triangles, repair.origin,
-                                                    repair.input_points, zero))
+            repair.replace(
+                *_repair_zero_area_faces(repair.points, repair.triangles, repair.origin, repair.input_points, zero)
+            )
     repair.counts["hole_faces_added"] = len(repair.triangles) - faces_before
 
 
@@ -674,7 +700,8 @@ def _close_holes(points, triangles, origin, input_points, max_hole_edges, counts
         return points, triangles, origin
     if np.any(faces_per_edge > 2):
         raise MeshError(
-            "holes cannot be closed in a mesh with non-manifold edges; keep repair_non_manifold=True or pass max_hole_edges=0."
+            "holes cannot be closed in a mesh with non-manifold edges; keep repair_non_manifold=True or pass "
+            "max_hole_edges=0."
         )
     pymeshlab = import_pymeshlab()
     mesh_set = _to_meshset(pymeshlab, points, triangles, origin)

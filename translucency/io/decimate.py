@@ -364,8 +364,14 @@ def decimate_mesh(
                 from ..geometry.measure import vertex_normals
 
                 point_data["normals"] = vertex_normals(points, triangles)
-        proxy = TriangleMesh(points, triangles, point_data, source=mesh.source, mm_per_unit=mesh.mm_per_unit,
-                             unit_inferred=mesh.unit_inferred)
+        proxy = TriangleMesh(
+            points,
+            triangles,
+            point_data,
+            source=mesh.source,
+            mm_per_unit=mesh.mm_per_unit,
+            unit_inferred=mesh.unit_inferred,
+        )
         used_method = method
     mapping = map_to_proxy(mesh.points, proxy.points, proxy.triangles)
     return Decimation(

@@ -109,8 +109,9 @@ def read_equirectangular(path) -> np.ndarray:
     """
     path = Path(path)
     if not path.is_file():  # a regular file only: a FIFO or a device would never end
-        raise EnvironmentMapError(f"environment map {str(path)!r} does not exist or is not a regular file; "
-                                  "pass an image file stored on disk.")
+        raise EnvironmentMapError(
+            f"environment map {str(path)!r} does not exist or is not a regular file; pass an image file stored on disk."
+        )
     suffix = path.suffix.lower()
     if suffix in RADIANCE_EXTENSIONS:
         pixels = _read_radiance_hdr(path)

@@ -25,13 +25,13 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import MeshError
+from ..geometry.mesh import TriangleMesh, validate_mesh_arrays
 from .formats.obj import read_obj
 from .formats.off import read_off
 from .formats.ply import read_ply
 from .formats.pymeshlab import PYMESHLAB_FORMATS, read_with_pymeshlab
 from .formats.stl import read_stl
 from .formats.vtk import VTK_FORMATS, mesh_from_vtk_polydata, read_with_vtk
-from ..geometry.mesh import TriangleMesh, validate_mesh_arrays
 from .units import UnitInferredWarning, check_extent, infer_unit, inferred_unit_message, parse_unit
 
 __all__ = ["load_mesh", "read_mesh_arrays", "mesh_from_vtk_polydata", "SUPPORTED_FORMATS", "detect_format"]
@@ -113,8 +113,7 @@ def load_mesh(path, unit: str | float | None = None, *, format: str | None = Non
             f"{path.name} has coordinates too large to convert to mm; check the file's unit and coordinates."
         )
     check_extent(_extent(points, triangles), mm_per_unit, path.name, stacklevel=2)
-    return TriangleMesh(points, triangles, point_data, source=path, mm_per_unit=mm_per_unit,
-                        unit_inferred=unit is None)
+    return TriangleMesh(points, triangles, point_data, source=path, mm_per_unit=mm_per_unit, unit_inferred=unit is None)
 
 
 def _extent(points: np.ndarray, triangles: np.ndarray) -> float:
@@ -232,8 +231,12 @@ def _misnamed(path: Path, suffix: str, sniffed: str) -> str:
 # --------------------------------------------------------------------------------------------------
 def _special_kind(mode: int) -> str:
     """What a file that is not a regular file is, in words ("a FIFO (named pipe)", ...)."""
-    for test, words in ((stat.S_ISFIFO, "a FIFO (named pipe)"), (stat.S_ISCHR, "a character device"),
-                        (stat.S_ISBLK, "a block device"), (stat.S_ISSOCK, "a socket")):
+    for test, words in (
+        (stat.S_ISFIFO, "a FIFO (named pipe)"),
+        (stat.S_ISCHR, "a character device"),
+        (stat.S_ISBLK, "a block device"),
+        (stat.S_ISSOCK, "a socket"),
+    ):
         if test(mode):
             return words
     return "a special file"
@@ -273,7 +276,8 @@ def _check_readable(path: Path, format: str | None) -> str:
         if suffix not in SUPPORTED_FORMATS:
             sniffed = detect_format(path) if first else None
             hint = (
-                f" (its content looks like {sniffed[1:].upper()}: rename it to {path.stem}{sniffed} or pass format={sniffed[1:]!r})"
+                f" (its content looks like {sniffed[1:].upper()}: rename it to {path.stem}{sniffed} or pass "
+                f"format={sniffed[1:]!r})"
                 if sniffed
                 else ""
             )

@@ -99,7 +99,7 @@ def _ply_bytes(mesh, suffix) -> list[bytes]:
         fields += [(name, "<f4") for name in ("nx", "ny", "nz")]
         columns.append(normals)
     if colors is not None and np.ndim(colors) == 2 and len(colors) == mesh.n_points and np.shape(colors)[1] in (3, 4):
-        fields += [(name, "u1") for name in ("red", "green", "blue", "alpha")[:np.shape(colors)[1]]]
+        fields += [(name, "u1") for name in ("red", "green", "blue", "alpha")[: np.shape(colors)[1]]]
         columns.append(colors)
     vertices = np.empty(mesh.n_points, dtype=fields)
     names = iter(vertices.dtype.names)
@@ -119,7 +119,9 @@ def _stl_bytes(mesh, suffix) -> list[bytes]:
     """Binary STL: an 80-byte header, the triangle count, per triangle its unit normal and corners (mm)."""
     from ..geometry.measure import triangle_normals
 
-    records = np.zeros(mesh.n_triangles, dtype=[("normal", "<f4", (3,)), ("corners", "<f4", (3, 3)), ("attribute", "<u2")])
+    records = np.zeros(
+        mesh.n_triangles, dtype=[("normal", "<f4", (3,)), ("corners", "<f4", (3, 3)), ("attribute", "<u2")]
+    )
     records["normal"] = np.nan_to_num(triangle_normals(mesh.points, mesh.triangles))
     records["corners"] = mesh.points[mesh.triangles]
     header = b"translucency mesh, mm".ljust(80, b" ")

@@ -164,7 +164,9 @@ def infer_unit(extent_in_file_units: float, name: str = "the mesh") -> str:
         check_extent(extent_in_file_units * smallest, smallest, name)  # its own sentence: zero, not finite, huge
     if extent_in_file_units * largest < ABSURD_EXTENT[0]:
         check_extent(extent_in_file_units * largest, largest, name)  # its own sentence: too small for any object
-    readings = ", ".join(f"as {_UNIT_WORDS[unit]} {_size(extent_in_file_units * UNITS[unit])}" for unit in INFERRED_UNITS)
+    readings = ", ".join(
+        f"as {_UNIT_WORDS[unit]} {_size(extent_in_file_units * UNITS[unit])}" for unit in INFERRED_UNITS
+    )
     raise MeshError(
         f"{name} is {extent_in_file_units:.3g} units across and no {option('unit')} was given, but no unit makes "
         f"that a plausible scan of 5 mm to 5 m ({readings}); pass {option('unit')} with the file's unit "
@@ -185,8 +187,12 @@ def inferred_unit_message(name: str, extent_in_file_units: float, unit: str) -> 
 def unit_metadata(mm_per_unit: float, inferred: bool = False) -> dict:
     """How every output records a mesh's unit: ``unit`` (label), ``unit_name`` (in words),
     ``mm_per_unit`` (mm) and ``unit_inferred`` (True when it was inferred from the size)."""
-    return {"unit": unit_label(mm_per_unit), "unit_name": unit_words(mm_per_unit),
-            "mm_per_unit": float(mm_per_unit), "unit_inferred": bool(inferred)}
+    return {
+        "unit": unit_label(mm_per_unit),
+        "unit_name": unit_words(mm_per_unit),
+        "mm_per_unit": float(mm_per_unit),
+        "unit_inferred": bool(inferred),
+    }
 
 
 def _size(extent_mm: float) -> str:
@@ -284,7 +290,8 @@ def check_extent(extent_mm: float, mm_per_unit: float, name: str = "the mesh", *
                 f"{name} has all its vertices at one position (size 0); the file holds no surface, export it again."
             )
         raise MeshError(
-            f"{name} is {extent_mm:.3g} mm across, smaller than any scanned object; check the file's coordinates and unit."
+            f"{name} is {extent_mm:.3g} mm across, smaller than any scanned object; check the file's "
+            "coordinates and unit."
         )
     message = implausible_size_message(extent_mm, mm_per_unit, name)
     if message is not None:

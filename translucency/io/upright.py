@@ -47,8 +47,21 @@ import numpy as np
 
 from ..errors import InvalidParameterError, option
 
-__all__ = ["UP_CHOICES", "AXES", "FRONT", "BASE_ANGLE", "MIN_SCORE", "FALLBACK_UP", "parse_up", "up_vector",
-           "base_scores", "infer_up", "resolve_up", "display_frame", "to_scan_frame"]
+__all__ = [
+    "UP_CHOICES",
+    "AXES",
+    "FRONT",
+    "BASE_ANGLE",
+    "MIN_SCORE",
+    "FALLBACK_UP",
+    "parse_up",
+    "up_vector",
+    "base_scores",
+    "infer_up",
+    "resolve_up",
+    "display_frame",
+    "to_scan_frame",
+]
 
 #: The six axis directions, as ``--up`` takes them.
 AXES = ("+x", "-x", "+y", "-y", "+z", "-z")

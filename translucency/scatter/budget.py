@@ -37,10 +37,10 @@ from dataclasses import asdict, dataclass
 from ..errors import InvalidParameterError, option
 
 #: One gigabyte as ``memory_limit`` counts it (2**30 bytes, GiB).
-GB = 2 ** 30
+GB = 2**30
 #: Head-room left of the available memory: this fraction of it, and at least this many bytes.
 HEADROOM_FRACTION = 0.10
-HEADROOM_BYTES = 256 * 2 ** 20
+HEADROOM_BYTES = 256 * 2**20
 #: Seconds a solve may take unless told otherwise (``time_limit``); the estimate is checked against it.
 DEFAULT_TIME_LIMIT_S = 300.0
 
@@ -184,8 +184,12 @@ def solve_seconds(counts: SolveCounts) -> float:
     return (far + lists + near) / threads + SETUP_SECONDS_PER_VERTEX * counts.n_vertices
 
 
-def estimate(counts: SolveCounts, budget_bytes: float | None = None, time_limit: float | None = None,
-             keep_lists: bool | None = None) -> SolveEstimate:
+def estimate(
+    counts: SolveCounts,
+    budget_bytes: float | None = None,
+    time_limit: float | None = None,
+    keep_lists: bool | None = None,
+) -> SolveEstimate:
     """Plan a solve: keep every near list or go in blocks, the block size, peak memory (bytes), time (s).
 
     Parameters
@@ -204,10 +208,13 @@ def estimate(counts: SolveCounts, budget_bytes: float | None = None, time_limit:
     SolveEstimate
     """
     n, m, n_r = counts.n_vertices, counts.n_triangles, counts.n_receivers
-    base = (BYTES_PER_VERTEX * n + BYTES_PER_TRIANGLE * m + BYTES_PER_TRIANGLE_THREAD * m * max(1, counts.threads)
-            + 3 * 8 * counts.n_channels * n_r)
-    far = (BYTES_PER_FAR_EVALUATION * counts.far_evaluations if counts.method == "tree"
-           else 9 * 8 * counts.n_lit)
+    base = (
+        BYTES_PER_VERTEX * n
+        + BYTES_PER_TRIANGLE * m
+        + BYTES_PER_TRIANGLE_THREAD * m * max(1, counts.threads)
+        + 3 * 8 * counts.n_channels * n_r
+    )
+    far = BYTES_PER_FAR_EVALUATION * counts.far_evaluations if counts.method == "tree" else 9 * 8 * counts.n_lit
     near_triangles = SAMPLE_SAFETY * counts.near_triangles
     lists = BYTES_PER_NEAR_TRIANGLE * n_r * near_triangles
     per_receiver = BYTES_PER_NEAR_ROOM * near_triangles + BYTES_PER_OWN_POINT * SAMPLE_SAFETY * counts.own_points
@@ -226,8 +233,21 @@ def estimate(counts: SolveCounts, budget_bytes: float | None = None, time_limit:
         peak = base + max(far, block_bytes)
     seconds = solve_seconds(counts)
     fits = (budget_bytes is None or peak <= budget_bytes) and (time_limit is None or seconds <= time_limit)
-    return SolveEstimate(base, far, lists, per_receiver, bool(keep_lists), max(1, block), block_bytes,
-                         counts.own_points, peak, seconds, budget_bytes, time_limit, bool(fits))
+    return SolveEstimate(
+        base,
+        far,
+        lists,
+        per_receiver,
+        bool(keep_lists),
+        max(1, block),
+        block_bytes,
+        counts.own_points,
+        peak,
+        seconds,
+        budget_bytes,
+        time_limit,
+        bool(fits),
+    )
 
 
 def check_limits(memory_limit, time_limit) -> None:
@@ -256,7 +276,7 @@ def memory_budget(memory_limit: float | None, available: float | None, resident:
 
 def format_bytes(size: float) -> str:
     """``size`` bytes as a short text (``"3.2 GB"``, ``"850 MB"``), in units of 2**30 and 2**20."""
-    return f"{size / GB:.1f} GB" if size >= GB else f"{size / 2 ** 20:.0f} MB"
+    return f"{size / GB:.1f} GB" if size >= GB else f"{size / 2**20:.0f} MB"
 
 
 def format_seconds(seconds: float) -> str:
@@ -285,9 +305,10 @@ def available_memory() -> float | None:
                     break
     except (OSError, ValueError, IndexError):
         pass
-    for limit_file, usage_file in (("/sys/fs/cgroup/memory.max", "/sys/fs/cgroup/memory.current"),
-                                   ("/sys/fs/cgroup/memory/memory.limit_in_bytes",
-                                    "/sys/fs/cgroup/memory/memory.usage_in_bytes")):
+    for limit_file, usage_file in (
+        ("/sys/fs/cgroup/memory.max", "/sys/fs/cgroup/memory.current"),
+        ("/sys/fs/cgroup/memory/memory.limit_in_bytes", "/sys/fs/cgroup/memory/memory.usage_in_bytes"),
+    ):
         try:
             with open(limit_file) as f:
                 limit = f.read().strip()
@@ -295,7 +316,7 @@ def available_memory() -> float | None:
                 usage = float(f.read().strip())
         except (OSError, ValueError):
             continue
-        if limit != "max" and float(limit) < 2 ** 60:  # "max" or a huge number: no limit
+        if limit != "max" and float(limit) < 2**60:  # "max" or a huge number: no limit
             values.append(max(0.0, float(limit) - usage))
     return min(values) if values else None
 

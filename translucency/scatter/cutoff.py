@@ -30,16 +30,31 @@ import numpy as np
 from scipy import integrate, optimize
 
 from . import dipoles, fresnel
-from .kernels import (MODEL_DIRECTIONAL, channel_lanes, group_inputs, pair_three, rows_kernel, source_columns, store_three,
-                      table_rows)
+from .kernels import (
+    MODEL_DIRECTIONAL,
+    channel_lanes,
+    group_inputs,
+    pair_three,
+    rows_kernel,
+    source_columns,
+    store_three,
+    table_rows,
+)
 from .medium import Medium
 from .threads import for_ranges
 
 
 def _directional_bound(r, D, sigma_tr_, C_phi, C_E, norm):
     s = sigma_tr_ * r
-    return 2.0 * norm * math.exp(-s) / (4.0 * math.pi**2) * (
-        C_phi * (1.0 / (D * r) + 3.0 * (1.0 + s) / r**2) + C_E * ((1.0 + s) / r**2 + 3.0 * D * (4.0 * (1.0 + s) + s * s) / r**3)
+    return (
+        2.0
+        * norm
+        * math.exp(-s)
+        / (4.0 * math.pi**2)
+        * (
+            C_phi * (1.0 / (D * r) + 3.0 * (1.0 + s) / r**2)
+            + C_E * ((1.0 + s) / r**2 + 3.0 * D * (4.0 * (1.0 + s) + s * s) / r**3)
+        )
     )
 
 
@@ -47,8 +62,14 @@ def cutoff_radius(medium: Medium, tol: float, model: str = "directional") -> flo
     """Radius (mm) beyond which pairs may be skipped with at most ``tol`` of the energy dropped.
 
     Memoised on the coefficients (a few quadratures and a root search: ~50 ms per call otherwise)."""
-    key = (tuple(np.asarray(medium.sigma_a, float).tolist()), tuple(np.asarray(medium.sigma_s, float).tolist()),
-           tuple(np.asarray(medium.g, float).tolist()), float(medium.eta), float(tol), str(model))
+    key = (
+        tuple(np.asarray(medium.sigma_a, float).tolist()),
+        tuple(np.asarray(medium.sigma_s, float).tolist()),
+        tuple(np.asarray(medium.g, float).tolist()),
+        float(medium.eta),
+        float(tol),
+        str(model),
+    )
     if key not in _RADII:
         if len(_RADII) >= 256:
             _RADII.clear()
@@ -73,8 +94,11 @@ def _cutoff_radius(medium: Medium, tol: float, model: str) -> float:
         else:
             profile = dipoles.standard_dipole_profile if model == "standard" else dipoles.better_dipole_profile
             scale = 1.0 / math.pi if model == "standard" else norm / math.pi
-            reflectance = (dipoles.standard_dipole_total_reflectance if model == "standard"
-                           else dipoles.better_dipole_total_reflectance)(float(medium.alpha_reduced[c]), eta)
+            reflectance = (
+                dipoles.standard_dipole_total_reflectance
+                if model == "standard"
+                else dipoles.better_dipole_total_reflectance
+            )(float(medium.alpha_reduced[c]), eta)
             total = float(reflectance) * scale
             density = lambda r, a=a, s=s, g=g: 2.0 * math.pi * r * scale * float(profile(r, a, s, g, eta))  # noqa: E731
         if total <= 0.0:
@@ -112,8 +136,23 @@ class SourceGrid:
         self.dims = dims
 
 
-def cutoff_sum(model, grid_order, grid_start, origin, cell, dims, radius, src_points, src_normals, src_w12, src_flux,
-               rcv_points, rcv_normals, params, channel_of):
+def cutoff_sum(
+    model,
+    grid_order,
+    grid_start,
+    origin,
+    cell,
+    dims,
+    radius,
+    src_points,
+    src_normals,
+    src_w12,
+    src_flux,
+    rcv_points,
+    rcv_normals,
+    params,
+    channel_of,
+):
     """Sum over the sources within ``radius`` (mm) of each receiver (method ``cutoff``).
 
     Arguments as :func:`~translucency.scatter.kernels.vertex_sum`, with the sources binned in a
@@ -128,36 +167,135 @@ def cutoff_sum(model, grid_order, grid_start, origin, cell, dims, radius, src_po
         Pairs within the radius, per receiver.
     """
     order = np.asarray(grid_order)
-    table, weights = source_columns(np.asarray(src_points)[order], np.asarray(src_normals)[order],
-                                    np.asarray(src_w12)[order], np.asarray(src_flux)[order])
+    table, weights = source_columns(
+        np.asarray(src_points)[order],
+        np.asarray(src_normals)[order],
+        np.asarray(src_w12)[order],
+        np.asarray(src_flux)[order],
+    )
     lanes = channel_lanes(params, channel_of, weights.shape[0])
     n_rcv = rcv_points.shape[0]
     B = np.zeros((n_rcv, weights.shape[0]))
     evaluated = np.zeros(n_rcv, dtype=np.int64)
-    for_ranges(rows_kernel(model, _cutoff_rows_directional, _cutoff_rows_radial), n_rcv, model, table, weights, grid_start, origin, float(cell), dims, float(radius),
-               rcv_points, rcv_normals, lanes, B, evaluated)
+    for_ranges(
+        rows_kernel(model, _cutoff_rows_directional, _cutoff_rows_radial),
+        n_rcv,
+        model,
+        table,
+        weights,
+        grid_start,
+        origin,
+        float(cell),
+        dims,
+        float(radius),
+        rcv_points,
+        rcv_normals,
+        lanes,
+        B,
+        evaluated,
+    )
     return B, evaluated
 
 
 @numba.njit(cache=True, nogil=True, fastmath=True, error_model="numpy")
-def _cutoff_rows_directional(worker, lo, hi, model, table, weights, grid_start, origin, cell, dims, radius, rcv_points,
-                             rcv_normals, lanes, B, evaluated):
+def _cutoff_rows_directional(
+    worker,
+    lo,
+    hi,
+    model,
+    table,
+    weights,
+    grid_start,
+    origin,
+    cell,
+    dims,
+    radius,
+    rcv_points,
+    rcv_normals,
+    lanes,
+    B,
+    evaluated,
+):
     """:func:`_cutoff_rows` of the directional dipole (``model`` is ignored: a constant here)."""
-    _cutoff_rows(worker, lo, hi, MODEL_DIRECTIONAL, table, weights, grid_start, origin, cell, dims, radius, rcv_points,
-                 rcv_normals, lanes, B, evaluated)
+    _cutoff_rows(
+        worker,
+        lo,
+        hi,
+        MODEL_DIRECTIONAL,
+        table,
+        weights,
+        grid_start,
+        origin,
+        cell,
+        dims,
+        radius,
+        rcv_points,
+        rcv_normals,
+        lanes,
+        B,
+        evaluated,
+    )
 
 
 @numba.njit(cache=True, nogil=True, fastmath=True, error_model="numpy")
-def _cutoff_rows_radial(worker, lo, hi, model, table, weights, grid_start, origin, cell, dims, radius, rcv_points,
-                        rcv_normals, lanes, B, evaluated):
+def _cutoff_rows_radial(
+    worker,
+    lo,
+    hi,
+    model,
+    table,
+    weights,
+    grid_start,
+    origin,
+    cell,
+    dims,
+    radius,
+    rcv_points,
+    rcv_normals,
+    lanes,
+    B,
+    evaluated,
+):
     """:func:`_cutoff_rows` of the standard and better dipoles."""
-    _cutoff_rows(worker, lo, hi, model, table, weights, grid_start, origin, cell, dims, radius, rcv_points,
-                 rcv_normals, lanes, B, evaluated)
+    _cutoff_rows(
+        worker,
+        lo,
+        hi,
+        model,
+        table,
+        weights,
+        grid_start,
+        origin,
+        cell,
+        dims,
+        radius,
+        rcv_points,
+        rcv_normals,
+        lanes,
+        B,
+        evaluated,
+    )
 
 
 @numba.njit(cache=True, inline="always", fastmath=True, error_model="numpy")
-def _cutoff_rows(worker, lo, hi, model, table, weights, grid_start, origin, cell, dims, radius, rcv_points, rcv_normals,
-                 lanes, B, evaluated):
+def _cutoff_rows(
+    worker,
+    lo,
+    hi,
+    model,
+    table,
+    weights,
+    grid_start,
+    origin,
+    cell,
+    dims,
+    radius,
+    rcv_points,
+    rcv_normals,
+    lanes,
+    B,
+    evaluated,
+):
     """Receivers ``lo .. hi - 1`` of :func:`cutoff_sum`."""
     n_out = weights.shape[0]
     reach = int(math.ceil(radius / cell))
@@ -180,8 +318,33 @@ def _cutoff_rows(worker, lo, hi, model, table, weights, grid_start, origin, cell
                     base = (i * dims[1] + j) * dims[2]
                     first = grid_start[base + max(ck - reach, 0)]
                     last = grid_start[base + min(ck + reach + 1, dims[2])]
-                    b0, b1, b2, n = _cell_sources(model, first, last, r2max, X0, X1, X2, N0, N1, N2, W0, W1, W2, px,
-                                                  py, pz, nx, ny, nz, p0, p1, p2, F0, F1, F2)
+                    b0, b1, b2, n = _cell_sources(
+                        model,
+                        first,
+                        last,
+                        r2max,
+                        X0,
+                        X1,
+                        X2,
+                        N0,
+                        N1,
+                        N2,
+                        W0,
+                        W1,
+                        W2,
+                        px,
+                        py,
+                        pz,
+                        nx,
+                        ny,
+                        nz,
+                        p0,
+                        p1,
+                        p2,
+                        F0,
+                        F1,
+                        F2,
+                    )
                     a0 += b0
                     a1 += b1
                     a2 += b2
@@ -191,8 +354,9 @@ def _cutoff_rows(worker, lo, hi, model, table, weights, grid_start, origin, cell
 
 
 @numba.njit(cache=True, inline="always", fastmath=True)
-def _cell_sources(model, first, last, r2max, X0, X1, X2, N0, N1, N2, W0, W1, W2, px, py, pz, nx, ny, nz, p0, p1, p2,
-                  F0, F1, F2):
+def _cell_sources(
+    model, first, last, r2max, X0, X1, X2, N0, N1, N2, W0, W1, W2, px, py, pz, nx, ny, nz, p0, p1, p2, F0, F1, F2
+):
     """Sum over the sources ``first .. last - 1`` within ``sqrt(r2max)`` mm of three channels' clamped
     ``S_d`` times flux at one receiver, and how many were within."""
     a0 = a1 = a2 = 0.0

@@ -299,8 +299,11 @@ def better_dipole_total_reflectance(alpha_reduced_, eta):
     mu = np.sqrt((1.0 - alpha) * (2.0 - alpha) / 3.0)
     with np.errstate(divide="ignore", invalid="ignore"):
         ratio = np.where(mu > 0.0, -np.expm1(-4.0 * A * mu) / mu, 4.0 * A)
-    return 0.5 * alpha**2 * np.exp(-np.sqrt(3.0 * (1.0 - alpha) / (2.0 - alpha))) * (
-        C_E * (1.0 + np.exp(-4.0 * A * mu)) + C_phi * ratio
+    return (
+        0.5
+        * alpha**2
+        * np.exp(-np.sqrt(3.0 * (1.0 - alpha) / (2.0 - alpha)))
+        * (C_E * (1.0 + np.exp(-4.0 * A * mu)) + C_phi * ratio)
     )
 
 

@@ -92,16 +92,20 @@ class Blocks:
         """Number of (receiver, source) pairs, each evaluated for three channels."""
         return self.x_i.shape[0] * self.x_i.shape[1] * self.x_o.shape[1]
 
-    def subset(self, n_blocks: int) -> "Blocks":
+    def subset(self, n_blocks: int) -> Blocks:
         """The first ``n_blocks`` blocks."""
-        arrays = {name: getattr(self, name)[:n_blocks]
-                  for name in ("eta", "sigma_a", "sigma_s", "g", "size", "x_i", "n_i", "w12", "x_o", "n_o")}
+        arrays = {
+            name: getattr(self, name)[:n_blocks]
+            for name in ("eta", "sigma_a", "sigma_s", "g", "size", "x_i", "n_i", "w12", "x_o", "n_o")
+        }
         return Blocks(**arrays, source_of=self.source_of)
 
-    def as_dtype(self, dtype) -> "Blocks":
+    def as_dtype(self, dtype) -> Blocks:
         """The same blocks with geometry and coefficients stored in ``dtype`` (rounded once)."""
-        cast = {name: np.ascontiguousarray(getattr(self, name), dtype=dtype)
-                for name in ("eta", "sigma_a", "sigma_s", "g", "size", "x_i", "n_i", "w12", "x_o", "n_o")}
+        cast = {
+            name: np.ascontiguousarray(getattr(self, name), dtype=dtype)
+            for name in ("eta", "sigma_a", "sigma_s", "g", "size", "x_i", "n_i", "w12", "x_o", "n_o")
+        }
         return Blocks(**cast, source_of=self.source_of)
 
 
@@ -169,9 +173,11 @@ def random_blocks(n_blocks: int, n_sources: int = 8, receivers_per_source: int =
     eta[pick > 0.95] = ETA_RANGE[1]
     lo, hi = ALBEDO_RANGE
     kind = rng.integers(0, 3, (G, 3))
-    albedo = np.select([kind == 0, kind == 1], [_log_uniform(rng, lo, 1.0, (G, 3)),
-                                                1.0 - _log_uniform(rng, 1.0 - hi, 1.0, (G, 3))],
-                       rng.uniform(lo, hi, (G, 3)))
+    albedo = np.select(
+        [kind == 0, kind == 1],
+        [_log_uniform(rng, lo, 1.0, (G, 3)), 1.0 - _log_uniform(rng, 1.0 - hi, 1.0, (G, 3))],
+        rng.uniform(lo, hi, (G, 3)),
+    )
     pick = rng.random((G, 3))
     albedo = np.clip(np.where(pick < 0.05, lo, np.where(pick > 0.95, hi, albedo)), lo, hi)
     mfp = _log_uniform(rng, *MFP_OVER_SIZE_RANGE, (G, 3))
@@ -194,16 +200,31 @@ def random_blocks(n_blocks: int, n_sources: int = 8, receivers_per_source: int =
     a, s, gg = (np.take_along_axis(v, channel, 1) for v in (sigma_a, sigma_s, g))
     D = diffusion_coefficient(a, s, gg)
     s_tr = sigma_tr(a, s, gg)
-    scales = np.stack([np.broadcast_to(size[:, None], (G, R)), 3.0 * D,
-                       np.where(s_tr > 0, 1.0 / np.where(s_tr > 0, s_tr, 1.0), size[:, None]), D], axis=-1)
+    scales = np.stack(
+        [
+            np.broadcast_to(size[:, None], (G, R)),
+            3.0 * D,
+            np.where(s_tr > 0, 1.0 / np.where(s_tr > 0, s_tr, 1.0), size[:, None]),
+            D,
+        ],
+        axis=-1,
+    )
     r = np.take_along_axis(scales, rng.integers(0, len(DISTANCE_SCALES), (G, R, 1)), -1)[..., 0]
     r = r * 10.0 ** rng.uniform(*DISTANCE_EXPONENTS, (G, R))
     # virtual-source height 2 A d_e (docs/physics.md §4.2)
     virtual_height = 2.0 * fresnel.reflection_parameter_A(eta)[:, None] * extrapolation_distance(a, s, gg)
-    x_o, n_o = receivers(x_i[:, source_of], n_i[:, source_of], w12[:, source_of],
-                         rng.choice(len(OFFSETS), (G, R), p=OFFSET_WEIGHTS), r, _unit(rng.normal(size=(G, R, 3))),
-                         virtual_height, rng.choice(len(EXIT_NORMALS), (G, R), p=EXIT_WEIGHTS),
-                         _unit(rng.normal(size=(G, R, 3))), rng.normal(size=(G, R, 3)))
+    x_o, n_o = receivers(
+        x_i[:, source_of],
+        n_i[:, source_of],
+        w12[:, source_of],
+        rng.choice(len(OFFSETS), (G, R), p=OFFSET_WEIGHTS),
+        r,
+        _unit(rng.normal(size=(G, R, 3))),
+        virtual_height,
+        rng.choice(len(EXIT_NORMALS), (G, R), p=EXIT_WEIGHTS),
+        _unit(rng.normal(size=(G, R, 3))),
+        rng.normal(size=(G, R, 3)),
+    )
     return Blocks(eta, sigma_a, sigma_s, g, size, x_i, n_i, w12, x_o, n_o, source_of)
 
 
@@ -211,8 +232,19 @@ def single_block(eta, sigma_a, sigma_s, g, x_i, n_i, w12, x_o, n_o) -> Blocks:
     """One block of one pair (the form property tests draw): vectors of 3, coefficients of 3 channels."""
     vec = lambda v: np.asarray(v, dtype=np.float64).reshape(1, 1, 3)  # noqa: E731
     chan = lambda v: np.broadcast_to(np.asarray(v, dtype=np.float64), (3,)).reshape(1, 3).copy()  # noqa: E731
-    return Blocks(np.array([float(eta)]), chan(sigma_a), chan(sigma_s), chan(g), np.array([1.0]),
-                  vec(x_i), vec(n_i), vec(w12), vec(x_o), vec(n_o), np.zeros(1, dtype=np.int64))
+    return Blocks(
+        np.array([float(eta)]),
+        chan(sigma_a),
+        chan(sigma_s),
+        chan(g),
+        np.array([1.0]),
+        vec(x_i),
+        vec(n_i),
+        vec(w12),
+        vec(x_o),
+        vec(n_o),
+        np.zeros(1, dtype=np.int64),
+    )
 
 
 # --------------------------------------------------------------------------------------------------
@@ -270,8 +302,12 @@ def peak(blocks: Blocks, model: str) -> np.ndarray:
 
 def kernel_parameters(blocks: Blocks, model: str) -> np.ndarray:
     """Channel parameters of every block, (G, 3, N_PARAMS) float64, from the blocks' coefficients."""
-    return np.stack([kernels.channel_parameters(blocks.sigma_a[k], blocks.sigma_s[k], blocks.g[k], blocks.eta[k], model)
-                     for k in range(len(blocks.eta))])
+    return np.stack(
+        [
+            kernels.channel_parameters(blocks.sigma_a[k], blocks.sigma_s[k], blocks.g[k], blocks.eta[k], model)
+            for k in range(len(blocks.eta))
+        ]
+    )
 
 
 @numba.njit(cache=True)
@@ -281,9 +317,26 @@ def _kernel_pairs(model, x_i, n_i, w12, x_o, n_o, params):
     for g in range(G):  # serial: many small calls must not each start the thread pool
         for o in range(R):
             for j in range(S):
-                kernels.model_pair(model, x_i[g, j, 0], x_i[g, j, 1], x_i[g, j, 2], n_i[g, j, 0], n_i[g, j, 1],
-                                   n_i[g, j, 2], w12[g, j, 0], w12[g, j, 1], w12[g, j, 2], x_o[g, o, 0], x_o[g, o, 1],
-                                   x_o[g, o, 2], n_o[g, o, 0], n_o[g, o, 1], n_o[g, o, 2], params[g], out[g, o, j])
+                kernels.model_pair(
+                    model,
+                    x_i[g, j, 0],
+                    x_i[g, j, 1],
+                    x_i[g, j, 2],
+                    n_i[g, j, 0],
+                    n_i[g, j, 1],
+                    n_i[g, j, 2],
+                    w12[g, j, 0],
+                    w12[g, j, 1],
+                    w12[g, j, 2],
+                    x_o[g, o, 0],
+                    x_o[g, o, 1],
+                    x_o[g, o, 2],
+                    n_o[g, o, 0],
+                    n_o[g, o, 1],
+                    n_o[g, o, 2],
+                    params[g],
+                    out[g, o, j],
+                )
     return out
 
 
@@ -293,8 +346,9 @@ def kernel_pairs(blocks: Blocks, model: str, params: np.ndarray | None = None) -
     return _kernel_pairs(kernels.MODELS[model], blocks.x_i, blocks.n_i, blocks.w12, blocks.x_o, blocks.n_o, params)
 
 
-def kernel_sums(blocks: Blocks, model: str, flux: np.ndarray,
-                params: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+def kernel_sums(
+    blocks: Blocks, model: str, flux: np.ndarray, params: np.ndarray | None = None
+) -> tuple[np.ndarray, np.ndarray]:
     """``B[g, o, c] = sum_j S_d(j -> o)[c] flux[g, j, c]`` per block, by the solver's ``exact`` kernels.
 
     :func:`~translucency.scatter.kernels.vertex_sum` for every model. Returns ``B`` and the clamp
@@ -307,16 +361,29 @@ def kernel_sums(blocks: Blocks, model: str, flux: np.ndarray,
     channel_of = np.arange(3, dtype=np.int64)
     flux = np.ascontiguousarray(flux, dtype=blocks.x_i.dtype)
     for k in range(G):
-        B[k], clamped[k] = kernels.vertex_sum(kernels.MODELS[model], blocks.x_i[k], blocks.n_i[k], blocks.w12[k],
-                                              flux[k], blocks.x_o[k], blocks.n_o[k], params[k], channel_of)
+        B[k], clamped[k] = kernels.vertex_sum(
+            kernels.MODELS[model],
+            blocks.x_i[k],
+            blocks.n_i[k],
+            blocks.w12[k],
+            flux[k],
+            blocks.x_o[k],
+            blocks.n_o[k],
+            params[k],
+            channel_of,
+        )
     return B, clamped
 
 
 def bad_counts(values) -> dict:
     """Numbers of NaN, infinite and negative entries (and the total) of an array of ``S_d`` or ``B``."""
     values = np.asarray(values)
-    return {"values": int(values.size), "nan": int(np.isnan(values).sum()), "inf": int(np.isinf(values).sum()),
-            "negative": int((values < 0).sum())}
+    return {
+        "values": int(values.size),
+        "nan": int(np.isnan(values).sum()),
+        "inf": int(np.isinf(values).sum()),
+        "negative": int((values < 0).sum()),
+    }
 
 
 def pair_geometry(blocks: Blocks) -> dict:
@@ -358,7 +425,14 @@ def relative_differences(values, reference_values, scale, threshold: float = 1e-
     ``scale`` broadcasts against the values (the material's :func:`peak`); entries below the threshold,
     or not finite in either array, are dropped (returned flattened).
     """
-    values, reference_values = np.broadcast_arrays(np.asarray(values, np.float64), np.asarray(reference_values, np.float64))
+    values, reference_values = np.broadcast_arrays(
+        np.asarray(values, np.float64), np.asarray(reference_values, np.float64)
+    )
     scale = np.broadcast_to(scale, values.shape)
-    keep = np.isfinite(values) & np.isfinite(reference_values) & (reference_values >= threshold * scale) & (reference_values > 0)
+    keep = (
+        np.isfinite(values)
+        & np.isfinite(reference_values)
+        & (reference_values >= threshold * scale)
+        & (reference_values > 0)
+    )
     return np.abs(values[keep] - reference_values[keep]) / reference_values[keep]

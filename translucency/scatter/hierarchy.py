@@ -29,7 +29,6 @@ import numpy as np
 
 from .threads import for_ranges
 
-
 LEAF_SIZE = 8
 #: Receivers that share one walk of the tree (consecutive along the solver's space-filling curve).
 #: Measured on the bunny and the Igea (marble, ketchup; tol 0.1-0.003): groups of 4 with
@@ -157,7 +156,7 @@ def aggregate(order, start, end, left, right, points, normals, w12, flux):
     out_pos[some] = sums[some, 0:3] / weight[some, None]
     unit = []
     for block in (sums[:, 3:6], sums[:, 6:9]):
-        length = np.sqrt(np.sum(block ** 2, axis=1))
+        length = np.sqrt(np.sum(block**2, axis=1))
         out = np.zeros((n_nodes, 3))
         ok = some & (length > 0.0)
         out[ok] = block[ok] / length[ok, None]
@@ -171,14 +170,30 @@ def source_table(points, normals, w12, flux, node_flux, node_pos, node_nrm, node
 
     Returns ``table (9, n + nodes)`` (position mm, unit normal, unit w12) and ``weights (C, n + nodes)`` (flux).
     """
-    table = np.ascontiguousarray(np.concatenate([np.hstack([points, normals, w12]),
-                                                 np.hstack([node_pos, node_nrm, node_dir])]).T)
+    table = np.ascontiguousarray(
+        np.concatenate([np.hstack([points, normals, w12]), np.hstack([node_pos, node_nrm, node_dir])]).T
+    )
     weights = np.ascontiguousarray(np.concatenate([flux, node_flux]).T)
     return table, weights
 
 
-def tree_sum(model, tree, nodes, points, normals, w12, flux, rcv_points, rcv_normals, params, channel_of, theta,
-             block=4096, reach=math.inf, group=GROUP_RECEIVERS):
+def tree_sum(
+    model,
+    tree,
+    nodes,
+    points,
+    normals,
+    w12,
+    flux,
+    rcv_points,
+    rcv_normals,
+    params,
+    channel_of,
+    theta,
+    block=4096,
+    reach=math.inf,
+    group=GROUP_RECEIVERS,
+):
     """Far-field sum with the hierarchy: ``B[o, c]``, sources summed one by one and clusters used, per receiver.
 
     A node small seen from the receiver (radius < ``theta`` x distance, receiver outside it) is one
@@ -216,10 +231,24 @@ def tree_sum(model, tree, nodes, points, normals, w12, flux, rcv_points, rcv_nor
         spread = np.linalg.norm(p[members] - centre[:, None, :], axis=2).max(axis=1)
         g_direct = np.zeros(n_groups, dtype=np.int64)
         g_clustered = np.zeros(n_groups, dtype=np.int64)
-        walk = (tree.order, tree.start, tree.end, tree.left, tree.right, tree.centre, tree.radius, node_weight, lit,
-                centre, spread, theta, reach)
-        for_ranges(_traverse, n_groups, *walk, np.empty(0, dtype=np.int64), np.zeros(1, dtype=np.int64), g_direct,
-                   g_clustered)
+        walk = (
+            tree.order,
+            tree.start,
+            tree.end,
+            tree.left,
+            tree.right,
+            tree.centre,
+            tree.radius,
+            node_weight,
+            lit,
+            centre,
+            spread,
+            theta,
+            reach,
+        )
+        for_ranges(
+            _traverse, n_groups, *walk, np.empty(0, dtype=np.int64), np.zeros(1, dtype=np.int64), g_direct, g_clustered
+        )
         g_counts = g_direct + g_clustered
         g_starts = np.zeros(n_groups, dtype=np.int64)
         np.cumsum(g_counts[:-1], out=g_starts[1:])
@@ -227,14 +256,35 @@ def tree_sum(model, tree, nodes, points, normals, w12, flux, rcv_points, rcv_nor
         for_ranges(_traverse, n_groups, *walk, columns, g_starts, g_direct, g_clustered)
         of = np.arange(p.shape[0]) // group  # each receiver's group
         direct[part], clustered[part] = g_direct[of], g_clustered[of]
-        B[part] = indexed_sum(model, p, nrm, table, weights, g_starts[of], g_counts[of], columns, np.ones(columns.size),
-                              lanes)
+        B[part] = indexed_sum(
+            model, p, nrm, table, weights, g_starts[of], g_counts[of], columns, np.ones(columns.size), lanes
+        )
     return B, direct, clustered
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
-def _traverse(worker, lo, hi, order, start, end, left, right, centre, radius, node_weight, lit, rcv_points, rcv_spread,
-              theta, reach, columns, starts, direct, clustered):
+def _traverse(
+    worker,
+    lo,
+    hi,
+    order,
+    start,
+    end,
+    left,
+    right,
+    centre,
+    radius,
+    node_weight,
+    lit,
+    rcv_points,
+    rcv_spread,
+    theta,
+    reach,
+    columns,
+    starts,
+    direct,
+    clustered,
+):
     """Walk the tree for every group of receivers (a sphere: ``rcv_points`` centres, ``rcv_spread``
     radii, mm): count the lit sources and clusters it evaluates (``columns`` empty), or write their
     columns (source ``j`` or ``n + node``) from ``starts[o]`` on. A node is a cluster when the sphere is

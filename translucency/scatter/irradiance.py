@@ -176,14 +176,18 @@ def _validated_arrays(points, normals, areas):
         raise InvalidParameterError(f"incident_flux: points must have shape (n, 3), got {points.shape}.")
     n = len(points)
     if normals.shape != (n, 3):
-        raise InvalidParameterError(f"incident_flux: normals must have shape ({n}, 3) like points, got {normals.shape}.")
+        raise InvalidParameterError(
+            f"incident_flux: normals must have shape ({n}, 3) like points, got {normals.shape}."
+        )
     if areas.shape != (n,):
         raise InvalidParameterError(f"incident_flux: areas must have shape ({n},), one per vertex, got {areas.shape}.")
     for name, value in (("points", points), ("normals", normals), ("areas", areas)):
         if not np.all(np.isfinite(value)):
             raise InvalidParameterError(f"incident_flux: {name} contain NaN or infinite values; clean the mesh first.")
     if np.any(areas < 0):
-        raise InvalidParameterError(f"incident_flux: vertex areas must be >= 0 (mm²), got a minimum of {areas.min():g}.")
+        raise InvalidParameterError(
+            f"incident_flux: vertex areas must be >= 0 (mm²), got a minimum of {areas.min():g}."
+        )
     length = np.linalg.norm(normals, axis=1)
     degenerate = ~(length > 1e-12)
     normals = normals / np.where(degenerate, 1.0, length)[:, None]
@@ -296,8 +300,18 @@ def _apply_visibility(batch, occluder, cache, origins_key, points, normals, stat
             job.w, job.distance = job.w[v], job.distance[v]
 
 
-def incident_flux(points, normals, areas, lights, eta, *, triangles=None, occluder=None,
-                  cache: VisibilityCache | None = None, per_direction: bool = False) -> IncidentLight:
+def incident_flux(
+    points,
+    normals,
+    areas,
+    lights,
+    eta,
+    *,
+    triangles=None,
+    occluder=None,
+    cache: VisibilityCache | None = None,
+    per_direction: bool = False,
+) -> IncidentLight:
     """Flux and flux-weighted refracted direction entering the medium at each source vertex.
 
     Parameters
@@ -377,7 +391,9 @@ def incident_flux(points, normals, areas, lights, eta, *, triangles=None, occlud
             weighted_w12[:, channel] += np.bincount(front, weights=weight * w12_pairs[:, channel], minlength=n)
         if contributions is not None:
             bounds = np.cumsum(sizes)[:-1]
-            for job, f, p, w12_k in zip(batch, np.split(front, bounds), np.split(phi_pairs, bounds), np.split(w12_pairs, bounds)):
+            for job, f, p, w12_k in zip(
+                batch, np.split(front, bounds), np.split(phi_pairs, bounds), np.split(w12_pairs, bounds)
+            ):
                 direction = job.vector.copy() if job.kind == "dir" else None
                 contributions.append(LightContribution(job.light, direction, f, p, areas[f, None] * p, w12_k))
 

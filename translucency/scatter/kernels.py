@@ -113,8 +113,30 @@ def exp_nonpositive(x):
     exactly 0 below -746 (where ``e^x`` underflows anyway).
     """
     y = max(x, -746.0) * (1.0 / 4096.0)
-    p = 1.0 + y * (1.0 + y * (1.0 / 2.0 + y * (1.0 / 6.0 + y * (1.0 / 24.0 + y * (1.0 / 120.0 + y * (
-        1.0 / 720.0 + y * (1.0 / 5040.0 + y * (1.0 / 40320.0 + y * (1.0 / 362880.0 + y * (1.0 / 3628800.0))))))))))
+    p = 1.0 + y * (
+        1.0
+        + y
+        * (
+            1.0 / 2.0
+            + y
+            * (
+                1.0 / 6.0
+                + y
+                * (
+                    1.0 / 24.0
+                    + y
+                    * (
+                        1.0 / 120.0
+                        + y
+                        * (
+                            1.0 / 720.0
+                            + y * (1.0 / 5040.0 + y * (1.0 / 40320.0 + y * (1.0 / 362880.0 + y * (1.0 / 3628800.0))))
+                        )
+                    )
+                )
+            )
+        )
+    )
     for _ in range(12):
         p = p * p
     return p
@@ -133,7 +155,10 @@ def _ray_source(x_dot_w, x_dot_n, w_dot_n, d, D, inv_D, sigma_tr_, C_phi, C_E, n
     inv_d = 1.0 / d
     inv_d2 = inv_d * inv_d
     fluence = C_phi * (d * d * inv_D + 3.0 * one_plus_s * x_dot_w)
-    flux = C_E * (3.0 * D * one_plus_s * w_dot_n - (one_plus_s + 3.0 * D * (3.0 * one_plus_s + s * s) * x_dot_w * inv_d2) * x_dot_n)
+    flux = C_E * (
+        3.0 * D * one_plus_s * w_dot_n
+        - (one_plus_s + 3.0 * D * (3.0 * one_plus_s + s * s) * x_dot_w * inv_d2) * x_dot_n
+    )
     return norm_over_4pi2 * exp_nonpositive(-s) * inv_d2 * inv_d * (fluence - flux)
 
 
@@ -152,8 +177,9 @@ def _channel(p, r2, perp2, mu0, x_dot_w, x_dot_n, x_dot_v, s_dot_v, s_dot_n, v_d
     inv_D = 1.0 / D
     scale = p[P_NORM] / FOUR_PI_SQUARED
     real = _ray_source(x_dot_w, x_dot_n, -mu0, d_r, D, inv_D, p[P_SIGMA_TR], p[P_C_PHI], p[P_C_E], scale)
-    virtual = _ray_source(x_dot_v - c * s_dot_v, x_dot_n - c * s_dot_n, v_dot_n, d_v, D, inv_D, p[P_SIGMA_TR],
-                          p[P_C_PHI], p[P_C_E], scale)
+    virtual = _ray_source(
+        x_dot_v - c * s_dot_v, x_dot_n - c * s_dot_n, v_dot_n, d_v, D, inv_D, p[P_SIGMA_TR], p[P_C_PHI], p[P_C_E], scale
+    )
     return real - virtual
 
 
@@ -213,7 +239,8 @@ def _radial(model, r2, p):
         value = z_r * (1.0 + st * d_r) * e_r / (d_r * d_r * d_r) + z_v * (1.0 + st * d_v) * e_v / (d_v * d_v * d_v)
     else:
         value = p[R_C_PHI] / p[R_D] * (e_r / d_r - e_v / d_v) + p[R_C_E] * (
-            z_r * (1.0 + st * d_r) * e_r / (d_r * d_r * d_r) - z_v * (1.0 + st * d_v) * e_v / (d_v * d_v * d_v))
+            z_r * (1.0 + st * d_r) * e_r / (d_r * d_r * d_r) - z_v * (1.0 + st * d_v) * e_v / (d_v * d_v * d_v)
+        )
     return p[R_SCALE] * value
 
 
@@ -231,8 +258,16 @@ def _lane(model, p, r2, perp2, mu0, xw, xn, xv, sv, sn, vn, xs):
 def lane(params, k):
     """Row ``k`` of ``params`` as a tuple of ``N_PARAMS`` floats. Kernels read a channel's parameters
     into one before their inner loop: values, not an array, so that the loop vectorises."""
-    return (params[k, 0], params[k, 1], params[k, 2], params[k, 3], params[k, 4], params[k, 5], params[k, 6],
-            params[k, 7])
+    return (
+        params[k, 0],
+        params[k, 1],
+        params[k, 2],
+        params[k, 3],
+        params[k, 4],
+        params[k, 5],
+        params[k, 6],
+        params[k, 7],
+    )
 
 
 @numba.njit(cache=True, inline="always", fastmath=True)
@@ -240,9 +275,11 @@ def pair_three(model, x0, x1, x2, ni0, ni1, ni2, w0, w1, w2, nx, ny, nz, p0, p1,
     """Unclamped ``S_d`` of three channels (parameters ``p0, p1, p2``, :func:`lane`) for the pair offset
     ``x = x_o - x_i``: the geometry once, the channels from it (branch-free, so loops vectorise)."""
     r2, perp2, mu0, xw, xn, xv, sv, sn, vn, xs = pair_geometry(x0, x1, x2, ni0, ni1, ni2, w0, w1, w2, nx, ny, nz)
-    return (_lane(model, p0, r2, perp2, mu0, xw, xn, xv, sv, sn, vn, xs),
-            _lane(model, p1, r2, perp2, mu0, xw, xn, xv, sv, sn, vn, xs),
-            _lane(model, p2, r2, perp2, mu0, xw, xn, xv, sv, sn, vn, xs))
+    return (
+        _lane(model, p0, r2, perp2, mu0, xw, xn, xv, sv, sn, vn, xs),
+        _lane(model, p1, r2, perp2, mu0, xw, xn, xv, sv, sn, vn, xs),
+        _lane(model, p2, r2, perp2, mu0, xw, xn, xv, sv, sn, vn, xs),
+    )
 
 
 @numba.njit(cache=True, fastmath=True)
@@ -260,8 +297,9 @@ def model_pair(model, xi0, xi1, xi2, ni0, ni1, ni2, w0, w1, w2, xo0, xo1, xo2, n
     int
         The number of channels whose value was clamped from below 0 to 0.
     """
-    r2, perp2, mu0, xw, xn, xv, sv, sn, vn, xs = pair_geometry(xo0 - xi0, xo1 - xi1, xo2 - xi2, ni0, ni1, ni2, w0, w1,
-                                                               w2, no0, no1, no2)
+    r2, perp2, mu0, xw, xn, xv, sv, sn, vn, xs = pair_geometry(
+        xo0 - xi0, xo1 - xi1, xo2 - xi2, ni0, ni1, ni2, w0, w1, w2, no0, no1, no2
+    )
     clamped = 0
     for k in range(params.shape[0]):
         value = _lane(model, lane(params, k), r2, perp2, mu0, xw, xn, xv, sv, sn, vn, xs)
@@ -275,8 +313,9 @@ def model_pair(model, xi0, xi1, xi2, ni0, ni1, ni2, w0, w1, w2, xo0, xo1, xo2, n
 @numba.njit(cache=True)
 def directional_dipole_pair(xi0, xi1, xi2, ni0, ni1, ni2, w0, w1, w2, xo0, xo1, xo2, no0, no1, no2, params, out):
     """:func:`model_pair` of the directional dipole (FHK14); returns the clamp count."""
-    return model_pair(MODEL_DIRECTIONAL, xi0, xi1, xi2, ni0, ni1, ni2, w0, w1, w2, xo0, xo1, xo2, no0, no1, no2, params,
-                      out)
+    return model_pair(
+        MODEL_DIRECTIONAL, xi0, xi1, xi2, ni0, ni1, ni2, w0, w1, w2, xo0, xo1, xo2, no0, no1, no2, params, out
+    )
 
 
 @numba.njit(cache=True)
@@ -285,8 +324,26 @@ def model_pairs(model, x_i, n_i, w12, x_o, n_o, params):
     n = x_i.shape[0]
     out = np.empty((n, params.shape[0]))
     for p in range(n):
-        model_pair(model, x_i[p, 0], x_i[p, 1], x_i[p, 2], n_i[p, 0], n_i[p, 1], n_i[p, 2], w12[p, 0], w12[p, 1],
-                   w12[p, 2], x_o[p, 0], x_o[p, 1], x_o[p, 2], n_o[p, 0], n_o[p, 1], n_o[p, 2], params, out[p])
+        model_pair(
+            model,
+            x_i[p, 0],
+            x_i[p, 1],
+            x_i[p, 2],
+            n_i[p, 0],
+            n_i[p, 1],
+            n_i[p, 2],
+            w12[p, 0],
+            w12[p, 1],
+            w12[p, 2],
+            x_o[p, 0],
+            x_o[p, 1],
+            x_o[p, 2],
+            n_o[p, 0],
+            n_o[p, 1],
+            n_o[p, 2],
+            params,
+            out[p],
+        )
     return out
 
 
@@ -343,13 +400,26 @@ def vertex_sum(model, src_points, src_normals, src_w12, src_flux, rcv_points, rc
     n_rcv = rcv_points.shape[0]
     B = np.zeros((n_rcv, n_out))
     clamped = np.zeros(n_rcv, dtype=np.int64)
-    for_ranges(rows_kernel(model, _vertex_rows_directional, _vertex_rows_radial), n_rcv, model, table, weights, rcv_points, rcv_normals, lanes, counted, B, clamped)
+    for_ranges(
+        rows_kernel(model, _vertex_rows_directional, _vertex_rows_radial),
+        n_rcv,
+        model,
+        table,
+        weights,
+        rcv_points,
+        rcv_normals,
+        lanes,
+        counted,
+        B,
+        clamped,
+    )
     return B, clamped
 
 
 @numba.njit(cache=True, nogil=True, fastmath=True, error_model="numpy")
-def _vertex_rows_directional(worker, lo, hi, model, table, weights, rcv_points, rcv_normals, lanes, counted, B,
-                             clamped):
+def _vertex_rows_directional(
+    worker, lo, hi, model, table, weights, rcv_points, rcv_normals, lanes, counted, B, clamped
+):
     """:func:`_vertex_rows` of the directional dipole (``model`` is ignored: a constant here)."""
     _vertex_rows(worker, lo, hi, MODEL_DIRECTIONAL, table, weights, rcv_points, rcv_normals, lanes, counted, B, clamped)
 
@@ -374,24 +444,52 @@ def _vertex_rows(worker, lo, hi, model, table, weights, rcv_points, rcv_normals,
             c0 = 3 * group
             F0, F1, F2, p0, p1, p2 = group_inputs(weights, lanes, c0)
             k0, k1, k2 = counted[c0], counted[c0 + 1], counted[c0 + 2]
-            a0, a1, a2, n = _vertex_sources(model, n_src, X0, X1, X2, N0, N1, N2, W0, W1, W2, px, py, pz, nx, ny, nz,
-                                            p0, p1, p2, F0, F1, F2, k0, k1, k2)
+            a0, a1, a2, n = _vertex_sources(
+                model,
+                n_src,
+                X0,
+                X1,
+                X2,
+                N0,
+                N1,
+                N2,
+                W0,
+                W1,
+                W2,
+                px,
+                py,
+                pz,
+                nx,
+                ny,
+                nz,
+                p0,
+                p1,
+                p2,
+                F0,
+                F1,
+                F2,
+                k0,
+                k1,
+                k2,
+            )
             count += n
             store_three(B, o, c0, n_out, a0, a1, a2)
         clamped[o] = count
 
 
 @numba.njit(cache=True, inline="always", fastmath=True)
-def _vertex_sources(model, n_src, X0, X1, X2, N0, N1, N2, W0, W1, W2, px, py, pz, nx, ny, nz, p0, p1, p2, F0, F1, F2,
-                    k0, k1, k2):
+def _vertex_sources(
+    model, n_src, X0, X1, X2, N0, N1, N2, W0, W1, W2, px, py, pz, nx, ny, nz, p0, p1, p2, F0, F1, F2, k0, k1, k2
+):
     """Sum over every source of three channels' clamped ``S_d`` times flux at one receiver, and the clamps."""
     a0 = 0.0
     a1 = 0.0
     a2 = 0.0
     count = 0
     for j in range(n_src):
-        e0, e1, e2 = pair_three(model, px - X0[j], py - X1[j], pz - X2[j], N0[j], N1[j], N2[j], W0[j], W1[j], W2[j],
-                                nx, ny, nz, p0, p1, p2)
+        e0, e1, e2 = pair_three(
+            model, px - X0[j], py - X1[j], pz - X2[j], N0[j], N1[j], N2[j], W0[j], W1[j], W2[j], nx, ny, nz, p0, p1, p2
+        )
         count += (e0 < 0.0) * k0 + (e1 < 0.0) * k1 + (e2 < 0.0) * k2
         a0 += max(e0, 0.0) * F0[j]
         a1 += max(e1, 0.0) * F1[j]
@@ -417,8 +515,14 @@ def group_inputs(weights, lanes, c0):
     """For the output channels ``c0 .. c0 + 2``: their weight rows (the last repeated past the end) and
     their parameters (:func:`lane`), read once before a kernel's inner loop."""
     n_out = weights.shape[0]
-    return (weights[c0], weights[min(c0 + 1, n_out - 1)], weights[min(c0 + 2, n_out - 1)], lane(lanes, c0),
-            lane(lanes, c0 + 1), lane(lanes, c0 + 2))
+    return (
+        weights[c0],
+        weights[min(c0 + 1, n_out - 1)],
+        weights[min(c0 + 2, n_out - 1)],
+        lane(lanes, c0),
+        lane(lanes, c0 + 1),
+        lane(lanes, c0 + 2),
+    )
 
 
 @numba.njit(cache=True, inline="always")
@@ -442,30 +546,61 @@ def indexed_sum(model, rcv_points, rcv_normals, table, weights, starts, counts, 
     vectorises.
     """
     out = np.zeros((rcv_points.shape[0], weights.shape[0]))
-    for_ranges(rows_kernel(model, _indexed_rows_directional, _indexed_rows_radial), rcv_points.shape[0], model, rcv_points, rcv_normals, table, weights, starts, counts,
-               columns, factors, lanes, out)
+    for_ranges(
+        rows_kernel(model, _indexed_rows_directional, _indexed_rows_radial),
+        rcv_points.shape[0],
+        model,
+        rcv_points,
+        rcv_normals,
+        table,
+        weights,
+        starts,
+        counts,
+        columns,
+        factors,
+        lanes,
+        out,
+    )
     return out
 
 
 @numba.njit(cache=True, nogil=True, fastmath=True, error_model="numpy")
-def _indexed_rows_directional(worker, lo, hi, model, rcv_points, rcv_normals, table, weights, starts, counts, columns,
-                              factors, lanes, out):
+def _indexed_rows_directional(
+    worker, lo, hi, model, rcv_points, rcv_normals, table, weights, starts, counts, columns, factors, lanes, out
+):
     """:func:`_indexed_rows` of the directional dipole (``model`` is ignored: a constant here)."""
-    _indexed_rows(worker, lo, hi, MODEL_DIRECTIONAL, rcv_points, rcv_normals, table, weights, starts, counts, columns,
-                  factors, lanes, out)
+    _indexed_rows(
+        worker,
+        lo,
+        hi,
+        MODEL_DIRECTIONAL,
+        rcv_points,
+        rcv_normals,
+        table,
+        weights,
+        starts,
+        counts,
+        columns,
+        factors,
+        lanes,
+        out,
+    )
 
 
 @numba.njit(cache=True, nogil=True, fastmath=True, error_model="numpy")
-def _indexed_rows_radial(worker, lo, hi, model, rcv_points, rcv_normals, table, weights, starts, counts, columns,
-                         factors, lanes, out):
+def _indexed_rows_radial(
+    worker, lo, hi, model, rcv_points, rcv_normals, table, weights, starts, counts, columns, factors, lanes, out
+):
     """:func:`_indexed_rows` of the standard and better dipoles."""
-    _indexed_rows(worker, lo, hi, model, rcv_points, rcv_normals, table, weights, starts, counts, columns, factors,
-                  lanes, out)
+    _indexed_rows(
+        worker, lo, hi, model, rcv_points, rcv_normals, table, weights, starts, counts, columns, factors, lanes, out
+    )
 
 
 @numba.njit(cache=True, inline="always", fastmath=True, error_model="numpy")
-def _indexed_rows(worker, lo, hi, model, rcv_points, rcv_normals, table, weights, starts, counts, columns, factors,
-                  lanes, out):
+def _indexed_rows(
+    worker, lo, hi, model, rcv_points, rcv_normals, table, weights, starts, counts, columns, factors, lanes, out
+):
     """Receivers ``lo .. hi - 1`` of :func:`indexed_sum`."""
     n_out = weights.shape[0]
     X0, X1, X2, N0, N1, N2, W0, W1, W2 = table_rows(table)
@@ -476,14 +611,66 @@ def _indexed_rows(worker, lo, hi, model, rcv_points, rcv_normals, table, weights
             c0 = 3 * group
             F0, F1, F2, p0, p1, p2 = group_inputs(weights, lanes, c0)
             first, last = starts[r], starts[r] + counts[r]
-            a0, a1, a2 = _indexed_sources(model, first, last, columns, factors, X0, X1, X2, N0, N1, N2, W0, W1, W2,
-                                          x0, x1, x2, n0, n1, n2, p0, p1, p2, F0, F1, F2)
+            a0, a1, a2 = _indexed_sources(
+                model,
+                first,
+                last,
+                columns,
+                factors,
+                X0,
+                X1,
+                X2,
+                N0,
+                N1,
+                N2,
+                W0,
+                W1,
+                W2,
+                x0,
+                x1,
+                x2,
+                n0,
+                n1,
+                n2,
+                p0,
+                p1,
+                p2,
+                F0,
+                F1,
+                F2,
+            )
             store_three(out, r, c0, n_out, a0, a1, a2)
 
 
 @numba.njit(cache=True, inline="always", fastmath=True)
-def _indexed_sources(model, first, last, columns, factors, X0, X1, X2, N0, N1, N2, W0, W1, W2, x0, x1, x2, n0, n1, n2,
-                     p0, p1, p2, F0, F1, F2):
+def _indexed_sources(
+    model,
+    first,
+    last,
+    columns,
+    factors,
+    X0,
+    X1,
+    X2,
+    N0,
+    N1,
+    N2,
+    W0,
+    W1,
+    W2,
+    x0,
+    x1,
+    x2,
+    n0,
+    n1,
+    n2,
+    p0,
+    p1,
+    p2,
+    F0,
+    F1,
+    F2,
+):
     """Sum over the listed sources ``columns[first:last]`` of three channels' clamped ``S_d`` times flux
     and factor at one receiver."""
     a0 = 0.0
@@ -491,8 +678,9 @@ def _indexed_sources(model, first, last, columns, factors, X0, X1, X2, N0, N1, N
     a2 = 0.0
     for k in range(first, last):
         i = columns[k]
-        e0, e1, e2 = pair_three(model, x0 - X0[i], x1 - X1[i], x2 - X2[i], N0[i], N1[i], N2[i], W0[i], W1[i], W2[i],
-                                n0, n1, n2, p0, p1, p2)
+        e0, e1, e2 = pair_three(
+            model, x0 - X0[i], x1 - X1[i], x2 - X2[i], N0[i], N1[i], N2[i], W0[i], W1[i], W2[i], n0, n1, n2, p0, p1, p2
+        )
         f = factors[k]
         a0 += max(e0, 0.0) * F0[i] * f
         a1 += max(e1, 0.0) * F1[i] * f

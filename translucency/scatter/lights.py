@@ -171,7 +171,11 @@ class DirectionalLight:
 
     def to_dict(self) -> dict:
         """Plain description for metadata."""
-        return {"type": "directional", "direction": self.direction.tolist(), "irradiance_rgb_W_m2": self.irradiance_rgb.tolist()}
+        return {
+            "type": "directional",
+            "direction": self.direction.tolist(),
+            "irradiance_rgb_W_m2": self.irradiance_rgb.tolist(),
+        }
 
 
 @dataclass(frozen=True, eq=False)
@@ -198,7 +202,11 @@ class PointLight:
 
     def to_dict(self) -> dict:
         """Plain description for metadata."""
-        return {"type": "point", "position_mm": self.position_mm.tolist(), "intensity_rgb_W_sr": self.intensity_rgb.tolist()}
+        return {
+            "type": "point",
+            "position_mm": self.position_mm.tolist(),
+            "intensity_rgb_W_sr": self.intensity_rgb.tolist(),
+        }
 
 
 POINT_LIGHT_MIN_DISTANCE_MM = 1e-3
@@ -325,8 +333,14 @@ class EnvironmentLight:
 
     def to_dict(self) -> dict:
         """Plain description for metadata (a map is described by its name, shape and mean radiance)."""
-        out = {"type": "environment", "name": self.name, "n_directions": self.n_directions,
-               "sampling": self.sampling, "seed": self.seed, "up": self.up.tolist()}
+        out = {
+            "type": "environment",
+            "name": self.name,
+            "n_directions": self.n_directions,
+            "sampling": self.sampling,
+            "seed": self.seed,
+            "up": self.up.tolist(),
+        }
         if self.radiance_map is None:
             out["radiance_rgb_W_m2_sr"] = self.radiance_rgb.tolist()
         else:
@@ -423,11 +437,12 @@ def as_light_list(lights) -> tuple:
     try:
         lights = tuple(lights)
     except TypeError:
-        raise InvalidParameterError(f"lights must be a light or a sequence of lights, got {type(lights).__name__}.") from None
+        raise InvalidParameterError(
+            f"lights must be a light or a sequence of lights, got {type(lights).__name__}."
+        ) from None
     for light in lights:
         if not isinstance(light, kinds):
             raise InvalidParameterError(
                 f"lights must be DirectionalLight, PointLight or EnvironmentLight objects, got {type(light).__name__}."
             )
     return lights
-

@@ -169,7 +169,7 @@ class Medium:
         object.__setattr__(self, "eta", float(eta.flat[0]))
 
     @classmethod
-    def from_reduced(cls, sigma_a, sigma_s_reduced, eta: float = 1.3, name: str = "custom") -> "Medium":
+    def from_reduced(cls, sigma_a, sigma_s_reduced, eta: float = 1.3, name: str = "custom") -> Medium:
         """A medium from reduced scattering coefficients ``sigma_s'`` (1/mm) with ``g = 0``."""
         return cls(sigma_a, sigma_s_reduced, np.zeros(np.shape(sigma_s_reduced)), eta, name)
 
@@ -229,7 +229,7 @@ class Medium:
         with np.errstate(divide="ignore"):
             return 1.0 / self.sigma_tr
 
-    def scaled(self, factor: float) -> "Medium":
+    def scaled(self, factor: float) -> Medium:
         """The same material with every coefficient multiplied by ``factor`` (e.g. a unit change)."""
         if not (np.isfinite(factor) and factor > 0):
             raise InvalidParameterError(f"{self.name}: a coefficient scale must be a positive number, got {factor!r}.")

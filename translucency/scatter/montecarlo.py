@@ -566,9 +566,7 @@ def simulate_half_space(
             "grazing or back-facing light does not enter the medium."
         )
     if launch not in LAUNCH_MODES:
-        raise InvalidParameterError(
-            f"simulate_half_space: launch must be one of {LAUNCH_MODES}, got {launch!r}."
-        )
+        raise InvalidParameterError(f"simulate_half_space: launch must be one of {LAUNCH_MODES}, got {launch!r}.")
     n_photons = _check_positive_int("n_photons", n_photons, 1)
     n_batches = _check_positive_int("n_batches", n_batches, 2)
     seed = _check_positive_int("seed", seed, 0)

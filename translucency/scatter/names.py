@@ -14,10 +14,19 @@ import numbers
 
 from ..errors import InvalidParameterError, setting_name
 
-__all__ = ["MODELS", "METHODS", "DEFAULT_MODEL", "DEFAULT_METHOD", "DEFAULT_TOL", "check_model", "check_method",
-           "check_tol"]
+__all__ = [
+    "MODELS",
+    "METHODS",
+    "DEFAULT_MODEL",
+    "DEFAULT_METHOD",
+    "DEFAULT_TOL",
+    "check_model",
+    "check_method",
+    "check_tol",
+]
 
-#: Scattering models (the BSSRDF): FHK14's directional dipole, Jensen 2001's standard dipole, d'Eon 2012's better dipole.
+#: Scattering models (the BSSRDF): FHK14's directional dipole, Jensen 2001's standard dipole,
+#: d'Eon 2012's better dipole.
 MODELS = ("directional", "standard", "better")
 #: Far-field methods: every pair, pairs above the tolerance's cutoff radius, aggregated source clusters.
 METHODS = ("exact", "cutoff", "tree")

@@ -54,7 +54,15 @@ _A1, _B1 = 0.059715871789770, 0.470142064105115
 _A2, _B2 = 0.797426985353087, 0.101286507323456
 _W1, _W2 = 0.132394152788506, 0.125939180544827
 RULE_POINTS = np.array(
-    [[1 / 3, 1 / 3, 1 / 3], [_A1, _B1, _B1], [_B1, _A1, _B1], [_B1, _B1, _A1], [_A2, _B2, _B2], [_B2, _A2, _B2], [_B2, _B2, _A2]]
+    [
+        [1 / 3, 1 / 3, 1 / 3],
+        [_A1, _B1, _B1],
+        [_B1, _A1, _B1],
+        [_B1, _B1, _A1],
+        [_A2, _B2, _B2],
+        [_B2, _A2, _B2],
+        [_B2, _B2, _A2],
+    ]
 )
 RULE_WEIGHTS = np.array([0.225, _W1, _W1, _W1, _W2, _W2, _W2])
 
@@ -122,9 +130,24 @@ def _counted(points, triangles, receivers, radius):
     cell_start = np.append(cell_start, n).astype(np.int64)
     stamps = np.full((thread_count(), triangles.shape[0]), -1, dtype=np.int64)
     counts = np.zeros(receivers.size, dtype=np.int64)
-    visit = np.argsort(keys[receivers], kind="stable")  # receivers cell by cell: neighbours share the cells' cache lines
-    args = (points, np.ascontiguousarray(points[by_key]), receivers, visit, float(radius), low, cell, dims, cell_keys,
-            cell_start, by_key.astype(np.int64), vt_offsets, vt_tris)
+    visit = np.argsort(
+        keys[receivers], kind="stable"
+    )  # receivers cell by cell: neighbours share the cells' cache lines
+    args = (
+        points,
+        np.ascontiguousarray(points[by_key]),
+        receivers,
+        visit,
+        float(radius),
+        low,
+        cell,
+        dims,
+        cell_keys,
+        cell_start,
+        by_key.astype(np.int64),
+        vt_offsets,
+        vt_tris,
+    )
     none = np.empty(0, dtype=np.int64)
     for_ranges(_near_pass, receivers.size, *args, none, none, counts, stamps, 0)
     return args, counts, stamps
@@ -137,8 +160,29 @@ def _cell_keys(points, low, cell, dims):
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
-def _near_pass(worker, lo, hi, points, sorted_points, receivers, visit, radius, low, cell, dims, cell_keys, cell_start,
-               by_key, vt_offsets, vt_tris, offsets, triangle_ids, counts, stamps, stamp_base):
+def _near_pass(
+    worker,
+    lo,
+    hi,
+    points,
+    sorted_points,
+    receivers,
+    visit,
+    radius,
+    low,
+    cell,
+    dims,
+    cell_keys,
+    cell_start,
+    by_key,
+    vt_offsets,
+    vt_tris,
+    offsets,
+    triangle_ids,
+    counts,
+    stamps,
+    stamp_base,
+):
     """Count (``triangle_ids`` empty) or write each receiver's near triangles, each once, receivers in
     the order ``visit``: ``stamps`` (threads x triangles) hold the stamp ``stamp_base + receiver`` of the
     receiver that last took one. ``sorted_points`` are the points cell by cell (``points[by_key]``), so
@@ -165,8 +209,11 @@ def _near_pass(worker, lo, hi, points, sorted_points, receivers, visit, radius, 
                 c = np.searchsorted(cell_keys, last - (k_hi - k_lo))
                 while c < cell_keys.shape[0] and cell_keys[c] <= last:
                     for s in range(cell_start[c], cell_start[c + 1]):
-                        d2 = ((sorted_points[s, 0] - x[0]) ** 2 + (sorted_points[s, 1] - x[1]) ** 2
-                              + (sorted_points[s, 2] - x[2]) ** 2)
+                        d2 = (
+                            (sorted_points[s, 0] - x[0]) ** 2
+                            + (sorted_points[s, 1] - x[1]) ** 2
+                            + (sorted_points[s, 2] - x[2]) ** 2
+                        )
                         if d2 > r2:
                             continue
                         v = by_key[s]
@@ -296,12 +343,25 @@ class TriangleTables:
 def triangle_tables(points, triangles) -> TriangleTables:
     """:class:`TriangleTables` of a mesh (``points`` in mm)."""
     edges, edge_of_corner = unique_edges(triangles)
-    return TriangleTables(edge_lengths(points, triangles).max(axis=1), points[triangles].mean(axis=1), edges,
-                          np.ascontiguousarray(edge_of_corner))
+    return TriangleTables(
+        edge_lengths(points, triangles).max(axis=1),
+        points[triangles].mean(axis=1),
+        edges,
+        np.ascontiguousarray(edge_of_corner),
+    )
 
 
-def source_point_table(points, normals, w12, phi, triangles, triangle_areas, tables: TriangleTables,
-                       rule_points=RULE_POINTS, rule_weights=RULE_WEIGHTS) -> SourcePoints:
+def source_point_table(
+    points,
+    normals,
+    w12,
+    phi,
+    triangles,
+    triangle_areas,
+    tables: TriangleTables,
+    rule_points=RULE_POINTS,
+    rule_weights=RULE_WEIGHTS,
+) -> SourcePoints:
     """Quadrature points every receiver shares (made as :func:`_gather` makes them).
 
     Columns ``0..n-1`` are the vertices, then ``len(rule_points)`` Dunavant points per triangle with
@@ -326,14 +386,47 @@ def source_point_table(points, normals, w12, phi, triangles, triangle_areas, tab
     weights[:, :n] = phi.T
     # an edge as a degenerate "triangle" (its two ends twice) interpolates as the edge does
     edge_triangles = np.ascontiguousarray(tables.edges[lit_edges][:, [0, 1, 1]])
-    for_ranges(_fill_shared_points, lit_triangles.size + edge_triangles.shape[0], points, normals, w12, phi, triangles,
-               triangle_areas, rule_points, rule_weights, lit_triangles, edge_triangles, table, weights, n, start_mid)
+    for_ranges(
+        _fill_shared_points,
+        lit_triangles.size + edge_triangles.shape[0],
+        points,
+        normals,
+        w12,
+        phi,
+        triangles,
+        triangle_areas,
+        rule_points,
+        rule_weights,
+        lit_triangles,
+        edge_triangles,
+        table,
+        weights,
+        n,
+        start_mid,
+    )
     return SourcePoints(table, weights, vertex_lit, first_rule, midpoint_column)
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
-def _fill_shared_points(worker, lo, hi, points, normals, w12, phi, triangles, triangle_areas, rule_points, rule_weights,
-                        lit_triangles, edge_triangles, table, weights, start_rule, start_mid):
+def _fill_shared_points(
+    worker,
+    lo,
+    hi,
+    points,
+    normals,
+    w12,
+    phi,
+    triangles,
+    triangle_areas,
+    rule_points,
+    rule_weights,
+    lit_triangles,
+    edge_triangles,
+    table,
+    weights,
+    start_rule,
+    start_mid,
+):
     """Dunavant points of the lit triangles and midpoints of their edges into ``table``: items ``lo .. hi - 1``
     of the lit triangles followed by the edges."""
     n_rule = rule_points.shape[0]
@@ -343,11 +436,35 @@ def _fill_shared_points(worker, lo, hi, points, normals, w12, phi, triangles, tr
             t = lit_triangles[k]
             column = start_rule + k * n_rule
             for q in range(n_rule):
-                _gather(points, normals, w12, phi, triangles[t], rule_points[q, 0], rule_points[q, 1], rule_points[q, 2],
-                        triangle_areas[t] * rule_weights[q], table, weights, column + q)
+                _gather(
+                    points,
+                    normals,
+                    w12,
+                    phi,
+                    triangles[t],
+                    rule_points[q, 0],
+                    rule_points[q, 1],
+                    rule_points[q, 2],
+                    triangle_areas[t] * rule_weights[q],
+                    table,
+                    weights,
+                    column + q,
+                )
         else:
-            _gather(points, normals, w12, phi, edge_triangles[k - n_lit], 0.5, 0.25, 0.25, 1.0, table, weights,
-                    start_mid + k - n_lit)
+            _gather(
+                points,
+                normals,
+                w12,
+                phi,
+                edge_triangles[k - n_lit],
+                0.5,
+                0.25,
+                0.25,
+                1.0,
+                table,
+                weights,
+                start_mid + k - n_lit,
+            )
 
 
 @numba.njit(cache=True, inline="always")
@@ -370,8 +487,12 @@ def _pieces(points, tri, xo, beta, scale_min, stack, cx, out):
     """
     a, b, c = tri[0], tri[1], tri[2]
     top = 0
-    for child in ((1.0, 0.0, 0.5, 0.5, 0.5, 0.0), (0.5, 0.5, 0.0, 1.0, 0.0, 0.5), (0.5, 0.0, 0.0, 0.5, 0.0, 0.0),
-                  (0.5, 0.5, 0.0, 0.5, 0.5, 0.0)):  # the four children of the whole triangle
+    for child in (
+        (1.0, 0.0, 0.5, 0.5, 0.5, 0.0),
+        (0.5, 0.5, 0.0, 1.0, 0.0, 0.5),
+        (0.5, 0.0, 0.0, 0.5, 0.0, 0.0),
+        (0.5, 0.5, 0.0, 0.5, 0.5, 0.0),
+    ):  # the four children of the whole triangle
         for i in range(6):
             stack[top, i] = child[i]
         stack[top, 6] = 1.0
@@ -379,8 +500,15 @@ def _pieces(points, tri, xo, beta, scale_min, stack, cx, out):
     n = 0
     while top > 0:
         top -= 1
-        p0, q0, p1, q1, p2, q2, depth = (stack[top, 0], stack[top, 1], stack[top, 2], stack[top, 3], stack[top, 4],
-                                         stack[top, 5], stack[top, 6])
+        p0, q0, p1, q1, p2, q2, depth = (
+            stack[top, 0],
+            stack[top, 1],
+            stack[top, 2],
+            stack[top, 3],
+            stack[top, 4],
+            stack[top, 5],
+            stack[top, 6],
+        )
         r0 = 1.0 - p0 - q0
         r1 = 1.0 - p1 - q1
         r2 = 1.0 - p2 - q2
@@ -389,7 +517,7 @@ def _pieces(points, tri, xo, beta, scale_min, stack, cx, out):
             cx[1, i] = p1 * points[a, i] + q1 * points[b, i] + r1 * points[c, i]
             cx[2, i] = p2 * points[a, i] + q2 * points[b, i] + r2 * points[c, i]
         h2 = 0.0
-        for (u, v) in ((0, 1), (1, 2), (2, 0)):
+        for u, v in ((0, 1), (1, 2), (2, 0)):
             e = (cx[u, 0] - cx[v, 0]) ** 2 + (cx[u, 1] - cx[v, 1]) ** 2 + (cx[u, 2] - cx[v, 2]) ** 2
             if e > h2:
                 h2 = e
@@ -413,8 +541,12 @@ def _pieces(points, tri, xo, beta, scale_min, stack, cx, out):
             m12q = 0.5 * (q1 + q2)
             m20p = 0.5 * (p2 + p0)
             m20q = 0.5 * (q2 + q0)
-            children = ((p0, q0, m01p, m01q, m20p, m20q), (m01p, m01q, p1, q1, m12p, m12q),
-                        (m20p, m20q, m12p, m12q, p2, q2), (m01p, m01q, m12p, m12q, m20p, m20q))
+            children = (
+                (p0, q0, m01p, m01q, m20p, m20q),
+                (m01p, m01q, p1, q1, m12p, m12q),
+                (m20p, m20q, m12p, m12q, p2, q2),
+                (m01p, m01q, m12p, m12q, m20p, m20q),
+            )
             for child in children:
                 for i in range(6):
                     stack[top, i] = child[i]
@@ -519,10 +651,29 @@ def _corner_of(tri, vertex):
     return -1
 
 
-def near_field_correction(model, points, triangles, triangle_areas, normals, w12, phi, receivers, offsets,
-                          triangle_ids, params, channel_of, beta, scale_min, tables=None, degree3_ratio=0.0,
-                          rule_points=RULE_POINTS, rule_weights=RULE_WEIGHTS, fan_nodes=(FAN_ANGULAR, FAN_RADIAL),
-                          shared=None, refined_out=None):
+def near_field_correction(
+    model,
+    points,
+    triangles,
+    triangle_areas,
+    normals,
+    w12,
+    phi,
+    receivers,
+    offsets,
+    triangle_ids,
+    params,
+    channel_of,
+    beta,
+    scale_min,
+    tables=None,
+    degree3_ratio=0.0,
+    rule_points=RULE_POINTS,
+    rule_weights=RULE_WEIGHTS,
+    fan_nodes=(FAN_ANGULAR, FAN_RADIAL),
+    shared=None,
+    refined_out=None,
+):
     """Correction ``C[r, c]`` of the vertex sum for every receiver ``r`` (see the module docstring).
 
     Receivers are done in blocks of :data:`BLOCK_RECEIVERS`: (1) list each receiver's quadrature
@@ -551,8 +702,9 @@ def near_field_correction(model, points, triangles, triangle_areas, normals, w12
         raise ValueError("the rule's first point must be the centroid (the degree-3 rule shares it)")
     centroid_factor = CENTROID_WEIGHT / float(rule_weights[0])  # its weight is area * w_0 * phi
     if shared is None:
-        shared = source_point_table(points, normals, w12, phi, triangles, triangle_areas, tables, rule_points,
-                                    rule_weights)
+        shared = source_point_table(
+            points, normals, w12, phi, triangles, triangle_areas, tables, rule_points, rule_weights
+        )
     diameters, centroids = tables.diameters, tables.centroids
     lanes = channel_lanes(params, channel_of, phi.shape[1])
     fan = (*_gauss_legendre_unit(fan_nodes[0]), *_gauss_legendre_unit(fan_nodes[1]))
@@ -572,13 +724,38 @@ def near_field_correction(model, points, triangles, triangle_areas, normals, w12
     for start in starts:
         block = slice(start, min(n_r, start + BLOCK_RECEIVERS))
         rcv = receivers[block]
-        col_offsets = bound[start:block.stop + 1] - bound[start]
+        col_offsets = bound[start : block.stop + 1] - bound[start]
         n_columns = np.zeros(rcv.size, dtype=np.int64)
         n_refined = np.zeros(rcv.size, dtype=np.int64)
-        for_ranges(_list_points, rcv.size, points, triangles, triangle_areas, rcv, offsets[start:block.stop + 1],
-                   triangle_ids, beta, scale_min, degree3_ratio, centroid_factor, shared.vertex_lit, shared.first_rule,
-                   shared.midpoint_column, tables.edge_of_corner, diameters, centroids, fan[0].size, fan[2].size,
-                   col_offsets, columns, factors, n_columns, n_refined, start, stamps)
+        for_ranges(
+            _list_points,
+            rcv.size,
+            points,
+            triangles,
+            triangle_areas,
+            rcv,
+            offsets[start : block.stop + 1],
+            triangle_ids,
+            beta,
+            scale_min,
+            degree3_ratio,
+            centroid_factor,
+            shared.vertex_lit,
+            shared.first_rule,
+            shared.midpoint_column,
+            tables.edge_of_corner,
+            diameters,
+            centroids,
+            fan[0].size,
+            fan[2].size,
+            col_offsets,
+            columns,
+            factors,
+            n_columns,
+            n_refined,
+            start,
+            stamps,
+        )
         n_points[block] = n_columns + n_refined
         if refined_out is not None:
             refined_out[block] = n_refined
@@ -588,17 +765,56 @@ def near_field_correction(model, points, triangles, triangle_areas, normals, w12
         if own.size < (9 + n_c) * size:
             own = np.empty(int(1.25 * (9 + n_c) * size))
             ones = np.ones(own.size // (9 + n_c))
-        refined = own[:9 * size].reshape(9, size)  # every column is written
-        refined_weights = own[9 * size:(9 + n_c) * size].reshape(n_c, size)
-        for_ranges(_refined_points, rcv.size, points, normals, w12, phi, triangles, triangle_areas, rcv,
-                   offsets[start:block.stop + 1], triangle_ids, beta, scale_min, shared.first_rule, diameters, centroids,
-                   rule_points, rule_weights, *fan, ref_offsets, refined, refined_weights)
+        refined = own[: 9 * size].reshape(9, size)  # every column is written
+        refined_weights = own[9 * size : (9 + n_c) * size].reshape(n_c, size)
+        for_ranges(
+            _refined_points,
+            rcv.size,
+            points,
+            normals,
+            w12,
+            phi,
+            triangles,
+            triangle_areas,
+            rcv,
+            offsets[start : block.stop + 1],
+            triangle_ids,
+            beta,
+            scale_min,
+            shared.first_rule,
+            diameters,
+            centroids,
+            rule_points,
+            rule_weights,
+            *fan,
+            ref_offsets,
+            refined,
+            refined_weights,
+        )
         rcv_points, rcv_normals = points[rcv], normals[rcv]
-        correction[block] = (
-            indexed_sum(model, rcv_points, rcv_normals, shared.table, shared.weights, col_offsets[:-1], n_columns,
-                        columns, factors, lanes)
-            + indexed_sum(model, rcv_points, rcv_normals, refined, refined_weights, ref_offsets[:-1],
-                          np.diff(ref_offsets), np.arange(size), ones[:size], lanes))
+        correction[block] = indexed_sum(
+            model,
+            rcv_points,
+            rcv_normals,
+            shared.table,
+            shared.weights,
+            col_offsets[:-1],
+            n_columns,
+            columns,
+            factors,
+            lanes,
+        ) + indexed_sum(
+            model,
+            rcv_points,
+            rcv_normals,
+            refined,
+            refined_weights,
+            ref_offsets[:-1],
+            np.diff(ref_offsets),
+            np.arange(size),
+            ones[:size],
+            lanes,
+        )
     return correction, n_points
 
 
@@ -607,10 +823,36 @@ BLOCK_RECEIVERS = 2048
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
-def _list_points(worker, lo, hi, points, triangles, triangle_areas, receivers, offsets, triangle_ids, beta, scale_min,
-                 degree3_ratio, centroid_factor, vertex_lit, first_rule, midpoint_column, edge_of_corner, diameters,
-                 centroids, fan_angular, fan_radial, col_offsets, columns, factors, n_columns, n_refined, first_receiver,
-                 stamps):
+def _list_points(
+    worker,
+    lo,
+    hi,
+    points,
+    triangles,
+    triangle_areas,
+    receivers,
+    offsets,
+    triangle_ids,
+    beta,
+    scale_min,
+    degree3_ratio,
+    centroid_factor,
+    vertex_lit,
+    first_rule,
+    midpoint_column,
+    edge_of_corner,
+    diameters,
+    centroids,
+    fan_angular,
+    fan_radial,
+    col_offsets,
+    columns,
+    factors,
+    n_columns,
+    n_refined,
+    first_receiver,
+    stamps,
+):
     """Pass 1: per receiver, the shared-table points (vertex rule, whole triangles) and the number of
     points of its own quadrature (fan rule on its own triangles, refined pieces of the other close ones).
 
@@ -627,9 +869,9 @@ def _list_points(worker, lo, hi, points, triangles, triangle_areas, receivers, o
     n_e = midpoint_column.shape[0]
     mine = stamps[worker]
     owner = mine[:n_v]  # receiver that last listed a vertex
-    slot = mine[n_v:2 * n_v]  # its position in that receiver's list
-    edge_owner = mine[2 * n_v:2 * n_v + n_e]  # the same for edge midpoints
-    edge_slot = mine[2 * n_v + n_e:]
+    slot = mine[n_v : 2 * n_v]  # its position in that receiver's list
+    edge_owner = mine[2 * n_v : 2 * n_v + n_e]  # the same for edge midpoints
+    edge_slot = mine[2 * n_v + n_e :]
     for r in range(lo, hi):
         me = first_receiver + r
         xo = points[receivers[r]]
@@ -684,15 +926,40 @@ def _list_points(worker, lo, hi, points, triangles, triangle_areas, receivers, o
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
-def _refined_points(worker, lo, hi, points, normals, w12, phi, triangles, triangle_areas, receivers, offsets,
-                    triangle_ids, beta, scale_min, first_rule, diameters, centroids, rule_points, rule_weights, ang_x,
-                    ang_w, rad_x, rad_w, ref_offsets, refined, refined_weights):
+def _refined_points(
+    worker,
+    lo,
+    hi,
+    points,
+    normals,
+    w12,
+    phi,
+    triangles,
+    triangle_areas,
+    receivers,
+    offsets,
+    triangle_ids,
+    beta,
+    scale_min,
+    first_rule,
+    diameters,
+    centroids,
+    rule_points,
+    rule_weights,
+    ang_x,
+    ang_w,
+    rad_x,
+    rad_w,
+    ref_offsets,
+    refined,
+    refined_weights,
+):
     """Pass 2: each receiver's own quadrature points (fan rule, refined pieces), from ``ref_offsets`` on."""
     n_rule = rule_points.shape[0]
     # receivers lo .. hi - 1, with their own scratch space
     stack = np.empty((3 * MAX_DEPTH + 8, 7))
     cx = np.empty((3, 3))
-    found = np.empty((4 ** 6, 7))
+    found = np.empty((4**6, 7))
     fan = np.empty((4 * ang_x.shape[0] * rad_x.shape[0], 4))
     for r in range(lo, hi):
         xo = points[receivers[r]]
@@ -709,8 +976,20 @@ def _refined_points(worker, lo, hi, points, normals, w12, phi, triangles, triang
                     fan = np.empty((n, 4))
                 _fan(points, tri, corner, beta, scale_min, ang_x, ang_w, rad_x, rad_w, fan)
                 for j in range(n):
-                    _gather(points, normals, w12, phi, tri, fan[j, 0], fan[j, 1], fan[j, 2],
-                            triangle_areas[t] * fan[j, 3], refined, refined_weights, column)
+                    _gather(
+                        points,
+                        normals,
+                        w12,
+                        phi,
+                        tri,
+                        fan[j, 0],
+                        fan[j, 1],
+                        fan[j, 2],
+                        triangle_areas[t] * fan[j, 3],
+                        refined,
+                        refined_weights,
+                        column,
+                    )
                     column += 1
                 continue
             if _whole(diameters[t], centroids[t], xo, beta, scale_min):
@@ -729,7 +1008,18 @@ def _refined_points(worker, lo, hi, points, normals, w12, phi, triangles, triang
                     l0 = rule_points[qp, 0]
                     l1 = rule_points[qp, 1]
                     l2 = rule_points[qp, 2]
-                    _gather(points, normals, w12, phi, tri, l0 * p0 + l1 * p1 + l2 * p2, l0 * q0 + l1 * q1 + l2 * q2,
-                            l0 * r0 + l1 * r1 + l2 * r2, piece_area * rule_weights[qp], refined, refined_weights,
-                            column)
+                    _gather(
+                        points,
+                        normals,
+                        w12,
+                        phi,
+                        tri,
+                        l0 * p0 + l1 * p1 + l2 * p2,
+                        l0 * q0 + l1 * q1 + l2 * q2,
+                        l0 * r0 + l1 * r1 + l2 * r2,
+                        piece_area * rule_weights[qp],
+                        refined,
+                        refined_weights,
+                        column,
+                    )
                     column += 1

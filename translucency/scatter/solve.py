@@ -37,8 +37,8 @@ from __future__ import annotations
 
 import dataclasses
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Callable
 
 import numpy as np
 
@@ -46,8 +46,8 @@ from ..errors import BudgetError, InvalidParameterError, option
 from ..geometry.measure import barycentric_vertex_areas, mean_edge_length, triangle_areas
 from ..geometry.morton import morton_order
 from . import budget, cutoff, hierarchy, kernels, nearfield
-from .names import DEFAULT_MODEL, METHODS, MODELS, check_method, check_model, check_tol
 from .medium import Medium
+from .names import DEFAULT_MODEL, METHODS, MODELS, check_method, check_model, check_tol
 
 __all__ = ["SurfaceGeometry", "Solution", "solve", "METHODS", "MODELS"]
 
@@ -134,26 +134,26 @@ class SurfaceGeometry:
             self._cache["mean_edge"] = float(mean_edge_length(self.points, self.triangles))
         return self._cache["mean_edge"]
 
-    def source_tree(self) -> "hierarchy.SourceTree":
+    def source_tree(self) -> hierarchy.SourceTree:
         """The kd-tree over all vertices (geometry only; reused across lights and materials)."""
         if "tree" not in self._cache:
             self._cache["tree"] = hierarchy.SourceTree(self.points)
         return self._cache["tree"]
 
-    def source_grid(self, sources: np.ndarray, cell: float) -> "cutoff.SourceGrid":
+    def source_grid(self, sources: np.ndarray, cell: float) -> cutoff.SourceGrid:
         """Uniform grid over the given source vertices, cached per (sources, cell)."""
         key = ("grid", sources.tobytes(), round(cell, 12))
         if key not in self._cache:
             self._cache[key] = cutoff.SourceGrid(self.points[sources], cell)
         return self._cache[key]
 
-    def triangle_tables(self) -> "nearfield.TriangleTables":
+    def triangle_tables(self) -> nearfield.TriangleTables:
         """Triangle diameters, centroids and edges for the near field (geometry only)."""
         if "triangle_tables" not in self._cache:
             self._cache["triangle_tables"] = nearfield.triangle_tables(self.points, self.triangles)
         return self._cache["triangle_tables"]
 
-    def spatial_order(self) -> tuple["SurfaceGeometry", np.ndarray, np.ndarray]:
+    def spatial_order(self) -> tuple[SurfaceGeometry, np.ndarray, np.ndarray]:
         """``(ordered, order, rank)``: the same surface with its vertices along a Morton curve
         (:func:`translucency.geometry.morton.morton_order`) and its triangles by first vertex, so that
         neighbours sit close in memory whatever order the mesh came in (subdivided or merged meshes
@@ -213,19 +213,32 @@ def _as_array(value, dtype, shape, name):
     except (TypeError, ValueError):
         raise InvalidParameterError(f"{name} must be a numeric array of shape {shape}.") from None
     if array.ndim != len(shape) or any(s is not None and s != a for s, a in zip(shape, array.shape)):
-        raise InvalidParameterError(f"{name} must have shape {tuple('n' if s is None else s for s in shape)}, got {array.shape}.")
+        raise InvalidParameterError(
+            f"{name} must have shape {tuple('n' if s is None else s for s in shape)}, got {array.shape}."
+        )
     return array
 
 
 def _all_pairs(model_code, geometry, sources, w12, flux, rcv_points, rcv_normals, params, channel_of):
     """Every (source, receiver) pair."""
-    return kernels.vertex_sum(model_code, geometry.points[sources], geometry.normals[sources], w12[sources],
-                              flux[sources], rcv_points, rcv_normals, params, channel_of)
+    return kernels.vertex_sum(
+        model_code,
+        geometry.points[sources],
+        geometry.normals[sources],
+        w12[sources],
+        flux[sources],
+        rcv_points,
+        rcv_normals,
+        params,
+        channel_of,
+    )
 
 
 def _far_field_exact(model, geometry, medium, lit, w12, flux, rcv_points, rcv_normals, params, channel_of, tol):
     """Method ``exact``: every (lit source, receiver) pair."""
-    B, clamped = _all_pairs(kernels.MODELS[model], geometry, lit, w12, flux, rcv_points, rcv_normals, params, channel_of)
+    B, clamped = _all_pairs(
+        kernels.MODELS[model], geometry, lit, w12, flux, rcv_points, rcv_normals, params, channel_of
+    )
     pairs = int(lit.size) * int(rcv_points.shape[0])
     return B, {"pairs_evaluated": pairs, "pairs_skipped": 0, "clamped_values": int(clamped.sum())}
 
@@ -236,16 +249,34 @@ def _far_field_cutoff(model, geometry, medium, lit, w12, flux, rcv_points, rcv_n
     model_code = kernels.MODELS[model]
     diagonal = float(np.linalg.norm(np.ptp(geometry.points, axis=0)))
     if not radius < diagonal:  # the radius covers the object: every pair
-        B, stats = _far_field_exact(model, geometry, medium, lit, w12, flux, rcv_points, rcv_normals, params,
-                                    channel_of, tol)
+        B, stats = _far_field_exact(
+            model, geometry, medium, lit, w12, flux, rcv_points, rcv_normals, params, channel_of, tol
+        )
         return B, {**stats, "cutoff_radius_mm": radius}
     grid = geometry.source_grid(lit, radius)
-    B, evaluated = cutoff.cutoff_sum(model_code, grid.order, grid.start, grid.origin, grid.cell, grid.dims, radius,
-                                     geometry.points[lit], geometry.normals[lit], w12[lit], flux[lit], rcv_points,
-                                     rcv_normals, params, channel_of)
+    B, evaluated = cutoff.cutoff_sum(
+        model_code,
+        grid.order,
+        grid.start,
+        grid.origin,
+        grid.cell,
+        grid.dims,
+        radius,
+        geometry.points[lit],
+        geometry.normals[lit],
+        w12[lit],
+        flux[lit],
+        rcv_points,
+        rcv_normals,
+        params,
+        channel_of,
+    )
     pairs = int(lit.size) * int(rcv_points.shape[0])
-    return B, {"cutoff_radius_mm": radius, "pairs_evaluated": int(evaluated.sum()),
-               "pairs_skipped": pairs - int(evaluated.sum())}
+    return B, {
+        "cutoff_radius_mm": radius,
+        "pairs_evaluated": int(evaluated.sum()),
+        "pairs_skipped": pairs - int(evaluated.sum()),
+    }
 
 
 def _far_field_tree(model, geometry, medium, lit, w12, flux, rcv_points, rcv_normals, params, channel_of, tol):
@@ -253,16 +284,35 @@ def _far_field_tree(model, geometry, medium, lit, w12, flux, rcv_points, rcv_nor
     model_code = kernels.MODELS[model]
     tree = geometry.source_tree()
     theta = hierarchy.THETA_PER_SQRT_TOL * float(np.sqrt(tol))
-    nodes = hierarchy.aggregate(tree.order, tree.start, tree.end, tree.left, tree.right, geometry.points,
-                                geometry.normals, w12, flux)
+    nodes = hierarchy.aggregate(
+        tree.order, tree.start, tree.end, tree.left, tree.right, geometry.points, geometry.normals, w12, flux
+    )
     reach = cutoff.cutoff_radius(medium, tol, model)
-    B, direct, clustered = hierarchy.tree_sum(model_code, tree, nodes, geometry.points, geometry.normals, w12, flux,
-                                              rcv_points, rcv_normals, params, channel_of, theta, reach=reach)
+    B, direct, clustered = hierarchy.tree_sum(
+        model_code,
+        tree,
+        nodes,
+        geometry.points,
+        geometry.normals,
+        w12,
+        flux,
+        rcv_points,
+        rcv_normals,
+        params,
+        channel_of,
+        theta,
+        reach=reach,
+    )
     pairs = int(lit.size) * int(rcv_points.shape[0])
-    return B, {"theta": theta, "cutoff_radius_mm": reach, "tree_nodes": tree.n_nodes,
-               "pairs_evaluated": int(direct.sum() + clustered.sum()),
-               "pairs_direct": int(direct.sum()), "cluster_evaluations": int(clustered.sum()),
-               "pairs_skipped": pairs - int(direct.sum())}
+    return B, {
+        "theta": theta,
+        "cutoff_radius_mm": reach,
+        "tree_nodes": tree.n_nodes,
+        "pairs_evaluated": int(direct.sum() + clustered.sum()),
+        "pairs_direct": int(direct.sum()),
+        "cluster_evaluations": int(clustered.sum()),
+        "pairs_skipped": pairs - int(direct.sum()),
+    }
 
 
 def unique_channels(medium: Medium):
@@ -345,8 +395,9 @@ def solve(
     timings: dict[str, float] = {}
     stats: dict[str, object] = {}
     report = progress or (lambda stage, fraction: None)
-    phi, w12, receivers = _checked_inputs(geometry, phi, w12, medium, model, method, tol, receivers, memory_limit,
-                                          time_limit)
+    phi, w12, receivers = _checked_inputs(
+        geometry, phi, w12, medium, model, method, tol, receivers, memory_limit, time_limit
+    )
 
     start = time.perf_counter()
     work = _ordered_work(geometry, phi, w12, medium, model, receivers, stats)
@@ -455,15 +506,34 @@ def _plan(work: _Work, method, tol, memory_limit, time_limit, stats):
     ``(plan, near_args, near radius in mm)``; the plan goes into ``stats["budget"]``."""
     geometry = work.geometry
     radius = near_radius(geometry, work.medium)
-    shared = nearfield.source_point_table(geometry.points, geometry.normals, work.w12, work.phi, geometry.triangles,
-                                          geometry.triangle_areas, geometry.triangle_tables())
-    near_args = dict(model_code=kernels.MODELS[work.model], geometry=geometry, w12=work.w12, phi=work.phi,
-                     params=work.params, channel_of=work.channel_of, medium=work.medium,
-                     degree3_ratio=0.0 if method == "exact" else NEAR_DEGREE3_RATIO, shared=shared)
+    shared = nearfield.source_point_table(
+        geometry.points,
+        geometry.normals,
+        work.w12,
+        work.phi,
+        geometry.triangles,
+        geometry.triangle_areas,
+        geometry.triangle_tables(),
+    )
+    near_args = dict(
+        model_code=kernels.MODELS[work.model],
+        geometry=geometry,
+        w12=work.w12,
+        phi=work.phi,
+        params=work.params,
+        channel_of=work.channel_of,
+        medium=work.medium,
+        degree3_ratio=0.0 if method == "exact" else NEAR_DEGREE3_RATIO,
+        shared=shared,
+    )
     counts = sample_counts(work.far_args, near_args, work.inner, radius, method, work.params, work.channel_of, tol)
     available = budget.available_memory()
-    plan = budget.estimate(counts, budget.memory_budget(memory_limit, available, budget.resident_memory()),
-                           time_limit, keep_lists=None if memory_limit is not None or available is not None else True)
+    plan = budget.estimate(
+        counts,
+        budget.memory_budget(memory_limit, available, budget.resident_memory()),
+        time_limit,
+        keep_lists=None if memory_limit is not None or available is not None else True,
+    )
     stats["budget"] = {**plan.as_dict(), "counts": dataclasses.asdict(counts)}
     return plan, near_args, radius
 
@@ -481,8 +551,9 @@ def _far_field(work: _Work, method, tol, report):
     step = FAR_CHUNK * max(1, -(-inner.size // (budget.PROGRESS_STEPS * FAR_CHUNK)))
     for first in range(0, inner.size, step):
         part = slice(first, min(inner.size, first + step))
-        B[part], part_stats = far_field(*work.far_args, rcv_points[part], rcv_normals[part], work.params,
-                                        work.channel_of, tol)
+        B[part], part_stats = far_field(
+            *work.far_args, rcv_points[part], rcv_normals[part], work.params, work.channel_of, tol
+        )
         far_stats = _merge_stats(far_stats, part_stats)
         report("far field", part.stop / inner.size)
     return B, far_stats
@@ -521,12 +592,28 @@ def _near_call(args, receivers, offsets, triangle_ids, own=None):
     """:func:`translucency.scatter.nearfield.near_field_correction` on some receivers with their lists."""
     g = args["geometry"]
     return nearfield.near_field_correction(
-        args["model_code"], g.points, g.triangles, g.triangle_areas, g.normals, args["w12"], args["phi"], receivers,
-        offsets, triangle_ids, args["params"], args["channel_of"], NEAR_BETA, float(np.min(args["medium"].D)),
-        tables=g.triangle_tables(), degree3_ratio=args["degree3_ratio"], shared=args["shared"], refined_out=own)
+        args["model_code"],
+        g.points,
+        g.triangles,
+        g.triangle_areas,
+        g.normals,
+        args["w12"],
+        args["phi"],
+        receivers,
+        offsets,
+        triangle_ids,
+        args["params"],
+        args["channel_of"],
+        NEAR_BETA,
+        float(np.min(args["medium"].D)),
+        tables=g.triangle_tables(),
+        degree3_ratio=args["degree3_ratio"],
+        shared=args["shared"],
+        refined_out=own,
+    )
 
 
-def sample_counts(far_args, near_args, inner, radius, method, params, channel_of, tol) -> "budget.SolveCounts":
+def sample_counts(far_args, near_args, inner, radius, method, params, channel_of, tol) -> budget.SolveCounts:
     """The budget's counts from a sample of receivers (:data:`SAMPLE_GROUPS` groups of 4 neighbours, all
     receivers when there are few): near triangles, near-field points and far-field evaluations per receiver."""
     import numba
@@ -558,22 +645,39 @@ def sample_counts(far_args, near_args, inner, radius, method, params, channel_of
             _, far_stats = far_field(*far_args, geometry.points[rcv], geometry.normals[rcv], params, channel_of, tol)
             far = far_stats["pairs_evaluated"] / rcv.size
     mean = lambda a: float(a.mean()) if a.size else 0.0  # noqa: E731
-    return budget.SolveCounts(geometry.n_vertices, int(geometry.triangles.shape[0]), int(n_r), int(lit.size),
-                              int(flux.shape[1]), numba.get_num_threads(), method, mean(near), mean(points), mean(own),
-                              far)
+    return budget.SolveCounts(
+        geometry.n_vertices,
+        int(geometry.triangles.shape[0]),
+        int(n_r),
+        int(lit.size),
+        int(flux.shape[1]),
+        numba.get_num_threads(),
+        method,
+        mean(near),
+        mean(points),
+        mean(own),
+        far,
+    )
 
 
-def over_budget_sentence(plan: "budget.SolveEstimate", n_vertices: int) -> str:
+def over_budget_sentence(plan: budget.SolveEstimate, n_vertices: int) -> str:
     """One sentence saying which budget a solve of ``n_vertices`` is over and what to change."""
     if plan.over_memory:
-        what = (f"needs about {budget.format_bytes(plan.peak_bytes)} of memory beyond what the process holds, over "
-                f"the budget of {budget.format_bytes(plan.budget_bytes)}")
+        what = (
+            f"needs about {budget.format_bytes(plan.peak_bytes)} of memory beyond what the process holds, over "
+            f"the budget of {budget.format_bytes(plan.budget_bytes)}"
+        )
         more = option("memory_limit")
     else:
-        what = f"would take about {budget.format_seconds(plan.seconds)}, over the limit of {budget.format_seconds(plan.time_limit)}"
+        what = (
+            f"would take about {budget.format_seconds(plan.seconds)}, "
+            f"over the limit of {budget.format_seconds(plan.time_limit)}"
+        )
         more = option("time_limit")
-    return (f"solving at {n_vertices:,} vertices {what}; pass {option('resolution')} with a proxy edge length in mm "
-            f"(coarser), raise {more}, or check the scan's {option('unit')}.")
+    return (
+        f"solving at {n_vertices:,} vertices {what}; pass {option('resolution')} with a proxy edge length in mm "
+        f"(coarser), raise {more}, or check the scan's {option('unit')}."
+    )
 
 
 def _near_field(args, inner, radius, plan, report):
@@ -591,7 +695,7 @@ def _near_field(args, inner, radius, plan, report):
         bounds = list(range(0, n_r, plan.block_receivers)) + [n_r]
         total_triangles = int(triangle_ids.size)
         for lo, hi in zip(bounds[:-1], bounds[1:]):
-            correction[lo:hi], points = _near_call(args, inner[lo:hi], offsets[lo:hi + 1], triangle_ids)
+            correction[lo:hi], points = _near_call(args, inner[lo:hi], offsets[lo : hi + 1], triangle_ids)
             total_points += int(points.sum())
             report("near field", hi / n_r)
         return correction, total_triangles, total_points, list_seconds

@@ -126,14 +126,18 @@ class Occluder:
         if triangles.size == 0:
             triangles = triangles.reshape(0, 3)
         if triangles.ndim != 2 or triangles.shape[1] != 3 or not np.issubdtype(triangles.dtype, np.integer):
-            raise MeshError(f"occluder: triangles must be an (m, 3) integer array, got {triangles.dtype} {triangles.shape}.")
+            raise MeshError(
+                f"occluder: triangles must be an (m, 3) integer array, got {triangles.dtype} {triangles.shape}."
+            )
         if len(triangles) and (triangles.min() < 0 or triangles.max() >= len(points)):
             raise MeshError(
                 f"occluder: triangle indices must lie in [0, {len(points) - 1}], got "
                 f"[{triangles.min()}, {triangles.max()}]."
             )
         if not (np.isfinite(relative_offset) and relative_offset > 0):
-            raise InvalidParameterError(f"occluder: relative_offset must be a positive number, got {relative_offset!r}.")
+            raise InvalidParameterError(
+                f"occluder: relative_offset must be a positive number, got {relative_offset!r}."
+            )
         self.workers = default_workers() if workers is None else int(workers)
         if self.workers < 1:
             raise InvalidParameterError(f"occluder: workers must be >= 1, got {workers!r}.")

@@ -18,7 +18,7 @@ import argparse
 import contextlib
 import sys
 import time
-from typing import Callable, Iterator
+from collections.abc import Callable, Iterator
 
 import numpy as np
 
@@ -88,8 +88,9 @@ def _plane(n: int = 24, spacing: float = 1.0):
     u, v = np.meshgrid(np.arange(n, dtype=np.float64), np.arange(n, dtype=np.float64), indexing="ij")
     points = np.column_stack([u.ravel() * spacing, v.ravel() * spacing, np.zeros(n * n)])
     corner = (np.arange(n - 1)[:, None] * n + np.arange(n - 1)[None, :]).ravel()
-    triangles = np.concatenate([np.column_stack([corner, corner + n, corner + 1]),
-                                np.column_stack([corner + 1, corner + n, corner + n + 1])]).astype(np.int64)
+    triangles = np.concatenate(
+        [np.column_stack([corner, corner + n, corner + 1]), np.column_stack([corner + 1, corner + n, corner + n + 1])]
+    ).astype(np.int64)
     normals = np.tile([0.0, 0.0, 1.0], (n * n, 1))
     return points, triangles, normals
 

@@ -4,9 +4,24 @@
 without one.
 """
 
-from .state import (INTERACTIVE_VERTICES, ViewerState, diffusive_materials, interactive_edge_length, light_angles,
-                    light_direction)
+from .state import (
+    INTERACTIVE_VERTICES,
+    ViewerState,
+    diffusive_materials,
+    interactive_edge_length,
+    light_angles,
+    light_direction,
+)
 from .widgets import EXPOSURE_STOPS, SCALE_RANGE, Viewer
 
-__all__ = ["Viewer", "ViewerState", "light_direction", "light_angles", "interactive_edge_length",
-           "diffusive_materials", "INTERACTIVE_VERTICES", "SCALE_RANGE", "EXPOSURE_STOPS"]
+__all__ = [
+    "Viewer",
+    "ViewerState",
+    "light_direction",
+    "light_angles",
+    "interactive_edge_length",
+    "diffusive_materials",
+    "INTERACTIVE_VERTICES",
+    "SCALE_RANGE",
+    "EXPOSURE_STOPS",
+]

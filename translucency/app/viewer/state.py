@@ -38,8 +38,15 @@ import numpy as np
 from ...errors import InvalidParameterError
 from ...scatter.budget import DEFAULT_TIME_LIMIT_S
 from ...scatter.names import DEFAULT_METHOD, DEFAULT_MODEL, DEFAULT_TOL
-from ..pipeline import (Scene, coarsest_proxy_edge, default_light_direction, display_colors, proxy_edge_length,
-                        resolve_medium, write_result)
+from ..pipeline import (
+    Scene,
+    coarsest_proxy_edge,
+    default_light_direction,
+    display_colors,
+    proxy_edge_length,
+    resolve_medium,
+    write_result,
+)
 from ..render import DEFAULT_UP
 from ..settings import DEFAULT_MATERIAL, ShadeSettings
 
@@ -142,17 +149,46 @@ class ViewerState:
         Solve now (default); with ``False`` call :meth:`solve` before reading :attr:`result` or colours.
     """
 
-    def __init__(self, mesh=None, material=DEFAULT_MATERIAL, lights=None, *, model=DEFAULT_MODEL, method=DEFAULT_METHOD,
-                 tol=DEFAULT_TOL, resolution="interactive", shadows=True, per_direction=False, exposure=None,
-                 memory_limit=None, time_limit=DEFAULT_TIME_LIMIT_S, view_dependent=False, specular=False,
-                 roughness=0.25, up="auto", name=None, solve=True):
+    def __init__(
+        self,
+        mesh=None,
+        material=DEFAULT_MATERIAL,
+        lights=None,
+        *,
+        model=DEFAULT_MODEL,
+        method=DEFAULT_METHOD,
+        tol=DEFAULT_TOL,
+        resolution="interactive",
+        shadows=True,
+        per_direction=False,
+        exposure=None,
+        memory_limit=None,
+        time_limit=DEFAULT_TIME_LIMIT_S,
+        view_dependent=False,
+        specular=False,
+        roughness=0.25,
+        up="auto",
+        name=None,
+        solve=True,
+    ):
         from ...io.upright import up_vector
         from ...scatter.lights import DirectionalLight, as_light_list
         from ..pipeline import load_scan
 
         # every setting checked once, before the scan is loaded ("interactive" is the viewer's own resolution)
-        settings = ShadeSettings(material, model, method, tol, "full" if resolution == "interactive" else resolution,
-                                 shadows, per_direction, exposure, memory_limit, time_limit, up)
+        settings = ShadeSettings(
+            material,
+            model,
+            method,
+            tol,
+            "full" if resolution == "interactive" else resolution,
+            shadows,
+            per_direction,
+            exposure,
+            memory_limit,
+            time_limit,
+            up,
+        )
         if mesh is None:
             mesh, _, default_name = load_scan(None)
             name = name or default_name
@@ -167,12 +203,14 @@ class ViewerState:
         self.scene = Scene(mesh, shadows=self.shadows, up=up)
         self.up_axis = self.scene.up
         self.up = tuple(float(u) for u in up_vector(self.up_axis))
-        self.lights = as_light_list(lights if lights is not None
-                                    else DirectionalLight(default_light_direction(self.up_axis), 1.0))
+        self.lights = as_light_list(
+            lights if lights is not None else DirectionalLight(default_light_direction(self.up_axis), 1.0)
+        )
         #: Index in :attr:`lights` of the directional light :meth:`set_light` steers, or None.
         self.key_light = next((i for i, light in enumerate(self.lights) if isinstance(light, DirectionalLight)), None)
-        self.azimuth, self.elevation = (light_angles(self.lights[self.key_light].direction, self.up)
-                                        if self.key_light is not None else (None, None))
+        self.azimuth, self.elevation = (
+            light_angles(self.lights[self.key_light].direction, self.up) if self.key_light is not None else (None, None)
+        )
         self.mm_per_unit = float(mesh.mm_per_unit)
         self.exposure = exposure
         self.view_dependent, self.specular, self.roughness = bool(view_dependent), bool(specular), float(roughness)
@@ -201,8 +239,10 @@ class ViewerState:
             raise InvalidParameterError("the lights hold no directional light to steer; add one (--light-dir X,Y,Z).")
         azimuth, elevation = float(azimuth), float(elevation)
         if not (np.isfinite(azimuth) and np.isfinite(elevation) and -90.0 <= elevation <= 90.0):
-            raise InvalidParameterError(f"light angles must be finite with elevation in [-90, 90] degrees, "
-                                        f"got azimuth {azimuth!r}, elevation {elevation!r}.")
+            raise InvalidParameterError(
+                f"light angles must be finite with elevation in [-90, 90] degrees, "
+                f"got azimuth {azimuth!r}, elevation {elevation!r}."
+            )
         if (azimuth, elevation) == (self.azimuth, self.elevation):
             return False
         self.azimuth, self.elevation = azimuth, elevation
@@ -296,12 +336,23 @@ class ViewerState:
         :attr:`n_solves`, and fixes the exposure from the first solve when none was given.
         """
         if resolution is None:
-            resolution = (interactive_edge_length(self.scene.mesh, self.medium) if self.resolution == "interactive"
-                          else self.resolution)
+            resolution = (
+                interactive_edge_length(self.scene.mesh, self.medium)
+                if self.resolution == "interactive"
+                else self.resolution
+            )
         start = time.perf_counter()
-        self.result = self.scene.shade(self.medium, self.lights, model=self.model, method=self.method, tol=self.tol,
-                                       resolution=resolution, exposure=self.exposure, per_direction=self.per_direction,
-                                       **self.limits)
+        self.result = self.scene.shade(
+            self.medium,
+            self.lights,
+            model=self.model,
+            method=self.method,
+            tol=self.tol,
+            resolution=resolution,
+            exposure=self.exposure,
+            per_direction=self.per_direction,
+            **self.limits,
+        )
         self.solve_seconds = time.perf_counter() - start
         self.n_solves += 1
         if self.exposure is None:
@@ -327,12 +378,16 @@ class ViewerState:
         if not (self.view_dependent or self.specular) or self.eye is None:
             return result.radiance
         w_o = view_directions(self.base_mesh.points, np.asarray(self.eye, dtype=np.float64))
-        radiance = subsurface_radiance(result.B, result.normals, w_o, self.medium.eta) if self.view_dependent \
+        radiance = (
+            subsurface_radiance(result.B, result.normals, w_o, self.medium.eta)
+            if self.view_dependent
             else result.radiance.copy()
+        )
         if self.specular:
             for vertices, direction, irradiance in self._highlights():
-                radiance[vertices] += specular_radiance(result.normals[vertices], w_o[vertices], direction, irradiance,
-                                                        self.medium.eta, self.roughness)
+                radiance[vertices] += specular_radiance(
+                    result.normals[vertices], w_o[vertices], direction, irradiance, self.medium.eta, self.roughness
+                )
         return radiance
 
     def colors(self, eye=None) -> np.ndarray:
@@ -346,14 +401,19 @@ class ViewerState:
         if result is None:  # nothing solved yet
             return
         size = float(self.scene.mesh.extent)
-        light = ("" if self.azimuth is None else
-                 f"light azimuth {self.azimuth:.0f} deg, elevation {self.elevation:.0f} deg; ")
+        light = (
+            ""
+            if self.azimuth is None
+            else f"light azimuth {self.azimuth:.0f} deg, elevation {self.elevation:.0f} deg; "
+        )
         tolerance = "exact sum" if self.method == "exact" else f"tolerance {self.tol:.3g}"
-        self.status = (f"{self.medium.name}, {self.model} dipole, {size:.3g} mm ({self.mm_per_unit:.4g} mm per unit), "
-                       f"up {self.up_axis}\n"
-                       f"{light}exposure {self.exposure:.3g}\n"
-                       f"solved in {self.solve_seconds:.2f} s: {self.method}, {tolerance}, "
-                       f"{result.stats['solver_vertices']} of {result.stats['vertices']} vertices")
+        self.status = (
+            f"{self.medium.name}, {self.model} dipole, {size:.3g} mm ({self.mm_per_unit:.4g} mm per unit), "
+            f"up {self.up_axis}\n"
+            f"{light}exposure {self.exposure:.3g}\n"
+            f"solved in {self.solve_seconds:.2f} s: {self.method}, {tolerance}, "
+            f"{result.stats['solver_vertices']} of {result.stats['vertices']} vertices"
+        )
 
     def add_note(self, line: str) -> None:
         """Append one line to :attr:`status` (it replaces an earlier note and lasts until the next change)."""
@@ -376,8 +436,12 @@ class ViewerState:
         """
         result = self.result
         colors, _ = display_colors(result.radiance, self.exposure)
-        return write_result(dataclasses.replace(result, colors=colors, exposure=self.exposure,
-                                                metadata=dict(result.metadata, exposure=self.exposure)), path)
+        return write_result(
+            dataclasses.replace(
+                result, colors=colors, exposure=self.exposure, metadata=dict(result.metadata, exposure=self.exposure)
+            ),
+            path,
+        )
 
     def _highlights(self) -> list:
         """Per directional sample: (vertices it reaches, direction, irradiance on the surface E cos V)."""
@@ -392,7 +456,12 @@ class ViewerState:
                     continue
                 cos_i = normals[part.vertices] @ part.direction
                 # phi = T12 E cos V (irradiance.py), so E cos V = phi / T12
-                inputs.append((part.vertices, part.direction,
-                               part.phi_rgb / fresnel_transmittance(cos_i, self.medium.eta)[:, None]))
+                inputs.append(
+                    (
+                        part.vertices,
+                        part.direction,
+                        part.phi_rgb / fresnel_transmittance(cos_i, self.medium.eta)[:, None],
+                    )
+                )
             self._highlight_inputs = inputs
         return self._highlight_inputs

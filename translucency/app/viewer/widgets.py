@@ -128,17 +128,53 @@ class Viewer:
     n_solves = _state_attribute("n_solves")
     status = _state_attribute("status")
 
-    def __init__(self, mesh=None, material=DEFAULT_MATERIAL, lights=None, *, model=DEFAULT_MODEL, method=DEFAULT_METHOD,
-                 tol=DEFAULT_TOL,
-                 resolution="interactive", shadows=True, per_direction=False, exposure=None, memory_limit=None,
-                 time_limit=DEFAULT_TIME_LIMIT_S, view_dependent=False, specular=False, roughness=0.25, up="auto",
-                 camera_direction=None,
-                 window_size=(1024, 768), off_screen=False, widgets=True, output=".", name=None):
+    def __init__(
+        self,
+        mesh=None,
+        material=DEFAULT_MATERIAL,
+        lights=None,
+        *,
+        model=DEFAULT_MODEL,
+        method=DEFAULT_METHOD,
+        tol=DEFAULT_TOL,
+        resolution="interactive",
+        shadows=True,
+        per_direction=False,
+        exposure=None,
+        memory_limit=None,
+        time_limit=DEFAULT_TIME_LIMIT_S,
+        view_dependent=False,
+        specular=False,
+        roughness=0.25,
+        up="auto",
+        camera_direction=None,
+        window_size=(1024, 768),
+        off_screen=False,
+        widgets=True,
+        output=".",
+        name=None,
+    ):
         # settings checked and the scan loaded first; the window before the (slower) first solve
-        self.state = ViewerState(mesh, material, lights, model=model, method=method, tol=tol, resolution=resolution,
-                                 shadows=shadows, per_direction=per_direction, exposure=exposure,
-                                 memory_limit=memory_limit, time_limit=time_limit, view_dependent=view_dependent,
-                                 specular=specular, roughness=roughness, up=up, name=name, solve=False)
+        self.state = ViewerState(
+            mesh,
+            material,
+            lights,
+            model=model,
+            method=method,
+            tol=tol,
+            resolution=resolution,
+            shadows=shadows,
+            per_direction=per_direction,
+            exposure=exposure,
+            memory_limit=memory_limit,
+            time_limit=time_limit,
+            view_dependent=view_dependent,
+            specular=specular,
+            roughness=roughness,
+            up=up,
+            name=name,
+            solve=False,
+        )
         self.output = Path(output)
         self.widgets = {}
         self._window_shown = False  # set by show() and by screenshot(); a window never shown has no picture yet
@@ -148,8 +184,9 @@ class Viewer:
         if camera_direction is None:
             camera_direction = default_camera_direction(self.up_axis)
         self.plotter.camera_position = camera_position(self.poly.center, self.poly.length, camera_direction, self.up)
-        self._status_actor = self.plotter.add_text(self.status, position="upper_left", font_size=10, color="white",
-                                                   name="status")
+        self._status_actor = self.plotter.add_text(
+            self.status, position="upper_left", font_size=10, color="white", name="status"
+        )
         self._overlays = [self._status_actor]
         if widgets:
             self._add_widgets()
@@ -296,43 +333,81 @@ class Viewer:
             choices = {self.medium.name: self.medium, **choices}
         self._materials = list(choices)
         self.widgets["material"] = plotter.add_text_slider_widget(
-            lambda name: self.set_material(choices[name]), self._materials,
-            value=self._materials.index(self.medium.name), **at(0, row_low), **style)
+            lambda name: self.set_material(choices[name]),
+            self._materials,
+            value=self._materials.index(self.medium.name),
+            **at(0, row_low),
+            **style,
+        )
         self.widgets["model"] = plotter.add_text_slider_widget(
-            self.set_model, list(MODELS), value=list(MODELS).index(self.model), **at(1, row_low), **style)
+            self.set_model, list(MODELS), value=list(MODELS).index(self.model), **at(1, row_low), **style
+        )
         for key in ("material", "model"):
             self.widgets[key].GetRepresentation().SetTitleHeight(titled["title_height"])
         base = float(self.base_mesh.mm_per_unit)
         self.widgets["scale"] = plotter.add_slider_widget(
-            self.set_scale, [base * SCALE_RANGE[0], base * SCALE_RANGE[1]], value=self.mm_per_unit,
-            title="scale (mm per unit)", fmt="%.3g", **at(2, row_low), **titled)
+            self.set_scale,
+            [base * SCALE_RANGE[0], base * SCALE_RANGE[1]],
+            value=self.mm_per_unit,
+            title="scale (mm per unit)",
+            fmt="%.3g",
+            **at(2, row_low),
+            **titled,
+        )
         if self.state.key_light is not None:
             self.widgets["azimuth"] = plotter.add_slider_widget(
-                lambda a: self.set_light(a, self.elevation), [-180.0, 180.0], value=self.azimuth,
-                title="light azimuth (deg)", fmt="%.0f", **at(0, row_high), **titled)
+                lambda a: self.set_light(a, self.elevation),
+                [-180.0, 180.0],
+                value=self.azimuth,
+                title="light azimuth (deg)",
+                fmt="%.0f",
+                **at(0, row_high),
+                **titled,
+            )
             self.widgets["elevation"] = plotter.add_slider_widget(
-                lambda e: self.set_light(self.azimuth, e), [-90.0, 90.0], value=self.elevation,
-                title="light elevation (deg)", fmt="%.0f", **at(1, row_high), **titled)
+                lambda e: self.set_light(self.azimuth, e),
+                [-90.0, 90.0],
+                value=self.elevation,
+                title="light elevation (deg)",
+                fmt="%.0f",
+                **at(1, row_high),
+                **titled,
+            )
         stops = math.log2(self.exposure)
         self.widgets["exposure"] = plotter.add_slider_widget(
-            lambda v: self.set_exposure(2.0 ** v), [stops - EXPOSURE_STOPS, stops + EXPOSURE_STOPS], value=stops,
-            title="exposure (log2)", fmt="%.1f", **at(2, row_high), **titled)
+            lambda v: self.set_exposure(2.0**v),
+            [stops - EXPOSURE_STOPS, stops + EXPOSURE_STOPS],
+            value=stops,
+            title="exposure (log2)",
+            fmt="%.1f",
+            **at(2, row_high),
+            **titled,
+        )
         width, height = plotter.window_size
         for k, (key, label, callback, value) in enumerate(
-                (("view_dependent", "T21 toward the camera", self.set_view_dependent, self.view_dependent),
-                 ("specular", "specular highlight", self.set_specular, self.specular))):
+            (
+                ("view_dependent", "T21 toward the camera", self.set_view_dependent, self.view_dependent),
+                ("specular", "specular highlight", self.set_specular, self.specular),
+            )
+        ):
             y = height - 40 - 36 * k
-            self.widgets[key] = plotter.add_checkbox_button_widget(callback, value=value, position=(width - 40, y),
-                                                                   size=26, border_size=2)
-            self._overlays.append(plotter.add_text(label, position=(width - 250, y + 4), font_size=8, color="white",
-                                                   name=f"{key}_label"))
+            self.widgets[key] = plotter.add_checkbox_button_widget(
+                callback, value=value, position=(width - 40, y), size=26, border_size=2
+            )
+            self._overlays.append(
+                plotter.add_text(label, position=(width - 250, y + 4), font_size=8, color="white", name=f"{key}_label")
+            )
 
     def _sync_widgets(self) -> None:
         """Put the widgets where the state is (after a change made from code)."""
         from ...scatter.names import MODELS
 
-        values = {"scale": self.mm_per_unit, "exposure": math.log2(self.exposure),
-                  "azimuth": self.azimuth, "elevation": self.elevation}
+        values = {
+            "scale": self.mm_per_unit,
+            "exposure": math.log2(self.exposure),
+            "azimuth": self.azimuth,
+            "elevation": self.elevation,
+        }
         if self.medium.name in getattr(self, "_materials", ()):
             values["material"] = self._materials.index(self.medium.name)
         values["model"] = list(MODELS).index(self.model)

@@ -145,8 +145,16 @@ def _face_list_property(header: PlyHeader):
 
 def _read_ply_with_plyfile(path: Path, header: PlyHeader, plyfile):
     face = _face_list_property(header)
-    errors = (plyfile.PlyParseError, ValueError, TypeError, IndexError, EOFError, UnicodeDecodeError, MemoryError,
-              OverflowError)  # OverflowError: an ascii list length beyond its count type (300 for uchar)
+    errors = (
+        plyfile.PlyParseError,
+        ValueError,
+        TypeError,
+        IndexError,
+        EOFError,
+        UnicodeDecodeError,
+        MemoryError,
+        OverflowError,
+    )  # OverflowError: an ascii list length beyond its count type (300 for uchar)
     ply = None
     if face is not None and header.format != "ascii":
         for corners in (3, 4):  # fast paths: all triangles or all quads, read as one record array

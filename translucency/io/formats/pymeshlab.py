@@ -50,7 +50,8 @@ def read_with_pymeshlab(path: Path, suffix: str):
         mesh_set.load_new_mesh(str(path))
     except pymeshlab.PyMeshLabException as exc:
         raise MeshError(
-            f"{path.name} is not a readable {PYMESHLAB_FORMATS[suffix]} file ({short_reason(exc)}); check or export the file again."
+            f"{path.name} is not a readable {PYMESHLAB_FORMATS[suffix]} file ({short_reason(exc)}); check or "
+            "export the file again."
         ) from exc
     mesh = mesh_set.current_mesh()
     points = np.array(mesh.vertex_matrix(), dtype=np.float64).reshape(-1, 3)
