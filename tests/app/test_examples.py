@@ -32,6 +32,8 @@ def test_bake_and_render(tmp_path, monkeypatch, capsys):
     assert (tmp_path / "marble.png").stat().st_size > 1000
 
 
+# models compared: test_compare.py; an example script running: the two tests above
+@pytest.mark.slow
 def test_model_differences(tmp_path, monkeypatch, capsys):
     run_example("model_differences.py", tmp_path, "--quick", monkeypatch=monkeypatch)
     assert (tmp_path / "differences.png").exists() and (tmp_path / "statistics.json").exists()

@@ -45,7 +45,8 @@ TRIANGLES = {
 
 @pytest.mark.parametrize("material_name", ["marble", "ketchup"])
 @pytest.mark.parametrize("name", TRIANGLES)
-@pytest.mark.parametrize("corner", [0, 1])
+# corner 0 of every shape (obtuse, thin) is in the quick subset; corner 1 runs with the slow tests
+@pytest.mark.parametrize("corner", [0, pytest.param(1, marks=pytest.mark.slow)])
 def test_fan_rule_integrates_the_peak_at_the_receiver(material_name, name, corner):
     """S_d of the reference formula (dipoles.py, bluest channel: the narrowest peak, D = 0.11 mm for
     marble) from every point of a 1.5-2 mm triangle to the receiver at its corner, light at 30 deg:
