@@ -20,6 +20,7 @@ value of the option before it as written: ``--light-dir -1,0.3,-0.5`` (argparse 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import re
 import sys
 
@@ -139,7 +140,7 @@ def add_solver_options(parser: argparse.ArgumentParser) -> None:
     """``--material`` and the solver's settings (help texts and defaults: :mod:`translucency.app.settings`)."""
     from .settings import HELP, ShadeSettings
 
-    default = ShadeSettings.__dataclass_fields__
+    default = {field.name: field for field in dataclasses.fields(ShadeSettings)}
     group = parser.add_argument_group("material and solver")
     group.add_argument("--material", default=default["material"].default, help=HELP["material"])
     group.add_argument(

@@ -16,9 +16,12 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import glob
+import inspect
 import sys
 import time
 from collections.abc import Callable, Iterator
+from pathlib import Path
 
 import numpy as np
 
@@ -66,21 +69,32 @@ def compile_notice(say: Callable[[], None]) -> Iterator[None]:
         event.unregister("numba:compile", listener)
 
 
+def _is_cached(dispatcher) -> bool:
+    """Whether numba's on-disk cache holds a compiled version of ``dispatcher`` for its current source.
+
+    Read from the files only (numba's public ``stats.cache_path`` and its file naming: an index
+    ``<file>.<function>-<line>.py<XY>.nbi`` beside one ``.nbc`` per compiled signature); an index older
+    than the source file is stale, as numba itself would find it.
+    """
+    function = dispatcher.py_func
+    source = Path(inspect.getsourcefile(function))
+    python = f"py{sys.version_info[0]}{sys.version_info[1]}"
+    stem = f"{source.stem}.{function.__qualname__}-{function.__code__.co_firstlineno}.{python}"
+    folder = Path(dispatcher.stats.cache_path)
+    index = folder / f"{stem}.nbi"
+    try:
+        fresh = index.stat().st_mtime >= source.stat().st_mtime
+    except OSError:
+        return False
+    return fresh and any(folder.glob(f"{glob.escape(stem)}.*.nbc"))
+
+
 def cold_kernels() -> list[str]:
     """Names of the main job's kernels that numba's cache holds no compiled version of (all of them
     when the cache cannot be read)."""
     import importlib
 
-    cold = []
-    for module, name in MAIN_JOB_KERNELS:
-        dispatcher = getattr(importlib.import_module(module), name)
-        try:
-            index = dispatcher._cache._cache_file._load_index()  # {(signature, target, flags): file}; {} when stale
-        except Exception:  # noqa: BLE001 - an unreadable cache is a cold one
-            index = {}
-        if not index:
-            cold.append(name)
-    return cold
+    return [name for module, name in MAIN_JOB_KERNELS if not _is_cached(getattr(importlib.import_module(module), name))]
 
 
 def _plane(n: int = 24, spacing: float = 1.0):
