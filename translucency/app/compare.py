@@ -235,7 +235,7 @@ def profile_cut(mesh, values, light_direction, up=DEFAULT_UP, camera_direction=D
     return position[order], samples, plane
 
 
-def _names(values, what, known=None) -> list:
+def _names(values, what) -> list:
     if isinstance(values, str):
         values = [v.strip() for v in values.split(",")]
     values = [v for v in values if v]
@@ -243,9 +243,6 @@ def _names(values, what, known=None) -> list:
         raise InvalidParameterError(f"give at least one {what}.")
     if len(set(values)) != len(values):
         raise InvalidParameterError(f"the {what}s {', '.join(values)} repeat a name; give each once.")
-    for value in values if known is not None else ():
-        if value not in known:
-            raise InvalidParameterError(f"unknown {what} {value!r}; choose from {', '.join(known)}.")
     return list(values)
 
 
@@ -255,10 +252,10 @@ def validate_choices(materials, models) -> tuple[list, list, dict]:
     Raises a :class:`~translucency.errors.TranslucencyError` with one sentence for an empty or repeated
     list, an unknown model or an unknown or non-scattering material.
     """
-    from ..scatter.names import MODELS
+    from ..scatter.names import check_model
 
     materials = _names(materials, "material")
-    models = _names(models, "model", MODELS)
+    models = [check_model(model) for model in _names(models, "model")]
     return materials, models, {name: resolve_medium(name) for name in materials}
 
 

@@ -256,15 +256,7 @@ def clean_mesh(
     )
     point_data = {name: np.asarray(values)[origin] for name, values in mesh.point_data.items() if name != "normals"}
     point_data["normals"] = normals
-    cleaned = TriangleMesh(
-        points,
-        triangles,
-        point_data,
-        source=mesh.source,
-        mm_per_unit=mesh.mm_per_unit,
-        unit_inferred=mesh.unit_inferred,
-    )
-    return cleaned, report
+    return mesh.replace(points=points, triangles=triangles, point_data=point_data), report
 
 
 def clean_arrays(

@@ -364,14 +364,7 @@ def decimate_mesh(
                 from ..geometry.measure import vertex_normals
 
                 point_data["normals"] = vertex_normals(points, triangles)
-        proxy = TriangleMesh(
-            points,
-            triangles,
-            point_data,
-            source=mesh.source,
-            mm_per_unit=mesh.mm_per_unit,
-            unit_inferred=mesh.unit_inferred,
-        )
+        proxy = mesh.replace(points=points, triangles=triangles, point_data=point_data)
         used_method = method
     mapping = map_to_proxy(mesh.points, proxy.points, proxy.triangles)
     return Decimation(
