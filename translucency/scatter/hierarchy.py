@@ -23,6 +23,7 @@ radius     bounding-sphere radius of a node (about its box centre)    mm
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numba
 import numpy as np
@@ -164,27 +165,48 @@ def aggregate(order, start, end, left, right, points, normals, w12, flux):
     return node_flux, weight, out_pos, unit[0], unit[1]
 
 
-def source_table(points, normals, w12, flux, node_flux, node_pos, node_nrm, node_dir):
-    """Sources and aggregated clusters as one table for :func:`~translucency.scatter.kernels.indexed_sum`:
-    columns ``0..n-1`` are the sources, ``n + k`` the aggregated source of node ``k``.
+@dataclass(frozen=True)
+class AggregatedSources:
+    """The sources of one solve and the aggregated source of every node of a :class:`SourceTree`, as
+    one table for :func:`~translucency.scatter.kernels.indexed_sum` (built once per solve by
+    :func:`aggregated_sources`, used for every block of receivers).
 
-    Returns ``table (9, n + nodes)`` (position mm, unit normal, unit w12) and ``weights (C, n + nodes)`` (flux).
+    Attributes
+    ----------
+    table : (9, n + nodes) float64
+        Columns ``0..n-1`` the sources, ``n + k`` the aggregated source of node ``k``: position (mm),
+        unit normal, unit refracted direction.
+    weights : (C, n + nodes) float64
+        Flux per channel of each column.
+    node_weight : (nodes,) float64
+        Total flux over channels of each node (0: nothing to evaluate under it).
+    lit : (n,) bool
+        Sources with any flux.
     """
+
+    table: np.ndarray
+    weights: np.ndarray
+    node_weight: np.ndarray
+    lit: np.ndarray
+
+
+def aggregated_sources(tree: SourceTree, points, normals, w12, flux) -> AggregatedSources:
+    """The sources (positions mm, unit normals, unit ``w12``, ``flux (n, C)``) and their aggregates at
+    every node of ``tree`` (:func:`aggregate`), in the table :func:`tree_sum` walks."""
+    node_flux, node_weight, node_pos, node_nrm, node_dir = aggregate(
+        tree.order, tree.start, tree.end, tree.left, tree.right, points, normals, w12, flux
+    )
     table = np.ascontiguousarray(
         np.concatenate([np.hstack([points, normals, w12]), np.hstack([node_pos, node_nrm, node_dir])]).T
     )
     weights = np.ascontiguousarray(np.concatenate([flux, node_flux]).T)
-    return table, weights
+    return AggregatedSources(table, weights, node_weight, flux.sum(axis=1) > 0)
 
 
 def tree_sum(
     model,
     tree,
-    nodes,
-    points,
-    normals,
-    w12,
-    flux,
+    sources: AggregatedSources,
     rcv_points,
     rcv_normals,
     params,
@@ -197,12 +219,13 @@ def tree_sum(
     """Far-field sum with the hierarchy: ``B[o, c]``, sources summed one by one and clusters used, per receiver.
 
     A node small seen from the receiver (radius < ``theta`` x distance, receiver outside it) is one
-    aggregated source; otherwise its children are opened, down to the leaves' sources. A node wholly
-    farther than ``reach`` (mm; the cutoff radius of the tolerance) is skipped. The tree is walked once
-    per group of ``group`` consecutive receivers (the solver orders them along a space-filling curve)
-    with the tests made for the group's bounding sphere -- for every receiver of the group they hold
-    with at least the same margin -- and the group's list of sources and clusters is evaluated at each
-    of its receivers with :func:`~translucency.scatter.kernels.indexed_sum`, ``block`` receivers at a time.
+    aggregated source (``sources``, from :func:`aggregated_sources`); otherwise its children are opened,
+    down to the leaves' sources. A node wholly farther than ``reach`` (mm; the cutoff radius of the
+    tolerance) is skipped. The tree is walked once per group of ``group`` consecutive receivers (the
+    solver orders them along a space-filling curve) with the tests made for the group's bounding
+    sphere -- for every receiver of the group they hold with at least the same margin -- and the group's
+    list of sources and clusters is evaluated at each of its receivers with
+    :func:`~translucency.scatter.kernels.indexed_sum`, ``block`` receivers at a time.
 
     Returns
     -------
@@ -212,12 +235,10 @@ def tree_sum(
     """
     from .kernels import channel_lanes, indexed_sum
 
-    node_flux, node_weight, node_pos, node_nrm, node_dir = nodes
-    table, weights = source_table(points, normals, w12, flux, node_flux, node_pos, node_nrm, node_dir)
-    lanes = channel_lanes(params, channel_of, flux.shape[1])
-    lit = flux.sum(axis=1) > 0
+    n_channels = sources.weights.shape[0]
+    lanes = channel_lanes(params, channel_of, n_channels)
     n_rcv = rcv_points.shape[0]
-    B = np.zeros((n_rcv, flux.shape[1]))
+    B = np.zeros((n_rcv, n_channels))
     direct = np.zeros(n_rcv, dtype=np.int64)
     clustered = np.zeros(n_rcv, dtype=np.int64)
     group = max(1, int(group))
@@ -239,8 +260,8 @@ def tree_sum(
             tree.right,
             tree.centre,
             tree.radius,
-            node_weight,
-            lit,
+            sources.node_weight,
+            sources.lit,
             centre,
             spread,
             theta,
@@ -257,7 +278,16 @@ def tree_sum(
         of = np.arange(p.shape[0]) // group  # each receiver's group
         direct[part], clustered[part] = g_direct[of], g_clustered[of]
         B[part] = indexed_sum(
-            model, p, nrm, table, weights, g_starts[of], g_counts[of], columns, np.ones(columns.size), lanes
+            model,
+            p,
+            nrm,
+            sources.table,
+            sources.weights,
+            g_starts[of],
+            g_counts[of],
+            columns,
+            np.ones(columns.size),
+            lanes,
         )
     return B, direct, clustered
 

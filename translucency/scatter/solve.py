@@ -219,100 +219,90 @@ def _as_array(value, dtype, shape, name):
     return array
 
 
-def _all_pairs(model_code, geometry, sources, w12, flux, rcv_points, rcv_normals, params, channel_of):
-    """Every (source, receiver) pair."""
-    return kernels.vertex_sum(
-        model_code,
-        geometry.points[sources],
-        geometry.normals[sources],
-        w12[sources],
-        flux[sources],
-        rcv_points,
-        rcv_normals,
-        params,
-        channel_of,
-    )
-
-
-def _far_field_exact(model, geometry, medium, lit, w12, flux, rcv_points, rcv_normals, params, channel_of, tol):
+def _exact_far_field(model, geometry, medium, lit, w12, flux, params, channel_of, tol):
     """Method ``exact``: every (lit source, receiver) pair."""
-    B, clamped = _all_pairs(
-        kernels.MODELS[model], geometry, lit, w12, flux, rcv_points, rcv_normals, params, channel_of
-    )
-    pairs = int(lit.size) * int(rcv_points.shape[0])
-    return B, {"pairs_evaluated": pairs, "pairs_skipped": 0, "clamped_values": int(clamped.sum())}
+    model_code = kernels.MODELS[model]
+    sources = (geometry.points[lit], geometry.normals[lit], w12[lit], flux[lit])
+
+    def evaluate(rcv_points, rcv_normals):
+        B, clamped = kernels.vertex_sum(model_code, *sources, rcv_points, rcv_normals, params, channel_of)
+        pairs = int(lit.size) * int(rcv_points.shape[0])
+        return B, {"pairs_evaluated": pairs, "pairs_skipped": 0, "clamped_values": int(clamped.sum())}
+
+    return evaluate
 
 
-def _far_field_cutoff(model, geometry, medium, lit, w12, flux, rcv_points, rcv_normals, params, channel_of, tol):
+def _cutoff_far_field(model, geometry, medium, lit, w12, flux, params, channel_of, tol):
     """Method ``cutoff``: pairs within the radius of :func:`translucency.scatter.cutoff.cutoff_radius`."""
     radius = cutoff.cutoff_radius(medium, tol, model)
-    model_code = kernels.MODELS[model]
     diagonal = float(np.linalg.norm(np.ptp(geometry.points, axis=0)))
     if not radius < diagonal:  # the radius covers the object: every pair
-        B, stats = _far_field_exact(
-            model, geometry, medium, lit, w12, flux, rcv_points, rcv_normals, params, channel_of, tol
-        )
-        return B, {**stats, "cutoff_radius_mm": radius}
+        every_pair = _exact_far_field(model, geometry, medium, lit, w12, flux, params, channel_of, tol)
+
+        def evaluate(rcv_points, rcv_normals):
+            B, stats = every_pair(rcv_points, rcv_normals)
+            return B, {**stats, "cutoff_radius_mm": radius}
+
+        return evaluate
+    model_code = kernels.MODELS[model]
     grid = geometry.source_grid(lit, radius)
-    B, evaluated = cutoff.cutoff_sum(
-        model_code,
-        grid.order,
-        grid.start,
-        grid.origin,
-        grid.cell,
-        grid.dims,
-        radius,
-        geometry.points[lit],
-        geometry.normals[lit],
-        w12[lit],
-        flux[lit],
-        rcv_points,
-        rcv_normals,
-        params,
-        channel_of,
-    )
-    pairs = int(lit.size) * int(rcv_points.shape[0])
-    return B, {
-        "cutoff_radius_mm": radius,
-        "pairs_evaluated": int(evaluated.sum()),
-        "pairs_skipped": pairs - int(evaluated.sum()),
-    }
+    sources = (geometry.points[lit], geometry.normals[lit], w12[lit], flux[lit])
+
+    def evaluate(rcv_points, rcv_normals):
+        B, evaluated = cutoff.cutoff_sum(
+            model_code,
+            grid.order,
+            grid.start,
+            grid.origin,
+            grid.cell,
+            grid.dims,
+            radius,
+            *sources,
+            rcv_points,
+            rcv_normals,
+            params,
+            channel_of,
+        )
+        pairs = int(lit.size) * int(rcv_points.shape[0])
+        return B, {
+            "cutoff_radius_mm": radius,
+            "pairs_evaluated": int(evaluated.sum()),
+            "pairs_skipped": pairs - int(evaluated.sum()),
+        }
+
+    return evaluate
 
 
-def _far_field_tree(model, geometry, medium, lit, w12, flux, rcv_points, rcv_normals, params, channel_of, tol):
-    """Method ``tree``: clusters small seen from the receiver replaced by their aggregated source."""
+def _tree_far_field(model, geometry, medium, lit, w12, flux, params, channel_of, tol):
+    """Method ``tree``: clusters small seen from the receiver replaced by their aggregated source (the
+    aggregates are built once here, for every block of receivers)."""
     model_code = kernels.MODELS[model]
     tree = geometry.source_tree()
     theta = hierarchy.THETA_PER_SQRT_TOL * float(np.sqrt(tol))
-    nodes = hierarchy.aggregate(
-        tree.order, tree.start, tree.end, tree.left, tree.right, geometry.points, geometry.normals, w12, flux
-    )
+    sources = hierarchy.aggregated_sources(tree, geometry.points, geometry.normals, w12, flux)
     reach = cutoff.cutoff_radius(medium, tol, model)
-    B, direct, clustered = hierarchy.tree_sum(
-        model_code,
-        tree,
-        nodes,
-        geometry.points,
-        geometry.normals,
-        w12,
-        flux,
-        rcv_points,
-        rcv_normals,
-        params,
-        channel_of,
-        theta,
-        reach=reach,
-    )
-    pairs = int(lit.size) * int(rcv_points.shape[0])
-    return B, {
-        "theta": theta,
-        "cutoff_radius_mm": reach,
-        "tree_nodes": tree.n_nodes,
-        "pairs_evaluated": int(direct.sum() + clustered.sum()),
-        "pairs_direct": int(direct.sum()),
-        "cluster_evaluations": int(clustered.sum()),
-        "pairs_skipped": pairs - int(direct.sum()),
-    }
+
+    def evaluate(rcv_points, rcv_normals):
+        B, direct, clustered = hierarchy.tree_sum(
+            model_code, tree, sources, rcv_points, rcv_normals, params, channel_of, theta, reach=reach
+        )
+        pairs = int(lit.size) * int(rcv_points.shape[0])
+        return B, {
+            "theta": theta,
+            "cutoff_radius_mm": reach,
+            "tree_nodes": tree.n_nodes,
+            "pairs_evaluated": int(direct.sum() + clustered.sum()),
+            "pairs_direct": int(direct.sum()),
+            "cluster_evaluations": int(clustered.sum()),
+            "pairs_skipped": pairs - int(direct.sum()),
+        }
+
+    return evaluate
+
+
+#: Each method prepares once per solve what does not depend on the receivers and returns a function
+#: ``(receiver points mm, receiver normals) -> (B, statistics)`` called on every block of receivers.
+_FAR_FIELD = {"exact": _exact_far_field, "cutoff": _cutoff_far_field, "tree": _tree_far_field}
 
 
 def unique_channels(medium: Medium):
@@ -404,14 +394,14 @@ def solve(
     timings["setup"] = time.perf_counter() - start
 
     start = time.perf_counter()
-    plan, near_args, radius = _plan(work, method, tol, memory_limit, time_limit, stats)
+    plan, near_args, radius, far_field = _plan(work, method, tol, memory_limit, time_limit, stats)
     timings["budget"] = time.perf_counter() - start
     if not plan.fits:
         raise BudgetError(over_budget_sentence(plan, geometry.n_vertices), plan)
 
     report("far field", 0.0)
     start = time.perf_counter()
-    B, far_stats = _far_field(work, method, tol, report)
+    B, far_stats = _far_field(work, far_field, method, tol, report)
     stats.update(far_stats)
     timings["far_field"] = time.perf_counter() - start
     report("far field", 1.0)
@@ -473,10 +463,11 @@ class _Work:
     params: np.ndarray
     channel_of: np.ndarray
 
-    @property
-    def far_args(self) -> tuple:
-        """The leading arguments of the far-field methods: ``(model, geometry, medium, lit, w12, flux)``."""
-        return (self.model, self.geometry, self.medium, self.lit, self.w12, self.flux)
+    def far_field(self, method: str, tol: float):
+        """The far-field ``method`` prepared for these sources (see :data:`_FAR_FIELD`)."""
+        return _FAR_FIELD[method](
+            self.model, self.geometry, self.medium, self.lit, self.w12, self.flux, self.params, self.channel_of, tol
+        )
 
 
 def _ordered_work(geometry, phi, w12, medium, model, receivers, stats) -> _Work:
@@ -503,7 +494,8 @@ def _ordered_work(geometry, phi, w12, medium, model, receivers, stats) -> _Work:
 
 def _plan(work: _Work, method, tol, memory_limit, time_limit, stats):
     """The memory and time plan (:func:`translucency.scatter.budget.estimate`) from a sample of receivers:
-    ``(plan, near_args, near radius in mm)``; the plan goes into ``stats["budget"]``."""
+    ``(plan, near_args, near radius in mm, the prepared far field or None)``; the plan goes into
+    ``stats["budget"]``."""
     geometry = work.geometry
     radius = near_radius(geometry, work.medium)
     shared = nearfield.source_point_table(
@@ -526,7 +518,8 @@ def _plan(work: _Work, method, tol, memory_limit, time_limit, stats):
         degree3_ratio=0.0 if method == "exact" else NEAR_DEGREE3_RATIO,
         shared=shared,
     )
-    counts = sample_counts(work.far_args, near_args, work.inner, radius, method, work.params, work.channel_of, tol)
+    far_field = work.far_field(method, tol) if work.lit.size and method != "exact" else None
+    counts = sample_counts(work, far_field, near_args, radius, method)
     available = budget.available_memory()
     plan = budget.estimate(
         counts,
@@ -535,25 +528,23 @@ def _plan(work: _Work, method, tol, memory_limit, time_limit, stats):
         keep_lists=None if memory_limit is not None or available is not None else True,
     )
     stats["budget"] = {**plan.as_dict(), "counts": dataclasses.asdict(counts)}
-    return plan, near_args, radius
+    return plan, near_args, radius, far_field
 
 
-def _far_field(work: _Work, method, tol, report):
-    """The far field of every receiver by ``method``, in chunks of :data:`FAR_CHUNK` multiples (with
-    progress): ``(B in the ordered receivers' rows, statistics)``."""
+def _far_field(work: _Work, far_field, method, tol, report):
+    """The far field of every receiver by ``method`` (``far_field``: already prepared, or None), in chunks
+    of :data:`FAR_CHUNK` multiples (with progress): ``(B in the ordered receivers' rows, statistics)``."""
     inner, n_channels = work.inner, work.medium.n_channels
     if work.lit.size == 0:
         return np.zeros((inner.size, n_channels)), {"pairs_evaluated": 0, "pairs_skipped": 0}
+    far_field = far_field or work.far_field(method, tol)
     rcv_points = work.geometry.points[inner]
     rcv_normals = work.geometry.normals[inner]
-    far_field = {"exact": _far_field_exact, "cutoff": _far_field_cutoff, "tree": _far_field_tree}[method]
     B, far_stats = np.zeros((inner.size, n_channels)), {}
     step = FAR_CHUNK * max(1, -(-inner.size // (budget.PROGRESS_STEPS * FAR_CHUNK)))
     for first in range(0, inner.size, step):
         part = slice(first, min(inner.size, first + step))
-        B[part], part_stats = far_field(
-            *work.far_args, rcv_points[part], rcv_normals[part], work.params, work.channel_of, tol
-        )
+        B[part], part_stats = far_field(rcv_points[part], rcv_normals[part])
         far_stats = _merge_stats(far_stats, part_stats)
         report("far field", part.stop / inner.size)
     return B, far_stats
@@ -613,12 +604,13 @@ def _near_call(args, receivers, offsets, triangle_ids, own=None):
     )
 
 
-def sample_counts(far_args, near_args, inner, radius, method, params, channel_of, tol) -> budget.SolveCounts:
+def sample_counts(work: _Work, far_field, near_args, radius, method) -> budget.SolveCounts:
     """The budget's counts from a sample of receivers (:data:`SAMPLE_GROUPS` groups of 4 neighbours, all
-    receivers when there are few): near triangles, near-field points and far-field evaluations per receiver."""
+    receivers when there are few): near triangles, near-field points and far-field evaluations per receiver
+    (by the prepared ``far_field`` of ``cutoff`` and ``tree``; ``exact`` evaluates every lit source)."""
     import numba
 
-    model, geometry, medium, lit, w12, flux = far_args
+    geometry, lit, inner = work.geometry, work.lit, work.inner
     n_r = inner.size
     groups = -(-n_r // 4)
     if groups <= SAMPLE_GROUPS:
@@ -641,8 +633,7 @@ def sample_counts(far_args, near_args, inner, radius, method, params, channel_of
         if method == "exact":
             far = float(lit.size)
         else:
-            far_field = {"cutoff": _far_field_cutoff, "tree": _far_field_tree}[method]
-            _, far_stats = far_field(*far_args, geometry.points[rcv], geometry.normals[rcv], params, channel_of, tol)
+            _, far_stats = far_field(geometry.points[rcv], geometry.normals[rcv])
             far = far_stats["pairs_evaluated"] / rcv.size
     mean = lambda a: float(a.mean()) if a.size else 0.0  # noqa: E731
     return budget.SolveCounts(
@@ -650,7 +641,7 @@ def sample_counts(far_args, near_args, inner, radius, method, params, channel_of
         int(geometry.triangles.shape[0]),
         int(n_r),
         int(lit.size),
-        int(flux.shape[1]),
+        int(work.flux.shape[1]),
         numba.get_num_threads(),
         method,
         mean(near),
