@@ -47,7 +47,8 @@ _LAZY = {
     "write_result": "translucency.app.pipeline",
     # many scans to baked PLY files
     "bake": "translucency.app.bake",
-    "display_colors": "translucency.app.pipeline",
+    "display_colors": "translucency.app.display",
+    "luminance": "translucency.app.display",
     # showing and comparing
     "Viewer": "translucency.app.viewer",
     "compare": "translucency.app.compare",

@@ -23,7 +23,7 @@ the lights reach directly: front-facing and not shadowed, i.e. with incident flu
 linear radiance toward the normal ``T21(eta, 1) B`` in W/(m² sr) for irradiance in W/m².
 
 Common exposure: unless one is given, it maps the 99.5th percentile of the brightest channel over the
-vertices of *all* cells together to 0.9 (:func:`~translucency.app.pipeline.display_colors`), so the
+vertices of *all* cells together to 0.9 (:func:`~translucency.app.display.display_colors`), so the
 brightest cell looks as a single render would and darker materials look darker.
 
 Profile: the plane through the centre of the mesh's bounding box that contains the light direction (of
@@ -53,7 +53,8 @@ from ..io.polydata import to_pyvista
 from ..io.units import unit_metadata
 from ..scatter.budget import DEFAULT_TIME_LIMIT_S
 from ..scatter.names import DEFAULT_METHOD, DEFAULT_MODEL, DEFAULT_TOL
-from .pipeline import Scene, display_colors, resolve_medium
+from .display import display_colors
+from .pipeline import Scene, resolve_medium
 from .render import (
     DEFAULT_CAMERA_DIRECTION,
     DEFAULT_UP,

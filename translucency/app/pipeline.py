@@ -20,6 +20,7 @@ from ..geometry.measure import mean_edge_length
 from ..io.units import unit_metadata
 from ..scatter.budget import DEFAULT_TIME_LIMIT_S
 from ..scatter.names import DEFAULT_METHOD, DEFAULT_MODEL, DEFAULT_TOL
+from .display import display_colors, srgb_encode  # noqa: F401  (re-exported)
 from .settings import DEFAULT_MATERIAL, ShadeSettings, parse_resolution, resolve_medium  # noqa: F401  (resolve_medium re-exported)
 
 #: The embedded default scan: the watertight Stanford bunny inside the pymeshlab wheel, stored
@@ -100,30 +101,6 @@ def load_default_scan():
     points, _, _ = read_mesh_arrays(path)
     width = float(np.max(points.max(axis=0) - points.min(axis=0)))
     return load_mesh(path, unit=DEFAULT_SCAN_WIDTH_MM / width)
-
-
-def srgb_encode(linear):
-    """sRGB transfer function (IEC 61966-2-1) of linear values clipped to [0, 1]."""
-    c = np.clip(np.asarray(linear, dtype=np.float64), 0.0, 1.0)
-    return np.where(c <= 0.0031308, 12.92 * c, 1.055 * np.power(c, 1.0 / 2.4) - 0.055)
-
-
-def display_colors(radiance, exposure: float | None = None):
-    """Linear RGB radiance to 8-bit sRGB colours: ``srgb(exposure * L)``.
-
-    With ``exposure=None`` the exposure maps the 99.5th percentile of the brightest channel to 0.9.
-
-    Returns
-    -------
-    colors : (n, 3) uint8
-    exposure : float
-    """
-    radiance = np.asarray(radiance, dtype=np.float64)
-    if exposure is None:
-        level = float(np.percentile(radiance.max(axis=1), 99.5)) if radiance.size else 0.0
-        exposure = 0.9 / level if level > 0 else 1.0
-    colors = np.round(srgb_encode(radiance * exposure) * 255.0).astype(np.uint8)
-    return colors, float(exposure)
 
 
 @dataclass

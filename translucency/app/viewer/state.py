@@ -38,11 +38,11 @@ import numpy as np
 from ...errors import InvalidParameterError
 from ...scatter.budget import DEFAULT_TIME_LIMIT_S
 from ...scatter.names import DEFAULT_METHOD, DEFAULT_MODEL, DEFAULT_TOL
+from ..display import display_colors
 from ..pipeline import (
     Scene,
     coarsest_proxy_edge,
     default_light_direction,
-    display_colors,
     proxy_edge_length,
     resolve_medium,
     write_result,
