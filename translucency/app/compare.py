@@ -54,7 +54,7 @@ from ..io.units import unit_metadata
 from ..scatter.budget import DEFAULT_TIME_LIMIT_S
 from ..scatter.names import DEFAULT_METHOD, DEFAULT_MODEL, DEFAULT_TOL
 from .display import display_colors
-from .pipeline import Scene, resolve_medium
+from .pipeline import Scene, mesh_for_shading, resolve_medium
 from .render import (
     DEFAULT_CAMERA_DIRECTION,
     DEFAULT_UP,
@@ -279,13 +279,15 @@ def compare(
     up="auto",
     cell_size=(480, 480),
     progress=None,
+    unit=None,
 ) -> Comparison:
     """Render and measure one scan in several materials and models (module docstring for every output).
 
     Parameters
     ----------
-    mesh : TriangleMesh, optional
-        A cleaned mesh in mm (default: the embedded default scan, cleaned).
+    mesh : TriangleMesh or pyvista.PolyData, optional
+        A cleaned mesh in mm, or a PolyData in ``unit`` (converted and repaired,
+        :func:`~translucency.app.pipeline.mesh_for_shading`); default: the embedded default scan, cleaned.
     materials : sequence of str, or str "a,b,c"
         Catalogue names (the grid's columns).
     models : sequence of str, or str
@@ -310,6 +312,8 @@ def compare(
         Width and height of one grid cell, pixels; ``grid.png`` is ``(columns * width, rows * height)``.
     progress : callable, optional
         Called with a line of text after each solve.
+    unit : {"mm", "cm", "m", "in"} or float, optional
+        A PolyData's length unit (None: its ``field_data["length_unit"]``, else inferred from its size).
 
     Returns
     -------
@@ -335,6 +339,8 @@ def compare(
         from .pipeline import load_scan
 
         mesh, _, _ = load_scan(None)
+    else:
+        mesh = mesh_for_shading(mesh, unit, entry="compare")
     scene = Scene(mesh, shadows=settings.shadows, up=settings.up)
     up_axis = scene.up
     up = tuple(up_vector(up_axis))

@@ -135,21 +135,25 @@ class Scene:
 
     Parameters
     ----------
-    mesh : TriangleMesh
-        A cleaned mesh in mm with outward orientation.
+    mesh : TriangleMesh or pyvista.PolyData
+        A cleaned mesh in mm with outward orientation, or a PolyData (any PyVista dataset) in ``unit``,
+        converted and repaired (:func:`mesh_for_shading`); :attr:`mesh` is the mesh shaded.
     shadows : bool
         Cast Embree shadow rays (off: every front-facing vertex is lit).
     up : str
         The scan's up axis, ``"x"`` ... ``"-z"``, or ``"auto"`` (inferred from the mesh, see
         :mod:`translucency.io.upright`); it places the default light (above and in front) and is
         recorded in the metadata. The solver does not use it.
+    unit : {"mm", "cm", "m", "in"} or float, optional
+        A PolyData's length unit (None: its ``field_data["length_unit"]``, else inferred from its size);
+        refused with a TriangleMesh, which is in mm.
     """
 
-    def __init__(self, mesh, *, shadows: bool = True, up: str = "auto"):
+    def __init__(self, mesh, *, shadows: bool = True, up: str = "auto", unit=None):
         from ..io.upright import parse_up
         from ..scatter.visibility import VisibilityCache
 
-        self.mesh = mesh
+        self.mesh = mesh_for_shading(mesh, unit, entry="Scene")
         self.shadows = bool(shadows)
         self.up_requested = parse_up(up)
         self._up = None if self.up_requested == "auto" else self.up_requested
@@ -441,6 +445,7 @@ def shade(
     exposure=None,
     per_direction=False,
     up="auto",
+    unit=None,
     progress=None,
     memory_limit=None,
     time_limit=DEFAULT_TIME_LIMIT_S,
@@ -452,8 +457,9 @@ def shade(
 
     Parameters
     ----------
-    mesh : TriangleMesh
-        A cleaned mesh in mm with outward orientation.
+    mesh : TriangleMesh or pyvista.PolyData
+        A cleaned mesh in mm with outward orientation, or a PolyData (any PyVista dataset) in ``unit``,
+        converted and repaired first (:func:`mesh_for_shading`; ``result.mesh`` is the mesh shaded).
     material : str or Material or Medium
         Catalogue name, catalogue entry or a :class:`~translucency.scatter.medium.Medium` (1/mm).
     lights : light or sequence of lights, optional
@@ -478,6 +484,8 @@ def shade(
     up : str
         The scan's up axis (``"x"`` ... ``"-z"``, or ``"auto"``: inferred, see :mod:`translucency.io.upright`);
         only the default light and the metadata depend on it.
+    unit : {"mm", "cm", "m", "in"} or float, optional
+        A PolyData's length unit (None: its ``field_data["length_unit"]``, else inferred from its size).
     progress : callable, optional
         ``progress(stage, fraction)``, many times per stage during the solve.
     memory_limit : float, optional
@@ -491,6 +499,7 @@ def shade(
     warn : callable, optional
         ``warn(line)`` receives that line (default: a :class:`~translucency.errors.TranslucencyWarning`).
     """
+    mesh = mesh_for_shading(mesh, unit, entry="shade")
     return Scene(mesh, shadows=shadows, up=up).shade(
         material,
         lights,
@@ -535,6 +544,22 @@ def load_scan(path, unit=None, *, warn=None, note=None):
     return mesh, report, name
 
 
+def mesh_for_shading(mesh, unit=None, *, entry: str, stacklevel: int = 3):
+    """The mesh an entry point shades: a :class:`~translucency.geometry.mesh.TriangleMesh` as it is (already
+    cleaned, in mm), a ``pyvista.PolyData`` (or other PyVista dataset) converted in ``unit``
+    (:func:`~translucency.io.polydata.as_triangle_mesh`: None reads its ``field_data["length_unit"]`` or
+    infers the unit from the size) and repaired with :func:`~translucency.io.clean.clean_mesh`, as a scan
+    file would be. ``stacklevel`` as in :func:`~translucency.io.polydata.as_triangle_mesh`."""
+    from ..geometry.mesh import TriangleMesh
+    from ..io.clean import clean_mesh
+    from ..io.polydata import as_triangle_mesh
+
+    if isinstance(mesh, TriangleMesh):
+        return as_triangle_mesh(mesh, unit, entry=entry)
+    mesh = as_triangle_mesh(mesh, unit, entry=entry, stacklevel=stacklevel + 1)
+    return clean_mesh(mesh)[0]
+
+
 def scene_for(mesh, settings: ShadeSettings) -> Scene:
     """A :class:`Scene` of ``mesh`` with the settings' shadows and up axis."""
     return Scene(mesh, shadows=settings.shadows, up=settings.up)
@@ -548,9 +573,10 @@ def shade_scan(
 
     Parameters
     ----------
-    scan : path-like, TriangleMesh or None
+    scan : path-like, TriangleMesh, pyvista.PolyData or None
         A scan file in ``unit`` (None: inferred from its size), loaded and cleaned by :func:`load_scan`;
-        None for the embedded default scan; or a mesh already cleaned, in mm, used as it is.
+        None for the embedded default scan; a PolyData in ``unit``, converted and cleaned
+        (:func:`mesh_for_shading`); or a TriangleMesh already cleaned, in mm, used as it is.
     settings : ShadeSettings, optional
         Every setting of the solve (default: :class:`~translucency.app.settings.ShadeSettings`'s defaults).
     lights : light or sequence of lights, optional
@@ -565,9 +591,13 @@ def shade_scan(
         ``result.mesh`` is the cleaned mesh in mm.
     """
     from ..geometry.mesh import TriangleMesh
+    from ..io.polydata import is_pyvista_mesh
 
     settings = ShadeSettings() if settings is None else settings
-    mesh = scan if isinstance(scan, TriangleMesh) else load_scan(scan, unit, warn=warn, note=note)[0]
+    if isinstance(scan, TriangleMesh) or is_pyvista_mesh(scan):
+        mesh = mesh_for_shading(scan, unit, entry="shade_scan")
+    else:
+        mesh = load_scan(scan, unit, warn=warn, note=note)[0]
     return scene_for(mesh, settings).shade_with(settings, lights, progress=progress, warn=warn)
 
 

@@ -50,6 +50,7 @@ from ..geometry.mesh import TriangleMesh, validate_mesh_arrays
 from ..geometry.orientation import coherent_orientation, flip_triangles, outward_flips
 from ..geometry.topology import count_non_manifold_vertices, face_components, unique_edges
 from .defects import ZERO_AREA_RATIO, MeshDefects, find_defects, triangle_keys, zero_area_mask
+from .polydata import as_triangle_mesh
 
 __all__ = ["CleanReport", "clean_mesh", "clean_arrays", "smooth_vertex_normals"]
 
@@ -190,8 +191,9 @@ class CleanReport:
 
 
 def clean_mesh(
-    mesh: TriangleMesh,
+    mesh,
     *,
+    unit=None,
     merge_duplicate_vertices: bool = True,
     remove_degenerate_faces: bool = True,
     repair_non_manifold: bool = True,
@@ -204,8 +206,11 @@ def clean_mesh(
 
     Parameters
     ----------
-    mesh : TriangleMesh
-        The scan (points in mm); it is not modified.
+    mesh : TriangleMesh or pyvista.PolyData
+        The scan (a TriangleMesh: points in mm; a PolyData: in ``unit``, see
+        :func:`~translucency.io.polydata.as_triangle_mesh`); it is not modified.
+    unit : {"mm", "cm", "m", "in"} or float, optional
+        A PolyData's length unit (None: its ``field_data["length_unit"]``, else inferred from the size).
     merge_duplicate_vertices : bool, default True
         Merge vertices at exactly the same position.
     remove_degenerate_faces : bool, default True
@@ -239,10 +244,7 @@ def clean_mesh(
     InvalidParameterError
         For out-of-range options.
     """
-    if not isinstance(mesh, TriangleMesh):
-        raise InvalidParameterError(
-            f"clean_mesh needs a TriangleMesh, not {type(mesh).__name__}; load the file with load_mesh first."
-        )
+    mesh = as_triangle_mesh(mesh, unit, entry="clean_mesh")
     points, triangles, origin, normals, report = clean_arrays(
         mesh.points,
         mesh.triangles,

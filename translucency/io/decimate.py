@@ -43,6 +43,7 @@ from ..errors import InvalidParameterError, MeshError
 from ..geometry.measure import triangle_areas
 from ..geometry.mesh import TriangleMesh, validate_mesh_arrays
 from ..geometry.proximity import closest_points_on_triangles
+from .polydata import as_triangle_mesh
 
 __all__ = [
     "METHODS",
@@ -286,8 +287,9 @@ class Decimation:
 
 
 def decimate_mesh(
-    mesh: TriangleMesh,
+    mesh,
     *,
+    unit=None,
     target_faces: int | None = None,
     target_edge_length: float | None = None,
     method: str = "fast-simplification",
@@ -297,8 +299,11 @@ def decimate_mesh(
 
     Parameters
     ----------
-    mesh : TriangleMesh
-        The full-resolution mesh (points in mm); not modified.
+    mesh : TriangleMesh or pyvista.PolyData
+        The full-resolution mesh (a TriangleMesh: points in mm; a PolyData: in ``unit``, see
+        :func:`~translucency.io.polydata.as_triangle_mesh`); not modified.
+    unit : {"mm", "cm", "m", "in"} or float, optional
+        A PolyData's length unit (None: its ``field_data["length_unit"]``, else inferred from the size).
     target_faces : int, optional
         Triangles wanted in the proxy.
     target_edge_length : float, optional
@@ -322,10 +327,7 @@ def decimate_mesh(
         triangles.
     """
     started = time.perf_counter()
-    if not isinstance(mesh, TriangleMesh):
-        raise InvalidParameterError(
-            f"decimate_mesh needs a TriangleMesh, not {type(mesh).__name__}; load the file with load_mesh first."
-        )
+    mesh = as_triangle_mesh(mesh, unit, entry="decimate_mesh")
     if (target_faces is None) == (target_edge_length is None):
         raise InvalidParameterError("give exactly one of target_faces and target_edge_length to decimate_mesh.")
     if method not in METHODS:

@@ -34,7 +34,14 @@ from .formats.stl import read_stl
 from .formats.vtk import VTK_FORMATS, mesh_from_vtk_polydata, read_with_vtk
 from .units import UnitInferredWarning, check_extent, infer_unit, inferred_unit_message, parse_unit
 
-__all__ = ["load_mesh", "read_mesh_arrays", "mesh_from_vtk_polydata", "SUPPORTED_FORMATS", "detect_format"]
+__all__ = [
+    "load_mesh",
+    "read_mesh_arrays",
+    "to_millimetres",
+    "mesh_from_vtk_polydata",
+    "SUPPORTED_FORMATS",
+    "detect_format",
+]
 
 #: File suffixes that :func:`load_mesh` reads, with a description.
 SUPPORTED_FORMATS: dict[str, str] = {
@@ -99,21 +106,42 @@ def load_mesh(path, unit: str | float | None = None, *, format: str | None = Non
     >>> mesh.extent  # doctest: +SKIP
     155.7
     """
-    mm_per_unit = None if unit is None else parse_unit(unit)
+    if unit is not None:
+        parse_unit(unit)  # a bad unit is refused before the file is read
     path = Path(path)
     points, triangles, point_data = read_mesh_arrays(path, format=format)
-    if mm_per_unit is None:
-        extent_in_file = _extent(points, triangles)
-        inferred = infer_unit(extent_in_file, path.name)
-        warnings.warn(inferred_unit_message(path.name, extent_in_file, inferred), UnitInferredWarning, stacklevel=2)
-        mm_per_unit = parse_unit(inferred)
-    points = points * mm_per_unit
-    if not np.isfinite(points).all():
-        raise MeshError(
-            f"{path.name} has coordinates too large to convert to mm; check the file's unit and coordinates."
-        )
-    check_extent(_extent(points, triangles), mm_per_unit, path.name, stacklevel=2)
+    points, mm_per_unit = to_millimetres(points, triangles, unit, path.name, stacklevel=3)
     return TriangleMesh(points, triangles, point_data, source=path, mm_per_unit=mm_per_unit, unit_inferred=unit is None)
+
+
+def to_millimetres(points, triangles, unit, name: str, *, stacklevel: int = 2) -> tuple[np.ndarray, float]:
+    """Mesh coordinates in their own ``unit`` converted to mm: ``(points in mm, mm per unit)``.
+
+    The rule every mesh entering the library follows (files and in-memory meshes alike): ``unit`` is
+    ``"mm"``, ``"cm"``, ``"m"``, ``"in"`` or a number of mm per unit; None infers it from the size of the
+    triangles' vertices (:func:`~translucency.io.units.infer_unit`) and says so in one
+    :class:`~translucency.io.units.UnitInferredWarning`. A size implausible for the unit warns
+    (:class:`~translucency.io.units.ImplausibleSizeWarning`); ``name`` names the mesh in those sentences.
+
+    Raises
+    ------
+    MeshError
+        With no unit, for a size no unit makes plausible; or when the coordinates overflow in mm.
+    InvalidParameterError
+        For an unknown unit.
+    """
+    if unit is None:
+        extent_in_file = _extent(points, triangles)
+        inferred = infer_unit(extent_in_file, name)
+        warnings.warn(inferred_unit_message(name, extent_in_file, inferred), UnitInferredWarning, stacklevel=stacklevel)
+        mm_per_unit = parse_unit(inferred)
+    else:
+        mm_per_unit = parse_unit(unit)
+    points = np.asarray(points, dtype=np.float64) * mm_per_unit
+    if not np.isfinite(points).all():
+        raise MeshError(f"{name} has coordinates too large to convert to mm; check its unit and coordinates.")
+    check_extent(_extent(points, triangles), mm_per_unit, name, stacklevel=stacklevel)
+    return points, mm_per_unit
 
 
 def _extent(points: np.ndarray, triangles: np.ndarray) -> float:

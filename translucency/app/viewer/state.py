@@ -43,6 +43,7 @@ from ..pipeline import (
     Scene,
     coarsest_proxy_edge,
     default_light_direction,
+    mesh_for_shading,
     proxy_edge_length,
     resolve_medium,
     write_result,
@@ -117,8 +118,9 @@ class ViewerState:
 
     Parameters
     ----------
-    mesh : TriangleMesh, optional
-        A cleaned mesh in mm (default: the embedded default scan, cleaned).
+    mesh : TriangleMesh or pyvista.PolyData, optional
+        A cleaned mesh in mm, or a PolyData in ``unit`` (converted and repaired,
+        :func:`~translucency.app.pipeline.mesh_for_shading`); default: the embedded default scan, cleaned.
     material : str or Material or Medium
         The starting material (catalogue name, 1/mm coefficients).
     lights : light or sequence of lights, optional
@@ -147,6 +149,8 @@ class ViewerState:
         Stem of saved files (default: the mesh's file name, or ``scan``).
     solve : bool
         Solve now (default); with ``False`` call :meth:`solve` before reading :attr:`result` or colours.
+    unit : {"mm", "cm", "m", "in"} or float, optional
+        A PolyData's length unit (None: its ``field_data["length_unit"]``, else inferred from its size).
     """
 
     def __init__(
@@ -170,6 +174,7 @@ class ViewerState:
         up="auto",
         name=None,
         solve=True,
+        unit=None,
     ):
         from ...io.upright import up_vector
         from ...scatter.lights import DirectionalLight, as_light_list
@@ -192,6 +197,8 @@ class ViewerState:
         if mesh is None:
             mesh, _, default_name = load_scan(None)
             name = name or default_name
+        else:
+            mesh = mesh_for_shading(mesh, unit, entry="Viewer", stacklevel=4)
         self.base_mesh = mesh
         self.name = name or (Path(mesh.source).stem if mesh.source is not None else "scan")
         self.medium = settings.material

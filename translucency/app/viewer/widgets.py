@@ -59,8 +59,9 @@ class Viewer:
 
     Parameters
     ----------
-    mesh : TriangleMesh, optional
-        A cleaned mesh in mm (default: the embedded default scan, cleaned).
+    mesh : TriangleMesh or pyvista.PolyData, optional
+        A cleaned mesh in mm, or a PolyData in ``unit`` (converted and repaired,
+        :func:`~translucency.app.pipeline.mesh_for_shading`); default: the embedded default scan, cleaned.
     material : str or Material or Medium
         The starting material (catalogue name, 1/mm coefficients).
     lights : light or sequence of lights, optional
@@ -100,6 +101,8 @@ class Viewer:
         Folder for the files the ``s`` key saves (default: the current folder).
     name : str, optional
         Stem of the saved files (default: the mesh's file name, or ``scan``).
+    unit : {"mm", "cm", "m", "in"} or float, optional
+        A PolyData's length unit (None: its ``field_data["length_unit"]``, else inferred from its size).
     """
 
     base_mesh = _state_attribute("base_mesh")
@@ -153,6 +156,7 @@ class Viewer:
         widgets=True,
         output=".",
         name=None,
+        unit=None,
     ):
         # settings checked and the scan loaded first; the window before the (slower) first solve
         self.state = ViewerState(
@@ -174,6 +178,7 @@ class Viewer:
             up=up,
             name=name,
             solve=False,
+            unit=unit,
         )
         self.output = Path(output)
         self.widgets = {}
