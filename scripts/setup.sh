@@ -42,8 +42,16 @@ stamp=.venv/.translucency-setup
 want="$(sha256sum pyproject.toml | cut -d' ' -f1)"
 if [[ ! -f $stamp || "$(cat "$stamp")" != "$want" ]]; then
     echo "setup: installing Python packages into .venv (about a minute the first time)"
-    .venv/bin/python -m pip install -q --upgrade pip >/dev/null
-    .venv/bin/python -m pip install -q -e ".[test,dask]"
+    # pip's own notes (the build back-end's warning about editable installs, the index's) are kept in a
+    # log and shown only when the installation fails
+    log="$(mktemp)"
+    if ! { .venv/bin/python -m pip install -q --upgrade pip && .venv/bin/python -m pip install -q -e ".[test,dask]"; } >"$log" 2>&1; then
+        cat "$log" >&2
+        rm -f "$log"
+        echo "setup: installing the Python packages failed (pip's output above)" >&2
+        exit 1
+    fi
+    rm -f "$log"
     echo "$want" > "$stamp"
 fi
 .venv/bin/python -m translucency.scatter.warmup
