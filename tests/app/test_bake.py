@@ -282,7 +282,7 @@ def test_console_progress_prints_failures_and_warnings(tmp_path):
     import io
 
     stream = io.StringIO()
-    progress = batch.ConsoleProgress(file=stream)
+    progress = batch.ConsoleProgress(file=stream, terminal=True)  # bars, as on a terminal
     progress.start(["a.ply", "b.ply"], ["o/a.ply", "o/b.ply"])
     progress.stage(0, "far field", 0.5)
     progress.finished(0, batch.BakeRecord("a.ply", "o/a.ply", warnings=("a is 0.2 mm across; did you mean m?",)))
@@ -300,13 +300,13 @@ def test_summary_table():
         batch.BakeRecord("long/name/b.ply", None, None, None, 0.04, "b.ply is empty; export it again."),
     ]
     lines = batch.format_summary(records, 3.0).splitlines()
-    assert lines[0].split() == ["file", "vertices", "lit", "sources", "time", "[s]", "output", "status"]
+    assert lines[0].split() == ["file", "vertices", "lit", "solver", "vertices", "time", "[s]", "output", "status"]
     assert lines[2].split() == ["a.ply", "642", "300", "1.3", "o/a_m.ply", "baked"]
     assert lines[3].split()[:5] == ["long/name/b.ply", "-", "-", "0.0", "-"]
     assert lines[3].endswith("failed: b.ply is empty; export it again.")
     assert lines[2].index("o/a_m.ply") == lines[3].index("-", len("long/name/b.ply") + 20)  # columns line up
     assert lines[2].index("baked") == lines[3].index("failed")
-    assert lines[-1] == "baked 1 of 2 files in 3.0 s; 1 failed"
+    assert lines[-1] == "baked 1 of 2 files in 3.0 s (wall time); 1 failed"
 
 
 # --------------------------------------------------------------------------------------------------

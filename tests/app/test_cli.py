@@ -1,5 +1,6 @@
 """The command line: exit codes, one-sentence errors, output that agrees with the API, the main job."""
 
+import re
 import subprocess
 import sys
 
@@ -19,15 +20,66 @@ def run_cli(*args, cwd=None):
     return done.returncode, done.stdout, done.stderr
 
 
-def test_materials_lists_the_catalogue(capsys):
-    assert cli.main(["materials"]) == 0
+def test_materials_wide_lists_the_catalogue_with_every_column(capsys):
+    assert cli.main(["materials", "--wide"]) == 0
     out = capsys.readouterr().out
     for entry in catalogue():
         assert entry.key in out
+    header = out.splitlines()[0].split("  ")
+    assert {"table", "sigma_s [1/mm]", "g", "1/sigma_t' [mm]", "1/sigma_tr [mm]"} <= {h.strip() for h in header}
     marble = next(line for line in out.splitlines() if line.startswith("marble "))
     assert "0.0021, 0.0041, 0.0071" in marble and "2.19, 2.62, 3" in marble
     # reduced mean free path 1/sigma_t' of marble red = 1 / 2.1921 mm
     assert f"{1 / 2.1921:.3g}" in marble
+
+
+def test_materials_default_table_fits_100_columns(capsys):
+    assert cli.main(["materials"]) == 0
+    out = capsys.readouterr().out
+    assert max(len(line) for line in out.splitlines()) <= 100
+    for entry in catalogue():
+        assert entry.key in out
+    header = [h.strip() for h in out.splitlines()[1].split("  ") if h.strip()]
+    assert header == ["name", "eta", "sigma_a [1/mm]", "sigma_s' [1/mm]", "1/sigma_tr [mm]"]
+    assert "1/sigma_t' [mm]" not in out and "[jensen2001]" in out and "[narasimhan2006]" in out
+    # marble (Jensen et al. 2001, Table 2: reduced sigma_s' = 2.19, 2.62, 3.00 and sigma_a = 0.0021, 0.0041,
+    # 0.0071 per mm): diffusion length 1/sigma_tr = 1/sqrt(3 sigma_a sigma_t') = 8.51, 5.57, 3.95 mm
+    sigma_a, sigma_s = np.array([0.0021, 0.0041, 0.0071]), np.array([2.19, 2.62, 3.00])
+    diffusion = [f"{d:.2g}" for d in 1 / np.sqrt(3 * sigma_a * (sigma_a + sigma_s))]
+    marble = next(line for line in out.splitlines() if line.startswith("marble ")).split()
+    assert marble[1:] == ["1.5", "0.0021", "0.0041", "0.0071", "2.2", "2.6", "3", *diffusion]
+    # an unreduced table is shown reduced: lowfat milk sigma_s = 0.9124 per mm red with g = 0.932 -> 0.062
+    milk = next(line for line in out.splitlines() if line.startswith("lowfat_milk ")).split()
+    assert milk[5] == "0.062"
+
+
+def test_every_option_with_a_default_says_it_in_help(capsys):
+    """``--help`` of the command and of every subcommand: each option with a default states it."""
+    import argparse
+
+    parser = cli.build_parser()
+    commands = {"": parser}
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            commands.update(action.choices)
+    assert {"bake", "view", "compare", "materials", "inspect"} <= set(commands)
+    checked = 0
+    for name, command in commands.items():
+        with pytest.raises(SystemExit):
+            cli.main([name, "--help"] if name else ["--help"])
+        text = capsys.readouterr().out
+        for action in command._actions:
+            if not action.option_strings or action.nargs == 0 or action.default in (None, argparse.SUPPRESS):
+                continue
+            flag = action.option_strings[-1]
+            # the option's entry: from its line to the next option's, on one line
+            entry = re.search(rf"\n  (?:[^\n]*?[ ,])?{re.escape(flag)}(?=[ ,=\n]).*?(?=\n  -|\n\n|\Z)", text, re.S)
+            assert entry is not None, f"{name} {flag} is missing from --help"
+            # argparse wraps lines at spaces and after hyphens: compare without any white space
+            entry = "".join(entry.group(0).split())
+            assert "default" in entry and "".join(str(action.default).split()) in entry, f"{name} {flag}: {entry}"
+            checked += 1
+    assert checked >= 20
 
 
 def test_unknown_material_table_is_a_usage_error():
@@ -140,6 +192,22 @@ def test_main_job_bakes_the_embedded_default(tmp_path):
     # marble scatters red farther than blue: relative to the lit side, the dark side is redder
     dark, bright = radiance[facing < -0.5].mean(axis=0), radiance[facing > 0.5].mean(axis=0)
     assert dark[0] / bright[0] > dark[2] / bright[2]
+    # each mean says over what it is taken; the one over all vertices is the file's, read back by plyfile
+    from plyfile import PlyData
+
+    vertex = PlyData.read(str(ply))["vertex"]
+    stored = np.stack([np.asarray(vertex[f"radiance_{c}"], dtype=np.float64) for c in "rgb"], axis=1)
+    means = {
+        m.group(1): np.array([float(m.group(k)) for k in (2, 3, 4)])
+        for m in re.finditer(r"mean radiance toward the normal over (.+?) \(.*?\): R (\S+), G (\S+), B (\S+)", out)
+    }
+    n_lit = int(re.search(r"vertices lit \(incident flux > 0\): (\d+) of (\d+)", out).group(1))
+    assert set(means) == {f"the {n_lit} lit vertices", f"all {len(stored)} vertices"}
+    assert means[f"all {len(stored)} vertices"] == pytest.approx(stored.mean(axis=0), abs=6e-5)
+    assert 0 < n_lit < len(stored) and np.all(means[f"the {n_lit} lit vertices"] > stored.mean(axis=0))
+    # the solve's progress: one line per stage on stderr (a pipe here), no escape codes anywhere
+    assert not any(code in out + err for code in ("\r", "\x1b["))
+    assert err.count("bunny: far field done (") == 1 and err.count("bunny: near field done (") == 1
 
 
 def test_shade_on_a_proxy_interpolates_back_to_every_vertex():

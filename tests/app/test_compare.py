@@ -2,6 +2,7 @@
 
 import csv
 import json
+import re
 
 import numpy as np
 import pytest
@@ -186,9 +187,25 @@ def test_the_cli_writes_what_the_api_computes(sphere, tmp_path, capsys):
         ]
     )
     assert code == 0
-    stdout = capsys.readouterr().out
+    captured = capsys.readouterr()
+    stdout = captured.out
     assert "ketchup" in stdout and "statistics.json" in stdout
     document = json.loads((out / "statistics.json").read_text())
+    # every cell's means say over what: the lit vertices (with their count) and all; the numbers are the JSON's
+    rows = {(r["material"], r["model"], r["subset"], r["channel"]): r for r in document["statistics"]}
+    for material in ("marble", "ketchup"):
+        for model in ("directional", "standard"):
+            line = next(x for x in stdout.splitlines() if x.split()[:2] == [material, model])
+            lit, every = line.split(";  all: ")
+            n_lit = rows[material, model, "lit", "R"]["n_vertices"]
+            assert f" lit ({n_lit}): " in lit and 0 < n_lit < rows[material, model, "all", "R"]["n_vertices"]
+            for part, subset in ((lit, "lit"), (every, "all")):
+                printed = [float(v) for v in re.findall(r"[RGB] (\S+)", part)]
+                expected = [rows[material, model, subset, c]["mean"] for c in "RGB"]
+                assert printed == pytest.approx(expected, rel=1e-3)
+    # progress: one line per solve on stderr, none on stdout
+    assert sum(line.startswith("solved ") for line in captured.err.splitlines()) == 4
+    assert "solved " not in stdout
     from translucency.app.pipeline import load_scan
 
     mesh, _, _ = load_scan(path)

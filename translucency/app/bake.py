@@ -6,7 +6,7 @@
   process, in ``workers`` spawned processes, or on a Dask distributed cluster.
 * :func:`bake` is the same from Python, with the settings as keyword arguments.
 * :func:`format_summary` and :func:`exit_code` turn the records into the table and the exit status
-  of ``translucency bake``; :class:`ConsoleProgress` draws its progress bars.
+  of ``translucency bake``; :class:`ConsoleProgress` shows its progress (bars on a terminal, lines elsewhere).
 
 Output names are ``<stem>_<material>.ply`` in the output folder; a stem met twice (``a/scan.ply``,
 ``b/scan.obj``) gets ``-2``, ``-3``, ... and a name is never that of an input, so no input is ever
@@ -186,63 +186,96 @@ class BakeProgress:
 
 
 class ConsoleProgress(BakeProgress):
-    """tqdm progress bars on stderr: files done, and the current file's stage when baked here.
+    """Progress of a batch on stderr, by the rule of :mod:`translucency.app.progress`.
 
-    Failures and loading warnings are printed above the bars as they happen, one line each.
+    On a terminal: a tqdm bar of files done and, below it, the stage of the file baked in this
+    process. Elsewhere (a pipe, a log file): one line per stage of a file baked in this process
+    (``bunny.ply: far field done (0.41 s)``) and one line per file done (``[1/3] bunny.ply: baked
+    (1.32 s)``). Files baked in worker processes or on Dask report no stages, so they give their file
+    line only. With ``quiet``: no progress. Failures and loading warnings are printed in every mode,
+    one line each, as they happen.
+
+    Parameters
+    ----------
+    file : file-like, optional
+        Where to write (default: ``sys.stderr``).
+    quiet : bool
+        No progress (``--quiet``).
+    terminal : bool, optional
+        Force bars (True) or lines (False); None: look at ``file``.
     """
 
-    def __init__(self, file=None):
+    def __init__(self, file=None, *, quiet: bool = False, terminal: bool | None = None):
         self.file = file
-        self._files = self._stage = None
+        self.quiet = quiet
+        self.terminal = terminal
+        self._files = None
+        self._stages: dict = {}
         self._sources: list[str] = []
+        self._done = 0
 
     def _stream(self):
         import sys
 
         return self.file if self.file is not None else sys.stderr
 
-    def start(self, sources, outputs):
-        """Open the bar of files."""
-        from tqdm import tqdm
+    def _mode(self) -> str:
+        from .progress import progress_mode
 
-        self._sources = list(sources)
-        self._files = tqdm(
-            total=len(sources), desc="baking", unit="file", file=self._stream(), position=0, dynamic_ncols=True
-        )
+        return progress_mode(self._stream(), self.quiet, self.terminal)
+
+    def _print(self, line: str) -> None:
+        if self._files is not None:  # above the bars
+            self._files.write(line, file=self._stream())
+        else:
+            print(line, file=self._stream(), flush=True)
+
+    def start(self, sources, outputs):
+        """Open the bar of files (on a terminal)."""
+        self._sources, self._done = list(sources), 0
+        if self._mode() == "bars":
+            from tqdm import tqdm
+
+            self._files = tqdm(
+                total=len(sources), desc="baking", unit="file", file=self._stream(), position=0, dynamic_ncols=True
+            )
 
     def stage(self, index, stage, fraction):
         """Show the stage of the file baked in this process."""
-        from tqdm import tqdm
+        from .progress import StageProgress
 
-        if self._stage is None:
-            self._stage = tqdm(
-                total=100,
-                unit="%",
-                file=self._stream(),
-                position=1,
-                leave=False,
-                dynamic_ncols=True,
-                bar_format="{desc}: {percentage:3.0f}%|{bar}|",
+        if index not in self._stages:
+            for other in self._stages.values():  # one stage bar at a time
+                other.close()
+            self._stages[index] = StageProgress(
+                Path(self._sources[index]).name, self._stream(), quiet=self.quiet, terminal=self.terminal, position=1
             )
-        self._stage.set_description_str(f"{Path(self._sources[index]).name}: {stage}", refresh=False)
-        self._stage.n = round(100 * min(max(fraction, 0.0), 1.0))
-        self._stage.refresh()
+        self._stages[index](stage, fraction)
 
     def finished(self, index, record):
-        """Count the file; print its warnings and its error, if any."""
+        """Count the file; print its warnings and its error, if any, and its line when not on a terminal."""
+        if index in self._stages:
+            self._stages.pop(index).close()
+        self._done += 1
         for warning in record.warnings:  # most sentences start with the file's name already
             about = "" if warning.startswith(Path(record.source).name) else f"{record.source}: "
-            self._files.write(f"translucency: warning: {about}{warning}", file=self._stream())
+            self._print(f"translucency: warning: {about}{warning}")
         if not record.ok:
-            self._files.write(f"translucency: error: {record.source}: {record.error}", file=self._stream())
-        self._files.update(1)
+            self._print(f"translucency: error: {record.source}: {record.error}")
+        if self._files is not None:
+            self._files.update(1)
+        elif self._mode() == "lines":
+            name = Path(self._sources[index]).name if index < len(self._sources) else record.source
+            status = "baked" if record.ok else "failed"
+            self._print(f"[{self._done}/{len(self._sources)}] {name}: {status} ({record.seconds:.2f} s)")
 
     def end(self):
         """Close the bars."""
-        for bar in (self._stage, self._files):
-            if bar is not None:
-                bar.close()
-        self._files = self._stage = None
+        for stage in self._stages.values():
+            stage.close()
+        if self._files is not None:
+            self._files.close()
+        self._files, self._stages = None, {}
 
 
 # --------------------------------------------------------------------------------------------------
@@ -706,8 +739,9 @@ def _run_on_dask(client, jobs, done) -> None:
 # summary
 # --------------------------------------------------------------------------------------------------
 def format_summary(records, seconds: float | None = None) -> str:
-    """The summary table of a batch: file, vertices, lit sources, time, output, status; and a total line."""
-    header = ("file", "vertices", "lit sources", "time [s]", "output", "status")
+    """The summary table of a batch: file, vertices, lit solver vertices (incident flux > 0), wall time,
+    output, status; and a total line."""
+    header = ("file", "vertices", "lit solver vertices", "time [s]", "output", "status")
     rows = [
         (
             r.source,
@@ -727,7 +761,7 @@ def format_summary(records, seconds: float | None = None) -> str:
     failed = sum(not r.ok for r in records)
     total = f"baked {len(records) - failed} of {len(records)} files"
     if seconds is not None:
-        total += f" in {seconds:.1f} s"
+        total += f" in {seconds:.1f} s (wall time)"
     if failed:
         total += f"; {failed} failed"
     return "\n".join(lines + [total])

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+import textwrap
 
 from .. import __version__
 from ..errors import TranslucencyError, command_line_spelling
@@ -28,43 +29,92 @@ def _format_triplet(values, fmt="{:.4g}") -> str:
     return ", ".join(fmt.format(v) for v in values)
 
 
+#: Columns the default ``translucency materials`` fits in (``--wide``: every column, as wide as it takes).
+MATERIALS_WIDTH = 100
+
+
+def _compact(values) -> str:
+    """Per-channel values, two significant digits below 10 and whole numbers from 10: ``"0.0021 0.0041 0.0071"``."""
+    return " ".join(f"{v:.0f}" if 10 <= v < float("inf") else f"{v:.2g}" for v in values)
+
+
+def _table_lines(header, rows) -> list[str]:
+    """Columns padded to their widest cell, two spaces apart, with a rule under the header."""
+    widths = [max(len(str(r[i])) for r in rows + [header]) for i in range(len(header))]
+    return [
+        "  ".join(str(c).ljust(w) for c, w in zip(row, widths)).rstrip()
+        for row in [header, tuple("-" * w for w in widths)] + rows
+    ]
+
+
 def cmd_materials(args) -> int:
-    """Print the catalogue: name, source table, eta, sigma_a, sigma_s (or sigma_s'), g, length scales."""
+    """Print the catalogue: by default name, eta, sigma_a, reduced sigma_s' and diffusion length per
+    channel, grouped by source table (fits 100 columns); with ``--wide`` every column, one table."""
+    import numpy as np
+
     from ..scatter.materials import catalogue, material_tables
 
     tables = material_tables()
-    rows = []
-    for entry in catalogue():
-        if args.table and entry.table != args.table:
-            continue
-        if entry.is_diffusive:
-            medium = entry.medium()
-            mfp = _format_triplet(medium.mean_free_path, "{:.3g}")
-            diffusion = _format_triplet(medium.diffusion_length, "{:.3g}")
-        else:
-            mfp = diffusion = "(does not scatter in every channel)"
-        rows.append(
-            (
-                entry.key,
-                entry.table,
-                f"{entry.eta:g}",
-                _format_triplet(entry.sigma_a),
-                _format_triplet(entry.sigma_s),
-                _format_triplet(entry.g, "{:g}"),
-                mfp,
-                diffusion,
-            )
+    entries = [entry for entry in catalogue() if not args.table or entry.table == args.table]
+    lines = []
+    if args.wide:
+        header = (
+            "name",
+            "table",
+            "eta",
+            "sigma_a [1/mm]",
+            "sigma_s [1/mm]",
+            "g",
+            "1/sigma_t' [mm]",
+            "1/sigma_tr [mm]",
         )
-    header = ("name", "table", "eta", "sigma_a [1/mm]", "sigma_s [1/mm]", "g", "1/sigma_t' [mm]", "1/sigma_tr [mm]")
-    widths = [max(len(str(r[i])) for r in rows + [header]) for i in range(len(header))]
-    for row in [header, tuple("-" * w for w in widths)] + rows:
-        print("  ".join(str(c).ljust(w) for c, w in zip(row, widths)).rstrip())
+        rows = []
+        for entry in entries:
+            if entry.is_diffusive:
+                medium = entry.medium()
+                mfp = _format_triplet(medium.mean_free_path, "{:.3g}")
+                diffusion = _format_triplet(medium.diffusion_length, "{:.3g}")
+            else:
+                mfp = diffusion = "(does not scatter in every channel)"
+            rows.append(
+                (
+                    entry.key,
+                    entry.table,
+                    f"{entry.eta:g}",
+                    _format_triplet(entry.sigma_a),
+                    _format_triplet(entry.sigma_s),
+                    _format_triplet(entry.g, "{:g}"),
+                    mfp,
+                    diffusion,
+                )
+            )
+        lines = _table_lines(header, rows)
+    else:
+        header = ("name", "eta", "sigma_a [1/mm]", "sigma_s' [1/mm]", "1/sigma_tr [mm]")
+        rows, groups = [], []
+        for entry in entries:
+            reduced = np.asarray(entry.sigma_s, dtype=np.float64) * (1.0 - np.asarray(entry.g, dtype=np.float64))
+            diffusion = _compact(entry.medium().diffusion_length) if entry.is_diffusive else "- (not diffusive)"
+            rows.append((entry.key, f"{entry.eta:g}", _compact(entry.sigma_a), _compact(reduced), diffusion))
+            groups.append(entry.table)
+        table_lines = _table_lines(header, rows)
+        lines = [
+            "per channel R G B; sigma_s' = sigma_s (1 - g); 1/sigma_tr: diffusion length; all columns: --wide",
+            *table_lines[:2],
+        ]
+        for k, (row, group) in enumerate(zip(table_lines[2:], groups)):
+            if k == 0 or group != groups[k - 1]:
+                lines.append(f"[{group}]")
+            lines.append(row)
+    for line in lines:
+        print(line)
     print()
     for key, table in tables.items():
         if args.table and key != args.table:
             continue
         reduced = "reduced sigma_s' (g = 0)" if table["sigma_s_is_reduced"] else "unreduced sigma_s with g"
-        print(f"{key}: {table['source']} Units {table['units']}; {reduced}. {table['notes']}")
+        note = f"{key}: {table['source']} Units {table['units']}; {reduced}. {table['notes']}"
+        print(textwrap.fill(note, MATERIALS_WIDTH, subsequent_indent="  "))
     return 0
 
 
@@ -121,8 +171,8 @@ def cmd_inspect(args) -> int:
     low, high = mesh.bounds
     print(
         f"{args.mesh}: {mesh.n_points} vertices, {mesh.n_triangles} triangles, "
-        f"{mesh.extent:.4g} mm across ({' x '.join(f'{v:.4g}' for v in high - low)} mm), area "
-        f"{mesh.surface_area:.4g} mm^2"
+        f"{mesh.extent:.4g} mm across (bounding box {' x '.join(f'{v:.4g}' for v in high - low)} mm), surface "
+        f"area {mesh.surface_area:.4g} mm^2"
     )
     cleaned, report = clean_mesh(mesh, max_hole_edges=args.max_hole_edges)
     print(report)
@@ -139,12 +189,13 @@ def cmd_bake(args) -> int:
     import time
 
     from .bake import BakeSettings, ConsoleProgress, bake_files, exit_code, format_summary
-    from .options import lights_from_args, solver_settings
+    from .options import lights_from_args, quiet, solver_settings
 
     settings = BakeSettings.of(solver_settings(args), lights=lights_from_args(args), unit=args.unit)
     start = time.perf_counter()
+    progress = ConsoleProgress(quiet=quiet(args))
     records = bake_files(
-        args.meshes, args.output, settings, workers=args.workers, scheduler=args.scheduler, progress=ConsoleProgress()
+        args.meshes, args.output, settings, workers=args.workers, scheduler=args.scheduler, progress=progress
     )
     print(format_summary(records, time.perf_counter() - start))
     return exit_code(records)
@@ -231,7 +282,7 @@ def cmd_compare(args) -> int:
     """Render and measure a scan in several materials and models into a folder."""
     from ..io.atomic import prepare_output_folder
     from .compare import compare, validate_choices
-    from .options import lights_from_args, solver_settings
+    from .options import lights_from_args, quiet, solver_settings
     from .pipeline import load_scan
 
     settings = solver_settings(args).solver_keywords()
@@ -245,7 +296,7 @@ def cmd_compare(args) -> int:
     prepare_output_folder(args.output)
     lights = lights_from_args(args)
     mesh, _, name = load_scan(args.mesh, args.unit, warn=_warn, note=_note)
-    print(f"{name}: {mesh.n_points} vertices, {mesh.extent:.4g} mm across")
+    print(f"{name}: {mesh.n_points} vertices, {mesh.extent:.4g} mm across (largest side of the bounding box)")
     result = compare(
         mesh,
         materials,
@@ -255,17 +306,26 @@ def cmd_compare(args) -> int:
         shadows=not args.no_shadows,
         up=args.up,
         cell_size=cell_size,
-        progress=lambda line: print(f"  solved {line}"),
+        progress=None if quiet(args) else (lambda line: print(f"solved {line}", file=sys.stderr, flush=True)),
         **settings,
     )
+    print(f"common display exposure {result.exposure:.4g} (one for every cell)")
     print(
-        f"common exposure {result.exposure:.4g}; mean radiance toward the normal over lit vertices, W/(m^2 sr) "
-        "per W/m^2:"
+        "per-vertex mean radiance toward the normal, W/(m^2 sr) per W/m^2 of irradiance, over the lit "
+        f"vertices (incident flux > 0) and over all {mesh.n_points}:"
     )
     for material in result.materials:
         for model in result.models:
-            r, g, b = result.mean(material, model)
-            print(f"  {material:<24} {model:<12} R {r:.4g}  G {g:.4g}  B {b:.4g}")
+            lit, every = result.mean(material, model, "lit"), result.mean(material, model, "all")
+            n_lit = next(
+                row["n_vertices"]
+                for row in result.statistics
+                if (row["material"], row["model"], row["subset"]) == (material, model, "lit")
+            )
+            print(
+                f"  {material:<24} {model:<12} lit ({n_lit}): R {lit[0]:.4g}  G {lit[1]:.4g}  B {lit[2]:.4g};  "
+                f"all: R {every[0]:.4g}  G {every[1]:.4g}  B {every[2]:.4g}"
+            )
     print("wrote " + ", ".join(str(path) for path in result.files.values()))
     return 0
 
@@ -273,13 +333,14 @@ def cmd_compare(args) -> int:
 def cmd_main_job(args) -> int:
     """The main job on the embedded default scan (see :mod:`translucency.app.default_job`)."""
     from .default_job import run_default_job
+    from .options import quiet
 
-    return run_default_job()
+    return run_default_job(quiet=quiet(args))
 
 
 def _add_view_and_compare_parsers(sub) -> None:
     """The ``view`` and ``compare`` subcommands: a scan, its lights and the solver's options, and their own."""
-    from .options import add_light_options, add_scan_options, add_solver_options
+    from .options import add_light_options, add_quiet_option, add_scan_options, add_solver_options
 
     def scene_parser(name, summary, description):
         parser = sub.add_parser(name, help=summary, description=description)
@@ -300,7 +361,7 @@ def _add_view_and_compare_parsers(sub) -> None:
     p.add_argument("--specular", action="store_true", help="add the boundary's specular highlight (GGX)")
     p.add_argument("--roughness", type=float, default=0.25, help="GGX alpha of the highlight (default 0.25)")
     p.add_argument("--window-size", default="1024x768", metavar="WxH", help="window size in pixels (default 1024x768)")
-    p.add_argument("-o", "--output", default=".", help="folder for what key s saves (default: here)")
+    p.add_argument("-o", "--output", default=".", help="folder for what key s saves (default . : here)")
     p.set_defaults(func=cmd_view)
 
     p = scene_parser(
@@ -321,6 +382,7 @@ def _add_view_and_compare_parsers(sub) -> None:
         default="translucency-output/compare",
         help="output folder (created; default translucency-output/compare)",
     )
+    add_quiet_option(p)
     p.set_defaults(func=cmd_compare)
 
 
@@ -332,10 +394,16 @@ def build_parser() -> argparse.ArgumentParser:
         description="Translucent shading of 3D scans with the directional dipole BSSRDF.",
     )
     parser.add_argument("--version", action="version", version=f"translucency {__version__}")
+    from .options import add_quiet_option
+
+    add_quiet_option(parser)  # the main job's; bake and compare take it too
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
 
     p = sub.add_parser("materials", help="list the material catalogue")
     p.add_argument("--table", choices=["jensen2001", "narasimhan2006"], help="only one source table")
+    p.add_argument(
+        "--wide", action="store_true", help="every column (table, sigma_s, g, 1/sigma_t'), wider than 100 columns"
+    )
     p.set_defaults(func=cmd_materials)
 
     p = sub.add_parser("report", help="versions of the stack and whether off-screen rendering works")
@@ -346,11 +414,13 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("inspect", help="load a scan, show its defects and repair it")
     p.add_argument("mesh", help="mesh file (PLY, OBJ, STL, OFF, VTK, VTP, ...)")
     p.add_argument("--unit", default=None, help=UNIT_HELP)
-    p.add_argument("--max-hole-edges", type=int, default=100, help="close holes of at most this many edges")
+    p.add_argument(
+        "--max-hole-edges", type=int, default=100, help="close holes of at most this many edges (default 100)"
+    )
     p.add_argument("-o", "--output", help="save the repaired mesh (any format PyVista writes)")
     p.set_defaults(func=cmd_inspect)
 
-    from .options import add_light_options, add_scan_options, add_solver_options
+    from .options import add_light_options, add_quiet_option, add_scan_options, add_solver_options
 
     p = sub.add_parser(
         "bake",
@@ -366,12 +436,19 @@ def build_parser() -> argparse.ArgumentParser:
         "--output",
         help="a .ply file for one mesh, else a folder, created when missing (default translucency-output)",
     )
-    p.add_argument("--workers", type=int, default=1, metavar="N", help="bake N files at a time in local processes")
+    p.add_argument(
+        "--workers",
+        type=int,
+        default=1,
+        metavar="N",
+        help="bake N files at a time in local processes (default 1: in this process)",
+    )
     p.add_argument(
         "--scheduler",
         metavar="ADDRESS",
         help="bake on a Dask cluster (tcp://host:8786); its workers must reach the meshes and the output folder",
     )
+    add_quiet_option(p)
     p.set_defaults(func=cmd_bake)
 
     _add_view_and_compare_parsers(sub)

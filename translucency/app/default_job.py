@@ -12,15 +12,21 @@ from pathlib import Path
 
 from ..io.atomic import prepare_output_folder
 from ..io.clean import clean_mesh
-from .pipeline import default_scan_path, load_default_scan, shade_scan, write_result
+from ..scatter.lights import DirectionalLight
+from .pipeline import default_light_direction, default_scan_path, load_default_scan, scene_for, write_result
+from .progress import StageProgress
 from .render import render_colors
 from .settings import DEFAULT_MATERIAL, ShadeSettings
 
 OUTPUT_FOLDER = Path("translucency-output")
 
 
-def run_default_job(output: Path = OUTPUT_FOLDER, material: str = DEFAULT_MATERIAL) -> int:
-    """Bake the embedded default scan; prints what it does and returns the exit code."""
+def run_default_job(output: Path = OUTPUT_FOLDER, material: str = DEFAULT_MATERIAL, *, quiet: bool = False) -> int:
+    """Bake the embedded default scan; prints what it does and returns the exit code.
+
+    The solve's progress goes to stderr (:mod:`translucency.app.progress`: a bar on a terminal, one
+    line per stage elsewhere, nothing with ``quiet``); every other line to stdout.
+    """
     total = time.perf_counter()
     prepare_output_folder(output)
     print(f"embedded default scan: {default_scan_path().name} (the Stanford bunny shipped inside pymeshlab)")
@@ -33,19 +39,25 @@ def run_default_job(output: Path = OUTPUT_FOLDER, material: str = DEFAULT_MATERI
         f"shading with {material} ({settings.model} dipole, {settings.method} method, tol {settings.tol:g}, "
         "Embree shadows) ..."
     )
-    result = shade_scan(mesh, settings)
+    scene = scene_for(mesh, settings)
+    light = DirectionalLight(default_light_direction(scene.up), 1.0)
+    with StageProgress(default_scan_path().stem, quiet=quiet) as progress:
+        result = scene.shade_with(settings, light, progress=progress)
+    # lit: incident flux > 0 at the vertex (front-facing and not shadowed); the solve's own, reused
+    lit = scene.incident_on_mesh(settings.material, light)[0].phi_rgb.max(axis=1) > 0
     solver = result.stats["solver"]
     print(
-        f"  sources lit: {solver['sources']} of {mesh.n_points}; pairs evaluated {solver['pairs_evaluated']:,}, "
-        f"skipped {solver['pairs_skipped']:,}; near-field triangles {solver['near_triangles']:,}"
+        f"  vertices lit (incident flux > 0): {int(lit.sum())} of {mesh.n_points}; source-receiver pairs "
+        f"evaluated {solver['pairs_evaluated']:,}, skipped {solver['pairs_skipped']:,}; near-field triangles "
+        f"{solver['near_triangles']:,}"
     )
-    print("  time: " + ", ".join(f"{k} {v:.2f} s" for k, v in result.timings.items()))
-    lit = result.radiance.max(axis=1) > 0
-    mean = result.radiance[lit].mean(axis=0)
-    print(
-        f"  mean radiance toward the normal over lit vertices (W/(m^2 sr) per W/m^2): "
-        f"R {mean[0]:.4f}, G {mean[1]:.4f}, B {mean[2]:.4f}"
-    )
+    print("  wall time per step: " + ", ".join(f"{k} {v:.2f} s" for k, v in result.timings.items()))
+    for label, mask in ((f"the {int(lit.sum())} lit vertices", lit), (f"all {mesh.n_points} vertices", slice(None))):
+        mean = result.radiance[mask].mean(axis=0)
+        print(
+            f"  mean radiance toward the normal over {label} (W/(m^2 sr) per W/m^2 of irradiance): "
+            f"R {mean[0]:.4f}, G {mean[1]:.4f}, B {mean[2]:.4f}"
+        )
     output.mkdir(parents=True, exist_ok=True)
     ply = write_result(result, output / f"bunny_{material}.ply")
     png = output / f"bunny_{material}.png"

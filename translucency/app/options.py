@@ -10,7 +10,10 @@ rejects the same things with the same sentences:
   ``--env FILE`` (an equirectangular HDR map) with ``--env-directions N``;
 * :func:`add_solver_options` / :func:`solver_settings` -- ``--model``, ``--method``, ``--tol``,
   ``--resolution``, ``--no-shadows``, ``--per-direction``, ``--exposure``, ``--memory-limit``, ``--time-limit``,
-  made from and read into :class:`~translucency.app.settings.ShadeSettings` (help texts, defaults, checks).
+  made from and read into :class:`~translucency.app.settings.ShadeSettings` (help texts, defaults, checks);
+* :func:`add_quiet_option` / :func:`quiet` -- ``-q``/``--quiet``: no progress (see :mod:`translucency.app.progress`).
+
+Every option that has a default says it in its help (``--help``).
 
 :class:`ArgumentParser` is argparse's parser, except that a negative number or vector is taken as the
 value of the option before it as written: ``--light-dir -1,0.3,-0.5`` (argparse alone reads
@@ -142,7 +145,11 @@ def add_solver_options(parser: argparse.ArgumentParser) -> None:
 
     default = {field.name: field for field in dataclasses.fields(ShadeSettings)}
     group = parser.add_argument_group("material and solver")
-    group.add_argument("--material", default=default["material"].default, help=HELP["material"])
+    group.add_argument(
+        "--material",
+        default=default["material"].default,
+        help=f"{HELP['material']} (default {default['material'].default})",
+    )
     group.add_argument(
         "--model",
         default=default["model"].default,
@@ -158,12 +165,34 @@ def add_solver_options(parser: argparse.ArgumentParser) -> None:
     group.add_argument(
         "--tol", type=float, default=default["tol"].default, help=f"{HELP['tol']} (default {default['tol'].default:g})"
     )
-    group.add_argument("--resolution", default=default["resolution"].default, help=HELP["resolution"])
+    group.add_argument(
+        "--resolution", default=default["resolution"].default, help=f"{HELP['resolution']} (default %(default)s)"
+    )
     group.add_argument("--no-shadows", action="store_true", help=HELP["shadows"])
     group.add_argument("--per-direction", action="store_true", help=HELP["per_direction"])
     group.add_argument("--exposure", type=float, default=None, help=HELP["exposure"])
     group.add_argument("--memory-limit", type=float, default=None, metavar="GB", help=HELP["memory_limit"])
     group.add_argument("--time-limit", type=float, default=None, metavar="S", help=HELP["time_limit"])
+
+
+def add_quiet_option(parser: argparse.ArgumentParser) -> None:
+    """``-q``/``--quiet``: no progress bars or lines (warnings, errors and results still print).
+
+    Left out of the namespace when not given (read it with :func:`quiet`), so that ``translucency -q
+    bake`` and ``translucency bake -q`` both work.
+    """
+    parser.add_argument(
+        "-q",
+        "--quiet",
+        action="store_true",
+        default=argparse.SUPPRESS,
+        help="no progress bars or progress lines (warnings, errors and results still print)",
+    )
+
+
+def quiet(args) -> bool:
+    """True when ``-q``/``--quiet`` was given (:func:`add_quiet_option`)."""
+    return bool(getattr(args, "quiet", False))
 
 
 def parse_vector(text: str, name: str) -> np.ndarray:

@@ -54,7 +54,40 @@ ZERO_AREA_RATIO = 1e-10
 
 @dataclasses.dataclass(frozen=True)
 class MeshDefects:
-    """Counts of the defects of a triangle mesh (see the module docstring for the definitions)."""
+    """Counts of the defects of a triangle mesh (the module docstring has the full definitions).
+
+    Every field is a count (a number of vertices, triangles, edges, loops or pieces; no unit).
+
+    Attributes
+    ----------
+    vertices, triangles : int
+        Size of the mesh as given (every vertex and triangle, defects included).
+    duplicate_vertices : int
+        Vertices at exactly the position of another (k coincident vertices count k - 1).
+    unreferenced_vertices : int
+        Vertices used by no triangle.
+    null_faces : int
+        Triangles with a repeated vertex index (left out of every count below).
+    duplicate_faces : int
+        Triangles on the same three vertices as an earlier one, in any order.
+    zero_area_faces : int
+        Triangles with distinct indices and zero area relative to their size (:data:`ZERO_AREA_RATIO`).
+    non_manifold_edges : int
+        Edges shared by more than two triangles.
+    non_manifold_vertices : int
+        Vertices whose triangles form more than one fan.
+    boundary_edges : int
+        Edges of exactly one triangle.
+    boundary_loops : int
+        Connected chains of boundary edges (holes and outer borders).
+    largest_boundary_loop : int
+        Edges of the longest boundary loop.
+    components : int
+        Connected pieces (triangles linked through edges of exactly two triangles).
+    inconsistent_edges : int
+        Edges of two triangles that run the same direction in both (the triangles disagree on which
+        side is out).
+    """
 
     vertices: int
     triangles: int

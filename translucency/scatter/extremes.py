@@ -63,6 +63,7 @@ class Blocks:
     Attributes
     ----------
     eta : (G,)
+        Relative index of refraction of each block (dimensionless).
     sigma_a, sigma_s, g : (G, 3)
         Per channel, 1/mm (``g`` dimensionless).
     size : (G,)

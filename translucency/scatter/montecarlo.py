@@ -332,8 +332,8 @@ class HalfSpaceTally:
 
     Attributes
     ----------
-    sigma_a, sigma_s, g, eta, theta_i_deg, seed, launch
-        The settings (1/mm, 1/mm, 1, 1, degrees).
+    sigma_a, sigma_s, g, eta, theta_i_deg, seed, launch, max_interactions
+        The settings (1/mm, 1/mm, 1, 1, degrees, --, --, interactions per photon).
     n_photons, n_batches : int
         Photons simulated (a multiple of ``n_batches``) and number of batches.
     refracted_direction : ndarray, shape (3,)
@@ -358,8 +358,14 @@ class HalfSpaceTally:
         Annulus edges, mm.
     radial_exitance, radial_exitance_single, radial_exitance_multiple : ndarray, shape (n_annuli,)
         Annulus-averaged exitance ``M(r)`` in 1/mm^2.
+    total_reflectance_se, single_reflectance_se, multiple_reflectance_se, absorbed_se : float
+        Standard errors of the fractions above (dimensionless).
+    exitance_se, exitance_single_se, exitance_multiple_se : ndarray, shape (grid_cells, grid_cells)
+        Standard errors of the cell-averaged exitances, 1/mm^2.
+    radial_exitance_se, radial_exitance_single_se, radial_exitance_multiple_se : ndarray, shape (n_annuli,)
+        Standard errors of the annulus-averaged exitances, 1/mm^2.
     elapsed_s : float
-        Wall time of the simulation (including compilation on the first call of a session without
+        Wall time of the simulation, s (including compilation on the first call of a session without
         a numba cache).
     """
 

@@ -417,9 +417,9 @@ class ViewerState:
         self.status = (
             f"{self.medium.name}, {self.model} dipole, {size:.3g} mm ({self.mm_per_unit:.4g} mm per unit), "
             f"up {self.up_axis}\n"
-            f"{light}exposure {self.exposure:.3g}\n"
-            f"solved in {self.solve_seconds:.2f} s: {self.method}, {tolerance}, "
-            f"{result.stats['solver_vertices']} of {result.stats['vertices']} vertices"
+            f"{light}display exposure {self.exposure:.3g}\n"
+            f"solved in {self.solve_seconds:.2f} s (wall time) on {result.stats['solver_vertices']} of "
+            f"{result.stats['vertices']} vertices: {self.method}, {tolerance}"
         )
 
     def add_note(self, line: str) -> None:
