@@ -19,8 +19,9 @@ suffix what it holds                        read by
        B, luminance; settings in extras
 ====== ==================================== ===================================================
 
-OBJ is not offered: its vertex colours are an unofficial extension that VTK's reader (PyVista)
-drops, and it has no place for the float values or the settings.
+OBJ is not offered (yet): its vertex colours (``v x y z r g b``, an unofficial extension) do survive
+in PyVista 0.49, trimesh and pymeshlab, but it has no place for the float values, and the settings
+could only be comments no reader returns.
 """
 
 from __future__ import annotations
