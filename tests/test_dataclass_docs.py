@@ -9,7 +9,7 @@ import re
 import translucency
 
 #: Dataclasses whose fields are not documented yet (remove a name once its docstring lists every field).
-NOT_YET_DOCUMENTED = {"translucency.app.pipeline.ShadeResult", "translucency.io.baked.BakedPly"}
+NOT_YET_DOCUMENTED: set[str] = set()
 
 
 def public_dataclasses():

@@ -41,6 +41,7 @@ _LAZY = {
     # the whole chain on one mesh
     "shade": "translucency.app.pipeline",
     "Scene": "translucency.app.pipeline",
+    "ShadeResult": "translucency.app.pipeline",
     "load_default_scan": "translucency.app.pipeline",
     "ShadeSettings": "translucency.app.settings",
     "shade_scan": "translucency.app.pipeline",

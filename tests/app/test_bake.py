@@ -238,6 +238,66 @@ def test_cli_refuses_one_file_for_several_meshes(scans, tmp_path, capsys):
     assert os.listdir(tmp_path) == []
 
 
+def test_the_output_suffix_or_format_names_the_format(tmp_path):
+    a, b = tmp_path / "a.ply", tmp_path / "b.obj"
+    for suffix in (".vtp", ".VTK", ".glb", ".gltf"):
+        assert batch.output_paths([a], tmp_path / f"x{suffix}", "m") == [tmp_path / f"x{suffix}"]
+    assert batch.output_paths([a, b], tmp_path / "o", "m", "glb") == [
+        tmp_path / "o" / "a_m.glb",
+        tmp_path / "o" / "b_m.glb",
+    ]
+    assert batch.output_paths([a], tmp_path / "x.vtp", "m", "vtp") == [tmp_path / "x.vtp"]
+    assert batch.output_paths([a], tmp_path / "x.obj", "m") == [tmp_path / "x.obj" / "a_m.ply"]  # a folder
+    with pytest.raises(InvalidParameterError, match="names a .vtp file but format='glb' was given"):
+        batch.output_paths([a], tmp_path / "x.vtp", "m", "glb")
+    with pytest.raises(InvalidParameterError, match="format must be one of ply, vtp, vtk, glb, gltf"):
+        batch.output_paths([a], tmp_path / "o", "m", "obj")
+
+
+def test_cli_bakes_one_scan_to_vtp_glb_and_ply_with_the_same_numbers(scans, tmp_path, capsys):
+    import json
+    import struct
+
+    import plyfile
+    import pyvista
+    import trimesh
+
+    arguments = ["bake", str(scans["small"]), "--unit", "mm", "--method", "exact", "--no-shadows"]
+    for name in ("x.vtp", "x.glb", "x.ply"):
+        assert cli.main([*arguments, "-o", str(tmp_path / name)]) == 0, capsys.readouterr().err
+    assert sorted(os.listdir(tmp_path)) == ["x.glb", "x.ply", "x.vtp"]
+    vertex = plyfile.PlyData.read(str(tmp_path / "x.ply"))["vertex"]
+    radiance = np.stack([vertex[f"radiance_{c}"] for c in "rgb"], axis=1)  # float32
+    colours = np.stack([vertex[c] for c in ("red", "green", "blue")], axis=1)
+    vtp = pyvista.read(str(tmp_path / "x.vtp"))
+    np.testing.assert_array_equal(vtp.point_data["radiance"].astype(np.float32), radiance)
+    np.testing.assert_array_equal(vtp.point_data["colors"], colours)
+    np.testing.assert_allclose(vtp.point_data["luminance"], vertex["quality"], rtol=1e-6)
+    (glb,) = trimesh.load(str(tmp_path / "x.glb"), process=False).geometry.values()
+    np.testing.assert_array_equal(glb.vertex_attributes["_RADIANCE"], radiance)
+    np.testing.assert_array_equal(glb.vertices, np.stack([vertex[a] for a in "xyz"], axis=1) / np.float32(1000))
+    data = (tmp_path / "x.glb").read_bytes()
+    (length,) = struct.unpack_from("<I", data, 12)
+    extras = json.loads(data[20 : 20 + length])["scenes"][0]["extras"]
+    assert extras["method"] == vtp.field_data["method"][0] == "exact" and extras["shadows"] is False
+
+
+def test_cli_format_names_the_files_in_a_folder_and_a_conflict_is_one_sentence(scans, tmp_path, capsys):
+    import pyvista
+
+    out = tmp_path / "out"
+    assert (
+        cli.main(["bake", str(scans["small"]), "--unit", "mm", "--no-shadows", "--format", "vtk", "-o", str(out)]) == 0
+    )
+    assert os.listdir(out) == ["small_marble.vtk"]
+    assert pyvista.read(str(out / "small_marble.vtk")).point_data["radiance"].shape == (642, 3)
+    capsys.readouterr()
+    code = cli.main(["bake", str(scans["small"]), "--format", "glb", "-o", str(tmp_path / "x.vtp")])
+    captured = capsys.readouterr()
+    assert code == 2 and len(error_lines(captured.err)) == 1 and "names a .vtp file but --format glb" in captured.err
+    assert not (tmp_path / "x.vtp").exists()
+
+
 def test_no_mesh_bakes_the_embedded_default_to_the_default_folder(tmp_path, monkeypatch, capsys):
     monkeypatch.chdir(tmp_path)
     assert cli.main(["bake", "--resolution", "8", "--no-shadows"]) == 0, capsys.readouterr().err
@@ -397,12 +457,13 @@ def test_bake_without_unit_infers_says_it_once_and_records_it(tmp_path, capsys):
     line = "ball.ply: no --unit given; 0.04 units across, read as metres (40 mm); pass --unit to override"
     assert err.count(line) == 1 and "ball.ply: ball.ply" not in err
     baked = read_baked_ply(out / "ball_marble.ply")
-    assert baked.metadata["unit"] == "m" and baked.metadata["unit_name"] == "metres"
-    assert baked.metadata["mm_per_unit"] == 1000.0 and baked.metadata["unit_inferred"] is True
+    assert baked.metadata["source_unit"] == "m" and baked.metadata["source_unit_name"] == "metres"
+    assert baked.metadata["source_mm_per_unit"] == 1000.0 and baked.metadata["source_unit_inferred"] is True
+    assert baked.metadata["length_unit"] == "mm"
     assert baked.metadata["up"] == "+y" and np.ptp(baked.points[:, 0]) == pytest.approx(40.0, rel=1e-3)
     given = translucency.bake([path], tmp_path / "given", unit="m", shadows=False, up="z")
     metadata = read_baked_ply(given[0].output).metadata
-    assert metadata["unit_inferred"] is False and metadata["up"] == "+z" and metadata["up_inferred"] is False
+    assert metadata["source_unit_inferred"] is False and metadata["up"] == "+z" and metadata["up_inferred"] is False
 
 
 @pytest.mark.slow

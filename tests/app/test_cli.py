@@ -180,7 +180,7 @@ def test_main_job_bakes_the_embedded_default(tmp_path):
     baked = read_baked_ply(ply)
     assert baked.metadata["material"] == "marble" and baked.metadata["method"] == "tree"
     # the embedded default keeps its size (given, not inferred) and stands +y up under the unchanged light
-    assert baked.metadata["up"] == "+y" and baked.metadata["unit_inferred"] is False
+    assert baked.metadata["up"] == "+y" and baked.metadata["source_unit_inferred"] is False
     assert baked.metadata["lights"][0]["direction"] == pytest.approx(
         np.array([0.35, 1.0, 0.45]) / np.linalg.norm([0.35, 1.0, 0.45])
     )

@@ -218,7 +218,7 @@ def test_the_cli_writes_what_the_api_computes(sphere, tmp_path, capsys):
             assert cli_row[key] == pytest.approx(api_row[key], rel=1e-12, abs=1e-15)
     assert document["settings"]["method"] == "exact"
     assert document["settings"]["up"] == "-x" and document["settings"]["up_inferred"] is False  # --up -x as written
-    assert document["mesh"]["unit_inferred"] is True  # the 40-unit file was read in millimetres
+    assert document["mesh"]["source_unit_inferred"] is True  # the 40-unit file was read in millimetres
 
 
 def test_cli_errors_are_one_sentence_with_exit_code_2(tmp_path, capsys):
@@ -232,8 +232,9 @@ def test_cli_errors_are_one_sentence_with_exit_code_2(tmp_path, capsys):
 def test_json_records_the_unit_and_the_up_axis(two_by_two):
     _, out = two_by_two
     document = json.loads((out / "statistics.json").read_text())
-    assert document["mesh"]["unit"] == "mm" and document["mesh"]["mm_per_unit"] == 1.0
-    assert document["mesh"]["unit_inferred"] is False and document["mesh"]["unit_name"] == "millimetres"
+    assert document["mesh"]["source_unit"] == "mm" and document["mesh"]["source_mm_per_unit"] == 1.0
+    assert document["mesh"]["source_unit_inferred"] is False and document["mesh"]["source_unit_name"] == "millimetres"
+    assert document["mesh"]["length_unit"] == "mm"
     assert document["settings"]["up"] == "+y" and document["settings"]["up_inferred"] is True  # a ball: the fallback
 
 

@@ -99,13 +99,10 @@ def test_the_solver_does_not_depend_on_up():
 def test_unit_is_recorded_in_the_metadata():
     mesh = sphere().replace(mm_per_unit=1000.0, unit_inferred=True)
     metadata = shade(mesh, "marble", method="exact").metadata
-    assert (metadata["unit"], metadata["unit_name"], metadata["mm_per_unit"], metadata["unit_inferred"]) == (
-        "m",
-        "metres",
-        1000.0,
-        True,
-    )
-    assert metadata["geometry_unit"] == "mm"
+    source = ("source_unit", "source_unit_name", "source_mm_per_unit", "source_unit_inferred")
+    assert tuple(metadata[key] for key in source) == ("m", "metres", 1000.0, True)
+    assert metadata["length_unit"] == "mm" and "unit" not in metadata and "mm_per_unit" not in metadata
+    assert metadata["radiance_unit"] == "W/(m^2 sr) per W/m^2 of irradiance of the light"
 
 
 def test_a_tiny_object_gets_a_proxy_it_allows_and_a_given_edge_too_coarse_is_one_sentence():

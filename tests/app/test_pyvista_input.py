@@ -22,7 +22,7 @@ def test_shade_of_a_polydata_equals_shade_of_its_cleaned_mesh():
     reference = tl.shade(mesh, "marble")
     np.testing.assert_array_equal(result.mesh.points, mesh.points)
     np.testing.assert_allclose(result.B, reference.B, rtol=1e-12, atol=0)
-    assert result.metadata["mm_per_unit"] == 1000.0 and result.B.max() > 0
+    assert result.metadata["source_mm_per_unit"] == 1000.0 and result.B.max() > 0
 
 
 def test_scene_shade_scan_compare_and_viewer_state_take_a_polydata():

@@ -60,7 +60,8 @@ def test_round_trip_with_read_baked_ply(bake):
     np.testing.assert_allclose(baked.normals, mesh.vertex_normals(), atol=1e-7)
     for key, value in METADATA.items():
         assert baked.metadata[key] == value
-    assert baked.metadata["unit"] == "mm" and baked.metadata["geometry_unit"] == "mm"
+    assert baked.metadata["source_unit"] == "mm" and baked.metadata["length_unit"] == "mm"
+    assert baked.metadata["radiance_unit"] == "W/(m^2 sr) per W/m^2 of irradiance of the light"
     assert baked.metadata["version"] and baked.metadata["format"] == "translucency-bake"
 
 
@@ -71,16 +72,14 @@ def test_header_records_the_mesh_unit_and_whether_it_was_inferred(tmp_path, sphe
         tmp_path / "m.ply", inferred, np.ones((n, 3)), np.ones((n, 3)), np.zeros((n, 3), np.uint8), METADATA
     )
     metadata = read_baked_ply(path).metadata
-    assert (metadata["unit"], metadata["unit_name"], metadata["mm_per_unit"], metadata["unit_inferred"]) == (
-        "m",
-        "metres",
-        1000.0,
-        True,
-    )
+    source = ("source_unit", "source_unit_name", "source_mm_per_unit", "source_unit_inferred")
+    assert tuple(metadata[key] for key in source) == ("m", "metres", 1000.0, True)
+    assert metadata["length_unit"] == "mm"  # the coordinates: mm whatever the file's unit
+    assert "unit" not in metadata and "mm_per_unit" not in metadata
     given = write_baked_ply(
         tmp_path / "g.ply", sphere_mesh, np.ones((n, 3)), np.ones((n, 3)), np.zeros((n, 3), np.uint8), METADATA
     )
-    assert read_baked_ply(given).metadata["unit_inferred"] is False
+    assert read_baked_ply(given).metadata["source_unit_inferred"] is False
 
 
 def test_round_trip_with_plyfile(bake):

@@ -124,13 +124,16 @@ def test_implausible_warning_spells_the_flag_on_the_command_line():
 
 
 def test_unit_metadata_records_name_factor_and_whether_inferred():
+    # the coordinates are in mm whatever the file's unit: the file's unit is named source_...
     assert unit_metadata(1000.0, True) == {
-        "unit": "m",
-        "unit_name": "metres",
-        "mm_per_unit": 1000.0,
-        "unit_inferred": True,
+        "length_unit": "mm",
+        "source_unit": "m",
+        "source_unit_name": "metres",
+        "source_mm_per_unit": 1000.0,
+        "source_unit_inferred": True,
     }
-    assert unit_metadata(2.5)["unit_name"] == "units of 2.5 mm" and unit_metadata(2.5)["unit_inferred"] is False
+    assert unit_metadata(2.5)["source_unit_name"] == "units of 2.5 mm"
+    assert unit_metadata(2.5)["source_unit_inferred"] is False
 
 
 # the shared scans state no unit; inferred, each comes out at its real size (largest extent, mm)

@@ -8,10 +8,11 @@
 * :func:`format_summary` and :func:`exit_code` turn the records into the table and the exit status
   of ``translucency bake``; :class:`ConsoleProgress` shows its progress (bars on a terminal, lines elsewhere).
 
-Output names are ``<stem>_<material>.ply`` in the output folder; a stem met twice (``a/scan.ply``,
+Output names are ``<stem>_<material>.<format>`` in the output folder (``format`` ply, vtp, vtk, glb
+or gltf: :func:`translucency.app.pipeline.write_result`; default ply); a stem met twice (``a/scan.ply``,
 ``b/scan.obj``) gets ``-2``, ``-3``, ... and a name is never that of an input, so no input is ever
-written over. Each PLY is written atomically (:func:`translucency.io.baked.write_baked_ply`): a
-failed file leaves no partial output.
+written over. A single scan may be baked to one file named by ``output`` (``x.vtp``: that format). Each
+file is written atomically: a failed file leaves no partial output.
 
 Threads: ``workers`` processes each run numba with ``cores // workers`` threads. On Dask every task
 runs numba with ``cores // nthreads`` threads of its worker (start workers with ``--nthreads 1`` and
@@ -374,18 +375,22 @@ def failure_sentence(exc: BaseException) -> str:
 # --------------------------------------------------------------------------------------------------
 # output names
 # --------------------------------------------------------------------------------------------------
-def output_paths(sources, output, material_name: str) -> list[Path]:
-    """The PLY each source is baked to (``<stem>_<material>.ply``); creates nothing.
+def output_paths(sources, output, material_name: str, format: str | None = None) -> list[Path]:
+    """The file each source is baked to (``<stem>_<material>.<format>``); creates nothing.
 
     Parameters
     ----------
     sources : list of path-like or None
         The scans (None: the embedded default scan, stem ``bunny``).
     output : path-like
-        A ``.ply`` file for one source, else a folder (existing, or to be created); a name ending
-        in a path separator is always a folder.
+        A file for one source, whose suffix (``.ply``, ``.vtp``, ``.vtk``, ``.glb``, ``.gltf``) names
+        its format; else a folder (existing, or to be created); a name ending in a path separator is
+        always a folder.
     material_name : str
         The material part of the names.
+    format : {"ply", "vtp", "vtk", "glb", "gltf"}, optional
+        The format of the files in a folder (default ply); for a file output, its suffix (a
+        different ``format`` is refused).
 
     Raises
     ------
@@ -393,10 +398,20 @@ def output_paths(sources, output, material_name: str) -> list[Path]:
         A file name for several sources, a folder name that is an existing file, or an output file
         that is an input.
     """
+    from .exports import DEFAULT_FORMAT, RESULT_SUFFIXES, check_format
+
     text = os.fspath(output)
     output = Path(text)
-    as_file = output.suffix.lower() == ".ply" and not output.is_dir() and not text.endswith(("/", os.sep))
+    suffix = output.suffix.lower()
+    as_file = suffix in RESULT_SUFFIXES and not output.is_dir() and not text.endswith(("/", os.sep))
     inputs = {_key(path) for path in sources if path is not None}
+    if format is not None:
+        check_format(format)
+    if as_file and format is not None and suffix != f".{format}":
+        raise InvalidParameterError(
+            f"the output {text} names a {suffix} file but {option('format', format)} was given; the suffix of "
+            f"a file output names its format, so pass one of the two (or a folder for {option('format')})."
+        )
     if as_file:
         if len(sources) != 1:
             raise InvalidParameterError(
@@ -410,15 +425,17 @@ def output_paths(sources, output, material_name: str) -> list[Path]:
         return [output]
     if output.exists() and not output.is_dir():
         raise InvalidParameterError(
-            f"the output {text} is an existing file, not a folder; pass a folder, or a .ply name when baking one mesh."
+            f"the output {text} is an existing file, not a folder; pass a folder, or a file name ending in "
+            f"{', '.join(RESULT_SUFFIXES)} when baking one mesh."
         )
     taken = set(inputs)
     paths = []
     for source in sources:
         stem = _default_stem() if source is None else Path(source).stem
-        candidate, k = output / f"{stem}_{material_name}.ply", 2
+        extension = format or DEFAULT_FORMAT
+        candidate, k = output / f"{stem}_{material_name}.{extension}", 2
         while _key(candidate) in taken:
-            candidate, k = output / f"{stem}-{k}_{material_name}.ply", k + 1
+            candidate, k = output / f"{stem}-{k}_{material_name}.{extension}", k + 1
         taken.add(_key(candidate))
         paths.append(candidate)
     return paths
@@ -438,7 +455,14 @@ def _default_stem() -> str:
 # a batch
 # --------------------------------------------------------------------------------------------------
 def bake_files(
-    paths, output, settings: BakeSettings, *, workers: int = 1, scheduler=None, progress: BakeProgress | None = None
+    paths,
+    output,
+    settings: BakeSettings,
+    *,
+    workers: int = 1,
+    scheduler=None,
+    progress: BakeProgress | None = None,
+    format: str | None = None,
 ) -> list[BakeRecord]:
     """Bake every scan of ``paths`` with the same settings; one failed file does not stop the others.
 
@@ -456,6 +480,8 @@ def bake_files(
         Bake on a Dask cluster: the scheduler's address (``tcp://host:8786``) or a client. The
         workers read the scans and write the PLYs: both must be reachable from them.
     progress : BakeProgress, optional
+    format : {"ply", "vtp", "vtk", "glb", "gltf"}, optional
+        Format of the files in an output folder (default ply); a file output's suffix names its own.
 
     Returns
     -------
@@ -479,7 +505,7 @@ def bake_files(
         from .default_job import OUTPUT_FOLDER
 
         output = OUTPUT_FOLDER
-    outputs = output_paths(sources, output, settings.material_name)
+    outputs = output_paths(sources, output, settings.material_name, format)
     labels = [_source_label(source) for source in sources]
     _check_outputs(outputs)
     client = None if scheduler is None else _dask_client(scheduler)
@@ -795,16 +821,18 @@ def bake(
     workers=1,
     scheduler=None,
     progress=None,
+    format=None,
 ) -> list[BakeRecord]:
-    """Bake scans to PLY files of per-vertex translucent radiance, one file per scan.
+    """Bake scans to files of per-vertex translucent radiance (PLY by default), one file per scan.
 
     Parameters
     ----------
     meshes : path-like or sequence of path-like, optional
         Scan files; None: the embedded default scan (the Stanford bunny, 155 mm across).
     output : path-like, optional
-        A ``.ply`` file for one scan, else a folder (created when missing), default
-        ``translucency-output``; files are named ``<stem>_<material>.ply``.
+        A file for one scan (``.ply``, ``.vtp``, ``.vtk``, ``.glb`` or ``.gltf``: the suffix names the
+        format), else a folder (created when missing), default ``translucency-output``; files are
+        named ``<stem>_<material>.<format>``.
     material : str or Material or Medium
         Catalogue name or coefficients (1/mm).
     lights : light or sequence of lights, optional
@@ -828,6 +856,9 @@ def bake(
         the scans and the output folder must be reachable from them under the same paths.
     progress : BakeProgress, optional
         E.g. :class:`ConsoleProgress` for progress bars.
+    format : {"ply", "vtp", "vtk", "glb", "gltf"}, optional
+        Format of the files in an output folder (default ply; see
+        :func:`translucency.app.pipeline.write_result`).
 
     Returns
     -------
@@ -852,4 +883,4 @@ def bake(
         lights=lights,
         unit=unit,
     )
-    return bake_files(meshes, output, settings, workers=workers, scheduler=scheduler, progress=progress)
+    return bake_files(meshes, output, settings, workers=workers, scheduler=scheduler, progress=progress, format=format)

@@ -195,7 +195,13 @@ def cmd_bake(args) -> int:
     start = time.perf_counter()
     progress = ConsoleProgress(quiet=quiet(args))
     records = bake_files(
-        args.meshes, args.output, settings, workers=args.workers, scheduler=args.scheduler, progress=progress
+        args.meshes,
+        args.output,
+        settings,
+        workers=args.workers,
+        scheduler=args.scheduler,
+        progress=progress,
+        format=args.format,
     )
     print(format_summary(records, time.perf_counter() - start))
     return exit_code(records)
@@ -420,7 +426,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("-o", "--output", help="save the repaired mesh (any format PyVista writes)")
     p.set_defaults(func=cmd_inspect)
 
-    from .options import add_light_options, add_quiet_option, add_scan_options, add_solver_options
+    from .options import add_format_option, add_light_options, add_quiet_option, add_scan_options, add_solver_options
 
     p = sub.add_parser(
         "bake",
@@ -434,8 +440,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument(
         "-o",
         "--output",
-        help="a .ply file for one mesh, else a folder, created when missing (default translucency-output)",
+        help="a file for one mesh (.ply, .vtp, .vtk, .glb or .gltf: the suffix names the format), else a folder, "
+        "created when missing (default translucency-output)",
     )
+    add_format_option(p)
     p.add_argument(
         "--workers",
         type=int,

@@ -50,7 +50,7 @@ import numpy as np
 from .. import __version__
 from ..errors import InvalidParameterError
 from ..io.polydata import to_pyvista
-from ..io.units import unit_metadata
+from ..io.units import RADIANCE_UNIT, unit_metadata
 from ..scatter.budget import DEFAULT_TIME_LIMIT_S
 from ..scatter.names import DEFAULT_METHOD, DEFAULT_MODEL, DEFAULT_TOL
 from .display import display_colors
@@ -465,7 +465,7 @@ def _write_files(folder, mesh, comparison, relative, lights, camera_direction, u
             "materials": comparison.materials,
             "models": comparison.models,
             "exposure": {"value": comparison.exposure, "rule": "common to every cell"},
-            "radiance_unit": "W/(m^2 sr) per W/m^2 of irradiance, toward the normal",
+            "radiance_unit": f"{RADIANCE_UNIT}, toward the normal",
             "times_s": [{"material": m, "model": k, "seconds": t} for (m, k), t in comparison.times.items()],
             "statistics": comparison.statistics,
             "differences": comparison.differences,

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["REC709_LUMINANCE", "srgb_encode", "display_colors", "luminance"]
+__all__ = ["REC709_LUMINANCE", "srgb_encode", "srgb_decode", "display_colors", "luminance"]
 
 #: Weights of linear R, G, B in the luminance Y (ITU-R BT.709, the primaries sRGB shares).
 REC709_LUMINANCE = (0.2126, 0.7152, 0.0722)
@@ -26,6 +26,16 @@ def srgb_encode(linear):
     """sRGB transfer function (IEC 61966-2-1) of linear values clipped to [0, 1]."""
     c = np.clip(np.asarray(linear, dtype=np.float64), 0.0, 1.0)
     return np.where(c <= 0.0031308, 12.92 * c, 1.055 * np.power(c, 1.0 / 2.4) - 0.055)
+
+
+def srgb_decode(encoded):
+    """Inverse of :func:`srgb_encode` (IEC 61966-2-1): sRGB-encoded values in [0, 1] to linear ones.
+
+    ``srgb_decode(colors / 255)`` is the linear light a display shows for 8-bit sRGB colours (what
+    glTF's linear vertex colours need).
+    """
+    c = np.clip(np.asarray(encoded, dtype=np.float64), 0.0, 1.0)
+    return np.where(c <= 0.04045, c / 12.92, np.power((c + 0.055) / 1.055, 2.4))
 
 
 def display_colors(radiance, exposure: float | None = None):

@@ -8,6 +8,8 @@ rejects the same things with the same sentences:
 * :func:`add_light_options` / :func:`lights_from_args` -- ``--light-dir X,Y,Z`` (from the object toward
   the light), ``--light SPEC`` (any mix, see :data:`~translucency.app.lightspec.LIGHT_SPEC_HELP`),
   ``--env FILE`` (an equirectangular HDR map) with ``--env-directions N``;
+* :func:`add_format_option` -- ``--format ply|vtp|vtk|glb|gltf``, the format of the files written into
+  an output folder (:mod:`translucency.app.exports`);
 * :func:`add_solver_options` / :func:`solver_settings` -- ``--model``, ``--method``, ``--tol``,
   ``--resolution``, ``--no-shadows``, ``--per-direction``, ``--exposure``, ``--memory-limit``, ``--time-limit``,
   made from and read into :class:`~translucency.app.settings.ShadeSettings` (help texts, defaults, checks);
@@ -193,6 +195,15 @@ def add_quiet_option(parser: argparse.ArgumentParser) -> None:
 def quiet(args) -> bool:
     """True when ``-q``/``--quiet`` was given (:func:`add_quiet_option`)."""
     return bool(getattr(args, "quiet", False))
+
+
+def add_format_option(parser: argparse.ArgumentParser) -> None:
+    """``--format``: the format of the files written into an output folder (default ply; None when not given,
+    so a file output's suffix can name its own)."""
+    from ..io.baked import BAKED_FORMATS
+    from .exports import FORMAT_HELP
+
+    parser.add_argument("--format", default=None, choices=BAKED_FORMATS, help=FORMAT_HELP)
 
 
 def parse_vector(text: str, name: str) -> np.ndarray:

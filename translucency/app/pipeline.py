@@ -3,7 +3,9 @@
 This is the glue between :mod:`translucency.io` and :mod:`translucency.scatter` that the command line,
 the viewer and batch baking share: :func:`shade` takes a cleaned :class:`~translucency.geometry.mesh.TriangleMesh`
 in mm, a material and lights, and returns the per-vertex diffuse radiance factor ``B``, the radiance
-toward the normal ``L = T21(eta, 1) B`` (linear) and display colours (exposure + sRGB).
+toward the normal ``L = T21(eta, 1) B`` (linear) and display colours (exposure + sRGB), in a
+:class:`ShadeResult`; :meth:`ShadeResult.to_pyvista` and :func:`write_result` (PLY, VTP/VTK, glTF by
+the suffix, :mod:`translucency.app.exports`) hand it to other programs.
 """
 
 from __future__ import annotations
@@ -17,7 +19,7 @@ import numpy as np
 
 from ..errors import TranslucencyError, option
 from ..geometry.measure import mean_edge_length
-from ..io.units import unit_metadata
+from ..io.units import RADIANCE_UNIT, unit_metadata
 from ..scatter.budget import DEFAULT_TIME_LIMIT_S
 from ..scatter.names import DEFAULT_METHOD, DEFAULT_MODEL, DEFAULT_TOL
 from .display import display_colors, srgb_encode  # noqa: F401  (re-exported)
@@ -105,7 +107,43 @@ def load_default_scan():
 
 @dataclass
 class ShadeResult:
-    """Everything :func:`shade` computed for one mesh (per-vertex arrays over ``mesh.points``)."""
+    """Everything :func:`shade` computed for one mesh: per-vertex arrays over ``mesh.points``, the settings.
+
+    Radiance and ``B`` are in the solver's unit, W/(m² sr) for lights whose irradiance is given in
+    W/m² (per W/m² of the light's irradiance: the default light has 1 W/m²).
+
+    Attributes
+    ----------
+    mesh : TriangleMesh
+        The mesh shaded: points in mm, triangles, ``mesh.mm_per_unit`` the scan file's unit.
+    B : ndarray, shape (n, 3)
+        The view-independent diffuse radiance factor ``B(x_o)`` per vertex and RGB channel, W/(m² sr)
+        per W/m² (linear; interpolated from the proxy on a proxy solve).
+    radiance : ndarray, shape (n, 3)
+        Linear radiance toward the normal ``L = T21(eta, 1) B``, same unit: what a bake stores.
+    colors : ndarray of uint8, shape (n, 3)
+        Display colours, ``srgb(exposure * radiance)`` in 8 bits (:func:`translucency.app.display.display_colors`).
+    exposure : float
+        The display exposure the colours were made with, 1 / (unit of ``radiance``).
+    normals : ndarray, shape (n, 3)
+        Unit vertex normals of ``mesh`` (area-weighted), 1.
+    stats : dict
+        What the solve did: ``incident`` (lit vertices, rays), ``solver`` (pairs, ...), ``reused`` (work
+        kept from earlier calls of the :class:`Scene`), ``coarser`` (the proxy line, or None),
+        ``solver_vertices``, ``vertices``.
+    timings : dict
+        Seconds per stage (``geometry``, ``incident_light``, ``solve_...``, ``interpolate_to_full``), s.
+    metadata : dict
+        Every setting of the run, as the outputs record them: material and coefficients (1/mm), lights,
+        model, method, tolerance, resolution, shadows, exposure, the units (``length_unit`` = "mm",
+        ``source_unit``, ``source_mm_per_unit``, ... of the scan file, ``radiance_unit``), up axis,
+        budget, version.
+    incident_flux : ndarray, shape (n, 3), optional
+        The solver's input: the flux density entering the surface, ``phi = T12 E cos V`` summed over the
+        light samples, W/m² per channel (:func:`translucency.scatter.irradiance.incident_flux`). On a
+        proxy solve it is the proxy's ``phi`` interpolated to every vertex like ``B`` (what the solver
+        saw: shadow edges as soft as the proxy's); None on a result made by hand.
+    """
 
     mesh: object
     B: np.ndarray
@@ -116,6 +154,22 @@ class ShadeResult:
     stats: dict
     timings: dict
     metadata: dict = field(default_factory=dict)
+    incident_flux: np.ndarray | None = None
+
+    def to_pyvista(self):
+        """The result as a ``pyvista.PolyData``: points (mm), triangles, every per-vertex array, the settings.
+
+        ``point_data`` holds ``radiance`` and ``B`` (n, 3) float, ``colors`` (n, 3) uint8 (the active
+        scalars), ``luminance`` (n,, the Rec. 709 luminance of the radiance, same unit),
+        ``incident_flux`` (n, 3, W/m²) and ``normals`` (n, 3); ``field_data`` the settings (:attr:`metadata`
+        flattened to strings and numbers, with ``length_unit`` = "mm", ``radiance_unit`` and
+        ``incident_flux_unit``). So ``mesh.plot(scalars="colors", rgb=True)`` shows the bake,
+        ``mesh.plot(scalars="luminance")`` the luminance in a colour map, and ``mesh.save("x.vtp")``
+        keeps it all (:func:`write_result` writes the same atomically).
+        """
+        from .exports import result_polydata
+
+        return result_polydata(self)
 
 
 class Scene:
@@ -292,9 +346,11 @@ class Scene:
         for solution in solutions:
             for k, v in solution.timings.items():
                 timings[f"solve_{k}"] = timings.get(f"solve_{k}", 0.0) + v
+        phi = incident.phi_rgb
         if decimation is not None:
             start = time.perf_counter()
             B = np.maximum(decimation.interpolate(B), 0.0)
+            phi = np.maximum(decimation.interpolate(phi), 0.0)  # what the solver saw, as B (ShadeResult)
             timings["interpolate_to_full"] = time.perf_counter() - start
         radiance = float(fresnel_transmittance(1.0, medium.eta)) * B  # L toward the normal, T21(eta, 1) B
         colors, exposure = display_colors(radiance, exposure)
@@ -305,7 +361,7 @@ class Scene:
             "shadows": self.shadows,
             "exposure": exposure,
             **unit_metadata(self.mesh.mm_per_unit, self.mesh.unit_inferred),
-            "geometry_unit": "mm",
+            "radiance_unit": RADIANCE_UNIT,
             "up": self.up,
             "up_inferred": self.up_requested == "auto",
             "budget": {"memory_limit_gb": memory_limit, "time_limit_s": time_limit, "coarser": coarsened},
@@ -342,7 +398,7 @@ class Scene:
             "solver_vertices": solver_mesh.n_points,
             "vertices": self.mesh.n_points,
         }
-        return ShadeResult(self.mesh, B, radiance, colors, exposure, self._normals, stats, timings, metadata)
+        return ShadeResult(self.mesh, B, radiance, colors, exposure, self._normals, stats, timings, metadata, phi)
 
     def _coarser(self, solver_mesh, exc, attempt):
         """The edge length (mm) of a proxy whose solve should fit the budget ``exc`` was over;
@@ -602,13 +658,24 @@ def shade_scan(
 
 
 def write_result(result: ShadeResult, path) -> Path:
-    """Write a result as a baked PLY (radiance, ``B``, colours, normals, every setting in the header),
-    atomically (:func:`translucency.io.baked.write_baked_ply`); the pipeline's second half. Returns the path."""
-    from ..io.baked import write_baked_ply
+    """Write a result to a file whose suffix names the format, atomically, with every setting; the
+    pipeline's second half. Returns the path.
 
-    return write_baked_ply(
-        path, result.mesh, result.radiance, result.B, result.colors, result.metadata, normals=result.normals
-    )
+    ``.ply`` (colours, radiance and ``B`` as float properties, ``quality`` = luminance, settings in the
+    header), ``.vtp``/``.vtk`` (:meth:`ShadeResult.to_pyvista`: every array as point data, settings as
+    field data), ``.glb``/``.gltf`` (linear vertex colours for Blender and web viewers, settings in
+    ``extras``); what each holds and which programs read it: :mod:`translucency.app.exports`.
+
+    Raises
+    ------
+    InvalidParameterError
+        Another suffix (one sentence listing the supported ones), a missing folder, the scan itself.
+    WriteError
+        When the disk refuses the file; nothing is left behind.
+    """
+    from .exports import write_result_file
+
+    return write_result_file(result, path)
 
 
 def _proxy_edge(mean_edge, medium, resolution, mesh):

@@ -23,6 +23,7 @@ import numpy as np
 
 from ..errors import InvalidParameterError, WriteError
 from .atomic import prepare_output_file, same_file, write_bytes
+from .formats.vtk import encode_polydata
 from .polydata import to_pyvista
 
 __all__ = ["WRITABLE_FORMATS", "check_output_path", "save_mesh"]
@@ -137,14 +138,4 @@ def _obj_bytes(mesh, suffix) -> list[bytes]:
 
 def _vtk_bytes(mesh, suffix) -> list[bytes]:
     """VTK legacy (binary) or XML PolyData, by VTK's writers into memory; every point array is kept."""
-    from vtkmodules.vtkIOLegacy import vtkPolyDataWriter
-    from vtkmodules.vtkIOXML import vtkXMLPolyDataWriter
-
-    writer = vtkPolyDataWriter() if suffix == ".vtk" else vtkXMLPolyDataWriter()
-    writer.SetInputData(to_pyvista(mesh))
-    if suffix == ".vtk":
-        writer.SetFileTypeToBinary()
-    writer.WriteToOutputStringOn()
-    if not writer.Write():
-        raise RuntimeError(f"VTK could not encode the mesh as {suffix}")
-    return [writer.GetOutputStdString() if suffix == ".vtk" else writer.GetOutputString().encode("utf-8")]
+    return [encode_polydata(to_pyvista(mesh), suffix)]

@@ -26,6 +26,10 @@ extent           largest side of the bounding box                           mm
 PLAUSIBLE_EXTENT extents of scanned objects: 5 mm (a ring) to 5 m (a car)   mm
 ABSURD_EXTENT    outside this range the file cannot be a scan at all        mm
 ================ ========================================================== =====
+
+Outputs record their units with :func:`unit_metadata` (``length_unit`` = ``"mm"``, the coordinates'
+unit, and ``source_unit`` ... for the scan file's) and :data:`RADIANCE_UNIT` /
+:data:`INCIDENT_FLUX_UNIT` for the values computed on them.
 """
 
 from __future__ import annotations
@@ -38,6 +42,9 @@ from ..errors import InvalidParameterError, MeshError, option
 
 __all__ = [
     "UNITS",
+    "LENGTH_UNIT",
+    "RADIANCE_UNIT",
+    "INCIDENT_FLUX_UNIT",
     "PLAUSIBLE_EXTENT",
     "ABSURD_EXTENT",
     "ImplausibleSizeWarning",
@@ -52,6 +59,16 @@ __all__ = [
     "implausible_size_message",
     "check_extent",
 ]
+
+#: Unit of every length translucency computes and writes (coordinates of bakes, edge lengths, extents).
+LENGTH_UNIT = "mm"
+
+#: Unit of the radiance and of ``B`` in every output: the solver's answer for lights whose irradiance
+#: (directional, on a surface facing the light) is given in W/m^2, so per W/m^2 of that irradiance.
+RADIANCE_UNIT = "W/(m^2 sr) per W/m^2 of irradiance of the light"
+
+#: Unit of the incident flux density entering the surface, ``phi = T12 E cos V`` (the solver's input).
+INCIDENT_FLUX_UNIT = "W/m^2"
 
 #: Millimetres per unit of the named length units.
 UNITS: dict[str, float] = {"mm": 1.0, "cm": 10.0, "m": 1000.0, "in": 25.4}
@@ -185,13 +202,20 @@ def inferred_unit_message(name: str, extent_in_file_units: float, unit: str) -> 
 
 
 def unit_metadata(mm_per_unit: float, inferred: bool = False) -> dict:
-    """How every output records a mesh's unit: ``unit`` (label), ``unit_name`` (in words),
-    ``mm_per_unit`` (mm) and ``unit_inferred`` (True when it was inferred from the size)."""
+    """How every output records its units: ``length_unit`` (always ``"mm"``, the unit of the coordinates
+    written) and the unit of the scan file the mesh was read from, ``source_unit`` (label),
+    ``source_unit_name`` (in words), ``source_mm_per_unit`` (mm) and ``source_unit_inferred`` (True when
+    it was inferred from the size).
+
+    The file's unit is named ``source_...`` so that nobody reads ``source_unit = "m"`` as the unit of
+    the coordinates of the output, which are in mm whatever the file's unit was.
+    """
     return {
-        "unit": unit_label(mm_per_unit),
-        "unit_name": unit_words(mm_per_unit),
-        "mm_per_unit": float(mm_per_unit),
-        "unit_inferred": bool(inferred),
+        "length_unit": LENGTH_UNIT,
+        "source_unit": unit_label(mm_per_unit),
+        "source_unit_name": unit_words(mm_per_unit),
+        "source_mm_per_unit": float(mm_per_unit),
+        "source_unit_inferred": bool(inferred),
     }
 
 

@@ -1,4 +1,5 @@
-"""Formats VTK reads (STL, legacy VTK, VTP, VTU, VTM, BYU, glTF, VTK HDF), and PolyData to arrays.
+"""Formats VTK reads (STL, legacy VTK, VTP, VTU, VTM, BYU, glTF, VTK HDF), PolyData to arrays, and
+PolyData to the bytes of a ``.vtp`` or ``.vtk`` file (:func:`encode_polydata`).
 
 VTK's own error text names its classes and addresses, so a file VTK cannot read is reported in our
 sentence instead; point arrays are kept (colours as ``"colors"``).
@@ -15,7 +16,7 @@ from ...errors import MeshError
 from ..triangulate import triangulate_polygons, triangulate_strips
 from .common import as_rgb8
 
-__all__ = ["VTK_FORMATS", "read_with_vtk", "mesh_from_vtk_polydata"]
+__all__ = ["VTK_FORMATS", "read_with_vtk", "mesh_from_vtk_polydata", "encode_polydata"]
 
 VTK_FORMATS = {
     ".stl": ("vtkmodules.vtkIOGeometry", "vtkSTLReader", "STL"),
@@ -116,3 +117,29 @@ def mesh_from_vtk_polydata(poly, *, what: str = "the PolyData"):
             key = "normals"
         point_data[key] = values
     return points, triangles, point_data
+
+
+def encode_polydata(poly, suffix: str) -> bytes:
+    """The bytes of a PolyData as a VTK XML PolyData (``".vtp"``) or binary legacy VTK (``".vtk"``) file.
+
+    VTK's writers encode into memory (they are kept off the disk: on a full disk they stop silently
+    or crash); every point, cell and field array is kept, float64 stays float64.
+
+    Raises
+    ------
+    RuntimeError
+        When VTK cannot encode the data.
+    """
+    from vtkmodules.vtkIOLegacy import vtkPolyDataWriter
+    from vtkmodules.vtkIOXML import vtkXMLPolyDataWriter
+
+    legacy = suffix.lower() == ".vtk"
+    writer = vtkPolyDataWriter() if legacy else vtkXMLPolyDataWriter()
+    writer.SetInputData(poly)
+    if legacy:
+        writer.SetFileTypeToBinary()
+    writer.WriteToOutputStringOn()
+    if not writer.Write():
+        raise RuntimeError(f"VTK could not encode the mesh as {suffix}")
+    output = writer.GetOutputStdString() if legacy else writer.GetOutputString()
+    return output if isinstance(output, bytes) else output.encode("utf-8")
