@@ -1,8 +1,10 @@
-"""The main job on the embedded default scan: clean, light, solve, bake a PLY and render a PNG.
+"""The main job on the embedded default scan: clean, light, solve, bake a PLY and draw its picture.
 
 Until the full ``bake``/``view`` commands exist this is what ``./run.sh`` and ``translucency`` with no
 subcommand do: a real end-to-end computation on the Stanford bunny shipped inside pymeshlab, in marble,
-under one directional light with shadows, written to ``translucency-output/``.
+under one directional light with shadows, written to ``translucency-output/``. The PNG is the labelled
+two-view picture of :mod:`translucency.app.figure` (sRGB and false-colour luminance in physical units,
+scale bar, colour bar, light arrow).
 """
 
 from __future__ import annotations
@@ -12,8 +14,8 @@ from pathlib import Path
 
 from ..io.atomic import prepare_output_folder
 from ..io.clean import clean_mesh
+from .figure import write_figure
 from .pipeline import default_scan_path, load_default_scan, shade_scan, write_result
-from .render import render_colors
 from .settings import DEFAULT_MATERIAL, ShadeSettings
 
 OUTPUT_FOLDER = Path("translucency-output")
@@ -49,6 +51,6 @@ def run_default_job(output: Path = OUTPUT_FOLDER, material: str = DEFAULT_MATERI
     output.mkdir(parents=True, exist_ok=True)
     ply = write_result(result, output / f"bunny_{material}.ply")
     png = output / f"bunny_{material}.png"
-    render_colors(mesh, result.colors, png, up=result.metadata["up"])
+    write_figure(png, mesh, result, name="bunny")
     print(f"wrote {ply} and {png} in {time.perf_counter() - total:.1f} s")
     return 0
