@@ -141,7 +141,9 @@ def cmd_bake(args) -> int:
     from .bake import BakeSettings, ConsoleProgress, bake_files, exit_code, format_summary
     from .options import lights_from_args, solver_settings
 
-    settings = BakeSettings.of(solver_settings(args), lights=lights_from_args(args), unit=args.unit)
+    settings = BakeSettings.of(
+        solver_settings(args), lights=lights_from_args(args), unit=args.unit, preview=args.preview
+    )
     start = time.perf_counter()
     records = bake_files(
         args.meshes, args.output, settings, workers=args.workers, scheduler=args.scheduler, progress=ConsoleProgress()
@@ -350,7 +352,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("-o", "--output", help="save the repaired mesh (any format PyVista writes)")
     p.set_defaults(func=cmd_inspect)
 
-    from .options import add_light_options, add_scan_options, add_solver_options
+    from .options import add_light_options, add_preview_option, add_scan_options, add_solver_options
 
     p = sub.add_parser(
         "bake",
@@ -361,6 +363,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_scan_options(p, several=True)
     add_light_options(p)
     add_solver_options(p)
+    add_preview_option(p)
     p.add_argument(
         "-o",
         "--output",
