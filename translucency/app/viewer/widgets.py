@@ -243,14 +243,15 @@ class Viewer:
             scalar_bar={
                 "color": "white",
                 "position_x": 0.15,
-                "position_y": 0.02,
+                "position_y": 0.01,
                 "width": 0.7,
-                "height": 0.07,
+                "height": 0.09,
                 "fmt": "%.3g",
                 "title_font_size": 12,
                 "label_font_size": 11,
             },
         )
+        self._scalar_bar.SetTextPositionToPrecedeScalarBar()  # tick labels under the bar, apart from the title
         if camera_direction is None:
             camera_direction = default_camera_direction(self.up_axis)
         self.renderer.camera_position = camera_position(self.poly.center, self.poly.length, camera_direction, self.up)
