@@ -477,3 +477,24 @@ def test_worker_processes_spell_the_flag_as_the_command_line_does(tmp_path, caps
 def test_bad_up_is_one_sentence():
     with pytest.raises(InvalidParameterError, match="up axis must be one of"):
         batch.BakeSettings(up="sideways")
+
+
+def test_preview_writes_the_picture_beside_each_bake_also_from_worker_processes(scans, tmp_path, capsys):
+    import imageio.v3 as iio
+
+    inputs = [str(scans["small"]), str(scans["large"])]
+    code = cli.main(["bake", *inputs, "-o", str(tmp_path), "--preview", "--workers", "2", "--method", "exact"])
+    assert code == 0
+    assert sorted(p.name for p in tmp_path.iterdir()) == [
+        "large_marble.ply",
+        "large_marble.png",
+        "small_marble.ply",
+        "small_marble.png",
+    ]
+    for name in ("small_marble.png", "large_marble.png"):
+        image = iio.imread(tmp_path / name)
+        assert image.ndim == 3 and image.shape[1] > image.shape[0] > 300  # two views side by side
+    # without --preview no picture
+    records = translucency.bake([scans["small"]], tmp_path / "plain", "marble", method="exact")
+    assert records[0].ok and [p.suffix for p in (tmp_path / "plain").iterdir()] == [".ply"]
+    assert batch.BakeSettings(preview=True).preview and not batch.BakeSettings().preview

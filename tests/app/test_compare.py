@@ -46,10 +46,11 @@ def test_files_and_the_grid_size(two_by_two):
     assert result.files["grid"] == out / "grid.png"
     grid = iio.imread(out / "grid.png")
     assert grid.shape[:2] == (2 * CELL[1], 2 * CELL[0])  # rows: models, columns: materials
-    # each cell holds its object: the centre pixel of every cell is lit
+    # each cell holds its object: pixels around the centre of every cell are lit
     for row in range(2):
         for column in range(2):
-            assert grid[row * CELL[1] + CELL[1] // 2, column * CELL[0] + CELL[0] // 2].max() > 20
+            y, x = row * CELL[1] + CELL[1] // 2, column * CELL[0] + CELL[0] // 2
+            assert grid[y - 20 : y + 20, x - 20 : x + 20].max() > 20
     differences = iio.imread(out / "differences.png")
     assert differences.shape[1] == 2 * CELL[0] and differences.shape[0] > CELL[1]
 
@@ -239,11 +240,49 @@ def test_json_records_the_unit_and_the_up_axis(two_by_two):
 
 
 def test_up_sets_the_default_light_and_the_profile_plane(sphere):
-    from translucency.app.pipeline import default_light_direction
+    from translucency.app.compare import compare_light_direction
 
     result = compare(sphere, ["marble"], up="z", method="exact")
     metadata = result.results["marble", "directional"].metadata
     assert metadata["up"] == "+z"
-    light = default_light_direction("+z") / np.linalg.norm(default_light_direction("+z"))
+    light = compare_light_direction("+z") / np.linalg.norm(compare_light_direction("+z"))
     np.testing.assert_allclose(metadata["lights"][0]["direction"], light)
     assert abs(np.dot(result.profile_plane["normal"], (0, 0, 1))) < 1e-12  # the cut contains the up axis
+
+
+def test_the_profile_legend_lies_beside_the_data(two_by_two):
+    from translucency.app.compare import profile_figure
+
+    figure = profile_figure(two_by_two[0])
+    figure.canvas.draw()
+    renderer = figure.canvas.get_renderer()
+    legend = figure.legends[0].get_window_extent(renderer)
+    assert all(not legend.overlaps(ax.get_window_extent(renderer)) for ax in figure.axes)
+    assert not legend.overlaps(figure.get_suptitle() and figure._suptitle.get_window_extent(renderer))
+    assert figure.axes[0].get_xlabel().startswith("position along the cut (mm")
+
+
+def test_the_default_light_puts_a_tenth_of_what_the_camera_sees_in_shadow():
+    from translucency.app.compare import visible_shadow_fraction, visible_vertices
+    from translucency.app.pipeline import DEFAULT_LIGHT_DIRECTION, load_scan
+    from translucency.app.render import camera_position
+    from translucency.io.upright import to_scan_frame
+
+    mesh, _, _ = load_scan(None)
+    shadowed = visible_shadow_fraction(mesh)
+    assert 0.10 <= shadowed < 0.6  # a shadow edge to see, and still most of the scan lit
+    # the main job's key light, from above and in front, leaves less than half as much in shadow
+    light = DirectionalLight(to_scan_frame(DEFAULT_LIGHT_DIRECTION, "+y"), 1.0)
+    assert visible_shadow_fraction(mesh, light) < 0.5 * shadowed
+    # visibility itself: a sphere of radius r seen from a distance d shows the cap cos(theta) > r / d,
+    # (1 - r / d) / 2 of its surface
+    points, triangles = icosphere(3, 20.0)
+    ball = TriangleMesh(points, triangles)
+    eye = np.asarray(camera_position((0, 0, 0), 40.0, (0, 0, 1))[0])
+    seen = visible_vertices(ball, eye)
+    assert np.all(points[seen][:, 2] > 0) and abs(seen.mean() - (1 - 20.0 / eye[2]) / 2) < 0.03
+    # a second ball in front hides part of the first
+    hidden = visible_vertices(
+        TriangleMesh(np.vstack([points, points + (0, 0, 45)]), np.vstack([triangles, triangles + len(points)])), eye
+    )
+    assert hidden[: len(points)].sum() < 0.5 * seen.sum()

@@ -160,6 +160,10 @@ def test_save_key_writes_a_screenshot_and_the_bake(viewer, tmp_path):
     interactor.InvokeEvent("KeyPressEvent")
     pngs, plys = sorted(tmp_path.glob("*.png")), sorted(tmp_path.glob("*.ply"))
     assert [p.name for p in pngs] == ["scan_marble_directional_000.png"] and len(plys) == 1
+    import imageio.v3 as iio
+
+    assert np.array_equal(iio.imread(pngs[0]), viewer.screenshot())  # the scan's part: no controls in it
+    assert iio.imread(pngs[0]).shape[:2] == (300, 280)
     baked = read_baked_ply(plys[0])
     np.testing.assert_allclose(baked.radiance, viewer.result.radiance, rtol=1e-6, atol=1e-9)
     assert baked.metadata["material"] == "marble" and baked.metadata["exposure"] == viewer.exposure
@@ -292,3 +296,113 @@ def test_shared_angel_is_shown_z_up_by_default(shared_meshes):
         np.testing.assert_allclose(view.plotter.camera_position[2], (0, 0, 1), atol=1e-9)
     finally:
         view.close()
+
+
+def test_the_picture_is_the_scan_alone_and_no_control_covers_it(sphere, tmp_path):
+    import imageio.v3 as iio
+
+    from translucency.app.viewer import CONTROL_STRIP
+
+    view = Viewer(sphere, "marble", window_size=(1024, 768), off_screen=True)
+    try:
+        picture = view.screenshot(tmp_path / "shot.png")
+        window = view.screenshot(widgets=True)
+        height, width = picture.shape[:2]
+        assert window.shape == (768, 1024, 3) and height == 768 and abs(width - 1024 * (1 - CONTROL_STRIP)) <= 1
+        assert np.array_equal(iio.imread(tmp_path / "shot.png"), picture)
+        # a render of the same colours and camera with no widget at all: equal pixels, so neither the saved
+        # picture nor the scan's part of the window holds a slider, a check box or text
+        expected = render_colors(
+            sphere, view.poly.point_data["colors"], window_size=(width, height), camera=view.renderer.camera_position
+        )
+        assert picture.max() > 100
+        assert np.abs(picture.astype(float) - expected).mean() < PIXEL_TOLERANCE
+        assert np.abs(window[:, :width].astype(float) - expected).mean() < PIXEL_TOLERANCE
+        # and the controls are there, in the strip
+        strip = window[:, width + 2 :]
+        assert (strip != strip[0, 0]).any(axis=2).mean() > 0.05
+    finally:
+        view.close()
+
+
+def test_false_colour_shows_the_luminance_with_a_colour_bar_and_no_solve(sphere):
+    from matplotlib import colormaps
+
+    from translucency.app.display import luminance
+
+    view = Viewer(sphere, "marble", window_size=(480, 360), off_screen=True)
+    try:
+        solves, srgb = view.n_solves, view.screenshot()
+        view.set_false_colour(True)
+        picture = view.screenshot()
+        assert view.n_solves == solves and view.widgets["false_colour"].GetRepresentation().GetState() == 1
+        low, high = view.state.false_colour_range()
+        np.testing.assert_allclose(
+            view.false_colour_poly.point_data["false colour"], np.maximum(luminance(view.result.radiance), low)
+        )
+        # the scan and the colour bar are drawn with matplotlib's inferno map (the sRGB view has no such pixels)
+        lut = (colormaps["inferno"](np.linspace(0, 1, 256))[:, :3] * 255).astype(int)
+
+        def on_map(image):
+            pixels = image.reshape(-1, 3).astype(int)
+            pixels = pixels[pixels.max(axis=1) > 40]
+            return (np.abs(pixels[:, None, :] - lut[None]).sum(axis=2).min(axis=1) <= 6).mean()
+
+        assert on_map(picture) > 0.9 and on_map(srgb) < 0.5
+        assert view.state.false_colour_title in [bar.GetTitle() for bar in view.plotter.scalar_bars.values()]
+        view.set_false_colour_scale("linear")
+        assert not (view.screenshot() == picture).all()
+        view.set_false_colour(False)
+        assert np.abs(view.screenshot().astype(float) - srgb).mean() < PIXEL_TOLERANCE
+    finally:
+        view.close()
+
+
+def test_the_compass_arrow_follows_the_light_sliders(viewer):
+    def arrow_direction():
+        points = np.asarray(viewer.compass_arrow.points)
+        centre = points.mean(axis=0)
+        return centre / np.linalg.norm(centre)
+
+    assert arrow_direction() @ viewer.lights[0].direction > 0.99
+    drag(viewer.widgets["azimuth"], -120.0)
+    drag(viewer.widgets["elevation"], 10.0)
+    direction = light_direction(-120.0, 10.0)
+    np.testing.assert_allclose(viewer.lights[0].direction, direction, atol=1e-12)
+    assert arrow_direction() @ direction > 0.99
+
+
+def test_draws_into_a_plotter_the_user_passes(sphere):
+    import pyvista
+
+    plotter = pyvista.Plotter(off_screen=True, window_size=(300, 200), shape=(1, 2), border=False)
+    plotter.set_background("black")  # as the viewer's own, so that the pictures compare
+    plotter.subplot(0, 1)
+    view = Viewer(sphere, "marble", plotter=plotter)
+    try:
+        assert view.plotter is plotter and view.renderer is plotter.renderers[1] and view.widgets == {}
+        picture = view.screenshot()
+        assert picture.shape == (200, 150, 3) and picture.max() > 100
+        expected = render_colors(
+            sphere, view.poly.point_data["colors"], window_size=(150, 200), camera=view.renderer.camera_position
+        )
+        # a sub-viewport of the host's window rasterises the same triangles a little differently at the edges
+        assert np.abs(picture.astype(float) - expected).mean() < 2 * PIXEL_TOLERANCE
+        left = plotter.screenshot(return_img=True)[:, :150]
+        assert np.all(left == left[0, 0])  # the other subplot is the host's, untouched
+        view.set_exposure(2 * view.exposure)
+        assert view.screenshot().astype(float).mean() > picture.astype(float).mean()
+        view.close()
+        plotter.render()  # still the host's, still open
+    finally:
+        plotter.close()
+
+
+@needs_display
+def test_keys_y_and_l_toggle_the_false_colour_and_its_scale(viewer):
+    interactor = viewer.plotter.iren.interactor
+    for key, expected in (("y", (True, "log")), ("l", (True, "linear")), ("y", (False, "linear"))):
+        interactor.SetKeySym(key)
+        interactor.InvokeEvent("KeyPressEvent")
+        assert (viewer.state.false_colour, viewer.state.false_colour_scale) == expected
+    assert viewer.widgets["log_scale"].GetRepresentation().GetState() == 0

@@ -233,3 +233,24 @@ def test_the_bake_holds_the_radiance_toward_the_normal_at_the_current_exposure(s
     assert baked.metadata["exposure"] == pytest.approx(state.exposure)
     state.set_view_dependent(False)
     np.testing.assert_array_equal(np.asarray(baked.colors_rgb8), state.colors())  # the view-independent colours
+
+
+def test_false_colour_shows_the_luminance_without_a_solve(state, monkeypatch):
+    from translucency.app.display import luminance
+
+    calls = count_solves(state, monkeypatch)
+    assert state.set_false_colour(True) and state.false_colour and not state.set_false_colour(True)
+    # the luminance of what is shown (Rec. 709 of the linear radiance), in W/(m^2 sr) per W/m^2
+    np.testing.assert_allclose(state.false_colour_values(), luminance(state.radiance_shown()))
+    assert "false colour: luminance, log" in state.status
+    low, high = state.false_colour_range()
+    assert np.isclose(high, 1.0 / state.exposure) and np.isclose(low, high / 1000)
+    assert state.set_false_colour_scale("linear") and state.false_colour_range()[0] == 0.0
+    state.set_false_colour(True, "red")
+    np.testing.assert_array_equal(state.false_colour_values(), state.result.radiance[:, 0])
+    assert "linear scale" in state.false_colour_title and "W/(m² sr)" in state.false_colour_title
+    with pytest.raises(InvalidParameterError, match="log, linear"):
+        state.set_false_colour_scale("sqrt")
+    with pytest.raises(InvalidParameterError, match="luminance"):
+        state.set_false_colour(True, "hue")
+    assert calls == []

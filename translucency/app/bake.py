@@ -92,10 +92,14 @@ class BakeSettings(ShadeSettings):
         Length unit of the scan files: ``mm``, ``cm``, ``m``, ``in`` or mm per unit; None: inferred
         from each file's size (:func:`translucency.io.units.infer_unit`). Ignored for the embedded
         default scan, which has its own size.
+    preview : bool
+        Also write a PNG beside each output, same name with ``.png``: the sRGB and the false-colour
+        views, labelled (:func:`translucency.app.figure.write_figure`).
     """
 
     lights: tuple | None = None
     unit: str | float | None = None
+    preview: bool = False
 
     def __post_init__(self):
         from ..io.units import parse_unit
@@ -108,9 +112,14 @@ class BakeSettings(ShadeSettings):
             parse_unit(self.unit)
 
     @classmethod
-    def of(cls, settings: ShadeSettings, lights=None, unit=None) -> BakeSettings:
-        """The bake of ``settings`` under ``lights`` for files in ``unit``."""
-        return cls(**{f.name: getattr(settings, f.name) for f in fields(ShadeSettings)}, lights=lights, unit=unit)
+    def of(cls, settings: ShadeSettings, lights=None, unit=None, preview=False) -> BakeSettings:
+        """The bake of ``settings`` under ``lights`` for files in ``unit`` (with ``preview`` PNGs)."""
+        return cls(
+            **{f.name: getattr(settings, f.name) for f in fields(ShadeSettings)},
+            lights=lights,
+            unit=unit,
+            preview=preview,
+        )
 
     @property
     def material_name(self) -> str:
@@ -290,7 +299,8 @@ def bake_file(path, output, settings: BakeSettings, progress=None) -> BakeRecord
     path : str or path-like or None
         The scan (in ``settings.unit``); None for the embedded default scan.
     output : str or path-like
-        The PLY to write (its folder must exist); written atomically, so a failure leaves nothing.
+        The PLY to write (its folder must exist); written atomically, so a failure leaves nothing. With
+        ``settings.preview`` its picture is written beside it (same name, ``.png``).
     settings : BakeSettings
     progress : callable, optional
         ``progress(stage, fraction)`` with stages ``loading``, the solver's (``far field``,
@@ -319,6 +329,15 @@ def bake_file(path, output, settings: BakeSettings, progress=None) -> BakeRecord
         lit = int(result.stats["incident"]["n_lit"])
         report("writing", 0.0)
         write_result(result, output)
+        if settings.preview:
+            from .figure import write_figure
+
+            write_figure(
+                Path(output).with_suffix(".png"),
+                mesh,
+                result,
+                name=_default_stem() if path is None else Path(path).stem,
+            )
         report("writing", 1.0)
     except Exception as exc:  # noqa: BLE001 -- every failure of one file becomes its record
         return BakeRecord(
@@ -822,6 +841,7 @@ def bake(
     scheduler=None,
     progress=None,
     format=None,
+    preview=False,
 ) -> list[BakeRecord]:
     """Bake scans to files of per-vertex translucent radiance (PLY by default), one file per scan.
 
@@ -859,6 +879,8 @@ def bake(
     format : {"ply", "vtp", "vtk", "glb", "gltf"}, optional
         Format of the files in an output folder (default ply; see
         :func:`translucency.app.pipeline.write_result`).
+    preview : bool
+        Also write ``<stem>_<material>.png`` beside each output: its sRGB and false-colour views, labelled.
 
     Returns
     -------
@@ -882,5 +904,6 @@ def bake(
         up,
         lights=lights,
         unit=unit,
+        preview=preview,
     )
     return bake_files(meshes, output, settings, workers=workers, scheduler=scheduler, progress=progress, format=format)

@@ -191,7 +191,9 @@ def cmd_bake(args) -> int:
     from .bake import BakeSettings, ConsoleProgress, bake_files, exit_code, format_summary
     from .options import lights_from_args, quiet, solver_settings
 
-    settings = BakeSettings.of(solver_settings(args), lights=lights_from_args(args), unit=args.unit)
+    settings = BakeSettings.of(
+        solver_settings(args), lights=lights_from_args(args), unit=args.unit, preview=args.preview
+    )
     start = time.perf_counter()
     progress = ConsoleProgress(quiet=quiet(args))
     records = bake_files(
@@ -426,7 +428,14 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("-o", "--output", help="save the repaired mesh (any format PyVista writes)")
     p.set_defaults(func=cmd_inspect)
 
-    from .options import add_format_option, add_light_options, add_quiet_option, add_scan_options, add_solver_options
+    from .options import (
+        add_format_option,
+        add_light_options,
+        add_preview_option,
+        add_quiet_option,
+        add_scan_options,
+        add_solver_options,
+    )
 
     p = sub.add_parser(
         "bake",
@@ -437,6 +446,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_scan_options(p, several=True)
     add_light_options(p)
     add_solver_options(p)
+    add_preview_option(p)
     p.add_argument(
         "-o",
         "--output",

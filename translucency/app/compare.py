@@ -15,7 +15,8 @@ file                         content
 ``statistics.csv``           per (material, model, vertex subset, channel): mean, median and percentiles
                              5/25/75/95/99 of the radiance toward the normal, and the solve time
 ``statistics.json``          the same, the differences' statistics, the settings and the profile's plane
-``profile.png``              radiance along a cut across the light boundary (below), one panel per channel
+``profile.png``              radiance along a cut across the light boundary (below), one panel per channel,
+                             the legend under the panels
 ============================ ===========================================================================
 
 Statistics are per vertex (not area weighted) over two subsets: ``all`` vertices and ``lit`` ones (those
@@ -32,6 +33,14 @@ the light is along ``up``) cuts the surface in closed lines; along the longest, 
 interpolated linearly from the vertices and plotted against the signed arc length, in mm, from the point
 that faces the light most (positive toward ``up``). Dotted lines mark where the direct light ends (the
 shadow terminator, and cast shadows), so the plot shows how far light bleeds past it in each material.
+
+Default light: its own, :data:`COMPARE_LIGHT_DIRECTION`, not the pipeline's. The main job and the viewer
+light a scan from above and in front (:data:`~translucency.app.pipeline.DEFAULT_LIGHT_DIRECTION`), a
+key light that leaves 13 % of the vertices the camera sees of the default bunny in shadow, mostly
+under the chin and the haunch; but materials differ most where light crosses a shadow edge and where
+it shines through thin parts, so compare lights from the right, above and a little behind: 32 % of
+what the camera sees is in shadow, the terminator crosses the body and the ears are lit from behind
+(:func:`visible_shadow_fraction` measures it; tests/app/test_compare.py keeps it at 10 % or more).
 
 Files are written into a temporary folder beside the output folder and moved in only when all are
 complete (:func:`~translucency.io.atomic.staged_folder`): a failed run leaves the folder as it was.
@@ -66,12 +75,17 @@ from .render import (
 from .settings import DEFAULT_MATERIAL, ShadeSettings
 
 __all__ = [
+    "COMPARE_LIGHT_DIRECTION",
+    "compare_light_direction",
+    "visible_vertices",
+    "visible_shadow_fraction",
     "Comparison",
     "compare",
     "validate_choices",
     "radiance_statistics",
     "relative_difference",
     "profile_cut",
+    "profile_figure",
     "PERCENTILES",
 ]
 
@@ -86,6 +100,12 @@ CHANNELS = ("R", "G", "B")
 COLOUR_BAR_BAND = 0.3
 #: The profile's log axis spans this fraction of the largest radiance and up (darker values sit on the floor).
 PROFILE_RANGE = 1e-6
+#: From the object toward compare's default light, in the display frame (right, up, front; turned into the
+#: scan's frame by its up axis like the pipeline's default): from the right, above and a little behind, so
+#: that the camera (front right, :data:`~translucency.app.render.DEFAULT_CAMERA_DIRECTION`) sees the shadow
+#: edge and the glow through thin parts (module docstring: 32 % of the visible vertices of the default
+#: bunny in shadow).
+COMPARE_LIGHT_DIRECTION = (0.9, 1.0, -0.2)
 
 
 @dataclass
@@ -136,6 +156,52 @@ class Comparison:
             if (row["material"], row["model"], row["subset"]) == (material, model, subset)
         }
         return np.array([rows[c] if rows[c] is not None else np.nan for c in CHANNELS])
+
+
+def compare_light_direction(up: str = "+y") -> np.ndarray:
+    """:data:`COMPARE_LIGHT_DIRECTION` in the scan's coordinates for an up axis ``"+x"`` ... ``"-z"``."""
+    from ..io.upright import to_scan_frame
+
+    return to_scan_frame(COMPARE_LIGHT_DIRECTION, up)
+
+
+def visible_vertices(mesh, eye, normals=None) -> np.ndarray:
+    """Which vertices a camera at ``eye`` (mm) sees: facing it (``n . (eye - p) > 0``) and not hidden by
+    the mesh (an Embree ray toward the eye hits nothing), (n,) bool."""
+    from ..scatter.visibility import Occluder
+
+    points = mesh.points
+    normals = mesh.vertex_normals() if normals is None else np.asarray(normals, dtype=np.float64)
+    toward = np.asarray(eye, dtype=np.float64) - points
+    distance = np.linalg.norm(toward, axis=1)
+    facing = np.einsum("ij,ij->i", normals, toward) > 0
+    seen = np.zeros(len(points), dtype=bool)
+    index = np.flatnonzero(facing)
+    seen[index] = Occluder(points, mesh.triangles).visible(
+        points[index], normals[index], toward[index] / distance[index, None], distance[index]
+    )
+    return seen
+
+
+def visible_shadow_fraction(mesh, lights=None, camera_direction=None, up="auto") -> float:
+    """Share of the vertices the default camera sees that get no direct light (incident flux 0).
+
+    ``lights`` default to compare's (:func:`compare_light_direction`), ``camera_direction`` to
+    :func:`~translucency.app.render.default_camera_direction`, both placed by ``up`` (the camera at
+    :func:`~translucency.app.render.camera_position`, as in ``grid.png``).
+    """
+    from ..io.upright import resolve_up
+    from ..scatter.lights import DirectionalLight
+
+    up_axis = resolve_up(up, mesh.points, mesh.triangles)
+    scene = Scene(mesh, up=up_axis)
+    lights = lights if lights is not None else DirectionalLight(compare_light_direction(up_axis), 1.0)
+    camera_direction = default_camera_direction(up_axis) if camera_direction is None else camera_direction
+    low, high = mesh.points.min(axis=0), mesh.points.max(axis=0)
+    eye = camera_position(0.5 * (low + high), float(np.linalg.norm(high - low)), camera_direction)[0]
+    seen = visible_vertices(mesh, eye)
+    lit = scene.incident_on_mesh(resolve_medium(DEFAULT_MATERIAL), lights)[0].phi_rgb.max(axis=1) > 0
+    return float(np.count_nonzero(seen & ~lit) / max(np.count_nonzero(seen), 1))
 
 
 def radiance_statistics(radiance, mask=None) -> dict:
@@ -293,8 +359,8 @@ def compare(
     models : sequence of str, or str
         Scattering models (the grid's rows; the first is the reference of the difference maps).
     lights : light or sequence of lights, optional
-        Directions in the scan's own coordinates. Default: the pipeline's white directional light of
-        1 W/m², above and in front of the scan (:func:`~translucency.app.pipeline.default_light_direction`).
+        Directions in the scan's own coordinates. Default: a white directional light of 1 W/m² from the
+        right, above and a little behind (:func:`compare_light_direction`; why: the module docstring).
     output : path-like, optional
         Folder for the files (created; files in it are replaced atomically). None: numbers only.
     method, tol, resolution, shadows, per_direction, memory_limit, time_limit
@@ -321,7 +387,6 @@ def compare(
     """
     from ..io.upright import up_vector
     from ..scatter.lights import DirectionalLight, as_light_list
-    from .pipeline import default_light_direction
 
     materials, models, media = validate_choices(materials, models)
     if output is not None:
@@ -346,7 +411,7 @@ def compare(
     up = tuple(up_vector(up_axis))
     if camera_direction is None:
         camera_direction = default_camera_direction(up_axis)
-    lights = as_light_list(lights if lights is not None else DirectionalLight(default_light_direction(up_axis), 1.0))
+    lights = as_light_list(lights if lights is not None else DirectionalLight(compare_light_direction(up_axis), 1.0))
 
     results, times = {}, {}
     for material in materials:
@@ -547,8 +612,11 @@ def _difference_image(mesh, comparison, relative, camera_direction, up, cell_siz
         plotter.add_text(f"{material}: {model} vs {reference}", position="upper_left", font_size=10, color="white")
     plotter.subplot(rows, 0)
     font = int(np.clip(columns * cell_size[0] / 40, 8, 14))  # the title fits the band's width
-    plotter.add_scalar_bar(
-        title=f"(Y - Y_{reference}) / Y_{reference}",
+    title = f"(Y - Y_{reference}) / Y_{reference}"
+    # the title at the band's top, apart from the bar: VTK puts a horizontal bar's title among its tick labels
+    plotter.add_text(title, position="upper_edge", font_size=max(font // 2, 5), color="white")
+    bar = plotter.add_scalar_bar(
+        title=title,
         mapper=actor.mapper,
         color="white",
         fmt="%.2f",
@@ -559,13 +627,20 @@ def _difference_image(mesh, comparison, relative, camera_direction, up, cell_siz
         title_font_size=font,
         label_font_size=font - 2,
     )
+    bar.SetTitle("")
     image = plotter.screenshot(return_img=True)
     plotter.close()
     return image
 
 
 def _profile_plot(comparison, path) -> None:
-    """Radiance along the cut, one panel per channel (matplotlib, no global state)."""
+    """Write :func:`profile_figure` as a PNG."""
+    profile_figure(comparison).savefig(path, format="png")
+
+
+def profile_figure(comparison):
+    """Radiance along the cut, one panel per channel, legend beside the panels (a matplotlib Figure,
+    no global state)."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
@@ -593,10 +668,12 @@ def _profile_plot(comparison, path) -> None:
         ax.set_xlabel("position along the cut (mm; 0 faces the light)")
         ax.set_title(f"{channel} channel")
     axes[0].set_ylabel("radiance toward the normal, W/(m² sr) per W/m²")
-    axes[-1].legend(fontsize=7, loc="lower center")
+    handles, labels = axes[0].get_legend_handles_labels()
+    # under the panels, off the data and off the title
+    figure.legend(handles, labels, fontsize=7, loc="outside lower center", ncols=min(len(labels), 4))
     figure.suptitle(
         f"profile across the light boundary: the plane through the centre containing the light cuts the "
         f"surface in a line of {plane['length_mm']:.0f} mm; dotted: where the direct light ends",
         fontsize=9,
     )
-    figure.savefig(path, format="png")
+    return figure

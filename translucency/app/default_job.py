@@ -1,8 +1,10 @@
-"""The main job on the embedded default scan: clean, light, solve, bake a PLY and render a PNG.
+"""The main job on the embedded default scan: clean, light, solve, bake a PLY and draw its picture.
 
 Until the full ``bake``/``view`` commands exist this is what ``./run.sh`` and ``translucency`` with no
 subcommand do: a real end-to-end computation on the Stanford bunny shipped inside pymeshlab, in marble,
-under one directional light with shadows, written to ``translucency-output/``.
+under one directional light with shadows, written to ``translucency-output/``. The PNG is the labelled
+two-view picture of :mod:`translucency.app.figure` (sRGB and false-colour luminance in physical units,
+scale bar, colour bar, light arrow).
 """
 
 from __future__ import annotations
@@ -12,10 +14,9 @@ from pathlib import Path
 
 from ..io.atomic import prepare_output_folder
 from ..io.clean import clean_mesh
-from ..scatter.lights import DirectionalLight
-from .pipeline import default_light_direction, default_scan_path, load_default_scan, scene_for, write_result
+from .figure import write_figure
+from .pipeline import default_scan_path, load_default_scan, scene_for, write_result
 from .progress import StageProgress
-from .render import render_colors
 from .settings import DEFAULT_MATERIAL, ShadeSettings
 
 OUTPUT_FOLDER = Path("translucency-output")
@@ -40,11 +41,9 @@ def run_default_job(output: Path = OUTPUT_FOLDER, material: str = DEFAULT_MATERI
         "Embree shadows) ..."
     )
     scene = scene_for(mesh, settings)
-    light = DirectionalLight(default_light_direction(scene.up), 1.0)
     with StageProgress(default_scan_path().stem, quiet=quiet) as progress:
-        result = scene.shade_with(settings, light, progress=progress)
-    # lit: incident flux > 0 at the vertex (front-facing and not shadowed); the solve's own, reused
-    lit = scene.incident_on_mesh(settings.material, light)[0].phi_rgb.max(axis=1) > 0
+        result = scene.shade_with(settings, progress=progress)  # the default light, above and in front
+    lit = result.incident_flux.max(axis=1) > 0  # incident flux > 0: front-facing and not shadowed
     solver = result.stats["solver"]
     print(
         f"  vertices lit (incident flux > 0): {int(lit.sum())} of {mesh.n_points}; source-receiver pairs "
@@ -61,6 +60,6 @@ def run_default_job(output: Path = OUTPUT_FOLDER, material: str = DEFAULT_MATERI
     output.mkdir(parents=True, exist_ok=True)
     ply = write_result(result, output / f"bunny_{material}.ply")
     png = output / f"bunny_{material}.png"
-    render_colors(mesh, result.colors, png, up=result.metadata["up"])
+    write_figure(png, mesh, result, name="bunny")
     print(f"wrote {ply} and {png} in {time.perf_counter() - total:.1f} s")
     return 0

@@ -206,6 +206,16 @@ def add_format_option(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--format", default=None, choices=BAKED_FORMATS, help=FORMAT_HELP)
 
 
+def add_preview_option(parser: argparse.ArgumentParser) -> None:
+    """``--preview``: a labelled picture beside each output (:mod:`translucency.app.figure`)."""
+    parser.add_argument(
+        "--preview",
+        action="store_true",
+        help="also write <stem>_<material>.png beside each output: the sRGB view and the false-colour "
+        "luminance in W/(m^2 sr) per W/m^2 side by side, with colour bar, scale bar and the light's arrow",
+    )
+
+
 def parse_vector(text: str, name: str) -> np.ndarray:
     """Three finite numbers from ``"x,y,z"``; ``name`` is the option, for the error sentence."""
     try:

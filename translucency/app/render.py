@@ -92,15 +92,15 @@ def new_plotter(window_size, *, off_screen=True, **layout):
     return plotter
 
 
-def add_colored_mesh(plotter, mesh, colors_rgb8):
+def add_colored_mesh(plotter, mesh, colors_rgb8, *, name=None):
     """Add a mesh (mm) showing per-vertex display colours as they are (no lighting); returns the PolyData.
 
     The colours are the array ``"colors"`` of the returned PolyData: change it in place and call
-    ``plotter.render()`` to show new colours.
+    ``plotter.render()`` to show new colours. ``name`` names the actor (``plotter.renderer.actors[name]``).
     """
     poly = to_pyvista(mesh)
     poly.point_data["colors"] = np.asarray(colors_rgb8, dtype=np.uint8)
-    plotter.add_mesh(poly, scalars="colors", rgb=True, lighting=False)
+    plotter.add_mesh(poly, scalars="colors", rgb=True, lighting=False, name=name)
     return poly
 
 
@@ -149,3 +149,64 @@ def render_colors(
 
         write_png(path, image)
     return image
+
+
+#: Colour of the light glyph (an arrow from the light toward the object): in neither the scans' colours
+#: nor the false colour map.
+LIGHT_GLYPH_COLOR = "deepskyblue"
+
+
+def light_glyph(center, radius, direction):
+    """An arrow (PolyData) from the light toward the object: the light direction drawn as a glyph.
+
+    Parameters
+    ----------
+    center : sequence of 3 float
+        Where the arrow points to (the object's centre), mm.
+    radius : float
+        The object's radius (half its bounding-box diagonal), mm: the arrow's tip is that far from
+        ``center`` toward the light, and the arrow is 0.6 of it long.
+    direction : sequence of 3 float
+        From the object toward the light (any non-zero length).
+    """
+    import pyvista
+
+    d = np.asarray(direction, dtype=float)
+    d = d / np.linalg.norm(d)
+    length = 0.6 * float(radius)
+    tail = np.asarray(center, dtype=float) + d * (float(radius) + length)
+    return pyvista.Arrow(start=tail, direction=-d, tip_length=0.3, tip_radius=0.12, shaft_radius=0.045, scale=length)
+
+
+def add_false_colour_mesh(plotter, mesh, values, clim, scale="log", *, title=None, scalar_bar=None):
+    """Add a mesh (mm) showing per-vertex ``values`` through the false colour map.
+
+    ``values`` are in physical units (:func:`translucency.app.display.false_colour_values`), ``clim`` their
+    range (:func:`~translucency.app.display.false_colour_range`); on a log scale values below the range
+    take its lowest colour. With a ``title`` a colour bar is drawn (``scalar_bar``: more keywords of
+    PyVista's ``add_scalar_bar``). The values are the array ``"false colour"`` of the PolyData: change it
+    in place to show new ones.
+
+    Returns
+    -------
+    poly : pyvista.PolyData
+    actor : pyvista.Actor
+    bar : vtkScalarBarActor or None
+    """
+    from .display import FALSE_COLOUR_MAP
+
+    poly = to_pyvista(mesh)
+    poly.point_data["false colour"] = np.maximum(np.asarray(values, dtype=np.float64), clim[0])
+    actor = plotter.add_mesh(
+        poly,
+        scalars="false colour",
+        cmap=FALSE_COLOUR_MAP,
+        clim=list(clim),
+        log_scale=scale == "log",
+        lighting=False,
+        show_scalar_bar=False,
+    )
+    bar = None
+    if title is not None:
+        bar = plotter.add_scalar_bar(title=title, mapper=actor.mapper, **(scalar_bar or {}))
+    return poly, actor, bar

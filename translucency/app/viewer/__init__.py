@@ -12,7 +12,7 @@ from .state import (
     light_angles,
     light_direction,
 )
-from .widgets import EXPOSURE_STOPS, SCALE_RANGE, Viewer
+from .widgets import CONTROL_STRIP, EXPOSURE_STOPS, SCALE_RANGE, Viewer
 
 __all__ = [
     "Viewer",
@@ -24,4 +24,5 @@ __all__ = [
     "INTERACTIVE_VERTICES",
     "SCALE_RANGE",
     "EXPOSURE_STOPS",
+    "CONTROL_STRIP",
 ]

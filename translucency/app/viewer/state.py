@@ -24,6 +24,13 @@ fraction of a second, fine enough that the error stays at a few percent away fro
 terminator, which the proxy moves by up to an edge (single vertices just past it can be many times
 too bright). The measurements behind the default are in bench/README.md ("Interactive proxy").
 :meth:`ViewerState.solve_full` solves what is shown on every vertex.
+
+False colour. Instead of ``sRGB(exposure L)`` the viewer can show one number per vertex in physical
+units, W/(m² sr) per W/m² of irradiance: the luminance ``Y`` of what is shown (or one channel), on a
+log or a linear scale whose top is the radiance the sRGB view shows as white, ``1 / exposure``
+(:func:`translucency.app.display.false_colour_range`). :meth:`ViewerState.set_false_colour` and
+:meth:`ViewerState.set_false_colour_scale` choose it; :meth:`ViewerState.false_colour_values` and
+:meth:`ViewerState.false_colour_range` are what a window maps through the colour map.
 """
 
 from __future__ import annotations
@@ -38,7 +45,14 @@ import numpy as np
 from ...errors import InvalidParameterError
 from ...scatter.budget import DEFAULT_TIME_LIMIT_S
 from ...scatter.names import DEFAULT_METHOD, DEFAULT_MODEL, DEFAULT_TOL
-from ..display import display_colors
+from ..display import (
+    FALSE_COLOUR_QUANTITIES,
+    FALSE_COLOUR_SCALES,
+    display_colors,
+    false_colour_label,
+    false_colour_range,
+    false_colour_values,
+)
 from ..pipeline import (
     Scene,
     coarsest_proxy_edge,
@@ -221,6 +235,8 @@ class ViewerState:
         self.mm_per_unit = float(mesh.mm_per_unit)
         self.exposure = exposure
         self.view_dependent, self.specular, self.roughness = bool(view_dependent), bool(specular), float(roughness)
+        #: False colour instead of sRGB (:meth:`set_false_colour`), its quantity and scale.
+        self.false_colour, self.false_colour_quantity, self.false_colour_scale = False, "luminance", "log"
         #: Camera position (mm, scan coordinates) the view-dependent layers use; None: not known yet.
         self.eye = None
         self.result = None
@@ -322,6 +338,29 @@ class ViewerState:
         self.update_status()
         return changed
 
+    def set_false_colour(self, on: bool, quantity: str | None = None) -> bool:
+        """Show false colour (on) or sRGB (off); ``quantity`` is ``luminance`` (kept when None) or a channel
+        name (``red``, ``green``, ``blue``). No solve."""
+        quantity = self.false_colour_quantity if quantity is None else quantity
+        if quantity not in FALSE_COLOUR_QUANTITIES:
+            raise InvalidParameterError(
+                f"the false colour shows one of {', '.join(FALSE_COLOUR_QUANTITIES)}, got {quantity!r}."
+            )
+        changed = (bool(on), quantity) != (self.false_colour, self.false_colour_quantity)
+        self.false_colour, self.false_colour_quantity = bool(on), quantity
+        self.update_status()
+        return changed
+
+    def set_false_colour_scale(self, scale: str) -> bool:
+        """Scale of the false colour: ``log`` (:data:`~translucency.app.display.LOG_DECADES` decades) or
+        ``linear``; no solve. Returns whether the picture changed (only when false colour is on)."""
+        if scale not in FALSE_COLOUR_SCALES:
+            raise InvalidParameterError(f"the false colour's scale is one of log, linear; got {scale!r}.")
+        changed = scale != self.false_colour_scale
+        self.false_colour_scale = scale
+        self.update_status()
+        return changed and self.false_colour
+
     def set_eye(self, eye) -> bool:
         """Camera position (3 floats, mm, scan coordinates) for the view-dependent layers; no solve.
 
@@ -402,6 +441,20 @@ class ViewerState:
         colors, _ = display_colors(self.radiance_shown(eye), self.exposure)
         return colors
 
+    def false_colour_values(self, eye=None) -> np.ndarray:
+        """The false colour's number per vertex, (n,), in W/(m² sr) per W/m²: the luminance (or the
+        channel) of :meth:`radiance_shown`, whether or not false colour is on."""
+        return false_colour_values(self.radiance_shown(eye), self.false_colour_quantity)
+
+    def false_colour_range(self) -> tuple[float, float]:
+        """``(low, high)`` of the false colour, W/(m² sr) per W/m²: ``high = 1 / exposure`` (white in sRGB)."""
+        return false_colour_range(np.zeros(0), self.false_colour_scale, self.exposure)
+
+    @property
+    def false_colour_title(self) -> str:
+        """Title of the false colour's colour bar: quantity, unit and scale."""
+        return false_colour_label(self.false_colour_quantity, self.false_colour_scale)
+
     def update_status(self) -> None:
         """Write :attr:`status` from the current state (three lines: material and size, light, last solve)."""
         result = self.result
@@ -417,7 +470,9 @@ class ViewerState:
         self.status = (
             f"{self.medium.name}, {self.model} dipole, {size:.3g} mm ({self.mm_per_unit:.4g} mm per unit), "
             f"up {self.up_axis}\n"
-            f"{light}display exposure {self.exposure:.3g}\n"
+            f"{light}display exposure {self.exposure:.3g}"
+            + (f"; false colour: {self.false_colour_quantity}, {self.false_colour_scale}" if self.false_colour else "")
+            + "\n"
             f"solved in {self.solve_seconds:.2f} s (wall time) on {result.stats['solver_vertices']} of "
             f"{result.stats['vertices']} vertices: {self.method}, {tolerance}"
         )

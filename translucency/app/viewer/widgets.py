@@ -7,6 +7,18 @@ how fast a change answers, is said in :mod:`translucency.app.viewer.state`). Wit
 view-dependent layers the picture equals :func:`~translucency.app.render.render_colors` of the same
 colours.
 
+Layout: the scan has the window's left part to itself; the controls live in a strip on the right
+(:data:`CONTROL_STRIP` of the width): at the top a light compass (a small copy of the scan turned with
+the camera, and the light's arrow, :func:`~translucency.app.render.light_glyph`, following the light
+sliders), then the status, the check boxes and the sliders. No control covers the scan.
+
+False colour: check box (or key ``y``) swaps the sRGB view for the luminance in W/(m² sr) per W/m²
+through a colour map, with its colour bar under the scan; a second check box (or key ``l``) chooses a
+log or a linear scale (:mod:`translucency.app.viewer.state`).
+
+Pictures: :meth:`Viewer.screenshot` and key ``s`` save the scan's part of the window only -- what
+the scan looks like, with the colour bar in false colour, never a slider or a check box.
+
 Controls (each calls a method, so the viewer can be driven from code the same way): sliders for
 the light's azimuth and elevation (degrees, around the ``up`` axis; they steer the first directional
 light, other lights stay as they are), the material (the catalogue's diffusive materials), the model,
@@ -26,7 +38,15 @@ import numpy as np
 
 from ...scatter.budget import DEFAULT_TIME_LIMIT_S
 from ...scatter.names import DEFAULT_METHOD, DEFAULT_MODEL, DEFAULT_TOL
-from ..render import add_colored_mesh, camera_position, default_camera_direction, new_plotter
+from ..render import (
+    LIGHT_GLYPH_COLOR,
+    add_colored_mesh,
+    add_false_colour_mesh,
+    camera_position,
+    default_camera_direction,
+    light_glyph,
+    new_plotter,
+)
 from ..settings import DEFAULT_MATERIAL
 from .state import ViewerState, diffusive_materials
 
@@ -34,6 +54,12 @@ from .state import ViewerState, diffusive_materials
 SCALE_RANGE = (0.25, 4.0)
 #: Half-range of the exposure slider, in stops (log2) around the first exposure.
 EXPOSURE_STOPS = 8.0
+#: Fraction of the window's width the control strip takes (right); the scan has the rest.
+CONTROL_STRIP = 0.3
+#: Fraction of the window's height the light compass takes (top of the strip).
+COMPASS_HEIGHT = 0.22
+#: Background of the control strip.
+STRIP_BACKGROUND = "#202020"
 
 
 def _state_attribute(name: str):
@@ -96,13 +122,18 @@ class Viewer:
     off_screen : bool
         Render without a window (screenshots, tests).
     widgets : bool
-        Show the sliders, check boxes and status line.
+        Show the control strip (sliders, check boxes, status, light compass) beside the scan.
     output : path-like
         Folder for the files the ``s`` key saves (default: the current folder).
     name : str, optional
         Stem of the saved files (default: the mesh's file name, or ``scan``).
     unit : {"mm", "cm", "m", "in"} or float, optional
         A PolyData's length unit (None: its ``field_data["length_unit"]``, else inferred from its size).
+    plotter : pyvista.Plotter, optional
+        Draw into this plotter's current renderer instead of a window of the viewer's own (the
+        ``window_size`` and ``off_screen`` arguments are then the plotter's). The host owns the window:
+        no control strip and no keys are added (drive the viewer by its ``set_*`` methods), and
+        :meth:`close` leaves the plotter open.
     """
 
     base_mesh = _state_attribute("base_mesh")
@@ -157,6 +188,7 @@ class Viewer:
         output=".",
         name=None,
         unit=None,
+        plotter=None,
     ):
         # settings checked and the scan loaded first; the window before the (slower) first solve
         self.state = ViewerState(
@@ -183,23 +215,64 @@ class Viewer:
         self.output = Path(output)
         self.widgets = {}
         self._window_shown = False  # set by show() and by screenshot(); a window never shown has no picture yet
-        self.plotter = new_plotter(window_size, off_screen=off_screen)
+        self._own_plotter = plotter is None
+        widgets = bool(widgets) and self._own_plotter
+        if plotter is not None:
+            self.plotter = plotter
+        elif widgets:  # the scan on the left (both rows), the compass and the controls in a strip on the right
+            self.plotter = new_plotter(
+                window_size,
+                off_screen=off_screen,
+                shape=(2, 2),
+                col_weights=[1.0 - CONTROL_STRIP, CONTROL_STRIP],
+                row_weights=[COMPASS_HEIGHT, 1.0 - COMPASS_HEIGHT],
+                groups=[(np.s_[:], 0)],
+                border=False,
+            )
+            self.plotter.subplot(0, 0)
+        else:
+            self.plotter = new_plotter(window_size, off_screen=off_screen)
+        #: The renderer that draws the scan (screenshots are its part of the window).
+        self.renderer = self.plotter.renderer
         self.state.solve()
-        self.poly = add_colored_mesh(self.plotter, self.base_mesh, self.state.colors())
+        self.poly = add_colored_mesh(self.plotter, self.base_mesh, self.state.colors(), name="scan")
+        self._rgb_actor = self.renderer.actors["scan"]
+        low, high = self.state.false_colour_range()
+        self.false_colour_poly, self._false_actor, self._scalar_bar = add_false_colour_mesh(
+            self.plotter,
+            self.base_mesh,
+            self.state.false_colour_values(),
+            (low, high),
+            self.state.false_colour_scale,
+            title=self.state.false_colour_title,
+            scalar_bar={
+                "color": "white",
+                "position_x": 0.15,
+                "position_y": 0.01,
+                "width": 0.7,
+                "height": 0.09,
+                "fmt": "%.3g",
+                "title_font_size": 12,
+                "label_font_size": 11,
+            },
+        )
+        self._scalar_bar.SetTextPositionToPrecedeScalarBar()  # tick labels under the bar, apart from the title
         if camera_direction is None:
             camera_direction = default_camera_direction(self.up_axis)
-        self.plotter.camera_position = camera_position(self.poly.center, self.poly.length, camera_direction, self.up)
-        self._status_actor = self.plotter.add_text(
-            self.status, position="upper_left", font_size=10, color="white", name="status"
-        )
-        self._overlays = [self._status_actor]
+        self.renderer.camera_position = camera_position(self.poly.center, self.poly.length, camera_direction, self.up)
+        self._status_actor = None
+        self._compass = self.compass_arrow = None
         if widgets:
             self._add_widgets()
-        else:
-            self._status_actor.SetVisibility(False)
-        self.plotter.camera.AddObserver("ModifiedEvent", self._on_camera)
-        self.plotter.add_key_event("s", self.save)
-        self.plotter.add_key_event("Return", self.solve_full)
+            self.plotter.subplot(0, 0)
+        self.renderer.camera.AddObserver("ModifiedEvent", self._on_camera)
+        if self._own_plotter:
+            self.plotter.add_key_event("s", self.save)
+            self.plotter.add_key_event("Return", self.solve_full)
+            self.plotter.add_key_event("y", lambda: self.set_false_colour(not self.state.false_colour))
+            self.plotter.add_key_event(
+                "l", lambda: self.set_false_colour_scale("linear" if self.state.false_colour_scale == "log" else "log")
+            )
         self._redisplay()
 
     # ------------------------------------------------------------------------------------------------
@@ -240,6 +313,16 @@ class Viewer:
         if self.state.set_specular(on):
             self._redisplay()
 
+    def set_false_colour(self, on: bool, quantity: str | None = None) -> None:
+        """Show the false colour (on: luminance, or ``quantity``, in physical units) or the sRGB view; no solve."""
+        if self.state.set_false_colour(on, quantity):
+            self._redisplay()
+
+    def set_false_colour_scale(self, scale: str) -> None:
+        """``log`` or ``linear`` scale of the false colour; no solve."""
+        self.state.set_false_colour_scale(scale)
+        self._redisplay()
+
     def solve_full(self) -> None:
         """Solve the current state on every vertex of the mesh (slow; see :mod:`translucency.app.viewer.state`)."""
         self.state.solve_full()
@@ -251,32 +334,34 @@ class Viewer:
     def screenshot(self, path=None, *, widgets: bool = False) -> np.ndarray:
         """The current picture as an (h, w, 3) uint8 image, written as a PNG when ``path`` is given.
 
-        Without ``widgets`` the sliders, check boxes and status line are hidden for the picture.
+        Without ``widgets`` (default) the picture is the scan's renderer only -- the scan, and the colour
+        bar in false colour -- cropped from the window, so no control is in it; with ``widgets`` it is the
+        whole window.
         """
         from ..outputs import write_png
 
         if not (self._window_shown or self.plotter.off_screen):  # a window never shown has no picture yet
             self.plotter.show(interactive=False, auto_close=False)
             self._window_shown = True
-        hidden = [] if widgets else [w for w in self.widgets.values() if w.GetEnabled()]
-        overlays = [] if widgets else [actor for actor in self._overlays if actor.GetVisibility()]
-        for widget in hidden:
-            widget.Off()
-        for actor in overlays:
-            actor.SetVisibility(False)
         self.plotter.render()
         image = np.asarray(self.plotter.screenshot(return_img=True))
-        for widget in hidden:
-            widget.On()
-        for actor in overlays:
-            actor.SetVisibility(True)
-        self.plotter.render()
+        if not widgets:
+            image = self._crop_to_scan(image)
         if path is not None:
             write_png(path, image)
         return image
 
+    def _crop_to_scan(self, image) -> np.ndarray:
+        """The scan renderer's pixels of a window image (rows from the top, VTK's origin at the bottom)."""
+        x0, x1, y0, y1 = (float(v) for v in np.asarray(self.renderer.GetViewport())[[0, 2, 1, 3]])
+        height, width = image.shape[:2]
+        left, right = round(x0 * width), round(x1 * width)
+        bottom, top = round(y0 * height), round(y1 * height)
+        return np.ascontiguousarray(image[height - top : height - bottom, left:right])
+
     def save(self, folder=None) -> tuple[Path, Path]:
-        """Save a screenshot (PNG, with the controls) and the current bake (PLY) into ``folder``.
+        """Save a screenshot (PNG, the scan's part of the window, :meth:`screenshot`) and the current bake
+        (PLY) into ``folder``.
 
         The bake holds the radiance toward the normal and colours at the current exposure (a bake does
         not depend on the view). File names are ``<name>_<material>_<model>_<n>`` with the first free
@@ -289,10 +374,10 @@ class Viewer:
         while (folder / f"{stem}_{index:03d}.png").exists() or (folder / f"{stem}_{index:03d}.ply").exists():
             index += 1
         png, ply = folder / f"{stem}_{index:03d}.png", folder / f"{stem}_{index:03d}.ply"
-        self.screenshot(png, widgets=True)
+        self.screenshot(png)
         self.state.write_bake(ply)
         self.state.add_note(f"saved {png.name} and {ply.name}")
-        self._status_actor.set_text("upper_left", self.status)
+        self._show_status()
         return png, ply
 
     def show(self, **kwargs) -> None:
@@ -301,37 +386,144 @@ class Viewer:
         self.plotter.show(**kwargs)
 
     def close(self) -> None:
-        """Close the window and free the renderer."""
-        self.plotter.close()
+        """Close the window and free the renderer (a plotter passed in stays open: it is the host's)."""
+        if self._own_plotter:
+            self.plotter.close()
 
     # ------------------------------------------------------------------------------------------------
     # internals
 
     def _redisplay(self) -> None:
-        """Draw what the state computes: colours from the current camera, status, widget positions."""
-        self.state.set_eye(self.plotter.camera.position)
-        self.poly.point_data["colors"][:] = self.state.colors()
-        self._status_actor.set_text("upper_left", self.status)
+        """Draw what the state computes: colours or false colour from the current camera, status, widgets."""
+        self.state.set_eye(self.renderer.camera.position)
+        self._recolour()
+        self._show_status()
         self._sync_widgets()
+        self._point_compass()
         self.plotter.render()
 
-    def _on_camera(self, camera, _event) -> None:
-        """Camera moved: recompute the view-dependent layers (no solve, no render here)."""
-        if self.state.set_eye(camera.GetPosition()):
+    def _recolour(self) -> None:
+        """New colours, or new false-colour values, range, scale and title, from the state (no render)."""
+        false_colour = self.state.false_colour
+        self._rgb_actor.SetVisibility(not false_colour)
+        self._false_actor.SetVisibility(false_colour)
+        self._scalar_bar.SetVisibility(false_colour)
+        if not false_colour:
             self.poly.point_data["colors"][:] = self.state.colors()
+            return
+        low, high = self.state.false_colour_range()
+        self.false_colour_poly.point_data["false colour"][:] = np.maximum(self.state.false_colour_values(), low)
+        table = self._false_actor.mapper.lookup_table
+        table.log_scale = self.state.false_colour_scale == "log"
+        self._false_actor.mapper.scalar_range = (low, high)
+        table.scalar_range = (low, high)
+        self._scalar_bar.SetTitle(self.state.false_colour_title)
+
+    def _show_status(self) -> None:
+        """The status, wrapped to the strip's width."""
+        if self._status_actor is None:
+            return
+        import textwrap
+
+        width = max(20, int(self.plotter.window_size[0] * CONTROL_STRIP / 7.5))
+        lines = [textwrap.fill(line, width, subsequent_indent="  ") for line in self.status.split("\n")]
+        self._status_actor.SetInput("\n".join(lines))
+
+    def _on_camera(self, camera, _event) -> None:
+        """Camera moved: recompute the view-dependent layers (no solve, no render here), turn the compass."""
+        if self.state.set_eye(camera.GetPosition()):
+            self._recolour()
+        self._turn_compass()
+
+    def _point_compass(self) -> None:
+        """The compass's arrow along the current key light."""
+        if self._compass is None or self.state.key_light is None:
+            return
+        arrow, radius = self._compass
+        arrow.copy_from(light_glyph((0.0, 0.0, 0.0), radius, self.lights[self.state.key_light].direction))
+
+    def _turn_compass(self) -> None:
+        """The compass's camera looks from where the scan's camera looks (same direction and view-up)."""
+        if self._compass is None:
+            return
+        camera, compass = self.renderer.camera, self._compass_renderer.camera
+        offset = np.asarray(camera.GetPosition()) - np.asarray(camera.GetFocalPoint())
+        offset = offset / np.linalg.norm(offset)
+        compass.SetFocalPoint(0.0, 0.0, 0.0)
+        compass.SetPosition(*(offset * 6.0 * self._compass[1]))
+        compass.SetViewUp(*camera.GetViewUp())
+        compass.SetParallelProjection(True)
+        compass.SetParallelScale(1.7 * self._compass[1])
+        self._compass_renderer.ResetCameraClippingRange()
+        self._compass_renderer.camera_set = True  # PyVista must not reset it on the first render
 
     def _add_widgets(self) -> None:
+        """The control strip: compass (top), status, check boxes and sliders, none over the scan."""
         from ...scatter.names import MODELS
 
         plotter = self.plotter
-        style = {"style": "modern", "interaction_event": "end"}
-        titled = {**style, "title_height": 0.02}
-        row_low, row_high = 0.08, 0.21
-        columns = [(0.03, 0.31), (0.36, 0.64), (0.69, 0.97)]
+        width, height = plotter.window_size
+        strip_x0 = 1.0 - CONTROL_STRIP
+        strip_px = int(round(strip_x0 * width))
 
-        def at(column, row):
-            (x0, x1), y = columns[column], row
-            return {"pointa": (x0, y), "pointb": (x1, y)}
+        # the light compass: the scan, scaled to a unit radius, and the light's arrow, turned with the camera
+        plotter.subplot(0, 1)
+        plotter.renderer.set_background(STRIP_BACKGROUND)
+        self._compass_renderer = plotter.renderer
+        if self.state.key_light is not None:
+            points = self.base_mesh.points - 0.5 * (
+                self.base_mesh.points.min(axis=0) + self.base_mesh.points.max(axis=0)
+            )
+            radius = 1.0
+            small = self.base_mesh.replace(points=points / (0.5 * float(self.base_mesh.extent)))
+            from ...io.polydata import to_pyvista
+
+            plotter.add_mesh(to_pyvista(small), color="lightgrey", name="compass_scan")
+            arrow = light_glyph((0.0, 0.0, 0.0), radius, self.lights[self.state.key_light].direction)
+            plotter.add_mesh(arrow, color=LIGHT_GLYPH_COLOR, name="compass_arrow")
+            plotter.add_text("light", position="upper_left", font_size=8, color="white", name="compass_label")
+            self._compass = (arrow, radius)
+            #: The compass's arrow (PolyData): from the key light toward the object.
+            self.compass_arrow = arrow
+            self._turn_compass()
+
+        # the status, the check boxes and the sliders
+        plotter.subplot(1, 1)
+        plotter.renderer.set_background(STRIP_BACKGROUND)
+        self._status_actor = plotter.add_text(" ", position=(8, 0), font_size=6, color="white", name="status")
+        self._status_actor.GetTextProperty().SetVerticalJustificationToTop()
+        strip_height = int(round((1.0 - COMPASS_HEIGHT) * height))
+        self._status_actor.SetPosition(8, strip_height - 6)
+        self._show_status()
+        toggles = (
+            ("false_colour", "false colour (key y)", self.set_false_colour, self.state.false_colour),
+            (
+                "log_scale",
+                "log scale (key l)",
+                lambda on: self.set_false_colour_scale("log" if on else "linear"),
+                self.state.false_colour_scale == "log",
+            ),
+            ("view_dependent", "T21 toward the camera", self.set_view_dependent, self.view_dependent),
+            ("specular", "specular highlight", self.set_specular, self.specular),
+        )
+        box = max(14, min(22, height // 35))
+        step = box + 8
+        first = int(strip_height * 0.66 + 2 * step)  # from the bottom of the window (the strip starts there)
+        for k, (key, label, callback, value) in enumerate(toggles):
+            y = first - k * step
+            self.widgets[key] = plotter.add_checkbox_button_widget(
+                callback, value=value, position=(strip_px + 8, y), size=box, border_size=2, color_off="grey"
+            )
+            plotter.add_text(label, position=(box + 16, y + box // 4), font_size=6, color="white", name=f"{key}_label")
+
+        style = {"style": "modern", "interaction_event": "end"}
+        titled = {**style, "title_height": 0.018}
+        # PyVista places sliders in the current renderer's normalised viewport: the strip, below the compass
+        rows = [0.06 + k * 0.098 for k in range(6)]  # bottom to top
+        x0, x1 = 0.06, 0.94
+
+        def at(row):
+            return {"pointa": (x0, rows[row]), "pointb": (x1, rows[row])}
 
         choices = {key: key for key in diffusive_materials()}
         if self.medium.name not in choices:  # a medium of its own: offer it first
@@ -341,24 +533,15 @@ class Viewer:
             lambda name: self.set_material(choices[name]),
             self._materials,
             value=self._materials.index(self.medium.name),
-            **at(0, row_low),
+            **at(5),
             **style,
         )
         self.widgets["model"] = plotter.add_text_slider_widget(
-            self.set_model, list(MODELS), value=list(MODELS).index(self.model), **at(1, row_low), **style
+            self.set_model, list(MODELS), value=list(MODELS).index(self.model), **at(4), **style
         )
-        for key in ("material", "model"):
+        for key in ("material", "model"):  # the title names the choice; the index is no use
             self.widgets[key].GetRepresentation().SetTitleHeight(titled["title_height"])
-        base = float(self.base_mesh.mm_per_unit)
-        self.widgets["scale"] = plotter.add_slider_widget(
-            self.set_scale,
-            [base * SCALE_RANGE[0], base * SCALE_RANGE[1]],
-            value=self.mm_per_unit,
-            title="scale (mm per unit)",
-            fmt="%.3g",
-            **at(2, row_low),
-            **titled,
-        )
+            self.widgets[key].GetRepresentation().ShowSliderLabelOff()
         if self.state.key_light is not None:
             self.widgets["azimuth"] = plotter.add_slider_widget(
                 lambda a: self.set_light(a, self.elevation),
@@ -366,7 +549,7 @@ class Viewer:
                 value=self.azimuth,
                 title="light azimuth (deg)",
                 fmt="%.0f",
-                **at(0, row_high),
+                **at(3),
                 **titled,
             )
             self.widgets["elevation"] = plotter.add_slider_widget(
@@ -375,7 +558,7 @@ class Viewer:
                 value=self.elevation,
                 title="light elevation (deg)",
                 fmt="%.0f",
-                **at(1, row_high),
+                **at(2),
                 **titled,
             )
         stops = math.log2(self.exposure)
@@ -385,23 +568,19 @@ class Viewer:
             value=stops,
             title="exposure (log2)",
             fmt="%.1f",
-            **at(2, row_high),
+            **at(1),
             **titled,
         )
-        width, height = plotter.window_size
-        for k, (key, label, callback, value) in enumerate(
-            (
-                ("view_dependent", "T21 toward the camera", self.set_view_dependent, self.view_dependent),
-                ("specular", "specular highlight", self.set_specular, self.specular),
-            )
-        ):
-            y = height - 40 - 36 * k
-            self.widgets[key] = plotter.add_checkbox_button_widget(
-                callback, value=value, position=(width - 40, y), size=26, border_size=2
-            )
-            self._overlays.append(
-                plotter.add_text(label, position=(width - 250, y + 4), font_size=8, color="white", name=f"{key}_label")
-            )
+        base = float(self.base_mesh.mm_per_unit)
+        self.widgets["scale"] = plotter.add_slider_widget(
+            self.set_scale,
+            [base * SCALE_RANGE[0], base * SCALE_RANGE[1]],
+            value=self.mm_per_unit,
+            title="scale (mm per unit)",
+            fmt="%.3g",
+            **at(0),
+            **titled,
+        )
 
     def _sync_widgets(self) -> None:
         """Put the widgets where the state is (after a change made from code)."""
@@ -424,6 +603,12 @@ class Viewer:
             self.widgets["material"].GetRepresentation().SetTitleText(self.medium.name)
         if "model" in self.widgets:
             self.widgets["model"].GetRepresentation().SetTitleText(self.model)
-        for key in ("view_dependent", "specular"):
+        states = {
+            "view_dependent": self.view_dependent,
+            "specular": self.specular,
+            "false_colour": self.state.false_colour,
+            "log_scale": self.state.false_colour_scale == "log",
+        }
+        for key, on in states.items():
             if key in self.widgets:
-                self.widgets[key].GetRepresentation().SetState(int(getattr(self, key)))
+                self.widgets[key].GetRepresentation().SetState(int(on))

@@ -1,0 +1,78 @@
+"""The labelled two-view picture: both views, a scale bar that measures the scan, the light's arrow, the colour bar."""
+
+import numpy as np
+import pytest
+
+from translucency.app.figure import _render_views, figure_image, nice_length, write_figure
+from translucency.app.pipeline import Scene
+from translucency.geometry.mesh import TriangleMesh
+from translucency.geometry.synthetic import icosphere
+from translucency.scatter.lights import DirectionalLight
+
+
+def blue(image):
+    """Pixels of the light's arrow (deepskyblue, shaded): blue well above red; neither the white scan nor
+    the inferno map has such pixels."""
+    image = image.astype(int)
+    return (image[..., 2] > 120) & (image[..., 2] > image[..., 0] + 60)
+
+
+@pytest.fixture(scope="module")
+def sphere_result():
+    points, triangles = icosphere(3, 20.0)  # 642 vertices, 40 mm across
+    mesh = TriangleMesh(points, triangles)
+    return mesh, Scene(mesh).shade("marble", DirectionalLight((1.0, 0.6, 0.3), 1.0), method="exact")
+
+
+def test_nice_lengths():
+    assert [nice_length(v) for v in (37.0, 10.0, 0.3, 7.9, 1999.0)] == [20.0, 10.0, 0.2, 5.0, 1000.0]
+
+
+def test_the_views_measure_the_scan_in_mm(sphere_result):
+    mesh, result = sphere_result
+    from translucency.app.display import false_colour_range, false_colour_values
+
+    values = false_colour_values(result.radiance)
+    panel = 300
+    image, mm_per_pixel = _render_views(
+        mesh, result, values, false_colour_range(values, "log", result.exposure), "log", None, "+y", panel
+    )
+    assert image.shape == (panel, 2 * panel, 3)
+    for view in (image[:, :panel], image[:, panel:]):
+        arrow = blue(view)
+        assert arrow.sum() > 30  # the light's arrow is drawn in both views
+        scan = (view.max(axis=2) > 0) & ~arrow
+        rows = np.flatnonzero(scan.any(axis=1))
+        # the sphere is 40 mm across (icosphere vertices on r = 20 mm; the facets come in by < 1 %)
+        height_mm = (rows[-1] - rows[0] + 1) * mm_per_pixel
+        assert 38.5 < height_mm < 41.0
+    # the false colour uses matplotlib's inferno map: scan pixels lie on it
+    from matplotlib import colormaps
+
+    lut = (colormaps["inferno"](np.linspace(0, 1, 256))[:, :3] * 255).astype(int)
+    right = image[:, panel:].reshape(-1, 3).astype(int)
+    pixels = right[(right.max(axis=1) > 0) & ~blue(right)]
+    distance = np.abs(pixels[:, None, :] - lut[None, :, :]).sum(axis=2).min(axis=1)
+    assert np.median(distance) <= 6
+
+
+def test_the_figure_has_both_views_a_colour_bar_and_is_written_atomically(sphere_result, tmp_path):
+    import imageio.v3 as iio
+    from matplotlib import colormaps
+
+    mesh, result = sphere_result
+    path = write_figure(tmp_path / "sphere_marble.png", mesh, result, name="sphere", panel=240)
+    image = iio.imread(path)[..., :3].astype(int)
+    assert path.name == "sphere_marble.png" and [p.name for p in tmp_path.iterdir()] == ["sphere_marble.png"]
+    assert image.shape[1] > 2 * 240 and image.shape[0] > 240
+    # the colour bar: a row running through inferno from black-purple to pale yellow
+    lut = (colormaps["inferno"](np.linspace(0, 1, 256))[:, :3] * 255).astype(int)
+    on_map = np.abs(image.reshape(-1, 1, 3) - lut[None, :, :]).sum(axis=2).min(axis=1).reshape(image.shape[:2]) < 8
+    bar_rows = np.flatnonzero((on_map & (image.sum(axis=2) > 60)).sum(axis=1) > 0.3 * image.shape[1])
+    bar_rows = bar_rows[bar_rows > 0.7 * image.shape[0]]  # under the views
+    assert bar_rows.size >= 5
+    row = image[bar_rows[len(bar_rows) // 2]]
+    yellow = np.flatnonzero(np.all(np.abs(row - lut[-1]) < 12, axis=1))
+    purple = np.flatnonzero(np.all(np.abs(row - lut[64]) < 12, axis=1))
+    assert yellow.size and purple.size and purple.mean() < yellow.mean()  # dark on the left, bright on the right
+    assert figure_image(mesh, result, scale="linear", quantity="red", panel=120).ndim == 3
