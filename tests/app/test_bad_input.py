@@ -116,7 +116,7 @@ def test_failed_write_leaves_nothing_and_keeps_the_old_output(tmp_path, monkeypa
 
     output = tmp_path / "out.ply"
     output.write_bytes(b"previous result")
-    mesh = load_mesh(good_file)
+    mesh = load_mesh(good_file, unit="mm")
 
     def full_disk(path, *args):
         raise OSError(28, "No space left on device")
@@ -133,7 +133,7 @@ def test_cli_good_file_writes_the_repaired_mesh(tmp_path, capsys, good_file):
     output = tmp_path / "repaired.stl"
     code, _ = _inspect(capsys, good_file, output)
     assert code == 0
-    assert load_mesh(output).n_triangles == len(TRIANGLES)
+    assert load_mesh(output, unit="mm").n_triangles == len(TRIANGLES)
 
 
 # ---------------------------------------------------------------------------- separate processes

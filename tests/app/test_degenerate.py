@@ -141,7 +141,7 @@ def test_sliver_box_from_a_file_grazing_light(tmp_path):
     """load -> clean -> shade with the light in the plane of the sliver (grazing on its large faces)."""
     sliver = box((100.0, 100.0, 0.001), divisions=3)
     path = write_ply(tmp_path / "sliver.ply", sliver.points, sliver.triangles)
-    cleaned, _ = clean_mesh(load_mesh(path))
+    cleaned, _ = clean_mesh(load_mesh(path, unit="mm"))
     result = _shade(cleaned, lights=DirectionalLight((1.0, 0.0, 0.0), 1.0))
     assert result.B.max() > 0
 

@@ -45,5 +45,8 @@ def test_the_readme_pyvista_session_runs_and_plots_with_a_colour_bar(tmp_path, m
     for name in ("radiance", "B", "colors", "luminance", "incident_flux", "normals"):
         assert name in out.point_data
     np.testing.assert_allclose(out.point_data["radiance"], result.radiance)
-    assert shown["bars"] == ["luminance W/(m^2 sr)"]
+    assert shown["bars"] == ["luminance"]
+    # the view: the scan's up axis (+y for this sphere's inferred up, or the one recorded) is the view-up
+    up = {"+x": (1, 0, 0), "+y": (0, 1, 0), "+z": (0, 0, 1), "-x": (-1, 0, 0), "-y": (0, -1, 0), "-z": (0, 0, -1)}
+    assert tuple(result.camera_position()[2]) == pytest.approx(up[result.metadata["up"]])
     assert (tmp_path / "plot.png").is_file()

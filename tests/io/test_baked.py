@@ -160,7 +160,7 @@ def test_the_input_scan_is_never_overwritten(tmp_path, sphere_mesh):
                     np.zeros((sphere_mesh.n_points, 3), np.uint8), METADATA)  # fmt: skip
     from translucency.io import load_mesh
 
-    mesh = load_mesh(source)
+    mesh = load_mesh(source, unit="mm")
     before = source.read_bytes()
     with pytest.raises(InvalidParameterError, match="never modified"):
         write_baked_ply(

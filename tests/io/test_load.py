@@ -66,7 +66,7 @@ def test_ply_ascii_and_binary_keep_colours_and_properties(tmp_path, sphere_array
         colors=colors,
         extra={"confidence": confidence},
     )
-    mesh = load_mesh(path)
+    mesh = load_mesh(path, unit="mm")
     np.testing.assert_allclose(mesh.points, points.astype(np.float32), rtol=0, atol=0)
     np.testing.assert_array_equal(mesh.triangles, triangles)
     np.testing.assert_array_equal(mesh.point_data["colors"], colors)
@@ -79,7 +79,7 @@ def test_ply_ascii_and_binary_keep_colours_and_properties(tmp_path, sphere_array
 def test_ply_polygons_are_triangulated(tmp_path, text):
     points = np.array([[0, 0, 0], [10, 0, 0], [10, 10, 0], [0, 10, 0], [5, 15, 0]], dtype=float)
     path = write_ply(tmp_path / "q.ply", points, [[0, 1, 2, 3], [3, 2, 4]], text=text)
-    mesh = load_mesh(path)
+    mesh = load_mesh(path, unit="mm")
     np.testing.assert_array_equal(mesh.triangles, [[0, 1, 2], [0, 2, 3], [3, 2, 4]])
     assert mesh.surface_area == pytest.approx(125.0)
 
@@ -88,14 +88,14 @@ def test_ply_polygons_are_triangulated(tmp_path, text):
 def test_ply_all_quads(tmp_path, text):
     points = np.array([[0, 0, 0], [10, 0, 0], [10, 10, 0], [0, 10, 0], [20, 0, 0], [20, 10, 0]], dtype=float)
     path = write_ply(tmp_path / "quads.ply", points, [[0, 1, 2, 3], [1, 4, 5, 2]], text=text)
-    mesh = load_mesh(path)
+    mesh = load_mesh(path, unit="mm")
     np.testing.assert_array_equal(mesh.triangles, [[0, 1, 2], [0, 2, 3], [1, 4, 5], [1, 5, 2]])
 
 
 def test_ply_triangle_strips(tmp_path):
     points = np.array([[x, y, 0.0] for x in range(0, 50, 10) for y in (0, 10)])
     path = write_ply(tmp_path / "strip.ply", points, None, strips=[0, 1, 2, 3, 4, 5, -1, 6, 7, 8, 9])
-    mesh = load_mesh(path)
+    mesh = load_mesh(path, unit="mm")
     assert mesh.n_triangles == 6
     assert mesh.surface_area == pytest.approx(300.0)
     normals = mesh.vertex_normals()
@@ -108,7 +108,7 @@ def test_obj_with_vertex_colours_and_quads(tmp_path):
     path.write_text(
         "# quad\nv 0 0 0 1 0 0\nv 10 0 0 0 1 0\nv 10 10 0 0 0 1\nv 0 10 0 1 1 1\nvn 0 0 1\nf 1//1 2//1 3//1 4//1\n"
     )
-    mesh = load_mesh(path)
+    mesh = load_mesh(path, unit="mm")
     assert mesh.n_triangles == 2 and mesh.surface_area == pytest.approx(100.0)
     np.testing.assert_array_equal(
         mesh.point_data["colors"][:, :3], [[255, 0, 0], [0, 255, 0], [0, 0, 255], [255, 255, 255]]
@@ -122,7 +122,7 @@ def test_obj_texture_corners_do_not_split_vertices_and_negative_indices(tmp_path
         "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nvt 0.5 0.5\nvn 0 0 1\n"
         "usemtl skin\nf 1/1/1 2/2/1 3/3/1\nf -4/5/1 -2/4/1 -1/4/1\n"
     )
-    mesh = load_mesh(path)
+    mesh = load_mesh(path, unit="mm")
     assert mesh.n_points == 4  # VTK's reader would make 6 points, one per face corner
     np.testing.assert_array_equal(mesh.triangles, [[0, 1, 2], [0, 2, 3]])
 
@@ -140,7 +140,7 @@ def test_off_and_coff(tmp_path):
         "COFF\n# comment\n4 2 0\n0 0 0 255 0 0 255\n10 0 0 0 255 0 255\n10 10 0 0 0 255 255\n0 10 0 9 9 9 "
         "255\n4 0 1 2 3\n3 0 2 1 1 0 0\n"
     )
-    mesh = load_mesh(path)
+    mesh = load_mesh(path, unit="mm")
     np.testing.assert_array_equal(mesh.triangles, [[0, 1, 2], [0, 2, 3], [0, 2, 1]])
     np.testing.assert_array_equal(mesh.point_data["colors"][:, :3], [[255, 0, 0], [0, 255, 0], [0, 0, 255], [9, 9, 9]])
     plain = tmp_path / "p.off"
@@ -154,7 +154,7 @@ def test_vtk_formats(tmp_path, sphere_arrays, suffix):
     mesh = TriangleMesh(points, triangles, {"confidence": np.arange(len(points), dtype=float)})
     path = tmp_path / f"s{suffix}"
     to_pyvista(mesh).save(str(path))
-    loaded = load_mesh(path)
+    loaded = load_mesh(path, unit="mm")
     assert loaded.n_triangles == len(triangles)
     assert loaded.surface_area == pytest.approx(mesh.surface_area, rel=1e-6)
     if suffix in (".vtp", ".vtk"):
@@ -167,7 +167,7 @@ def test_vtu_surface_is_extracted(tmp_path):
 
     grid = pyvista.ImageData(dimensions=(3, 3, 3), spacing=(5, 5, 5)).cast_to_unstructured_grid()
     grid.save(str(tmp_path / "g.vtu"))
-    mesh = load_mesh(tmp_path / "g.vtu")
+    mesh = load_mesh(tmp_path / "g.vtu", unit="mm")
     assert mesh.surface_area == pytest.approx(6 * 100.0)
 
 
@@ -188,7 +188,7 @@ def test_pymeshlab_formats(tmp_path, suffix):
 def test_format_override(tmp_path, sphere_arrays):
     points, triangles, _ = sphere_arrays
     path = write_ply(tmp_path / "mesh.data", points, triangles)
-    assert load_mesh(path, format="ply").n_triangles == len(triangles)
+    assert load_mesh(path, unit="mm", format="ply").n_triangles == len(triangles)
 
 
 def test_unit_converts_to_mm_and_warns_when_implausible(tmp_path):
@@ -207,7 +207,7 @@ def test_loading_does_not_modify_the_file(tmp_path, sphere_arrays):
     points, triangles, colors = sphere_arrays
     path = write_ply(tmp_path / "s.ply", points, triangles, colors=colors)
     before = hashlib.sha256(path.read_bytes()).hexdigest(), path.stat().st_mtime_ns
-    mesh = load_mesh(path)
+    mesh = load_mesh(path, unit="mm")
     mesh.replace(points=mesh.points * 2)
     assert (hashlib.sha256(path.read_bytes()).hexdigest(), path.stat().st_mtime_ns) == before
 

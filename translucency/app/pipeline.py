@@ -171,6 +171,21 @@ class ShadeResult:
 
         return result_polydata(self)
 
+    def camera_position(self) -> list:
+        """The default view of the result as PyVista takes it (``plotter.camera_position`` or
+        ``mesh.plot(cpos=...)``): ``[eye, focal point, view up]`` in mm, in front of the scan and a little
+        above, its up axis (``metadata["up"]``) up -- the view of the tool's own pictures, where PyVista's
+        default camera would take +z as up."""
+        from ..io.upright import up_vector
+        from .render import camera_position, default_camera_direction
+
+        up = self.metadata.get("up", "+y")
+        points = np.asarray(self.mesh.points)
+        low, high = points.min(axis=0), points.max(axis=0)
+        return camera_position(
+            0.5 * (low + high), float(np.linalg.norm(high - low)), default_camera_direction(up), tuple(up_vector(up))
+        )
+
 
 class Scene:
     """One mesh prepared for repeated shading, keeping every piece of work that a new call can reuse.
