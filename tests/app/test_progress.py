@@ -128,6 +128,22 @@ def test_bake_into_a_pipe_prints_one_line_per_stage_and_no_escape_codes(tmp_path
     assert "baked 1 of 1 files" in done.stdout
 
 
+def test_bake_says_the_inferred_unit_before_the_solve_as_view_does(tmp_path):
+    sphere = write_sphere(tmp_path / "sphere.ply")  # no --unit: 40 units across, read as millimetres
+    done = subprocess.run(
+        [sys.executable, "-m", "translucency", "bake", str(sphere), "-o", str(tmp_path / "out")],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert done.returncode == 0, done.stderr
+    lines = done.stderr.splitlines()
+    unit = [k for k, line in enumerate(lines) if "no --unit given" in line]
+    far = [k for k, line in enumerate(lines) if "far field done" in line]
+    assert len(unit) == 1 and far and unit[0] < far[0]  # said as it happens, once
+    assert lines[unit[0]].startswith("translucency: sphere.ply: no --unit given;")  # a note, as in view
+
+
 def test_quiet_prints_no_progress(tmp_path, capsys):
     sphere = write_sphere(tmp_path / "sphere.ply")
     assert cli.main(["bake", str(sphere), "--unit", "mm", "-o", str(tmp_path / "a"), "-q"]) == 0

@@ -146,7 +146,9 @@ class BakeRecord:
     error : str or None
         One sentence saying what went wrong; None when the file was baked.
     warnings : tuple of str
-        Warnings while loading (an implausible size for the unit, say).
+        Warnings while loading and solving (an implausible size for the unit, a coarser proxy, say).
+    notes : tuple of str
+        Notes while loading: the line that says which unit was inferred.
     threads : int or None
         numba threads the solver used.
     over_budget : bool
@@ -162,6 +164,7 @@ class BakeRecord:
     warnings: tuple = field(default=())
     threads: int | None = None
     over_budget: bool = False
+    notes: tuple = field(default=())
 
     @property
     def ok(self) -> bool:
@@ -187,6 +190,10 @@ class BakeProgress:
 
     def stage(self, index: int, stage: str, fraction: float) -> None:
         """File ``index`` is at ``fraction`` (0 to 1) of ``stage`` (loading, far field, near field, writing)."""
+
+    def said(self, index: int, kind: str, message: str) -> None:
+        """File ``index``, baked in this process, has a ``"warning"`` or a ``"note"`` to say now (the same
+        line is also in its record's ``warnings`` or ``notes``)."""
 
     def finished(self, index: int, record: BakeRecord) -> None:
         """File ``index`` is done, baked or failed."""
@@ -223,6 +230,7 @@ class ConsoleProgress(BakeProgress):
         self._stages: dict = {}
         self._sources: list[str] = []
         self._done = 0
+        self._said: set = set()  # (index, message) already printed while the file was baked
 
     def _stream(self):
         import sys
@@ -262,14 +270,27 @@ class ConsoleProgress(BakeProgress):
             )
         self._stages[index](stage, fraction)
 
+    def said(self, index, kind, message):
+        """Print a note or warning of a file baked in this process as it happens (once)."""
+        self._said.add((index, message))
+        self._print(self._line(self._sources[index] if index < len(self._sources) else "", kind, message))
+
+    @staticmethod
+    def _line(source: str, kind: str, message: str) -> str:
+        """``translucency: [warning: ]<file>: <message>``, the file named once (most messages name it)."""
+        about = "" if not source or message.startswith(Path(source).name) else f"{source}: "
+        return f"translucency: {'warning: ' if kind == 'warning' else ''}{about}{message}"
+
     def finished(self, index, record):
-        """Count the file; print its warnings and its error, if any, and its line when not on a terminal."""
+        """Count the file; print its notes, warnings and error not printed yet, and its line when not on a
+        terminal."""
         if index in self._stages:
             self._stages.pop(index).close()
         self._done += 1
-        for warning in record.warnings:  # most sentences start with the file's name already
-            about = "" if warning.startswith(Path(record.source).name) else f"{record.source}: "
-            self._print(f"translucency: warning: {about}{warning}")
+        for kind, messages in (("note", record.notes), ("warning", record.warnings)):
+            for message in messages:
+                if (index, message) not in self._said:
+                    self._print(self._line(record.source, kind, message))
         if not record.ok:
             self._print(f"translucency: error: {record.source}: {record.error}")
         if self._files is not None:
@@ -291,7 +312,7 @@ class ConsoleProgress(BakeProgress):
 # --------------------------------------------------------------------------------------------------
 # one file
 # --------------------------------------------------------------------------------------------------
-def bake_file(path, output, settings: BakeSettings, progress=None) -> BakeRecord:
+def bake_file(path, output, settings: BakeSettings, progress=None, said=None) -> BakeRecord:
     """Bake one scan to a PLY; a problem with this file is returned in the record, never raised.
 
     Parameters
@@ -305,6 +326,9 @@ def bake_file(path, output, settings: BakeSettings, progress=None) -> BakeRecord
     progress : callable, optional
         ``progress(stage, fraction)`` with stages ``loading``, the solver's (``far field``,
         ``near field``) and ``writing``.
+    said : callable, optional
+        ``said(kind, message)`` as soon as there is a ``"note"`` (the unit inferred) or a ``"warning"``;
+        they are in the record too.
 
     Returns
     -------
@@ -316,16 +340,28 @@ def bake_file(path, output, settings: BakeSettings, progress=None) -> BakeRecord
     start = time.perf_counter()
     source = _source_label(path)
     warnings: list[str] = []
+    notes: list[str] = []
+
+    def warn(message):
+        warnings.append(message)
+        if said is not None:
+            said("warning", message)
+
+    def note(message):
+        notes.append(message)
+        if said is not None:
+            said("note", message)
+
     vertices = lit = threads = None
     try:
         import numba
 
         threads = numba.get_num_threads()
         report("loading", 0.0)
-        mesh, _, _ = load_scan(path, settings.unit, warn=warnings.append)
+        mesh, _, _ = load_scan(path, settings.unit, warn=warn, note=note)
         vertices = mesh.n_points
         report("loading", 1.0)
-        result = shade_scan(mesh, settings, settings.lights, progress=report, warn=warnings.append)
+        result = shade_scan(mesh, settings, settings.lights, progress=report, warn=warn)
         lit = int(result.stats["incident"]["n_lit"])
         report("writing", 0.0)
         write_result(result, output)
@@ -350,8 +386,19 @@ def bake_file(path, output, settings: BakeSettings, progress=None) -> BakeRecord
             tuple(warnings),
             threads,
             isinstance(exc, BudgetError),
+            tuple(notes),
         )
-    return BakeRecord(source, str(output), vertices, lit, time.perf_counter() - start, None, tuple(warnings), threads)
+    return BakeRecord(
+        source,
+        str(output),
+        vertices,
+        lit,
+        time.perf_counter() - start,
+        None,
+        tuple(warnings),
+        threads,
+        notes=tuple(notes),
+    )
 
 
 def _bake_file_spelled(command_line: bool, path, output, settings: BakeSettings) -> BakeRecord:
@@ -557,7 +604,10 @@ def bake_files(
                     def stage(name, fraction, index=index):
                         progress.stage(index, name, fraction)
 
-                    done(index, bake_file(source, target, settings, progress=stage))
+                    def said(kind, message, index=index):
+                        progress.said(index, kind, message)
+
+                    done(index, bake_file(source, target, settings, progress=stage, said=said))
         finally:
             progress.end()
     finally:
