@@ -203,7 +203,7 @@ def test_the_cli_writes_what_the_api_computes(sphere, tmp_path, capsys):
             for part, subset in ((lit, "lit"), (every, "all")):
                 printed = [float(v) for v in re.findall(r"[RGB] (\S+)", part)]
                 expected = [rows[material, model, subset, c]["mean"] for c in "RGB"]
-                assert printed == pytest.approx(expected, rel=1e-3)
+                assert printed == pytest.approx(expected, rel=5e-3)  # printed to three significant digits
     # progress: one line per solve on stderr, none on stdout
     assert sum(line.startswith("solved ") for line in captured.err.splitlines()) == 4
     assert "solved " not in stdout

@@ -322,6 +322,7 @@ def cmd_compare(args) -> int:
         "per-vertex mean radiance toward the normal, W/(m^2 sr) per W/m^2 of irradiance, over the lit "
         f"vertices (incident flux > 0) and over all {mesh.n_points}:"
     )
+    width = max(len(m) for m in result.materials)
     for material in result.materials:
         for model in result.models:
             lit, every = result.mean(material, model, "lit"), result.mean(material, model, "all")
@@ -330,9 +331,12 @@ def cmd_compare(args) -> int:
                 for row in result.statistics
                 if (row["material"], row["model"], row["subset"]) == (material, model, "lit")
             )
+            rgb = "  ".join  # fixed-width columns, three significant digits in scientific notation
             print(
-                f"  {material:<24} {model:<12} lit ({n_lit}): R {lit[0]:.4g}  G {lit[1]:.4g}  B {lit[2]:.4g};  "
-                f"all: R {every[0]:.4g}  G {every[1]:.4g}  B {every[2]:.4g}"
+                f"  {material:<{width}}  {model:<11}  lit ({n_lit}): "
+                + rgb(f"{c} {v:.2e}" for c, v in zip("RGB", lit))
+                + ";  all: "
+                + rgb(f"{c} {v:.2e}" for c, v in zip("RGB", every))
             )
     print("wrote " + ", ".join(str(path) for path in result.files.values()))
     return 0

@@ -45,12 +45,15 @@ def run_default_job(output: Path = OUTPUT_FOLDER, material: str = DEFAULT_MATERI
         result = scene.shade_with(settings, progress=progress)  # the default light, above and in front
     lit = result.incident_flux.max(axis=1) > 0  # incident flux > 0: front-facing and not shadowed
     solver = result.stats["solver"]
+    print(f"  vertices lit (incident flux > 0): {int(lit.sum())} of {mesh.n_points}")
     print(
-        f"  vertices lit (incident flux > 0): {int(lit.sum())} of {mesh.n_points}; source-receiver pairs "
-        f"evaluated {solver['pairs_evaluated']:,}, skipped {solver['pairs_skipped']:,}; near-field triangles "
-        f"{solver['near_triangles']:,}"
+        f"  source-receiver pairs evaluated {solver['pairs_evaluated']:,}, skipped {solver['pairs_skipped']:,}; "
+        f"near-field triangles {solver['near_triangles']:,}"
     )
-    print("  wall time per step: " + ", ".join(f"{k} {v:.2f} s" for k, v in result.timings.items()))
+    steps = [f"{k} {v:.2f} s" for k, v in result.timings.items()]
+    print("  wall time per step: " + ", ".join(steps[:4]) + ("," if len(steps) > 4 else ""))
+    if len(steps) > 4:
+        print("    " + ", ".join(steps[4:]))
     for label, mask in ((f"the {int(lit.sum())} lit vertices", lit), (f"all {mesh.n_points} vertices", slice(None))):
         mean = result.radiance[mask].mean(axis=0)
         print(

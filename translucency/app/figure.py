@@ -41,7 +41,7 @@ def _light_words(light: dict) -> str:
         d = np.asarray(light["direction"], dtype=float)
         e = np.asarray(light["irradiance_rgb_W_m2"], dtype=float)
         irradiance = f"{e[0]:.3g}" if np.all(e == e[0]) else "(" + ", ".join(f"{v:.3g}" for v in e) + ")"
-        return f"directional from ({d[0]:.2f}, {d[1]:.2f}, {d[2]:.2f}) (object to light, arrow), E = {irradiance} W/m²"
+        return f"directional, toward the light ({d[0]:.2f}, {d[1]:.2f}, {d[2]:.2f}), E = {irradiance} W/m²"
     if light["type"] == "point":
         p = light["position_mm"]
         return f"point at ({p[0]:.3g}, {p[1]:.3g}, {p[2]:.3g}) mm"
@@ -188,7 +188,7 @@ def figure_image(
     note.text(
         0.0,
         0.5,
-        "parallel projection: the scale bar holds at every depth; blue arrow: from the light toward the object",
+        "parallel projection: the scale bar holds at every depth; blue arrow: the light, travelling toward the object",
         fontsize=8,
         va="center",
     )

@@ -121,7 +121,7 @@ def add_light_options(parser: argparse.ArgumentParser) -> None:
     from .lightspec import LIGHT_SPEC_HELP
 
     group = parser.add_argument_group(
-        "lights (default: one white directional light of 1 W/m^2 above and in front of the scan, placed by --up)"
+        "lights (default: a white directional light, 1 W/m^2, above and in front of the scan by --up)"
     )
     group.add_argument(
         "--light-dir",
