@@ -479,6 +479,7 @@ def test_bad_up_is_one_sentence():
         batch.BakeSettings(up="sideways")
 
 
+@pytest.mark.slow  # two worker processes: about 20 s
 def test_preview_writes_the_picture_beside_each_bake_also_from_worker_processes(scans, tmp_path, capsys):
     import imageio.v3 as iio
 

@@ -24,7 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["figure_image", "write_figure", "nice_length"]
+__all__ = ["figure_image", "write_figure", "render_views", "nice_length"]
 
 #: Narrowest picture, inches at 100 dpi: the title and the colour bar's label fit in it.
 FIGURE_MIN_WIDTH = 11.6
@@ -48,7 +48,7 @@ def _light_words(light: dict) -> str:
     return f"environment {light.get('name') or ''} ({light.get('n_directions')} directions)".replace("  ", " ")
 
 
-def _render_views(mesh, result, values, clim, scale, camera_direction, up_axis, panel):
+def render_views(mesh, result, values, clim, scale, camera_direction, up_axis, panel):
     """The two views as one (panel, 2 panel, 3) image with one parallel camera; returns (image, mm per pixel)."""
     from ..io.upright import up_vector
     from .render import (
@@ -127,7 +127,7 @@ def figure_image(
     metadata = result.metadata
     values = false_colour_values(result.radiance, quantity)
     clim = false_colour_range(values, scale, result.exposure)
-    image, mm_per_pixel = _render_views(
+    image, mm_per_pixel = render_views(
         mesh, result, values, clim, scale, camera_direction, metadata.get("up", "+y"), int(panel)
     )
     views = (image[:, :panel], image[:, panel:])
