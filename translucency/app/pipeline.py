@@ -22,7 +22,7 @@ from ..geometry.measure import mean_edge_length
 from ..io.units import RADIANCE_UNIT, unit_metadata
 from ..scatter.budget import DEFAULT_TIME_LIMIT_S
 from ..scatter.names import DEFAULT_METHOD, DEFAULT_MODEL, DEFAULT_TOL
-from .display import display_colors, srgb_encode  # noqa: F401  (re-exported)
+from .display import display_colors
 from .settings import DEFAULT_MATERIAL, ShadeSettings, parse_resolution, resolve_medium  # noqa: F401  (resolve_medium re-exported)
 
 #: The embedded default scan: the watertight Stanford bunny inside the pymeshlab wheel, stored
@@ -547,7 +547,7 @@ def shade(
         the shared Igea (134k vertices, 0.48 mm edges) in marble on an auto proxy of 9.8k vertices is
         4.2 % relative RMS from ``exact`` on the full mesh, which is why ``"full"`` is the default.
     exposure : float, optional
-        Display exposure (automatic by default, see :func:`display_colors`).
+        Display exposure (automatic by default, see :func:`~translucency.app.display.display_colors`).
     per_direction : bool
         Solve once per light sample with its own refracted direction and add the results (exact for
         several lights; the default aggregates the lights per vertex, see
