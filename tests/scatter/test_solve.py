@@ -118,8 +118,10 @@ def test_methods_stay_within_their_tolerance(sphere_case, method, tol):
 
 
 def test_cutoff_skips_pairs_for_a_short_diffusion_length():
+    """Ketchup on a 200 mm sphere: its longest diffusion length (red, 1/sigma_tr ~ 5 mm) is short beside
+    the object, so most pairs are skipped even at the receivers that need a wider radius than R(tol)."""
     medium = material("ketchup").medium()
-    points, triangles = icosphere(4, 25.0)
+    points, triangles = icosphere(4, 100.0)
     normals, phi, w12 = _lit(points, triangles, medium, _unit([0.0, 0.0, 1.0]))
     geometry = solve.SurfaceGeometry(points, triangles, normals)
     exact = solve.solve(geometry, phi, w12, medium, method="exact")

@@ -27,7 +27,7 @@ import math
 
 import numba
 import numpy as np
-from scipy import integrate, optimize
+from scipy import optimize
 
 from . import dipoles, fresnel
 from .kernels import (
@@ -45,11 +45,12 @@ from .threads import for_ranges
 
 
 def _directional_bound(r, D, sigma_tr_, C_phi, C_E, norm):
+    r = np.asarray(r, dtype=np.float64)
     s = sigma_tr_ * r
     return (
         2.0
         * norm
-        * math.exp(-s)
+        * np.exp(-s)
         / (4.0 * math.pi**2)
         * (
             C_phi * (1.0 / (D * r) + 3.0 * (1.0 + s) / r**2)
@@ -100,13 +101,14 @@ def _cutoff_radius(medium: Medium, tol: float, model: str) -> float:
                 else dipoles.better_dipole_total_reflectance
             )(float(medium.alpha_reduced[c]), eta)
             total = float(reflectance) * scale
-            density = lambda r, a=a, s=s, g=g: 2.0 * math.pi * r * scale * float(profile(r, a, s, g, eta))  # noqa: E731
+            density = lambda r, a=a, s=s, g=g: 2.0 * math.pi * r * scale * profile(r, a, s, g, eta)  # noqa: E731
         if total <= 0.0:
             radii.append(0.0)
             continue
-        if model == "directional" and st == 0.0:
+        sigma = float(medium.sigma_tr[c])
+        if sigma == 0.0:
             return math.inf  # no absorption: S_d decays as a power law and every pair matters
-        tail = lambda R: integrate.quad(density, R, np.inf, limit=200)[0] - tol * total  # noqa: E731
+        tail = lambda R, density=density, sigma=sigma: _tail(density, R, sigma) - tol * total  # noqa: E731
         lo = 1e-3 / float(medium.sigma_t_reduced[c])
         if tail(lo) <= 0.0:
             radii.append(lo)
@@ -116,6 +118,85 @@ def _cutoff_radius(medium: Medium, tol: float, model: str) -> float:
             lo, hi = hi, 2.0 * hi
         radii.append(float(optimize.brentq(tail, lo, hi, xtol=1e-6 * hi)))
     return max(radii)
+
+
+def pair_bound(medium: Medium, model: str, r) -> np.ndarray:
+    """Upper bound of one pair's clamped ``S_d`` (1/(mm^2 sr)) at distance ``r`` (mm), per channel: ``2 b(r)``
+    of the module docstring for the directional dipole, the profile itself for the radial models; decreasing
+    in ``r``. Returns ``(C, len(r))``."""
+    r = np.atleast_1d(np.asarray(r, dtype=np.float64))
+    eta = medium.eta
+    norm = 1.0 / (4.0 * float(fresnel.C_phi(1.0 / eta)))
+    out = np.empty((medium.n_channels, r.size))
+    for c in range(medium.n_channels):
+        a, s, g = medium.sigma_a[c], medium.sigma_s[c], medium.g[c]
+        if model == "directional":
+            C_phi, C_E = float(fresnel.C_phi(eta)), float(fresnel.C_E(eta))
+            D, st = float(medium.D[c]), float(medium.sigma_tr[c])
+            out[c] = _directional_bound(r, D, st, C_phi, C_E, norm)
+        else:
+            profile = dipoles.standard_dipole_profile if model == "standard" else dipoles.better_dipole_profile
+            scale = 1.0 / math.pi if model == "standard" else norm / math.pi
+            out[c] = scale * np.asarray(profile(r, a, s, g, eta), dtype=np.float64)
+    return out
+
+
+def receiver_radii(medium: Medium, model: str, tol: float, near_sum, total_flux, radius, largest, floor):
+    """Radius (mm) each receiver needs so that what it skips is at most ``tol`` of its own ``B`` (docs/physics.md §8.4).
+
+    A source beyond ``R`` adds at most ``pair_bound(R) Phi`` to a receiver, so the sources beyond ``R``
+    add at most ``pair_bound(R) Phi_total``. A receiver keeps the first ``radius`` when that is at most
+    ``tol`` times the sum it found within it (``near_sum``, ``(n, C)``) -- or ``tol`` times ``floor``
+    times the largest such sum of the channel (``largest``: below that fraction of the brightest
+    receiver, ``tol`` bounds the error relative to ``floor`` of the largest); otherwise the smallest of
+    the radii ``radius 2^(k/4)`` for which it holds, and ``inf`` (every pair) when none below the
+    object's ``diagonal`` does.
+
+    Parameters
+    ----------
+    near_sum : (n, C) float64
+        Each receiver's sum over the sources within ``radius``.
+    total_flux : (C,) float64
+        Total source flux per channel.
+    radius : float
+        The first radius, mm.
+    largest : float
+        The largest radius worth trying (the object's diagonal), mm.
+    floor : float
+        Fraction of the largest sum of a channel below which the error is measured against that fraction.
+
+    Returns
+    -------
+    (n,) float64
+    """
+    steps = max(1, int(math.ceil(4.0 * math.log2(max(largest / radius, 1.0)))))
+    radii = radius * 2.0 ** (np.arange(steps + 1) / 4.0)
+    dropped = pair_bound(medium, model, radii).T * np.asarray(total_flux)[None, :]  # (radii, C)
+    allowed = tol * np.maximum(near_sum, floor * near_sum.max(axis=0, initial=0.0)[None, :])  # (n, C)
+    ok = np.all(dropped[None, :, :] <= allowed[:, None, :], axis=2)  # (n, radii)
+    first = np.where(ok.any(axis=1), ok.argmax(axis=1), -1)
+    return np.where(first >= 0, radii[np.maximum(first, 0)], math.inf)
+
+
+#: The tail integral stops TAIL_DECAY_LENGTHS / sigma_tr beyond its start: the bound has fallen by
+#: exp(-TAIL_DECAY_LENGTHS / sqrt(2)) there (the better dipole's sigma_tr is at least sigma_tr / sqrt(2)).
+TAIL_DECAY_LENGTHS = 120.0
+_TAIL_NODES, _TAIL_WEIGHTS = np.polynomial.legendre.leggauss(24)
+
+
+def _tail(density, R, sigma_tr_):
+    """``int_R^inf density(r) dr`` of a vectorised density that decays as ``exp(-sigma_tr r)`` or faster:
+    24-point Gauss-Legendre on the pieces of ``[R, R + TAIL_DECAY_LENGTHS / sigma_tr]`` cut at
+    ``R + 2^k / sigma_tr`` (and at ``2^k R``), where the integrand is smooth (an exponential times powers
+    of ``r``). One vectorised call of the density; QUADPACK on ``[R, inf)`` lost the decay when
+    ``sigma_tr R`` was far from 1 (``sigma_s`` = 1e-9/mm: "probably divergent", "roundoff error")."""
+    scale = 1.0 / sigma_tr_
+    end = R + TAIL_DECAY_LENGTHS * scale
+    cuts = np.concatenate([R + scale * 2.0 ** np.arange(-8, 7), R * 2.0 ** np.arange(1, 40)])
+    cuts = np.unique(np.concatenate([[R], cuts[(cuts > R) & (cuts < end)], [end]]))
+    lo, hi = cuts[:-1, None], cuts[1:, None]
+    r = 0.5 * (lo + hi) + 0.5 * (hi - lo) * _TAIL_NODES[None, :]
+    return float(np.sum(0.5 * (hi - lo) * _TAIL_WEIGHTS[None, :] * density(r)))
 
 
 class SourceGrid:

@@ -26,6 +26,7 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = [
+    "ETA_MAX",
     "fresnel_reflectance",
     "fresnel_transmittance",
     "refract",
@@ -36,6 +37,12 @@ __all__ = [
     "reflection_parameter_A",
     "F_dr_egan_hilgeman",
 ]
+
+#: Largest relative index the diffusion models accept: the dEI11 moment fits (docs/physics.md §3.3) are
+#: polynomials in ``eta`` fitted for the indices of real translucent materials, and the solver's
+#: per-vertex tolerance is tested from ``eta = 1`` up to this value; beyond it the fits are extrapolated
+#: (at ``eta = 10``, ``2C1`` is about 8400, not a reflectance).
+ETA_MAX = 2.5
 
 
 def fresnel_reflectance(cos_i, eta):

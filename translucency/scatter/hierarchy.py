@@ -6,9 +6,10 @@ bottom-up). A node seen from a receiver under a small enough angle is replaced b
 source (Jensen & Buhler 2002; docs/physics.md §8.3): total flux per channel, flux-weighted position,
 flux-weighted normal and refracted direction (both renormalised).
 
-Criterion: a node is accepted when the receiver is outside its bounding sphere and
-``radius / distance(receiver, centre) < theta``; the error of one accepted node is of order
-``theta^2`` relative to its contribution, so the solver sets ``theta = THETA_PER_SQRT_TOL * sqrt(tol)``.
+Criterion: a node is accepted when the receiver is farther than ``min_distance`` from its bounding
+sphere and ``radius / distance(receiver, centre) < theta``; the error of one accepted node is of order
+``theta^2`` relative to its contribution, so the solver sets ``theta = THETA_PER_SQRT_TOL * sqrt(tol)``
+and ``min_distance = CLUSTER_MEAN_FREE_PATHS / min sigma_t'``.
 The tree is walked once per small group of neighbouring receivers, with the distance from the group's
 bounding sphere (conservative for each member, so a larger ``theta`` gives the same error).
 
@@ -32,13 +33,19 @@ from .threads import for_ranges
 
 LEAF_SIZE = 8
 #: Receivers that share one walk of the tree (consecutive along the solver's space-filling curve).
-#: Measured on the bunny and the Igea (marble, ketchup; tol 0.1-0.003): groups of 4 with
+#: Measured on the bunny and the Igea (marble, ketchup; tol 0.1-0.003; relative RMS): groups of 4 with
 #: THETA_PER_SQRT_TOL = 2.5 give the error of single receivers with 2.0 (0.6-0.9 x tol) in 60-75 % of
 #: the far-field time (8 and 16 evaluate more clusters than the shared walk saves).
 GROUP_RECEIVERS = 4
-#: theta = THETA_PER_SQRT_TOL * sqrt(tol); calibrated in tests/scatter/test_solve.py and bench/solver.py
-#: so that the measured relative RMS error of the tree stays below tol.
-THETA_PER_SQRT_TOL = 2.5
+#: theta = THETA_PER_SQRT_TOL * sqrt(tol); calibrated so that the per-vertex error that tol bounds
+#: (99th percentile, docs/physics.md §8.5) stays below tol. Measured on the whole bunny in marble at tol
+#: 1e-2 (p99 against exact): 2.5 -> 8.7e-2, 1.2 -> 2.1e-2, 1.0 -> 1.4e-2, 0.75 -> 6.4e-3 (the error goes
+#: as theta^2.5, the cluster evaluations as theta^-2); tests/scatter/test_tolerance.py checks it on spheres.
+THETA_PER_SQRT_TOL = 0.8
+#: No cluster closer than CLUSTER_MEAN_FREE_PATHS / min sigma_t' to the receiver (the solver's
+#: ``min_distance``): nearer than that S_d varies with the angles between normals and refracted
+#: directions as much as with the distance, which a cluster's size-over-distance test does not see.
+CLUSTER_MEAN_FREE_PATHS = 1.0
 
 
 class SourceTree:
@@ -215,17 +222,20 @@ def tree_sum(
     block=4096,
     reach=math.inf,
     group=GROUP_RECEIVERS,
+    min_distance=0.0,
 ):
     """Far-field sum with the hierarchy: ``B[o, c]``, sources summed one by one and clusters used, per receiver.
 
     A node small seen from the receiver (radius < ``theta`` x distance, receiver outside it) is one
     aggregated source (``sources``, from :func:`aggregated_sources`); otherwise its children are opened,
-    down to the leaves' sources. A node wholly farther than ``reach`` (mm; the cutoff radius of the
-    tolerance) is skipped. The tree is walked once per group of ``group`` consecutive receivers (the
-    solver orders them along a space-filling curve) with the tests made for the group's bounding
-    sphere -- for every receiver of the group they hold with at least the same margin -- and the group's
-    list of sources and clusters is evaluated at each of its receivers with
-    :func:`~translucency.scatter.kernels.indexed_sum`, ``block`` receivers at a time.
+    down to the leaves' sources; a node is never a cluster for a receiver nearer than ``min_distance``
+    (mm) to its bounding sphere. A node wholly farther than ``reach`` (mm) is skipped (the solver passes
+    infinity: a skip sized on the total reflectance drops most of a dark receiver's ``B``). The tree is
+    walked once per group of ``group`` consecutive receivers (the solver orders them along a
+    space-filling curve) with the tests made for the group's bounding sphere -- for every receiver of
+    the group they hold with at least the same margin -- and the group's list of sources and clusters
+    is evaluated at each of its receivers with :func:`~translucency.scatter.kernels.indexed_sum`,
+    ``block`` receivers at a time.
 
     Returns
     -------
@@ -266,6 +276,7 @@ def tree_sum(
             spread,
             theta,
             reach,
+            min_distance,
         )
         for_ranges(
             _traverse, n_groups, *walk, np.empty(0, dtype=np.int64), np.zeros(1, dtype=np.int64), g_direct, g_clustered
@@ -310,6 +321,7 @@ def _traverse(
     rcv_spread,
     theta,
     reach,
+    min_distance,
     columns,
     starts,
     direct,
@@ -346,7 +358,7 @@ def _traverse(
             near = math.sqrt(dist2) - rcv_spread[o]  # the group's closest possible distance to the centre
             if near > reach + rk:  # wholly beyond the cutoff radius
                 continue
-            if near > rk and rk * rk < theta2 * near * near:
+            if near > rk + min_distance and rk * rk < theta2 * near * near:
                 if write:
                     columns[at] = n_src + k
                     at += 1

@@ -86,7 +86,8 @@ def validate_coefficients(sigma_a, sigma_s, g, eta, *, what: str = "medium"):
     """Check optical coefficients and return them as broadcast float64 arrays.
 
     Raises :class:`~translucency.errors.InvalidParameterError` with a sentence naming the problem:
-    non-finite values, ``sigma_a < 0``, ``sigma_s < 0``, ``g`` outside (-1, 1), ``eta < 1``, or no
+    non-finite values, ``sigma_a < 0``, ``sigma_s < 0``, ``g`` outside (-1, 1), ``eta`` outside
+    [1, :data:`~translucency.scatter.fresnel.ETA_MAX`], or no
     scattering at all (``alpha' = 0``: the diffusion models need ``sigma_s (1 - g) > 0``).
 
     Returns
@@ -116,6 +117,11 @@ def validate_coefficients(sigma_a, sigma_s, g, eta, *, what: str = "medium"):
         raise InvalidParameterError(
             f"{what}: eta = n_inside / n_outside must be >= 1, got {e.tolist()}; "
             "the diffusion models assume light enters an optically denser medium."
+        )
+    if np.any(e > fresnel.ETA_MAX):
+        raise InvalidParameterError(
+            f"{what}: eta = n_inside / n_outside must be at most {fresnel.ETA_MAX}, got {e.tolist()}; "
+            "the Fresnel moment fits of the diffusion models hold from 1 to that value (docs/physics.md §3.3)."
         )
     if np.any(s * (1 - gg) <= 0):
         raise InvalidParameterError(

@@ -668,6 +668,7 @@ def near_field_correction(
     scale_min,
     tables=None,
     degree3_ratio=0.0,
+    degree3_diameter=math.inf,
     rule_points=RULE_POINTS,
     rule_weights=RULE_WEIGHTS,
     fan_nodes=(FAN_ANGULAR, FAN_RADIAL),
@@ -684,7 +685,10 @@ def near_field_correction(
     :func:`~translucency.scatter.kernels.indexed_sum` (where the time goes).
 
     Whole triangles use Dunavant's degree-5 rule, or the cheaper degree-3 rule (shared midpoints and
-    centroids) where ``diameter <= degree3_ratio * distance`` (0: never). ``tables`` are the mesh's
+    centroids) where ``diameter <= degree3_ratio * distance``, ``distance >= scale_min`` and ``diameter <=
+    degree3_diameter`` (mm; ``degree3_ratio`` 0: never; nearer than ``D_min``, ``S_d`` varies with the angles
+    too, and over a triangle wider than a fraction of ``1 / sigma_tr`` faster than the rule follows).
+    ``tables`` are the mesh's
     :class:`TriangleTables` (made here when not given); ``shared`` the :class:`SourcePoints` of the
     same inputs (made here when not given; pass it to call this on receivers a part at a time).
     ``refined_out`` (n_receivers,) int64, when given, receives the number of each receiver's own points.
@@ -739,6 +743,7 @@ def near_field_correction(
             beta,
             scale_min,
             degree3_ratio,
+            degree3_diameter,
             centroid_factor,
             shared.vertex_lit,
             shared.first_rule,
@@ -836,6 +841,7 @@ def _list_points(
     beta,
     scale_min,
     degree3_ratio,
+    degree3_diameter,
     centroid_factor,
     vertex_lit,
     first_rule,
@@ -897,7 +903,11 @@ def _list_points(
             corner = _corner_of(triangles[t], receivers[r])
             if corner >= 0:  # the receiver's own triangle: the fan rule
                 refined += _fan_count(points, triangles[t], corner, beta * scale_min, fan_angular, fan_radial)
-            elif _whole(diameters[t], centroids[t], xo, degree3_ratio, 0.0):  # degree 3: shared points
+            elif (
+                diameters[t] <= degree3_diameter
+                and _whole(diameters[t], centroids[t], xo, degree3_ratio, 0.0)
+                and _whole(scale_min, centroids[t], xo, 1.0, 0.0)
+            ):  # degree 3 (shared points), only beyond D_min: nearer, S_d varies with the angles too
                 area = triangle_areas[t]
                 for corner in range(3):
                     v = triangles[t, corner]

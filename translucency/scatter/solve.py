@@ -11,13 +11,18 @@ Methods for the far field (each with a tolerance where it has one):
 ``exact``
     every (source, receiver) pair, numba-parallel, blocked; the reference.
 ``cutoff``
-    pairs farther apart than a radius ``R(tol)`` are skipped: ``R`` is where the tail of a
-    geometry-independent bound of ``S_d`` holds less than ``tol`` of the total reflectance (docs/physics.md §8.4).
+    pairs farther apart than a radius are skipped: first ``R(tol)``, where the tail of a
+    geometry-independent bound of ``S_d`` holds less than ``tol`` of the total reflectance, then, for
+    every receiver whose own ``B`` is too small for what ``R(tol)`` may drop, the radius that bound
+    allows it (docs/physics.md §8.4).
 ``tree``
     a hierarchy over the sources (:mod:`translucency.scatter.hierarchy`): a cluster that is small
-    seen from the receiver is replaced by one aggregated source (Jensen & Buhler 2002, docs/physics.md §8.3);
-    clusters wholly beyond the ``cutoff`` radius ``R(tol)`` are skipped (on the bunny in marble this
-    drops a quarter of the evaluations and changes ``B`` by 5e-6 relative, in ketchup 45 % and 3e-4).
+    seen from the receiver, and farther than a reduced mean free path, is replaced by one aggregated
+    source (Jensen & Buhler 2002, docs/physics.md §8.3). Nothing is skipped by distance: far clusters are
+    cheap, and the far side of an object gets all its ``B`` from them.
+
+``tol`` bounds the relative error of ``B`` per receiver against ``exact`` at the 99th percentile over the
+receivers whose ``B`` is at least :data:`TOL_FLOOR` of the largest in its channel (docs/physics.md §8.5).
 
 Skipped work is reported in :attr:`Solution.stats`: sources with no flux, pairs beyond the cutoff or
 inside accepted clusters, channels with identical coefficients (computed once).
@@ -36,22 +41,27 @@ B         diffuse radiance factor sum S_d Phi (+ near field)        W/(m^2 sr)
 from __future__ import annotations
 
 import dataclasses
+import math
 import time
+import warnings
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import BudgetError, InvalidParameterError, option
+from ..errors import BudgetError, InvalidParameterError, TranslucencyWarning, option
 from ..geometry.measure import barycentric_vertex_areas, mean_edge_length, triangle_areas
 from ..geometry.morton import morton_order
 from . import budget, cutoff, hierarchy, kernels, nearfield
-from .medium import Medium
+from .medium import CHANNELS, Medium
 from .names import DEFAULT_MODEL, METHODS, MODELS, check_method, check_model, check_tol
 
 __all__ = ["SurfaceGeometry", "Solution", "solve", "METHODS", "MODELS"]
 
 
+#: ``tol`` bounds the relative error of ``B`` at every receiver whose ``B`` is at least TOL_FLOOR of the
+#: largest in its channel (darker receivers: tol x TOL_FLOOR of that largest, absolute).
+TOL_FLOOR = 1e-4
 #: Near field: triangles with a vertex within max(NEAR_EDGES * mean edge, NEAR_MEAN_FREE_PATHS / min sigma_t')
 #: of the receiver are integrated with sub-triangle quadrature (:mod:`translucency.scatter.nearfield`).
 NEAR_EDGES = 3.0
@@ -66,6 +76,9 @@ NEAR_BETA = 1.5
 #: Measured on the bunny (3000 receivers, marble and ketchup): 2-4e-4 relative RMS from the degree-5
 #: answer with 45 % fewer near-field points.
 NEAR_DEGREE3_RATIO = 1.0
+#: ... and only for triangles no wider than NEAR_DEGREE3_DECAY / max sigma_tr: across a wider one S_d
+#: changes by more than exp(NEAR_DEGREE3_DECAY) (docs/physics.md §8.2).
+NEAR_DEGREE3_DECAY = 0.5
 
 
 @dataclass
@@ -245,27 +258,40 @@ def _cutoff_far_field(model, geometry, medium, lit, w12, flux, params, channel_o
 
         return evaluate
     model_code = kernels.MODELS[model]
-    grid = geometry.source_grid(lit, radius)
     sources = (geometry.points[lit], geometry.normals[lit], w12[lit], flux[lit])
+    total_flux = flux[lit].sum(axis=0)
 
-    def evaluate(rcv_points, rcv_normals):
-        B, evaluated = cutoff.cutoff_sum(
+    def within(r, rcv_points, rcv_normals):
+        if not r < diagonal:
+            B, _ = kernels.vertex_sum(model_code, *sources, rcv_points, rcv_normals, params, channel_of)
+            return B, np.full(rcv_points.shape[0], lit.size, dtype=np.int64)
+        grid = geometry.source_grid(lit, r)
+        return cutoff.cutoff_sum(
             model_code,
             grid.order,
             grid.start,
             grid.origin,
             grid.cell,
             grid.dims,
-            radius,
+            r,
             *sources,
             rcv_points,
             rcv_normals,
             params,
             channel_of,
         )
+
+    def evaluate(rcv_points, rcv_normals):
+        B, evaluated = within(radius, rcv_points, rcv_normals)
+        # receivers whose own B is too small for what the radius may skip get a larger one (§8.4)
+        radii = cutoff.receiver_radii(medium, model, tol, B, total_flux, radius, diagonal, TOL_FLOOR)
+        for r in np.unique(radii[radii > radius]):
+            these = np.flatnonzero(radii == r)
+            B[these], evaluated[these] = within(float(r), rcv_points[these], rcv_normals[these])
         pairs = int(lit.size) * int(rcv_points.shape[0])
         return B, {
             "cutoff_radius_mm": radius,
+            "receivers_widened": int(np.count_nonzero(radii > radius)),
             "pairs_evaluated": int(evaluated.sum()),
             "pairs_skipped": pairs - int(evaluated.sum()),
         }
@@ -280,16 +306,26 @@ def _tree_far_field(model, geometry, medium, lit, w12, flux, params, channel_of,
     tree = geometry.source_tree()
     theta = hierarchy.THETA_PER_SQRT_TOL * float(np.sqrt(tol))
     sources = hierarchy.aggregated_sources(tree, geometry.points, geometry.normals, w12, flux)
-    reach = cutoff.cutoff_radius(medium, tol, model)
+    reach = math.inf
+    min_distance = hierarchy.CLUSTER_MEAN_FREE_PATHS / float(np.min(medium.sigma_t_reduced))
 
     def evaluate(rcv_points, rcv_normals):
         B, direct, clustered = hierarchy.tree_sum(
-            model_code, tree, sources, rcv_points, rcv_normals, params, channel_of, theta, reach=reach
+            model_code,
+            tree,
+            sources,
+            rcv_points,
+            rcv_normals,
+            params,
+            channel_of,
+            theta,
+            reach=reach,
+            min_distance=min_distance,
         )
         pairs = int(lit.size) * int(rcv_points.shape[0])
         return B, {
             "theta": theta,
-            "cutoff_radius_mm": reach,
+            "cluster_min_distance_mm": min_distance,
             "tree_nodes": tree.n_nodes,
             "pairs_evaluated": int(direct.sum() + clustered.sum()),
             "pairs_direct": int(direct.sum()),
@@ -303,6 +339,30 @@ def _tree_far_field(model, geometry, medium, lit, w12, flux, params, channel_of,
 #: Each method prepares once per solve what does not depend on the receivers and returns a function
 #: ``(receiver points mm, receiver normals) -> (B, statistics)`` called on every block of receivers.
 _FAR_FIELD = {"exact": _exact_far_field, "cutoff": _cutoff_far_field, "tree": _tree_far_field}
+
+
+#: Reduced albedo below which the diffusion models are outside their range (README, "Models"): a solve
+#: warns once per material and process (:func:`warn_low_albedo`).
+LOW_ALBEDO = 0.5
+_LOW_ALBEDO_WARNED: set = set()
+
+
+def warn_low_albedo(medium: Medium) -> None:
+    """A :class:`~translucency.errors.TranslucencyWarning` (one sentence, once per material per process)
+    when a channel's reduced albedo is below :data:`LOW_ALBEDO`."""
+    low = np.flatnonzero(medium.alpha_reduced < LOW_ALBEDO)
+    key = (medium.name, medium.sigma_a.tobytes(), medium.sigma_s.tobytes(), medium.g.tobytes())
+    if not low.size or key in _LOW_ALBEDO_WARNED:
+        return
+    _LOW_ALBEDO_WARNED.add(key)
+    names = CHANNELS if medium.n_channels == len(CHANNELS) else [f"channel {c}" for c in range(medium.n_channels)]
+    which = ", ".join(f"{names[c]} {medium.alpha_reduced[c]:.2g}" for c in low)
+    warnings.warn(
+        f"{medium.name}: reduced albedo below {LOW_ALBEDO} ({which}), where the diffusion models are outside "
+        "their range; treat its subsurface light there as a rough estimate.",
+        TranslucencyWarning,
+        stacklevel=3,
+    )
 
 
 def unique_channels(medium: Medium):
@@ -358,8 +418,9 @@ def solve(
     method : {"exact", "cutoff", "tree"}
         How the far field is summed (module docstring); ``exact`` by default (the reference).
     tol : float
-        Relative error allowed to the far-field approximation (``cutoff``, ``tree``), in (0, 1);
-        ignored by ``exact``; 1e-3 by default.
+        Relative error of ``B`` allowed per receiver against ``exact`` (``cutoff``, ``tree``; docs/physics.md
+        §8.5: at the 99th percentile over the receivers whose ``B`` is at least :data:`TOL_FLOOR` of the
+        largest in its channel), in (0, 1); ignored by ``exact``; 1e-3 by default.
     receivers : array_like of int, optional
         Vertices to compute ``B`` at (all by default).
     progress : callable, optional
@@ -388,6 +449,7 @@ def solve(
     phi, w12, receivers = _checked_inputs(
         geometry, phi, w12, medium, model, method, tol, receivers, memory_limit, time_limit
     )
+    warn_low_albedo(medium)
 
     start = time.perf_counter()
     work = _ordered_work(geometry, phi, w12, medium, model, receivers, stats)
@@ -516,6 +578,7 @@ def _plan(work: _Work, method, tol, memory_limit, time_limit, stats):
         channel_of=work.channel_of,
         medium=work.medium,
         degree3_ratio=0.0 if method == "exact" else NEAR_DEGREE3_RATIO,
+        degree3_diameter=NEAR_DEGREE3_DECAY / max(float(np.max(work.medium.sigma_tr)), 1e-300),
         shared=shared,
     )
     far_field = work.far_field(method, tol) if work.lit.size and method != "exact" else None
@@ -572,7 +635,14 @@ SAMPLE_NEAR_ENTRIES = 500_000
 
 def _merge_stats(total: dict, part: dict) -> dict:
     """Far-field statistics of receiver chunks: counters add up, settings (radius, theta) stay."""
-    counters = ("pairs_evaluated", "pairs_skipped", "pairs_direct", "cluster_evaluations", "clamped_values")
+    counters = (
+        "pairs_evaluated",
+        "pairs_skipped",
+        "receivers_widened",
+        "pairs_direct",
+        "cluster_evaluations",
+        "clamped_values",
+    )
     merged = dict(total)
     for key, value in part.items():
         merged[key] = merged.get(key, 0) + value if key in counters else value
@@ -599,6 +669,7 @@ def _near_call(args, receivers, offsets, triangle_ids, own=None):
         float(np.min(args["medium"].D)),
         tables=g.triangle_tables(),
         degree3_ratio=args["degree3_ratio"],
+        degree3_diameter=args["degree3_diameter"],
         shared=args["shared"],
         refined_out=own,
     )
