@@ -78,6 +78,19 @@ def test_total_reflectance_matches_chandrasekhar_exact_values(albedo, theta):
     assert tally.total_reflectance_se < 0.002 * exact  # the check above is a real one
 
 
+@pytest.mark.parametrize("albedo", [0.5, 0.9])
+def test_radiance_along_the_normal_matches_chandrasekhar(albedo):
+    # docs/physics.md §9.3: at eta = 1, g = 0, normal incidence and exit, a uniform beam of unit flux per
+    # unit area gives the intensity alpha H(1)^2 / (8 pi), with H(1) = (1 - R(1)) / sqrt(1 - alpha) from
+    # the exact totals above. Tolerance: 3 standard errors and 1 %.
+    tally = _index_matched(albedo, 0, n_photons=400_000)
+    h1 = (1.0 - SPEC_3_3[albedo][0]) / math.sqrt(1.0 - albedo)
+    exact = albedo * h1**2 / (8.0 * math.pi)
+    assert abs(tally.normal_radiance - exact) <= 3.0 * tally.normal_radiance_se
+    assert abs(tally.normal_radiance - exact) <= 0.01 * exact
+    assert tally.normal_radiance_se < 0.004 * exact
+
+
 @pytest.mark.parametrize("theta", [0, 60])
 def test_single_scattering_matches_closed_form(theta):
     # Index-matched half-space, isotropic scattering: R1(mu0) = (alpha/2) (1 - mu0 ln(1 + 1/mu0)).

@@ -93,3 +93,30 @@ def disc(radius, rings):
     flip = e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0] < 0
     triangles[flip] = triangles[flip][:, ::-1]
     return np.concatenate([xy, np.zeros((len(xy), 1))], axis=1), triangles
+
+
+def box(half_sizes, centre=(0.0, 0.0, 0.0)):
+    """Closed box of half side lengths ``(a, b, c)`` in mm: 8 corners, 12 outward counter-clockwise triangles."""
+    a, b, c = (float(h) for h in half_sizes)
+    signs = np.array([[x, y, z] for z in (-1, 1) for y in (-1, 1) for x in (-1, 1)], float)
+    points = signs * [a, b, c] + np.asarray(centre, float)
+    # corner index = x + 2 y + 4 z with 0 for the minus side; each face as two triangles seen from outside
+    faces = [(0, 2, 3, 1), (4, 5, 7, 6), (0, 1, 5, 4), (2, 6, 7, 3), (0, 4, 6, 2), (1, 3, 7, 5)]
+    triangles = [t for p, q, r, s in faces for t in ((p, q, r), (p, r, s))]
+    return points, np.array(triangles, dtype=np.int64)
+
+
+def torus(major_radius, minor_radius, n_major=48, n_minor=24):
+    """Closed torus about the z axis in mm (a concave, closed test surface); outward counter-clockwise triangles."""
+    u = np.linspace(0.0, 2.0 * np.pi, n_major, endpoint=False)
+    v = np.linspace(0.0, 2.0 * np.pi, n_minor, endpoint=False)
+    uu, vv = np.meshgrid(u, v, indexing="ij")
+    ring = major_radius + minor_radius * np.cos(vv)
+    points = np.stack([ring * np.cos(uu), ring * np.sin(uu), minor_radius * np.sin(vv)], axis=-1).reshape(-1, 3)
+    i, j = np.meshgrid(np.arange(n_major), np.arange(n_minor), indexing="ij")
+    a = i * n_minor + j
+    b = ((i + 1) % n_major) * n_minor + j
+    c = ((i + 1) % n_major) * n_minor + (j + 1) % n_minor
+    d = i * n_minor + (j + 1) % n_minor
+    triangles = np.concatenate([np.stack([a, b, c], -1).reshape(-1, 3), np.stack([a, c, d], -1).reshape(-1, 3)])
+    return points, triangles.astype(np.int64)

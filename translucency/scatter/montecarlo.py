@@ -221,6 +221,8 @@ def _random_walk_batches(
         Escaped weight per cell, indexed [batch, order, iy, ix].
     radial : ndarray, shape (n_batches, 2, n_annuli)
         Escaped weight per annulus.
+    normal_radiance : ndarray, shape (n_batches,)
+        Sum over interactions of weight x phase function toward +z x attenuation to the boundary, 1/sr.
     """
     sigma_t = sigma_a + sigma_s
     albedo = sigma_s / sigma_t
@@ -235,6 +237,8 @@ def _random_walk_batches(
     interactions = np.zeros(n_batches, dtype=np.int64)
     grid = np.zeros((n_batches, 2, grid_cells, grid_cells))
     radial = np.zeros((n_batches, 2, n_annuli))
+    normal_radiance = np.zeros(n_batches)
+    hg_norm = (1.0 - g * g) / (4.0 * math.pi)
 
     for batch in numba.prange(n_batches):
         state = np.empty(4, dtype=np.uint64)
@@ -284,6 +288,10 @@ def _random_walk_batches(
                     w *= albedo
                     events += 1
                     batch_interactions += 1
+                    # Next event toward a sensor above: what this interaction sends straight up (+z), the
+                    # phase function at the travel direction's cosine uz, attenuated to the boundary
+                    # (docs/physics.md §9.1 item 7).
+                    normal_radiance[batch] += w * hg_norm / (1.0 + g * g - 2.0 * g * uz) ** 1.5 * math.exp(sigma_t * z)
                     cos_theta = _sample_hg_cosine(g, _uniform(state))
                     sin_theta = math.sqrt(max(0.0, 1.0 - cos_theta * cos_theta))
                     phi = 2.0 * math.pi * _uniform(state)
@@ -312,7 +320,7 @@ def _random_walk_batches(
                     else:
                         break
         interactions[batch] = batch_interactions
-    return totals, absorbed, truncated, interactions, grid, radial
+    return totals, absorbed, truncated, interactions, grid, radial, normal_radiance
 
 
 # --------------------------------------------------------------------------------------------------
@@ -348,6 +356,11 @@ class HalfSpaceTally:
     truncated : float
         Fraction still travelling when a photon reached ``max_interactions`` (0 unless
         ``sigma_a`` is ~0).
+    normal_radiance, normal_radiance_se : float
+        Radiance inside the medium at the boundary travelling along the outward normal ``+z``, averaged
+        over the boundary, under a *uniform* collimated beam of unit launched flux per unit area, 1/sr
+        (docs/physics.md §9.1 item 7); outside it is ``T21(eta, 1) / eta^2`` times this. The pencil
+        beam and the uniform beam give the same average by translation invariance.
     mean_interactions : float
         Interactions per photon.
     grid_edges_mm : ndarray, shape (grid_cells + 1,)
@@ -390,6 +403,8 @@ class HalfSpaceTally:
     absorbed: float
     absorbed_se: float
     truncated: float
+    normal_radiance: float
+    normal_radiance_se: float
     mean_interactions: float
     grid_edges_mm: np.ndarray
     exitance: np.ndarray
@@ -611,7 +626,7 @@ def simulate_half_space(
     photons_per_batch = -(-n_photons // n_batches)
     n_total = photons_per_batch * n_batches
     started = time.perf_counter()
-    totals, absorbed, truncated, interactions, grid, radial = _random_walk_batches(
+    totals, absorbed, truncated, interactions, grid, radial, normal_radiance = _random_walk_batches(
         sigma_a,
         sigma_s,
         g,
@@ -642,6 +657,7 @@ def simulate_half_space(
     total, total_se = _batch_mean_and_se(totals.sum(axis=1))
     by_order, by_order_se = _batch_mean_and_se(totals)
     absorbed_mean, absorbed_se = _batch_mean_and_se(absorbed * per_photon)
+    normal_radiance_mean, normal_radiance_se = _batch_mean_and_se(normal_radiance * per_photon)
 
     return HalfSpaceTally(
         sigma_a=sigma_a,
@@ -665,6 +681,8 @@ def simulate_half_space(
         absorbed=float(absorbed_mean),
         absorbed_se=float(absorbed_se),
         truncated=float(truncated.sum() / n_total),
+        normal_radiance=float(normal_radiance_mean),
+        normal_radiance_se=float(normal_radiance_se),
         mean_interactions=float(interactions.sum() / n_total),
         grid_edges_mm=edges,
         radial_edges_mm=radial_edges,

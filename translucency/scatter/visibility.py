@@ -202,18 +202,56 @@ class Occluder:
         self.rays_cast += k
         return hit < 0
 
-    def _run(self, origins, directions, tfar):
+    def first_hits(self, origins, directions, max_distance=None):
+        """The first triangle each ray meets, and how far along it, for rays from the points given as they are.
+
+        Unlike :meth:`visible` the origins are not moved: a caller starting on the surface offsets them
+        itself (by :attr:`epsilon` along the side it continues on).
+
+        Parameters
+        ----------
+        origins, directions : array_like, shape (k, 3)
+            Ray origins (mm) and unit directions.
+        max_distance : array_like, shape (k,), optional
+            Only hits nearer than this count, mm (default: to infinity).
+
+        Returns
+        -------
+        triangle : ndarray of int64, shape (k,)
+            Index of the first triangle hit, -1 where none is.
+        distance : ndarray of float64, shape (k,)
+            Distance to it along the ray, mm (inf where none is).
+        """
+        origins = np.ascontiguousarray(origins, dtype=np.float32)
+        k = len(origins)
+        if k == 0 or self._scene is None:
+            return np.full(k, -1, dtype=np.int64), np.full(k, np.inf)
+        directions = np.ascontiguousarray(directions, dtype=np.float32)
+        tfar = np.full(k, INFINITE_DISTANCE, dtype=np.float32)
+        if max_distance is not None:
+            tfar = np.ascontiguousarray(np.minimum(max_distance, INFINITE_DISTANCE), dtype=np.float32)
+        hits = self._run(origins, directions, tfar, query="INTERSECT", output=True)
+        self.rays_cast += k
+        triangle = hits["primID"].astype(np.int64)
+        distance = np.where(triangle >= 0, hits["tfar"].astype(np.float64), np.inf)
+        return triangle, distance
+
+    def _run(self, origins, directions, tfar, query="OCCLUDED", output=False):
         k = len(origins)
         n_chunks = min(self.workers * 4, k // MIN_RAYS_PER_CHUNK)
+
+        def trace(s):
+            return self._scene.run(origins[s], directions[s], dists=tfar[s].copy(), query=query, output=output)
+
         if self.workers == 1 or n_chunks < 2:
-            return self._scene.run(origins, directions, dists=tfar, query="OCCLUDED")
+            return trace(slice(0, k))
         bounds = np.linspace(0, k, n_chunks + 1).astype(np.int64)
         chunks = [slice(a, b) for a, b in zip(bounds[:-1], bounds[1:])]
         with ThreadPoolExecutor(max_workers=self.workers) as pool:
-            parts = pool.map(
-                lambda s: self._scene.run(origins[s], directions[s], dists=tfar[s], query="OCCLUDED"), chunks
-            )
-            return np.concatenate(list(parts))
+            parts = list(pool.map(trace, chunks))
+        if output:
+            return {key: np.concatenate([part[key] for part in parts]) for key in parts[0]}
+        return np.concatenate(parts)
 
 
 class VisibilityCache:

@@ -1,0 +1,6 @@
+"""Ground truth on a mesh: path-traced radiance to measure the scattering models against.
+
+:mod:`translucency.reference.pathtrace` is the project's own unbiased random walk in a closed mesh with
+Embree ray casts (docs/physics.md §9.5). Nothing here is imported by ``import translucency``; the
+modules load on demand.
+"""
