@@ -22,7 +22,7 @@ import sys
 import textwrap
 
 from .. import __version__
-from ..errors import TranslucencyError, command_line_spelling
+from ..errors import InvalidParameterError, TranslucencyError, command_line_spelling
 
 
 def _format_triplet(values, fmt="{:.4g}") -> str:
@@ -342,6 +342,63 @@ def cmd_compare(args) -> int:
     return 0
 
 
+#: Seconds between two progress lines of ``translucency reference`` (a trace takes minutes).
+REFERENCE_PROGRESS_SECONDS = 15.0
+
+
+def _every(seconds: float, prefix: str):
+    """A ``progress(fraction, line)`` callback that prints ``prefix + line`` to stderr at most every ``seconds``
+    (and at the end)."""
+    import time
+
+    last = [time.perf_counter()]
+
+    def report(fraction: float, line: str) -> None:
+        now = time.perf_counter()
+        if now - last[0] >= seconds or fraction >= 1.0:
+            last[0] = now
+            print(prefix + line, file=sys.stderr, flush=True)
+
+    return report
+
+
+def cmd_reference(args) -> int:
+    """Path-trace the radiance along the normal at every vertex of a scan and write it with its mesh."""
+    from pathlib import Path
+
+    from ..io.atomic import prepare_output_file
+    from ..io.reference_file import REFERENCE_SUFFIXES
+    from .ground_truth import check_spp, trace_reference, write_reference
+    from .options import parse_vector, quiet
+    from .pipeline import load_scan
+
+    spp = check_spp(args.spp)
+    output = Path(args.output)
+    if output.suffix.lower() not in REFERENCE_SUFFIXES:
+        raise InvalidParameterError(f"-o must name a .npz or .vtp file, got {args.output!r}.")
+    prepare_output_file(output, create_folder=True, setting="-o")
+    light = None if args.light_dir is None else parse_vector(args.light_dir, "--light-dir")
+    mesh, _, name = load_scan(args.mesh, args.unit, warn=_warn, note=_note)
+    print(f"{name}: {mesh.n_points} vertices, {mesh.extent:.4g} mm across; {spp} paths per vertex and channel")
+    truth = trace_reference(
+        mesh,
+        args.material,
+        light,
+        spp=spp,
+        seed=args.seed,
+        up=args.up,
+        progress=None if quiet(args) else _every(REFERENCE_PROGRESS_SECONDS, f"{Path(name).name}: tracing: "),
+    )
+    written = write_reference(truth, output)
+    meta = truth.metadata
+    print(
+        f"traced {meta['stats']['paths']:,} paths in {meta['seconds']:.1f} s; median standard error "
+        f"{100 * meta['median_relative_stderr']:.1f} % of the radiance per vertex (it falls as 1/sqrt(spp))"
+    )
+    print(f"wrote {written}")
+    return 0
+
+
 def cmd_main_job(args) -> int:
     """The main job on the embedded default scan (see :mod:`translucency.app.default_job`)."""
     from .default_job import run_default_job
@@ -474,6 +531,37 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_bake)
 
     _add_view_and_compare_parsers(sub)
+
+    from .ground_truth import DEFAULT_SPP
+
+    p = sub.add_parser(
+        "reference",
+        help="path-trace the radiance at every vertex: the ground truth the models are measured against",
+        description="Unbiased Monte Carlo light transport in the closed scan (smooth dielectric boundary, "
+        "homogeneous medium, one directional light): the radiance leaving each vertex along its normal, its "
+        "standard error and the part that re-entered the surface, written with the mesh to OUT.npz or OUT.vtp.",
+    )
+    add_scan_options(p)
+    p.add_argument("--material", default="marble", help="catalogue name (default marble)")
+    p.add_argument(
+        "--light-dir",
+        metavar="X,Y,Z",
+        help="direction toward a white directional light of 1 W/m^2, scan coordinates (default: above and in "
+        "front, by --up)",
+    )
+    p.add_argument(
+        "--spp",
+        type=int,
+        default=DEFAULT_SPP,
+        metavar="N",
+        help=f"paths per vertex and channel; the noise falls as 1/sqrt(N) (default {DEFAULT_SPP})",
+    )
+    p.add_argument("--seed", type=int, default=0, help="seed of the random numbers (default 0)")
+    p.add_argument(
+        "-o", "--output", default="translucency-output/reference.npz", help="OUT.npz or OUT.vtp (default %(default)s)"
+    )
+    add_quiet_option(p)
+    p.set_defaults(func=cmd_reference)
     parser.set_defaults(func=cmd_main_job)
     return parser
 

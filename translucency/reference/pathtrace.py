@@ -476,7 +476,8 @@ def _next_event(boundary: _Boundary, light: _Light, z, d, sigma_t, g, rng, stats
 
 
 def _progress_line(done, elapsed, samples, sums):
-    """``"37 % of the paths, 12 s; median error 3.1 % after 24 paths per point"`` for the progress callback."""
+    """``"37 % of the paths, 12 s; median error 3.1 % after 24 paths per point"`` for the progress callback
+    (the error of the channel being walked)."""
     line = f"{100 * done:.0f} % of the paths, {elapsed:.0f} s"
     if samples >= 2:
         mean = sums[0] / samples
@@ -730,7 +731,8 @@ def trace_radiance(
                 return
             last[0] = now
             done = (c * len(queue) + finished) / total_paths
-            progress(done, _progress_line(done, now - started, finished // k, sums))
+            where = f"channel {c + 1} of {len(distinct)}, " if len(distinct) > 1 else ""
+            progress(done, where + _progress_line(done, now - started, finished // k, sums))
 
         _walk(
             boundary,
