@@ -121,7 +121,8 @@ class ReferenceRadiance:
     stats : dict
         Counters: ``paths``, ``interactions``, ``rays``, ``leaked_paths`` (a ray from inside met no
         surface or a surface from its outer side: an open or self-intersecting mesh), ``stopped_paths``
-        (over ``MAX_INTERACTIONS``), ``next_event_skipped`` (too deep), ``entries_found`` (lit facets
+        (over ``MAX_INTERACTIONS``), ``next_event_skipped`` (too deep), ``flights_without_ray`` (shorter than
+        the distance to every facet), ``entries_found`` (lit facets
         found by the next event).
     """
 
@@ -148,7 +149,22 @@ class ReferenceRadiance:
 
 @numba.njit(cache=True)
 def _flight(
-    x, d, skip, w, inside, reentered, hit, hit_distance, xi_flight, xi_fresnel, face_normals, sigma_t, albedo, eta, eps
+    x,
+    d,
+    skip,
+    w,
+    inside,
+    reentered,
+    channel,
+    hit,
+    hit_distance,
+    xi_flight,
+    xi_fresnel,
+    face_normals,
+    sigma_t,
+    albedo,
+    eta,
+    eps,
 ):
     """One flight of every path in the wave, in place; returns the event code of each (docs/physics.md §9.5).
 
@@ -164,16 +180,16 @@ def _flight(
     for i in range(m):
         f = hit[i]
         if inside[i]:
-            step = -math.log(xi_flight[i]) / sigma_t
-            if f < 0:
-                event[i] = _LEAKED
-                continue
+            step = -math.log(xi_flight[i]) / sigma_t[channel[i]]
             if step < hit_distance[i]:
                 for k in range(3):
                     x[i, k] += step * d[i, k]
                 skip[i] = 0.0
-                w[i] *= albedo
+                w[i] *= albedo[channel[i]]
                 event[i] = _SCATTER
+                continue
+            if f < 0:
+                event[i] = _LEAKED
                 continue
         elif f < 0:
             event[i] = _ESCAPED
@@ -233,10 +249,11 @@ def _flight(
 
 
 @numba.njit(cache=True)
-def _new_directions(d, rows, g, xi_cos, xi_phi):
+def _new_directions(d, rows, channel, g_of_channel, xi_cos, xi_phi):
     """Henyey-Greenstein directions about the current ones, in place for ``rows`` (docs/physics.md §9.1)."""
     for j in range(rows.shape[0]):
         i = rows[j]
+        g = g_of_channel[channel[i]]
         if abs(g) < 1e-6:
             cos_theta = 1.0 - 2.0 * xi_cos[j]
         else:
@@ -372,6 +389,7 @@ class _Boundary:
         self.cell = max(float(np.max(high - low)) / DEPTH_GRID_CELLS, 1e-300)
         self.origin = low - self.cell
         self.dims = np.maximum(np.ceil((high - low) / self.cell).astype(np.int64) + 2, 1)
+        self.depth = self.distance_bound(np.arange(len(self.points)))
 
     def distance_bound(self, vertices):
         """A grid of lower bounds of the distance to the facets around ``vertices``, mm.
@@ -422,7 +440,8 @@ def _hg(cos_theta, g):
 
 
 def _next_event(boundary: _Boundary, light: _Light, z, d, sigma_t, g, rng, stats):
-    """Light arriving at interactions ``z`` straight from the entering beam, per unit weight (docs/physics.md §9.5)."""
+    """Light arriving at interactions ``z`` (travelling along ``d``, in media ``sigma_t``, ``g``: one per
+    interaction) straight from the entering beam, per unit weight (docs/physics.md §9.5)."""
     q = len(z)
     out = np.zeros(q)
     occ = boundary.occluder
@@ -470,14 +489,14 @@ def _next_event(boundary: _Boundary, light: _Light, z, d, sigma_t, g, rng, stats
     rows, facets, s = rows[lit], facets[lit], s[lit]
     stats["entries_found"] += rows.size
     cos_scatter = -np.einsum("ij,ij->i", light.w_t[facets], d[near[rows]])
-    value = _hg(cos_scatter, g) * light.beam[facets] * np.exp(-sigma_t * s)
+    at = near[rows]
+    value = _hg(cos_scatter, g[at]) * light.beam[facets] * np.exp(-sigma_t[at] * s)
     out[near] = np.bincount(rows, weights=value, minlength=near.size) / chance[near]
     return out
 
 
 def _progress_line(done, elapsed, samples, sums):
-    """``"37 % of the paths, 12 s; median error 3.1 % after 24 paths per point"`` for the progress callback
-    (the error of the channel being walked)."""
+    """``"37 % of the paths, 12 s; median error 3.1 % after 24 paths per point"`` for the progress callback."""
     line = f"{100 * done:.0f} % of the paths, {elapsed:.0f} s"
     if samples >= 2:
         mean = sums[0] / samples
@@ -494,6 +513,7 @@ class _Paths:
 
     def __init__(self):
         self.sensor = np.empty(0, dtype=np.int64)
+        self.channel = np.empty(0, dtype=np.int64)
         self.x = np.empty((0, 3))
         self.d = np.empty((0, 3))
         self.skip = np.empty(0)
@@ -504,13 +524,27 @@ class _Paths:
         self.estimate_reentered = np.empty(0)
         self.interactions = np.empty(0, dtype=np.int64)
 
-    _FIELDS = ("sensor", "x", "d", "skip", "w", "inside", "reentered", "estimate", "estimate_reentered", "interactions")
+    _FIELDS = (
+        "sensor",
+        "channel",
+        "x",
+        "d",
+        "skip",
+        "w",
+        "inside",
+        "reentered",
+        "estimate",
+        "estimate_reentered",
+        "interactions",
+    )
 
-    def add(self, sensor, points, normals, eps, w0):
-        """Start paths at the sensors given: on the surface point, along ``-n`` (docs/physics.md §9.5 item 1)."""
+    def add(self, sensor, channel, points, normals, eps, w0):
+        """Start paths at the sensors given, in the channels given: on the surface point, along ``-n``
+        (docs/physics.md §9.5 item 1)."""
         k = len(sensor)
         new = {
             "sensor": sensor,
+            "channel": channel,
             "x": points[sensor],
             "d": -normals[sensor],
             "skip": np.full(k, eps),
@@ -529,52 +563,50 @@ class _Paths:
             setattr(self, name, getattr(self, name)[rows])
 
 
-def _walk(boundary, light, start_points, start_normals, queue, sigma_t, albedo, g, eta, rng, sums, stats, report):
-    """Trace one path per entry of ``queue`` (sensor indices), keeping up to ``PATHS_PER_WAVE`` in flight;
-    add each path's estimate, its square and its re-entered part to ``sums`` (3, k)."""
-    n_sensors = sums.shape[1]
+def _walk(boundary, light, start_points, start_normals, queue, coefficients, eta, rng, sums, stats, report):
+    """Trace one path per entry of ``queue`` (``sensor * n_channels + channel``), keeping up to
+    ``PATHS_PER_WAVE`` in flight; add each path's estimate, its square and its re-entered part to ``sums``
+    (3, k, n_channels). ``coefficients`` holds ``sigma_t``, the albedo and ``g`` per channel (3, n_channels)."""
+    n_channels = coefficients.shape[1]
+    sigma_t, albedo, g = (np.ascontiguousarray(row) for row in coefficients)
     eps = boundary.eps
     w0 = (1.0 - float(fresnel_reflectance(1.0, 1.0 / eta))) / eta**2
     paths = _Paths()
     started = 0
     finished = 0
+    flat = sums.reshape(3, -1)
     while started < len(queue) or len(paths.sensor):
         if started < len(queue) and len(paths.sensor) < PATHS_PER_WAVE // 2:
-            take = min(PATHS_PER_WAVE - len(paths.sensor), len(queue) - started)
-            paths.add(queue[started : started + take], start_points, start_normals, eps, w0)
-            started += take
+            take = queue[started : started + PATHS_PER_WAVE - len(paths.sensor)]
+            paths.add(take // n_channels, take % n_channels, start_points, start_normals, eps, w0)
+            started += len(take)
         p = paths
-        hit, distance = boundary.occluder.first_hits(p.x + p.skip[:, None] * p.d, p.d)
-        distance += p.skip
         xi = rng.random((2, len(p.sensor)))
+        # a ray only where the flight may reach the boundary: deep inside, the flight is shorter than the
+        # distance to any facet (docs/physics.md §9.5)
+        hit = np.full(len(p.sensor), -1, dtype=np.int64)
+        distance = np.full(len(p.sensor), np.inf)
+        step = -np.log(xi[0]) / sigma_t[p.channel]
+        cast = np.flatnonzero(~p.inside | (step >= boundary.lookup(boundary.depth, p.x)))
+        stats["flights_without_ray"] += len(p.sensor) - cast.size
+        hit[cast], distance[cast] = boundary.occluder.first_hits(p.x[cast] + p.skip[cast, None] * p.d[cast], p.d[cast])
+        distance[cast] += p.skip[cast]
         event = _flight(
-            p.x,
-            p.d,
-            p.skip,
-            p.w,
-            p.inside,
-            p.reentered,
-            hit,
-            distance,
-            xi[0],
-            xi[1],
-            boundary.normals,
-            sigma_t,
-            albedo,
-            eta,
-            eps,
-        )
+            p.x, p.d, p.skip, p.w, p.inside, p.reentered, p.channel, hit, distance, xi[0], xi[1], boundary.normals,
+            sigma_t, albedo, eta, eps,
+        )  # fmt: skip
         scattered = np.flatnonzero(event == _SCATTER)
         stats["interactions"] += scattered.size
         p.interactions[scattered] += 1
         if scattered.size:
+            c = p.channel[scattered]
             gained = p.w[scattered] * _next_event(
-                boundary, light, p.x[scattered], p.d[scattered], sigma_t, g, rng, stats
+                boundary, light, p.x[scattered], p.d[scattered], sigma_t[c], g[c], rng, stats
             )
             p.estimate[scattered] += gained
             p.estimate_reentered[scattered] += np.where(p.reentered[scattered], gained, 0.0)
             xi = rng.random((2, scattered.size))
-            _new_directions(p.d, scattered, g, xi[0], xi[1])
+            _new_directions(p.d, scattered, p.channel, g, xi[0], xi[1])
         # Russian roulette on small weights
         low = np.flatnonzero(p.w < ROULETTE_FRACTION * w0)
         if low.size:
@@ -588,10 +620,10 @@ def _walk(boundary, light, start_points, start_normals, queue, sigma_t, albedo, 
         done = leaked | stopped | (event == _ESCAPED) | (p.w == 0.0)
         if np.any(done):
             rows = np.flatnonzero(done)
-            s = p.sensor[rows]
-            sums[0] += np.bincount(s, weights=p.estimate[rows], minlength=n_sensors)
-            sums[1] += np.bincount(s, weights=p.estimate[rows] ** 2, minlength=n_sensors)
-            sums[2] += np.bincount(s, weights=p.estimate_reentered[rows], minlength=n_sensors)
+            slot = p.sensor[rows] * n_channels + p.channel[rows]
+            flat[0] += np.bincount(slot, weights=p.estimate[rows], minlength=flat.shape[1])
+            flat[1] += np.bincount(slot, weights=p.estimate[rows] ** 2, minlength=flat.shape[1])
+            flat[2] += np.bincount(slot, weights=p.estimate_reentered[rows], minlength=flat.shape[1])
             finished += rows.size
             paths.keep(np.flatnonzero(~done))
             report(finished)
@@ -709,46 +741,33 @@ def trace_radiance(
         "leaked_paths": 0,
         "stopped_paths": 0,
         "next_event_skipped": 0,
+        "flights_without_ray": 0,
         "entries_found": 0,
     }
     table = np.stack([medium.sigma_a, medium.sigma_s, medium.g], axis=1)
     distinct, channel_of = np.unique(table, axis=0, return_inverse=True)
     channel_of = channel_of.reshape(-1)
-    # round robin: every sensor gets its n-th path before any gets its (n+1)-th, so the running error is
-    # the same everywhere and the progress line can estimate the time to a given noise
-    queue = np.tile(np.arange(k, dtype=np.int64), spp)
-    results = np.zeros((3, k, len(distinct)))
-    total_paths = len(queue) * len(distinct)
-    for c, (sigma_a, sigma_s, g) in enumerate(distinct):
-        sigma_t = sigma_a + sigma_s
-        rng = np.random.default_rng([seed, c])
-        sums = results[:, :, c]
-        last = [time.perf_counter()]
+    # round robin: every (sensor, channel) gets its n-th path before any gets its (n+1)-th, so the running
+    # error is the same everywhere and the progress line can tell the time to a given noise; the channels
+    # walk together, so the few long paths at the end are waited for once
+    n_distinct = len(distinct)
+    queue = np.tile(np.arange(k * n_distinct, dtype=np.int64), spp)
+    results = np.zeros((3, k, n_distinct))
+    coefficients = np.stack(
+        [distinct[:, 0] + distinct[:, 1], distinct[:, 1] / (distinct[:, 0] + distinct[:, 1]), distinct[:, 2]]
+    )
+    rng = np.random.default_rng(seed)
+    last = [time.perf_counter()]
 
-        def report(finished, c=c, sums=sums, last=last):
-            now = time.perf_counter()
-            if progress is None or (now - last[0] < PROGRESS_SECONDS and finished < len(queue)):
-                return
-            last[0] = now
-            done = (c * len(queue) + finished) / total_paths
-            where = f"channel {c + 1} of {len(distinct)}, " if len(distinct) > 1 else ""
-            progress(done, where + _progress_line(done, now - started, finished // k, sums))
+    def report(finished):
+        now = time.perf_counter()
+        if progress is None or (now - last[0] < PROGRESS_SECONDS and finished < len(queue)):
+            return
+        last[0] = now
+        done = finished / len(queue)
+        progress(done, _progress_line(done, now - started, finished // (k * n_distinct), results))
 
-        _walk(
-            boundary,
-            light,
-            sensor_points,
-            sensor_normals,
-            queue,
-            sigma_t,
-            sigma_s / sigma_t,
-            g,
-            eta,
-            rng,
-            sums,
-            stats,
-            report,
-        )
+    _walk(boundary, light, sensor_points, sensor_normals, queue, coefficients, eta, rng, results, stats, report)
     mean = results[0] / spp
     variance = np.maximum(results[1] / spp - mean**2, 0.0) * spp / (spp - 1)
     stderr = np.sqrt(variance / spp)
