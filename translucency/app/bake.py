@@ -49,7 +49,7 @@ from ..errors import (
     option,
 )
 from ..scatter.budget import DEFAULT_TIME_LIMIT_S
-from ..scatter.names import DEFAULT_METHOD, DEFAULT_MODEL, DEFAULT_TOL
+from ..scatter.names import DEFAULT_BOUNCES, DEFAULT_METHOD, DEFAULT_MODEL, DEFAULT_TOL
 from .settings import DEFAULT_MATERIAL, ShadeSettings
 
 __all__ = [
@@ -83,7 +83,7 @@ class BakeSettings(ShadeSettings):
 
     Parameters
     ----------
-    material, model, method, tol, resolution, shadows, per_direction, exposure, memory_limit, time_limit, up
+    material, model, method, tol, resolution, shadows, per_direction, exposure, memory_limit, time_limit, up, bounces
         As in :class:`~translucency.app.settings.ShadeSettings` (``up`` places the default light and is
         recorded; the memory limit in GB, the time limit in seconds).
     lights : light or sequence of lights, optional
@@ -884,6 +884,7 @@ def bake(
     shadows=True,
     exposure=None,
     per_direction=False,
+    bounces=DEFAULT_BOUNCES,
     up="auto",
     memory_limit=None,
     time_limit=DEFAULT_TIME_LIMIT_S,
@@ -910,7 +911,7 @@ def bake(
     unit : str or float, optional
         Length unit of the files: ``mm``, ``cm``, ``m``, ``in`` or a number of mm per unit; None
         (default): inferred from each file's size, said in one line and recorded in the bake.
-    model, method, tol, resolution, shadows, exposure, per_direction
+    model, method, tol, resolution, shadows, exposure, per_direction, bounces
         As in :func:`translucency.shade`; ``resolution`` is ``"full"``, ``"auto"`` or a proxy edge
         length in mm.
     up : str
@@ -952,6 +953,7 @@ def bake(
         memory_limit,
         time_limit,
         up,
+        bounces,
         lights=lights,
         unit=unit,
         preview=preview,

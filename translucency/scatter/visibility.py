@@ -40,12 +40,13 @@ import hashlib
 import os
 from collections import OrderedDict
 from concurrent.futures import ThreadPoolExecutor
+from typing import NamedTuple
 
 import numpy as np
 
 from ..errors import InvalidParameterError, MeshError, TranslucencyError
 
-__all__ = ["Occluder", "VisibilityCache", "RELATIVE_OFFSET", "array_digest"]
+__all__ = ["Hits", "Occluder", "VisibilityCache", "RELATIVE_OFFSET", "array_digest"]
 
 RELATIVE_OFFSET = 1e-4
 """Default ray-origin offset as a fraction of the mesh's bounding-box diagonal (module docstring)."""
@@ -57,6 +58,25 @@ MIN_RAYS_PER_CHUNK = 16384
 """Below this many rays per worker the rays run on the calling thread (pool overhead dominates)."""
 
 INFINITE_DISTANCE = 1e37  # embreex's "no limit" tfar, representable in float32
+
+
+class Hits(NamedTuple):
+    """Where rays first meet the mesh (:meth:`Occluder.intersect`).
+
+    Attributes
+    ----------
+    triangle : ndarray of int64, shape (k,)
+        Index of the triangle hit, -1 where the ray escapes.
+    u, v : ndarray, shape (k,)
+        Barycentrics of the hit point, ``(1 - u - v) p0 + u p1 + v p2`` (0 where it escapes), 1.
+    distance : ndarray, shape (k,)
+        From the offset origin to the hit, mm (inf where it escapes).
+    """
+
+    triangle: np.ndarray
+    u: np.ndarray
+    v: np.ndarray
+    distance: np.ndarray
 
 
 def _embreex():
@@ -202,18 +222,57 @@ class Occluder:
         self.rays_cast += k
         return hit < 0
 
-    def _run(self, origins, directions, tfar):
+    def intersect(self, origins, normals, directions) -> Hits:
+        """The first triangle each ray from a surface point meets, and where (the bounce gather's rays).
+
+        Parameters
+        ----------
+        origins, normals : array_like, shape (k, 3)
+            As in :meth:`visible` (mm; rays start ``epsilon`` along the normal).
+        directions : array_like, shape (k, 3)
+            Unit ray directions.
+
+        Returns
+        -------
+        Hits
+            Per ray: the triangle hit (-1 where the ray escapes), the barycentrics ``u, v`` of the hit
+            point (``(1 - u - v) p0 + u p1 + v p2`` over the triangle's vertices) and its distance (mm).
+        """
+        origins = np.asarray(origins, dtype=np.float64)
+        k = len(origins)
+        if k == 0 or self._scene is None:
+            return Hits(np.full(k, -1, np.int64), np.zeros(k), np.zeros(k), np.full(k, np.inf))
+        start = origins + self.epsilon * np.asarray(normals, dtype=np.float64)
+        ray_origins = np.ascontiguousarray(start, dtype=np.float32)
+        ray_directions = np.ascontiguousarray(np.broadcast_to(directions, (k, 3)), dtype=np.float32)
+        tfar = np.full(k, INFINITE_DISTANCE, dtype=np.float32)
+        out = self._run(ray_origins, ray_directions, tfar, query="INTERSECT", output=True)
+        self.rays_cast += k
+        triangle = out["primID"].astype(np.int64)
+        missed = triangle < 0
+        u = np.where(missed, 0.0, out["u"].astype(np.float64))
+        v = np.where(missed, 0.0, out["v"].astype(np.float64))
+        distance = np.where(missed, np.inf, out["tfar"].astype(np.float64))
+        return Hits(triangle, u, v, distance)
+
+    def _run(self, origins, directions, tfar, query="OCCLUDED", output=False):
         k = len(origins)
         n_chunks = min(self.workers * 4, k // MIN_RAYS_PER_CHUNK)
+
+        def trace(s):
+            if output:
+                return self._scene.run(origins[s], directions[s], dists=tfar[s], query=query, output=True)
+            return self._scene.run(origins[s], directions[s], dists=tfar[s], query=query)
+
         if self.workers == 1 or n_chunks < 2:
-            return self._scene.run(origins, directions, dists=tfar, query="OCCLUDED")
+            return trace(slice(0, k))
         bounds = np.linspace(0, k, n_chunks + 1).astype(np.int64)
         chunks = [slice(a, b) for a, b in zip(bounds[:-1], bounds[1:])]
         with ThreadPoolExecutor(max_workers=self.workers) as pool:
-            parts = pool.map(
-                lambda s: self._scene.run(origins[s], directions[s], dists=tfar[s], query="OCCLUDED"), chunks
-            )
-            return np.concatenate(list(parts))
+            parts = list(pool.map(trace, chunks))
+        if output:
+            return {key: np.concatenate([part[key] for part in parts]) for key in parts[0]}
+        return np.concatenate(parts)
 
 
 class VisibilityCache:
