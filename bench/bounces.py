@@ -44,6 +44,13 @@ def main() -> None:
         one, two = mean[1] / mean[0], mean[2] / mean[1]
         print(f"  {label:13s} {inside.sum():6d} vertices  B1/B0 {np.round(one, 3)}  B2/B1 {np.round(two, 3)}")
     first = sum(v for k, v in results[0].timings.items() if k.startswith("solve_"))
+    stats = results[1].stats["bounces"]
+    lit_flux = float((results[0].incident_flux[:, 0] * mesh.vertex_areas()).sum())
+    mirror = stats["mirror"]
+    print(
+        f"  entering flux (red, W mm²/m²): lights {lit_flux:.4g}; first bounce {stats['entered_flux'][0][0]:.4g}, "
+        f"of it the mirror reflection {mirror['deposited_flux'][0]:.4g} (reflected: {mirror['reflected_flux'][0]:.4g})"
+    )
     for k in (1, 2):
         t = results[k].timings
         print(

@@ -102,7 +102,9 @@ class Bounces:
     orders : list of ndarray
         Each ``B_k`` on its own.
     stats : dict
-        ``bounces`` done, rays, the re-entered flux per order, seconds of ``gather`` and ``solve``.
+        ``bounces`` done, ``rays_per_vertex``, ``rays``, the bounce solves' ``tol``, ``entered_flux`` (per
+        order and channel, W mm²/m²), ``mirror`` (the lights' ``reflected_flux`` and the ``deposited_flux``
+        that enters again), ``seconds`` of ``gather``, ``specular`` and ``solve``.
     solutions : list
         The solver's :class:`~translucency.scatter.solve.Solution` of each bounce.
     """
@@ -225,12 +227,15 @@ def gather_exitance(occluder: Occluder, points, normals, triangles, B, eta, *, r
         directions = cosine_directions(normals[these], rays, offsets[these]).reshape(-1, 3)
         origin = np.repeat(these, rays)
         hits = occluder.intersect(points[origin], normals[origin], directions)
+        stats["rays"] += int(origin.size)
+        hit = np.flatnonzero(hits.triangle >= 0)  # only these are interpolated
+        hits = type(hits)(*(part[hit] for part in hits))
+        directions, origin = directions[hit], origin[hit]
         corners, weights, hit_normal = _at_hits(triangles, normals, hits)
         cos_out = -np.einsum("kc,kc->k", hit_normal, directions)
-        front = (hits.triangle >= 0) & (cos_out > 0.0)
-        stats["rays"] += int(origin.size)
-        stats["hits"] += int(np.count_nonzero(hits.triangle >= 0))
-        stats["back_faces"] += int(np.count_nonzero((hits.triangle >= 0) & ~front))
+        front = cos_out > 0.0
+        stats["hits"] += int(hit.size)
+        stats["back_faces"] += int(np.count_nonzero(~front))
         if not np.any(front):
             continue
         directions, origin, corners, weights = directions[front], origin[front], corners[front], weights[front]
@@ -468,6 +473,7 @@ def solve_bounces(
     orders, solutions, entered = [], [], []
     seconds = {"gather": 0.0, "specular": 0.0, "solve": 0.0}
     rays_cast = 0
+    mirror = {"reflected_flux": None, "deposited_flux": None}
     for k in range(bounces):
         report("bounces", k / max(bounces, 1))
         light = reentering_light(
@@ -486,6 +492,8 @@ def solve_bounces(
         seconds["gather"] += light.stats["seconds"]["gather"]
         seconds["specular"] += light.stats["seconds"]["specular"]
         rays_cast += light.stats["gather"]["rays"] + light.stats.get("specular", {}).get("rays", 0)
+        if "specular" in light.stats:
+            mirror = {key: light.stats["specular"][key] for key in ("reflected_flux", "deposited_flux")}
         entered.append((light.phi_rgb * geometry.vertex_areas[:, None]).sum(axis=0).tolist())
         t = time.perf_counter()
         solution = solve(
@@ -511,6 +519,7 @@ def solve_bounces(
         "tol": bounce_tol,
         "rays": rays_cast,
         "entered_flux": entered,
+        "mirror": mirror,
         "seconds": seconds,
     }
     return Bounces(total, orders, stats, solutions)

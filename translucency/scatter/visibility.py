@@ -2,11 +2,12 @@
 
 An :class:`Occluder` builds one Embree scene per mesh (float32, C-contiguous, committed once) and
 answers "is the way from these surface points toward the light free?" for rays to infinity
-(directional lights, environment samples) and for segments (point lights). Rays start at the
-surface point moved along its normal by a scale-aware offset ``epsilon``; without it nearly every
-ray hits one of the faces around its own vertex (measured on the shared scans: 99.6-99.9 % of the
-front-facing rays with no offset). Large ray sets run in chunks on a thread pool: embreex releases
-the GIL while it traces.
+(directional lights, environment samples) and for segments (point lights); :meth:`Occluder.intersect`
+also says which triangle a ray meets first, and where (the bounce gather,
+:mod:`translucency.scatter.bounces`). Rays start at the surface point moved along its normal by a
+scale-aware offset ``epsilon``; without it nearly every ray hits one of the faces around its own
+vertex (measured on the shared scans: 99.6-99.9 % of the front-facing rays with no offset). Large ray
+sets run in chunks on a thread pool: embreex releases the GIL while it traces.
 
 Choice of the offset (measured on the five shared scans, 8 random light directions, vertices with
 ``n . w > 0``): any offset from ``1e-7 * diagonal`` up removes every self-hit caused by float32
