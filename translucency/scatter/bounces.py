@@ -61,9 +61,9 @@ __all__ = [
 GATHER_RAYS = 32
 #: The bounce solves of ``cutoff`` and ``tree`` run at this many times the user's tolerance (at most
 #: :data:`MAX_BOUNCE_TOL`): the re-entered part is a share of ``B``, so its error counts for less. Measured
-#: on the default bunny in marble (bench/README.md, "Bounces"): ``B_0 + B_1`` with ``B_1`` at 10 x 0.01
-#: differs from ``B_1`` at 0.01 by 0.86 % at the 99th percentile of the vertices (30 x: 2.9 %), and the
-#: bounce solve takes 2.9 s instead of 9 s.
+#: on the default bunny (bench/README.md, "Bounces"): ``B_0 + B_1`` with ``B_1`` at 10 x 0.01 differs
+#: from ``B_1`` at 0.01 by 0.86 % (marble, ketchup) to 0.96 % (skim milk) at the 99th percentile of the
+#: vertices (marble at 30 x: 2.9 %), and the bounce solve takes a third of the time.
 BOUNCE_TOL_FACTOR = 10.0
 MAX_BOUNCE_TOL = 0.5
 #: Rays traced per Embree call (vertices are taken in blocks of this many rays).
