@@ -95,3 +95,19 @@ def test_bad_bounces_on_the_command_line_are_one_sentence(value):
 def test_bad_bounces_in_python_are_one_sentence(value):
     with pytest.raises(InvalidParameterError, match="^bounces must be a whole number"):
         ShadeSettings(bounces=value)
+
+
+def test_a_bake_on_the_command_line_records_and_equals_the_api(tmp_path):
+    from translucency.app import cli
+    from translucency.io.baked import read_baked_ply
+    from translucency.io.polydata import to_pyvista
+
+    scan = tmp_path / "pair.ply"
+    to_pyvista(two_spheres()).save(str(scan))
+    out = tmp_path / "pair_marble.ply"
+    argv = ["bake", str(scan), "-o", str(out), "--unit", "mm", "--light-dir", "0.2,1,0.3", "--bounces", "2", "-q"]
+    assert cli.main(argv) == 0
+    baked = read_baked_ply(out)
+    api = shade_scan(scan, ShadeSettings(bounces=2), LIGHT, unit="mm")
+    assert baked.metadata["bounces"] == 2
+    np.testing.assert_allclose(baked.b, api.B, rtol=1e-6, atol=1e-7 * api.B.max())  # stored as float32
