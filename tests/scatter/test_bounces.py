@@ -137,3 +137,38 @@ def test_bad_bounces_are_one_sentence_naming_the_setting(bad):
     with pytest.raises(InvalidParameterError, match="bounces"):
         check_bounces(bad)
     assert check_bounces(np.int64(2)) == 2
+
+
+def test_one_drawn_light_sample_per_vertex_reflects_the_right_flux_on_average():
+    # a plane under a coloured directional light and a coloured point light: each vertex reflects one
+    # sample drawn by its share of the reflected flux; the sum over the vertices must match the flux
+    # both reflect (F_r c E per light) within four standard deviations of that draw
+    from translucency.geometry.synthetic import grid
+    from translucency.scatter.fresnel import fresnel_reflectance
+    from translucency.scatter.lights import PointLight
+
+    points, triangles = grid(200.0, 2.0)
+    normals = np.tile([0.0, 0.0, 1.0], (len(points), 1))
+    areas = barycentric_vertex_areas(triangles, triangle_areas(points, triangles), len(points))
+    sun = DirectionalLight((0.6, 0.0, 1.0), (1.0, 0.2, 0.05))
+    lamp = PointLight((30.0, -20.0, 80.0), (0.002, 0.008, 0.004))
+    eta = 1.4
+    c_sun = np.full(len(points), sun.direction[2])
+    to_lamp = lamp.position_mm - points
+    d = np.linalg.norm(to_lamp, axis=1)
+    c_lamp = to_lamp[:, 2] / d
+    f = np.stack(
+        [
+            (fresnel_reflectance(c_sun, eta) * c_sun)[:, None] * sun.irradiance_rgb,
+            (fresnel_reflectance(c_lamp, eta) * c_lamp)[:, None] * lamp.intensity_rgb / (d[:, None] / 1000.0) ** 2,
+        ],
+        axis=1,
+    )  # (n, 2 samples, 3)
+    s = f.sum(axis=2)
+    total = s.sum(axis=1)
+    expected = (areas[:, None] * f.sum(axis=1)).sum(axis=0)
+    second_moment = total[:, None] * (f**2 / s[..., None]).sum(axis=1)
+    sigma = np.sqrt((areas[:, None] ** 2 * (second_moment - f.sum(axis=1) ** 2)).sum(axis=0))
+    _, _, stats = specular_reflection(Occluder(points, triangles), points, normals, areas, triangles, [sun, lamp], eta)
+    assert np.all(sigma > 0) and np.all(np.abs(np.array(stats["reflected_flux"]) - expected) < 4 * sigma)
+    assert stats["hits"] == 0  # a plane: every mirror ray escapes

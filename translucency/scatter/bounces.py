@@ -251,32 +251,61 @@ def gather_exitance(occluder: Occluder, points, normals, triangles, B, eta, *, r
     return phi, weighted_w12, stats
 
 
-def _light_samples(lights):
-    """``(kind, vector, rgb)`` per sample: ``"dir"`` (direction toward it, E in W/m²) or ``"point"``
-    (position in mm, I in W/sr)."""
-    samples = []
+#: The mirror reflection draws its light sample for blocks of vertices with this many (vertex, sample) pairs.
+PAIRS_PER_BLOCK = 1 << 18
+
+
+def _drawn_reflections(points, normals, usable, lights, eta, draw):
+    """One light sample per vertex drawn in proportion to its reflected flux density (channel sum):
+    ``(direction toward it (n, 3), reflected flux density f_j sum|f| / |f_j| (n, 3) in W/m², distance
+    (n,) in mm, inf for a direction)``; zero where no sample faces the vertex (docs/physics.md §7.4)."""
+    directions, irradiance, positions, intensities = [np.zeros((0, 3))], [np.zeros((0, 3))], [], []
     for light in as_light_list(lights):
         if isinstance(light, PointLight):
-            samples.append(("point", light.position_mm, light.intensity_rgb))
+            positions.append(light.position_mm)
+            intensities.append(light.intensity_rgb)
         else:
             drawn = light.directional_samples()
-            samples.extend(("dir", w, e) for w, e in zip(drawn.directions, drawn.irradiance_rgb))
-    return samples
-
-
-def _toward(sample, points, normals):
-    """A sample at every vertex: unit direction toward it, cosine (clipped at 0), irradiance on a
-    surface facing it (W/m²) and distance (mm; inf for a direction)."""
-    kind, vector, rgb = sample
-    n = len(points)
-    if kind == "dir":
-        w = np.broadcast_to(np.asarray(vector, dtype=np.float64), (n, 3))
-        return w, np.maximum(normals @ vector, 0.0), np.broadcast_to(rgb, (n, 3)), np.full(n, np.inf)
-    to_light = np.asarray(vector, dtype=np.float64)[None, :] - points
-    distance = np.linalg.norm(to_light, axis=1)
-    w = to_light / np.where(distance > 0.0, distance, 1.0)[:, None]
-    cos = np.where(distance > 0.0, np.maximum(np.einsum("ij,ij->i", normals, w), 0.0), 0.0)
-    return w, cos, point_light_irradiance(rgb, distance), distance
+            directions.append(drawn.directions)
+            irradiance.append(drawn.irradiance_rgb)
+    directions, irradiance = np.concatenate(directions), np.concatenate(irradiance)
+    positions = np.asarray(positions, dtype=np.float64).reshape(-1, 3)
+    n, n_samples = len(points), len(directions) + len(positions)
+    toward, reflected, distance = np.zeros((n, 3)), np.zeros((n, 3)), np.full(n, np.inf)
+    block = max(1, PAIRS_PER_BLOCK // max(n_samples, 1))
+    for lo in range(0, n if n_samples else 0, block):
+        these = slice(lo, lo + block)
+        b = len(points[these])
+        offset = positions[None, :, :] - points[these, None, :]
+        d_point = np.linalg.norm(offset, axis=2)
+        w = np.concatenate(
+            [
+                np.broadcast_to(directions, (b, len(directions), 3)),
+                offset / np.where(d_point > 0, d_point, 1.0)[..., None],
+            ],
+            axis=1,
+        )
+        e_point = [np.zeros((b, 3))] + [point_light_irradiance(rgb, d_point[:, k]) for k, rgb in enumerate(intensities)]
+        e = np.concatenate(
+            [np.broadcast_to(irradiance, (b, len(directions), 3)), np.stack(e_point, axis=1)[:, 1:]], axis=1
+        )
+        d = np.concatenate([np.full((b, len(directions)), np.inf), d_point], axis=1)
+        cos = np.einsum("bi,bsi->bs", normals[these], w)
+        cos = np.where(usable[these, None] & (d > 0.0) & (cos > 0.0), cos, 0.0)
+        f = (fresnel_reflectance(cos, eta) * cos * (cos > 0.0))[..., None] * e
+        weight = f.sum(axis=2)
+        cumulative = np.cumsum(weight, axis=1)
+        total = cumulative[:, -1]
+        past = cumulative > (draw[these] * total)[:, None]
+        last_positive = n_samples - 1 - np.argmax((weight > 0.0)[:, ::-1], axis=1)  # where rounding leaves none past
+        pick = np.where(past.any(axis=1), np.argmax(past, axis=1), last_positive)
+        rows = np.arange(b)
+        chosen = weight[rows, pick]
+        scale = np.where(chosen > 0.0, total / np.where(chosen > 0.0, chosen, 1.0), 0.0)
+        toward[these] = w[rows, pick]
+        reflected[these] = f[rows, pick] * scale[:, None]
+        distance[these] = d[rows, pick]
+    return toward, reflected, distance
 
 
 def specular_reflection(
@@ -319,30 +348,9 @@ def specular_reflection(
     areas = np.asarray(areas, dtype=np.float64)
     triangles = np.asarray(triangles, dtype=np.int64)
     n = len(points)
-    samples = _light_samples(lights)
     draw = np.random.default_rng(seed + 1).random(n)
-
-    def reflected(sample):
-        w, cos, irradiance, distance = _toward(sample, points, normals)
-        cos = np.where(usable, cos, 0.0)
-        return w, cos, (fresnel_reflectance(cos, eta) * cos)[:, None] * irradiance * (cos > 0.0)[:, None], distance
-
-    total = np.zeros(n)
-    for sample in samples:
-        total += reflected(sample)[2].sum(axis=1)
-    target, cumulative = draw * total, np.zeros(n)
-    chosen = np.zeros(n, dtype=bool)
-    w_sel, flux_sel, dist_sel = np.zeros((n, 3)), np.zeros((n, 3)), np.full(n, np.inf)
-    for index, sample in enumerate(samples):
-        w, cos, f, distance = reflected(sample)
-        s = f.sum(axis=1)
-        last = index == len(samples) - 1
-        take = ~chosen & (s > 0.0) & ((cumulative + s > target) | last)
-        w_sel[take], dist_sel[take] = w[take], distance[take]
-        flux_sel[take] = f[take] * (total[take] / s[take])[:, None]
-        chosen |= take
-        cumulative += s
-    # rounding can leave a vertex whose last positive sample came before the end: it reflects nothing
+    w_sel, flux_sel, dist_sel = _drawn_reflections(points, normals, usable, lights, eta, draw)
+    chosen = flux_sel.sum(axis=1) > 0.0
     reflected_flux = (flux_sel * areas[:, None]).sum(axis=0)
     lit = np.flatnonzero(chosen)
     if shadows and lit.size:
