@@ -59,6 +59,8 @@ def test_one_bounce_only_adds_light_and_says_how_much():
     np.testing.assert_allclose(share, one.reentered.sum(axis=0) / one.B.sum(axis=0), rtol=1e-12)
     assert np.all((share > 0) & (share < 0.5))
     assert one.metadata["bounces"] == 1 and "bounce_gather" in one.timings and "bounce_solve" in one.timings
+    assert np.array_equal(one.to_pyvista().point_data["reentered"], one.reentered)
+    assert "reentered" not in none.to_pyvista().point_data
     two = scene.shade("marble", LIGHT, bounces=2)
     assert np.all(two.B >= one.B - 1e-12 * one.B.max())
 

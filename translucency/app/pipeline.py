@@ -165,11 +165,12 @@ class ShadeResult:
 
         ``point_data`` holds ``radiance`` and ``B`` (n, 3) float, ``colors`` (n, 3) uint8 (the active
         scalars), ``luminance`` (n,, the Rec. 709 luminance of the radiance, same unit),
-        ``incident_flux`` (n, 3, W/m²) and ``normals`` (n, 3); ``field_data`` the settings (:attr:`metadata`
-        flattened to strings and numbers, with ``length_unit`` = "mm", ``radiance_unit`` and
-        ``incident_flux_unit``). So ``mesh.plot(scalars="colors", rgb=True)`` shows the bake,
-        ``mesh.plot(scalars="luminance")`` the luminance in a colour map, and ``mesh.save("x.vtp")``
-        keeps it all (:func:`write_result` writes the same atomically).
+        ``incident_flux`` (n, 3, W/m²), ``reentered`` (n, 3, with bounces) and ``normals`` (n, 3);
+        ``field_data`` the settings (:attr:`metadata` flattened to strings and numbers, with
+        ``length_unit`` = "mm", ``radiance_unit`` and ``incident_flux_unit``). So
+        ``mesh.plot(scalars="colors", rgb=True)`` shows the bake, ``mesh.plot(scalars="luminance")`` the
+        luminance in a colour map, and ``mesh.save("x.vtp")`` keeps it all (:func:`write_result` writes the
+        same atomically).
         """
         from .exports import result_polydata
 
