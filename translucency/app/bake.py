@@ -189,7 +189,8 @@ class BakeProgress:
         """The batch starts: the inputs and their planned outputs, in order."""
 
     def stage(self, index: int, stage: str, fraction: float) -> None:
-        """File ``index`` is at ``fraction`` (0 to 1) of ``stage`` (loading, far field, near field, writing)."""
+        """File ``index`` is at ``fraction`` (0 to 1) of ``stage`` (loading, far field, near field, bounces,
+        writing)."""
 
     def said(self, index: int, kind: str, message: str) -> None:
         """File ``index``, baked in this process, has a ``"warning"`` or a ``"note"`` to say now (the same
@@ -325,7 +326,7 @@ def bake_file(path, output, settings: BakeSettings, progress=None, said=None) ->
     settings : BakeSettings
     progress : callable, optional
         ``progress(stage, fraction)`` with stages ``loading``, the solver's (``far field``,
-        ``near field``) and ``writing``.
+        ``near field``, and ``bounces`` when light re-enters) and ``writing``.
     said : callable, optional
         ``said(kind, message)`` as soon as there is a ``"note"`` (the unit inferred) or a ``"warning"``;
         they are in the record too.
