@@ -122,9 +122,10 @@ def test_bake_into_a_pipe_prints_one_line_per_stage_and_no_escape_codes(tmp_path
     assert not any(code in done.stderr + done.stdout for code in ESCAPES)
     lines = [line for line in done.stderr.splitlines() if not line.startswith("translucency: ")]  # first-run notice
     stages = [line.split(" done ")[0] for line in lines if " done (" in line]
-    assert stages == [f"sphere.ply: {stage}" for stage in ("loading", "far field", "near field", "writing")]
+    expected = ("loading", "far field", "near field", "bounces", "writing")  # bounces: the default 1
+    assert stages == [f"sphere.ply: {stage}" for stage in expected]
     assert re.fullmatch(r"\[1/1\] sphere\.ply: baked \(\d+\.\d\d s\)", lines[-1])
-    assert len(lines) == 5
+    assert len(lines) == len(expected) + 1
     assert "baked 1 of 1 files" in done.stdout
 
 

@@ -183,3 +183,28 @@ def test_no_self_hits_on_a_real_scan(shared_meshes):
         toward_light = np.asarray(mesh.face_normals)[hit[struck]] @ w > 0
         assert not np.any(own & toward_light)
         assert 0.02 < struck.mean() < 0.4  # a real shadow, not noise
+
+
+def test_intersect_gives_the_triangle_the_barycentrics_and_the_distance_of_the_hit():
+    corners = np.array([[-50.0, -50.0, 10.0], [80.0, -40.0, 10.0], [-30.0, 90.0, 10.0], [0.0, 0.0, 30.0]])
+    triangles = np.array([[0, 1, 2], [0, 1, 3]])
+    rng = np.random.default_rng(3)
+    origins = np.column_stack([rng.uniform(-10, 10, (40000, 2)), np.zeros(40000)])
+    up = np.tile([0.0, 0.0, 1.0], (40000, 1))
+    directions = np.column_stack([rng.uniform(-0.3, 0.3, (40000, 2)), np.ones(40000)])
+    directions /= np.linalg.norm(directions, axis=1, keepdims=True)
+    directions[:5] = (0.0, 0.0, -1.0)  # these escape
+    threaded = Occluder(corners, triangles, workers=2).intersect(origins, up, directions)
+    single = Occluder(corners, triangles, workers=1)
+    hits = single.intersect(origins, up, directions)
+    for a, b in zip(threaded, hits):
+        np.testing.assert_array_equal(a, b)  # the chunks on threads come back in order
+    assert np.all(hits.triangle[:5] == -1) and np.all(np.isinf(hits.distance[:5])) and single.rays_cast == 40000
+    met = hits.triangle[5:]
+    assert np.all(met == 0)  # the plane z = 10 is the first thing every upward ray meets here
+    start = origins[5:] + single.epsilon * up[5:]
+    expected = start + directions[5:] * ((10.0 - start[:, 2]) / directions[5:, 2])[:, None]
+    u, v = hits.u[5:, None], hits.v[5:, None]
+    at = (1 - u - v) * corners[0] + u * corners[1] + v * corners[2]
+    np.testing.assert_allclose(at, expected, atol=1e-4)
+    np.testing.assert_allclose(hits.distance[5:], np.linalg.norm(expected - start, axis=1), rtol=1e-5)

@@ -49,7 +49,7 @@ from ..errors import (
     option,
 )
 from ..scatter.budget import DEFAULT_TIME_LIMIT_S
-from ..scatter.names import DEFAULT_METHOD, DEFAULT_MODEL, DEFAULT_TOL
+from ..scatter.names import DEFAULT_BOUNCES, DEFAULT_METHOD, DEFAULT_MODEL, DEFAULT_TOL
 from .settings import DEFAULT_MATERIAL, ShadeSettings
 
 __all__ = [
@@ -83,7 +83,7 @@ class BakeSettings(ShadeSettings):
 
     Parameters
     ----------
-    material, model, method, tol, resolution, shadows, per_direction, exposure, memory_limit, time_limit, up
+    material, model, method, tol, resolution, shadows, per_direction, exposure, memory_limit, time_limit, up, bounces
         As in :class:`~translucency.app.settings.ShadeSettings` (``up`` places the default light and is
         recorded; the memory limit in GB, the time limit in seconds).
     lights : light or sequence of lights, optional
@@ -189,7 +189,8 @@ class BakeProgress:
         """The batch starts: the inputs and their planned outputs, in order."""
 
     def stage(self, index: int, stage: str, fraction: float) -> None:
-        """File ``index`` is at ``fraction`` (0 to 1) of ``stage`` (loading, far field, near field, writing)."""
+        """File ``index`` is at ``fraction`` (0 to 1) of ``stage`` (loading, far field, near field, bounces,
+        writing)."""
 
     def said(self, index: int, kind: str, message: str) -> None:
         """File ``index``, baked in this process, has a ``"warning"`` or a ``"note"`` to say now (the same
@@ -325,7 +326,7 @@ def bake_file(path, output, settings: BakeSettings, progress=None, said=None) ->
     settings : BakeSettings
     progress : callable, optional
         ``progress(stage, fraction)`` with stages ``loading``, the solver's (``far field``,
-        ``near field``) and ``writing``.
+        ``near field``, and ``bounces`` when light re-enters) and ``writing``.
     said : callable, optional
         ``said(kind, message)`` as soon as there is a ``"note"`` (the unit inferred) or a ``"warning"``;
         they are in the record too.
@@ -884,6 +885,7 @@ def bake(
     shadows=True,
     exposure=None,
     per_direction=False,
+    bounces=DEFAULT_BOUNCES,
     up="auto",
     memory_limit=None,
     time_limit=DEFAULT_TIME_LIMIT_S,
@@ -910,7 +912,7 @@ def bake(
     unit : str or float, optional
         Length unit of the files: ``mm``, ``cm``, ``m``, ``in`` or a number of mm per unit; None
         (default): inferred from each file's size, said in one line and recorded in the bake.
-    model, method, tol, resolution, shadows, exposure, per_direction
+    model, method, tol, resolution, shadows, exposure, per_direction, bounces
         As in :func:`translucency.shade`; ``resolution`` is ``"full"``, ``"auto"`` or a proxy edge
         length in mm.
     up : str
@@ -952,6 +954,7 @@ def bake(
         memory_limit,
         time_limit,
         up,
+        bounces,
         lights=lights,
         unit=unit,
         preview=preview,

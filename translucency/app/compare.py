@@ -61,7 +61,7 @@ from ..errors import InvalidParameterError
 from ..io.polydata import to_pyvista
 from ..io.units import RADIANCE_UNIT, unit_metadata
 from ..scatter.budget import DEFAULT_TIME_LIMIT_S
-from ..scatter.names import DEFAULT_METHOD, DEFAULT_MODEL, DEFAULT_TOL
+from ..scatter.names import DEFAULT_BOUNCES, DEFAULT_METHOD, DEFAULT_MODEL, DEFAULT_TOL
 from .display import display_colors
 from .pipeline import Scene, mesh_for_shading, resolve_medium
 from .render import (
@@ -338,6 +338,7 @@ def compare(
     resolution="full",
     shadows=True,
     per_direction=False,
+    bounces=DEFAULT_BOUNCES,
     exposure=None,
     memory_limit=None,
     time_limit=DEFAULT_TIME_LIMIT_S,
@@ -363,7 +364,7 @@ def compare(
         right, above and a little behind (:func:`compare_light_direction`; why: the module docstring).
     output : path-like, optional
         Folder for the files (created; files in it are replaced atomically). None: numbers only.
-    method, tol, resolution, shadows, per_direction, memory_limit, time_limit
+    method, tol, resolution, shadows, per_direction, bounces, memory_limit, time_limit
         Solver settings (:meth:`Scene.shade <translucency.app.pipeline.Scene.shade>`; GB, seconds).
     exposure : float, optional
         The common display exposure (default: automatic over all cells).
@@ -394,9 +395,8 @@ def compare(
 
         prepare_output_folder(output)
     # every solver setting checked once, before the scan is loaded; each cell changes material and model
-    settings = ShadeSettings(
-        materials[0], models[0], method, tol, resolution, shadows, per_direction, exposure, memory_limit, time_limit, up
-    )
+    solver = (method, tol, resolution, shadows, per_direction, exposure, memory_limit, time_limit, up, bounces)
+    settings = ShadeSettings(materials[0], models[0], *solver)
     width, height = (int(v) for v in cell_size)
     if width < 16 or height < 16:
         raise InvalidParameterError(f"cell_size must be at least 16 x 16 pixels, got {cell_size!r}.")
@@ -493,6 +493,7 @@ def compare(
                 "resolution": resolution,
                 "shadows": bool(shadows),
                 "per_direction": bool(per_direction),
+                "bounces": settings.bounces,
                 "up": up_axis,
                 "up_inferred": scene.up_requested == "auto",
             },

@@ -50,6 +50,13 @@ def run_default_job(output: Path = OUTPUT_FOLDER, material: str = DEFAULT_MATERI
         f"  source-receiver pairs evaluated {solver['pairs_evaluated']:,}, skipped {solver['pairs_skipped']:,}; "
         f"near-field triangles {solver['near_triangles']:,}"
     )
+    bounced = result.stats["bounces"]
+    if bounced["bounces"]:
+        share = ", ".join(f"{name} {100 * part:.1f} %" for name, part in zip("RGB", bounced["share_of_B"]))
+        print(
+            f"  light that left the surface and entered again ({bounced['bounces']} bounce"
+            f"{'s' if bounced['bounces'] > 1 else ''}, {bounced['rays']:,} rays): {share} of B"
+        )
     steps = [f"{k} {v:.2f} s" for k, v in result.timings.items()]
     print("  wall time per step: " + ", ".join(steps[:4]) + ("," if len(steps) > 4 else ""))
     if len(steps) > 4:

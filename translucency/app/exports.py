@@ -102,7 +102,8 @@ def result_polydata(result):
     """A ``pyvista.PolyData`` of a result: points (mm), triangles, every per-vertex array, the settings.
 
     ``point_data``: ``radiance`` and ``B`` (n, 3) float64, ``colors`` (n, 3) uint8 (the active
-    scalars), ``luminance`` (n,), ``incident_flux`` (n, 3) and ``normals`` (n, 3, the active normals);
+    scalars), ``luminance`` (n,), ``incident_flux`` (n, 3), ``reentered`` (n, 3, the part of ``B`` that
+    re-entered, when bounces were solved) and ``normals`` (n, 3, the active normals);
     ``field_data``: the settings flattened to strings and numbers
     (:func:`translucency.io.baked.flat_metadata`), among them ``length_unit`` ("mm"),
     ``radiance_unit`` and ``incident_flux_unit``. See :meth:`ShadeResult.to_pyvista
@@ -118,6 +119,7 @@ def result_polydata(result):
         "B": result.B,
         "luminance": luminance(result.radiance),
         "incident_flux": result.incident_flux,
+        "reentered": result.reentered,
         "normals": result.normals,
     }
     for name, values in point_data.items():

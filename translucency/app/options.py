@@ -11,7 +11,8 @@ rejects the same things with the same sentences:
 * :func:`add_format_option` -- ``--format ply|vtp|vtk|glb|gltf``, the format of the files written into
   an output folder (:mod:`translucency.app.exports`);
 * :func:`add_solver_options` / :func:`solver_settings` -- ``--model``, ``--method``, ``--tol``,
-  ``--resolution``, ``--no-shadows``, ``--per-direction``, ``--exposure``, ``--memory-limit``, ``--time-limit``,
+  ``--resolution``, ``--no-shadows``, ``--per-direction``, ``--bounces``, ``--exposure``, ``--memory-limit``,
+  ``--time-limit``,
   made from and read into :class:`~translucency.app.settings.ShadeSettings` (help texts, defaults, checks);
 * :func:`add_quiet_option` / :func:`quiet` -- ``-q``/``--quiet``: no progress (see :mod:`translucency.app.progress`).
 
@@ -172,9 +173,25 @@ def add_solver_options(parser: argparse.ArgumentParser) -> None:
     )
     group.add_argument("--no-shadows", action="store_true", help=HELP["shadows"])
     group.add_argument("--per-direction", action="store_true", help=HELP["per_direction"])
+    group.add_argument(
+        "--bounces",
+        type=whole_number,
+        default=default["bounces"].default,
+        metavar="N",
+        help=f"{HELP['bounces']} (default {default['bounces'].default})",
+    )
     group.add_argument("--exposure", type=float, default=None, help=HELP["exposure"])
     group.add_argument("--memory-limit", type=float, default=None, metavar="GB", help=HELP["memory_limit"])
     group.add_argument("--time-limit", type=float, default=None, metavar="S", help=HELP["time_limit"])
+
+
+def whole_number(text: str):
+    """``text`` as an int when it spells one, else unchanged (the setting's own check then refuses it
+    with its sentence, rather than argparse with its own)."""
+    try:
+        return int(text)
+    except ValueError:
+        return text
 
 
 def add_quiet_option(parser: argparse.ArgumentParser) -> None:
@@ -262,6 +279,7 @@ def solver_settings(args, **changes):
         "resolution": args.resolution,
         "shadows": not args.no_shadows,
         "per_direction": args.per_direction,
+        "bounces": args.bounces,
         "exposure": args.exposure,
         "memory_limit": args.memory_limit,
         "time_limit": DEFAULT_TIME_LIMIT_S if args.time_limit is None else args.time_limit,

@@ -21,7 +21,7 @@ from ..errors import TranslucencyError, option
 from ..geometry.measure import mean_edge_length
 from ..io.units import RADIANCE_UNIT, unit_metadata
 from ..scatter.budget import DEFAULT_TIME_LIMIT_S
-from ..scatter.names import DEFAULT_METHOD, DEFAULT_MODEL, DEFAULT_TOL
+from ..scatter.names import DEFAULT_BOUNCES, DEFAULT_METHOD, DEFAULT_MODEL, DEFAULT_TOL
 from .display import display_colors
 from .settings import DEFAULT_MATERIAL, ShadeSettings, parse_resolution, resolve_medium  # noqa: F401  (resolve_medium re-exported)
 
@@ -143,6 +143,9 @@ class ShadeResult:
         light samples, W/m² per channel (:func:`translucency.scatter.irradiance.incident_flux`). On a
         proxy solve it is the proxy's ``phi`` interpolated to every vertex like ``B`` (what the solver
         saw: shadow edges as soft as the proxy's); None on a result made by hand.
+    reentered : ndarray, shape (n, 3), optional
+        The part of ``B`` from light that left the surface and entered again (``bounces``,
+        docs/physics.md §7.4), W/(m² sr) per W/m²; None with ``bounces=0``.
     """
 
     mesh: object
@@ -155,17 +158,19 @@ class ShadeResult:
     timings: dict
     metadata: dict = field(default_factory=dict)
     incident_flux: np.ndarray | None = None
+    reentered: np.ndarray | None = None
 
     def to_pyvista(self):
         """The result as a ``pyvista.PolyData``: points (mm), triangles, every per-vertex array, the settings.
 
         ``point_data`` holds ``radiance`` and ``B`` (n, 3) float, ``colors`` (n, 3) uint8 (the active
         scalars), ``luminance`` (n,, the Rec. 709 luminance of the radiance, same unit),
-        ``incident_flux`` (n, 3, W/m²) and ``normals`` (n, 3); ``field_data`` the settings (:attr:`metadata`
-        flattened to strings and numbers, with ``length_unit`` = "mm", ``radiance_unit`` and
-        ``incident_flux_unit``). So ``mesh.plot(scalars="colors", rgb=True)`` shows the bake,
-        ``mesh.plot(scalars="luminance")`` the luminance in a colour map, and ``mesh.save("x.vtp")``
-        keeps it all (:func:`write_result` writes the same atomically).
+        ``incident_flux`` (n, 3, W/m²), ``reentered`` (n, 3, with bounces) and ``normals`` (n, 3);
+        ``field_data`` the settings (:attr:`metadata` flattened to strings and numbers, with
+        ``length_unit`` = "mm", ``radiance_unit`` and ``incident_flux_unit``). So
+        ``mesh.plot(scalars="colors", rgb=True)`` shows the bake, ``mesh.plot(scalars="luminance")`` the
+        luminance in a colour map, and ``mesh.save("x.vtp")`` keeps it all (:func:`write_result` writes the
+        same atomically).
         """
         from .exports import result_polydata
 
@@ -297,6 +302,7 @@ class Scene:
         resolution="full",
         exposure=None,
         per_direction=False,
+        bounces=DEFAULT_BOUNCES,
         progress=None,
         memory_limit=None,
         time_limit=DEFAULT_TIME_LIMIT_S,
@@ -315,6 +321,7 @@ class Scene:
             memory_limit,
             time_limit,
             self.up_requested,
+            bounces,
         )
         return self.shade_with(settings, lights, progress=progress, warn=warn)
 
@@ -345,6 +352,7 @@ class Scene:
             timings["incident_light"] = timings.get("incident_light", 0.0) + time.perf_counter() - start
             try:
                 solutions = _solve(geometry, incident, medium, model, method, tol, progress, per_direction, limits)
+                bounced = self._bounces(geometry, solver_mesh, solutions, lights, settings, progress, limits)
                 break
             except BudgetError as exc:
                 reason = reason or budget_phrase(exc.estimate)  # of the resolution asked for
@@ -361,11 +369,19 @@ class Scene:
         for solution in solutions:
             for k, v in solution.timings.items():
                 timings[f"solve_{k}"] = timings.get(f"solve_{k}", 0.0) + v
+        reentered = None
+        if bounced is not None:
+            reentered = bounced.B
+            timings["bounce_gather"] = bounced.stats["seconds"]["gather"] + bounced.stats["seconds"]["specular"]
+            timings["bounce_solve"] = bounced.stats["seconds"]["solve"]
+            B = B + reentered
         phi = incident.phi_rgb
         if decimation is not None:
             start = time.perf_counter()
             B = np.maximum(decimation.interpolate(B), 0.0)
             phi = np.maximum(decimation.interpolate(phi), 0.0)  # what the solver saw, as B (ShadeResult)
+            if reentered is not None:
+                reentered = np.maximum(decimation.interpolate(reentered), 0.0)
             timings["interpolate_to_full"] = time.perf_counter() - start
         radiance = float(fresnel_transmittance(1.0, medium.eta)) * B  # L toward the normal, T21(eta, 1) B
         colors, exposure = display_colors(radiance, exposure)
@@ -412,8 +428,34 @@ class Scene:
             "coarser": coarsened,
             "solver_vertices": solver_mesh.n_points,
             "vertices": self.mesh.n_points,
+            "bounces": _bounce_stats(bounced, B),
         }
-        return ShadeResult(self.mesh, B, radiance, colors, exposure, self._normals, stats, timings, metadata, phi)
+        return ShadeResult(
+            self.mesh, B, radiance, colors, exposure, self._normals, stats, timings, metadata, phi, reentered
+        )
+
+    def _bounces(self, geometry, solver_mesh, solutions, lights, settings, progress, limits):
+        """The light that re-enters (:func:`translucency.scatter.bounces.solve_bounces`) after the first
+        solve, on the solver mesh with this Scene's Embree scene; None for ``bounces=0``."""
+        if not settings.bounces:
+            return None
+        from ..scatter.bounces import solve_bounces
+
+        occluder, _ = self.visibility.occluder(geometry.points, solver_mesh.triangles)
+        return solve_bounces(
+            geometry,
+            occluder,
+            sum(solution.B for solution in solutions),
+            lights,
+            settings.material,
+            bounces=settings.bounces,
+            model=settings.model,
+            method=settings.method,
+            tol=settings.tol,
+            shadows=self.shadows,
+            progress=progress,
+            **limits,
+        )
 
     def _coarser(self, solver_mesh, exc, attempt):
         """The edge length (mm) of a proxy whose solve should fit the budget ``exc`` was over;
@@ -430,6 +472,16 @@ class Scene:
         if self._mean_edge is None:
             self._mean_edge = mean_edge_length(self.mesh.points, self.mesh.triangles)
         return self._mean_edge * (self.mesh.n_points / target) ** 0.5
+
+
+def _bounce_stats(bounced, B) -> dict:
+    """``stats["bounces"]`` of a result: bounces done, rays, seconds of the gather and of the extra
+    solves, and the share of ``B`` (summed over the vertices, per channel) that re-entered."""
+    if bounced is None:
+        return {"bounces": 0}
+    total = np.asarray(B, dtype=np.float64).sum(axis=0)
+    share = np.asarray(bounced.B, dtype=np.float64).sum(axis=0) / np.where(total > 0.0, total, np.inf)
+    return {**bounced.stats, "share_of_B": share.tolist()}
 
 
 def budget_phrase(plan) -> str:
@@ -515,6 +567,7 @@ def shade(
     resolution="full",
     exposure=None,
     per_direction=False,
+    bounces=DEFAULT_BOUNCES,
     up="auto",
     unit=None,
     progress=None,
@@ -552,6 +605,12 @@ def shade(
         Solve once per light sample with its own refracted direction and add the results (exact for
         several lights; the default aggregates the lights per vertex, see
         :mod:`translucency.scatter.irradiance`).
+    bounces : int
+        Times the light leaving the surface (subsurface exitance, mirror reflection of the lights) that
+        reaches it again is let in and solved again (docs/physics.md §7.4; 0 to 8, default
+        :data:`~translucency.scatter.names.DEFAULT_BOUNCES`); the rays are traced even with
+        ``shadows=False``. ``result.reentered`` holds that part of ``B`` and ``result.stats["bounces"]``
+        its rays, seconds and share.
     up : str
         The scan's up axis (``"x"`` ... ``"-z"``, or ``"auto"``: inferred, see :mod:`translucency.io.upright`);
         only the default light and the metadata depend on it.
@@ -580,6 +639,7 @@ def shade(
         resolution=resolution,
         exposure=exposure,
         per_direction=per_direction,
+        bounces=bounces,
         progress=progress,
         memory_limit=memory_limit,
         time_limit=time_limit,

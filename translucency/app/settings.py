@@ -21,6 +21,7 @@ exposure                  display exposure (None: automatic)                    
 memory_limit              memory the process may hold (None: what is available)           GB
 time_limit                seconds a solve may take by its estimate (None: no limit)       s
 up                        the scan's up axis, ``"x"`` ... ``"-z"`` or ``"auto"``           --
+bounces                   times light leaving the surface enters again (0: never)         1
 ========================= ============================================================== ==========
 """
 
@@ -33,7 +34,17 @@ from dataclasses import dataclass
 
 from ..errors import InvalidParameterError, setting_name
 from ..scatter.budget import DEFAULT_TIME_LIMIT_S
-from ..scatter.names import DEFAULT_METHOD, DEFAULT_MODEL, DEFAULT_TOL, check_method, check_model, check_tol
+from ..scatter.names import (
+    DEFAULT_BOUNCES,
+    DEFAULT_METHOD,
+    DEFAULT_MODEL,
+    DEFAULT_TOL,
+    MAX_BOUNCES,
+    check_bounces,
+    check_method,
+    check_model,
+    check_tol,
+)
 
 __all__ = ["ShadeSettings", "HELP", "DEFAULT_MATERIAL", "RESOLUTIONS", "parse_resolution", "resolve_medium"]
 
@@ -54,6 +65,9 @@ HELP = {
     "exposure": "display exposure (default: automatic)",
     "memory_limit": "memory the process may use, GB (default: what the machine has available); a solve "
     "that would need more runs on a coarser proxy or stops with a message",
+    "bounces": "times the light that leaves the surface (subsurface exitance and the boundary's mirror "
+    f"reflection of the lights) and reaches it again is let in and solved again, 0 to {MAX_BOUNCES}; each "
+    "costs a ray gather and a solve",
     "time_limit": f"seconds a solve may take by its estimate (default {DEFAULT_TIME_LIMIT_S:g}); over it the solve "
     "runs on a coarser proxy or stops with a message",
 }
@@ -109,6 +123,9 @@ class ShadeSettings:
         Seconds a solve may take by its estimate (None: no limit).
     up : str
         The scan's up axis, ``"x"`` ... ``"-z"``, or ``"auto"`` (inferred); stored as ``"+x"`` ... or ``"auto"``.
+    bounces : int
+        Times the light leaving the surface that reaches it again is let in and solved again
+        (docs/physics.md §7.4), 0 to :data:`~translucency.scatter.names.MAX_BOUNCES`.
     """
 
     material: object = DEFAULT_MATERIAL
@@ -122,6 +139,7 @@ class ShadeSettings:
     memory_limit: float | None = None
     time_limit: float | None = DEFAULT_TIME_LIMIT_S
     up: str = "auto"
+    bounces: int = DEFAULT_BOUNCES
 
     def __post_init__(self):
         from ..io.upright import parse_up
@@ -131,6 +149,7 @@ class ShadeSettings:
         check_model(self.model)
         check_method(self.method)
         check_tol(self.tol)
+        object.__setattr__(self, "bounces", check_bounces(self.bounces))
         object.__setattr__(self, "resolution", parse_resolution(self.resolution))
         if not (self.exposure is None or _positive(self.exposure)):
             raise InvalidParameterError(f"{setting_name('exposure')} must be a positive number, got {self.exposure!r}.")
@@ -156,6 +175,7 @@ class ShadeSettings:
                 "resolution",
                 "exposure",
                 "per_direction",
+                "bounces",
                 "memory_limit",
                 "time_limit",
             )
@@ -177,6 +197,7 @@ class ShadeSettings:
             "resolution": resolution,
             "shadows": self.shadows,
             "light_summation": "per direction" if self.per_direction else "aggregated per vertex",
+            "bounces": self.bounces,
         }
 
 

@@ -455,14 +455,14 @@ def _next_event(boundary: _Boundary, light: _Light, z, d, sigma_t, g, rng, stats
     if not near.size:
         return out
     zn = z[near]
-    facet, _ = occ.first_hits(zn, np.broadcast_to(light.w_light, zn.shape))
+    facet = occ.first_hits(zn, light.w_light).triangle
     searching = np.ones(near.size, dtype=bool)
     for _ in range(NEE_SEARCH_STEPS):
         rows = np.flatnonzero(searching & (facet >= 0))
         rows = rows[light.lit_side[facet[rows]]]
         if not rows.size:
             break
-        found, _ = occ.first_hits(zn[rows], -light.w_t[facet[rows]])
+        found = occ.first_hits(zn[rows], -light.w_t[facet[rows]]).triangle
         same = found == facet[rows]
         searching[rows[same]] = False
         searching[rows[~same & (found < 0)]] = False
@@ -481,7 +481,7 @@ def _next_event(boundary: _Boundary, light: _Light, z, d, sigma_t, g, rng, stats
     )
     if not rows.size:
         return out
-    first, _ = occ.first_hits(zn[rows], -light.w_t[facets])
+    first = occ.first_hits(zn[rows], -light.w_t[facets]).triangle
     clear = first == facets
     rows, facets, s = rows[clear], facets[clear], s[clear]
     entry = zn[rows] - s[:, None] * light.w_t[facets]
@@ -589,7 +589,8 @@ def _walk(boundary, light, start_points, start_normals, queue, coefficients, eta
         step = -np.log(xi[0]) / sigma_t[p.channel]
         cast = np.flatnonzero(~p.inside | (step >= boundary.lookup(boundary.depth, p.x)))
         stats["flights_without_ray"] += len(p.sensor) - cast.size
-        hit[cast], distance[cast] = boundary.occluder.first_hits(p.x[cast] + p.skip[cast, None] * p.d[cast], p.d[cast])
+        hits = boundary.occluder.first_hits(p.x[cast] + p.skip[cast, None] * p.d[cast], p.d[cast])
+        hit[cast], distance[cast] = hits.triangle, hits.distance
         distance[cast] += p.skip[cast]
         event = _flight(
             p.x, p.d, p.skip, p.w, p.inside, p.reentered, p.channel, hit, distance, xi[0], xi[1], boundary.normals,

@@ -3,8 +3,8 @@
 Plain data with no numba behind it, so that the command line and the settings can offer and check the
 choices without compiling or importing the kernels; :mod:`translucency.scatter.kernels` maps each model
 name to its code and :mod:`translucency.scatter.solve` accepts exactly these names. :func:`check_model`,
-:func:`check_method` and :func:`check_tol` are the one check of each choice, used by the solver and by
-:class:`~translucency.app.settings.ShadeSettings` alike.
+:func:`check_method`, :func:`check_tol` and :func:`check_bounces` are the one check of each choice, used
+by the solver and by :class:`~translucency.app.settings.ShadeSettings` alike.
 """
 
 from __future__ import annotations
@@ -23,6 +23,9 @@ __all__ = [
     "check_model",
     "check_method",
     "check_tol",
+    "DEFAULT_BOUNCES",
+    "MAX_BOUNCES",
+    "check_bounces",
 ]
 
 #: Scattering models (the BSSRDF): FHK14's directional dipole, Jensen 2001's standard dipole,
@@ -35,6 +38,11 @@ DEFAULT_MODEL = "directional"
 DEFAULT_METHOD = "tree"
 #: Relative error per vertex allowed to ``cutoff`` and ``tree`` (ignored by ``exact``).
 DEFAULT_TOL = 1e-2
+#: Times light that leaves the surface is let in again (docs/physics.md §7.4; the default is measured
+#: in bench/README.md, "Bounces").
+DEFAULT_BOUNCES = 1
+#: Most bounces accepted (each one is a gather and a solve).
+MAX_BOUNCES = 8
 
 
 def check_model(model) -> str:
@@ -61,3 +69,15 @@ def check_tol(tol):
     if not (real and math.isfinite(tol) and 0 < tol < 1):
         raise InvalidParameterError(f"{setting_name('tol')} must be a relative error in (0, 1), got {tol!r}.")
     return tol
+
+
+def check_bounces(bounces) -> int:
+    """The number of bounces, checked to be a whole number from 0 to :data:`MAX_BOUNCES`; else an
+    ``InvalidParameterError`` sentence naming ``--bounces`` or ``bounces``."""
+    whole = isinstance(bounces, numbers.Integral) and not isinstance(bounces, bool)
+    if not (whole and 0 <= bounces <= MAX_BOUNCES):
+        raise InvalidParameterError(
+            f"{setting_name('bounces')} must be a whole number from 0 to {MAX_BOUNCES} (how many times light "
+            f"that leaves the surface enters it again), got {bounces!r}."
+        )
+    return int(bounces)

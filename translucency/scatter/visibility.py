@@ -2,11 +2,12 @@
 
 An :class:`Occluder` builds one Embree scene per mesh (float32, C-contiguous, committed once) and
 answers "is the way from these surface points toward the light free?" for rays to infinity
-(directional lights, environment samples) and for segments (point lights). Rays start at the
-surface point moved along its normal by a scale-aware offset ``epsilon``; without it nearly every
-ray hits one of the faces around its own vertex (measured on the shared scans: 99.6-99.9 % of the
-front-facing rays with no offset). Large ray sets run in chunks on a thread pool: embreex releases
-the GIL while it traces.
+(directional lights, environment samples) and for segments (point lights); :meth:`Occluder.intersect`
+also says which triangle a ray meets first, and where (the bounce gather,
+:mod:`translucency.scatter.bounces`). Rays start at the surface point moved along its normal by a
+scale-aware offset ``epsilon``; without it nearly every ray hits one of the faces around its own
+vertex (measured on the shared scans: 99.6-99.9 % of the front-facing rays with no offset). Large ray
+sets run in chunks on a thread pool: embreex releases the GIL while it traces.
 
 Choice of the offset (measured on the five shared scans, 8 random light directions, vertices with
 ``n . w > 0``): any offset from ``1e-7 * diagonal`` up removes every self-hit caused by float32
@@ -40,12 +41,13 @@ import hashlib
 import os
 from collections import OrderedDict
 from concurrent.futures import ThreadPoolExecutor
+from typing import NamedTuple
 
 import numpy as np
 
 from ..errors import InvalidParameterError, MeshError, TranslucencyError
 
-__all__ = ["Occluder", "VisibilityCache", "RELATIVE_OFFSET", "array_digest"]
+__all__ = ["Hits", "Occluder", "VisibilityCache", "RELATIVE_OFFSET", "array_digest"]
 
 RELATIVE_OFFSET = 1e-4
 """Default ray-origin offset as a fraction of the mesh's bounding-box diagonal (module docstring)."""
@@ -57,6 +59,25 @@ MIN_RAYS_PER_CHUNK = 16384
 """Below this many rays per worker the rays run on the calling thread (pool overhead dominates)."""
 
 INFINITE_DISTANCE = 1e37  # embreex's "no limit" tfar, representable in float32
+
+
+class Hits(NamedTuple):
+    """Where rays first meet the mesh (:meth:`Occluder.intersect`).
+
+    Attributes
+    ----------
+    triangle : ndarray of int64, shape (k,)
+        Index of the triangle hit, -1 where the ray escapes.
+    u, v : ndarray, shape (k,)
+        Barycentrics of the hit point, ``(1 - u - v) p0 + u p1 + v p2`` (0 where it escapes), 1.
+    distance : ndarray, shape (k,)
+        From the offset origin to the hit, mm (inf where it escapes).
+    """
+
+    triangle: np.ndarray
+    u: np.ndarray
+    v: np.ndarray
+    distance: np.ndarray
 
 
 def _embreex():
@@ -202,11 +223,11 @@ class Occluder:
         self.rays_cast += k
         return hit < 0
 
-    def first_hits(self, origins, directions, max_distance=None):
-        """The first triangle each ray meets, and how far along it, for rays from the points given as they are.
+    def first_hits(self, origins, directions, max_distance=None) -> Hits:
+        """The first triangle each ray meets, and where, for rays from the points given as they are.
 
-        Unlike :meth:`visible` the origins are not moved: a caller starting on the surface offsets them
-        itself (by :attr:`epsilon` along the side it continues on).
+        Unlike :meth:`visible` and :meth:`intersect` the origins are not moved: a caller starting on the
+        surface offsets them itself (the path tracer moves along the ray, not the normal).
 
         Parameters
         ----------
@@ -217,24 +238,32 @@ class Occluder:
 
         Returns
         -------
-        triangle : ndarray of int64, shape (k,)
-            Index of the first triangle hit, -1 where none is.
-        distance : ndarray of float64, shape (k,)
-            Distance to it along the ray, mm (inf where none is).
+        Hits
+            Per ray: the triangle hit (-1 where the ray escapes), the barycentrics ``u, v`` of the hit
+            point (``(1 - u - v) p0 + u p1 + v p2`` over the triangle's vertices) and its distance (mm).
         """
         origins = np.ascontiguousarray(origins, dtype=np.float32)
         k = len(origins)
         if k == 0 or self._scene is None:
-            return np.full(k, -1, dtype=np.int64), np.full(k, np.inf)
-        directions = np.ascontiguousarray(directions, dtype=np.float32)
+            return Hits(np.full(k, -1, np.int64), np.zeros(k), np.zeros(k), np.full(k, np.inf))
+        directions = np.ascontiguousarray(np.broadcast_to(directions, (k, 3)), dtype=np.float32)
         tfar = np.full(k, INFINITE_DISTANCE, dtype=np.float32)
         if max_distance is not None:
             tfar = np.ascontiguousarray(np.minimum(max_distance, INFINITE_DISTANCE), dtype=np.float32)
-        hits = self._run(origins, directions, tfar, query="INTERSECT", output=True)
+        out = self._run(origins, directions, tfar, query="INTERSECT", output=True)
         self.rays_cast += k
-        triangle = hits["primID"].astype(np.int64)
-        distance = np.where(triangle >= 0, hits["tfar"].astype(np.float64), np.inf)
-        return triangle, distance
+        triangle = out["primID"].astype(np.int64)
+        missed = triangle < 0
+        u = np.where(missed, 0.0, out["u"].astype(np.float64))
+        v = np.where(missed, 0.0, out["v"].astype(np.float64))
+        distance = np.where(missed, np.inf, out["tfar"].astype(np.float64))
+        return Hits(triangle, u, v, distance)
+
+    def intersect(self, origins, normals, directions) -> Hits:
+        """:meth:`first_hits` of rays from surface points moved ``epsilon`` along their normals (as in
+        :meth:`visible`; the bounce gather's rays)."""
+        start = np.asarray(origins, dtype=np.float64) + self.epsilon * np.asarray(normals, dtype=np.float64)
+        return self.first_hits(start, directions)
 
     def _run(self, origins, directions, tfar, query="OCCLUDED", output=False):
         k = len(origins)

@@ -44,7 +44,7 @@ import numpy as np
 
 from ...errors import InvalidParameterError
 from ...scatter.budget import DEFAULT_TIME_LIMIT_S
-from ...scatter.names import DEFAULT_METHOD, DEFAULT_MODEL, DEFAULT_TOL
+from ...scatter.names import DEFAULT_BOUNCES, DEFAULT_METHOD, DEFAULT_MODEL, DEFAULT_TOL
 from ..display import (
     FALSE_COLOUR_QUANTITIES,
     FALSE_COLOUR_SCALES,
@@ -141,7 +141,7 @@ class ViewerState:
         Directions in the scan's own coordinates. Default: one white directional light of 1 W/m²
         above and in front of the scan (:func:`~translucency.app.pipeline.default_light_direction` of
         ``up``). :meth:`set_light` steers the first directional light.
-    model, method, tol, per_direction, memory_limit, time_limit
+    model, method, tol, per_direction, bounces, memory_limit, time_limit
         Passed to :meth:`Scene.shade <translucency.app.pipeline.Scene.shade>` (GB, seconds).
     resolution : "interactive", "full", "auto" or float
         Where ``B`` is computed on a change: ``"interactive"`` (default) is a proxy of about
@@ -179,6 +179,7 @@ class ViewerState:
         resolution="interactive",
         shadows=True,
         per_direction=False,
+        bounces=DEFAULT_BOUNCES,
         exposure=None,
         memory_limit=None,
         time_limit=DEFAULT_TIME_LIMIT_S,
@@ -207,6 +208,7 @@ class ViewerState:
             memory_limit,
             time_limit,
             up,
+            bounces,
         )
         if mesh is None:
             mesh, _, default_name = load_scan(None)
@@ -219,6 +221,7 @@ class ViewerState:
         self.model, self.method, self.tol = model, method, float(tol)
         self.resolution = resolution
         self.per_direction = bool(per_direction)
+        self.bounces = settings.bounces
         self.limits = {"memory_limit": memory_limit, "time_limit": time_limit}
         self.shadows = bool(shadows)
         self.scene = Scene(mesh, shadows=self.shadows, up=up)
@@ -397,6 +400,7 @@ class ViewerState:
             resolution=resolution,
             exposure=self.exposure,
             per_direction=self.per_direction,
+            bounces=self.bounces,
             **self.limits,
         )
         self.solve_seconds = time.perf_counter() - start

@@ -37,7 +37,7 @@ from pathlib import Path
 import numpy as np
 
 from ...scatter.budget import DEFAULT_TIME_LIMIT_S
-from ...scatter.names import DEFAULT_METHOD, DEFAULT_MODEL, DEFAULT_TOL
+from ...scatter.names import DEFAULT_BOUNCES, DEFAULT_METHOD, DEFAULT_MODEL, DEFAULT_TOL
 from ..render import (
     LIGHT_GLYPH_COLOR,
     add_colored_mesh,
@@ -94,7 +94,7 @@ class Viewer:
         Directions in the scan's own coordinates. Default: one white directional light of 1 W/m²
         above and in front of the scan (:func:`~translucency.app.pipeline.default_light_direction` of
         ``up``). The light sliders steer the first directional light; without one they are not shown.
-    model, method, tol, per_direction, memory_limit, time_limit
+    model, method, tol, per_direction, bounces, memory_limit, time_limit
         Passed to :meth:`Scene.shade <translucency.app.pipeline.Scene.shade>` (GB, seconds).
     resolution : "interactive", "full", "auto" or float
         Where ``B`` is computed while controls change: ``"interactive"`` (default) is a proxy of about
@@ -144,6 +144,7 @@ class Viewer:
     tol = _state_attribute("tol")
     resolution = _state_attribute("resolution")
     per_direction = _state_attribute("per_direction")
+    bounces = _state_attribute("bounces")
     limits = _state_attribute("limits")
     shadows = _state_attribute("shadows")
     scene = _state_attribute("scene")
@@ -174,6 +175,7 @@ class Viewer:
         resolution="interactive",
         shadows=True,
         per_direction=False,
+        bounces=DEFAULT_BOUNCES,
         exposure=None,
         memory_limit=None,
         time_limit=DEFAULT_TIME_LIMIT_S,
@@ -201,6 +203,7 @@ class Viewer:
             resolution=resolution,
             shadows=shadows,
             per_direction=per_direction,
+            bounces=bounces,
             exposure=exposure,
             memory_limit=memory_limit,
             time_limit=time_limit,
