@@ -87,6 +87,16 @@ def test_geometry_imports_neither_io_scatter_nor_app():
     assert not upward, upward
 
 
+def test_reference_imports_only_geometry_and_scatter_and_nothing_imports_it():
+    wrong = [
+        f"{m}:{line} imports {t}"
+        for m, t, _, line in EDGES
+        if (_layer(m) == "reference" and _layer(t) in ("io", "app"))
+        or (_layer(t) == "reference" and _layer(m) != "reference")
+    ]
+    assert not wrong, wrong
+
+
 def test_no_private_name_is_imported_from_another_module():
     private = [
         f"{m}:{line} imports {t}.{n}"
