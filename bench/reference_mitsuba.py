@@ -22,6 +22,7 @@ Mitsuba's version and variant, and the time taken.
     .venv/bin/python bench/reference_mitsuba.py --only fast       # the fast one
     .venv/bin/python bench/reference_mitsuba.py --quick           # a smoke run
     .venv/bin/python bench/reference_mitsuba.py --spp-scale 8     # 8 times the samples (sqrt(8) less noise)
+    .venv/bin/python bench/reference_mitsuba.py --variant llvm_ad_rgb   # vectorised (libLLVM 16 or newer)
 """
 
 from __future__ import annotations
@@ -41,7 +42,7 @@ from report import load_average, machine_info, output_dir, write_results  # noqa
 
 from translucency.geometry.measure import triangle_normals  # noqa: E402
 from translucency.geometry.synthetic import icosphere  # noqa: E402
-from translucency.reference.mitsuba_check import volpath_radiance  # noqa: E402
+from translucency.reference.mitsuba_check import VARIANTS, volpath_radiance  # noqa: E402
 from translucency.scatter.materials import material  # noqa: E402
 from translucency.scatter.medium import Medium  # noqa: E402
 
@@ -95,7 +96,7 @@ def config_medium(config: dict) -> Medium:
     return Medium([c["sigma_a"]], [c["sigma_s"]], [c["g"]], c["eta"], name="fast")
 
 
-def run_config(name: str, config: dict, spp_scale: float, seed: int) -> dict:
+def run_config(name: str, config: dict, spp_scale: float, seed: int, variant: str = "scalar_rgb") -> dict:
     """Trace one configuration; print the time per point and the relative standard error reached."""
     points, triangles = icosphere(config["level"], config["radius_mm"])
     normals = triangle_normals(points, triangles)
@@ -121,6 +122,7 @@ def run_config(name: str, config: dict, spp_scale: float, seed: int) -> dict:
             light_half_angle_deg=half_angle,
             spp=spp,
             seed=seed,
+            variant=variant,
         )
         seconds = time.perf_counter() - start
         relative = result.relative_stderr[lit]
@@ -245,12 +247,15 @@ def main(argv=None) -> None:
     parser.add_argument("--quick", action="store_true", help="1/64 of the samples, into bench/results/tmp")
     parser.add_argument("--spp-scale", type=float, default=1.0, help="multiply every sample count (default 1)")
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument(
+        "--variant", choices=VARIANTS, default="scalar_rgb", help="Mitsuba variant (default scalar_rgb)"
+    )
     args = parser.parse_args(argv)
     scale = args.spp_scale / (64.0 if args.quick else 1.0)
     info = machine_info()
     start = time.perf_counter()
     configurations = {
-        name: run_config(name, config, scale, args.seed)
+        name: run_config(name, config, scale, args.seed, args.variant)
         for name, config in CONFIGS.items()
         if args.only in (None, name)
     }

@@ -53,6 +53,8 @@ from ..scatter.medium import Medium
 __all__ = ["VolpathRadiance", "volpath_radiance", "light_radiance", "depth_settings", "VARIANTS"]
 
 #: Mitsuba variants the check runs on (RGB: the three slots carry one channel's coefficients at a time).
+#: ``llvm_ad_rgb`` needs libLLVM 16 or newer (Debian 12: ``libllvm19``; with LLVM 15 Mitsuba 3.9's kernels
+#: fail to compile); ``scalar_rgb`` needs neither LLVM nor CUDA.
 VARIANTS = ("scalar_rgb", "llvm_ad_rgb", "cuda_ad_rgb")
 #: Distance of the light from the mesh's centre, in half-diagonals of its bounding box.
 LIGHT_DISTANCE = 1e4
