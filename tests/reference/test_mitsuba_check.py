@@ -10,13 +10,23 @@
    integrated over the light's cone: the finite light adds no bias to the comparison. The slab is a
    60 x 60 x 30 mm box (the diffusion length is 1.7 mm, so its sides and bottom are out of reach);
    the sensor is the middle of the top face, seen along the normal with the light 30 deg off it.
-2. A slab that only absorbs (eta = 1.5), lit from behind and seen along the normal: the sensor ray
+2. Single scattering under a refracting boundary (eta = 1.5, Henyey-Greenstein g = 0.3): with
+   ``max_depth = 4`` volpath keeps only the paths refracted in, scattered once and refracted out
+   (three bounces, then the light), whose radiance along the normal is exact. A beam of irradiance
+   ``E`` (on a surface facing it) at cosine ``mu`` enters with ``T12(mu)``, travels at inside cosine
+   ``mu'``; the light scattered once toward the normal leaves with ``T21(1)`` and the radiance drops by
+   ``eta^2`` on the way out:
+   ``L1 = alpha T12 T21 E mu p(-mu') / (eta^2 (mu' + 1))`` (the depth integral of
+   ``sigma_s E mu T12 / mu' exp(-sigma_t z (1/mu' + 1))``), again integrated over the light's cone.
+   It checks the refraction of the light, both Fresnel factors, the phase function and the
+   ``eta^2`` radiance law.
+3. A slab that only absorbs (eta = 1.5), lit from behind and seen along the normal: the sensor ray
    crosses the two faces at normal incidence and sees the light straight through, so
    ``L = L_e T^2 e^-tau / (1 - R^2 e^-2 tau)`` exactly (``R = ((eta - 1)/(eta + 1))^2``, ``T = 1 - R``,
    the inter-reflections summed), which checks the light's radiance, the refractive boundary and the
    extinction in mm.
 
-Both are traced in Mitsuba's ``scalar_rgb`` variant; the test skips when Mitsuba is not installed. The
+All are traced in Mitsuba's ``scalar_rgb`` variant; the test skips when Mitsuba is not installed. The
 argument checks run without it.
 """
 
@@ -30,6 +40,7 @@ import pytest
 from translucency.errors import InvalidParameterError, MeshError
 from translucency.geometry.synthetic import icosphere
 from translucency.reference.mitsuba_check import light_radiance, volpath_radiance
+from translucency.scatter.fresnel import fresnel_reflectance
 from translucency.scatter.medium import Medium
 
 
@@ -68,18 +79,41 @@ def h_function(albedo, n=64):
 def reflected_radiance(albedo, theta_deg, half_angle_deg, irradiance):
     """Radiance reflected along the normal of an index-matched half-space lit by a uniform cone (W/(m^2 sr))."""
     h = h_function(albedo)
+
+    def integrand(mu):
+        return albedo * mu * h(1.0) * h(mu) / (4 * math.pi * (1 + mu))
+
+    return light_radiance(irradiance, half_angle_deg) * cone_average(integrand, theta_deg, half_angle_deg)
+
+
+def cone_average(integrand, theta_deg, half_angle_deg):
+    """The integral of ``integrand(mu)`` over the light's cone (solid angle, sr), the cone ``theta_deg`` off the normal.
+
+    ``mu`` is the cosine between each direction of the cone and the normal; Gauss-Legendre in the
+    angle from the cone's axis, the midpoint rule in the azimuth.
+    """
     x, w = np.polynomial.legendre.leggauss(24)
     psi = 0.5 * math.radians(half_angle_deg) * (x + 1)
     w_psi = 0.5 * math.radians(half_angle_deg) * w
     phi = (np.arange(64) + 0.5) * 2 * math.pi / 64
     theta = math.radians(theta_deg)
     mu = math.cos(theta) * np.cos(psi)[:, None] + math.sin(theta) * np.sin(psi)[:, None] * np.cos(phi)
-    integrand = albedo * mu * h(1.0) * h(mu) / (4 * math.pi * (1 + mu))
-    return (
-        light_radiance(irradiance, half_angle_deg)
-        * np.sum(integrand * (np.sin(psi) * w_psi)[:, None])
-        * (2 * math.pi / 64)
-    )
+    return np.sum(integrand(mu) * (np.sin(psi) * w_psi)[:, None]) * (2 * math.pi / 64)
+
+
+def single_scattered_radiance(sigma_s, sigma_a, g, eta, theta_deg, half_angle_deg, irradiance):
+    """Once-scattered radiance along the normal of a half-space under a smooth boundary, uniform cone light."""
+    albedo = sigma_s / (sigma_s + sigma_a)
+    exit_transmittance = 1 - fresnel_reflectance(1.0, eta)
+
+    def integrand(mu):
+        inside = np.sqrt(1 - (1 - mu**2) / eta**2)  # cosine of the refracted beam with the inward normal
+        cos_scatter = -inside  # between the refracted beam (travelling down) and the normal (up)
+        phase = (1 - g * g) / (4 * math.pi * (1 + g * g - 2 * g * cos_scatter) ** 1.5)
+        entry_transmittance = 1 - fresnel_reflectance(mu, eta)
+        return albedo * entry_transmittance * exit_transmittance * mu * phase / (eta**2 * (inside + 1))
+
+    return light_radiance(irradiance, half_angle_deg) * cone_average(integrand, theta_deg, half_angle_deg)
 
 
 def test_the_h_function_reproduces_the_exact_totals():
@@ -113,6 +147,29 @@ def test_index_matched_half_space_matches_chandrasekhar():
     got, se = result.radiance[0, 0], result.stderr[0, 0]
     assert result.radiance.shape == (1, 1) and result.max_depth == (-1,) and result.rr_depth == (10,)
     assert 0 < se < 0.03 * expected
+    assert abs(got - expected) < 4 * se, (got, se, expected)
+
+
+def test_single_scattering_under_a_refracting_boundary():
+    _mitsuba()
+    sigma_s, sigma_a, g, eta, theta, half_angle = 1.0, 0.1, 0.3, 1.5, 30.0, 10.0
+    points, triangles = box((-30.0, -30.0, -30.0), (30.0, 30.0, 0.0))
+    light = (math.sin(math.radians(theta)), 0.0, math.cos(math.radians(theta)))
+    result = volpath_radiance(
+        points,
+        triangles,
+        [[0.0, 0.0, 0.0]],
+        [[0.0, 0.0, 1.0]],
+        Medium([sigma_a], [sigma_s], [g], eta=eta),
+        light,
+        light_half_angle_deg=half_angle,
+        spp=1_048_576,
+        seed=5,
+        max_depth=4,
+    )
+    expected = single_scattered_radiance(sigma_s, sigma_a, g, eta, theta, half_angle, 1.0)
+    got, se = result.radiance[0, 0], result.stderr[0, 0]
+    assert 0 < se < 0.05 * expected
     assert abs(got - expected) < 4 * se, (got, se, expected)
 
 
