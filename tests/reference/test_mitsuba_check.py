@@ -126,23 +126,25 @@ def test_the_h_function_reproduces_the_exact_totals():
         assert total == pytest.approx(expected, abs=1e-6)
 
 
-def test_index_matched_half_space_matches_chandrasekhar():
+def half_space_radiance(medium, theta_deg, half_angle_deg, **options):
+    """Mitsuba's radiance along the normal at the middle of the top face of a 60 x 60 x 30 mm box.
+
+    The light is ``theta_deg`` off the normal; returns the :class:`VolpathRadiance`.
+    """
     _mitsuba()
-    sigma_s, sigma_a, theta, half_angle = 1.0, 0.1, 30.0, 10.0
     points, triangles = box((-30.0, -30.0, -30.0), (30.0, 30.0, 0.0))
-    light = (math.sin(math.radians(theta)), 0.0, math.cos(math.radians(theta)))
-    result = volpath_radiance(
-        points,
-        triangles,
-        [[0.0, 0.0, 0.0]],
-        [[0.0, 0.0, 1.0]],
-        Medium([sigma_a], [sigma_s], [0.0], eta=1.0),
-        light,
-        light_half_angle_deg=half_angle,
-        irradiance=2.0,
-        spp=262_144,
-        seed=3,
+    theta = math.radians(theta_deg)
+    light = (math.sin(theta), 0.0, math.cos(theta))
+    sensor, normal = [[0.0, 0.0, 0.0]], [[0.0, 0.0, 1.0]]
+    return volpath_radiance(
+        points, triangles, sensor, normal, medium, light, light_half_angle_deg=half_angle_deg, **options
     )
+
+
+def test_index_matched_half_space_matches_chandrasekhar():
+    sigma_s, sigma_a, theta, half_angle = 1.0, 0.1, 30.0, 10.0
+    medium = Medium([sigma_a], [sigma_s], [0.0], eta=1.0)
+    result = half_space_radiance(medium, theta, half_angle, irradiance=2.0, spp=262_144, seed=3)
     expected = reflected_radiance(sigma_s / (sigma_s + sigma_a), theta, half_angle, 2.0)
     got, se = result.radiance[0, 0], result.stderr[0, 0]
     assert result.radiance.shape == (1, 1) and result.max_depth == (-1,) and result.rr_depth == (10,)
@@ -151,22 +153,9 @@ def test_index_matched_half_space_matches_chandrasekhar():
 
 
 def test_single_scattering_under_a_refracting_boundary():
-    _mitsuba()
     sigma_s, sigma_a, g, eta, theta, half_angle = 1.0, 0.1, 0.3, 1.5, 30.0, 10.0
-    points, triangles = box((-30.0, -30.0, -30.0), (30.0, 30.0, 0.0))
-    light = (math.sin(math.radians(theta)), 0.0, math.cos(math.radians(theta)))
-    result = volpath_radiance(
-        points,
-        triangles,
-        [[0.0, 0.0, 0.0]],
-        [[0.0, 0.0, 1.0]],
-        Medium([sigma_a], [sigma_s], [g], eta=eta),
-        light,
-        light_half_angle_deg=half_angle,
-        spp=1_048_576,
-        seed=5,
-        max_depth=4,
-    )
+    medium = Medium([sigma_a], [sigma_s], [g], eta=eta)
+    result = half_space_radiance(medium, theta, half_angle, spp=1_048_576, seed=5, max_depth=4)
     expected = single_scattered_radiance(sigma_s, sigma_a, g, eta, theta, half_angle, 1.0)
     got, se = result.radiance[0, 0], result.stderr[0, 0]
     assert 0 < se < 0.05 * expected
