@@ -308,7 +308,9 @@ def volpath_radiance(
     n_batches : int, optional
         Independent renders for the batch-means standard error (>= 2).
     seed : int, optional
-        Seed (>= 0); the result is reproducible for given ``(seed, n_batches, spp)`` and variant.
+        Seed (>= 0). For given ``(seed, n_batches, spp)``, sensors and depth settings the result
+        repeats bit for bit in ``scalar_rgb`` and to rounding in the vectorised variants (their sums
+        run in a varying order).
     max_depth, rr_depth : int, optional
         ``volpath``'s depth limit and first roulette depth; by default :func:`depth_settings` of
         each channel's albedo.
