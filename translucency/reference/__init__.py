@@ -1,22 +1,10 @@
-"""Independent references for the project's own results, built on outside renderers (optional extra).
+"""Ground truth on a mesh: path-traced radiance to measure the scattering models against.
 
-``mitsuba_check``: radiance leaving a closed triangle mesh along its normals, path-traced by Mitsuba 3's
-``volpath`` integrator (the ``reference`` extra: ``pip install -e ".[reference]"``). Mitsuba is imported
-only when a function of that module runs; importing this package loads nothing heavy.
+:mod:`translucency.reference.pathtrace` is the project's own unbiased random walk in a closed mesh with
+Embree ray casts (docs/physics.md §9.5). Nothing here is imported by ``import translucency``; the
+modules load on demand.
+
+:mod:`translucency.reference.mitsuba_check` is the independent check of it: the same radiance along
+the normal path-traced by Mitsuba 3's ``volpath`` (docs/physics.md §9.6; the ``reference`` extra),
+Mitsuba imported only when its functions run.
 """
-
-import importlib
-
-_LAZY = {
-    "VolpathRadiance": "translucency.reference.mitsuba_check",
-    "volpath_radiance": "translucency.reference.mitsuba_check",
-    "light_radiance": "translucency.reference.mitsuba_check",
-}
-
-__all__ = sorted(_LAZY)
-
-
-def __getattr__(name):
-    if name in _LAZY:
-        return getattr(importlib.import_module(_LAZY[name]), name)
-    raise AttributeError(f"module 'translucency.reference' has no attribute {name!r}")
