@@ -2,7 +2,8 @@
 # Set up everything translucency needs on a Debian machine, idempotently:
 #   1. system libraries (apt): OpenGL for pymeshlab, EGL for off-screen VTK, OpenMP for numba,
 #      Xvfb for the tests that open a real window, and Python's venv module;
-#   2. a virtual environment in .venv with the package (editable) and its test extras;
+#   2. a virtual environment in .venv with the package (editable), its test and Dask extras and the
+#      reference extra (Mitsuba 3, for the path-traced check; its scalar variant needs no system library);
 #   3. the solver's kernels compiled into numba's cache, so that the first real run does not wait for
 #      the compiler (skipped when the cache already holds them).
 # A second run does nothing unless pyproject.toml changed or the kernels' cache is empty.
@@ -45,7 +46,7 @@ if [[ ! -f $stamp || "$(cat "$stamp")" != "$want" ]]; then
     # pip's own notes (the build back-end's warning about editable installs, the index's) are kept in a
     # log and shown only when the installation fails
     log="$(mktemp)"
-    if ! { .venv/bin/python -m pip install -q --upgrade pip && .venv/bin/python -m pip install -q -e ".[test,dask]"; } >"$log" 2>&1; then
+    if ! { .venv/bin/python -m pip install -q --upgrade pip && .venv/bin/python -m pip install -q -e ".[test,dask,reference]"; } >"$log" 2>&1; then
         cat "$log" >&2
         rm -f "$log"
         echo "setup: installing the Python packages failed (pip's output above)" >&2

@@ -87,6 +87,16 @@ def test_geometry_imports_neither_io_scatter_nor_app():
     assert not upward, upward
 
 
+def test_reference_imports_neither_io_nor_app_and_the_lower_layers_never_import_it():
+    wrong = [
+        f"{m}:{line} imports {t}"
+        for m, t, _, line in EDGES
+        if (_layer(m) == "reference" and _layer(t) in ("io", "app"))
+        or (_layer(t) == "reference" and _layer(m) in ("scatter", "io", "geometry"))
+    ]
+    assert not wrong, wrong
+
+
 def test_no_private_name_is_imported_from_another_module():
     private = [
         f"{m}:{line} imports {t}.{n}"
