@@ -55,6 +55,10 @@ _LAZY = {
     "compare": "translucency.app.compare",
     "Comparison": "translucency.app.compare",
     "render_colors": "translucency.app.render",
+    # the path-traced ground truth
+    "trace_reference": "translucency.app.ground_truth",
+    "write_reference": "translucency.app.ground_truth",
+    "read_reference_file": "translucency.io.reference_file",
     # errors
     "TranslucencyError": "translucency.errors",
     "InvalidParameterError": "translucency.errors",
