@@ -91,6 +91,8 @@ POSITION_TOLERANCE = 1e-6
 NORMAL_TOLERANCE = 1e-6
 #: Rec. 709 luminance weights (the maps compare luminance).
 LUMINANCE_WEIGHTS = np.array([0.2126, 0.7152, 0.0722])
+#: sRGB colour of the vertices a reference did not trace (NaN), in every view.
+UNTRACED_GREY = 128
 #: Pixels of the band below the views that holds the colour bars and the note.
 FIGURE_BAND = 190
 #: Narrowest figure, pixels: the titles and the note fit in it.
@@ -350,7 +352,8 @@ def reference_errors_image(setup, results, models, exposure, camera_direction, u
     Columns: the reference, then one per model. Top row: each in sRGB at one exposure (the reference's), so
     brightness compares. Bottom row: under the reference, its relative standard error per vertex (where
     its noise is); under each model, the ratio of luminance model / reference per vertex on a log scale
-    over :data:`RATIO_RANGE` (red: the model is brighter, blue: darker, grey: not traced or dark). Every view
+    over :data:`RATIO_RANGE` (red: the model is brighter, blue: darker); grey in every view: not traced
+    (and in the bottom row, dark). Every view
     shows the light as an arrow travelling toward the object.
     """
     from matplotlib.backends.backend_agg import FigureCanvasAgg
@@ -373,7 +376,10 @@ def reference_errors_image(setup, results, models, exposure, camera_direction, u
                 plotter.subplot(row, column)
                 if row == 0:
                     radiance = np.nan_to_num(ref.radiance) if column == 0 else results[models[column - 1]].radiance
-                    poly = add_colored_mesh(plotter, mesh, display_colors(radiance, exposure)[0])
+                    colors = display_colors(radiance, exposure)[0]
+                    if column == 0:
+                        colors[~np.all(np.isfinite(ref.radiance), axis=1)] = UNTRACED_GREY
+                    poly = add_colored_mesh(plotter, mesh, colors)
                 else:
                     poly = _scalar_mesh(plotter, mesh, ref, results, models, column)
                 plotter.add_mesh(
@@ -456,7 +462,9 @@ def _scalar_mesh(plotter, mesh, ref, results, models, column):
     else:
         poly.point_data["value"] = luminance_ratio(results[models[column - 1]].radiance, ref)
         style = {"cmap": "RdBu_r", "clim": list(RATIO_RANGE), "log_scale": True}
-    plotter.add_mesh(poly, scalars="value", lighting=False, show_scalar_bar=False, nan_color="grey", **style)
+    plotter.add_mesh(
+        poly, scalars="value", lighting=False, show_scalar_bar=False, nan_color=[UNTRACED_GREY / 255] * 3, **style
+    )
     return poly
 
 
