@@ -465,7 +465,8 @@ def _add_view_and_compare_parsers(sub) -> None:
         "one scan in several materials and models: image grid, differences, statistics",
         "Solve a scan in several materials and models with the same view and light; write grid.png "
         "(common exposure), differences.png (models against the first), statistics.csv/.json and "
-        "profile.png into the output folder.",
+        "profile.png into the output folder; with --reference, also reference.csv/.json and "
+        "reference_errors.png (every model against a path-traced reference).",
     )
     p.add_argument("--materials", metavar="A,B,C", help="catalogue names, comma-separated (default: --material)")
     p.add_argument(

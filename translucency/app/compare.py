@@ -17,6 +17,8 @@ file                         content
 ``statistics.json``          the same, the differences' statistics, the settings and the profile's plane
 ``profile.png``              radiance along a cut across the light boundary (below), one panel per channel,
                              the legend under the panels
+``reference.csv``, ``.json`` with ``reference=``: every model against a path-traced reference per region
+``reference_errors.png``     and channel, and the per-vertex ratio maps (:mod:`.reference_compare`)
 ============================ ===========================================================================
 
 Statistics are per vertex (not area weighted) over two subsets: ``all`` vertices and ``lit`` ones (those
