@@ -125,6 +125,7 @@ def test_a_reference_at_twice_the_model_gives_half_in_every_region(doubled, sphe
             continue
         assert row["ratio"] == pytest.approx(0.5, rel=1e-12)
         assert row["reentered_share"] == pytest.approx(0.1, rel=1e-12)
+        assert row["ratio_without_reentered"] == pytest.approx(0.5 / 0.9, rel=1e-12)
         # |m - 2m| / 2m on every vertex; the NaN ones are left out
         assert row["relative_error_median"] == pytest.approx(0.5) and row["relative_error_p90"] == pytest.approx(0.5)
         assert row["n_precise"] == row["n_vertices"]

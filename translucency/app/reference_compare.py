@@ -91,6 +91,8 @@ POSITION_TOLERANCE = 1e-6
 NORMAL_TOLERANCE = 1e-6
 #: Rec. 709 luminance weights (the maps compare luminance).
 LUMINANCE_WEIGHTS = np.array([0.2126, 0.7152, 0.0722])
+#: Zoom after fitting the object and the light's arrow into a view (the arrow's tail may touch the border).
+VIEW_ZOOM = 1.3
 #: sRGB colour of the vertices a reference did not trace (NaN), in every view.
 UNTRACED_GREY = 128
 #: Pixels of the band below the views that holds the colour bars and the note.
@@ -276,8 +278,9 @@ def region_rows(model: str, radiance, reference, regions, time_s: float) -> list
     -------
     list of dict
         ``model, region, channel, n_vertices, mean_model, mean_reference, ratio, ratio_stderr,
-        reentered_share, n_precise, relative_error_median, relative_error_p90, time_s``; a figure that
-        cannot be formed (no vertex, a zero mean) is None.
+        reentered_share, ratio_without_reentered`` (mean model / mean of the reference less its re-entered
+        part, which the models leave out), ``n_precise, relative_error_median, relative_error_p90, time_s``;
+        a figure that cannot be formed (no vertex, a zero mean) is None.
     """
     model_radiance = np.asarray(radiance, dtype=np.float64)
     ref, stderr = reference.radiance, reference.radiance_stderr
@@ -292,11 +295,12 @@ def region_rows(model: str, radiance, reference, regions, time_s: float) -> list
             n = int(use.sum())
             mean_model = float(m.mean()) if n else None
             mean_ref = float(r.mean()) if n else None
-            ratio = ratio_se = share = None
+            ratio = ratio_se = share = direct = None
             if n and mean_ref > 0:
                 ratio = mean_model / mean_ref
                 ratio_se = ratio * float(np.sqrt(np.sum(s**2))) / n / mean_ref
                 share = float(np.nanmean(e)) / mean_ref
+                direct = mean_model / (mean_ref * (1.0 - share)) if share < 1 else None
             precise = (r > 0) & (s < PRECISE_STDERR * r)
             error = np.abs(m[precise] - r[precise]) / r[precise]
             rows.append(
@@ -310,6 +314,7 @@ def region_rows(model: str, radiance, reference, regions, time_s: float) -> list
                     "ratio": ratio,
                     "ratio_stderr": ratio_se,
                     "reentered_share": share,
+                    "ratio_without_reentered": direct,
                     "n_precise": int(error.size),
                     "relative_error_median": float(np.median(error)) if error.size else None,
                     "relative_error_p90": float(np.percentile(error, 90)) if error.size else None,
@@ -370,7 +375,6 @@ def reference_errors_image(setup, results, models, exposure, camera_direction, u
     cell_w, cell_h = (int(v) for v in cell_size)
     plotter = new_plotter((columns * cell_w, 2 * cell_h), shape=(2, columns), border=False)
     try:
-        camera = None
         for row in range(2):
             for column in range(columns):
                 plotter.subplot(row, column)
@@ -385,8 +389,11 @@ def reference_errors_image(setup, results, models, exposure, camera_direction, u
                 plotter.add_mesh(
                     light_glyph(poly.center, 0.5 * poly.length, setup.light.direction), color=LIGHT_GLYPH_COLOR
                 )
-                camera = camera or camera_position(poly.center, poly.length, camera_direction, up)
-                plotter.camera_position = camera
+        plotter.subplot(0, 0)
+        plotter.camera_position = camera_position(poly.center, poly.length, camera_direction, up)
+        plotter.reset_camera()  # the light's arrow in view too ...
+        plotter.camera.zoom(VIEW_ZOOM)  # ... the object no smaller than it must be
+        plotter.link_views()
         image = plotter.screenshot(return_img=True)
     finally:
         plotter.close()
@@ -479,6 +486,7 @@ CSV_COLUMNS = (
     "ratio",
     "ratio_stderr",
     "reentered_share",
+    "ratio_without_reentered",
     "n_precise",
     "relative_error_median",
     "relative_error_p90",
@@ -510,7 +518,9 @@ def reference_document(setup, rows, times) -> dict:
         "figures": (
             "ratio = mean model / mean reference over the region's vertices (not area weighted), ratio_stderr "
             "from the reference's per-vertex standard errors; reentered_share = the reference's re-entered "
-            "radiance over its radiance; relative_error_* = |model - reference| / reference per vertex, over "
+            "radiance over its radiance; ratio_without_reentered = mean model / mean of the reference less its "
+            "re-entered part (which the models leave out); relative_error_* = |model - reference| / reference "
+            "per vertex, over "
             f"the n_precise vertices whose reference standard error is below {PRECISE_STDERR:g} of it: they "
             "include the reference's noise"
         ),
