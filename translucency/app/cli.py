@@ -292,24 +292,31 @@ def cmd_compare(args) -> int:
     from .compare import compare, validate_choices
     from .options import lights_from_args, quiet, solver_settings
     from .pipeline import load_scan
+    from .settings import DEFAULT_MATERIAL
 
-    settings = solver_settings(args).solver_keywords()
+    settings = solver_settings(args, material=args.material or DEFAULT_MATERIAL).solver_keywords()
     settings.pop("material")
     settings.pop("model")
-    materials, models, _ = validate_choices(
-        args.materials if args.materials is not None else args.material,
-        args.models if args.models is not None else args.model,
-    )
+    materials = args.materials if args.materials is not None else args.material
+    reference = args.reference
+    if reference is None:
+        materials = materials if materials is not None else DEFAULT_MATERIAL
+        materials, models, _ = validate_choices(materials, args.models if args.models is not None else args.model)
+    else:  # the materials are checked against the reference's
+        _, models, _ = validate_choices(DEFAULT_MATERIAL, args.models if args.models is not None else args.model)
     cell_size = _pixels(args.cell_size, "--cell-size")
     prepare_output_folder(args.output)
     lights = lights_from_args(args)
-    mesh, _, name = load_scan(args.mesh, args.unit, warn=_warn, note=_note)
-    print(f"{name}: {mesh.n_points} vertices, {mesh.extent:.4g} mm across (largest side of the bounding box)")
+    mesh = None
+    if reference is None or args.mesh is not None:
+        mesh, _, name = load_scan(args.mesh, args.unit, warn=_warn, note=_note)
+        print(f"{name}: {mesh.n_points} vertices, {mesh.extent:.4g} mm across (largest side of the bounding box)")
     result = compare(
         mesh,
         materials,
         models,
         lights,
+        reference=reference,
         output=args.output,
         shadows=not args.no_shadows,
         up=args.up,
@@ -317,10 +324,12 @@ def cmd_compare(args) -> int:
         progress=None if quiet(args) else (lambda line: print(f"solved {line}", file=sys.stderr, flush=True)),
         **settings,
     )
+    if reference is not None:
+        _print_reference_tables(result)
     print(f"common display exposure {result.exposure:.4g} (one for every cell)")
     print(
         "per-vertex mean radiance toward the normal, W/(m^2 sr) per W/m^2 of irradiance, over the lit "
-        f"vertices (incident flux > 0) and over all {mesh.n_points}:"
+        f"vertices (incident flux > 0) and over all {next(iter(result.results.values())).mesh.n_points}:"
     )
     width = max(len(m) for m in result.materials)
     for material in result.materials:
@@ -340,6 +349,24 @@ def cmd_compare(args) -> int:
             )
     print("wrote " + ", ".join(str(path) for path in result.files.values()))
     return 0
+
+
+def _print_reference_tables(result) -> None:
+    """The reference's lines and one table per model (:func:`.reference_compare.reference_table_text`)."""
+    from .reference_compare import reference_table_text
+
+    setup, material = result.reference, result.materials[0]
+    meta, mesh = setup.reference.metadata, setup.mesh
+    stderr = meta.get("median_relative_stderr")
+    print(f"reference {setup.path}: {mesh.n_points} vertices, {mesh.extent:.4g} mm across, {material}")
+    print(
+        f"  path traced with {meta.get('spp', '?')} paths per vertex"
+        + (f" in {meta['seconds']:.1f} s" if "seconds" in meta else "")
+        + (f", median standard error {100 * stderr:.0f} % per vertex" if stderr is not None else "")
+    )
+    times = {model: result.times[material, model] for model in result.models}
+    for line in reference_table_text(result.reference_rows, result.models, times):
+        print(line)
 
 
 #: Seconds between two progress lines of ``translucency reference`` (a trace takes minutes).
@@ -438,13 +465,23 @@ def _add_view_and_compare_parsers(sub) -> None:
         "one scan in several materials and models: image grid, differences, statistics",
         "Solve a scan in several materials and models with the same view and light; write grid.png "
         "(common exposure), differences.png (models against the first), statistics.csv/.json and "
-        "profile.png into the output folder.",
+        "profile.png into the output folder; with --reference, also reference.csv/.json and "
+        "reference_errors.png (every model against a path-traced reference).",
     )
     p.add_argument("--materials", metavar="A,B,C", help="catalogue names, comma-separated (default: --material)")
     p.add_argument(
         "--models", metavar="M1,M2", help="models, comma-separated; the first is the reference (default: --model)"
     )
     p.add_argument("--cell-size", default="480x480", metavar="WxH", help="pixels of one grid cell (default 480x480)")
+    p.add_argument(
+        "--reference",
+        metavar="REF",
+        help="a path-traced reference (.npz or .vtp from 'translucency reference'): shade its mesh in its "
+        "material and light and measure every model against it per region (lit, grazing, shadowed, far "
+        "side): reference.csv/.json and reference_errors.png; MESH, --material(s) and --light-dir, "
+        "--light, --env may be left out, and are refused with a sentence when they disagree with it",
+    )
+    p.set_defaults(material=None)  # none given: the default material, or the reference's
     p.add_argument(
         "-o",
         "--output",

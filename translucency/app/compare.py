@@ -17,6 +17,8 @@ file                         content
 ``statistics.json``          the same, the differences' statistics, the settings and the profile's plane
 ``profile.png``              radiance along a cut across the light boundary (below), one panel per channel,
                              the legend under the panels
+``reference.csv``, ``.json`` with ``reference=``: every model against a path-traced reference per region
+``reference_errors.png``     and channel, and the per-vertex ratio maps (:mod:`.reference_compare`)
 ============================ ===========================================================================
 
 Statistics are per vertex (not area weighted) over two subsets: ``all`` vertices and ``lit`` ones (those
@@ -135,6 +137,15 @@ class Comparison:
         ``light_boundaries_mm`` (positions where the direct light ends).
     files : dict
         ``name -> Path`` of the written files (empty without an output folder).
+    reference : ReferenceSetup or None
+        With ``reference=``: the reference read back, its mesh, material and light
+        (:class:`~translucency.app.reference_compare.ReferenceSetup`); None without.
+    reference_rows : list of dict
+        With ``reference=``: one row per (model, region, channel) of the models against the reference, as in
+        ``reference.csv`` (:func:`~translucency.app.reference_compare.region_rows`); empty without.
+    regions : ndarray or None
+        With ``reference=``: the region of every vertex, (n,) int, an index into
+        :data:`~translucency.app.reference_compare.REGIONS`; None without.
     """
 
     materials: list
@@ -147,6 +158,21 @@ class Comparison:
     profiles: dict
     profile_plane: dict
     files: dict = field(default_factory=dict)
+    reference: object = None
+    reference_rows: list = field(default_factory=list)
+    regions: np.ndarray | None = None
+
+    def ratio(self, model: str, region: str = "lit") -> np.ndarray:
+        """Mean model / mean reference per channel (R, G, B) over a region (``compare(..., reference=...)``);
+        NaN where it cannot be formed."""
+        rows = {
+            row["channel"]: row["ratio"]
+            for row in self.reference_rows
+            if (row["model"], row["region"]) == (model, region)
+        }
+        if not rows:
+            raise InvalidParameterError(f"no reference row for model {model!r} and region {region!r}.")
+        return np.array([rows[c] if rows[c] is not None else np.nan for c in CHANNELS])
 
     def mean(self, material: str, model: str, subset: str = "lit") -> np.ndarray:
         """Mean radiance per channel (R, G, B) of one cell over ``subset`` (``"lit"`` or ``"all"``)."""
@@ -328,7 +354,7 @@ def validate_choices(materials, models) -> tuple[list, list, dict]:
 
 def compare(
     mesh=None,
-    materials=(DEFAULT_MATERIAL,),
+    materials=None,
     models=(DEFAULT_MODEL,),
     lights=None,
     *,
@@ -347,6 +373,7 @@ def compare(
     cell_size=(480, 480),
     progress=None,
     unit=None,
+    reference=None,
 ) -> Comparison:
     """Render and measure one scan in several materials and models (module docstring for every output).
 
@@ -355,8 +382,9 @@ def compare(
     mesh : TriangleMesh or pyvista.PolyData, optional
         A cleaned mesh in mm, or a PolyData in ``unit`` (converted and repaired,
         :func:`~translucency.app.pipeline.mesh_for_shading`); default: the embedded default scan, cleaned.
-    materials : sequence of str, or str "a,b,c"
-        Catalogue names (the grid's columns).
+    materials : sequence of str, or str "a,b,c", optional
+        Catalogue names (the grid's columns); default :data:`~translucency.app.settings.DEFAULT_MATERIAL`, or
+        the reference's material with ``reference``.
     models : sequence of str, or str
         Scattering models (the grid's rows; the first is the reference of the difference maps).
     lights : light or sequence of lights, optional
@@ -381,6 +409,12 @@ def compare(
         Called with a line of text after each solve.
     unit : {"mm", "cm", "m", "in"} or float, optional
         A PolyData's length unit (None: its ``field_data["length_unit"]``, else inferred from its size).
+    reference : path-like or ReferenceFile, optional
+        A path-traced reference (``translucency reference``): the scan, material and light are then the
+        reference's (its vertices shaded as they are); a ``mesh``, ``materials`` or ``lights`` given too must
+        agree with it, else a sentence says what differs. Every model is measured against it per region
+        (:mod:`translucency.app.reference_compare`): :attr:`Comparison.reference_rows`, and with an output
+        folder ``reference.csv``, ``reference.json`` and ``reference_errors.png``.
 
     Returns
     -------
@@ -389,14 +423,23 @@ def compare(
     from ..io.upright import up_vector
     from ..scatter.lights import DirectionalLight, as_light_list
 
-    materials, models, media = validate_choices(materials, models)
+    setup = None
+    if reference is not None:
+        from .reference_compare import reference_setup
+
+        setup = reference_setup(reference, mesh, materials, lights, unit)
+        materials, models, _ = validate_choices([DEFAULT_MATERIAL], models)
+        materials, media = [setup.medium.name], {setup.medium.name: setup.medium}
+        mesh, lights, unit = setup.mesh, setup.light, None  # the reference's points are in mm
+    else:
+        materials, models, media = validate_choices(materials if materials is not None else DEFAULT_MATERIAL, models)
     if output is not None:
         from ..io.atomic import prepare_output_folder
 
         prepare_output_folder(output)
     # every solver setting checked once, before the scan is loaded; each cell changes material and model
     solver = (method, tol, resolution, shadows, per_direction, exposure, memory_limit, time_limit, up, bounces)
-    settings = ShadeSettings(materials[0], models[0], *solver)
+    settings = ShadeSettings(media[materials[0]], models[0], *solver)
     width, height = (int(v) for v in cell_size)
     if width < 16 or height < 16:
         raise InvalidParameterError(f"cell_size must be at least 16 x 16 pixels, got {cell_size!r}.")
@@ -477,6 +520,16 @@ def compare(
     profiles = {key: (position, samples[names[key]]) for key in results}
 
     comparison = Comparison(materials, models, exposure, results, times, statistics, differences, profiles, plane)
+    if setup is not None:
+        from .reference_compare import assign_regions, region_rows
+
+        comparison.reference = setup
+        comparison.regions = assign_regions(mesh.vertex_normals(), setup.light.direction, lit[materials[0]])
+        for model in models:
+            result = results[materials[0], model]
+            comparison.reference_rows += region_rows(
+                model, result.radiance, setup.reference, comparison.regions, times[materials[0], model]
+            )
     if output is not None:
         comparison.files = _write_files(
             Path(output),
@@ -509,6 +562,11 @@ def _write_files(folder, mesh, comparison, relative, lights, camera_direction, u
     names = {"grid": "grid.png", "csv": "statistics.csv", "json": "statistics.json", "profile": "profile.png"}
     if relative:
         names["differences"] = "differences.png"
+    setup = comparison.reference
+    if setup is not None:
+        names.update(
+            reference_csv="reference.csv", reference_json="reference.json", reference_errors="reference_errors.png"
+        )
     with staged_folder(folder) as staging:
         write_png(staging / names["grid"], _grid_image(mesh, comparison, camera_direction, up, cell_size))
         if relative:
@@ -539,7 +597,33 @@ def _write_files(folder, mesh, comparison, relative, lights, camera_direction, u
             "files": names,
         }
         (staging / names["json"]).write_text(json.dumps(document, indent=1) + "\n", encoding="utf-8")
+        if setup is not None:
+            _write_reference_files(staging, names, comparison, document, camera_direction, up, cell_size)
     return {key: folder / name for key, name in names.items()}
+
+
+def _write_reference_files(staging, names, comparison, document, camera_direction, up, cell_size) -> None:
+    """``reference.csv``, ``reference.json`` and ``reference_errors.png`` (:mod:`.reference_compare`)."""
+    from .outputs import write_png
+    from .reference_compare import reference_document, reference_errors_image, write_reference_tables
+
+    setup, material = comparison.reference, comparison.materials[0]
+    results = {model: comparison.results[material, model] for model in comparison.models}
+    times = {model: comparison.times[material, model] for model in comparison.models}
+    write_reference_tables(comparison.reference_rows, staging / names["reference_csv"])
+    reference = {
+        "format": "translucency-reference-comparison",
+        "version": __version__,
+        "mesh": document["mesh"],
+        "settings": document["settings"],
+        "material": material,
+        "models": comparison.models,
+        **reference_document(setup, comparison.reference_rows, times),
+    }
+    (staging / names["reference_json"]).write_text(json.dumps(reference, indent=1) + "\n", encoding="utf-8")
+    _, exposure = display_colors(np.nan_to_num(setup.reference.radiance))
+    image = reference_errors_image(setup, results, comparison.models, exposure, camera_direction, up, cell_size)
+    write_png(staging / names["reference_errors"], image)
 
 
 def _write_csv(rows, path) -> None:
