@@ -31,24 +31,11 @@ import numpy as np  # noqa: E402
 from report import RESULTS, load_average, machine_info, output_dir, update_readme, write_results  # noqa: E402
 
 SHARED_BUNNY = Path(__file__).resolve().parents[2] / "shared" / "meshes" / "stanford_bunny_zipper.ply"
-#: A region with fewer vertices is left out (a sphere has no cast shadow).
+#: A region with fewer vertices is left out of the table (a sphere has no cast shadow).
 MIN_VERTICES = 20
-REGIONS = ("lit", "grazing", "shadowed", "far [-0.3,0)", "far [-0.6,-0.3)", "far [-1,-0.6)")
 SETTINGS = (("exact", None), ("cutoff", 1e-2), ("tree", 1e-2), ("tree", 1e-3))
 MODELS = ("directional", "better", "standard")
 LIGHT = np.array([0.35, 1.0, 0.45])
-
-
-def regions(cos, lit):
-    """Boolean masks of :data:`REGIONS` from the light's cosine per vertex and whether direct light arrives."""
-    return {
-        "lit": (cos > 0.2) & lit,
-        "grazing": (cos > 0) & (cos <= 0.2) & lit,
-        "shadowed": (cos > 0) & ~lit,
-        "far [-0.3,0)": (cos >= -0.3) & (cos < 0),
-        "far [-0.6,-0.3)": (cos >= -0.6) & (cos < -0.3),
-        "far [-1,-0.6)": cos < -0.6,
-    }
 
 
 def scans(quick: bool):
@@ -81,6 +68,14 @@ def traced(name, mesh, spp, retrace, cache: Path):
     return read_reference_file(path)
 
 
+def by_region(rows, key):
+    """``{region: [R, G, B]}`` of one column of :func:`region_rows`' rows."""
+    out = {}
+    for row in rows:
+        out.setdefault(row["region"], []).append(row[key])
+    return out
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--spp-bunny", type=int, default=8)
@@ -90,6 +85,7 @@ def main() -> None:
     args = parser.parse_args()
 
     from translucency.app.pipeline import Scene
+    from translucency.app.reference_compare import REGIONS, assign_regions, region_rows
     from translucency.scatter.lights import DirectionalLight
 
     info = machine_info()
@@ -102,28 +98,28 @@ def main() -> None:
     for name, mesh in scans(args.quick):
         spp = args.spp_sphere if name.startswith("sphere") else args.spp_bunny
         ref = traced(name, mesh, spp, args.retrace, cache)
-        cos = ref.normals @ w_light
         scene = Scene(mesh)
         light = DirectionalLight(w_light, 1.0)
         scene.shade("marble", light, bounces=0)  # compiles, builds the scene and its caches
         first = scene.shade("marble", light, bounces=0)
-        masks = {r: m for r, m in regions(cos, first.incident_flux.sum(axis=1) > 0).items() if m.sum() >= MIN_VERTICES}
-        reference_mean = {r: ref.radiance[m].mean(axis=0) for r, m in masks.items()}
-        reference_se = {
-            r: np.sqrt((ref.radiance_stderr[m] ** 2).sum(axis=0)) / max(m.sum(), 1) for r, m in masks.items()
-        }
-        reentered = {r: ref.radiance_reentered[m].mean(axis=0) / reference_mean[r] for r, m in masks.items()}
+        regions = assign_regions(ref.normals, w_light, first.incident_flux.sum(axis=1) > 0)
+        base = region_rows("-", first.radiance, ref, regions, 0.0)
+        counts = {row["region"]: row["n_vertices"] for row in base}
+        names = [r for r, _ in REGIONS if counts[r] >= MIN_VERTICES]
+        ratio_se = by_region(base, "ratio_stderr")
+        ratio = by_region(base, "ratio")
         noise = ref.radiance_stderr / np.where(ref.radiance > 0, ref.radiance, np.nan)
         entry = {
             "scan": name,
             "vertices": int(mesh.n_points),
+            "regions": names,
             "reference": {
                 "spp": int(ref.metadata["spp"]),
                 "seconds": float(ref.metadata["seconds"]),
                 "median_relative_stderr_per_vertex": float(np.nanmedian(noise)),
-                "region_vertices": {r: int(m.sum()) for r, m in masks.items()},
-                "region_relative_stderr": {r: (reference_se[r] / reference_mean[r]).tolist() for r in masks},
-                "reentered_share": {r: reentered[r].tolist() for r in masks},
+                "region_vertices": {r: int(counts[r]) for r in names},
+                "region_relative_stderr": {r: [s / q for s, q in zip(ratio_se[r], ratio[r])] for r in names},
+                "reentered_share": {r: by_region(base, "reentered_share")[r] for r in names},
             },
             "rows": [],
         }
@@ -142,24 +138,24 @@ def main() -> None:
                     start = time.perf_counter()
                     result = scene.shade("marble", light, **kwargs)
                     seconds = time.perf_counter() - start
-                    ratio = {
-                        r: (result.radiance[m].mean(axis=0) / reference_mean[r]).tolist() for r, m in masks.items()
-                    }
-                    worst = max(abs(v - 1.0) for r in masks for v in ratio[r])
-                    row = {
-                        "model": model,
-                        "method": method,
-                        "tol": tol,
-                        "bounces": bounces,
-                        "seconds": seconds,
-                        "ratio": ratio,
-                        "worst": worst,
-                        "load": load_average()[0],
-                    }
-                    entry["rows"].append(row)
+                    ratio = by_region(region_rows(model, result.radiance, ref, regions, seconds), "ratio")
+                    ratio = {r: ratio[r] for r in names}
+                    worst = max(abs(v - 1.0) for r in names for v in ratio[r])
+                    entry["rows"].append(
+                        {
+                            "model": model,
+                            "method": method,
+                            "tol": tol,
+                            "bounces": bounces,
+                            "seconds": seconds,
+                            "ratio": ratio,
+                            "worst": worst,
+                            "load": load_average()[0],
+                        }
+                    )
                     print(
                         f"  {model:11s} {method:6s} {tol or '':>6} b{bounces} {seconds:6.2f} s  "
-                        + "  ".join(f"{np.mean(ratio[r]):.2f}" if r in ratio else "  - " for r in REGIONS)
+                        + "  ".join(f"{np.mean(ratio[r]):.2f}" for r in names)
                         + f"  worst {worst:.2f}",
                         flush=True,
                     )
@@ -196,11 +192,11 @@ def table(entry) -> list[str]:
         "",
         head,
         "",
-        "| model | method | tol | bounces | s | " + " | ".join(REGIONS) + " | worst |",
-        "|---|---|---|---|---|" + "---|" * len(REGIONS) + "---|",
+        "| model | method | tol | bounces | s | " + " | ".join(entry["regions"]) + " | worst |",
+        "|---|---|---|---|---|" + "---|" * len(entry["regions"]) + "---|",
     ]
     for row in entry["rows"]:
-        cells = [_cell(row["ratio"].get(r)) for r in REGIONS]
+        cells = [_cell(row["ratio"].get(r)) for r in entry["regions"]]
         rows.append(
             f"| {row['model']} | {row['method']} | {row['tol'] or ''} | {row['bounces']} | {row['seconds']:.2f} | "
             + " | ".join(cells)

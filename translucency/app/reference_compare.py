@@ -45,6 +45,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InvalidParameterError
+from .display import REC709_LUMINANCE, luminance
 
 __all__ = [
     "REGIONS",
@@ -89,8 +90,6 @@ STDERR_RANGE = (0.0, 0.5)
 POSITION_TOLERANCE = 1e-6
 #: The reference's normals may differ from its mesh's vertex normals by this much (length of the difference).
 NORMAL_TOLERANCE = 1e-6
-#: Rec. 709 luminance weights (the maps compare luminance).
-LUMINANCE_WEIGHTS = np.array([0.2126, 0.7152, 0.0722])
 #: Zoom after fitting the object and the light's arrow into a view (the arrow's tail may touch the border).
 VIEW_ZOOM = 1.3
 #: sRGB colour of the vertices a reference did not trace (NaN), in every view.
@@ -327,8 +326,8 @@ def region_rows(model: str, radiance, reference, regions, time_s: float) -> list
 def luminance_ratio(radiance, reference) -> np.ndarray:
     """Per vertex, luminance of the model over the reference's, (n,); NaN where the reference is not traced
     or dark."""
-    y = np.asarray(radiance, dtype=np.float64) @ LUMINANCE_WEIGHTS
-    y_ref = np.asarray(reference.radiance, dtype=np.float64) @ LUMINANCE_WEIGHTS
+    y = luminance(radiance)
+    y_ref = luminance(reference.radiance)
     out = np.full(len(y), np.nan)
     good = np.isfinite(y_ref) & (y_ref > 0)
     out[good] = y[good] / y_ref[good]
@@ -337,8 +336,8 @@ def luminance_ratio(radiance, reference) -> np.ndarray:
 
 def _relative_stderr(reference) -> np.ndarray:
     """Relative standard error of the reference's luminance per vertex (channels traced apart), NaN where dark."""
-    y = reference.radiance @ LUMINANCE_WEIGHTS
-    se = np.sqrt((reference.radiance_stderr**2) @ LUMINANCE_WEIGHTS**2)
+    y = luminance(reference.radiance)
+    se = np.sqrt(luminance(reference.radiance_stderr**2 * np.asarray(REC709_LUMINANCE)))
     out = np.full(len(y), np.nan)
     good = np.isfinite(y) & (y > 0)
     out[good] = se[good] / y[good]
