@@ -389,6 +389,13 @@ def _every(seconds: float, prefix: str):
     return report
 
 
+def _duration(seconds: float) -> str:
+    """``"40 s"``, ``"12 min"`` or ``"2.5 h"``."""
+    if seconds < 90:
+        return f"{seconds:.0f} s"
+    return f"{seconds / 60:.0f} min" if seconds < 5400 else f"{seconds / 3600:.1f} h"
+
+
 def cmd_reference(args) -> int:
     """Path-trace the radiance along the normal at every vertex of a scan and write it with its mesh."""
     from pathlib import Path
@@ -420,7 +427,8 @@ def cmd_reference(args) -> int:
     meta = truth.metadata
     print(
         f"traced {meta['stats']['paths']:,} paths in {meta['seconds']:.1f} s; median standard error "
-        f"{100 * meta['median_relative_stderr']:.1f} % of the radiance per vertex (it falls as 1/sqrt(spp))"
+        f"{100 * meta['median_relative_stderr']:.1f} % of the radiance per vertex; half that takes --spp "
+        f"{4 * spp}, about {_duration(4 * meta['seconds'])}"
     )
     print(f"wrote {written}")
     return 0
