@@ -55,6 +55,8 @@ def _check(medium, radius, model, method, far_side=False, level=3):
 
 MODELS = ("standard", "better", "directional")
 METHODS = ("tree", "cutoff")
+#: The same methods with cutoff left to the slow run where one method per model says enough (the quick subset).
+METHODS_TREE_FIRST = ("tree", pytest.param("cutoff", marks=pytest.mark.slow))
 
 
 @pytest.mark.parametrize("method", METHODS)
@@ -65,14 +67,14 @@ def test_far_side_of_a_20_mm_marble_sphere(model, method):
     assert _check(material("marble").medium(), 10.0, model, method, far_side=True, level=4) <= TOL
 
 
-@pytest.mark.parametrize("method", METHODS)
+@pytest.mark.parametrize("method", METHODS_TREE_FIRST)
 @pytest.mark.parametrize("model", MODELS)
 @pytest.mark.parametrize("radius", [0.0005, 5000.0], ids=["0.001 mm", "10 m"])
 def test_extreme_scales(radius, model, method):
     assert _check(material("marble").medium(), radius, model, method) <= TOL
 
 
-@pytest.mark.parametrize("method", METHODS)
+@pytest.mark.parametrize("method", METHODS_TREE_FIRST)
 @pytest.mark.parametrize("model", MODELS)
 @pytest.mark.parametrize("eta", [1.0, 2.5])
 def test_ends_of_the_eta_range(eta, model, method):
@@ -82,7 +84,7 @@ def test_ends_of_the_eta_range(eta, model, method):
     assert _check(medium, 0.0005, model, method) <= TOL
 
 
-@pytest.mark.parametrize("method", METHODS)
+@pytest.mark.parametrize("method", METHODS_TREE_FIRST)
 @pytest.mark.parametrize("model", MODELS)
 @pytest.mark.parametrize("albedo", [0.5, 0.999])
 def test_albedo_range(albedo, model, method):
@@ -90,7 +92,7 @@ def test_albedo_range(albedo, model, method):
     assert _check(medium, 10.0, model, method) <= TOL
 
 
-@pytest.mark.parametrize("method", METHODS)
+@pytest.mark.parametrize("method", METHODS_TREE_FIRST)
 @pytest.mark.parametrize("model", MODELS)
 def test_almost_no_scattering(model, method):
     """sigma_s = 1e-9/mm: a reduced albedo of 1e-7 and a diffusion length of metres (no warning but ours)."""
