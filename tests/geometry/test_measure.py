@@ -108,3 +108,14 @@ def test_degenerate_and_unreferenced_vertices_get_zero():
 def test_unknown_area_method():
     with pytest.raises(InvalidParameterError, match="barycentric"):
         vertex_areas(*grid(1), method="voronoi")
+
+
+def test_vertex_normals_of_subnormal_triangles_are_unit():
+    # found by the property test above: a triangle whose cross product has subnormal components, whose
+    # norm came out 0.73 instead of 1 after the division
+    a = 8.14864815e-163
+    points = np.array([[2.0, a, a], [a, a, a], [a, 0.0, a]])
+    triangles = np.array([[2, 0, 1]])
+    length = np.linalg.norm(vertex_normals(points, triangles), axis=1)
+    assert np.all((np.abs(length - 1) < 1e-12) | (length == 0))
+    assert np.count_nonzero(length) == 3

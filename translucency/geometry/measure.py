@@ -94,9 +94,14 @@ def triangle_normals(points, triangles) -> np.ndarray:
 
 
 def _normalise_rows(vectors: np.ndarray) -> np.ndarray:
-    length = np.linalg.norm(vectors, axis=1, keepdims=True)
+    # each row is first divided by its largest component, so that rows of subnormal numbers (a scan of
+    # 1e-160 mm) do not lose their length to underflow in the squares
+    scale = np.max(np.abs(vectors), axis=1, keepdims=True)
+    scaled = np.zeros_like(vectors)
+    np.divide(vectors, scale, out=scaled, where=scale > 0)
+    length = np.linalg.norm(scaled, axis=1, keepdims=True)
     out = np.zeros_like(vectors)
-    np.divide(vectors, length, out=out, where=length > 0)
+    np.divide(scaled, length, out=out, where=length > 0)
     return out
 
 
