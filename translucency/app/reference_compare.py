@@ -80,8 +80,11 @@ ALL_REGION = "all"
 LIT_COSINE = 0.2
 #: Lower bounds of ``c`` of the far-side bands after the first (``-0.3 <= c <= 0``, ``-0.6 <= c < -0.3``, below).
 FAR_SIDE_BOUNDS = (-0.3, -0.6)
-#: Per-vertex relative errors count only where the reference's standard error is below this fraction of it.
+#: Per-vertex relative errors count only where the reference's standard error is below this fraction of it ...
 PRECISE_STDERR = 0.2
+#: ... and are given only over at least this many such vertices (a few paths per vertex leave most of a dark
+#: region at 0 or with a standard error estimated from a handful of paths).
+MIN_PRECISE_VERTICES = 30
 #: Range of the per-vertex ratio map (model / reference, log scale).
 RATIO_RANGE = (0.5, 2.0)
 #: Range of the map of the reference's relative standard error.
@@ -302,6 +305,8 @@ def region_rows(model: str, radiance, reference, regions, time_s: float) -> list
                 direct = mean_model / (mean_ref * (1.0 - share)) if share < 1 else None
             precise = (r > 0) & (s < PRECISE_STDERR * r)
             error = np.abs(m[precise] - r[precise]) / r[precise]
+            if error.size < MIN_PRECISE_VERTICES:
+                error = error[:0]
             rows.append(
                 {
                     "model": model,
