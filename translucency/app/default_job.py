@@ -38,7 +38,7 @@ def run_default_job(output: Path = OUTPUT_FOLDER, material: str = DEFAULT_MATERI
     settings = ShadeSettings(material)
     print(
         f"shading with {material} ({settings.model} dipole, {settings.method} method, tol {settings.tol:g}, "
-        "Embree shadows) ..."
+        f"{settings.bounces} bounce{'s' if settings.bounces != 1 else ''}, Embree shadows) ..."
     )
     scene = scene_for(mesh, settings)
     with StageProgress(default_scan_path().stem, quiet=quiet) as progress:

@@ -142,6 +142,9 @@ def figure_image(
     tolerance = "every pair" if method == "exact" else f"tol {metadata.get('tolerance', float('nan')):g}"
     lights = "; ".join(_light_words(light) for light in metadata.get("lights", ())) or "none"
     shadows = "with shadows" if metadata.get("shadows", True) else "no shadows"
+    bounces = metadata.get("bounces")
+    if bounces:
+        tolerance += f", {bounces} bounce" + ("s" if bounces > 1 else "")
     figure.suptitle(
         f"{name}: {mesh.n_points:,} vertices, {mesh.extent:.4g} mm across — {metadata.get('material', '?')}, "
         f"{metadata.get('model', '?')} dipole, {method} method ({tolerance})\nlight: {lights}, {shadows}",
