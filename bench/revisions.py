@@ -51,11 +51,14 @@ from translucency.app.pipeline import Scene
 path, unit, solves, out = sys.argv[1], sys.argv[2], int(sys.argv[3]), sys.argv[4]
 mesh, _ = tl.clean_mesh(tl.load_mesh(path, unit=unit))
 scene = Scene(mesh)
-result = scene.shade("marble")
+# one solve per call in every revision: revisions with bounces run without them
+import inspect
+single = {"bounces": 0} if "bounces" in inspect.signature(Scene.shade).parameters else {}
+result = scene.shade("marble", **single)
 times, stages = [], []
 for _ in range(solves):
     start = time.perf_counter()
-    result = scene.shade("marble")
+    result = scene.shade("marble", **single)
     times.append(time.perf_counter() - start)
     stages.append({k: v for k, v in result.timings.items() if k.startswith("solve_")})
 np.save(out + ".npy", result.B)

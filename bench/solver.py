@@ -280,7 +280,9 @@ def proxy_rows(scan, name, scene, medium, receivers, exact, resolutions, repeats
     n = scene.mesh.n_points
     for resolution in resolutions:
         result, seconds = timed(
-            lambda: scene.shade(medium, LIGHT, method=PROXY_METHOD, tol=PROXY_TOL, resolution=resolution), repeats
+            # no bounce: the error is against a single exact solve
+            lambda: scene.shade(medium, LIGHT, method=PROXY_METHOD, tol=PROXY_TOL, resolution=resolution, bounces=0),
+            repeats,
         )
         solver_mesh, decimation, edge, _, _ = scene.solver_mesh(medium, resolution)
         rms, worst, p99 = errors(result.B[receivers], exact.B)
