@@ -199,7 +199,9 @@ def test_main_job_bakes_the_embedded_default(tmp_path):
     stored = np.stack([np.asarray(vertex[f"radiance_{c}"], dtype=np.float64) for c in "rgb"], axis=1)
     means = {
         m.group(1): np.array([float(m.group(k)) for k in (2, 3, 4)])
-        for m in re.finditer(r"mean radiance toward the normal over (.+?) \(.*?\): R (\S+), G (\S+), B (\S+)", out)
+        for m in re.finditer(
+            r"\n    over (.+?): R (\S+), G (\S+), B (\S+)", out.split("mean radiance toward the normal")[1]
+        )
     }
     n_lit = int(re.search(r"vertices lit \(incident flux > 0\): (\d+) of (\d+)", out).group(1))
     assert set(means) == {f"the {n_lit} lit vertices", f"all {len(stored)} vertices"}

@@ -328,7 +328,7 @@ def cmd_compare(args) -> int:
         _print_reference_tables(result)
     print(f"common display exposure {result.exposure:.4g} (one for every cell)")
     print(
-        "per-vertex mean radiance toward the normal, W/(m^2 sr) per W/m^2 of irradiance, over the lit "
+        "per-vertex mean radiance toward the normal, W/(m^2 sr) per W/m^2 of irradiance,\nover the lit "
         f"vertices (incident flux > 0) and over all {next(iter(result.results.values())).mesh.n_points}:"
     )
     width = max(len(m) for m in result.materials)

@@ -61,12 +61,10 @@ def run_default_job(output: Path = OUTPUT_FOLDER, material: str = DEFAULT_MATERI
     print("  wall time per step: " + ", ".join(steps[:4]) + ("," if len(steps) > 4 else ""))
     if len(steps) > 4:
         print("    " + ", ".join(steps[4:]))
+    print("  mean radiance toward the normal, W/(m^2 sr) per W/m^2 of irradiance:")
     for label, mask in ((f"the {int(lit.sum())} lit vertices", lit), (f"all {mesh.n_points} vertices", slice(None))):
         mean = result.radiance[mask].mean(axis=0)
-        print(
-            f"  mean radiance toward the normal over {label} (W/(m^2 sr) per W/m^2 of irradiance): "
-            f"R {mean[0]:.4f}, G {mean[1]:.4f}, B {mean[2]:.4f}"
-        )
+        print(f"    over {label}: R {mean[0]:.4f}, G {mean[1]:.4f}, B {mean[2]:.4f}")
     output.mkdir(parents=True, exist_ok=True)
     ply = write_result(result, output / f"bunny_{material}.ply")
     png = output / f"bunny_{material}.png"
