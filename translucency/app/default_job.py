@@ -55,12 +55,12 @@ def run_default_job(output: Path = OUTPUT_FOLDER, material: str = DEFAULT_MATERI
         share = ", ".join(f"{name} {100 * part:.1f} %" for name, part in zip("RGB", bounced["share_of_B"]))
         print(
             f"  light that left the surface and entered again ({bounced['bounces']} bounce"
-            f"{'s' if bounced['bounces'] > 1 else ''}, {bounced['rays']:,} rays): {share} of B"
+            f"{'s' if bounced['bounces'] > 1 else ''}): {share} of B"
         )
     steps = [f"{k} {v:.2f} s" for k, v in result.timings.items()]
-    print("  wall time per step: " + ", ".join(steps[:4]) + ("," if len(steps) > 4 else ""))
-    if len(steps) > 4:
-        print("    " + ", ".join(steps[4:]))
+    print("  wall time per step:")
+    for first in range(0, len(steps), 3):
+        print("    " + ", ".join(steps[first : first + 3]) + ("," if first + 3 < len(steps) else ""))
     print("  mean radiance toward the normal, W/(m^2 sr) per W/m^2 of irradiance:")
     for label, mask in ((f"the {int(lit.sum())} lit vertices", lit), (f"all {mesh.n_points} vertices", slice(None))):
         mean = result.radiance[mask].mean(axis=0)
