@@ -40,8 +40,9 @@ GROUP_RECEIVERS = 4
 #: theta = THETA_PER_SQRT_TOL * sqrt(tol); calibrated so that the per-vertex error that tol bounds
 #: (99th percentile, docs/physics.md §8.5) stays below tol. Measured on the whole bunny in marble at tol
 #: 1e-2 (p99 against exact): 2.5 -> 8.7e-2, 1.2 -> 2.1e-2, 1.0 -> 1.4e-2, 0.75 -> 6.4e-3 (the error goes
-#: as theta^2.5, the cluster evaluations as theta^-2); tests/scatter/test_tolerance.py checks it on spheres.
-THETA_PER_SQRT_TOL = 0.8
+#: as theta^2.5, the cluster evaluations as theta^-2); 0.8 left the horse at 1.1e-2 (marble) and 3.4e-2 at tol
+#: 3e-2, 0.7 gives 7.8e-3 and 2.7e-2 there for 15 % more time; tests/scatter/test_tolerance.py checks it on spheres.
+THETA_PER_SQRT_TOL = 0.7
 #: No cluster closer than CLUSTER_MEAN_FREE_PATHS / min sigma_t' to the receiver (the solver's
 #: ``min_distance``): nearer than that S_d varies with the angles between normals and refracted
 #: directions as much as with the distance, which a cluster's size-over-distance test does not see.
