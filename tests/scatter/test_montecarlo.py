@@ -17,8 +17,8 @@ from translucency.errors import InvalidParameterError
 from translucency.scatter import fresnel
 from translucency.scatter.montecarlo import (
     HalfSpaceTally,
-    _sample_hg_cosine,
     fresnel_reflectance_scalar,
+    sample_hg_cosine,
     simulate_half_space,
 )
 
@@ -124,7 +124,7 @@ def test_single_scattering_uses_the_henyey_greenstein_phase_function(g):
 def test_henyey_greenstein_sampler_has_mean_cosine_g(g):
     # Midpoint rule over xi: the mean of cos(theta) is g to quadrature accuracy.
     xi = (np.arange(200_000) + 0.5) / 200_000
-    mean = np.mean([_sample_hg_cosine(g, x) for x in xi[::10]])
+    mean = np.mean([sample_hg_cosine(g, x) for x in xi[::10]])
     assert mean == pytest.approx(g, abs=2e-3)
 
 

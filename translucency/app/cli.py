@@ -402,7 +402,8 @@ def cmd_reference(args) -> int:
 
     from ..io.atomic import prepare_output_file
     from ..io.reference_file import REFERENCE_SUFFIXES
-    from .ground_truth import check_spp, trace_reference, write_reference
+    from ..reference.pathtrace import check_spp
+    from .ground_truth import trace_reference, write_reference
     from .options import parse_vector, quiet
     from .pipeline import load_scan
 

@@ -9,12 +9,9 @@ settings (:mod:`translucency.io.reference_file`).
 from __future__ import annotations
 
 import dataclasses
-import math
 from collections.abc import Callable
 
 import numpy as np
-
-from ..errors import InvalidParameterError
 
 __all__ = ["DEFAULT_SPP", "GroundTruth", "trace_reference", "write_reference"]
 
@@ -89,7 +86,6 @@ def trace_reference(
     if light_direction is None:
         light_direction = default_light_direction(resolve_up(up, mesh.points, mesh.triangles))
     light = np.asarray(light_direction, dtype=np.float64)
-    spp = check_spp(spp)
     normals = mesh.vertex_normals()
     traced = trace_radiance(
         mesh.points, mesh.triangles, mesh.points, normals, medium, light, spp=spp, seed=seed, progress=progress
@@ -97,7 +93,6 @@ def trace_reference(
     metadata = {
         "quantity": "radiance leaving the surface along the vertex normal, subsurface part, path traced",
         "radiance_unit": "W/(m^2 sr) per W/m^2",
-        "length_unit": "mm",
         "material": medium.name,
         "sigma_a_per_mm": medium.sigma_a.tolist(),
         "sigma_s_per_mm": medium.sigma_s.tolist(),
@@ -133,10 +128,3 @@ def write_reference(truth: GroundTruth, path):
         "radiance_reentered": truth.radiance_reentered,
     }
     return write_reference_file(path, truth.mesh.points, truth.mesh.triangles, truth.normals, arrays, truth.metadata)
-
-
-def check_spp(spp) -> int:
-    """``spp`` as an int of at least 2, or a sentence naming ``--spp``/``spp=``."""
-    if isinstance(spp, bool) or not isinstance(spp, (int, np.integer)) or spp < 2 or not math.isfinite(spp):
-        raise InvalidParameterError(f"spp (--spp) must be an integer of at least 2 paths per vertex, got {spp!r}.")
-    return int(spp)

@@ -68,12 +68,12 @@ from scipy.spatial import cKDTree
 from ..errors import InvalidParameterError, MeshError
 from ..geometry.measure import signed_volume, triangle_normals
 from ..geometry.topology import unique_edges
-from ..scatter.fresnel import fresnel_reflectance
+from ..scatter.fresnel import fresnel_transmittance, refract
 from ..scatter.medium import Medium
-from ..scatter.montecarlo import fresnel_reflectance_scalar
+from ..scatter.montecarlo import fresnel_reflectance_scalar, sample_hg_cosine
 from ..scatter.visibility import Occluder
 
-__all__ = ["ReferenceRadiance", "trace_radiance", "NEE_MAX_OPTICAL_DEPTH"]
+__all__ = ["ReferenceRadiance", "check_spp", "trace_radiance", "NEE_MAX_OPTICAL_DEPTH"]
 
 #: An interaction farther than this many mean free paths ``1/sigma_t`` from every facet the light enters
 #: skips the next event (it would add less than ``exp(-40)`` of the entering light) ...
@@ -136,10 +136,20 @@ class ReferenceRadiance:
     def relative_stderr(self, floor: float = 1e-3) -> float:
         """Median of ``radiance_stderr / radiance`` over the (sensor, channel) whose radiance is at least
         ``floor`` of the largest in its channel (1)."""
-        r = self.radiance
-        keep = r >= floor * np.maximum(r.max(axis=0, keepdims=True), 1e-300)
-        keep &= r > 0
-        return float(np.median(self.radiance_stderr[keep] / r[keep])) if np.any(keep) else math.inf
+        return _median_relative_error(self.radiance, self.radiance_stderr, floor)
+
+
+def _mean_and_stderr(sums, n: int):
+    """Mean and standard error of the mean of ``n`` samples per entry from their sum and sum of squares."""
+    mean = sums[0] / n
+    return mean, np.sqrt(np.maximum(sums[1] / n - mean**2, 0.0) / (n - 1))
+
+
+def _median_relative_error(mean, stderr, floor: float = 1e-3) -> float:
+    """Median of ``stderr / mean`` over the entries whose mean is at least ``floor`` of the largest in its
+    column (channel); inf when there is none."""
+    keep = (mean >= floor * np.maximum(mean.max(axis=0, keepdims=True), 1e-300)) & (mean > 0)
+    return float(np.median(stderr[keep] / mean[keep])) if np.any(keep) else math.inf
 
 
 # --------------------------------------------------------------------------------------------------
@@ -253,12 +263,7 @@ def _new_directions(d, rows, channel, g_of_channel, xi_cos, xi_phi):
     """Henyey-Greenstein directions about the current ones, in place for ``rows`` (docs/physics.md §9.1)."""
     for j in range(rows.shape[0]):
         i = rows[j]
-        g = g_of_channel[channel[i]]
-        if abs(g) < 1e-6:
-            cos_theta = 1.0 - 2.0 * xi_cos[j]
-        else:
-            ratio = (1.0 - g * g) / (1.0 - g + 2.0 * g * xi_cos[j])
-            cos_theta = min(max((1.0 + g * g - ratio * ratio) / (2.0 * g), -1.0), 1.0)
+        cos_theta = sample_hg_cosine(g_of_channel[channel[i]], xi_cos[j])
         sin_theta = math.sqrt(max(0.0, 1.0 - cos_theta * cos_theta))
         phi = 2.0 * math.pi * xi_phi[j]
         ux, uy, uz = d[i, 0], d[i, 1], d[i, 2]
@@ -423,13 +428,10 @@ class _Light:
         self.w_light = w_light
         self.lit_side = cos_i > 1e-12
         c = np.clip(cos_i, 0.0, 1.0)
-        cos_t = np.sqrt(np.maximum(0.0, 1.0 - (1.0 - c * c) / eta**2))
-        # refraction of the travel direction -w_L into the medium (docs/physics.md §3.2)
-        self.w_t = -w_light[None, :] / eta + (c / eta - cos_t)[:, None] * boundary.normals
-        self.w_t /= np.linalg.norm(self.w_t, axis=1, keepdims=True)
-        transmitted = 1.0 - fresnel_reflectance(c, eta)
+        self.w_t = refract(w_light, boundary.normals, eta)  # docs/physics.md §3.2
+        cos_t = -np.einsum("ij,ij->i", self.w_t, boundary.normals)
         # flux density across the beam per unit irradiance: T12 cos_i / cos_t
-        self.beam = np.where(self.lit_side, transmitted * c / np.maximum(cos_t, 1e-300), 0.0)
+        self.beam = np.where(self.lit_side, fresnel_transmittance(c, eta) * c / np.maximum(cos_t, 1e-300), 0.0)
         # how far every point is at least from the facets the light enters
         self.depth = boundary.distance_bound(np.unique(boundary.triangles[self.lit_side]))
 
@@ -499,12 +501,9 @@ def _progress_line(done, elapsed, samples, sums):
     """``"37 % of the paths, 12 s; median error 3.1 % after 24 paths per point"`` for the progress callback."""
     line = f"{100 * done:.0f} % of the paths, {elapsed:.0f} s"
     if samples >= 2:
-        mean = sums[0] / samples
-        se = np.sqrt(np.maximum(sums[1] / samples - mean**2, 0.0) / (samples - 1))
-        bright = mean >= 1e-3 * max(float(mean.max()), 1e-300)
-        if np.any(bright & (mean > 0)):
-            median = 100 * float(np.median(se[bright] / mean[bright]))
-            line += f"; median error {median:.1f} % after {samples} paths per point"
+        median = _median_relative_error(*_mean_and_stderr(sums, samples))
+        if math.isfinite(median):
+            line += f"; median error {100 * median:.1f} % after {samples} paths per point"
     return line
 
 
@@ -570,7 +569,7 @@ def _walk(boundary, light, start_points, start_normals, queue, coefficients, eta
     n_channels = coefficients.shape[1]
     sigma_t, albedo, g = (np.ascontiguousarray(row) for row in coefficients)
     eps = boundary.eps
-    w0 = (1.0 - float(fresnel_reflectance(1.0, 1.0 / eta))) / eta**2
+    w0 = float(fresnel_transmittance(1.0, 1.0 / eta)) / eta**2
     paths = _Paths()
     started = 0
     finished = 0
@@ -630,6 +629,13 @@ def _walk(boundary, light, start_points, start_normals, queue, coefficients, eta
             report(finished)
     stats["paths"] += len(queue)
     stats["rays"] = boundary.occluder.rays_cast
+
+
+def check_spp(spp) -> int:
+    """``spp`` as an int of at least 2 (a standard error needs two paths), or a sentence naming ``spp``/``--spp``."""
+    if isinstance(spp, bool) or not isinstance(spp, (int, np.integer)) or spp < 2:
+        raise InvalidParameterError(f"spp (--spp) must be an integer of at least 2 paths per vertex, got {spp!r}.")
+    return int(spp)
 
 
 def _checked_mesh(points, triangles):
@@ -723,8 +729,7 @@ def trace_radiance(
     if w_light.shape != (3,) or not np.all(np.isfinite(w_light)) or not np.linalg.norm(w_light) > 0:
         raise InvalidParameterError("reference: light_direction must be a finite, non-zero 3-vector.")
     w_light = w_light / np.linalg.norm(w_light)
-    if isinstance(spp, bool) or not isinstance(spp, (int, np.integer)) or spp < 2:
-        raise InvalidParameterError(f"reference: spp must be an integer of at least 2, got {spp!r}.")
+    spp = check_spp(spp)
     n_channels = medium.n_channels
     E = np.broadcast_to(np.asarray(irradiance, dtype=np.float64), (n_channels,))
     if not np.all(np.isfinite(E)) or np.any(E < 0):
@@ -769,9 +774,7 @@ def trace_radiance(
         progress(done, _progress_line(done, now - started, finished // (k * n_distinct), results))
 
     _walk(boundary, light, sensor_points, sensor_normals, queue, coefficients, eta, rng, results, stats, report)
-    mean = results[0] / spp
-    variance = np.maximum(results[1] / spp - mean**2, 0.0) * spp / (spp - 1)
-    stderr = np.sqrt(variance / spp)
+    mean, stderr = _mean_and_stderr(results, spp)
     reentered = results[2] / spp
     return ReferenceRadiance(
         radiance=mean[:, channel_of] * E,

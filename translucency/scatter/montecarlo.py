@@ -57,7 +57,7 @@ import numpy as np
 from ..errors import InvalidParameterError
 from .medium import validate_coefficients
 
-__all__ = ["HalfSpaceTally", "simulate_half_space", "fresnel_reflectance_scalar", "LAUNCH_MODES"]
+__all__ = ["HalfSpaceTally", "simulate_half_space", "fresnel_reflectance_scalar", "sample_hg_cosine", "LAUNCH_MODES"]
 
 #: Accepted values of ``launch``: per refracted photon or per incident photon.
 LAUNCH_MODES = ("refracted", "incident")
@@ -172,7 +172,7 @@ def fresnel_reflectance_scalar(cos_i, eta):
 
 
 @numba.njit(cache=True, inline="always")
-def _sample_hg_cosine(g, xi):
+def sample_hg_cosine(g, xi):
     """Cosine of the deflection angle sampled from Henyey-Greenstein (docs/physics.md §9.1 item 4)."""
     if abs(g) < 1e-6:
         return 1.0 - 2.0 * xi
@@ -292,7 +292,7 @@ def _random_walk_batches(
                     # phase function at the travel direction's cosine uz, attenuated to the boundary
                     # (docs/physics.md §9.1 item 7).
                     normal_radiance[batch] += w * hg_norm / (1.0 + g * g - 2.0 * g * uz) ** 1.5 * math.exp(sigma_t * z)
-                    cos_theta = _sample_hg_cosine(g, _uniform(state))
+                    cos_theta = sample_hg_cosine(g, _uniform(state))
                     sin_theta = math.sqrt(max(0.0, 1.0 - cos_theta * cos_theta))
                     phi = 2.0 * math.pi * _uniform(state)
                     cos_phi = math.cos(phi)
