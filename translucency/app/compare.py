@@ -50,7 +50,6 @@ complete (:func:`~translucency.io.atomic.staged_folder`): a failed run leaves th
 
 from __future__ import annotations
 
-import csv
 import json
 import time
 from dataclasses import dataclass, field
@@ -557,7 +556,7 @@ def compare(
 def _write_files(folder, mesh, comparison, relative, lights, camera_direction, up, cell_size, settings) -> dict:
     """Write every file into a staging folder, then move them into ``folder`` (module docstring)."""
     from ..io.atomic import staged_folder
-    from .outputs import write_png
+    from .outputs import write_csv, write_png
 
     names = {"grid": "grid.png", "csv": "statistics.csv", "json": "statistics.json", "profile": "profile.png"}
     if relative:
@@ -575,7 +574,7 @@ def _write_files(folder, mesh, comparison, relative, lights, camera_direction, u
                 _difference_image(mesh, comparison, relative, camera_direction, up, cell_size),
             )
         _profile_plot(comparison, staging / names["profile"])
-        _write_csv(comparison.statistics, staging / names["csv"])
+        write_csv(staging / names["csv"], comparison.statistics, CSV_COLUMNS)
         document = {
             "format": "translucency-comparison",
             "version": __version__,
@@ -604,13 +603,14 @@ def _write_files(folder, mesh, comparison, relative, lights, camera_direction, u
 
 def _write_reference_files(staging, names, comparison, document, camera_direction, up, cell_size) -> None:
     """``reference.csv``, ``reference.json`` and ``reference_errors.png`` (:mod:`.reference_compare`)."""
-    from .outputs import write_png
-    from .reference_compare import reference_document, reference_errors_image, write_reference_tables
+    from .outputs import write_csv, write_png
+    from .reference_compare import CSV_COLUMNS as REFERENCE_CSV_COLUMNS
+    from .reference_compare import reference_document, reference_errors_image
 
     setup, material = comparison.reference, comparison.materials[0]
     results = {model: comparison.results[material, model] for model in comparison.models}
     times = {model: comparison.times[material, model] for model in comparison.models}
-    write_reference_tables(comparison.reference_rows, staging / names["reference_csv"])
+    write_csv(staging / names["reference_csv"], comparison.reference_rows, REFERENCE_CSV_COLUMNS)
     reference = {
         "format": "translucency-reference-comparison",
         "version": __version__,
@@ -626,17 +626,12 @@ def _write_reference_files(staging, names, comparison, document, camera_directio
     write_png(staging / names["reference_errors"], image)
 
 
-def _write_csv(rows, path) -> None:
-    columns = (
-        ["material", "model", "subset", "channel", "n_vertices", "mean", "median"]
-        + [f"p{p}" for p in PERCENTILES]
-        + ["time_s"]
-    )
-    with open(path, "w", newline="", encoding="utf-8") as handle:
-        writer = csv.DictWriter(handle, fieldnames=columns)
-        writer.writeheader()
-        for row in rows:
-            writer.writerow({k: ("" if row[k] is None else row[k]) for k in columns})
+#: Columns of ``statistics.csv``.
+CSV_COLUMNS = (
+    ["material", "model", "subset", "channel", "n_vertices", "mean", "median"]
+    + [f"p{p}" for p in PERCENTILES]
+    + ["time_s"]
+)
 
 
 def _cells(plotter, rows, columns):

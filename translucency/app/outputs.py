@@ -1,11 +1,14 @@
-"""Images written atomically: a reader sees the old file or the complete new one, never a part.
+"""Images written atomically, and tables as CSV.
 
 * :func:`write_png` -- one image, through the atomic writer (:mod:`translucency.io.atomic`), which
-  also provides :func:`~translucency.io.atomic.staged_folder` for sets of files.
+  also provides :func:`~translucency.io.atomic.staged_folder` for sets of files: a reader sees the old
+  file or the complete new one, never a part;
+* :func:`write_csv` -- rows of dicts as a CSV table (written into such a staged folder).
 """
 
 from __future__ import annotations
 
+import csv
 from pathlib import Path
 
 import numpy as np
@@ -34,3 +37,13 @@ def write_png(path, image) -> Path:
     # encoded in memory, so that a full disk is met by the atomic writer, not inside the image library
     write_bytes(path, iio.imwrite("<bytes>", np.asarray(image, dtype=np.uint8), extension=".png"))
     return path
+
+
+def write_csv(path, rows, columns) -> None:
+    """Write ``rows`` (dicts) as CSV with the header ``columns`` and those keys of each row; a None is an
+    empty cell."""
+    with open(path, "w", newline="", encoding="utf-8") as handle:
+        writer = csv.DictWriter(handle, fieldnames=list(columns))
+        writer.writeheader()
+        for row in rows:
+            writer.writerow({k: ("" if row[k] is None else row[k]) for k in columns})

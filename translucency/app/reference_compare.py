@@ -38,7 +38,6 @@ median relative standard error) and ``reference_errors.png`` (:func:`reference_e
 
 from __future__ import annotations
 
-import csv
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -61,7 +60,6 @@ __all__ = [
     "luminance_ratio",
     "reference_errors_image",
     "reference_figure_size",
-    "write_reference_tables",
     "reference_table_text",
 ]
 
@@ -496,15 +494,6 @@ CSV_COLUMNS = (
     "relative_error_p90",
     "time_s",
 )
-
-
-def write_reference_tables(rows, path) -> None:
-    """Write the rows of :func:`region_rows` as CSV (empty cells where a figure is None)."""
-    with open(path, "w", newline="", encoding="utf-8") as handle:
-        writer = csv.DictWriter(handle, fieldnames=CSV_COLUMNS)
-        writer.writeheader()
-        for row in rows:
-            writer.writerow({k: ("" if row[k] is None else row[k]) for k in CSV_COLUMNS})
 
 
 def reference_document(setup, rows, times) -> dict:
