@@ -369,26 +369,6 @@ def _print_reference_tables(result) -> None:
         print(line)
 
 
-#: Seconds between two progress lines of ``translucency reference`` (a trace takes minutes).
-REFERENCE_PROGRESS_SECONDS = 15.0
-
-
-def _every(seconds: float, prefix: str):
-    """A ``progress(fraction, line)`` callback that prints ``prefix + line`` to stderr at most every ``seconds``
-    (and at the end)."""
-    import time
-
-    last = [time.perf_counter()]
-
-    def report(fraction: float, line: str) -> None:
-        now = time.perf_counter()
-        if now - last[0] >= seconds or fraction >= 1.0:
-            last[0] = now
-            print(prefix + line, file=sys.stderr, flush=True)
-
-    return report
-
-
 def _duration(seconds: float) -> str:
     """``"40 s"``, ``"12 min"`` or ``"2.5 h"``."""
     if seconds < 90:
@@ -406,6 +386,7 @@ def cmd_reference(args) -> int:
     from .ground_truth import trace_reference, write_reference
     from .options import parse_vector, quiet
     from .pipeline import load_scan
+    from .progress import REFERENCE_PROGRESS_SECONDS, throttled_lines
 
     spp = check_spp(args.spp)
     output = Path(args.output)
@@ -422,7 +403,7 @@ def cmd_reference(args) -> int:
         spp=spp,
         seed=args.seed,
         up=args.up,
-        progress=None if quiet(args) else _every(REFERENCE_PROGRESS_SECONDS, f"{Path(name).name}: tracing: "),
+        progress=None if quiet(args) else throttled_lines(REFERENCE_PROGRESS_SECONDS, f"{Path(name).name}: tracing: "),
     )
     written = write_reference(truth, output)
     meta = truth.metadata

@@ -13,7 +13,8 @@ mode      what is written
 ========= ======================================================================================
 
 :class:`StageProgress` is the ``progress(stage, fraction)`` callback of one item (a scan being
-solved) in that mode; a stage's time is the wall time spent in it, in seconds.
+solved) in that mode; a stage's time is the wall time spent in it, in seconds. Work that reports a line
+of its own (the path tracer's error so far) goes through :func:`throttled_lines` instead.
 """
 
 from __future__ import annotations
@@ -21,7 +22,7 @@ from __future__ import annotations
 import sys
 import time
 
-__all__ = ["MODES", "StageProgress", "is_terminal", "progress_mode"]
+__all__ = ["MODES", "StageProgress", "is_terminal", "progress_mode", "throttled_lines"]
 
 #: The ways progress is shown (module docstring).
 MODES = ("bars", "lines", "off")
@@ -124,3 +125,21 @@ class StageProgress:
 
     def __exit__(self, *exc) -> None:
         self.close()
+
+
+#: Seconds between two progress lines of ``translucency reference`` (a trace takes minutes).
+REFERENCE_PROGRESS_SECONDS = 15.0
+
+
+def throttled_lines(seconds: float, prefix: str, file=None):
+    """A ``progress(fraction, line)`` callback that prints ``prefix + line`` (to ``file``, default stderr) at
+    most every ``seconds`` and at the end."""
+    last = [time.perf_counter()]
+
+    def report(fraction: float, line: str) -> None:
+        now = time.perf_counter()
+        if now - last[0] >= seconds or fraction >= 1.0:
+            last[0] = now
+            print(prefix + line, file=file if file is not None else sys.stderr, flush=True)
+
+    return report
