@@ -41,7 +41,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .fresnel import fresnel_reflectance, fresnel_transmittance, refract
-from .lights import PointLight, as_light_list, point_light_irradiance
+from .lights import GOLDEN_RATIO, PointLight, as_light_list, point_light_irradiance
 from .names import check_bounces
 from .visibility import Occluder
 
@@ -151,7 +151,7 @@ def cosine_directions(normals, rays: int, offsets) -> np.ndarray:
     ndarray, shape (n, rays, 3)
     """
     i = np.arange(rays)
-    lattice = np.stack([(i + 0.5) / rays, np.mod(i * 0.6180339887498949, 1.0)], axis=1)
+    lattice = np.stack([(i + 0.5) / rays, np.mod(i * (GOLDEN_RATIO - 1.0), 1.0)], axis=1)
     u = np.mod(lattice[None, :, :] + offsets[:, None, :], 1.0)
     r = np.sqrt(u[..., 0])
     angle = 2.0 * np.pi * u[..., 1]
