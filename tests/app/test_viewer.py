@@ -37,8 +37,10 @@ def viewer(sphere):
 
 
 def drag(widget, value):
-    """Move a slider as a user would: set its value, then fire the event the viewer listens to."""
+    """Move a slider as a user would: set its value, then fire the events of a drag (the light sliders answer
+    while they move, the others when they are let go)."""
     widget.GetRepresentation().SetValue(value)
+    widget.InvokeEvent("InteractionEvent")
     widget.InvokeEvent("EndInteractionEvent")
 
 
@@ -70,10 +72,14 @@ def test_interactive_edge_gives_about_the_vertex_budget(sphere):
 @needs_display
 def test_light_slider_solves_again_and_updates_colours_and_status(viewer, sphere):
     before, status = colors(viewer), viewer.status
-    assert viewer.n_solves == 1 and "marble" in viewer.status and "tolerance 0.01" in viewer.status
+    assert viewer.n_solves == 1 and "marble" in viewer.status and "relight, tolerance 0.1" in viewer.status
+    assert "operators prepared in" in viewer.status
+    # every vertex, relit: the operators are prepared once and every move of a slider reuses them
+    assert viewer.result.stats["solver_vertices"] == viewer.result.stats["vertices"]
     drag(viewer.widgets["azimuth"], -140.0)
+    assert "relight operators" in viewer.result.stats["reused"]
     drag(viewer.widgets["elevation"], -20.0)
-    assert viewer.n_solves == 3
+    assert viewer.n_solves == 3 and "operators prepared" not in viewer.status
     assert (viewer.azimuth, viewer.elevation) == (-140.0, -20.0)
     assert viewer.status != status and "azimuth -140 deg, elevation -20 deg" in viewer.status
     assert f"solved in {viewer.solve_seconds:.2f} s" in viewer.status

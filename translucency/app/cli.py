@@ -438,10 +438,17 @@ def _add_view_and_compare_parsers(sub) -> None:
         "view",
         "show a scan as a translucent object, with controls that solve again",
         "Open the interactive viewer (sliders for light, material, model, scale and exposure; key s "
-        "saves a screenshot and the bake, Return solves on every vertex). Here --resolution defaults "
-        "to 'interactive': a proxy of about 7,500 vertices.",
+        "saves a screenshot and the bake, Return solves on every vertex by tree). Here --method defaults "
+        "to relight at --tol 0.1 (operators prepared once, then every light on every vertex) and "
+        "--resolution to 'interactive': every vertex with relight, a proxy of about 7,500 vertices "
+        "otherwise.",
     )
-    p.set_defaults(resolution="interactive")
+    from ..scatter.names import VIEWER_METHOD, VIEWER_TOL
+
+    p.set_defaults(resolution="interactive", method=VIEWER_METHOD, tol=VIEWER_TOL)
+    for action in p._actions:  # the help says the viewer's own defaults
+        if action.dest in ("method", "tol") and action.help:
+            action.help = action.help.rsplit(" (default", 1)[0] + f" (default {action.default})"
     p.add_argument("--screenshot", metavar="FILE.png", help="render the first picture off-screen to FILE.png and exit")
     p.add_argument("--view-dependent", action="store_true", help="show T21(eta, n.w_o) B toward the camera")
     p.add_argument("--specular", action="store_true", help="add the boundary's specular highlight (GGX)")

@@ -405,6 +405,7 @@ class Scene:
                 ("geometry", geometry_reused),
                 ("incident light", incident_reused),
                 ("Embree scene", incident.stats.scene == "reused"),
+                ("relight operators", any(s.stats.get("operators_reused") for s in solutions)),
             )
             if flag
         ]

@@ -105,10 +105,11 @@ class ShadeSettings:
         Catalogue name, entry or medium (coefficients in 1/mm); stored as a ``Medium``.
     model : {"directional", "standard", "better"}
         The BSSRDF (FHK14, Jensen 2001, d'Eon 2012).
-    method : {"exact", "cutoff", "tree"}
-        How the far field is summed (:func:`translucency.scatter.solve.solve`).
+    method : {"exact", "cutoff", "tree", "relight"}
+        How the far field is summed (:func:`translucency.scatter.solve.solve`); ``relight`` prepares operators
+        on first use that later lights on the same :class:`~translucency.app.pipeline.Scene` reuse.
     tol : float
-        Relative error per vertex allowed to ``cutoff`` and ``tree``, in (0, 1).
+        Relative error per vertex allowed to ``cutoff``, ``tree`` and ``relight``, in (0, 1).
     resolution : "full", "auto" or float
         Where ``B`` is computed (:func:`translucency.app.pipeline.shade`); a number is a proxy edge in mm.
     shadows : bool

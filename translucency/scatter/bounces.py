@@ -447,7 +447,8 @@ def solve_bounces(
 
     ``B_1 = solve(gather(B_0) + specular(lights))`` and ``B_{k+1} = solve(gather(B_k))``, each solve with
     the same medium, model and method as the first (:func:`translucency.scatter.solve.solve`) and the
-    tolerance ``tol`` times :data:`BOUNCE_TOL_FACTOR` (at most :data:`MAX_BOUNCE_TOL`; ``exact`` has none).
+    tolerance ``tol`` times :data:`BOUNCE_TOL_FACTOR` (at most :data:`MAX_BOUNCE_TOL`; ``exact`` has none;
+    ``relight`` applies the first solve's operators again, at ``tol``).
 
     Parameters
     ----------
@@ -477,7 +478,8 @@ def solve_bounces(
     from .solve import solve
 
     bounces = check_bounces(bounces)
-    bounce_tol = max(min(tol * BOUNCE_TOL_FACTOR, MAX_BOUNCE_TOL), tol)
+    # relight keeps one set of operators per surface: the bounces reuse the first solve's, at its tol
+    bounce_tol = tol if method == "relight" else max(min(tol * BOUNCE_TOL_FACTOR, MAX_BOUNCE_TOL), tol)
     report = progress or (lambda stage, fraction: None)
     previous = np.asarray(B, dtype=np.float64)
     total = np.zeros_like(previous)

@@ -143,22 +143,10 @@ def aggregate(order, start, end, left, right, points, normals, w12, flux):
     """
     n_nodes = start.shape[0]
     n_out = flux.shape[1]
-    node_flux = np.zeros((n_nodes, n_out))
-    weight = np.zeros(n_nodes)
-    sums = np.zeros((n_nodes, 9))  # flux-weighted position, normal, w12
-    leaves, levels = _leaves_then_levels(start, left, right)
-    filled = leaves[end[leaves] > start[leaves]]
-    if filled.size:
-        source_flux = flux[order]
-        source_weight = source_flux.sum(axis=1)
-        node_flux[filled] = np.add.reduceat(source_flux, start[filled], axis=0)
-        weight[filled] = np.add.reduceat(source_weight, start[filled])
-        weighted = source_weight[:, None] * np.hstack([points[order], normals[order], w12[order]])
-        sums[filled] = np.add.reduceat(weighted, start[filled], axis=0)
-    for nodes in levels:
-        node_flux[nodes] = node_flux[left[nodes]] + node_flux[right[nodes]]
-        weight[nodes] = weight[left[nodes]] + weight[right[nodes]]
-        sums[nodes] = sums[left[nodes]] + sums[right[nodes]]
+    source_weight = flux.sum(axis=1)
+    weighted = source_weight[:, None] * np.hstack([points, normals, w12])
+    sums = _sums(order, start, end, left, right, np.hstack([flux, source_weight[:, None], weighted]))
+    node_flux, weight, sums = sums[:, :n_out], sums[:, n_out], sums[:, n_out + 1 :]  # flux-weighted pos, normal, w12
     # weighted sums -> means
     some = weight > 0.0
     out_pos = np.zeros((n_nodes, 3))
@@ -171,6 +159,24 @@ def aggregate(order, start, end, left, right, points, normals, w12, flux):
         out[ok] = block[ok] / length[ok, None]
         unit.append(out)
     return node_flux, weight, out_pos, unit[0], unit[1]
+
+
+def _sums(order, start, end, left, right, values):
+    """Sum of ``values (n, K)`` over the vertices of every node, ``(nodes, K)``: the leaves by their ranges,
+    then every level of internal nodes from its two children, deepest first."""
+    totals = np.zeros((start.shape[0], values.shape[1]))
+    leaves, levels = _leaves_then_levels(start, left, right)
+    filled = leaves[end[leaves] > start[leaves]]
+    if filled.size:
+        totals[filled] = np.add.reduceat(values[order], start[filled], axis=0)
+    for nodes in levels:
+        totals[nodes] = totals[left[nodes]] + totals[right[nodes]]
+    return totals
+
+
+def node_sums(tree: SourceTree, values) -> np.ndarray:
+    """Sum of ``values (n, K)`` over the vertices of every node of ``tree``: ``(nodes, K)`` float64."""
+    return _sums(tree.order, tree.start, tree.end, tree.left, tree.right, np.asarray(values, dtype=np.float64))
 
 
 @dataclass(frozen=True)
@@ -209,6 +215,53 @@ def aggregated_sources(tree: SourceTree, points, normals, w12, flux) -> Aggregat
     )
     weights = np.ascontiguousarray(np.concatenate([flux, node_flux]).T)
     return AggregatedSources(table, weights, node_weight, flux.sum(axis=1) > 0)
+
+
+def walk_lists(
+    tree, node_weight, lit, rcv_points, theta, reach=math.inf, min_distance=0.0, group=GROUP_RECEIVERS, count_only=False
+):
+    """The tree walk of :func:`tree_sum` on its own: for every group of ``group`` consecutive receivers
+    (positions mm), the sources and clusters it evaluates.
+
+    Nodes with ``node_weight <= 0`` are skipped, and only sources with ``lit`` are listed. Returns
+    ``(starts, direct, clustered, columns)``: the group's list is ``columns[starts[g] : starts[g] + direct[g]
+    + clustered[g]]``, entries ``j < n`` source ``j`` and ``n + k`` node ``k``'s cluster (``count_only``: the
+    counts only, ``columns`` empty).
+    """
+    n_rcv = rcv_points.shape[0]
+    n_groups = -(-n_rcv // group)
+    members = np.minimum(np.arange(n_groups * group).reshape(n_groups, group), n_rcv - 1)
+    centre = rcv_points[members].mean(axis=1)
+    spread = np.linalg.norm(rcv_points[members] - centre[:, None, :], axis=2).max(axis=1)
+    g_direct = np.zeros(n_groups, dtype=np.int64)
+    g_clustered = np.zeros(n_groups, dtype=np.int64)
+    walk = (
+        tree.order,
+        tree.start,
+        tree.end,
+        tree.left,
+        tree.right,
+        tree.centre,
+        tree.radius,
+        node_weight,
+        lit,
+        centre,
+        spread,
+        theta,
+        reach,
+        min_distance,
+    )
+    for_ranges(
+        _traverse, n_groups, *walk, np.empty(0, dtype=np.int64), np.zeros(1, dtype=np.int64), g_direct, g_clustered
+    )
+    g_counts = g_direct + g_clustered
+    g_starts = np.zeros(n_groups, dtype=np.int64)
+    np.cumsum(g_counts[:-1], out=g_starts[1:])
+    if count_only:
+        return g_starts, g_direct, g_clustered, np.empty(0, dtype=np.int64)
+    columns = np.empty(int(g_counts.sum()), dtype=np.int64)
+    for_ranges(_traverse, n_groups, *walk, columns, g_starts, g_direct, g_clustered)
+    return g_starts, g_direct, g_clustered, columns
 
 
 def tree_sum(
@@ -257,36 +310,10 @@ def tree_sum(
     for first in range(0, n_rcv, block):
         part = slice(first, min(n_rcv, first + block))
         p, nrm = rcv_points[part], rcv_normals[part]
-        n_groups = -(-p.shape[0] // group)
-        members = np.minimum(np.arange(n_groups * group).reshape(n_groups, group), p.shape[0] - 1)
-        centre = p[members].mean(axis=1)
-        spread = np.linalg.norm(p[members] - centre[:, None, :], axis=2).max(axis=1)
-        g_direct = np.zeros(n_groups, dtype=np.int64)
-        g_clustered = np.zeros(n_groups, dtype=np.int64)
-        walk = (
-            tree.order,
-            tree.start,
-            tree.end,
-            tree.left,
-            tree.right,
-            tree.centre,
-            tree.radius,
-            sources.node_weight,
-            sources.lit,
-            centre,
-            spread,
-            theta,
-            reach,
-            min_distance,
-        )
-        for_ranges(
-            _traverse, n_groups, *walk, np.empty(0, dtype=np.int64), np.zeros(1, dtype=np.int64), g_direct, g_clustered
+        g_starts, g_direct, g_clustered, columns = walk_lists(
+            tree, sources.node_weight, sources.lit, p, theta, reach, min_distance, group
         )
         g_counts = g_direct + g_clustered
-        g_starts = np.zeros(n_groups, dtype=np.int64)
-        np.cumsum(g_counts[:-1], out=g_starts[1:])
-        columns = np.empty(int(g_counts.sum()), dtype=np.int64)
-        for_ranges(_traverse, n_groups, *walk, columns, g_starts, g_direct, g_clustered)
         of = np.arange(p.shape[0]) // group  # each receiver's group
         direct[part], clustered[part] = g_direct[of], g_clustered[of]
         B[part] = indexed_sum(

@@ -45,7 +45,7 @@ import numpy as np
 
 from ..geometry.measure import edge_lengths
 from ..geometry.topology import unique_edges
-from .kernels import channel_lanes, indexed_sum
+from .kernels import FIT_WORK_COLUMNS, QUADRATIC_TERMS, channel_lanes, fitted_pairs, indexed_sum
 from .threads import for_ranges, thread_count
 
 # Dunavant (1985) 7-point rule, exact for polynomials of degree 5: barycentric points and weights
@@ -965,12 +965,11 @@ def _refined_points(
     refined_weights,
 ):
     """Pass 2: each receiver's own quadrature points (fan rule, refined pieces), from ``ref_offsets`` on."""
-    n_rule = rule_points.shape[0]
     # receivers lo .. hi - 1, with their own scratch space
     stack = np.empty((3 * MAX_DEPTH + 8, 7))
     cx = np.empty((3, 3))
     found = np.empty((4**6, 7))
-    fan = np.empty((4 * ang_x.shape[0] * rad_x.shape[0], 4))
+    own = np.empty((4 * ang_x.shape[0] * rad_x.shape[0], 4))
     for r in range(lo, hi):
         xo = points[receivers[r]]
         column = ref_offsets[r]
@@ -980,56 +979,443 @@ def _refined_points(
                 continue
             tri = triangles[t]
             corner = _corner_of(tri, receivers[r])
-            if corner >= 0:
-                n = _fan_count(points, tri, corner, beta * scale_min, ang_x.shape[0], rad_x.shape[0])
-                if n > fan.shape[0]:
-                    fan = np.empty((n, 4))
-                _fan(points, tri, corner, beta, scale_min, ang_x, ang_w, rad_x, rad_w, fan)
-                for j in range(n):
-                    _gather(
-                        points,
-                        normals,
-                        w12,
-                        phi,
-                        tri,
-                        fan[j, 0],
-                        fan[j, 1],
-                        fan[j, 2],
-                        triangle_areas[t] * fan[j, 3],
-                        refined,
-                        refined_weights,
-                        column,
-                    )
-                    column += 1
-                continue
-            if _whole(diameters[t], centroids[t], xo, beta, scale_min):
-                continue
-            n = _pieces(points, tri, xo, beta, scale_min, stack, cx, found)
-            if n > found.shape[0]:  # deeper than the scratch space: grow it and subdivide again
-                found = np.empty((n, 7))
-                n = _pieces(points, tri, xo, beta, scale_min, stack, cx, found)
+            if corner < 0 and _whole(diameters[t], centroids[t], xo, beta, scale_min):
+                continue  # a whole triangle: its points are the shared ones
+            n, own, found = _own_points(
+                points,
+                tri,
+                triangle_areas[t],
+                corner,
+                xo,
+                beta,
+                scale_min,
+                rule_points,
+                rule_weights,
+                ang_x,
+                ang_w,
+                rad_x,
+                rad_w,
+                stack,
+                cx,
+                found,
+                own,
+            )
             for j in range(n):
-                p0, q0, p1, q1, p2, q2 = found[j, 0], found[j, 1], found[j, 2], found[j, 3], found[j, 4], found[j, 5]
-                r0 = 1.0 - p0 - q0
-                r1 = 1.0 - p1 - q1
-                r2 = 1.0 - p2 - q2
-                piece_area = triangle_areas[t] * 0.25 ** found[j, 6]
-                for qp in range(n_rule):
-                    l0 = rule_points[qp, 0]
-                    l1 = rule_points[qp, 1]
-                    l2 = rule_points[qp, 2]
-                    _gather(
+                _gather(
+                    points,
+                    normals,
+                    w12,
+                    phi,
+                    tri,
+                    own[j, 0],
+                    own[j, 1],
+                    own[j, 2],
+                    own[j, 3],
+                    refined,
+                    refined_weights,
+                    column,
+                )
+                column += 1
+
+
+@numba.njit(cache=True)
+def _own_points(
+    points,
+    tri,
+    area,
+    corner,
+    xo,
+    beta,
+    scale_min,
+    rule_points,
+    rule_weights,
+    ang_x,
+    ang_w,
+    rad_x,
+    rad_w,
+    stack,
+    cx,
+    found,
+    out,
+):
+    """A receiver's own quadrature points on the triangle ``tri`` (area mm^2): the fan rule about its corner
+    ``corner`` (>= 0: the receiver's own triangle), else Dunavant's rule on the pieces of the subdivision.
+    Rows ``(b0, b1, b2, weight mm^2)`` of ``out``; returns ``(count, out, found)`` (the scratch arrays, grown
+    where they were too small)."""
+    if corner >= 0:
+        n = _fan_count(points, tri, corner, beta * scale_min, ang_x.shape[0], rad_x.shape[0])
+        if n > out.shape[0]:
+            out = np.empty((n, 4))
+        _fan(points, tri, corner, beta, scale_min, ang_x, ang_w, rad_x, rad_w, out)
+        for j in range(n):
+            out[j, 3] *= area
+        return n, out, found
+    n = _pieces(points, tri, xo, beta, scale_min, stack, cx, found)
+    if n > found.shape[0]:  # deeper than the scratch space: grow it and subdivide again
+        found = np.empty((n, 7))
+        n = _pieces(points, tri, xo, beta, scale_min, stack, cx, found)
+    n_rule = rule_points.shape[0]
+    if n * n_rule > out.shape[0]:
+        out = np.empty((n * n_rule, 4))
+    m = 0
+    for j in range(n):
+        p0, q0, p1, q1, p2, q2 = found[j, 0], found[j, 1], found[j, 2], found[j, 3], found[j, 4], found[j, 5]
+        r0 = 1.0 - p0 - q0
+        r1 = 1.0 - p1 - q1
+        r2 = 1.0 - p2 - q2
+        piece_area = area * 0.25 ** found[j, 6]
+        for qp in range(n_rule):
+            l0, l1, l2 = rule_points[qp, 0], rule_points[qp, 1], rule_points[qp, 2]
+            out[m, 0] = l0 * p0 + l1 * p1 + l2 * p2
+            out[m, 1] = l0 * q0 + l1 * q1 + l2 * q2
+            out[m, 2] = l0 * r0 + l1 * r1 + l2 * r2
+            out[m, 3] = piece_area * rule_weights[qp]
+            m += 1
+    return m, out, found
+
+
+def near_field_operator(
+    model,
+    points,
+    triangles,
+    triangle_areas,
+    normals,
+    vertex_areas,
+    receivers,
+    offsets,
+    triangle_ids,
+    params,
+    beta,
+    scale_min,
+    fits,
+    tables=None,
+    rule_points=RULE_POINTS,
+    rule_weights=RULE_WEIGHTS,
+    fan_nodes=(FAN_ANGULAR, FAN_RADIAL),
+):
+    """The correction of :func:`near_field_correction` as a linear operator on the vertices' flux, for relighting.
+
+    The same quadrature (fan rule on the receiver's own triangles, subdivided pieces of the close ones,
+    Dunavant's rule on the others; no degree-3 substitution) with every vertex treated as lit, ``Phi``,
+    ``Psi = Phi w12`` and ``Xi = Phi w12 w12^T`` interpolated linearly, and ``S_d`` as the quadratic fit of
+    :func:`~translucency.scatter.kernels.fitted_pairs` (docs/physics.md §8.7). The coefficient of a point is
+    shared among the triangle's corners by their barycentric weights and divided by the corner's vertex
+    area (per unit flux ``Phi = phi A``). Each near vertex's own pair of the vertex sum is added with the
+    quadratic fit less the affine one, which the far field's operator holds for it.
+
+    Parameters
+    ----------
+    params : (C, N_PARAMS) float64
+        Kernel parameters of every output channel.
+    fits : tuple
+        ``(dirs, pinv)`` of :func:`~translucency.scatter.kernels.fit_directions` for the affine fit, then for
+        the quadratic one.
+    vertex_areas : (n,) float64
+        Barycentric vertex areas, mm^2 (a vertex of area 0 gets no coefficient).
+
+    Returns
+    -------
+    starts : (n_receivers + 1,) int64
+    columns : (E,) int64
+        Receiver ``r``'s vertices are ``columns[starts[r]:starts[r + 1]]``.
+    coefs : (E, 10 C) float32
+        Per entry and channel the ten coefficients of the quadratic fit (1/(mm^2 sr) per unit flux).
+    """
+    if tables is None:
+        tables = triangle_tables(points, triangles)
+    n_r = receivers.shape[0]
+    counts = near_vertex_counts(triangles, receivers, offsets, triangle_ids)
+    stamps = np.full((thread_count(), 2 * points.shape[0]), -1, dtype=np.int64)
+    fan = (*_gauss_legendre_unit(fan_nodes[0]), *_gauss_legendre_unit(fan_nodes[1]))
+    starts = np.zeros(n_r + 1, dtype=np.int64)
+    np.cumsum(counts, out=starts[1:])
+    columns = np.empty(int(starts[-1]), dtype=np.int64)
+    coefs = np.zeros((int(starts[-1]), QUADRATIC_TERMS * params.shape[0]), dtype=np.float32)
+    for_ranges(
+        _operator_rows,
+        n_r,
+        model,
+        points,
+        triangles,
+        triangle_areas,
+        normals,
+        vertex_areas,
+        receivers,
+        offsets,
+        triangle_ids,
+        params,
+        beta,
+        scale_min,
+        tables.diameters,
+        tables.centroids,
+        rule_points,
+        rule_weights,
+        *fan,
+        *fits,
+        stamps,
+        starts,
+        columns,
+        coefs,
+    )
+    return starts, columns, coefs
+
+
+def near_vertex_counts(triangles, receivers, offsets, triangle_ids) -> np.ndarray:
+    """Vertices of each receiver's near triangles (their distinct corners): the rows
+    :func:`near_field_operator` makes per receiver."""
+    counts = np.zeros(receivers.shape[0], dtype=np.int64)
+    stamps = np.full((thread_count(), int(triangles.max(initial=0)) + 1), -1, dtype=np.int64)
+    for_ranges(_operator_counts, receivers.shape[0], triangles, receivers, offsets, triangle_ids, stamps, counts)
+    return counts
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _operator_counts(worker, lo, hi, triangles, receivers, offsets, triangle_ids, stamps, counts):
+    """Distinct corners of each receiver's near triangles (receivers ``lo .. hi - 1``)."""
+    owner = stamps[worker]
+    for r in range(lo, hi):
+        listed = 0
+        for k in range(offsets[r], offsets[r + 1]):
+            for corner in range(3):
+                v = triangles[triangle_ids[k], corner]
+                if owner[v] != r:
+                    owner[v] = r
+                    listed += 1
+        counts[r] = listed
+
+
+@numba.njit(cache=True, inline="always", fastmath=True)
+def _add_point(
+    model, points, normals, vertex_areas, tri, b0, b1, b2, weight, xo, no, params, dirs, pinv, work, slot, scratch, out
+):
+    """Add the coefficients (:func:`~translucency.scatter.kernels.fitted_pairs` with ``dirs, pinv``) of the
+    point with barycentric ``b`` of ``tri``, times ``weight`` (mm^2), to its corners' rows of ``out``
+    (``slot``: each vertex's row), shared by ``b_k / A_k``."""
+    i0, i1, i2 = tri[0], tri[1], tri[2]
+    x0 = b0 * points[i0, 0] + b1 * points[i1, 0] + b2 * points[i2, 0]
+    x1 = b0 * points[i0, 1] + b1 * points[i1, 1] + b2 * points[i2, 1]
+    x2 = b0 * points[i0, 2] + b1 * points[i1, 2] + b2 * points[i2, 2]
+    m0 = b0 * normals[i0, 0] + b1 * normals[i1, 0] + b2 * normals[i2, 0]
+    m1 = b0 * normals[i0, 1] + b1 * normals[i1, 1] + b2 * normals[i2, 1]
+    m2 = b0 * normals[i0, 2] + b1 * normals[i1, 2] + b2 * normals[i2, 2]
+    mn = math.sqrt(m0 * m0 + m1 * m1 + m2 * m2)
+    if mn <= 0.0:
+        m0, m1, m2, mn = 0.0, 0.0, 1.0, 1.0
+    m0, m1, m2 = m0 / mn, m1 / mn, m2 / mn
+    fitted_pairs(
+        model, xo[0] - x0, xo[1] - x1, xo[2] - x2, m0, m1, m2, no[0], no[1], no[2], params, dirs, pinv, work, scratch
+    )
+    for corner in range(3):
+        v = tri[corner]
+        share = (b0 if corner == 0 else (b1 if corner == 1 else b2)) * weight
+        if share == 0.0 or vertex_areas[v] <= 0.0:
+            continue
+        share /= vertex_areas[v]
+        row = slot[v]
+        for c in range(params.shape[0]):
+            for t in range(QUADRATIC_TERMS):
+                out[row, c * QUADRATIC_TERMS + t] += share * scratch[c, t]
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _operator_rows(
+    worker,
+    lo,
+    hi,
+    model,
+    points,
+    triangles,
+    triangle_areas,
+    normals,
+    vertex_areas,
+    receivers,
+    offsets,
+    triangle_ids,
+    params,
+    beta,
+    scale_min,
+    diameters,
+    centroids,
+    rule_points,
+    rule_weights,
+    ang_x,
+    ang_w,
+    rad_x,
+    rad_w,
+    dirs_a,
+    pinv_a,
+    dirs_q,
+    pinv_q,
+    stamps,
+    starts,
+    columns,
+    coefs,
+):
+    """Rows of :func:`near_field_operator` for receivers ``lo .. hi - 1``: the near triangles' quadrature
+    less their vertex rule, and the vertex sum's own pairs with the affine fit of the far field replaced by
+    the quadratic one; accumulated in float64, stored as float32."""
+    n_v = points.shape[0]
+    n_c = params.shape[0]
+    width = QUADRATIC_TERMS * n_c
+    n_rule = rule_points.shape[0]
+    owner = stamps[worker, :n_v]
+    slot = stamps[worker, n_v:]
+    stack = np.empty((3 * MAX_DEPTH + 8, 7))
+    cx = np.empty((3, 3))
+    found = np.empty((4**6, 7))
+    own = np.empty((4 * ang_x.shape[0] * rad_x.shape[0], 4))
+    scratch = np.empty((n_c, QUADRATIC_TERMS))
+    work = np.empty((max(dirs_q.shape[0], 9), FIT_WORK_COLUMNS))
+    acc = np.zeros((64, width))
+    for r in range(lo, hi):
+        v_o = receivers[r]
+        xo = points[v_o]
+        no = normals[v_o]
+        size = starts[r + 1] - starts[r]
+        if acc.shape[0] < size:
+            acc = np.zeros((2 * size, width))
+        acc[:size] = 0.0
+        listed = 0
+        for k in range(offsets[r], offsets[r + 1]):
+            tri = triangles[triangle_ids[k]]
+            for corner in range(3):
+                v = tri[corner]
+                if owner[v] != r:
+                    owner[v] = r
+                    slot[v] = listed
+                    columns[starts[r] + listed] = v
+                    listed += 1
+                    # the vertex sum's pair: quadratic fit in, the far field's affine fit out
+                    one = np.array([v, v, v])
+                    _add_point(
+                        model,
                         points,
                         normals,
-                        w12,
-                        phi,
-                        tri,
-                        l0 * p0 + l1 * p1 + l2 * p2,
-                        l0 * q0 + l1 * q1 + l2 * q2,
-                        l0 * r0 + l1 * r1 + l2 * r2,
-                        piece_area * rule_weights[qp],
-                        refined,
-                        refined_weights,
-                        column,
+                        vertex_areas,
+                        one,
+                        1.0,
+                        0.0,
+                        0.0,
+                        vertex_areas[v],
+                        xo,
+                        no,
+                        params,
+                        dirs_q,
+                        pinv_q,
+                        work,
+                        slot,
+                        scratch,
+                        acc,
                     )
-                    column += 1
+                    _add_point(
+                        model,
+                        points,
+                        normals,
+                        vertex_areas,
+                        one,
+                        1.0,
+                        0.0,
+                        0.0,
+                        -vertex_areas[v],
+                        xo,
+                        no,
+                        params,
+                        dirs_a,
+                        pinv_a,
+                        work,
+                        slot,
+                        scratch,
+                        acc,
+                    )
+        for k in range(offsets[r], offsets[r + 1]):
+            t = triangle_ids[k]
+            tri = triangles[t]
+            area = triangle_areas[t]
+            for corner in range(3):  # minus the vertex rule: a third of the area at each corner
+                _add_point(
+                    model,
+                    points,
+                    normals,
+                    vertex_areas,
+                    tri,
+                    1.0 if corner == 0 else 0.0,
+                    1.0 if corner == 1 else 0.0,
+                    1.0 if corner == 2 else 0.0,
+                    -area / 3.0,
+                    xo,
+                    no,
+                    params,
+                    dirs_q,
+                    pinv_q,
+                    work,
+                    slot,
+                    scratch,
+                    acc,
+                )
+            corner = _corner_of(tri, v_o)
+            if corner < 0 and _whole(diameters[t], centroids[t], xo, beta, scale_min):
+                for q in range(n_rule):
+                    _add_point(
+                        model,
+                        points,
+                        normals,
+                        vertex_areas,
+                        tri,
+                        rule_points[q, 0],
+                        rule_points[q, 1],
+                        rule_points[q, 2],
+                        area * rule_weights[q],
+                        xo,
+                        no,
+                        params,
+                        dirs_q,
+                        pinv_q,
+                        work,
+                        slot,
+                        scratch,
+                        acc,
+                    )
+                continue
+            n, own, found = _own_points(
+                points,
+                tri,
+                area,
+                corner,
+                xo,
+                beta,
+                scale_min,
+                rule_points,
+                rule_weights,
+                ang_x,
+                ang_w,
+                rad_x,
+                rad_w,
+                stack,
+                cx,
+                found,
+                own,
+            )
+            for j in range(n):
+                _add_point(
+                    model,
+                    points,
+                    normals,
+                    vertex_areas,
+                    tri,
+                    own[j, 0],
+                    own[j, 1],
+                    own[j, 2],
+                    own[j, 3],
+                    xo,
+                    no,
+                    params,
+                    dirs_q,
+                    pinv_q,
+                    work,
+                    slot,
+                    scratch,
+                    acc,
+                )
+        for i in range(size):
+            for j in range(width):
+                coefs[starts[r] + i, j] = acc[i, j]

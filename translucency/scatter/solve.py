@@ -20,6 +20,11 @@ Methods for the far field (each with a tolerance where it has one):
     seen from the receiver, and farther than a reduced mean free path, is replaced by one aggregated
     source (Jensen & Buhler 2002, docs/physics.md §8.3). Nothing is skipped by distance: far clusters are
     cheap, and the far side of an object gets all its ``B`` from them.
+``relight``
+    the ``tree``'s sums and the near field written once as linear operators on the incident flux
+    (:mod:`translucency.scatter.relight`, docs/physics.md §8.7), kept on the surface
+    (:meth:`SurfaceGeometry.relight_operator`) and applied to every later light: slow to prepare, then
+    a sparse product per light.
 
 ``tol`` bounds the relative error of ``B`` per receiver against ``exact`` at the 99th percentile over the
 receivers whose ``B`` is at least :data:`TOL_FLOOR` of the largest in its channel (docs/physics.md §8.5).
@@ -186,6 +191,30 @@ class SurfaceGeometry:
             ordered._cache["ordered"] = (ordered, identity, identity)  # already ordered
             self._cache["ordered"] = (ordered, order, rank)
         return self._cache["ordered"]
+
+    def relight_operator(self, medium, model, tol, *, memory_limit=None, time_limit=None, progress=None):
+        """The relighting operators of this (spatially ordered) surface for the medium, model and ``tol``
+        (:func:`translucency.scatter.relight.prepare`): ``(operator, reused)``. One set is kept: another
+        medium, model or ``tol`` replaces it (its memory is freed before the new one is made).
+
+        Raises :class:`~translucency.errors.BudgetError` before preparing when the operators' memory
+        (counted by :func:`~translucency.scatter.relight.operator_bytes`) or time is over budget."""
+        from . import relight
+
+        key = relight.operator_key(medium, model, tol)
+        held = self._cache.get("relight")
+        if held is not None and held.key == key:
+            return held, True
+        self._cache.pop("relight", None)
+        del held
+        radius = near_radius(self, medium)
+        size, counts = relight.operator_bytes(self, medium, tol, radius)
+        plan = relight_plan(size, counts, memory_limit, time_limit)
+        if not plan.fits:
+            raise BudgetError(over_budget_sentence(plan, self.n_vertices), plan)
+        operator = relight.prepare(self, medium, model, tol, radius, NEAR_BETA, progress)
+        self._cache["relight"] = operator
+        return operator, False
 
     def near_lists(self, receivers: np.ndarray, radius: float):
         """Near triangles of each receiver (CSR), cached per (receivers, radius)."""
@@ -415,11 +444,11 @@ def solve(
         Coefficients in 1/mm.
     model : {"directional", "standard", "better"}
         The BSSRDF (FHK14, Jensen 2001, d'Eon 2012).
-    method : {"exact", "cutoff", "tree"}
+    method : {"exact", "cutoff", "tree", "relight"}
         How the far field is summed (module docstring); ``exact`` by default (the reference).
     tol : float
-        Relative error of ``B`` allowed per receiver against ``exact`` (``cutoff``, ``tree``; docs/physics.md
-        §8.5: at the 99th percentile over the receivers whose ``B`` is at least :data:`TOL_FLOOR` of the
+        Relative error of ``B`` allowed per receiver against ``exact`` (``cutoff``, ``tree``, ``relight``;
+        docs/physics.md §8.5: at the 99th percentile over the receivers whose ``B`` is at least :data:`TOL_FLOOR` of the
         largest in its channel), in (0, 1); ignored by ``exact``; 1e-3 by default.
     receivers : array_like of int, optional
         Vertices to compute ``B`` at (all by default).
@@ -454,6 +483,8 @@ def solve(
     start = time.perf_counter()
     work = _ordered_work(geometry, phi, w12, medium, model, receivers, stats)
     timings["setup"] = time.perf_counter() - start
+    if method == "relight":
+        return _relit(work, receivers, tol, memory_limit, time_limit, report, stats, timings)
 
     start = time.perf_counter()
     plan, near_args, radius, far_field = _plan(work, method, tol, memory_limit, time_limit, stats)
@@ -481,6 +512,42 @@ def solve(
     report("near field", 1.0)
     settings = {"model": model, "method": method, "tol": tol, "medium": medium.describe()}
     return Solution(B=B, receivers=receivers, stats=stats, timings=timings, settings=settings)
+
+
+def _relit(work, receivers, tol, memory_limit, time_limit, report, stats, timings) -> Solution:
+    """Method ``relight``: the surface's prepared operators (made on first use, kept for later calls with the
+    same medium, model and ``tol``) applied to this light; nothing is prepared when no light enters."""
+    settings = {"model": work.model, "method": "relight", "tol": tol, "medium": work.medium.describe()}
+    stats["pairs_skipped"] = 0
+    if work.lit.size == 0:
+        stats["pairs_evaluated"] = 0
+        return Solution(np.zeros((work.inner.size, work.medium.n_channels)), receivers, stats, timings, settings)
+    start = time.perf_counter()
+    operator, reused = work.geometry.relight_operator(
+        work.medium, work.model, tol, memory_limit=memory_limit, time_limit=time_limit, progress=report
+    )
+    timings["prepare"] = 0.0 if reused else time.perf_counter() - start
+    start = time.perf_counter()
+    B = operator.apply(work.geometry.vertex_areas, work.phi, work.w12)[work.inner]
+    timings["apply"] = time.perf_counter() - start
+    stats.update(operator.stats)
+    stats["operators_reused"] = reused
+    stats["pairs_evaluated"] = operator.stats["far_entries"] + operator.stats["near_entries"]
+    B = _assembled(B, np.zeros_like(B), work.visit, stats)
+    return Solution(B=B, receivers=receivers, stats=stats, timings=timings, settings=settings)
+
+
+def relight_plan(size: float, counts: dict, memory_limit, time_limit) -> budget.SolveEstimate:
+    """The budget plan of preparing relighting operators of ``size`` bytes (their entry ``counts``)."""
+    import numba
+
+    from .relight import FAR_ENTRY_SECONDS, NEAR_ENTRY_SECONDS
+
+    threads = max(1, numba.get_num_threads())
+    seconds = (counts["far_entries"] * FAR_ENTRY_SECONDS + counts["near_entries"] * NEAR_ENTRY_SECONDS) / threads
+    budget_bytes = budget.memory_budget(memory_limit, budget.available_memory(), budget.resident_memory())
+    fits = (budget_bytes is None or size <= budget_bytes) and (time_limit is None or seconds <= time_limit)
+    return budget.SolveEstimate(0.0, size, 0.0, 0.0, True, 0, 0.0, 0.0, size, seconds, budget_bytes, time_limit, fits)
 
 
 def _checked_inputs(geometry, phi, w12, medium, model, method, tol, receivers, memory_limit, time_limit):

@@ -17,13 +17,17 @@ solve):
   sample (GGX, roughness ``alpha``; :func:`translucency.scatter.outgoing.specular_radiance`, §5.5), with
   the same Embree shadows as the solve. Point lights give no highlight.
 
-Interactive resolution. Every change re-solves on the one ``Scene`` (geometry, Embree scene and
+Interactive resolution. By default (:data:`VIEWER_METHOD`, :data:`VIEWER_TOL`) every change relights every
+vertex with the operators the ``Scene``'s surface keeps (prepared on the first solve and after a change of
+material or model, with a note in the status while that runs; a proxy only where they would not fit the
+memory budget). With another method, every change re-solves on the one ``Scene`` (geometry, Embree scene and
 visibility are reused) on a proxy of about :data:`INTERACTIVE_VERTICES` vertices
 (:func:`interactive_edge_length`), interpolated back to every vertex: small enough to answer in a
 fraction of a second, fine enough that the error stays at a few percent away from the shadow
 terminator, which the proxy moves by up to an edge (single vertices just past it can be many times
 too bright). The measurements behind the default are in bench/README.md ("Interactive proxy").
-:meth:`ViewerState.solve_full` solves what is shown on every vertex.
+:meth:`ViewerState.solve_full` solves what is shown on every vertex (with ``relight``: by ``tree`` at the
+default tolerance, the accurate answer).
 
 False colour. Instead of ``sRGB(exposure L)`` the viewer can show one number per vertex in physical
 units, W/(m² sr) per W/m² of irradiance: the luminance ``Y`` of what is shown (or one channel), on a
@@ -44,7 +48,7 @@ import numpy as np
 
 from ...errors import InvalidParameterError
 from ...scatter.budget import DEFAULT_TIME_LIMIT_S
-from ...scatter.names import DEFAULT_BOUNCES, DEFAULT_METHOD, DEFAULT_MODEL, DEFAULT_TOL
+from ...scatter.names import DEFAULT_BOUNCES, DEFAULT_MODEL, DEFAULT_TOL, VIEWER_METHOD, VIEWER_TOL
 from ..display import (
     FALSE_COLOUR_QUANTITIES,
     FALSE_COLOUR_SCALES,
@@ -144,7 +148,8 @@ class ViewerState:
     model, method, tol, per_direction, bounces, memory_limit, time_limit
         Passed to :meth:`Scene.shade <translucency.app.pipeline.Scene.shade>` (GB, seconds).
     resolution : "interactive", "full", "auto" or float
-        Where ``B`` is computed on a change: ``"interactive"`` (default) is a proxy of about
+        Where ``B`` is computed on a change: ``"interactive"`` (default) is every vertex with ``relight``
+        (a proxy where its operators would not fit the memory budget), otherwise a proxy of about
         :data:`INTERACTIVE_VERTICES` vertices (:func:`interactive_edge_length`); the others are the
         pipeline's (a number is a proxy edge length in mm).
     shadows : bool
@@ -174,8 +179,8 @@ class ViewerState:
         lights=None,
         *,
         model=DEFAULT_MODEL,
-        method=DEFAULT_METHOD,
-        tol=DEFAULT_TOL,
+        method=VIEWER_METHOD,
+        tol=VIEWER_TOL,
         resolution="interactive",
         shadows=True,
         per_direction=False,
@@ -219,6 +224,7 @@ class ViewerState:
         self.name = name or (Path(mesh.source).stem if mesh.source is not None else "scan")
         self.medium = settings.material
         self.model, self.method, self.tol = model, method, float(tol)
+        self._relight_tol = self.tol
         self.resolution = resolution
         self.per_direction = bool(per_direction)
         self.bounces = settings.bounces
@@ -246,6 +252,8 @@ class ViewerState:
         self.solve_seconds = 0.0
         self.n_solves = 0
         self.status = ""
+        #: Called with no argument when :attr:`status` changes during a solve (a window redraws it).
+        self.notify = None
         self._highlight_inputs = None
         if solve:
             self.solve()
@@ -375,8 +383,17 @@ class ViewerState:
         return moved and (self.view_dependent or self.specular)
 
     def solve_full(self) -> None:
-        """Solve the current state on every vertex of the mesh (slow; see the module docstring)."""
-        self.solve("full")
+        """Solve the current state on every vertex of the mesh (slow; see the module docstring): with
+        ``relight``, by ``tree`` at the default tolerance."""
+        if self.method != "relight":
+            self.solve("full")
+            return
+        self.method, self.tol = "tree", DEFAULT_TOL
+        try:
+            self.solve("full")
+        finally:
+            self.method, self.tol = "relight", self._relight_tol
+            self.update_status()
 
     def solve(self, resolution=None) -> None:
         """Solve the current settings on :attr:`scene`, at ``resolution`` (default: the state's own).
@@ -385,11 +402,11 @@ class ViewerState:
         :attr:`n_solves`, and fixes the exposure from the first solve when none was given.
         """
         if resolution is None:
-            resolution = (
-                interactive_edge_length(self.scene.mesh, self.medium)
-                if self.resolution == "interactive"
-                else self.resolution
-            )
+            resolution = self.resolution
+            if resolution == "interactive":
+                resolution = (
+                    "full" if self.method == "relight" else interactive_edge_length(self.scene.mesh, self.medium)
+                )
         start = time.perf_counter()
         self.result = self.scene.shade(
             self.medium,
@@ -401,6 +418,7 @@ class ViewerState:
             exposure=self.exposure,
             per_direction=self.per_direction,
             bounces=self.bounces,
+            progress=self._progress,
             **self.limits,
         )
         self.solve_seconds = time.perf_counter() - start
@@ -459,6 +477,16 @@ class ViewerState:
         """Title of the false colour's colour bar: quantity, unit and scale."""
         return false_colour_label(self.false_colour_quantity, self.false_colour_scale)
 
+    def _progress(self, stage: str, fraction: float) -> None:
+        """A solve's progress: a note while the relighting operators are prepared (:attr:`notify` shows it)."""
+        if stage == "relight operators" and fraction == 0.0:
+            self.add_note(
+                f"preparing the relighting operators for {self.medium.name} on {self.scene.mesh.n_points:,} vertices "
+                "(once per material and model; about half a minute per 30,000 vertices)..."
+            )
+            if self.notify is not None:
+                self.notify()
+
     def update_status(self) -> None:
         """Write :attr:`status` from the current state (three lines: material and size, light, last solve)."""
         result = self.result
@@ -471,6 +499,9 @@ class ViewerState:
             else f"light azimuth {self.azimuth:.0f} deg, elevation {self.elevation:.0f} deg; "
         )
         tolerance = "exact sum" if self.method == "exact" else f"tolerance {self.tol:.3g}"
+        prepared = result.timings.get("solve_prepare", 0.0)
+        if self.method == "relight" and prepared:
+            tolerance += f" (operators prepared in {prepared:.0f} s, once)"
         self.status = (
             f"{self.medium.name}, {self.model} dipole, {size:.3g} mm ({self.mm_per_unit:.4g} mm per unit), "
             f"up {self.up_axis}\n"

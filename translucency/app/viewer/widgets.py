@@ -37,7 +37,7 @@ from pathlib import Path
 import numpy as np
 
 from ...scatter.budget import DEFAULT_TIME_LIMIT_S
-from ...scatter.names import DEFAULT_BOUNCES, DEFAULT_METHOD, DEFAULT_MODEL, DEFAULT_TOL
+from ...scatter.names import DEFAULT_BOUNCES, DEFAULT_MODEL, VIEWER_METHOD, VIEWER_TOL
 from ..render import (
     LIGHT_GLYPH_COLOR,
     add_colored_mesh,
@@ -170,8 +170,8 @@ class Viewer:
         lights=None,
         *,
         model=DEFAULT_MODEL,
-        method=DEFAULT_METHOD,
-        tol=DEFAULT_TOL,
+        method=VIEWER_METHOD,
+        tol=VIEWER_TOL,
         resolution="interactive",
         shadows=True,
         per_direction=False,
@@ -237,6 +237,8 @@ class Viewer:
             self.plotter = new_plotter(window_size, off_screen=off_screen)
         #: The renderer that draws the scan (screenshots are its part of the window).
         self.renderer = self.plotter.renderer
+        self._status_actor = None
+        self.state.notify = self._notify
         self.state.solve()
         self.poly = add_colored_mesh(self.plotter, self.base_mesh, self.state.colors(), name="scan")
         self._rgb_actor = self.renderer.actors["scan"]
@@ -263,7 +265,6 @@ class Viewer:
         if camera_direction is None:
             camera_direction = default_camera_direction(self.up_axis)
         self.renderer.camera_position = camera_position(self.poly.center, self.poly.length, camera_direction, self.up)
-        self._status_actor = None
         self._compass = self.compass_arrow = None
         if widgets:
             self._add_widgets()
@@ -422,6 +423,12 @@ class Viewer:
         table.scalar_range = (low, high)
         self._scalar_bar.SetTitle(self.state.false_colour_title)
 
+    def _notify(self) -> None:
+        """The state's status changed during a solve: show it now (a window that exists already)."""
+        if self._status_actor is not None:
+            self._show_status()
+            self.plotter.render()
+
     def _show_status(self) -> None:
         """The status, wrapped to the strip's width."""
         if self._status_actor is None:
@@ -545,6 +552,8 @@ class Viewer:
         for key in ("material", "model"):  # the title names the choice; the index is no use
             self.widgets[key].GetRepresentation().SetTitleHeight(titled["title_height"])
             self.widgets[key].GetRepresentation().ShowSliderLabelOff()
+        # relighting answers while the slider moves; a full solve when it is let go
+        light_style = {**titled, "interaction_event": "always" if self.state.method == "relight" else "end"}
         if self.state.key_light is not None:
             self.widgets["azimuth"] = plotter.add_slider_widget(
                 lambda a: self.set_light(a, self.elevation),
@@ -553,7 +562,7 @@ class Viewer:
                 title="light azimuth (deg)",
                 fmt="%.0f",
                 **at(3),
-                **titled,
+                **light_style,
             )
             self.widgets["elevation"] = plotter.add_slider_widget(
                 lambda e: self.set_light(self.azimuth, e),
@@ -562,7 +571,7 @@ class Viewer:
                 title="light elevation (deg)",
                 fmt="%.0f",
                 **at(2),
-                **titled,
+                **light_style,
             )
         stops = math.log2(self.exposure)
         self.widgets["exposure"] = plotter.add_slider_widget(

@@ -1,0 +1,146 @@
+"""Relighting operators: their fitted coefficients against the pair kernel, and relit B against direct solves."""
+
+import numba
+import numpy as np
+import pytest
+
+from translucency.errors import BudgetError
+from translucency.geometry.synthetic import icosphere, torus
+from translucency.scatter import kernels
+from translucency.scatter.fresnel import refract
+from translucency.scatter.irradiance import incident_flux
+from translucency.scatter.lights import DirectionalLight, EnvironmentLight, PointLight
+from translucency.scatter.materials import material
+from translucency.scatter.solve import SurfaceGeometry, solve
+from translucency.scatter.visibility import VisibilityCache
+
+MARBLE = material("marble").medium()
+
+
+@numba.njit(cache=True)
+def _fits(model, x, ni, no, params, dirs, pinv, terms):
+    out = np.zeros((params.shape[0], terms))
+    work = np.empty((max(dirs.shape[0], 9), kernels.FIT_WORK_COLUMNS))
+    kernels.fitted_pairs(
+        model, x[0], x[1], x[2], ni[0], ni[1], ni[2], no[0], no[1], no[2], params, dirs, pinv, work, out
+    )
+    return out
+
+
+def _monomials(w):
+    return np.array([1.0, *w, w[0] ** 2, w[1] ** 2, w[2] ** 2, w[0] * w[1], w[0] * w[2], w[1] * w[2]])
+
+
+def _random_pairs(rng, distance, count=200):
+    """Receivers near a gently curved surface at ``distance`` mm from the source, lit from random directions
+    above the source (the refracted direction of docs/physics.md §3.2)."""
+    for _ in range(count):
+        ni = np.array([0.0, 0.0, 1.0]) + 0.1 * rng.normal(size=3)
+        no = np.array([0.0, 0.0, 1.0]) + 0.1 * rng.normal(size=3)
+        ni, no = ni / np.linalg.norm(ni), no / np.linalg.norm(no)
+        x = rng.normal(size=3) * (1.0, 1.0, 0.1)
+        x *= distance / np.linalg.norm(x)
+        light = rng.normal(size=3)
+        light[2] = abs(light[2])
+        light /= np.linalg.norm(light)
+        if light @ ni > 0.05:
+            yield x, ni, no, refract(light, ni, MARBLE.eta)
+
+
+@pytest.mark.parametrize(
+    "terms, distance, bound",
+    [
+        (kernels.AFFINE_TERMS, 2.0, 0.01),
+        (kernels.AFFINE_TERMS, 20.0, 0.004),
+        (kernels.QUADRATIC_TERMS, 1.0, 0.01),
+        (kernels.QUADRATIC_TERMS, 5.0, 0.002),
+    ],
+)
+def test_fitted_coefficients_follow_the_pair_kernel_over_refracted_directions(terms, distance, bound):
+    # measured (docs/physics.md §8.7): affine p99 0.45 % at 2 mm, 0.15 % at 20 mm; quadratic 0.49 % at 1 mm
+    params = kernels.channel_parameters(MARBLE.sigma_a, MARBLE.sigma_s, MARBLE.g, MARBLE.eta, "directional")
+    dirs, pinv = kernels.fit_directions(MARBLE.eta, terms)
+    errors = []
+    for x, ni, no, w in _random_pairs(np.random.default_rng(7), distance):
+        exact = kernels.model_pairs(0, np.zeros((1, 3)), ni[None], w[None], x[None], no[None], params)[0]
+        if np.all(exact > 0):
+            fitted = _fits(0, x, ni, no, params, dirs, pinv, terms) @ _monomials(w)[:terms]
+            errors.append(np.max(np.abs(fitted / exact - 1.0)))
+    assert len(errors) > 100
+    assert np.percentile(errors, 99) < bound
+
+
+@pytest.mark.parametrize("model", ["standard", "better"])
+def test_radial_models_fit_exactly_with_no_direction_terms(model):
+    params = kernels.channel_parameters(MARBLE.sigma_a, MARBLE.sigma_s, MARBLE.g, MARBLE.eta, model)
+    dirs, pinv = kernels.fit_directions(MARBLE.eta, kernels.QUADRATIC_TERMS)
+    x, ni, no = np.array([1.5, -0.4, 0.1]), np.array([0.0, 0.0, 1.0]), np.array([0.0, 0.1, 0.995])
+    code = kernels.MODELS[model]
+    fitted = _fits(code, x, ni, no, params, dirs, pinv, kernels.QUADRATIC_TERMS)
+    exact = kernels.model_pairs(code, np.zeros((1, 3)), ni[None], -ni[None], x[None], no[None], params)[0]
+    np.testing.assert_allclose(fitted[:, 0], exact, rtol=1e-12)
+    assert np.all(fitted[:, 1:] == 0.0)
+
+
+def _surface(points, triangles):
+    from translucency.geometry.mesh import TriangleMesh
+
+    mesh = TriangleMesh(points, triangles)
+    return mesh, SurfaceGeometry(mesh.points, mesh.triangles, mesh.vertex_normals())
+
+
+def _per_vertex_error(B, reference):
+    """The error tol bounds (docs/physics.md §8.5): |B / B_ref - 1| over vertices with B_ref >= 1e-4 max."""
+    keep = reference >= 1e-4 * reference.max(axis=0)
+    return np.abs(B - reference)[keep] / reference[keep]
+
+
+LIGHTS = {
+    "directional": DirectionalLight((0.3, 0.5, 0.8), 1.0),
+    "point": PointLight((25.0, -10.0, 30.0), 1.0),
+    "environment": EnvironmentLight(radiance_rgb=(0.3, 0.3, 0.3), n_directions=24),
+}
+
+
+@pytest.mark.parametrize("light", sorted(LIGHTS))
+def test_relit_B_matches_a_direct_solve_within_tol(light):
+    mesh, geometry = _surface(*torus(20.0, 8.0, 48, 24))  # shadows of its own, 1152 vertices
+    incident = incident_flux(
+        geometry.points,
+        geometry.normals,
+        geometry.vertex_areas,
+        [LIGHTS[light]],
+        MARBLE.eta,
+        triangles=mesh.triangles,
+        cache=VisibilityCache(),
+    )
+    reference = solve(geometry, incident.phi_rgb, incident.w12, MARBLE, method="exact").B
+    relit = solve(geometry, incident.phi_rgb, incident.w12, MARBLE, method="relight", tol=0.01)
+    assert np.percentile(_per_vertex_error(relit.B, reference), 99) < 0.01
+
+
+def test_operators_are_prepared_once_and_a_new_material_replaces_them():
+    _, geometry = _surface(*icosphere(3, 10.0))
+    lights = [np.array(d, dtype=float) for d in ((0, 0, 1), (1, 0, 0), (0.6, 0.0, -0.8))]
+    first = None
+    for k, direction in enumerate(lights):
+        phi = np.repeat(np.clip(geometry.normals @ direction, 0.0, None)[:, None], 3, axis=1)
+        w12 = refract(np.broadcast_to(direction, geometry.normals.shape), geometry.normals, MARBLE.eta)
+        relit = solve(geometry, phi, w12, MARBLE, method="relight", tol=0.03)
+        assert relit.stats["operators_reused"] == (k > 0)
+        assert (relit.timings["prepare"] > 0) == (k == 0)
+        first = first or relit
+        # a tree solve in between keeps them
+        solve(geometry, phi, w12, MARBLE, method="tree", tol=0.03)
+    milk = material("skim_milk").medium()
+    other = solve(geometry, phi, w12, milk, method="relight", tol=0.03)
+    assert not other.stats["operators_reused"]
+    assert not solve(geometry, phi, w12, MARBLE, method="relight", tol=0.03).stats["operators_reused"]
+
+
+def test_operators_over_the_memory_budget_are_refused_before_they_are_made():
+    _, geometry = _surface(*icosphere(3, 10.0))
+    phi = np.ones((geometry.n_vertices, 3))
+    with pytest.raises(BudgetError, match="memory"):
+        solve(geometry, phi, -geometry.normals, MARBLE, method="relight", tol=0.01, memory_limit=1e-4)
+    assert "relight" not in geometry.spatial_order()[0]._cache
