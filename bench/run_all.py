@@ -11,6 +11,7 @@ scaling.py          time and memory from 10k to 1M vertices; the 1M bake      al
 stability.py        the solver's stability at extreme inputs                  when the file exists
 first_run.py        cold (empty numba cache) and warm times of the commands   always (last)
 validate_models.py  the diffusion models against Monte Carlo (slow)           with ``--validate``
+relight.py          relighting: preparation, time per light, error (slow)     with ``--validate``
 =================== ========================================================= ==================
 
 Each script writes its JSON, Markdown tables and PNG plots into ``bench/results`` (with ``--quick``:
@@ -45,6 +46,7 @@ SUITE = [
     ("stability", "stability.py", ["--blocks", "256", "--out", "bench/results/tmp"], False, False),
     ("validate_models", "validate_models.py", ["--quick"], False, True),
     ("first_run", "first_run.py", ["--quick"], True, False),
+    ("relight", "relight.py", ["--quick"], False, True),
 ]
 
 
@@ -76,6 +78,26 @@ def fastest_within(rows, scan, error):
             if r["material"] not in best or r["seconds"] < best[r["material"]]["seconds"]:
                 best[r["material"]] = r
     return best
+
+
+def relight_goal(results) -> str:
+    """The relighting goal's row: on the default bunny, a new light in <= 33 ms at <= 1 % (99th percentile
+    against ``tree`` at 1e-3), after a preparation of <= 5 s and <= 1 GB (``relight.json``)."""
+    goal = "default bunny: a new light ≤ 33 ms at ≤ 1 % (p99), prepared in ≤ 5 s, ≤ 1 GB"
+    path = results / "relight.json"
+    rows = json.loads(path.read_text())["rows"] if path.exists() else []
+    within = [
+        r for r in rows if r["scan"] == "bunny (default)" and "refused" not in r and r["p99_vs_tree_1e-3"] <= 0.01
+    ]
+    if not within:
+        return f"| {goal} | not measured | |"
+    parts = [
+        f"{r['material']} tol {r['tol']:g}: {1000 * r['relight_s']:.0f} ms, {100 * r['p99_vs_tree_1e-3']:.2f} %, "
+        f"prepared in {r['prepare_s']:.0f} s, {r['operator_gb']:.1f} GB"
+        for r in within
+    ]
+    ok = all(r["relight_s"] <= 0.033 and r["prepare_s"] <= 5 and r["operator_gb"] <= 1 for r in within)
+    return f"| {goal} | {'; '.join(parts)} | {'met' if ok else 'missed'} |"
 
 
 def goals_markdown(results):
@@ -112,6 +134,7 @@ def goals_markdown(results):
     else:
         status = bakes[0]["status"] if bakes else "not measured"
         lines.append(f"| 1M-vertex bake ≤ {GOALS['bake_1M']:g} s at ≤ 1 % | {status} | {'missed' if bakes else ''} |")
+    lines.append(relight_goal(results))
     lines.append("")
     lines.append(
         "Times are wall times on the machine of the run; the load average in each table shows how much "
@@ -126,7 +149,7 @@ def main(argv=None):
     parser.add_argument(
         "--quick", action="store_true", help="a smoke run: small sizes, into results/tmp, README untouched"
     )
-    parser.add_argument("--validate", action="store_true", help="also run validate_models.py (slow)")
+    parser.add_argument("--validate", action="store_true", help="also run validate_models.py and relight.py (slow)")
     parser.add_argument("--only", nargs="+", choices=[name for name, *_ in SUITE], help="run only these scripts")
     parser.add_argument("--repeats", type=int, help="timed warm runs per setting for solver.py and scaling.py")
     parser.add_argument("--no-readme", action="store_true", help="leave bench/README.md as it is")
@@ -143,7 +166,7 @@ def main(argv=None):
         if args.tables_only or (args.only and name not in args.only):
             continue
         if optional and not args.validate and not (args.only and name in args.only):
-            print(f"== {script}: skipped (slow; run it with --validate)")
+            print(f"== {script}: skipped (slow; run it with --validate or --only {name})")
             continue
         if not (BENCH / script).exists():
             print(f"== {script}: skipped (bench/{script} does not exist in this checkout)")

@@ -119,3 +119,19 @@ def test_a_tiny_object_gets_a_proxy_it_allows_and_a_given_edge_too_coarse_is_one
     message = str(info.value)
     assert "--resolution 1.66" in message and "pass --resolution below" in message and "--unit" in message
     assert "target_edge_length" not in message
+
+
+def test_a_scene_relights_with_operators_it_prepares_once_and_matches_an_exact_solve():
+    from translucency.geometry.synthetic import torus
+
+    mesh = TriangleMesh(*torus(20.0, 8.0, 48, 24))  # shadows and bounces of its own
+    scene = Scene(mesh)
+    first = scene.shade("marble", DirectionalLight((0.3, 0.5, 0.8), 1.0), method="relight", tol=0.01)
+    assert "relight operators" not in first.stats["reused"] and first.timings["solve_prepare"] > 0
+    light = DirectionalLight((-0.7, 0.2, 0.4), 1.0)
+    moved = scene.shade("marble", light, method="relight", tol=0.01)  # the bounce relights with them too
+    assert "relight operators" in moved.stats["reused"] and moved.timings["solve_prepare"] == 0
+    assert moved.stats["bounces"]["bounces"] == 1
+    exact = scene.shade("marble", light, method="exact").B
+    keep = exact >= 1e-4 * exact.max(axis=0)
+    assert np.percentile(np.abs(moved.B - exact)[keep] / exact[keep], 99) < 0.01

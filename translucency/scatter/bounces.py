@@ -48,6 +48,8 @@ from .visibility import Occluder
 __all__ = [
     "GATHER_RAYS",
     "Bounces",
+    "GatherPaths",
+    "gather_paths",
     "ReenteringLight",
     "cosine_directions",
     "gather_exitance",
@@ -181,7 +183,79 @@ def _unit_normals(normals):
     return normals / np.where(length > 1e-12, length, 1.0), length[:, 0] > 1e-12
 
 
-def gather_exitance(occluder: Occluder, points, normals, triangles, B, eta, *, rays: int = GATHER_RAYS, seed=SEED):
+@dataclass(frozen=True)
+class GatherPaths:
+    """The gather's rays that bring light (:func:`gather_paths`): geometry only, so the same for every ``B``.
+
+    Attributes
+    ----------
+    origin : (k,) int64
+        The vertex each ray starts from (and brings light to).
+    corners : (k, 3) int64
+        The vertices of the triangle it meets.
+    weights : (k, 3) float64
+        Their barycentric weights times ``(pi / K) T12(n_p . w_k) T21(n_h . -w_k)``: the flux density the
+        ray brings in per unit ``B`` at each corner, 1.
+    w12 : (k, 3) float64
+        The ray's refracted direction at the origin (unit, into the medium).
+    stats : dict
+        Counts of rays, hits and back faces.
+    """
+
+    origin: np.ndarray
+    corners: np.ndarray
+    weights: np.ndarray
+    w12: np.ndarray
+    stats: dict
+
+
+def gather_paths(occluder: Occluder, points, normals, triangles, eta, *, rays: int = GATHER_RAYS, seed=SEED):
+    """The rays of :func:`gather_exitance` (``K = rays`` cosine-weighted directions per vertex, turned per
+    vertex by ``seed``) that meet a front face, with what each brings per unit ``B``: a :class:`GatherPaths`.
+    Geometry and ``eta`` only: :func:`solve_bounces` keeps them with the surface (``SurfaceGeometry.kept``)."""
+    points = np.asarray(points, dtype=np.float64)
+    normals, usable = _unit_normals(normals)
+    triangles = np.asarray(triangles, dtype=np.int64)
+    n = points.shape[0]
+    offsets = np.random.default_rng(seed).random((n, 2))
+    parts = {"origin": [], "corners": [], "weights": [], "w12": []}
+    stats = {"rays": 0, "hits": 0, "back_faces": 0}
+    receivers = np.flatnonzero(usable)
+    block = max(1, RAYS_PER_BLOCK // rays)
+    for start in range(0, receivers.size, block):
+        these = receivers[start : start + block]
+        directions = cosine_directions(normals[these], rays, offsets[these]).reshape(-1, 3)
+        origin = np.repeat(these, rays)
+        hits = occluder.intersect(points[origin], normals[origin], directions)
+        stats["rays"] += int(origin.size)
+        hit = np.flatnonzero(hits.triangle >= 0)  # only these are interpolated
+        hits = type(hits)(*(part[hit] for part in hits))
+        directions, origin = directions[hit], origin[hit]
+        corners, weights, hit_normal = _at_hits(triangles, normals, hits)
+        cos_out = -np.einsum("kc,kc->k", hit_normal, directions)
+        front = cos_out > 0.0
+        stats["hits"] += int(hit.size)
+        stats["back_faces"] += int(np.count_nonzero(~front))
+        directions, origin, corners, weights = directions[front], origin[front], corners[front], weights[front]
+        cos_in = np.einsum("kc,kc->k", normals[origin], directions)
+        factor = (np.pi / rays) * fresnel_transmittance(cos_in, eta) * fresnel_transmittance(cos_out[front], eta)
+        parts["origin"].append(origin)
+        parts["corners"].append(corners)
+        parts["weights"].append(weights * factor[:, None])
+        parts["w12"].append(refract(directions, normals[origin], eta))
+    empty = {"origin": (0,), "corners": (0, 3), "weights": (0, 3), "w12": (0, 3)}
+    joined = {
+        key: np.concatenate(value)
+        if value
+        else np.zeros(empty[key], dtype=np.int64 if key in ("origin", "corners") else float)
+        for key, value in parts.items()
+    }
+    return GatherPaths(**joined, stats=stats)
+
+
+def gather_exitance(
+    occluder: Occluder, points, normals, triangles, B, eta, *, rays: int = GATHER_RAYS, seed=SEED, paths=None
+):
     """Flux density of the subsurface exitance that reaches each vertex and enters there (docs/physics.md §7.4).
 
     ``phi_p = (pi / K) sum_k T12(n_p . w_k, eta) T21(n_h . -w_k, eta) B(h_k)`` with ``K = rays``
@@ -207,6 +281,8 @@ def gather_exitance(occluder: Occluder, points, normals, triangles, B, eta, *, r
         Rays per vertex, ``K``.
     seed : int
         Seed of the per-vertex rotations.
+    paths : GatherPaths, optional
+        The rays already traced (:func:`gather_paths` of the same mesh, ``eta``, ``rays`` and ``seed``).
 
     Returns
     -------
@@ -214,44 +290,19 @@ def gather_exitance(occluder: Occluder, points, normals, triangles, B, eta, *, r
         ``phi`` (n, C) in W/m²; ``weighted_w12`` (n, 3) the refracted directions summed with the channel
         sum of their flux density as weight (not normalised); ``stats`` counts of rays, hits, back faces.
     """
-    points = np.asarray(points, dtype=np.float64)
-    normals, usable = _unit_normals(normals)
-    triangles = np.asarray(triangles, dtype=np.int64)
+    if paths is None:
+        paths = gather_paths(occluder, points, normals, triangles, eta, rays=rays, seed=seed)
     B = np.asarray(B, dtype=np.float64)
     n, channels = B.shape
-    offsets = np.random.default_rng(seed).random((n, 2))
+    entering = np.einsum("kj,kjc->kc", paths.weights, B[paths.corners])
     phi = np.zeros((n, channels))
     weighted_w12 = np.zeros((n, 3))
-    stats = {"rays": 0, "hits": 0, "back_faces": 0}
-    receivers = np.flatnonzero(usable)
-    block = max(1, RAYS_PER_BLOCK // rays)
-    for start in range(0, receivers.size, block):
-        these = receivers[start : start + block]
-        directions = cosine_directions(normals[these], rays, offsets[these]).reshape(-1, 3)
-        origin = np.repeat(these, rays)
-        hits = occluder.intersect(points[origin], normals[origin], directions)
-        stats["rays"] += int(origin.size)
-        hit = np.flatnonzero(hits.triangle >= 0)  # only these are interpolated
-        hits = type(hits)(*(part[hit] for part in hits))
-        directions, origin = directions[hit], origin[hit]
-        corners, weights, hit_normal = _at_hits(triangles, normals, hits)
-        cos_out = -np.einsum("kc,kc->k", hit_normal, directions)
-        front = cos_out > 0.0
-        stats["hits"] += int(hit.size)
-        stats["back_faces"] += int(np.count_nonzero(~front))
-        if not np.any(front):
-            continue
-        directions, origin, corners, weights = directions[front], origin[front], corners[front], weights[front]
-        radiance = fresnel_transmittance(cos_out[front], eta)[:, None] * np.einsum("kj,kjc->kc", weights, B[corners])
-        cos_in = np.einsum("kc,kc->k", normals[origin], directions)
-        entering = (np.pi / rays) * fresnel_transmittance(cos_in, eta)[:, None] * radiance
-        w12 = refract(directions, normals[origin], eta)
-        weight = entering.sum(axis=1)
-        for c in range(channels):
-            phi[:, c] += np.bincount(origin, weights=entering[:, c], minlength=n)
-        for c in range(3):
-            weighted_w12[:, c] += np.bincount(origin, weights=weight * w12[:, c], minlength=n)
-    return phi, weighted_w12, stats
+    weight = entering.sum(axis=1)
+    for c in range(channels):
+        phi[:, c] = np.bincount(paths.origin, weights=entering[:, c], minlength=n)
+    for c in range(3):
+        weighted_w12[:, c] = np.bincount(paths.origin, weights=weight * paths.w12[:, c], minlength=n)
+    return phi, weighted_w12, dict(paths.stats)
 
 
 #: The mirror reflection draws its light sample for blocks of vertices with this many (vertex, sample) pairs.
@@ -400,14 +451,16 @@ def reentering_light(
     shadows: bool = True,
     rays: int = GATHER_RAYS,
     seed=SEED,
+    paths=None,
 ) -> ReenteringLight:
     """The solver's input for one bounce: the exitance ``T21 B`` gathered (:func:`gather_exitance`)
     plus, when ``lights`` are given, their mirror reflection (:func:`specular_reflection`); the
-    refracted direction is the flux-weighted mean of both (docs/physics.md §7.2, §7.4)."""
+    refracted direction is the flux-weighted mean of both (docs/physics.md §7.2, §7.4); ``paths``: the
+    gather's rays traced before (:func:`gather_paths`)."""
     normals = np.asarray(normals, dtype=np.float64)
     t = time.perf_counter()
     phi, weighted_w12, gather_stats = gather_exitance(
-        occluder, points, normals, triangles, B, eta, rays=rays, seed=seed
+        occluder, points, normals, triangles, B, eta, rays=rays, seed=seed, paths=paths
     )
     stats = {"gather": gather_stats, "seconds": {"gather": time.perf_counter() - t, "specular": 0.0}}
     if lights is not None:
@@ -489,6 +542,14 @@ def solve_bounces(
     mirror = {"reflected_flux": None, "deposited_flux": None}
     for k in range(bounces):
         report("bounces", k / max(bounces, 1))
+        t = time.perf_counter()
+        paths = geometry.kept(  # traced once per surface: every later light reuses them
+            ("gather", float(medium.eta), rays, SEED + k),
+            lambda seed=SEED + k: gather_paths(
+                occluder, geometry.points, geometry.normals, geometry.triangles, medium.eta, rays=rays, seed=seed
+            ),
+        )
+        seconds["gather"] += time.perf_counter() - t
         light = reentering_light(
             occluder,
             geometry.points,
@@ -501,6 +562,7 @@ def solve_bounces(
             shadows=shadows,
             rays=rays,
             seed=SEED + k,
+            paths=paths,
         )
         seconds["gather"] += light.stats["seconds"]["gather"]
         seconds["specular"] += light.stats["seconds"]["specular"]

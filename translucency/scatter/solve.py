@@ -216,6 +216,13 @@ class SurfaceGeometry:
         self._cache["relight"] = operator
         return operator, False
 
+    def kept(self, key, make):
+        """``make()`` once per ``key``, kept with this surface's other caches (work that depends on the geometry
+        and its own settings only, such as the bounce gather's rays of :mod:`translucency.scatter.bounces`)."""
+        if key not in self._cache:
+            self._cache[key] = make()
+        return self._cache[key]
+
     def near_lists(self, receivers: np.ndarray, radius: float):
         """Near triangles of each receiver (CSR), cached per (receivers, radius)."""
         key = ("near", receivers.tobytes() if receivers.size < self.n_vertices else "all", round(radius, 12))
