@@ -23,6 +23,8 @@ Writes ``relight.json`` and ``relight.md`` into ``bench/results`` (``bench/resul
 from __future__ import annotations
 
 import argparse
+import gc
+import json
 import resource
 import statistics
 import sys
@@ -162,11 +164,16 @@ def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="bunny in marble at tol 0.1, two lights")
     parser.add_argument("--scans", nargs="+", choices=list(SCANS), help="scans to run (default: all)")
+    parser.add_argument("--materials", nargs="+", choices=MATERIALS, help="materials to run (default: the plan's)")
+    parser.add_argument("--tols", nargs="+", type=float, help="tolerances to run (default: the plan's)")
+    parser.add_argument("--append", action="store_true", help="add the rows to those of relight.json already there")
     args = parser.parse_args(argv)
     out = output_dir(args.quick)
     info = machine_info()
     plan = {"bunny (default)": (("marble",), (0.1,))} if args.quick else PLAN
-    rows = []
+    previous = out / "relight.json"
+    rows = json.loads(previous.read_text())["rows"] if args.append and previous.exists() else []
+    materials_described = {m: material(m).medium().describe() for m in MATERIALS}
     for scan, (materials, tolerances) in plan.items():
         if args.scans and scan not in args.scans:
             continue
@@ -174,18 +181,16 @@ def main(argv=None):
         if mesh is None:
             print(f"skipping {scan}: {SCANS[scan]} not in ../shared/meshes")
             continue
-        for name in materials:
-            for tol in tolerances:
+        for name in [m for m in materials if not args.materials or m in args.materials]:
+            for tol in [t for t in tolerances if not args.tols or t in args.tols]:
                 lights = LIGHTS[:2] if args.quick or scan != "bunny (default)" else LIGHTS
                 rows.append(run(scan, mesh, name, tol, lights, with_exact=scan == "bunny (default)"))
-    text = table(rows)
-    write_results(
-        out,
-        "relight",
-        {"info": info, "rows": rows, "materials": {m: material(m).medium().describe() for m in MATERIALS}},
-        text,
-    )
-    print(text)
+                gc.collect()  # the Scene's caches hold a cycle: free its operators before the next row
+                # written after every row: a long run that stops keeps what it measured
+                write_results(
+                    out, "relight", {"info": info, "rows": rows, "materials": materials_described}, table(rows)
+                )
+    print(table(rows))
 
 
 if __name__ == "__main__":

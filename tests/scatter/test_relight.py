@@ -144,3 +144,27 @@ def test_operators_over_the_memory_budget_are_refused_before_they_are_made():
     with pytest.raises(BudgetError, match="memory"):
         solve(geometry, phi, -geometry.normals, MARBLE, method="relight", tol=0.01, memory_limit=1e-4)
     assert "relight" not in geometry.spatial_order()[0]._cache
+
+
+def test_fresh_operators_check_their_first_light_and_say_when_the_direction_fit_misses_tol():
+    from translucency.errors import TranslucencyWarning
+
+    mesh, geometry = _surface(*torus(20.0, 8.0, 48, 24))
+    marble = solve(*_lit(mesh, geometry, MARBLE), MARBLE, method="relight", tol=0.01)
+    assert 0 < marble.stats["checked_p99"] < 0.01 and marble.timings["check"] > 0
+    ketchup = material("ketchup").medium()  # reduced albedo 0.02 in blue: S_d far from affine in w12
+    with pytest.warns(TranslucencyWarning, match="relighting operators are .* off a tree solve"):
+        solve(*_lit(mesh, geometry, ketchup), ketchup, method="relight", tol=0.01)
+
+
+def _lit(mesh, geometry, medium):
+    incident = incident_flux(
+        geometry.points,
+        geometry.normals,
+        geometry.vertex_areas,
+        [LIGHTS["directional"]],
+        medium.eta,
+        triangles=mesh.triangles,
+        cache=VisibilityCache(),
+    )
+    return geometry, incident.phi_rgb, incident.w12

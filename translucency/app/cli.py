@@ -252,6 +252,13 @@ def cmd_view(args) -> int:
         )
     if not (0 < args.roughness <= 1):
         raise TranslucencyError(f"--roughness must be a GGX alpha in (0, 1], got {args.roughness!r}.")
+    from ..scatter.names import DEFAULT_METHOD, DEFAULT_TOL, VIEWER_METHOD, VIEWER_TOL
+
+    one_picture = args.screenshot is not None  # no later light to reuse relighting operators for
+    if args.method is None:
+        args.method = DEFAULT_METHOD if one_picture else VIEWER_METHOD
+    if args.tol is None:
+        args.tol = DEFAULT_TOL if one_picture else VIEWER_TOL
     interactive = args.resolution == "interactive"
     settings = solver_settings(args, resolution="full") if interactive else solver_settings(args)
     keywords = settings.solver_keywords()
@@ -439,16 +446,20 @@ def _add_view_and_compare_parsers(sub) -> None:
         "show a scan as a translucent object, with controls that solve again",
         "Open the interactive viewer (sliders for light, material, model, scale and exposure; key s "
         "saves a screenshot and the bake, Return solves on every vertex by tree). Here --method defaults "
-        "to relight at --tol 0.1 (operators prepared once, then every light on every vertex) and "
-        "--resolution to 'interactive': every vertex with relight, a proxy of about 7,500 vertices "
-        "otherwise.",
+        "to relight at --tol 0.1 (operators prepared once, then every light on every vertex; tree at 0.01 "
+        "with --screenshot, one picture) and --resolution to 'interactive': every vertex with relight, a "
+        "proxy of about 7,500 vertices otherwise.",
     )
-    from ..scatter.names import VIEWER_METHOD, VIEWER_TOL
+    from ..scatter.names import DEFAULT_METHOD, DEFAULT_TOL, VIEWER_METHOD, VIEWER_TOL
 
-    p.set_defaults(resolution="interactive", method=VIEWER_METHOD, tol=VIEWER_TOL)
-    for action in p._actions:  # the help says the viewer's own defaults
-        if action.dest in ("method", "tol") and action.help:
-            action.help = action.help.rsplit(" (default", 1)[0] + f" (default {action.default})"
+    # the viewer's own defaults: relight (operators worth preparing for the lights to come), but tree for
+    # --screenshot, which shows one light
+    p.set_defaults(resolution="interactive", method=None, tol=None)
+    own = {"method": (VIEWER_METHOD, DEFAULT_METHOD), "tol": (f"{VIEWER_TOL:g}", f"{DEFAULT_TOL:g}")}
+    for action in p._actions:
+        if action.dest in own and action.help:
+            viewer, screenshot = own[action.dest]
+            action.help = action.help.rsplit(" (default", 1)[0] + f" (default {viewer}; {screenshot} with --screenshot)"
     p.add_argument("--screenshot", metavar="FILE.png", help="render the first picture off-screen to FILE.png and exit")
     p.add_argument("--view-dependent", action="store_true", help="show T21(eta, n.w_o) B toward the camera")
     p.add_argument("--specular", action="store_true", help="add the boundary's specular highlight (GGX)")

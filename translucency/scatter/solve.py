@@ -177,6 +177,9 @@ class SurfaceGeometry:
         neighbours sit close in memory whatever order the mesh came in (subdivided or merged meshes
         append vertices far from their neighbours); ``ordered.points == points[order]``,
         ``rank[order] == arange(n)``. The solver works on it; cached, with its own caches."""
+        if self._cache.get("is_ordered"):  # already ordered (no reference to itself: no cycle to collect)
+            identity = np.arange(self.n_vertices)
+            return self, identity, identity
         if "ordered" not in self._cache:
             order = morton_order(self.points)
             rank = np.empty_like(order)
@@ -187,8 +190,7 @@ class SurfaceGeometry:
             for name, permuted in (("vertex_areas", lambda a: a[order]), ("mean_edge", lambda a: a)):
                 if name in self._cache:  # already computed here: the same surface, relabelled
                     ordered._cache[name] = permuted(self._cache[name])
-            identity = np.arange(order.size)
-            ordered._cache["ordered"] = (ordered, identity, identity)  # already ordered
+            ordered._cache["is_ordered"] = True
             self._cache["ordered"] = (ordered, order, rank)
         return self._cache["ordered"]
 
@@ -537,11 +539,49 @@ def _relit(work, receivers, tol, memory_limit, time_limit, report, stats, timing
     start = time.perf_counter()
     B = operator.apply(work.geometry.vertex_areas, work.phi, work.w12)[work.inner]
     timings["apply"] = time.perf_counter() - start
+    if not reused:  # the operators' first light, checked against a tree solve of it (once per preparation)
+        start = time.perf_counter()
+        operator.stats["checked_p99"] = _checked_against_tree(work, B, tol)
+        timings["check"] = time.perf_counter() - start
     stats.update(operator.stats)
     stats["operators_reused"] = reused
     stats["pairs_evaluated"] = operator.stats["far_entries"] + operator.stats["near_entries"]
     B = _assembled(B, np.zeros_like(B), work.visit, stats)
     return Solution(B=B, receivers=receivers, stats=stats, timings=timings, settings=settings)
+
+
+#: The check of freshly prepared relighting operators solves their first light by ``tree`` at ``tol`` over this.
+RELIGHT_CHECK_TOL_FACTOR = 4.0
+
+
+def _checked_against_tree(work, B, tol) -> float:
+    """The per-vertex error (docs/physics.md §8.5) of relit ``B`` (rows of ``work.inner``) against ``tree`` at
+    ``tol / RELIGHT_CHECK_TOL_FACTOR`` for the same light; a warning (one sentence) when it is above ``tol``:
+    the direction fits of §8.7 follow ``S_d`` less closely for some materials (low albedo) than ``tol``
+    asks."""
+    reference = solve(
+        work.geometry,
+        work.phi,
+        work.w12,
+        work.medium,
+        model=work.model,
+        method="tree",
+        tol=tol / RELIGHT_CHECK_TOL_FACTOR,
+        receivers=work.inner,
+    ).B
+    keep = reference >= TOL_FLOOR * reference.max(axis=0)
+    if not np.any(keep):
+        return 0.0
+    error = float(np.percentile(np.abs(B - reference)[keep] / reference[keep], 99))
+    if error > tol:
+        warnings.warn(
+            f"{work.medium.name}: the relighting operators are {100 * error:.2g} % off a tree solve of the first "
+            f"light at the 99th percentile, over the tolerance of {100 * tol:.2g} % (their fit to the refracted "
+            "direction, docs/physics.md §8.7); solve with method tree where that matters.",
+            TranslucencyWarning,
+            stacklevel=4,
+        )
+    return error
 
 
 def relight_plan(size: float, counts: dict, memory_limit, time_limit) -> budget.SolveEstimate:
