@@ -55,9 +55,10 @@ FAR_ENTRY_BYTES = 2 * AFFINE_TERMS + 1
 NEAR_ENTRY_BYTES = 4 * QUADRATIC_TERMS
 INDEX_BYTES = 4
 #: Seconds per far-field entry and per near-field entry of the preparation on one thread (measured on the
-#: bunny in marble, 2-core machine; the time estimate the budget compares against ``time_limit``).
-FAR_ENTRY_SECONDS = 2.5e-7
-NEAR_ENTRY_SECONDS = 1.0e-5
+#: default bunny in marble, skim milk and ketchup at tol 0.1-0.01 on the 2-core machine: 7-9e-7 and
+#: 2.4-5e-5; the time estimate the budget compares against ``time_limit``).
+FAR_ENTRY_SECONDS = 9e-7
+NEAR_ENTRY_SECONDS = 3e-5
 
 
 @dataclass

@@ -25,7 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
-#: Kernels (module, name) the main job's solve calls (``tree`` method, near field).
+#: Kernels (module, name) the main job's solve calls (``tree`` method, near field) and the viewer's relighting.
 MAIN_JOB_KERNELS = (
     ("translucency.scatter.kernels", "_indexed_rows_directional"),
     ("translucency.scatter.hierarchy", "_traverse"),
@@ -33,9 +33,14 @@ MAIN_JOB_KERNELS = (
     ("translucency.scatter.nearfield", "_fill_shared_points"),
     ("translucency.scatter.nearfield", "_list_points"),
     ("translucency.scatter.nearfield", "_refined_points"),
+    # the viewer's relighting (its default method)
+    ("translucency.scatter.relight", "_fill_coefficients"),
+    ("translucency.scatter.relight", "_apply_quantised"),
+    ("translucency.scatter.relight", "_apply_rows"),
+    ("translucency.scatter.nearfield", "_operator_rows"),
 )
 
-NOTICE = "compiling the solver's kernels (first run only, about 15-30 s) ..."
+NOTICE = "compiling the solver's kernels (first run only, about 15-60 s) ..."
 
 
 @contextlib.contextmanager
@@ -110,12 +115,13 @@ def _plane(n: int = 24, spacing: float = 1.0):
 
 
 def warm_up(force: bool = False) -> float:
-    """Compile the kernels the main job uses (a ``tree`` solve of a small plane in marble); returns the
-    seconds it took (0 when every kernel was already cached and ``force`` is false)."""
+    """Compile the kernels the main job and the viewer use (a ``tree`` solve of a small plane in marble, and
+    one with ``relight``); returns the seconds it took (0 when every kernel was already cached and ``force``
+    is false)."""
     if not force and not cold_kernels():
         return 0.0
     from .materials import material
-    from .names import DEFAULT_METHOD, DEFAULT_TOL
+    from .names import DEFAULT_METHOD, DEFAULT_TOL, VIEWER_METHOD, VIEWER_TOL
     from .solve import SurfaceGeometry, solve
 
     start = time.perf_counter()
@@ -124,7 +130,9 @@ def warm_up(force: bool = False) -> float:
     phi = np.ones((points.shape[0], medium.n_channels))
     phi[::5] = 0.0  # unlit vertices too, as under shadows
     w12 = np.tile([0.0, 0.0, -1.0], (points.shape[0], 1))
-    solve(SurfaceGeometry(points, triangles, normals), phi, w12, medium, method=DEFAULT_METHOD, tol=DEFAULT_TOL)
+    surface = SurfaceGeometry(points, triangles, normals)
+    solve(surface, phi, w12, medium, method=DEFAULT_METHOD, tol=DEFAULT_TOL)
+    solve(surface, phi, w12, medium, method=VIEWER_METHOD, tol=VIEWER_TOL)
     return time.perf_counter() - start
 
 
