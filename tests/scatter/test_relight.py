@@ -102,7 +102,10 @@ LIGHTS = {
 }
 
 
-@pytest.mark.parametrize("light", sorted(LIGHTS))
+@pytest.mark.parametrize(
+    "light",
+    ["directional", pytest.param("environment", marks=pytest.mark.slow), pytest.param("point", marks=pytest.mark.slow)],
+)
 def test_relit_B_matches_a_direct_solve_within_tol(light):
     mesh, geometry = _surface(*torus(20.0, 8.0, 48, 24))  # shadows of its own, 1152 vertices
     incident = incident_flux(
@@ -146,6 +149,7 @@ def test_operators_over_the_memory_budget_are_refused_before_they_are_made():
     assert "relight" not in geometry.spatial_order()[0]._cache
 
 
+@pytest.mark.slow
 def test_fresh_operators_check_their_first_light_and_say_when_the_direction_fit_misses_tol():
     from translucency.errors import TranslucencyWarning
 
