@@ -1267,6 +1267,8 @@ def _operator_rows(
     scratch = np.empty((n_c, QUADRATIC_TERMS))
     work = np.empty((max(dirs_q.shape[0], 9), FIT_WORK_COLUMNS))
     acc = np.zeros((64, width))
+    rule = np.zeros(64)  # per listed vertex: its share of the near triangles' vertex rule, mm^2
+    one = np.empty(3, dtype=np.int64)  # a vertex as a degenerate triangle (its own point)
     for r in range(lo, hi):
         v_o = receivers[r]
         xo = points[v_o]
@@ -1275,83 +1277,70 @@ def _operator_rows(
         if acc.shape[0] < size:
             acc = np.zeros((2 * size, width))
         acc[:size] = 0.0
+        if rule.shape[0] < size:
+            rule = np.zeros(2 * size)
         listed = 0
         for k in range(offsets[r], offsets[r + 1]):
-            tri = triangles[triangle_ids[k]]
+            t = triangle_ids[k]
+            third = triangle_areas[t] / 3.0
             for corner in range(3):
-                v = tri[corner]
+                v = triangles[t, corner]
                 if owner[v] != r:
                     owner[v] = r
                     slot[v] = listed
                     columns[starts[r] + listed] = v
+                    rule[listed] = 0.0
                     listed += 1
-                    # the vertex sum's pair: quadratic fit in, the far field's affine fit out
-                    one = np.array([v, v, v])
-                    _add_point(
-                        model,
-                        points,
-                        normals,
-                        vertex_areas,
-                        one,
-                        1.0,
-                        0.0,
-                        0.0,
-                        vertex_areas[v],
-                        xo,
-                        no,
-                        params,
-                        dirs_q,
-                        pinv_q,
-                        work,
-                        slot,
-                        scratch,
-                        acc,
-                    )
-                    _add_point(
-                        model,
-                        points,
-                        normals,
-                        vertex_areas,
-                        one,
-                        1.0,
-                        0.0,
-                        0.0,
-                        -vertex_areas[v],
-                        xo,
-                        no,
-                        params,
-                        dirs_a,
-                        pinv_a,
-                        work,
-                        slot,
-                        scratch,
-                        acc,
-                    )
+                rule[slot[v]] += third  # the vertex rule: a third of the area at each corner
+        # every near vertex once: its pair of the vertex sum (the quadratic fit in, the far field's affine fit
+        # out) less the vertex rule of the near triangles around it, with the same quadratic fit
+        for i in range(listed):
+            v = columns[starts[r] + i]
+            one[:] = v
+            _add_point(
+                model,
+                points,
+                normals,
+                vertex_areas,
+                one,
+                1.0,
+                0.0,
+                0.0,
+                vertex_areas[v] - rule[i],
+                xo,
+                no,
+                params,
+                dirs_q,
+                pinv_q,
+                work,
+                slot,
+                scratch,
+                acc,
+            )
+            _add_point(
+                model,
+                points,
+                normals,
+                vertex_areas,
+                one,
+                1.0,
+                0.0,
+                0.0,
+                -vertex_areas[v],
+                xo,
+                no,
+                params,
+                dirs_a,
+                pinv_a,
+                work,
+                slot,
+                scratch,
+                acc,
+            )
         for k in range(offsets[r], offsets[r + 1]):
             t = triangle_ids[k]
             tri = triangles[t]
             area = triangle_areas[t]
-            for corner in range(3):  # minus the vertex rule: a third of the area at each corner
-                _add_point(
-                    model,
-                    points,
-                    normals,
-                    vertex_areas,
-                    tri,
-                    1.0 if corner == 0 else 0.0,
-                    1.0 if corner == 1 else 0.0,
-                    1.0 if corner == 2 else 0.0,
-                    -area / 3.0,
-                    xo,
-                    no,
-                    params,
-                    dirs_q,
-                    pinv_q,
-                    work,
-                    slot,
-                    scratch,
-                    acc,
-                )
             corner = _corner_of(tri, v_o)
             if corner < 0 and _whole(diameters[t], centroids[t], xo, beta, scale_min):
                 for q in range(n_rule):
