@@ -69,6 +69,7 @@ from ..errors import InvalidParameterError, MeshError
 from ..geometry.measure import signed_volume, triangle_normals
 from ..geometry.topology import unique_edges
 from ..scatter.fresnel import fresnel_transmittance, refract
+from ..scatter.kernels import orthonormal_frame
 from ..scatter.medium import Medium
 from ..scatter.montecarlo import fresnel_reflectance_scalar, sample_hg_cosine
 from ..scatter.visibility import Occluder
@@ -267,14 +268,7 @@ def _new_directions(d, rows, channel, g_of_channel, xi_cos, xi_phi):
         sin_theta = math.sqrt(max(0.0, 1.0 - cos_theta * cos_theta))
         phi = 2.0 * math.pi * xi_phi[j]
         ux, uy, uz = d[i, 0], d[i, 1], d[i, 2]
-        # an orthonormal frame about u
-        if abs(uz) < 0.9:
-            ax, ay, az = -uy, ux, 0.0
-        else:
-            ax, ay, az = 0.0, -uz, uy
-        a_len = math.sqrt(ax * ax + ay * ay + az * az)
-        ax, ay, az = ax / a_len, ay / a_len, az / a_len
-        bx, by, bz = uy * az - uz * ay, uz * ax - ux * az, ux * ay - uy * ax
+        ax, ay, az, bx, by, bz = orthonormal_frame(ux, uy, uz)
         c = sin_theta * math.cos(phi)
         s = sin_theta * math.sin(phi)
         nx = cos_theta * ux + c * ax + s * bx

@@ -183,6 +183,19 @@ def _channel(p, r2, perp2, mu0, x_dot_w, x_dot_n, x_dot_v, s_dot_v, s_dot_n, v_d
     return real - virtual
 
 
+@numba.njit(cache=True, inline="always")
+def orthonormal_frame(u0, u1, u2):
+    """``(a, b)`` as six floats: unit vectors that make the unit vector ``u`` a right-handed orthonormal frame
+    ``(a, b, u)``; ``a`` is perpendicular to ``u`` and to the axis ``u`` is least along (z, else x), ``b = u x a``."""
+    if abs(u2) < 0.9:
+        a0, a1, a2 = -u1, u0, 0.0
+    else:
+        a0, a1, a2 = 0.0, -u2, u1
+    length = math.sqrt(a0 * a0 + a1 * a1 + a2 * a2)
+    a0, a1, a2 = a0 / length, a1 / length, a2 / length
+    return a0, a1, a2, u1 * a2 - u2 * a1, u2 * a0 - u0 * a2, u0 * a1 - u1 * a0
+
+
 @numba.njit(cache=True, inline="always", fastmath=True)
 def modified_normal(x0, x1, x2, ni0, ni1, ni2):
     """``(r^2, n_i*)`` for the pair offset ``x = x_o - x_i`` (mm): the unit normal of the modified tangent
@@ -778,13 +791,7 @@ def fitted_pairs(model, x0, x1, x2, ni0, ni1, ni2, no0, no1, no2, params, dirs, 
     x_dot_s = x0 * s0 + x1 * s1 + x2 * s2
     s_dot_n = s0 * no0 + s1 * no1 + s2 * no2
     # a frame (e, f, n_i) about the source normal, and each direction's cosines
-    if abs(ni2) < 0.9:
-        e0, e1, e2 = -ni1, ni0, 0.0
-    else:
-        e0, e1, e2 = 0.0, -ni2, ni1
-    en = math.sqrt(e0 * e0 + e1 * e1 + e2 * e2)
-    e0, e1, e2 = e0 / en, e1 / en, e2 / en
-    f0, f1, f2 = ni1 * e2 - ni2 * e1, ni2 * e0 - ni0 * e2, ni0 * e1 - ni1 * e0
+    e0, e1, e2, f0, f1, f2 = orthonormal_frame(ni0, ni1, ni2)
     n_dirs = dirs.shape[0]
     for k in range(n_dirs):
         w0 = dirs[k, 0] * e0 + dirs[k, 1] * f0 + dirs[k, 2] * ni0
