@@ -211,15 +211,26 @@ class GatherPaths:
 
 def gather_paths(occluder: Occluder, points, normals, triangles, eta, *, rays: int = GATHER_RAYS, seed=SEED):
     """The rays of :func:`gather_exitance` (``K = rays`` cosine-weighted directions per vertex, turned per
-    vertex by ``seed``) that meet a front face, with what each brings per unit ``B``: a :class:`GatherPaths`.
-    Geometry and ``eta`` only: :func:`solve_bounces` keeps them with the surface (``SurfaceGeometry.kept``)."""
+    vertex by ``seed``) that meet a front face, with what each brings per unit ``B``: a :class:`GatherPaths`
+    of the whole mesh. Geometry and ``eta`` only: relighting keeps them with the surface (:func:`solve_bounces`);
+    without them :func:`gather_exitance` traces and uses them a block of vertices at a time."""
+    blocks = list(_path_blocks(occluder, points, normals, triangles, eta, rays, seed))
+    stats = {key: sum(block.stats[key] for block in blocks) for key in ("rays", "hits", "back_faces")}
+    joined = {
+        key: np.concatenate([getattr(block, key) for block in blocks])
+        if blocks
+        else np.zeros((0,) if key == "origin" else (0, 3), dtype=np.int64 if key in ("origin", "corners") else float)
+        for key in ("origin", "corners", "weights", "w12")
+    }
+    return GatherPaths(**joined, stats=stats)
+
+
+def _path_blocks(occluder, points, normals, triangles, eta, rays, seed):
+    """:class:`GatherPaths` of consecutive blocks of vertices (``RAYS_PER_BLOCK`` rays each), in turn."""
     points = np.asarray(points, dtype=np.float64)
     normals, usable = _unit_normals(normals)
     triangles = np.asarray(triangles, dtype=np.int64)
-    n = points.shape[0]
-    offsets = np.random.default_rng(seed).random((n, 2))
-    parts = {"origin": [], "corners": [], "weights": [], "w12": []}
-    stats = {"rays": 0, "hits": 0, "back_faces": 0}
+    offsets = np.random.default_rng(seed).random((points.shape[0], 2))
     receivers = np.flatnonzero(usable)
     block = max(1, RAYS_PER_BLOCK // rays)
     for start in range(0, receivers.size, block):
@@ -227,30 +238,19 @@ def gather_paths(occluder: Occluder, points, normals, triangles, eta, *, rays: i
         directions = cosine_directions(normals[these], rays, offsets[these]).reshape(-1, 3)
         origin = np.repeat(these, rays)
         hits = occluder.intersect(points[origin], normals[origin], directions)
-        stats["rays"] += int(origin.size)
+        stats = {"rays": int(origin.size), "hits": 0, "back_faces": 0}
         hit = np.flatnonzero(hits.triangle >= 0)  # only these are interpolated
         hits = type(hits)(*(part[hit] for part in hits))
         directions, origin = directions[hit], origin[hit]
         corners, weights, hit_normal = _at_hits(triangles, normals, hits)
         cos_out = -np.einsum("kc,kc->k", hit_normal, directions)
         front = cos_out > 0.0
-        stats["hits"] += int(hit.size)
-        stats["back_faces"] += int(np.count_nonzero(~front))
+        stats["hits"] = int(hit.size)
+        stats["back_faces"] = int(np.count_nonzero(~front))
         directions, origin, corners, weights = directions[front], origin[front], corners[front], weights[front]
         cos_in = np.einsum("kc,kc->k", normals[origin], directions)
         factor = (np.pi / rays) * fresnel_transmittance(cos_in, eta) * fresnel_transmittance(cos_out[front], eta)
-        parts["origin"].append(origin)
-        parts["corners"].append(corners)
-        parts["weights"].append(weights * factor[:, None])
-        parts["w12"].append(refract(directions, normals[origin], eta))
-    empty = {"origin": (0,), "corners": (0, 3), "weights": (0, 3), "w12": (0, 3)}
-    joined = {
-        key: np.concatenate(value)
-        if value
-        else np.zeros(empty[key], dtype=np.int64 if key in ("origin", "corners") else float)
-        for key, value in parts.items()
-    }
-    return GatherPaths(**joined, stats=stats)
+        yield GatherPaths(origin, corners, weights * factor[:, None], refract(directions, normals[origin], eta), stats)
 
 
 def gather_exitance(
@@ -290,19 +290,23 @@ def gather_exitance(
         ``phi`` (n, C) in W/m²; ``weighted_w12`` (n, 3) the refracted directions summed with the channel
         sum of their flux density as weight (not normalised); ``stats`` counts of rays, hits, back faces.
     """
-    if paths is None:
-        paths = gather_paths(occluder, points, normals, triangles, eta, rays=rays, seed=seed)
     B = np.asarray(B, dtype=np.float64)
     n, channels = B.shape
-    entering = np.einsum("kj,kjc->kc", paths.weights, B[paths.corners])
     phi = np.zeros((n, channels))
     weighted_w12 = np.zeros((n, 3))
-    weight = entering.sum(axis=1)
-    for c in range(channels):
-        phi[:, c] = np.bincount(paths.origin, weights=entering[:, c], minlength=n)
-    for c in range(3):
-        weighted_w12[:, c] = np.bincount(paths.origin, weights=weight * paths.w12[:, c], minlength=n)
-    return phi, weighted_w12, dict(paths.stats)
+    stats = {"rays": 0, "hits": 0, "back_faces": 0}
+    # the rays traced before, or traced and used a block at a time (memory bounded by RAYS_PER_BLOCK)
+    blocks = [paths] if paths is not None else _path_blocks(occluder, points, normals, triangles, eta, rays, seed)
+    for block in blocks:
+        entering = np.einsum("kj,kjc->kc", block.weights, B[block.corners])
+        weight = entering.sum(axis=1)
+        for c in range(channels):
+            phi[:, c] += np.bincount(block.origin, weights=entering[:, c], minlength=n)
+        for c in range(3):
+            weighted_w12[:, c] += np.bincount(block.origin, weights=weight * block.w12[:, c], minlength=n)
+        for key in stats:
+            stats[key] += block.stats[key]
+    return phi, weighted_w12, stats
 
 
 #: The mirror reflection draws its light sample for blocks of vertices with this many (vertex, sample) pairs.
@@ -542,14 +546,16 @@ def solve_bounces(
     mirror = {"reflected_flux": None, "deposited_flux": None}
     for k in range(bounces):
         report("bounces", k / max(bounces, 1))
-        t = time.perf_counter()
-        paths = geometry.kept(  # traced once per surface: every later light reuses them
-            ("gather", float(medium.eta), rays, SEED + k),
-            lambda seed=SEED + k: gather_paths(
-                occluder, geometry.points, geometry.normals, geometry.triangles, medium.eta, rays=rays, seed=seed
-            ),
-        )
-        seconds["gather"] += time.perf_counter() - t
+        paths = None
+        if method == "relight":  # relighting: every later light bounces too, so the rays are kept
+            t = time.perf_counter()
+            paths = geometry.kept(
+                ("gather", float(medium.eta), rays, SEED + k),
+                lambda seed=SEED + k: gather_paths(
+                    occluder, geometry.points, geometry.normals, geometry.triangles, medium.eta, rays=rays, seed=seed
+                ),
+            )
+            seconds["gather"] += time.perf_counter() - t
         light = reentering_light(
             occluder,
             geometry.points,
