@@ -224,7 +224,6 @@ class ViewerState:
         self.name = name or (Path(mesh.source).stem if mesh.source is not None else "scan")
         self.medium = settings.material
         self.model, self.method, self.tol = model, method, float(tol)
-        self._relight_tol = self.tol
         self.resolution = resolution
         self.per_direction = bool(per_direction)
         self.bounces = settings.bounces
@@ -388,11 +387,12 @@ class ViewerState:
         if self.method != "relight":
             self.solve("full")
             return
+        kept = self.tol
         self.method, self.tol = "tree", DEFAULT_TOL
         try:
             self.solve("full")
         finally:
-            self.method, self.tol = "relight", self._relight_tol
+            self.method, self.tol = "relight", kept
             self.update_status()
 
     def solve(self, resolution=None) -> None:
