@@ -1087,7 +1087,7 @@ def near_field_operator(
     params,
     beta,
     scale_min,
-    fits,
+    fit,
     tables=None,
     rule_points=RULE_POINTS,
     rule_weights=RULE_WEIGHTS,
@@ -1100,16 +1100,17 @@ def near_field_operator(
     ``Psi = Phi w12`` and ``Xi = Phi w12 w12^T`` interpolated linearly, and ``S_d`` as the quadratic fit of
     :func:`~translucency.scatter.kernels.fitted_pairs` (docs/physics.md §8.7). The coefficient of a point is
     shared among the triangle's corners by their barycentric weights and divided by the corner's vertex
-    area (per unit flux ``Phi = phi A``). Each near vertex's own pair of the vertex sum is added with the
-    quadratic fit less the affine one, which the far field's operator holds for it.
+    area (per unit flux ``Phi = phi A``). Each near vertex's own pair of the vertex sum is included, with the
+    quadratic fit, so that its row is the whole of what the vertex gives the receiver (the vertex rule of the
+    near triangles and the vertex's own pair cancel where all its triangles are near; held apart, as the far
+    field's and near field's separately rounded terms, they left coarse meshes tens of % off).
 
     Parameters
     ----------
     params : (C, N_PARAMS) float64
         Kernel parameters of every output channel.
-    fits : tuple
-        ``(dirs, pinv)`` of :func:`~translucency.scatter.kernels.fit_directions` for the affine fit, then for
-        the quadratic one.
+    fit : tuple
+        ``(dirs, pinv)`` of :func:`~translucency.scatter.kernels.fit_directions` for the quadratic fit.
     vertex_areas : (n,) float64
         Barycentric vertex areas, mm^2 (a vertex of area 0 gets no coefficient).
 
@@ -1151,7 +1152,7 @@ def near_field_operator(
         rule_points,
         rule_weights,
         *fan,
-        *fits,
+        *fit,
         stamps,
         starts,
         columns,
@@ -1242,8 +1243,6 @@ def _operator_rows(
     ang_w,
     rad_x,
     rad_w,
-    dirs_a,
-    pinv_a,
     dirs_q,
     pinv_q,
     stamps,
@@ -1252,8 +1251,8 @@ def _operator_rows(
     coefs,
 ):
     """Rows of :func:`near_field_operator` for receivers ``lo .. hi - 1``: the near triangles' quadrature
-    less their vertex rule, and the vertex sum's own pairs with the affine fit of the far field replaced by
-    the quadratic one; accumulated in float64, stored as float32."""
+    less their vertex rule, plus the near vertices' own pairs of the vertex sum; accumulated in float64,
+    stored as float32."""
     n_v = points.shape[0]
     n_c = params.shape[0]
     width = QUADRATIC_TERMS * n_c
@@ -1292,8 +1291,8 @@ def _operator_rows(
                     rule[listed] = 0.0
                     listed += 1
                 rule[slot[v]] += third  # the vertex rule: a third of the area at each corner
-        # every near vertex once: its pair of the vertex sum (the quadratic fit in, the far field's affine fit
-        # out) less the vertex rule of the near triangles around it, with the same quadratic fit
+        # every near vertex once: its pair of the vertex sum less the vertex rule of the near triangles around it
+        # (nothing where all its triangles are near), with the quadratic fit
         for i in range(listed):
             v = columns[starts[r] + i]
             one[:] = v
@@ -1312,26 +1311,6 @@ def _operator_rows(
                 params,
                 dirs_q,
                 pinv_q,
-                work,
-                slot,
-                scratch,
-                acc,
-            )
-            _add_point(
-                model,
-                points,
-                normals,
-                vertex_areas,
-                one,
-                1.0,
-                0.0,
-                0.0,
-                -vertex_areas[v],
-                xo,
-                no,
-                params,
-                dirs_a,
-                pinv_a,
                 work,
                 slot,
                 scratch,

@@ -15,7 +15,9 @@ solver's own sums written once with those coefficients instead of per light:
   its vertices, so the refracted directions need no averaging;
 * **near field**: the correction of :mod:`translucency.scatter.nearfield` (its quadrature, with ``Psi``
   interpolated linearly like ``Phi``) as coefficients on the vertices of the near triangles
-  (:func:`~translucency.scatter.nearfield.near_field_operator`).
+  (:func:`~translucency.scatter.nearfield.near_field_operator`), with those vertices' own pairs of the
+  vertex sum: their far columns are 0, since the pair and the near triangles' vertex rule cancel and must
+  be summed before they are rounded.
 
 The real source's corrected distance ``d_r`` depends on ``w12`` too; the coefficients are least-squares
 fits over the cone of refracted directions (:func:`~translucency.scatter.kernels.fitted_pairs`): affine in
@@ -45,7 +47,7 @@ import numpy as np
 
 from . import hierarchy, kernels, nearfield
 from .kernels import AFFINE_TERMS, FIT_WORK_COLUMNS, QUADRATIC_TERMS, fitted_pairs
-from .threads import for_ranges
+from .threads import for_ranges, thread_count
 
 __all__ = ["RelightOperator", "prepare", "operator_bytes"]
 
@@ -246,6 +248,27 @@ def prepare(
     tree = geometry.source_tree()
     theta, min_distance = theta_and_distance(medium, tol)
     report("relight operators", 0.0)
+    receivers = np.arange(n)
+    offsets, ids = geometry.near_lists(receivers, near_radius)
+    near_starts, near_columns, near_coefs = nearfield.near_field_operator(
+        model_code,
+        geometry.points,
+        geometry.triangles,
+        geometry.triangle_areas,
+        geometry.normals,
+        geometry.vertex_areas,
+        receivers,
+        offsets,
+        ids,
+        params,
+        beta,
+        float(np.min(medium.D)),
+        kernels.fit_directions(medium.eta, QUADRATIC_TERMS),
+        tables=geometry.triangle_tables(),
+    )
+    near_seconds = time.perf_counter() - start
+    report("relight operators", 0.5)
+    start = time.perf_counter()
     g_starts, g_direct, g_clustered, columns = hierarchy.walk_lists(
         tree, np.ones(tree.n_nodes), np.ones(n, dtype=bool), geometry.points, theta, math.inf, min_distance
     )
@@ -274,27 +297,10 @@ def prepare(
         pinv,
         far_coefs,
         far_exponents,
-    )
-    far_seconds = time.perf_counter() - start
-    report("relight operators", 0.5)
-    start = time.perf_counter()
-    receivers = np.arange(n)
-    offsets, ids = geometry.near_lists(receivers, near_radius)
-    near_starts, near_columns, near_coefs = nearfield.near_field_operator(
-        model_code,
-        geometry.points,
-        geometry.triangles,
-        geometry.triangle_areas,
-        geometry.normals,
-        geometry.vertex_areas,
-        receivers,
-        offsets,
-        ids,
-        params,
-        beta,
-        float(np.min(medium.D)),
-        (*kernels.fit_directions(medium.eta, AFFINE_TERMS), *kernels.fit_directions(medium.eta, QUADRATIC_TERMS)),
-        tables=geometry.triangle_tables(),
+        near_starts,
+        near_columns,
+        near_coefs,
+        np.full((thread_count(), 2 * n), -1, dtype=np.int64),
     )
     report("relight operators", 1.0)
     operator = RelightOperator(
@@ -316,7 +322,7 @@ def prepare(
         "far_entries": int(far_offsets[-1]),
         "near_entries": int(near_starts[-1]),
         "bytes": operator.nbytes,
-        "seconds": {"far": far_seconds, "near": time.perf_counter() - start},
+        "seconds": {"far": time.perf_counter() - start, "near": near_seconds},
     }
     return operator
 
@@ -348,39 +354,76 @@ def _fill_coefficients(
     pinv,
     coefs,
     exponents,
+    near_starts,
+    near_columns,
+    near_coefs,
+    stamps,
 ):
     """Far-field coefficients of receivers ``lo .. hi - 1``: for each column of its list, the affine fit of
     :func:`~translucency.scatter.kernels.fitted_pairs` for every channel per unit ``Phi``, stored by
-    :func:`_quantised`."""
+    :func:`_quantised`. A vertex of the receiver's near operator is held there whole: its far column is
+    stored as 0, and where the walk put it inside a cluster instead, its affine fit is taken off its near row
+    (the cluster holds it)."""
     n_c = params.shape[0]
+    n = rcv_points.shape[0]
     scratch = np.empty((n_c, AFFINE_TERMS))
     work = np.empty((max(dirs.shape[0], 9), FIT_WORK_COLUMNS))
+    owner = stamps[worker, :n]
+    slot = stamps[worker, n:]
+    held = np.zeros(64, dtype=np.bool_)
     for r in range(lo, hi):
         x0, x1, x2 = rcv_points[r, 0], rcv_points[r, 1], rcv_points[r, 2]
         n0, n1, n2 = rcv_normals[r, 0], rcv_normals[r, 1], rcv_normals[r, 2]
+        first = near_starts[r]
+        listed = near_starts[r + 1] - first
+        if held.shape[0] < listed:
+            held = np.zeros(2 * listed, dtype=np.bool_)
+        for i in range(listed):
+            owner[near_columns[first + i]] = r
+            slot[near_columns[first + i]] = i
+            held[i] = False
         at = offsets[r]
         for k in range(starts[r], starts[r] + counts[r]):
             j = columns[k]
-            fitted_pairs(
-                model,
-                x0 - table[0, j],
-                x1 - table[1, j],
-                x2 - table[2, j],
-                table[3, j],
-                table[4, j],
-                table[5, j],
-                n0,
-                n1,
-                n2,
-                params,
-                dirs,
-                pinv,
-                work,
-                scratch,
-            )
+            if j < n and owner[j] == r:
+                held[slot[j]] = True
+                coefs[at, :] = 0
+                exponents[at, :] = -128
+                at += 1
+                continue
+            _affine_at(model, table, j, x0, x1, x2, n0, n1, n2, params, dirs, pinv, work, scratch)
             for c in range(n_c):
                 _quantised(scratch[c], coefs[at, c * AFFINE_TERMS : (c + 1) * AFFINE_TERMS], exponents[at], c)
             at += 1
+        for i in range(listed):
+            if held[i]:
+                continue
+            _affine_at(model, table, near_columns[first + i], x0, x1, x2, n0, n1, n2, params, dirs, pinv, work, scratch)
+            for c in range(n_c):
+                for t in range(AFFINE_TERMS):
+                    near_coefs[first + i, c * QUADRATIC_TERMS + t] -= scratch[c, t]
+
+
+@numba.njit(cache=True, inline="always")
+def _affine_at(model, table, j, x0, x1, x2, n0, n1, n2, params, dirs, pinv, work, scratch):
+    """The affine fit (``scratch (C, 4)``) of source column ``j`` of ``table`` for the receiver at ``x, n``."""
+    fitted_pairs(
+        model,
+        x0 - table[0, j],
+        x1 - table[1, j],
+        x2 - table[2, j],
+        table[3, j],
+        table[4, j],
+        table[5, j],
+        n0,
+        n1,
+        n2,
+        params,
+        dirs,
+        pinv,
+        work,
+        scratch,
+    )
 
 
 #: ``2**e`` for the exponents ``e = -128 .. 127`` of :func:`_quantised` (index ``e + 128``).
