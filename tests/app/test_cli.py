@@ -208,7 +208,8 @@ def test_main_job_bakes_the_embedded_default(tmp_path):
     assert means[f"all {len(stored)} vertices"] == pytest.approx(stored.mean(axis=0), abs=6e-5)
     assert 0 < n_lit < len(stored) and np.all(means[f"the {n_lit} lit vertices"] > stored.mean(axis=0))
     # the solve's progress: one line per stage on stderr (a pipe here), no escape codes anywhere
-    assert not any(code in out + err for code in ("\r", "\x1b["))
+    marked = [repr(line) for line in (out + err).split("\n") if "\r" in line or "\x1b[" in line]
+    assert not marked, marked  # the lines themselves, to say where they came from
     assert err.count("bunny: far field done (") == 1 and err.count("bunny: near field done (") == 1
 
 
