@@ -18,13 +18,13 @@ def _compiled_function(module):
     return numba.njit(f)
 
 
-def test_notice_is_said_once_and_only_for_the_solver_kernels():
+def test_notice_is_said_once_and_only_for_our_own_kernels():
     said = []
     with warmup.compile_notice(lambda: said.append(1)):
         _compiled_function("elsewhere.module")(1)
-        _compiled_function("translucency.io.fake")(1)  # not the solver
+        _compiled_function("translucency_plugin.fake")(1)  # another package
         assert said == []
-        _compiled_function("translucency.scatter.fake")(1)
+        _compiled_function("translucency.io.fake")(1)  # the cleaning's kernels count too
         _compiled_function("translucency.scatter.fake")(2.0)
     assert said == [1]
     _compiled_function("translucency.scatter.fake")(1)  # outside the block: nothing listens

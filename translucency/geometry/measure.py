@@ -30,12 +30,16 @@ no area. A vertex with no non-degenerate triangle gets the zero normal (never Na
 
 from __future__ import annotations
 
+import math
+
+import numba
 import numpy as np
 
 from ..errors import InvalidParameterError
 from .topology import unique_edges
 
 __all__ = [
+    "degenerate_triangles",
     "triangle_cross_products",
     "triangle_areas",
     "triangle_normals",
@@ -50,10 +54,62 @@ __all__ = [
 
 def triangle_cross_products(points, triangles) -> np.ndarray:
     """Return ``(p1 - p0) x (p2 - p0)`` per triangle: twice the area times the unit normal, (m, 3) in mm²."""
-    points = np.asarray(points, dtype=np.float64)
-    triangles = np.asarray(triangles, dtype=np.int64)
-    p0 = points[triangles[:, 0]]
-    return np.cross(points[triangles[:, 1]] - p0, points[triangles[:, 2]] - p0)
+    points = np.ascontiguousarray(points, dtype=np.float64)
+    triangles = np.ascontiguousarray(triangles, dtype=np.int64).reshape(-1, 3)
+    return _cross_products(points, triangles)
+
+
+@numba.njit(cache=True)
+def _cross_products(points, triangles):
+    """:func:`triangle_cross_products` in one pass (the same arithmetic as ``np.cross``)."""
+    out = np.empty((triangles.shape[0], 3))
+    for t in range(triangles.shape[0]):
+        i0, i1, i2 = triangles[t, 0], triangles[t, 1], triangles[t, 2]
+        a0, a1, a2 = points[i1, 0] - points[i0, 0], points[i1, 1] - points[i0, 1], points[i1, 2] - points[i0, 2]
+        b0, b1, b2 = points[i2, 0] - points[i0, 0], points[i2, 1] - points[i0, 1], points[i2, 2] - points[i0, 2]
+        out[t, 0] = a1 * b2 - a2 * b1
+        out[t, 1] = a2 * b0 - a0 * b2
+        out[t, 2] = a0 * b1 - a1 * b0
+    return out
+
+
+@numba.njit(cache=True)
+def _vertex_sums(triangles, vectors, n_points):
+    """Each triangle's vector ``(m, 3)`` added to its three vertices, in triangle order: ``(n_points, 3)``."""
+    out = np.zeros((n_points, 3))
+    for t in range(triangles.shape[0]):
+        for i in range(3):
+            v = triangles[t, i]
+            out[v, 0] += vectors[t, 0]
+            out[v, 1] += vectors[t, 1]
+            out[v, 2] += vectors[t, 2]
+    return out
+
+
+def degenerate_triangles(points, triangles, ratio: float) -> np.ndarray:
+    """True for the triangles with ``|(p1 - p0) x (p2 - p0)| <= ratio * longest_edge**2`` (twice the area
+    against the square of the longest edge: 0 for a sliver or a point), ``(m,)`` bool; one pass in numba."""
+    points = np.ascontiguousarray(points, dtype=np.float64)
+    triangles = np.ascontiguousarray(triangles, dtype=np.int64).reshape(-1, 3)
+    return _degenerate(points, triangles, float(ratio))
+
+
+@numba.njit(cache=True)
+def _degenerate(points, triangles, ratio):
+    """:func:`degenerate_triangles`."""
+    out = np.empty(triangles.shape[0], dtype=np.bool_)
+    for t in range(triangles.shape[0]):
+        longest = 0.0
+        for i in range(3):
+            a, b = triangles[t, i], triangles[t, (i + 1) % 3]
+            d0, d1, d2 = points[b, 0] - points[a, 0], points[b, 1] - points[a, 1], points[b, 2] - points[a, 2]
+            longest = max(longest, math.sqrt(d0 * d0 + d1 * d1 + d2 * d2))
+        i0, i1, i2 = triangles[t, 0], triangles[t, 1], triangles[t, 2]
+        a0, a1, a2 = points[i1, 0] - points[i0, 0], points[i1, 1] - points[i0, 1], points[i1, 2] - points[i0, 2]
+        b0, b1, b2 = points[i2, 0] - points[i0, 0], points[i2, 1] - points[i0, 1], points[i2, 2] - points[i0, 2]
+        c0, c1, c2 = a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0
+        out[t] = math.sqrt(c0 * c0 + c1 * c1 + c2 * c2) <= ratio * longest * longest
+    return out
 
 
 def triangle_areas(points, triangles) -> np.ndarray:
@@ -133,11 +189,9 @@ def vertex_normals(points, triangles) -> np.ndarray:
     ndarray, shape (n, 3), float64
         Unit normals (dimensionless); zero vectors for vertices without a non-degenerate triangle.
     """
-    points = np.asarray(points, dtype=np.float64)
-    triangles = np.asarray(triangles, dtype=np.int64)
+    triangles = np.ascontiguousarray(triangles, dtype=np.int64).reshape(-1, 3)
     cross = triangle_cross_products(points, triangles)
-    per_corner = np.repeat(cross[:, None, :], 3, axis=1)
-    return _normalise_rows(_accumulate(triangles, per_corner, len(points)))
+    return _normalise_rows(_vertex_sums(triangles, cross, len(points)))
 
 
 def vertex_areas(points, triangles, method: str = "barycentric") -> np.ndarray:

@@ -1,7 +1,10 @@
-"""Topology of a triangle list: unique edges, components, boundary loops and fans, counted with numpy/scipy.
+"""Topology of a triangle list: unique edges, components, boundary loops and fans.
 
 Pure functions of ``triangles`` (m, 3) int64; they count and label, they neither validate nor repair
-(:mod:`translucency.io.defects` builds the repair inventory from them).
+(:mod:`translucency.io.defects` builds the repair inventory from them). The edges are bucketed by their
+smaller vertex and the components joined by union-find in numba, in time linear in the triangles (a
+scan of 10 million vertices is cleaned in seconds; sorting 60 million corner edges, as ``np.unique``
+does, took most of the cleaning's time).
 
 Corners ``(t, i)`` are numbered ``3 t + i`` (the "slot" of corner i of triangle t); the edge of slot
 ``3 t + i`` runs from corner i to corner i + 1.
@@ -9,6 +12,7 @@ Corners ``(t, i)`` are numbered ``3 t + i`` (the "slot" of corner i of triangle 
 
 from __future__ import annotations
 
+import numba
 import numpy as np
 from scipy import sparse
 from scipy.sparse import csgraph
@@ -26,18 +30,121 @@ def unique_edges(triangles) -> tuple[np.ndarray, np.ndarray]:
     Returns
     -------
     edges : ndarray, shape (e, 2), int64
-        Unique edges with the smaller index first.
+        Unique edges with the smaller index first, in increasing order of (smaller, larger) index.
     edge_of_corner : ndarray, shape (m, 3), int64
         ``edges[edge_of_corner[t, i]]`` is the edge from corner i to corner i+1 of triangle t.
     """
-    triangles = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
-    directed = np.stack([triangles, np.roll(triangles, -1, axis=1)], axis=2).reshape(-1, 2)
-    undirected = np.sort(directed, axis=1)
+    triangles = np.ascontiguousarray(np.asarray(triangles, dtype=np.int64).reshape(-1, 3))
     n = int(triangles.max()) + 1 if triangles.size else 1
-    key = undirected[:, 0] * n + undirected[:, 1]
-    unique_key, inverse = np.unique(key, return_inverse=True)
-    edges = np.stack([unique_key // n, unique_key % n], axis=1)
-    return edges, inverse.reshape(-1, 3)
+    edges, edge_of_slot = _unique_edges(triangles, n)
+    return edges, edge_of_slot.reshape(-1, 3)
+
+
+#: A bucket of edges that share their smaller vertex is sorted by insertion up to this size, by numpy above.
+_INSERTION_SORT_LIMIT = 32
+
+
+@numba.njit(cache=True)
+def _unique_edges(triangles, n):
+    """:func:`unique_edges`: the corner edges counted into buckets by their smaller vertex, each bucket sorted
+    by the larger one, numbered in that order."""
+    m = triangles.shape[0]
+    start = np.zeros(n + 1, dtype=np.int64)
+    for t in range(m):
+        for i in range(3):
+            start[min(triangles[t, i], triangles[t, (i + 1) % 3]) + 1] += 1
+    for v in range(n):
+        start[v + 1] += start[v]
+    fill = start[:-1].copy()
+    larger = np.empty(3 * m, dtype=np.int64)
+    slot_of = np.empty(3 * m, dtype=np.int64)
+    for t in range(m):
+        for i in range(3):
+            a, b = triangles[t, i], triangles[t, (i + 1) % 3]
+            k = fill[min(a, b)]
+            fill[min(a, b)] += 1
+            larger[k] = max(a, b)
+            slot_of[k] = 3 * t + i
+    edge_of_slot = np.empty(3 * m, dtype=np.int64)
+    edges = np.empty((3 * m, 2), dtype=np.int64)
+    count = 0
+    for v in range(n):
+        lo, hi = start[v], start[v + 1]
+        if hi - lo > _INSERTION_SORT_LIMIT:
+            order = np.argsort(larger[lo:hi], kind="mergesort")
+            larger[lo:hi] = larger[lo:hi][order]
+            slot_of[lo:hi] = slot_of[lo:hi][order]
+        else:
+            for k in range(lo + 1, hi):
+                key, slot = larger[k], slot_of[k]
+                j = k - 1
+                while j >= lo and (larger[j] > key or (larger[j] == key and slot_of[j] > slot)):
+                    larger[j + 1] = larger[j]
+                    slot_of[j + 1] = slot_of[j]
+                    j -= 1
+                larger[j + 1] = key
+                slot_of[j + 1] = slot
+        for k in range(lo, hi):
+            if k == lo or larger[k] != larger[k - 1]:
+                edges[count, 0] = v
+                edges[count, 1] = larger[k]
+                count += 1
+            edge_of_slot[slot_of[k]] = count - 1
+    return edges[:count].copy(), edge_of_slot
+
+
+@numba.njit(cache=True, inline="always")
+def _root(parent, x):
+    """Root of ``x`` in the union-find forest ``parent``, halving the path on the way."""
+    while parent[x] != x:
+        parent[x] = parent[parent[x]]
+        x = parent[x]
+    return x
+
+
+@numba.njit(cache=True, inline="always")
+def _join(parent, a, b):
+    """Join the sets of ``a`` and ``b`` (the larger root under the smaller)."""
+    ra, rb = _root(parent, a), _root(parent, b)
+    if ra < rb:
+        parent[rb] = ra
+    elif rb < ra:
+        parent[ra] = rb
+
+
+@numba.njit(cache=True)
+def _labels(parent):
+    """Component labels ``0, 1, ...`` numbered in the order of each component's first node (as scipy's
+    ``connected_components`` numbers them) and their count."""
+    size = parent.shape[0]
+    label = np.full(size, -1, dtype=np.int64)
+    count = 0
+    for x in range(size):
+        r = _root(parent, x)
+        if label[r] < 0:
+            label[r] = count
+            count += 1
+        label[x] = label[r]
+    return count, label
+
+
+@numba.njit(cache=True)
+def _manifold_pairs(edge_of_slot, faces_per_edge):
+    """The two corner slots of every manifold edge (edge of exactly two triangles), the smaller first."""
+    first = np.full(faces_per_edge.shape[0], -1, dtype=np.int64)
+    pairs = np.empty((edge_of_slot.shape[0] // 2, 2), dtype=np.int64)
+    count = 0
+    for s in range(edge_of_slot.shape[0]):
+        e = edge_of_slot[s]
+        if faces_per_edge[e] != 2:
+            continue
+        if first[e] < 0:
+            first[e] = s
+        else:
+            pairs[count, 0] = first[e]
+            pairs[count, 1] = s
+            count += 1
+    return pairs[:count]
 
 
 def boundary_loops(boundary_edges: np.ndarray) -> tuple[int, int]:
@@ -75,15 +182,18 @@ def face_components(triangles: np.ndarray, edge_of_corner: np.ndarray | None = N
     triangles = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
     if edge_of_corner is None:
         _, edge_of_corner = unique_edges(triangles)
-    m = len(triangles)
-    slot_edge = edge_of_corner.ravel()
-    faces_per_edge = np.bincount(slot_edge)
-    slots = np.flatnonzero(faces_per_edge[slot_edge] == 2)
-    slots = slots[np.argsort(slot_edge[slots], kind="stable")]
-    a, b = slots[0::2] // 3, slots[1::2] // 3
-    graph = sparse.coo_matrix((np.ones(len(a), dtype=np.int8), (a, b)), shape=(m, m))
-    count, labels = csgraph.connected_components(graph, directed=False)
-    return int(count), labels.astype(np.int64)
+    slot_edge = np.ascontiguousarray(edge_of_corner, dtype=np.int64).ravel()
+    count, labels = _face_components(_manifold_pairs(slot_edge, np.bincount(slot_edge)), len(triangles))
+    return int(count), labels
+
+
+@numba.njit(cache=True)
+def _face_components(pairs, m):
+    """:func:`face_components` by union-find over the manifold edges' pairs of slots."""
+    parent = np.arange(m)
+    for k in range(pairs.shape[0]):
+        _join(parent, pairs[k, 0] // 3, pairs[k, 1] // 3)
+    return _labels(parent)
 
 
 def next_corner(slot: np.ndarray) -> np.ndarray:
@@ -99,21 +209,33 @@ def count_non_manifold_vertices(
     Corners (t, i) are graph nodes 3 t + i; a manifold edge links, at each of its two end vertices,
     the corners of its two triangles; the fans are the connected components of that graph.
     """
-    m = len(triangles)
-    slot_edge = edge_of_corner.ravel()  # slot 3 t + i holds the edge from corner i to corner i + 1
-    manifold_slots = np.flatnonzero(faces_per_edge[slot_edge] == 2)
-    order = manifold_slots[np.argsort(slot_edge[manifold_slots], kind="stable")]
-    first, second = order[0::2], order[1::2]  # the two slots of each manifold edge
-    corner_vertex = triangles.ravel()
-    same_start = corner_vertex[first] == corner_vertex[second]
-    a = np.concatenate([first, next_corner(first)])
-    b = np.concatenate(
-        [np.where(same_start, second, next_corner(second)), np.where(same_start, next_corner(second), second)]
-    )
-    graph = sparse.coo_matrix((np.ones(len(a), dtype=np.int8), (a, b)), shape=(3 * m, 3 * m))
-    n_fans, fan = csgraph.connected_components(graph, directed=False)
-    # every fan lies around one vertex: count the fans per vertex through one corner of each
-    corner_of_fan = np.zeros(n_fans, dtype=np.int64)
-    corner_of_fan[fan] = np.arange(3 * m)
-    fans_per_vertex = np.bincount(corner_vertex[corner_of_fan], minlength=n)
-    return int(np.count_nonzero(fans_per_vertex > 1))
+    slot_edge = np.ascontiguousarray(edge_of_corner, dtype=np.int64).ravel()
+    pairs = _manifold_pairs(slot_edge, np.asarray(faces_per_edge, dtype=np.int64))
+    return int(_non_manifold_vertices(pairs, np.ascontiguousarray(triangles, dtype=np.int64).ravel(), n))
+
+
+@numba.njit(cache=True)
+def _non_manifold_vertices(pairs, corner_vertex, n):
+    """:func:`count_non_manifold_vertices`: the corners joined across manifold edges by union-find, then the
+    vertices whose corners have more than one root."""
+    parent = np.arange(corner_vertex.shape[0])
+    for k in range(pairs.shape[0]):
+        first, second = pairs[k, 0], pairs[k, 1]
+        first_next = first - first % 3 + (first % 3 + 1) % 3
+        second_next = second - second % 3 + (second % 3 + 1) % 3
+        if corner_vertex[first] == corner_vertex[second]:
+            _join(parent, first, second)
+            _join(parent, first_next, second_next)
+        else:
+            _join(parent, first, second_next)
+            _join(parent, first_next, second)
+    fan = np.full(n, -1, dtype=np.int64)
+    split = np.zeros(n, dtype=np.bool_)
+    for c in range(corner_vertex.shape[0]):
+        v = corner_vertex[c]
+        r = _root(parent, c)
+        if fan[v] < 0:
+            fan[v] = r
+        elif fan[v] != r:
+            split[v] = True
+    return np.count_nonzero(split)

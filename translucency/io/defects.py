@@ -38,6 +38,7 @@ import dataclasses
 
 import numpy as np
 
+from ..geometry.measure import degenerate_triangles
 from ..geometry.topology import boundary_loops, count_non_manifold_vertices, face_components, unique_edges
 
 __all__ = [
@@ -143,12 +144,9 @@ def zero_area_mask(points, triangles) -> np.ndarray:
     -------
     ndarray of bool, shape (m,)
     """
-    corners = np.asarray(points, dtype=np.float64)[np.asarray(triangles, dtype=np.int64).reshape(-1, 3)]
-    if len(corners) == 0:
-        return np.zeros(0, dtype=bool)
-    twice_area = np.linalg.norm(np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=1)
-    longest = np.max(np.linalg.norm(np.roll(corners, -1, axis=1) - corners, axis=2), axis=1)
-    return twice_area <= ZERO_AREA_RATIO * longest**2
+    points = np.ascontiguousarray(points, dtype=np.float64)
+    triangles = np.ascontiguousarray(triangles, dtype=np.int64).reshape(-1, 3)
+    return degenerate_triangles(points, triangles, ZERO_AREA_RATIO)
 
 
 def _count_duplicate_vertices(points: np.ndarray) -> int:

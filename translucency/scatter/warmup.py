@@ -25,7 +25,8 @@ from pathlib import Path
 
 import numpy as np
 
-#: Kernels (module, name) the main job's solve calls (``tree`` method, near field) and the viewer's relighting.
+#: Kernels (module, name) the main job's solve calls (``tree`` method, near field), the viewer's relighting and
+#: the cleaning of a scan.
 MAIN_JOB_KERNELS = (
     ("translucency.scatter.kernels", "_indexed_rows_directional"),
     ("translucency.scatter.hierarchy", "_traverse"),
@@ -38,6 +39,14 @@ MAIN_JOB_KERNELS = (
     ("translucency.scatter.relight", "_apply_quantised"),
     ("translucency.scatter.relight", "_apply_rows"),
     ("translucency.scatter.nearfield", "_operator_rows"),
+    # the cleaning of a scan (its defect count, orientation and normals)
+    ("translucency.geometry.topology", "_unique_edges"),
+    ("translucency.geometry.topology", "_manifold_pairs"),
+    ("translucency.geometry.topology", "_face_components"),
+    ("translucency.geometry.topology", "_non_manifold_vertices"),
+    ("translucency.geometry.measure", "_cross_products"),
+    ("translucency.geometry.measure", "_vertex_sums"),
+    ("translucency.geometry.measure", "_degenerate"),
 )
 
 NOTICE = "compiling the solver's kernels (first run only, about 15-60 s) ..."
@@ -46,7 +55,7 @@ NOTICE = "compiling the solver's kernels (first run only, about 15-60 s) ..."
 @contextlib.contextmanager
 def compile_notice(say: Callable[[], None]) -> Iterator[None]:
     """Within the block, call ``say()`` once when numba starts compiling one of the solver's kernels
-    (a function of ``translucency.scatter``).
+    (a function of ``translucency``: the solver's, and the cleaning's of :data:`MAIN_JOB_KERNELS`).
 
     Only real compilation counts: numba raises ``numba:compile`` on a cache miss, not when it loads a
     kernel from its cache (wherever ``NUMBA_CACHE_DIR`` puts it).
@@ -59,7 +68,7 @@ def compile_notice(say: Callable[[], None]) -> Iterator[None]:
         def on_start(self, ev):
             dispatcher = (ev.data or {}).get("dispatcher")
             module = getattr(getattr(dispatcher, "py_func", None), "__module__", "") or ""
-            if not self.said and module.startswith("translucency.scatter."):
+            if not self.said and module.startswith("translucency."):
                 self.said = True
                 say()
 
@@ -115,17 +124,25 @@ def _plane(n: int = 24, spacing: float = 1.0):
 
 
 def warm_up(force: bool = False) -> float:
-    """Compile the kernels the main job and the viewer use (a ``tree`` solve of a small plane in marble, and
-    one with ``relight``); returns the seconds it took (0 when every kernel was already cached and ``force``
-    is false)."""
+    """Compile the kernels the main job and the viewer use (the cleaning of a small plane, a ``tree`` solve of
+    it in marble, and one with ``relight``); returns the seconds it took (0 when every kernel was already
+    cached and ``force`` is false)."""
     if not force and not cold_kernels():
         return 0.0
+    from ..geometry import measure, topology
     from .materials import material
     from .names import DEFAULT_METHOD, DEFAULT_TOL, VIEWER_METHOD, VIEWER_TOL
     from .solve import SurfaceGeometry, solve
 
     start = time.perf_counter()
     points, triangles, normals = _plane()
+    # what the cleaning of a scan counts (translucency.io.defects) and computes
+    edges, edge_of_corner = topology.unique_edges(triangles)
+    faces_per_edge = np.bincount(edge_of_corner.ravel(), minlength=len(edges))
+    topology.count_non_manifold_vertices(triangles, edge_of_corner, faces_per_edge, len(points))
+    topology.face_components(triangles, edge_of_corner)
+    measure.degenerate_triangles(points, triangles, 1e-10)
+    measure.vertex_normals(points, triangles)
     medium = material("marble").medium()
     phi = np.ones((points.shape[0], medium.n_channels))
     phi[::5] = 0.0  # unlit vertices too, as under shadows

@@ -1,0 +1,81 @@
+"""Edges, components and fans of triangle lists, against computations written here independently
+(sorting, scipy's graph components, a walk around each vertex) on triangle soups full of defects."""
+
+import numpy as np
+import pytest
+from scipy import sparse
+from scipy.sparse import csgraph
+
+from translucency.geometry.synthetic import icosphere, torus
+from translucency.geometry.topology import count_non_manifold_vertices, face_components, unique_edges
+
+
+def _soups():
+    """Closed meshes, a fan around one vertex of degree 100, and random soups (non-manifold edges and
+    vertices, duplicate and inconsistently oriented triangles, several components)."""
+    rng = np.random.default_rng(1)
+    yield icosphere(3, 1.0)[1]
+    yield torus(3.0, 1.0, 12, 8)[1]
+    m = 100
+    fan = np.stack([np.zeros(m, dtype=np.int64), np.arange(1, m + 1), np.r_[np.arange(2, m + 1), 1]], axis=1)
+    yield fan
+    yield np.vstack([icosphere(2, 1.0)[1], icosphere(2, 1.0)[1] + 200, fan + 400])
+    for _ in range(30):
+        n, m = rng.integers(4, 40), rng.integers(1, 120)
+        t = rng.integers(0, n, size=(m, 3))
+        t = t[(t[:, 0] != t[:, 1]) & (t[:, 1] != t[:, 2]) & (t[:, 0] != t[:, 2])]
+        if len(t):
+            yield t
+
+
+def _sorted_edges(triangles):
+    directed = np.stack([triangles, np.roll(triangles, -1, axis=1)], axis=2).reshape(-1, 2)
+    keys, inverse = np.unique(np.sort(directed, axis=1), axis=0, return_inverse=True)
+    return keys, inverse.reshape(-1, 3)
+
+
+def _fans_per_vertex(triangles, n):
+    """Per vertex, the groups of its triangles linked through edges (at that vertex) of exactly two triangles."""
+    edges, edge_of_corner = _sorted_edges(triangles)
+    faces = np.bincount(edge_of_corner.ravel(), minlength=len(edges))
+    fans = np.zeros(n, dtype=int)
+    for v in range(n):
+        around = np.flatnonzero((triangles == v).any(axis=1))
+        if len(around) == 0:
+            continue
+        links = []
+        for a in range(len(around)):
+            for b in range(a + 1, len(around)):
+                ta, tb = around[a], around[b]
+                shared = set(edge_of_corner[ta]) & set(edge_of_corner[tb])
+                if any(faces[e] == 2 and v in edges[e] for e in shared):
+                    links.append((a, b))
+        graph = sparse.coo_matrix(
+            (np.ones(len(links)), ([a for a, _ in links], [b for _, b in links])), shape=(len(around),) * 2
+        )
+        fans[v] = csgraph.connected_components(graph, directed=False)[0]
+    return fans
+
+
+@pytest.mark.parametrize("index", range(34))
+def test_edges_components_and_fans_match_independent_computations(index):
+    triangles = list(_soups())[index]
+    n = int(triangles.max()) + 1
+    edges, edge_of_corner = unique_edges(triangles)
+    expected_edges, expected_corners = _sorted_edges(triangles)
+    np.testing.assert_array_equal(edges, expected_edges)
+    np.testing.assert_array_equal(edge_of_corner, expected_corners)
+
+    faces = np.bincount(edge_of_corner.ravel(), minlength=len(edges))
+    slots = np.flatnonzero(faces[edge_of_corner.ravel()] == 2)
+    slots = slots[np.argsort(edge_of_corner.ravel()[slots], kind="stable")]
+    graph = sparse.coo_matrix(
+        (np.ones(len(slots) // 2), (slots[0::2] // 3, slots[1::2] // 3)), shape=(len(triangles),) * 2
+    )
+    expected_count, expected_labels = csgraph.connected_components(graph, directed=False)
+    count, labels = face_components(triangles)
+    assert count == expected_count
+    np.testing.assert_array_equal(labels, expected_labels)
+
+    expected_split = int(np.count_nonzero(_fans_per_vertex(triangles, n) > 1))
+    assert count_non_manifold_vertices(triangles, edge_of_corner, faces, n) == expected_split
