@@ -313,7 +313,7 @@ class ConsoleProgress(BakeProgress):
 # --------------------------------------------------------------------------------------------------
 # one file
 # --------------------------------------------------------------------------------------------------
-def bake_file(path, output, settings: BakeSettings, progress=None, said=None) -> BakeRecord:
+def bake_file(path, output, settings: BakeSettings, progress=None, said=None, solver=None) -> BakeRecord:
     """Bake one scan to a PLY; a problem with this file is returned in the record, never raised.
 
     Parameters
@@ -330,6 +330,9 @@ def bake_file(path, output, settings: BakeSettings, progress=None, said=None) ->
     said : callable, optional
         ``said(kind, message)`` as soon as there is a ``"note"`` (the unit inferred) or a ``"warning"``;
         they are in the record too.
+    solver : callable, optional
+        Stands in for :func:`translucency.scatter.solve.solve` (a
+        :class:`~translucency.app.distributed.BlockSolver`: one scan's receivers on a Dask cluster).
 
     Returns
     -------
@@ -362,7 +365,7 @@ def bake_file(path, output, settings: BakeSettings, progress=None, said=None) ->
         mesh, _, _ = load_scan(path, settings.unit, warn=warn, note=note)
         vertices = mesh.n_points
         report("loading", 1.0)
-        result = shade_scan(mesh, settings, settings.lights, progress=report, warn=warn)
+        result = shade_scan(mesh, settings, settings.lights, progress=report, warn=warn, solver=solver)
         lit = int(result.stats["incident"]["n_lit"])
         report("writing", 0.0)
         write_result(result, output)
@@ -544,8 +547,10 @@ def bake_files(
     workers : int
         Processes to bake in (spawned; each runs numba with ``cores // workers`` threads). 1: here.
     scheduler : str or distributed.Client, optional
-        Bake on a Dask cluster: the scheduler's address (``tcp://host:8786``) or a client. The
-        workers read the scans and write the PLYs: both must be reachable from them.
+        Bake on a Dask cluster: the scheduler's address (``tcp://host:8786``) or a client. Several
+        scans go one per task: the workers read the scans and write the PLYs, so both must be reachable
+        from them. A single scan is loaded and written here and its receivers are solved in blocks on
+        the workers (:class:`~translucency.app.distributed.BlockSolver`).
     progress : BakeProgress, optional
     format : {"ply", "vtp", "vtk", "glb", "gltf"}, optional
         Format of the files in an output folder (default ply); a file output's suffix names its own.
@@ -590,7 +595,17 @@ def bake_files(
 
         progress.start(labels, [str(o) for o in outputs])
         try:
-            if client is not None:  # the workers may run elsewhere: absolute paths
+            if client is not None and len(sources) == 1:  # one scan: here, its receivers in blocks on the cluster
+                from .distributed import BlockSolver
+
+                def stage(name, fraction):
+                    progress.stage(0, name, fraction)
+
+                def said(kind, message):
+                    progress.said(0, kind, message)
+
+                done(0, bake_file(sources[0], outputs[0], settings, stage, said, solver=BlockSolver(client)))
+            elif client is not None:  # the workers may run elsewhere: absolute paths
                 jobs = [
                     (None if source is None else os.path.abspath(source), os.path.abspath(target), settings)
                     for source, target in zip(sources, outputs)

@@ -570,7 +570,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument(
         "--scheduler",
         metavar="ADDRESS",
-        help="bake on a Dask cluster (tcp://host:8786); its workers must reach the meshes and the output folder",
+        help=(
+            "bake on a Dask cluster (tcp://host:8786); several scans: its workers must reach the meshes and the "
+            "output folder; one scan: its receivers are solved in blocks on the workers"
+        ),
     )
     add_quiet_option(p)
     p.set_defaults(func=cmd_bake)

@@ -325,9 +325,11 @@ class Scene:
         )
         return self.shade_with(settings, lights, progress=progress, warn=warn)
 
-    def shade_with(self, settings: ShadeSettings, lights=None, *, progress=None, warn=None) -> ShadeResult:
+    def shade_with(self, settings: ShadeSettings, lights=None, *, progress=None, warn=None, solver=None) -> ShadeResult:
         """:meth:`shade` with validated :class:`~translucency.app.settings.ShadeSettings` (their ``shadows``
-        and ``up`` are this Scene's, see :func:`scene_for`)."""
+        and ``up`` are this Scene's, see :func:`scene_for`). ``solver`` stands in for
+        :func:`translucency.scatter.solve.solve` (the same arguments; a
+        :class:`~translucency.app.distributed.BlockSolver` solves on a Dask cluster)."""
         from ..errors import BudgetError
         from ..scatter.fresnel import fresnel_transmittance
         from ..scatter.lights import DirectionalLight, as_light_list
@@ -351,8 +353,10 @@ class Scene:
             )
             timings["incident_light"] = timings.get("incident_light", 0.0) + time.perf_counter() - start
             try:
-                solutions = _solve(geometry, incident, medium, model, method, tol, progress, per_direction, limits)
-                bounced = self._bounces(geometry, solver_mesh, solutions, lights, settings, progress, limits)
+                solutions = _solve(
+                    geometry, incident, medium, model, method, tol, progress, per_direction, limits, solver
+                )
+                bounced = self._bounces(geometry, solver_mesh, solutions, lights, settings, progress, limits, solver)
                 break
             except BudgetError as exc:
                 reason = reason or budget_phrase(exc.estimate)  # of the resolution asked for
@@ -435,7 +439,7 @@ class Scene:
             self.mesh, B, radiance, colors, exposure, self._normals, stats, timings, metadata, phi, reentered
         )
 
-    def _bounces(self, geometry, solver_mesh, solutions, lights, settings, progress, limits):
+    def _bounces(self, geometry, solver_mesh, solutions, lights, settings, progress, limits, solver=None):
         """The light that re-enters (:func:`translucency.scatter.bounces.solve_bounces`) after the first
         solve, on the solver mesh with this Scene's Embree scene; None for ``bounces=0``."""
         if not settings.bounces:
@@ -455,6 +459,7 @@ class Scene:
             tol=settings.tol,
             shadows=self.shadows,
             progress=progress,
+            solver=solver,
             **limits,
         )
 
@@ -513,12 +518,14 @@ def _warn(message: str) -> None:
     warnings.warn(message, TranslucencyWarning, stacklevel=3)
 
 
-def _solve(geometry, incident, medium, model, method, tol, progress, per_direction, limits):
-    """The solver's :class:`Solution` list: one, or one per light sample with ``per_direction``."""
+def _solve(geometry, incident, medium, model, method, tol, progress, per_direction, limits, solver=None):
+    """The solver's :class:`Solution` list: one, or one per light sample with ``per_direction`` (``solver``:
+    :func:`translucency.scatter.solve.solve` or what stands in for it)."""
     from ..scatter.solve import solve
 
+    solve = solver or solve
     if per_direction:
-        return _solve_per_direction(geometry, incident, medium, model, method, tol, progress, limits)
+        return _solve_per_direction(geometry, incident, medium, model, method, tol, progress, limits, solve)
     return [
         solve(
             geometry,
@@ -534,10 +541,11 @@ def _solve(geometry, incident, medium, model, method, tol, progress, per_directi
     ]
 
 
-def _solve_per_direction(geometry, incident, medium, model, method, tol, progress, limits=None):
+def _solve_per_direction(geometry, incident, medium, model, method, tol, progress, limits=None, solver=None):
     """One solve per light sample (each with its own refracted direction); their ``B`` add up."""
     from ..scatter.solve import solve
 
+    solve = solver or solve
     n = geometry.n_vertices
     solutions = []
     for k, part in enumerate(incident.contributions):
@@ -698,7 +706,15 @@ def scene_for(mesh, settings: ShadeSettings) -> Scene:
 
 
 def shade_scan(
-    scan, settings: ShadeSettings | None = None, lights=None, *, unit=None, progress=None, warn=None, note=None
+    scan,
+    settings: ShadeSettings | None = None,
+    lights=None,
+    *,
+    unit=None,
+    progress=None,
+    warn=None,
+    note=None,
+    solver=None,
 ) -> ShadeResult:
     """A scan shaded with every setting of ``settings``: the pipeline's first half (:func:`write_result`
     is the second).
@@ -716,6 +732,8 @@ def shade_scan(
     progress, warn
         As in :func:`shade`; ``warn`` also receives the loader's warnings, and ``note`` the line that
         says which unit was inferred (default: ``warn``).
+    solver : callable, optional
+        Stands in for :func:`translucency.scatter.solve.solve` (:meth:`Scene.shade_with`).
 
     Returns
     -------
@@ -730,7 +748,7 @@ def shade_scan(
         mesh = mesh_for_shading(scan, unit, entry="shade_scan")
     else:
         mesh = load_scan(scan, unit, warn=warn, note=note)[0]
-    return scene_for(mesh, settings).shade_with(settings, lights, progress=progress, warn=warn)
+    return scene_for(mesh, settings).shade_with(settings, lights, progress=progress, warn=warn, solver=solver)
 
 
 def write_result(result: ShadeResult, path) -> Path:

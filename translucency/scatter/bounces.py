@@ -499,6 +499,7 @@ def solve_bounces(
     progress=None,
     memory_limit=None,
     time_limit=None,
+    solver=None,
 ) -> Bounces:
     """The light that re-enters, ``bounces`` times (docs/physics.md §7.4).
 
@@ -527,6 +528,8 @@ def solve_bounces(
         Rays per vertex of the gather.
     progress : callable, optional
         ``progress(stage, fraction)`` with stage ``"bounces"``.
+    solver : callable, optional
+        Stands in for :func:`~translucency.scatter.solve.solve` (the same arguments), as the first solve's did.
 
     Returns
     -------
@@ -577,7 +580,7 @@ def solve_bounces(
             mirror = {key: light.stats["specular"][key] for key in ("reflected_flux", "deposited_flux")}
         entered.append((light.phi_rgb * geometry.vertex_areas[:, None]).sum(axis=0).tolist())
         t = time.perf_counter()
-        solution = solve(
+        solution = (solver or solve)(
             geometry,
             light.phi_rgb,
             light.w12,
