@@ -55,8 +55,8 @@ BYTES_PER_TRIANGLE = 1100
 #: Bytes per triangle and numba thread: the stamps of the near lists (1 int64) and of the listing
 #: of quadrature points (2 int64 per vertex and per edge).
 BYTES_PER_TRIANGLE_THREAD = 8 + 2 * 8 * 1.5 + 2 * 8 * 0.5
-#: Bytes of a near-triangle list entry (int64), kept for every receiver or for one block.
-BYTES_PER_NEAR_TRIANGLE = 8
+#: Bytes of a near-triangle list entry (int32), kept for every receiver or for one block.
+BYTES_PER_NEAR_TRIANGLE = 4
 #: Bytes per near triangle while a receiver's points are listed: room for 10 columns (3 vertices and
 #: 7 rule points) of an int64 index and a float64 factor.
 BYTES_PER_NEAR_ROOM = 10 * 16

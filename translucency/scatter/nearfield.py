@@ -91,13 +91,14 @@ def near_triangles(points, triangles, receivers, radius):
     Returns
     -------
     offsets : (n_receivers + 1,) int64
-    triangle_ids : (offsets[-1],) int64
-        CSR lists: the near triangles of receiver ``r`` are ``triangle_ids[offsets[r]:offsets[r+1]]``.
+    triangle_ids : (offsets[-1],) int32 (int64 for meshes of 2**31 triangles or more)
+        CSR lists: the near triangles of receiver ``r`` are ``triangle_ids[offsets[r]:offsets[r+1]]``. They
+        are the largest arrays of a solve (about 160 entries per receiver on a fine scan), hence 4 bytes.
     """
     args, counts, stamps = _counted(points, triangles, receivers, radius)
     offsets = np.zeros(counts.size + 1, dtype=np.int64)
     np.cumsum(counts, out=offsets[1:])
-    triangle_ids = np.empty(offsets[-1], dtype=np.int64)
+    triangle_ids = np.empty(offsets[-1], dtype=np.int32 if len(triangles) < 2**31 else np.int64)
     for_ranges(_near_pass, counts.size, *args, offsets, triangle_ids, counts, stamps, counts.size)
     return offsets, triangle_ids
 
@@ -149,7 +150,7 @@ def _counted(points, triangles, receivers, radius):
         vt_tris,
     )
     none = np.empty(0, dtype=np.int64)
-    for_ranges(_near_pass, receivers.size, *args, none, none, counts, stamps, 0)
+    for_ranges(_near_pass, receivers.size, *args, none, np.empty(0, dtype=np.int32), counts, stamps, 0)
     return args, counts, stamps
 
 
