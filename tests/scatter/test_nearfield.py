@@ -124,3 +124,19 @@ def test_near_triangles_are_those_with_a_vertex_within_the_radius(radius):
         found = ids[offsets[q] : offsets[q + 1]]
         assert len(found) == len(set(found.tolist()))  # each triangle once
         assert np.array_equal(np.sort(found), expected)
+
+
+def test_one_grid_lists_blocks_of_receivers_as_one_call_lists_them_all():
+    """A grid made once serves block after block (its stamps carry on): the same lists as all at once."""
+    from translucency.geometry.synthetic import icosphere
+
+    points, triangles = icosphere(3, 5.0)
+    receivers = np.random.default_rng(2).permutation(len(points))
+    offsets, ids = nearfield.near_triangles(points, triangles, receivers, 1.2)
+    grid = nearfield.near_grid(points, triangles, 1.2)
+    for block in np.array_split(np.arange(len(receivers)), 7):
+        counts = nearfield.near_triangle_counts(points, triangles, receivers[block], 1.2, grid)
+        o, i = nearfield.near_triangles(points, triangles, receivers[block], 1.2, grid)
+        assert np.array_equal(np.diff(o), counts)
+        for q, r in enumerate(block):
+            assert np.array_equal(np.sort(i[o[q] : o[q + 1]]), np.sort(ids[offsets[r] : offsets[r + 1]]))

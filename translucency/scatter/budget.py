@@ -57,6 +57,10 @@ BYTES_PER_TRIANGLE = 1100
 BYTES_PER_TRIANGLE_THREAD = 8 + 2 * 8 * 1.5 + 2 * 8 * 0.5
 #: Bytes of a near-triangle list entry (int32), kept for every receiver or for one block.
 BYTES_PER_NEAR_TRIANGLE = 4
+#: Every receiver's near lists are kept (for a later solve of the same surface: the viewer's) only up to this
+#: size; above, each block of receivers lists its own and frees them (listing is a few % of a solve), so that
+#: the memory of a large scan does not grow with them (1.7 GB on a 2.6M-vertex scan).
+KEPT_LISTS_BYTES = 256 * 2**20
 #: Bytes per near triangle while a receiver's points are listed: room for 10 columns (3 vertices and
 #: 7 rule points) of an int64 index and a float64 factor.
 BYTES_PER_NEAR_ROOM = 10 * 16
@@ -201,7 +205,7 @@ def estimate(
         Seconds the solve may take (None: no limit).
     keep_lists : bool, optional
         Force keeping every receiver's lists (True) or blocks (False); by default the lists are kept
-        when that fits the budget.
+        when they take at most :data:`KEPT_LISTS_BYTES` and that fits the budget.
 
     Returns
     -------
@@ -221,8 +225,8 @@ def estimate(
     steps = max(1, math.ceil(n_r / PROGRESS_STEPS))
     usual = min(n_r, max(2048, -(-steps // 2048) * 2048))  # a multiple of the near field's own blocks
     keep_peak = base + max(far, lists + per_receiver * usual)
-    if keep_lists is None:
-        keep_lists = budget_bytes is None or keep_peak <= budget_bytes
+    if keep_lists is None:  # kept for a later solve of the same receivers when they are small and fit
+        keep_lists = lists <= KEPT_LISTS_BYTES and (budget_bytes is None or keep_peak <= budget_bytes)
     if keep_lists:
         block, block_bytes, peak = usual, per_receiver * usual, keep_peak
     else:

@@ -81,40 +81,58 @@ FAN_ANGULAR = 3
 FAN_RADIAL = 5
 
 
-def near_triangles(points, triangles, receivers, radius):
-    """For each receiver vertex, the triangles that have a vertex within ``radius`` (mm) of it.
+@dataclass
+class NearGrid:
+    """What listing near triangles needs once per (mesh, radius): the vertices binned in a grid of cells at
+    least ``radius`` wide, each vertex's triangles (CSR) and one stamp per triangle and thread; built by
+    :func:`near_grid`, used by :func:`near_triangles` and :func:`near_triangle_counts` on any number of
+    blocks of receivers (the stamps carry on, so a block never mistakes an earlier block's for its own).
 
-    Includes the receiver's own 1-ring (the receiver is within any radius of itself). The vertices
-    are binned in a uniform grid of cells at least ``radius`` wide, and each receiver looks at the 27
-    cells around its own, in parallel (two passes: count, then fill).
-
-    Returns
-    -------
-    offsets : (n_receivers + 1,) int64
-    triangle_ids : (offsets[-1],) int32 (int64 for meshes of 2**31 triangles or more)
-        CSR lists: the near triangles of receiver ``r`` are ``triangle_ids[offsets[r]:offsets[r+1]]``. They
-        are the largest arrays of a solve (about 160 entries per receiver on a fine scan), hence 4 bytes.
+    Attributes
+    ----------
+    args : tuple
+        The arguments of ``_near_pass`` that do not depend on the receivers.
+    radius : float
+        mm.
+    stamps : (threads, m) int64
+    next_stamp : int
+        The first stamp the next pass may use.
     """
-    args, counts, stamps = _counted(points, triangles, receivers, radius)
-    offsets = np.zeros(counts.size + 1, dtype=np.int64)
-    np.cumsum(counts, out=offsets[1:])
-    triangle_ids = np.empty(offsets[-1], dtype=np.int32 if len(triangles) < 2**31 else np.int64)
-    for_ranges(_near_pass, counts.size, *args, offsets, triangle_ids, counts, stamps, counts.size)
-    return offsets, triangle_ids
+
+    args: tuple
+    radius: float
+    stamps: np.ndarray
+    next_stamp: int = 0
+
+    def passed(self, receivers, offsets, triangle_ids, counts):
+        """One pass of ``_near_pass`` (count when ``triangle_ids`` is empty, else fill) with fresh stamps."""
+        receivers = np.ascontiguousarray(receivers, dtype=np.int64)
+        points, sorted_points, low, cell, dims, cell_keys = self.args[:6]
+        visit = np.argsort(_cell_keys(points[receivers], low, cell, dims), kind="stable")  # cell by cell
+        base = self.next_stamp
+        self.next_stamp += receivers.size
+        for_ranges(
+            _near_pass,
+            receivers.size,
+            points,
+            sorted_points,
+            receivers,
+            visit,
+            self.radius,
+            *self.args[2:],
+            offsets,
+            triangle_ids,
+            counts,
+            self.stamps,
+            base,
+        )
 
 
-def near_triangle_counts(points, triangles, receivers, radius):
-    """Number of near triangles of each receiver (:func:`near_triangles` without the lists), ``(n_receivers,)``
-    int64; memory: the grid and one stamp per triangle and thread."""
-    return _counted(points, triangles, receivers, radius)[1]
-
-
-def _counted(points, triangles, receivers, radius):
-    """The grid of :func:`near_triangles` and its counting pass: ``(arguments of _near_pass, counts, stamps)``."""
+def near_grid(points, triangles, radius) -> NearGrid:
+    """The :class:`NearGrid` of a mesh (mm) for ``radius`` (mm): O(n log n) once, for every block after."""
     points = np.ascontiguousarray(points, dtype=np.float64)
     triangles = np.ascontiguousarray(triangles, dtype=np.int64)
     n = points.shape[0]
-    receivers = np.ascontiguousarray(receivers, dtype=np.int64)
     # vertex -> incident triangles (CSR)
     corner_vertex = triangles.ravel()
     vt_tris = (np.argsort(corner_vertex, kind="stable") // 3).astype(np.int64)
@@ -129,17 +147,9 @@ def _counted(points, triangles, receivers, radius):
     by_key = np.argsort(keys, kind="stable")
     cell_keys, cell_start = np.unique(keys[by_key], return_index=True)
     cell_start = np.append(cell_start, n).astype(np.int64)
-    stamps = np.full((thread_count(), triangles.shape[0]), -1, dtype=np.int64)
-    counts = np.zeros(receivers.size, dtype=np.int64)
-    visit = np.argsort(
-        keys[receivers], kind="stable"
-    )  # receivers cell by cell: neighbours share the cells' cache lines
     args = (
         points,
         np.ascontiguousarray(points[by_key]),
-        receivers,
-        visit,
-        float(radius),
         low,
         cell,
         dims,
@@ -149,9 +159,40 @@ def _counted(points, triangles, receivers, radius):
         vt_offsets,
         vt_tris,
     )
-    none = np.empty(0, dtype=np.int64)
-    for_ranges(_near_pass, receivers.size, *args, none, np.empty(0, dtype=np.int32), counts, stamps, 0)
-    return args, counts, stamps
+    return NearGrid(args, float(radius), np.full((thread_count(), triangles.shape[0]), -1, dtype=np.int64))
+
+
+def near_triangles(points, triangles, receivers, radius, grid: NearGrid | None = None):
+    """For each receiver vertex, the triangles that have a vertex within ``radius`` (mm) of it.
+
+    Includes the receiver's own 1-ring (the receiver is within any radius of itself). The vertices
+    are binned in a uniform grid of cells at least ``radius`` wide (``grid``: :func:`near_grid`, made here
+    when not given; pass it to list blocks of receivers one at a time), and each receiver looks at the 27
+    cells around its own, in parallel (two passes: count, then fill).
+
+    Returns
+    -------
+    offsets : (n_receivers + 1,) int64
+    triangle_ids : (offsets[-1],) int32 (int64 for meshes of 2**31 triangles or more)
+        CSR lists: the near triangles of receiver ``r`` are ``triangle_ids[offsets[r]:offsets[r+1]]``. They
+        are the largest arrays of a solve (about 160 entries per receiver on a fine scan), hence 4 bytes.
+    """
+    grid = grid or near_grid(points, triangles, radius)
+    counts = near_triangle_counts(points, triangles, receivers, radius, grid)
+    offsets = np.zeros(counts.size + 1, dtype=np.int64)
+    np.cumsum(counts, out=offsets[1:])
+    triangle_ids = np.empty(offsets[-1], dtype=np.int32 if len(triangles) < 2**31 else np.int64)
+    grid.passed(receivers, offsets, triangle_ids, counts)
+    return offsets, triangle_ids
+
+
+def near_triangle_counts(points, triangles, receivers, radius, grid: NearGrid | None = None):
+    """Number of near triangles of each receiver (:func:`near_triangles` without the lists), ``(n_receivers,)``
+    int64; memory: the grid and one stamp per triangle and thread."""
+    grid = grid or near_grid(points, triangles, radius)
+    counts = np.zeros(len(receivers), dtype=np.int64)
+    grid.passed(receivers, np.empty(0, dtype=np.int64), np.empty(0, dtype=np.int32), counts)
+    return counts
 
 
 def _cell_keys(points, low, cell, dims):
