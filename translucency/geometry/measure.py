@@ -36,7 +36,7 @@ import numba
 import numpy as np
 
 from ..errors import InvalidParameterError
-from .topology import unique_edges
+from .topology import kernel_array, unique_edges
 
 __all__ = [
     "degenerate_triangles",
@@ -54,8 +54,8 @@ __all__ = [
 
 def triangle_cross_products(points, triangles) -> np.ndarray:
     """Return ``(p1 - p0) x (p2 - p0)`` per triangle: twice the area times the unit normal, (m, 3) in mm²."""
-    points = np.ascontiguousarray(points, dtype=np.float64)
-    triangles = np.ascontiguousarray(triangles, dtype=np.int64).reshape(-1, 3)
+    points = kernel_array(points, np.float64)
+    triangles = kernel_array(np.asarray(triangles).reshape(-1, 3), np.int64)
     return _cross_products(points, triangles)
 
 
@@ -89,8 +89,8 @@ def _vertex_sums(triangles, vectors, n_points):
 def degenerate_triangles(points, triangles, ratio: float) -> np.ndarray:
     """True for the triangles with ``|(p1 - p0) x (p2 - p0)| <= ratio * longest_edge**2`` (twice the area
     against the square of the longest edge: 0 for a sliver or a point), ``(m,)`` bool; one pass in numba."""
-    points = np.ascontiguousarray(points, dtype=np.float64)
-    triangles = np.ascontiguousarray(triangles, dtype=np.int64).reshape(-1, 3)
+    points = kernel_array(points, np.float64)
+    triangles = kernel_array(np.asarray(triangles).reshape(-1, 3), np.int64)
     return _degenerate(points, triangles, float(ratio))
 
 
@@ -189,8 +189,8 @@ def vertex_normals(points, triangles) -> np.ndarray:
     ndarray, shape (n, 3), float64
         Unit normals (dimensionless); zero vectors for vertices without a non-degenerate triangle.
     """
-    triangles = np.ascontiguousarray(triangles, dtype=np.int64).reshape(-1, 3)
-    cross = triangle_cross_products(points, triangles)
+    triangles = kernel_array(np.asarray(triangles).reshape(-1, 3), np.int64)
+    cross = kernel_array(triangle_cross_products(points, triangles), np.float64)
     return _normalise_rows(_vertex_sums(triangles, cross, len(points)))
 
 

@@ -31,6 +31,8 @@ import functools
 import numpy as np
 from scipy.spatial import cKDTree
 
+from .topology import kernel_array
+
 __all__ = ["closest_points_on_triangles", "closest_point_barycentric", "vertex_hausdorff_distance"]
 
 
@@ -141,7 +143,15 @@ def closest_points_on_triangles(query, points, triangles, *, k: int = 16):
     first_distance, candidate = cKDTree(centroid).query(query, k=k, workers=-1)
     first_distance = first_distance.reshape(len(query), k)
     candidate = np.ascontiguousarray(candidate.reshape(len(query), k), dtype=np.int64)
-    scan(query, corners, candidate, best_triangle, best_weights, best_distance)
+    corners = kernel_array(corners, np.float64)  # one signature, whatever the caller's arrays (kernel_array)
+    scan(
+        kernel_array(query, np.float64),
+        corners,
+        kernel_array(candidate, np.int64),
+        best_triangle,
+        best_weights,
+        best_distance,
+    )
     if k == m:
         return best_triangle, best_weights, best_distance
 
@@ -169,7 +179,14 @@ def closest_points_on_triangles(query, points, triangles, *, k: int = 16):
             inside = distance <= reach[rows, None]
             candidate = np.ascontiguousarray(np.where(inside, members[local], -1))
             sub_triangle, sub_weights, sub_distance = best_triangle[rows], best_weights[rows], best_distance[rows]
-            scan(query[rows], corners, candidate, sub_triangle, sub_weights, sub_distance)
+            scan(
+                kernel_array(query[rows], np.float64),
+                corners,
+                kernel_array(candidate, np.int64),
+                sub_triangle,
+                sub_weights,
+                sub_distance,
+            )
             best_triangle[rows], best_weights[rows], best_distance[rows] = sub_triangle, sub_weights, sub_distance
             if count >= len(members):
                 break

@@ -5,13 +5,13 @@ import numpy as np
 
 def subdivide(points, triangles):
     """Split every triangle into four at its edge midpoints (the surface is unchanged)."""
-    m = len(triangles)
-    edges = np.sort(np.concatenate([triangles[:, [0, 1]], triangles[:, [1, 2]], triangles[:, [2, 0]]]), axis=1)
-    unique, inverse = np.unique(edges, axis=0, return_inverse=True)
-    inverse = inverse.ravel() + len(points)
+    from .topology import unique_edges
+
+    unique, edge_of_corner = unique_edges(triangles)
+    edge_of_corner = edge_of_corner + len(points)
     mids = 0.5 * (points[unique[:, 0]] + points[unique[:, 1]])
-    a, b, c = triangles.T
-    ab, bc, ca = inverse[:m], inverse[m : 2 * m], inverse[2 * m :]
+    a, b, c = np.asarray(triangles, dtype=np.int64).T
+    ab, bc, ca = edge_of_corner.T
     tris = np.concatenate([np.stack(t, 1) for t in ((a, ab, ca), (ab, b, bc), (ca, bc, c), (ab, bc, ca))])
     return np.concatenate([points, mids]), tris
 

@@ -17,7 +17,23 @@ import numpy as np
 from scipy import sparse
 from scipy.sparse import csgraph
 
-__all__ = ["unique_edges", "face_components", "boundary_loops", "next_corner", "count_non_manifold_vertices"]
+__all__ = [
+    "kernel_array",
+    "unique_edges",
+    "face_components",
+    "boundary_loops",
+    "next_corner",
+    "count_non_manifold_vertices",
+]
+
+
+def kernel_array(values, dtype) -> np.ndarray:
+    """``values`` as a C-contiguous, read-only array of ``dtype`` (a view; a copy only when the type or layout
+    differ), the one form this package's numba kernels are compiled for: a writable and a read-only array are
+    two types to numba, and a mesh's arrays come both ways (each would compile again on a first run)."""
+    array = np.ascontiguousarray(values, dtype=dtype).view()
+    array.flags.writeable = False
+    return array
 
 
 def unique_edges(triangles) -> tuple[np.ndarray, np.ndarray]:
@@ -34,7 +50,7 @@ def unique_edges(triangles) -> tuple[np.ndarray, np.ndarray]:
     edge_of_corner : ndarray, shape (m, 3), int64
         ``edges[edge_of_corner[t, i]]`` is the edge from corner i to corner i+1 of triangle t.
     """
-    triangles = np.ascontiguousarray(np.asarray(triangles, dtype=np.int64).reshape(-1, 3))
+    triangles = kernel_array(np.asarray(triangles, dtype=np.int64).reshape(-1, 3), np.int64)
     n = int(triangles.max()) + 1 if triangles.size else 1
     edges, edge_of_slot = _unique_edges(triangles, n)
     return edges, edge_of_slot.reshape(-1, 3)
@@ -182,8 +198,10 @@ def face_components(triangles: np.ndarray, edge_of_corner: np.ndarray | None = N
     triangles = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
     if edge_of_corner is None:
         _, edge_of_corner = unique_edges(triangles)
-    slot_edge = np.ascontiguousarray(edge_of_corner, dtype=np.int64).ravel()
-    count, labels = _face_components(_manifold_pairs(slot_edge, np.bincount(slot_edge)), len(triangles))
+    slot_edge = kernel_array(np.asarray(edge_of_corner).ravel(), np.int64)
+    count, labels = _face_components(
+        _manifold_pairs(slot_edge, kernel_array(np.bincount(slot_edge), np.int64)), len(triangles)
+    )
     return int(count), labels
 
 
@@ -209,9 +227,9 @@ def count_non_manifold_vertices(
     Corners (t, i) are graph nodes 3 t + i; a manifold edge links, at each of its two end vertices,
     the corners of its two triangles; the fans are the connected components of that graph.
     """
-    slot_edge = np.ascontiguousarray(edge_of_corner, dtype=np.int64).ravel()
-    pairs = _manifold_pairs(slot_edge, np.asarray(faces_per_edge, dtype=np.int64))
-    return int(_non_manifold_vertices(pairs, np.ascontiguousarray(triangles, dtype=np.int64).ravel(), n))
+    slot_edge = kernel_array(np.asarray(edge_of_corner).ravel(), np.int64)
+    pairs = _manifold_pairs(slot_edge, kernel_array(faces_per_edge, np.int64))
+    return int(_non_manifold_vertices(pairs, kernel_array(np.asarray(triangles).ravel(), np.int64), n))
 
 
 @numba.njit(cache=True)

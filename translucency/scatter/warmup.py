@@ -129,7 +129,7 @@ def warm_up(force: bool = False) -> float:
     cached and ``force`` is false)."""
     if not force and not cold_kernels():
         return 0.0
-    from ..geometry import measure, topology
+    from ..geometry import measure, proximity, topology
     from .materials import material
     from .names import DEFAULT_METHOD, DEFAULT_TOL, VIEWER_METHOD, VIEWER_TOL
     from .solve import SurfaceGeometry, solve
@@ -143,6 +143,8 @@ def warm_up(force: bool = False) -> float:
     topology.face_components(triangles, edge_of_corner)
     measure.degenerate_triangles(points, triangles, 1e-10)
     measure.vertex_normals(points, triangles)
+    # and the mapping of a scan onto its proxy (the viewer's screenshot)
+    proximity.closest_points_on_triangles(points + 0.1 * normals, points, triangles)
     medium = material("marble").medium()
     phi = np.ones((points.shape[0], medium.n_channels))
     phi[::5] = 0.0  # unlit vertices too, as under shadows
