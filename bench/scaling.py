@@ -1,4 +1,4 @@
-"""Time and memory against vertex count (10k to 1M vertices), and the 1M-vertex bake end to end.
+"""Time and memory against vertex count (10k to 10M vertices), and the largest bake end to end.
 
 The meshes are all the shared Igea (cleaned, in mm) at other densities, so that only the vertex count
 changes:
@@ -10,7 +10,12 @@ label     how it is made
 134k      the scan itself
 537k      midpoint-subdivided once (every triangle into four; the surface is unchanged)
 1M        midpoint-subdivided once, then the longest edges (29 %) split at their midpoints once more
+2.1M      midpoint-subdivided twice, every vertex moved along its normal by scan-like noise
+10M       midpoint-subdivided three times, the longest edges split to 10M vertices, the same noise
 ========= ================================================================================
+
+The noise (Gaussian, 5 % of the mesh's mean edge along each vertex normal) makes the subdivided meshes
+as rough at their own scale as a scan is, instead of flat within each triangle of the Igea.
 
 Each mesh is written to a temporary PLY and baked in a child process, as a user would bake it:
 load -> clean -> ``Scene.shade()`` with the default settings (marble, one directional light with
@@ -57,7 +62,9 @@ from solver import MESHES, SCANS, errors, prepare  # noqa: E402
 
 from translucency import __version__  # noqa: E402,F401  (first: it selects numba's threading layer)
 
-SIZES = ("10k", "30k", "134k", "537k", "1M")
+SIZES = ("10k", "30k", "134k", "537k", "1M", "2.1M", "10M")
+#: Standard deviation of the scan-like noise of the 2.1M and 10M meshes, in mean edges (along the normals).
+NOISE_EDGES = 0.05
 QUICK_SIZES = ("10k", "30k")
 RECEIVERS = 2000
 #: Warm shades are repeated (median) on meshes up to this many vertices, run once above.
@@ -89,12 +96,29 @@ def build_mesh(label, igea):
     points, triangles = subdivide(points, triangles)
     if label == "537k":
         return points, triangles, "midpoint-subdivided once"
-    points, triangles, share = split_longest_edges(points, triangles, 1_000_000)
-    return (
-        points,
-        triangles,
-        f"midpoint-subdivided once, then its longest {100 * share:.0f} % of edges split at their midpoints",
-    )
+    if label == "1M":
+        points, triangles, share = split_longest_edges(points, triangles, 1_000_000)
+        return (
+            points,
+            triangles,
+            f"midpoint-subdivided once, then its longest {100 * share:.0f} % of edges split at their midpoints",
+        )
+    points, triangles = subdivide(points, triangles)
+    how = "midpoint-subdivided twice"
+    if label == "10M":
+        points, triangles = subdivide(points, triangles)
+        points, triangles, share = split_longest_edges(points, triangles, 10_000_000)
+        how = f"midpoint-subdivided three times, its longest {100 * share:.0f} % of edges split"
+    return (*with_noise(points, triangles), f"{how}, with noise of {NOISE_EDGES:g} mean edges along the normals")
+
+
+def with_noise(points, triangles):
+    """Every vertex moved along its normal by Gaussian noise of :data:`NOISE_EDGES` mean edges (seeded)."""
+    from translucency.geometry.measure import mean_edge_length, vertex_normals
+
+    sigma = NOISE_EDGES * mean_edge_length(points, triangles)
+    offset = np.random.default_rng(17).normal(0.0, sigma, size=len(points))
+    return points + offset[:, None] * vertex_normals(points, triangles), triangles
 
 
 def split_longest_edges(points, triangles, vertices):
@@ -108,9 +132,9 @@ def split_longest_edges(points, triangles, vertices):
     from translucency.io.meshlab import import_pymeshlab
 
     pymeshlab = import_pymeshlab()
-    edges = np.unique(
-        np.sort(np.concatenate([triangles[:, [0, 1]], triangles[:, [1, 2]], triangles[:, [2, 0]]]), axis=1), axis=0
-    )
+    from translucency.geometry.topology import unique_edges
+
+    edges, _ = unique_edges(triangles)
     lengths = np.sort(np.linalg.norm(points[edges[:, 0]] - points[edges[:, 1]], axis=1))
     missing = min(max(vertices - len(points), 1), len(lengths))
     mesh_set = pymeshlab.MeshSet()
@@ -156,27 +180,40 @@ def current_rss_mb(pid) -> float:
     return 0.0
 
 
-def bake(path, out_ply):
-    """Load -> clean -> shade (default settings) -> write the baked PLY.
+def bake(path, out_ply, stage=None):
+    """Load -> clean -> shade (default settings) -> write the baked PLY; ``stage(name)`` is told each stage
+    as it starts (the solver's too), so that a bake stopped over its limits says where.
 
     Returns ``(scene, result, mesh, seconds per stage)``.
     """
+    stage = stage or (lambda name: None)
+    current = [None]
+
+    def progress(name, fraction):
+        if name != current[0]:
+            current[0] = name
+            stage(f"shade: {name}")
+
     from translucency.app.pipeline import Scene
     from translucency.io.baked import write_baked_ply
     from translucency.io.clean import clean_mesh
     from translucency.io.load import load_mesh
 
     stages = {}
+    stage("load")
     start = time.perf_counter()
     mesh = load_mesh(path, unit="mm")
     stages["load"] = time.perf_counter() - start
+    stage("clean")
     start = time.perf_counter()
     mesh, _ = clean_mesh(mesh)
     stages["clean"] = time.perf_counter() - start
+    stage("shade")
     start = time.perf_counter()
     scene = Scene(mesh)
-    result = scene.shade()
+    result = scene.shade(progress=progress)
     stages["shade"] = time.perf_counter() - start
+    stage("write")
     start = time.perf_counter()
     write_baked_ply(out_ply, mesh, result.radiance, result.B, result.colors, result.metadata)
     stages["write"] = time.perf_counter() - start
@@ -223,7 +260,9 @@ def child(path, out_json, repeats):
     save()
     warm_up(folder)
     save(phase="bake", load_average_start=load_average())
-    scene, result, mesh, stages = bake(path, folder / (Path(path).stem + "_baked.ply"))
+    scene, result, mesh, stages = bake(
+        path, folder / (Path(path).stem + "_baked.ply"), stage=lambda name: save(phase=f"bake: {name}")
+    )
     stages.update({SOLVER_STAGES[k]: result.timings.get(k, 0.0) for k in SOLVER_STAGES})
     save(
         phase="warm shades",
@@ -282,7 +321,7 @@ def run_child(path, out_json, repeats, time_limit, memory_limit_gb):
         rss = current_rss_mb(process.pid)
         peak_seen = max(peak_seen, rss)
         record = json.loads(Path(out_json).read_text()) if Path(out_json).exists() else {}
-        in_bake = record.get("phase") in (None, "warm-up", "bake")
+        in_bake = record.get("phase") in (None, "warm-up", "bake") or str(record.get("phase")).startswith("bake")
         if rss > memory_limit_gb * 1024:
             status = (
                 f"stopped: resident set {rss / 1024:.1f} GB above the {memory_limit_gb:g} GB limit "
@@ -481,9 +520,11 @@ def run(labels, repeats, time_limit, memory_limit_gb):
             points, triangles, how = build_mesh(label, igea)
             path = folder / f"igea_{label}.ply"
             write_mesh(path, points, triangles)
-            print(f"{label}: {len(points)} vertices ({how}) built in {time.perf_counter() - start:.1f} s; baking")
+            built = len(points)
+            del points, triangles  # the child reads the file: the parent holds nothing while it runs
+            print(f"{label}: {built} vertices ({how}) built in {time.perf_counter() - start:.1f} s; baking")
             record = run_child(path, folder / f"igea_{label}.json", repeats, time_limit, memory_limit_gb)
-            record.update(label=label, how=how, built_vertices=len(points))
+            record.update(label=label, how=how, built_vertices=built)
             rows.append(record)
             print(
                 f"{label}: {record['status']}; bake {record.get('bake_seconds', float('nan')):.1f} s, "
