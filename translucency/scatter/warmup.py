@@ -49,7 +49,7 @@ MAIN_JOB_KERNELS = (
     ("translucency.geometry.measure", "_degenerate"),
 )
 
-NOTICE = "compiling the solver's kernels (first run only, about 15-60 s) ..."
+NOTICE = "compiling the solver's kernels (first run only, about 30-90 s) ..."
 
 
 @contextlib.contextmanager
