@@ -425,7 +425,10 @@ def plot(rows, exponents, path):
     ax.set(xscale="log", yscale="log", xlabel="vertices", ylabel="MB", title="memory against vertex count")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=7)
-    fig.suptitle("translucency: the Igea from 10k to 1M vertices, marble, one directional light, tree 1e-2")
+    fig.suptitle(
+        "translucency: the Igea from 10k to 10M vertices, marble, one directional light, tree 1e-2 "
+        "(other: the bounce, geometry, set-up)"
+    )
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
