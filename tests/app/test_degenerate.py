@@ -167,6 +167,7 @@ def _triangle_integral(medium, channel, leg, w_i):
     return value
 
 
+@pytest.mark.slow
 def test_single_triangle_matches_the_integral_of_the_model():
     leg = 10.0
     mesh = TriangleMesh(np.array([[0.0, 0, 0], [leg, 0, 0], [0, leg, 0]]), np.array([[0, 1, 2]]))

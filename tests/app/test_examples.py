@@ -14,6 +14,7 @@ def run_example(name, *args, monkeypatch):
     runpy.run_path(str(EXAMPLES / name), run_name="__main__")
 
 
+@pytest.mark.slow
 def test_compare_materials(tmp_path, monkeypatch, capsys):
     import imageio.v3 as iio
 

@@ -283,7 +283,9 @@ def test_a_full_disk_is_one_sentence_with_exit_1_and_leaves_nothing(sphere, tmp_
         assert [p for p in disk.rglob("*") if p.is_file()] == [filler]
 
 
-@pytest.mark.parametrize("command", ["bake", "compare", "inspect", "view", "main job"])
+@pytest.mark.parametrize(
+    "command", ["bake", "compare", "inspect", "view", pytest.param("main job", marks=pytest.mark.slow)]
+)
 def test_a_simulated_full_disk_is_exit_1_for_every_command(sphere, tmp_path, capsys, monkeypatch, command):
     def full(*args):
         raise OSError(errno.ENOSPC, "No space left on device")

@@ -116,6 +116,7 @@ def test_bad_input_is_refused_with_a_sentence():
         trace_radiance(points, triangles, points, normals * 0, medium, [0, 0, 1], spp=4)
 
 
+@pytest.mark.slow
 def test_a_sphere_matches_mitsubas_volpath():
     # tests/data/mitsuba_sphere.json: Mitsuba 3's volpath (a different program and estimator: it finds a
     # small sphere light by chance after refraction out, docs/physics.md §9.6) on the same polyhedron, at
