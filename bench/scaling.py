@@ -326,7 +326,7 @@ def run_child(path, out_json, repeats, time_limit, memory_limit_gb):
         rss = current_rss_mb(process.pid)
         peak_seen = max(peak_seen, rss)
         record = json.loads(Path(out_json).read_text()) if Path(out_json).exists() else {}
-        in_bake = record.get("phase") in (None, "warm-up", "bake") or str(record.get("phase")).startswith("bake")
+        in_bake = record.get("phase") in (None, "warm-up") or str(record.get("phase")).startswith("bake")
         if rss > memory_limit_gb * 1024:
             status = (
                 f"stopped: resident set {rss / 1024:.1f} GB above the {memory_limit_gb:g} GB limit "

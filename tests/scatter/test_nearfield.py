@@ -135,8 +135,8 @@ def test_one_grid_lists_blocks_of_receivers_as_one_call_lists_them_all():
     offsets, ids = nearfield.near_triangles(points, triangles, receivers, 1.2)
     grid = nearfield.near_grid(points, triangles, 1.2)
     for block in np.array_split(np.arange(len(receivers)), 7):
-        counts = nearfield.near_triangle_counts(points, triangles, receivers[block], 1.2, grid)
-        o, i = nearfield.near_triangles(points, triangles, receivers[block], 1.2, grid)
+        counts = grid.counts(receivers[block])
+        o, i = grid.lists(receivers[block])
         assert np.array_equal(np.diff(o), counts)
         for q, r in enumerate(block):
             assert np.array_equal(np.sort(i[o[q] : o[q + 1]]), np.sort(ids[offsets[r] : offsets[r + 1]]))

@@ -85,8 +85,8 @@ FAN_RADIAL = 5
 class NearGrid:
     """What listing near triangles needs once per (mesh, radius): the vertices binned in a grid of cells at
     least ``radius`` wide, each vertex's triangles (CSR) and one stamp per triangle and thread; built by
-    :func:`near_grid`, used by :func:`near_triangles` and :func:`near_triangle_counts` on any number of
-    blocks of receivers (the stamps carry on, so a block never mistakes an earlier block's for its own).
+    :func:`near_grid`. :meth:`lists` and :meth:`counts` serve any number of blocks of receivers (the stamps
+    carry on, so a block never mistakes an earlier block's for its own).
 
     Attributes
     ----------
@@ -94,6 +94,7 @@ class NearGrid:
         The arguments of ``_near_pass`` that do not depend on the receivers.
     radius : float
         mm.
+    n_triangles : int
     stamps : (threads, m) int64
     next_stamp : int
         The first stamp the next pass may use.
@@ -101,10 +102,27 @@ class NearGrid:
 
     args: tuple
     radius: float
+    n_triangles: int
     stamps: np.ndarray
     next_stamp: int = 0
 
-    def passed(self, receivers, offsets, triangle_ids, counts):
+    def lists(self, receivers):
+        """For each receiver vertex, the triangles that have a vertex within the radius of it (its own 1-ring
+        included): ``(offsets, triangle_ids)``, as :func:`near_triangles` returns them."""
+        counts = self.counts(receivers)
+        offsets = np.zeros(counts.size + 1, dtype=np.int64)
+        np.cumsum(counts, out=offsets[1:])
+        triangle_ids = np.empty(offsets[-1], dtype=np.int32 if self.n_triangles < 2**31 else np.int64)
+        self._pass(receivers, offsets, triangle_ids, counts)
+        return offsets, triangle_ids
+
+    def counts(self, receivers):
+        """Number of near triangles of each receiver, ``(n_receivers,)`` int64 (:meth:`lists` without them)."""
+        counts = np.zeros(len(receivers), dtype=np.int64)
+        self._pass(receivers, np.empty(0, dtype=np.int64), np.empty(0, dtype=np.int32), counts)
+        return counts
+
+    def _pass(self, receivers, offsets, triangle_ids, counts):
         """One pass of ``_near_pass`` (count when ``triangle_ids`` is empty, else fill) with fresh stamps."""
         receivers = np.ascontiguousarray(receivers, dtype=np.int64)
         points, sorted_points, low, cell, dims, cell_keys = self.args[:6]
@@ -159,15 +177,16 @@ def near_grid(points, triangles, radius) -> NearGrid:
         vt_offsets,
         vt_tris,
     )
-    return NearGrid(args, float(radius), np.full((thread_count(), triangles.shape[0]), -1, dtype=np.int64))
+    stamps = np.full((thread_count(), triangles.shape[0]), -1, dtype=np.int64)
+    return NearGrid(args, float(radius), int(triangles.shape[0]), stamps)
 
 
-def near_triangles(points, triangles, receivers, radius, grid: NearGrid | None = None):
+def near_triangles(points, triangles, receivers, radius):
     """For each receiver vertex, the triangles that have a vertex within ``radius`` (mm) of it.
 
     Includes the receiver's own 1-ring (the receiver is within any radius of itself). The vertices
-    are binned in a uniform grid of cells at least ``radius`` wide (``grid``: :func:`near_grid`, made here
-    when not given; pass it to list blocks of receivers one at a time), and each receiver looks at the 27
+    are binned in a uniform grid of cells at least ``radius`` wide (:func:`near_grid`; keep the grid and call
+    its :meth:`NearGrid.lists` to list blocks of receivers one at a time), and each receiver looks at the 27
     cells around its own, in parallel (two passes: count, then fill).
 
     Returns
@@ -177,22 +196,13 @@ def near_triangles(points, triangles, receivers, radius, grid: NearGrid | None =
         CSR lists: the near triangles of receiver ``r`` are ``triangle_ids[offsets[r]:offsets[r+1]]``. They
         are the largest arrays of a solve (about 160 entries per receiver on a fine scan), hence 4 bytes.
     """
-    grid = grid or near_grid(points, triangles, radius)
-    counts = near_triangle_counts(points, triangles, receivers, radius, grid)
-    offsets = np.zeros(counts.size + 1, dtype=np.int64)
-    np.cumsum(counts, out=offsets[1:])
-    triangle_ids = np.empty(offsets[-1], dtype=np.int32 if len(triangles) < 2**31 else np.int64)
-    grid.passed(receivers, offsets, triangle_ids, counts)
-    return offsets, triangle_ids
+    return near_grid(points, triangles, radius).lists(receivers)
 
 
-def near_triangle_counts(points, triangles, receivers, radius, grid: NearGrid | None = None):
+def near_triangle_counts(points, triangles, receivers, radius):
     """Number of near triangles of each receiver (:func:`near_triangles` without the lists), ``(n_receivers,)``
     int64; memory: the grid and one stamp per triangle and thread."""
-    grid = grid or near_grid(points, triangles, radius)
-    counts = np.zeros(len(receivers), dtype=np.int64)
-    grid.passed(receivers, np.empty(0, dtype=np.int64), np.empty(0, dtype=np.int32), counts)
-    return counts
+    return near_grid(points, triangles, radius).counts(receivers)
 
 
 def _cell_keys(points, low, cell, dims):

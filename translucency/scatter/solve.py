@@ -237,8 +237,7 @@ class SurfaceGeometry:
         """Near triangles of each receiver (CSR), cached per (receivers, radius)."""
         key = ("near", receivers.tobytes() if receivers.size < self.n_vertices else "all", round(radius, 12))
         if key not in self._cache:
-            grid = self.near_grid(radius)
-            self._cache[key] = nearfield.near_triangles(self.points, self.triangles, receivers, radius, grid)
+            self._cache[key] = self.near_grid(radius).lists(receivers)
         return self._cache[key]
 
 
@@ -706,13 +705,8 @@ def _plan(work: _Work, method, tol, memory_limit, time_limit, stats):
     )
     far_field = work.far_field(method, tol) if work.lit.size and method != "exact" else None
     counts = sample_counts(work, far_field, near_args, radius, method)
-    available = budget.available_memory()
-    plan = budget.estimate(
-        counts,
-        budget.memory_budget(memory_limit, available, budget.resident_memory()),
-        time_limit,
-        keep_lists=None,
-    )
+    budget_bytes = budget.memory_budget(memory_limit, budget.available_memory(), budget.resident_memory())
+    plan = budget.estimate(counts, budget_bytes, time_limit)
     stats["budget"] = {**plan.as_dict(), "counts": dataclasses.asdict(counts)}
     return plan, near_args, radius, far_field
 
@@ -814,17 +808,13 @@ def sample_counts(work: _Work, far_field, near_args, radius, method) -> budget.S
         sample = np.unique(np.minimum((4 * chosen[:, None] + np.arange(4)).ravel(), n_r - 1))
     rcv = inner[sample]
     grid = geometry.near_grid(radius)
-    near = (
-        nearfield.near_triangle_counts(geometry.points, geometry.triangles, rcv, radius, grid)
-        if rcv.size
-        else np.zeros(0)
-    )
+    near = grid.counts(rcv) if rcv.size else np.zeros(0)
     # the near field on as many sampled receivers as SAMPLE_NEAR_ENTRIES allows (at least two groups)
     take = min(rcv.size, max(8, int(SAMPLE_NEAR_ENTRIES // max(1.0, float(near.mean()) if near.size else 1.0))))
     near_rcv = rcv[np.unique(np.linspace(0, rcv.size - 1, take).astype(np.int64))] if take else rcv
     points = own = np.zeros(0)
     if near_rcv.size:
-        offsets, ids = nearfield.near_triangles(geometry.points, geometry.triangles, near_rcv, radius, grid)
+        offsets, ids = grid.lists(near_rcv)
         own = np.zeros(near_rcv.size, dtype=np.int64)
         _, points = _near_call(near_args, near_rcv, offsets, ids, own)
     far = 0.0
@@ -891,7 +881,7 @@ def _near_field(args, inner, radius, plan, report):
         return correction, total_triangles, total_points, list_seconds
     # blocks with their own lists, cut where their memory reaches what the plan gives a block
     grid = geometry.near_grid(radius)
-    counts = nearfield.near_triangle_counts(geometry.points, geometry.triangles, inner, radius, grid)
+    counts = grid.counts(inner)
     own = budget.BYTES_PER_OWN_POINT * budget.SAMPLE_SAFETY * plan.own_points
     cost = np.cumsum((budget.BYTES_PER_NEAR_ROOM + budget.BYTES_PER_NEAR_TRIANGLE) * counts + own)
     cap = plan.block_bytes
@@ -901,9 +891,7 @@ def _near_field(args, inner, radius, plan, report):
         hi = int(np.searchsorted(cost, (cost[lo - 1] if lo else 0.0) + cap, side="right"))
         hi = min(n_r, max(hi, lo + 1))
         start = time.perf_counter()
-        offsets, triangle_ids = nearfield.near_triangles(
-            geometry.points, geometry.triangles, inner[lo:hi], radius, grid
-        )
+        offsets, triangle_ids = grid.lists(inner[lo:hi])
         list_seconds += time.perf_counter() - start
         correction[lo:hi], points = _near_call(args, inner[lo:hi], offsets, triangle_ids)
         total_triangles += int(triangle_ids.size)
