@@ -59,17 +59,21 @@ def triangle_cross_products(points, triangles) -> np.ndarray:
     return _cross_products(points, triangles)
 
 
+@numba.njit(cache=True, inline="always")
+def _cross(points, triangles, t):
+    """``(p1 - p0) x (p2 - p0)`` of triangle ``t`` as three floats (the same arithmetic as ``np.cross``)."""
+    i0, i1, i2 = triangles[t, 0], triangles[t, 1], triangles[t, 2]
+    a0, a1, a2 = points[i1, 0] - points[i0, 0], points[i1, 1] - points[i0, 1], points[i1, 2] - points[i0, 2]
+    b0, b1, b2 = points[i2, 0] - points[i0, 0], points[i2, 1] - points[i0, 1], points[i2, 2] - points[i0, 2]
+    return a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0
+
+
 @numba.njit(cache=True)
 def _cross_products(points, triangles):
-    """:func:`triangle_cross_products` in one pass (the same arithmetic as ``np.cross``)."""
+    """:func:`triangle_cross_products` in one pass."""
     out = np.empty((triangles.shape[0], 3))
     for t in range(triangles.shape[0]):
-        i0, i1, i2 = triangles[t, 0], triangles[t, 1], triangles[t, 2]
-        a0, a1, a2 = points[i1, 0] - points[i0, 0], points[i1, 1] - points[i0, 1], points[i1, 2] - points[i0, 2]
-        b0, b1, b2 = points[i2, 0] - points[i0, 0], points[i2, 1] - points[i0, 1], points[i2, 2] - points[i0, 2]
-        out[t, 0] = a1 * b2 - a2 * b1
-        out[t, 1] = a2 * b0 - a0 * b2
-        out[t, 2] = a0 * b1 - a1 * b0
+        out[t, 0], out[t, 1], out[t, 2] = _cross(points, triangles, t)
     return out
 
 
@@ -104,10 +108,7 @@ def _degenerate(points, triangles, ratio):
             a, b = triangles[t, i], triangles[t, (i + 1) % 3]
             d0, d1, d2 = points[b, 0] - points[a, 0], points[b, 1] - points[a, 1], points[b, 2] - points[a, 2]
             longest = max(longest, math.sqrt(d0 * d0 + d1 * d1 + d2 * d2))
-        i0, i1, i2 = triangles[t, 0], triangles[t, 1], triangles[t, 2]
-        a0, a1, a2 = points[i1, 0] - points[i0, 0], points[i1, 1] - points[i0, 1], points[i1, 2] - points[i0, 2]
-        b0, b1, b2 = points[i2, 0] - points[i0, 0], points[i2, 1] - points[i0, 1], points[i2, 2] - points[i0, 2]
-        c0, c1, c2 = a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0
+        c0, c1, c2 = _cross(points, triangles, t)
         out[t] = math.sqrt(c0 * c0 + c1 * c1 + c2 * c2) <= ratio * longest * longest
     return out
 

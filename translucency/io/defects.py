@@ -144,8 +144,6 @@ def zero_area_mask(points, triangles) -> np.ndarray:
     -------
     ndarray of bool, shape (m,)
     """
-    points = np.ascontiguousarray(points, dtype=np.float64)
-    triangles = np.ascontiguousarray(triangles, dtype=np.int64).reshape(-1, 3)
     return degenerate_triangles(points, triangles, ZERO_AREA_RATIO)
 
 
