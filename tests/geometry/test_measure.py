@@ -8,6 +8,8 @@ from hypothesis.extra.numpy import arrays
 
 from translucency.errors import InvalidParameterError
 from translucency.geometry.measure import (
+    area_centroids,
+    hull_candidates,
     mean_edge_length,
     signed_volume,
     triangle_areas,
@@ -119,3 +121,43 @@ def test_vertex_normals_of_subnormal_triangles_are_unit():
     length = np.linalg.norm(vertex_normals(points, triangles), axis=1)
     assert np.all((np.abs(length - 1) < 1e-12) | (length == 0))
     assert np.count_nonzero(length) == 3
+
+
+def test_area_centroids_match_a_sum_over_the_triangles():
+    """Per label, the area and the area-weighted mean of the triangles' centroids, summed here with numpy."""
+    rng = np.random.default_rng(3)
+    points = rng.normal(size=(60, 3)) * 10.0
+    triangles = rng.integers(0, 60, size=(200, 3))
+    labels = rng.integers(0, 4, size=200)
+    areas, centroids = area_centroids(points, triangles, labels, 5)
+    corners = points[triangles]
+    a = 0.5 * np.linalg.norm(np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=1)
+    for k in range(4):
+        mine = labels == k
+        assert areas[k] == pytest.approx(a[mine].sum(), rel=1e-12)
+        expected = (a[mine, None] * corners[mine].mean(axis=1)).sum(axis=0) / a[mine].sum()
+        np.testing.assert_allclose(centroids[k], expected, rtol=1e-12)
+    assert areas[4] == 0.0 and np.all(centroids[4] == 0.0)  # a label without triangles
+
+
+@pytest.mark.parametrize("cloud", ["ball", "sphere", "box"])
+def test_hull_candidates_keep_every_vertex_of_the_hull(cloud):
+    """The culled points have the same convex hull as all of them (scipy's hull of every point)."""
+    from scipy.spatial import ConvexHull
+
+    rng = np.random.default_rng(5)
+    points = rng.normal(size=(20000, 3))
+    if cloud == "sphere":  # every point on the hull
+        points /= np.linalg.norm(points, axis=1, keepdims=True)
+    elif cloud == "box":  # flat faces: many points on the hull's facets, few vertices
+        points = rng.uniform(-1.0, 1.0, size=(20000, 3))
+        points[:2000, 0] = 1.0
+    kept = hull_candidates(points * 30.0 + 5.0)
+    full = ConvexHull(points * 30.0 + 5.0)
+    culled = ConvexHull(kept)
+    assert culled.volume == pytest.approx(full.volume, rel=1e-12)
+    assert culled.area == pytest.approx(full.area, rel=1e-12)
+    vertices = {tuple(p) for p in (points * 30.0 + 5.0)[full.vertices]}
+    assert vertices <= {tuple(p) for p in kept}
+    if cloud == "ball":
+        assert len(kept) < 0.2 * len(points)  # it culls

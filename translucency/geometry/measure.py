@@ -113,6 +113,93 @@ def _degenerate(points, triangles, ratio):
     return out
 
 
+def area_centroids(points, triangles, labels=None, count: int = 1):
+    """Area (mm²) and area-weighted centroid (mm) of the triangles of each label, in one pass.
+
+    ``labels (m,)`` gives each triangle's label in ``0 .. count - 1`` (all 0 when omitted). Returns
+    ``(areas (count,), centroids (count, 3))``; a label without area has its centroid at the origin.
+    """
+    points = kernel_array(points, np.float64)
+    triangles = kernel_array(np.asarray(triangles).reshape(-1, 3), np.int64)
+    labels = np.zeros(triangles.shape[0], dtype=np.int64) if labels is None else kernel_array(labels, np.int64)
+    return _area_centroids(points, triangles, labels, int(count))
+
+
+@numba.njit(cache=True)
+def _area_centroids(points, triangles, labels, count):
+    """:func:`area_centroids`."""
+    areas = np.zeros(count)
+    sums = np.zeros((count, 3))
+    for t in range(triangles.shape[0]):
+        c0, c1, c2 = _cross(points, triangles, t)
+        area = 0.5 * math.sqrt(c0 * c0 + c1 * c1 + c2 * c2)
+        k = labels[t]
+        areas[k] += area
+        for i in range(3):
+            sums[k, i] += area * (points[triangles[t, 0], i] + points[triangles[t, 1], i] + points[triangles[t, 2], i])
+    for k in range(count):
+        if areas[k] > 0.0:
+            for i in range(3):
+                sums[k, i] /= 3.0 * areas[k]
+    return areas, sums
+
+
+#: Directions whose extreme points span the polytope that :func:`hull_candidates` culls inside.
+CULL_DIRECTIONS = 64
+
+
+def hull_candidates(points) -> np.ndarray:
+    """The points (n, 3) that can be vertices of their convex hull: the same hull from fewer points.
+
+    The extreme points along :data:`CULL_DIRECTIONS` directions span a polytope inside the hull; a
+    point strictly inside that polytope is strictly inside the hull and is dropped (Akl and Toussaint's
+    heuristic). On a 2M-vertex scan this keeps under 1 % of the points, in one pass each in numba.
+    """
+    from scipy.spatial import ConvexHull, QhullError
+
+    points = kernel_array(points, np.float64)
+    if points.shape[0] <= 4 * CULL_DIRECTIONS:
+        return np.array(points)
+    k = np.arange(CULL_DIRECTIONS) + 0.5  # a Fibonacci sphere of directions
+    z = 1.0 - 2.0 * k / CULL_DIRECTIONS
+    angle = np.pi * (1.0 + 5.0**0.5) * k
+    ring = np.sqrt(1.0 - z * z)
+    directions = np.ascontiguousarray(np.stack([ring * np.cos(angle), ring * np.sin(angle), z], axis=1))
+    try:
+        inner = ConvexHull(points[np.unique(_extremes(points, directions))])
+    except (QhullError, ValueError):  # the extremes are flat: nothing to cull by
+        return np.array(points)
+    margin = 1e-9 * float(np.max(np.abs(points)))
+    return points[_outside_or_on(points, np.ascontiguousarray(inner.equations), margin)]
+
+
+@numba.njit(cache=True)
+def _extremes(points, directions):
+    """Index of the point farthest along each direction."""
+    best = np.full(directions.shape[0], -np.inf)
+    index = np.zeros(directions.shape[0], dtype=np.int64)
+    for i in range(points.shape[0]):
+        for d in range(directions.shape[0]):
+            v = points[i, 0] * directions[d, 0] + points[i, 1] * directions[d, 1] + points[i, 2] * directions[d, 2]
+            if v > best[d]:
+                best[d] = v
+                index[d] = i
+    return index
+
+
+@numba.njit(cache=True)
+def _outside_or_on(points, equations, margin):
+    """True for the points not strictly inside every facet ``n . x + offset < 0`` (by ``margin``, mm)."""
+    keep = np.zeros(points.shape[0], dtype=np.bool_)
+    for i in range(points.shape[0]):
+        for f in range(equations.shape[0]):
+            e = equations[f]
+            if points[i, 0] * e[0] + points[i, 1] * e[1] + points[i, 2] * e[2] + e[3] >= -margin:
+                keep[i] = True
+                break
+    return keep
+
+
 def triangle_areas(points, triangles) -> np.ndarray:
     """Area of each triangle.
 

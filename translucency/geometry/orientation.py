@@ -26,6 +26,7 @@ import numpy as np
 from scipy import sparse
 from scipy.sparse import csgraph
 
+from .measure import area_centroids, triangle_cross_products
 from .topology import face_components, unique_edges
 
 __all__ = ["coherent_orientation", "outward_flips", "flip_triangles"]
@@ -104,16 +105,9 @@ def outward_flips(points, triangles) -> tuple[np.ndarray, int]:
     if len(triangles) == 0:
         return np.zeros(0, dtype=bool), 0
     count, component = face_components(triangles)
-    p0, p1, p2 = (points[triangles[:, i]] for i in range(3))
-    cross = np.cross(p1 - p0, p2 - p0)
-    area = 0.5 * np.linalg.norm(cross, axis=1)
-    centre = (p0 + p1 + p2) / 3.0
-    area_sum = np.bincount(component, weights=area, minlength=count)
-    safe = np.where(area_sum > 0, area_sum, 1.0)
-    centroid = np.stack(
-        [np.bincount(component, weights=area * centre[:, k], minlength=count) for k in range(3)], axis=1
-    )
-    centroid /= safe[:, None]
+    _, centroid = area_centroids(points, triangles, component, count)
+    p0 = points[triangles[:, 0]]
+    cross = triangle_cross_products(points, triangles)
     # signed volume of the tetrahedron (c, p0, p1, p2) = (p0 - c) . ((p1 - c) x (p2 - c)) / 6
     #                                               = (p0 - c) . ((p1 - p0) x (p2 - p0)) / 6
     c = centroid[component]

@@ -34,7 +34,9 @@ pymeshlab face000 (range) +y       0.0032 (+z), fallback     --
 ========================= ======== ========================= ==================================
 
 All seven come out the same when the scan is first turned by 3 or 6 degrees about two axes; it takes
-20-60 ms on 18-48k vertices and 0.2 s on the Igea's 134k (one convex hull).
+20-60 ms on 18-48k vertices and 0.2 s on the Igea's 134k (one convex hull);
+1.8 s on the Igea subdivided to 2.1M, where the hull is built from the points that the polytope of 64
+extreme points does not contain (:func:`~translucency.geometry.measure.hull_candidates`; 15 s before).
 
 The display frame (:func:`display_frame`) maps the scan's axes to right, up and front (a right-handed
 frame): for ``+y`` it is the identity (front +z), for ``+z`` front is -y (the "front view" of Z-up
@@ -46,6 +48,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import InvalidParameterError, option
+from ..geometry.measure import area_centroids, hull_candidates
 
 __all__ = [
     "UP_CHOICES",
@@ -127,15 +130,16 @@ def base_scores(points, triangles) -> dict:
     from scipy.spatial import ConvexHull, QhullError
 
     points = np.asarray(points, dtype=np.float64)
-    triangles = np.asarray(triangles, dtype=np.int64)
-    corners = points[triangles]
-    areas = 0.5 * np.linalg.norm(np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=1)
+    triangles = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
+    area, centroid = area_centroids(points, triangles)
     scores = {axis: None for axis in AXES}
-    if not areas.sum() > 0:
+    if not area[0] > 0:
         return scores
-    centroid = (areas[:, None] * corners.mean(axis=1)).sum(axis=0) / areas.sum()
-    used = points[np.unique(triangles)]
+    centroid = centroid[0]
+    in_use = np.zeros(points.shape[0], dtype=bool)
+    in_use[triangles.ravel()] = True
     try:
+        used = hull_candidates(points[in_use])
         hull = ConvexHull(used)
     except (QhullError, ValueError):  # flat or too few points: no volume, no base
         return scores

@@ -47,6 +47,10 @@ MAIN_JOB_KERNELS = (
     ("translucency.geometry.measure", "_cross_products"),
     ("translucency.geometry.measure", "_vertex_sums"),
     ("translucency.geometry.measure", "_degenerate"),
+    # the up axis of a scan (its default light)
+    ("translucency.geometry.measure", "_area_centroids"),
+    ("translucency.geometry.measure", "_extremes"),
+    ("translucency.geometry.measure", "_outside_or_on"),
 )
 
 NOTICE = "compiling the solver's kernels (first run only, about 30-90 s) ..."
@@ -143,6 +147,9 @@ def warm_up(force: bool = False) -> float:
     topology.face_components(triangles, edge_of_corner)
     measure.degenerate_triangles(points, triangles, 1e-10)
     measure.vertex_normals(points, triangles)
+    # the up axis (translucency.io.upright): the surface's centroid and the convex hull's candidates
+    measure.area_centroids(points, triangles)
+    measure.hull_candidates(np.random.default_rng(0).normal(size=(4 * measure.CULL_DIRECTIONS + 1, 3)))
     # and the mapping of a scan onto its proxy (the viewer's screenshot)
     proximity.closest_points_on_triangles(points + 0.1 * normals, points, triangles)
     medium = material("marble").medium()
