@@ -66,41 +66,99 @@ class SourceTree:
 
     def __init__(self, points: np.ndarray, leaf_size: int = LEAF_SIZE):
         points = np.ascontiguousarray(points, dtype=np.float64)
-        n = points.shape[0]
-        order = np.arange(n, dtype=np.int64)
-        starts, ends, lefts, rights = [], [], [], []
-        # iterative build: (node id, start, end) with the parent's child slot patched afterwards
-        stack = [(0, n, -1, 0)]
-        while stack:
-            lo, hi, parent, side = stack.pop()
-            node = len(starts)
-            starts.append(lo)
-            ends.append(hi)
-            lefts.append(-1)
-            rights.append(-1)
-            if parent >= 0:
-                (lefts if side == 0 else rights)[parent] = node
-            if hi - lo <= leaf_size:
-                continue
-            idx = order[lo:hi]
-            box = points[idx]
-            axis = int(np.argmax(box.max(axis=0) - box.min(axis=0)))
-            mid = (hi - lo) // 2
-            part = np.argpartition(box[:, axis], mid)
-            order[lo:hi] = idx[part]
-            stack.append((lo + mid, hi, node, 1))
-            stack.append((lo, lo + mid, node, 0))
-        self.order = order
-        self.start = np.array(starts, dtype=np.int64)
-        self.end = np.array(ends, dtype=np.int64)
-        self.left = np.array(lefts, dtype=np.int64)
-        self.right = np.array(rights, dtype=np.int64)
-        self.centre, self.radius = _bounds(points, order, self.start, self.end, self.left, self.right)
+        self.order, self.start, self.end, self.left, self.right = _build(points, max(1, int(leaf_size)))
+        self.centre, self.radius = _bounds(points, self.order, self.start, self.end, self.left, self.right)
 
     @property
     def n_nodes(self) -> int:
         """Number of nodes."""
         return int(self.start.size)
+
+
+@numba.njit(cache=True)
+def _build(points, leaf_size):
+    """The tree's ``(order, start, end, left, right)``: a node of more than ``leaf_size`` points is split at
+    the median of its box's longest axis (the lower half first); nodes are numbered depth first, a
+    parent before its children, the left subtree before the right."""
+    n = points.shape[0]
+    # a split leaves at least (leaf_size + 1) // 2 points on each side, so there are at most this many nodes
+    capacity = 2 * (n // max(1, (leaf_size + 1) // 2) + 1) + 1
+    start = np.empty(capacity, dtype=np.int64)
+    end = np.empty(capacity, dtype=np.int64)
+    left = np.full(capacity, -1, dtype=np.int64)
+    right = np.full(capacity, -1, dtype=np.int64)
+    order = np.arange(n)
+    points = points.copy()  # moved with ``order``: the passes over a node read memory in sequence
+    stack = np.empty((128, 4), dtype=np.int64)  # lo, hi, parent, side; depth is log2(n / leaf_size)
+    stack[0, 0], stack[0, 1], stack[0, 2], stack[0, 3] = 0, n, -1, 0
+    top, count = 1, 0
+    while top > 0:
+        top -= 1
+        lo, hi, parent, side = stack[top, 0], stack[top, 1], stack[top, 2], stack[top, 3]
+        node = count
+        count += 1
+        start[node], end[node] = lo, hi
+        if parent >= 0:
+            if side == 0:
+                left[parent] = node
+            else:
+                right[parent] = node
+        if hi - lo <= leaf_size:
+            continue
+        axis = _longest_axis(points, lo, hi)
+        mid = lo + (hi - lo) // 2
+        _select(points, order, lo, hi, mid, axis)
+        stack[top, 0], stack[top, 1], stack[top, 2], stack[top, 3] = mid, hi, node, 1
+        stack[top + 1, 0], stack[top + 1, 1], stack[top + 1, 2], stack[top + 1, 3] = lo, mid, node, 0
+        top += 2
+    return order, start[:count].copy(), end[:count].copy(), left[:count].copy(), right[:count].copy()
+
+
+@numba.njit(cache=True, inline="always")
+def _longest_axis(points, lo, hi):
+    """The axis (0, 1, 2) along which the box of ``points[lo:hi]`` is longest (the first of equals)."""
+    low = np.full(3, np.inf)
+    high = np.full(3, -np.inf)
+    for i in range(lo, hi):
+        for k in range(3):
+            v = points[i, k]
+            low[k] = min(low[k], v)
+            high[k] = max(high[k], v)
+    axis = 0
+    for k in range(1, 3):
+        if high[k] - low[k] > high[axis] - low[axis]:
+            axis = k
+    return axis
+
+
+@numba.njit(cache=True, inline="always")
+def _select(points, order, lo, hi, kth, axis):
+    """Reorder rows ``lo:hi`` of ``points`` and ``order`` alike so that the rows before ``kth`` are at most,
+    and those from it on at least, the ``kth`` smallest along ``axis`` (Hoare's selection with a
+    median-of-three pivot)."""
+    hi -= 1
+    while hi > lo:
+        m = (lo + hi) // 2
+        a, b, c = points[lo, axis], points[m, axis], points[hi, axis]
+        pivot = max(min(a, b), min(max(a, b), c))
+        i, j = lo, hi
+        while i <= j:
+            while points[i, axis] < pivot:
+                i += 1
+            while points[j, axis] > pivot:
+                j -= 1
+            if i <= j:
+                order[i], order[j] = order[j], order[i]
+                for k in range(3):
+                    points[i, k], points[j, k] = points[j, k], points[i, k]
+                i += 1
+                j -= 1
+        if kth <= j:
+            hi = j
+        elif kth >= i:
+            lo = i
+        else:
+            return
 
 
 def _leaves_then_levels(start, left, right):

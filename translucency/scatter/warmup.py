@@ -30,6 +30,7 @@ import numpy as np
 MAIN_JOB_KERNELS = (
     ("translucency.scatter.kernels", "_indexed_rows_directional"),
     ("translucency.scatter.hierarchy", "_traverse"),
+    ("translucency.scatter.hierarchy", "_build"),
     ("translucency.scatter.nearfield", "_near_pass"),
     ("translucency.scatter.nearfield", "_fill_shared_points"),
     ("translucency.scatter.nearfield", "_list_points"),
