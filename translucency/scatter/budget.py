@@ -48,13 +48,16 @@ DEFAULT_TIME_LIMIT_S = 300.0
 #: flux density and refracted direction (given, ordered, flux), areas, the source tree and its
 #: aggregated table, the near field's shared point table (vertex columns), ``B`` and its correction.
 BYTES_PER_VERTEX = 800
-#: Bytes per triangle: indices (given, ordered), triangle tables (diameters, centroids, edges), the
-#: vertex-to-triangle lists of the near-triangle grid, and the shared table's Dunavant points and
-#: edge midpoints (7 + 1.5 columns of 12 float64 where light enters).
-BYTES_PER_TRIANGLE = 1100
+#: Bytes per triangle: indices (given, ordered), triangle tables (diameters, centroids, edges) and the
+#: vertex-to-triangle lists of the near-triangle grid.
+BYTES_PER_TRIANGLE = 300
+#: Bytes per triangle of a near-field block's point table: Dunavant points and edge midpoints (7 + 1.5
+#: columns of 12 float64). A block of ``b`` receivers lists about ``(sqrt(2 b) + sqrt(k))**2 <= 4 b + 2 k``
+#: triangles (a patch of ``2 b`` triangles and its rim, ``k`` near triangles per receiver).
+BYTES_PER_TABLE_TRIANGLE = 8.5 * 12 * 8
 #: Bytes per triangle and numba thread: the stamps of the near lists (1 int64) and of the listing
-#: of quadrature points (2 int64 per vertex and per edge).
-BYTES_PER_TRIANGLE_THREAD = 8 + 2 * 8 * 1.5 + 2 * 8 * 0.5
+#: of quadrature points (2 int32 per vertex and per edge).
+BYTES_PER_TRIANGLE_THREAD = 8 + 2 * 4 * 1.5 + 2 * 4 * 0.5
 #: Bytes of a near-triangle list entry (int32), kept for every receiver or for one block.
 BYTES_PER_NEAR_TRIANGLE = 4
 #: Every receiver's near lists are kept (for a later solve of the same surface: the viewer's) only up to this
@@ -221,19 +224,24 @@ def estimate(
     far = BYTES_PER_FAR_EVALUATION * counts.far_evaluations if counts.method == "tree" else 9 * 8 * counts.n_lit
     near_triangles = SAMPLE_SAFETY * counts.near_triangles
     lists = BYTES_PER_NEAR_TRIANGLE * n_r * near_triangles
-    per_receiver = BYTES_PER_NEAR_ROOM * near_triangles + BYTES_PER_OWN_POINT * SAMPLE_SAFETY * counts.own_points
+    per_receiver = (
+        BYTES_PER_NEAR_ROOM * near_triangles
+        + BYTES_PER_OWN_POINT * SAMPLE_SAFETY * counts.own_points
+        + 4 * BYTES_PER_TABLE_TRIANGLE
+    )
+    rim = 2 * BYTES_PER_TABLE_TRIANGLE * near_triangles  # the block table's triangles around the patch
     steps = max(1, math.ceil(n_r / PROGRESS_STEPS))
     usual = min(n_r, max(2048, -(-steps // 2048) * 2048))  # a multiple of the near field's own blocks
-    keep_peak = base + max(far, lists + per_receiver * usual)
+    keep_peak = base + max(far, lists + rim + per_receiver * usual)
     if keep_lists is None:  # kept for a later solve of the same receivers when they are small and fit
         keep_lists = lists <= KEPT_LISTS_BYTES and (budget_bytes is None or keep_peak <= budget_bytes)
     if keep_lists:
-        block, block_bytes, peak = usual, per_receiver * usual, keep_peak
+        block, block_bytes, peak = usual, rim + per_receiver * usual, keep_peak
     else:
         per_block = per_receiver + BYTES_PER_NEAR_TRIANGLE * near_triangles
-        room = (budget_bytes - base) if budget_bytes is not None else per_block * usual
+        room = (budget_bytes - base - rim) if budget_bytes is not None else per_block * usual
         block = int(min(usual, max(MIN_BLOCK_RECEIVERS, room // per_block if per_block > 0 else usual)))
-        block_bytes = per_block * block
+        block_bytes = rim + per_block * block
         peak = base + max(far, block_bytes)
     seconds = solve_seconds(counts)
     fits = (budget_bytes is None or peak <= budget_bytes) and (time_limit is None or seconds <= time_limit)

@@ -413,15 +413,23 @@ def source_point_table(
     tables: TriangleTables,
     rule_points=RULE_POINTS,
     rule_weights=RULE_WEIGHTS,
+    within=None,
 ) -> SourcePoints:
     """Quadrature points every receiver shares (made as :func:`_gather` makes them).
 
     Columns ``0..n-1`` are the vertices, then ``len(rule_points)`` Dunavant points per triangle with
     light at a corner (the first is the centroid), then the midpoints of the edges of those triangles.
+    ``within`` (triangle ids), when given, limits the triangles to those: the ones some receivers list,
+    so that a block of receivers holds the points of its neighbourhood only.
     """
     n = points.shape[0]
     vertex_lit = phi.sum(axis=1) > 0
-    lit_triangles = np.flatnonzero(vertex_lit[triangles].any(axis=1))
+    lit = vertex_lit[triangles].any(axis=1)
+    if within is not None:
+        listed = np.zeros(triangles.shape[0], dtype=bool)
+        listed[within] = True
+        lit &= listed
+    lit_triangles = np.flatnonzero(lit)
     n_rule = rule_points.shape[0]
     first_rule = np.full(triangles.shape[0], -1, dtype=np.int64)
     first_rule[lit_triangles] = n + n_rule * np.arange(lit_triangles.size)
@@ -742,7 +750,7 @@ def near_field_correction(
     too, and over a triangle wider than a fraction of ``1 / sigma_tr`` faster than the rule follows).
     ``tables`` are the mesh's
     :class:`TriangleTables` (made here when not given); ``shared`` the :class:`SourcePoints` of the
-    same inputs (made here when not given; pass it to call this on receivers a part at a time).
+    same inputs (made here when not given, for the triangles these receivers list only).
     ``refined_out`` (n_receivers,) int64, when given, receives the number of each receiver's own points.
 
     Returns
@@ -759,7 +767,16 @@ def near_field_correction(
     centroid_factor = CENTROID_WEIGHT / float(rule_weights[0])  # its weight is area * w_0 * phi
     if shared is None:
         shared = source_point_table(
-            points, normals, w12, phi, triangles, triangle_areas, tables, rule_points, rule_weights
+            points,
+            normals,
+            w12,
+            phi,
+            triangles,
+            triangle_areas,
+            tables,
+            rule_points,
+            rule_weights,
+            within=triangle_ids[offsets[0] : offsets[-1]],
         )
     diameters, centroids = tables.diameters, tables.centroids
     lanes = channel_lanes(params, channel_of, phi.shape[1])
@@ -776,7 +793,8 @@ def near_field_correction(
     factors = np.empty(room)
     own = np.empty(0)
     ones = np.empty(0)
-    stamps = np.full((thread_count(), 2 * (points.shape[0] + tables.edges.shape[0])), -1, dtype=np.int64)
+    # receiver numbers and list slots (int32: half the memory of a pass that scales with the mesh)
+    stamps = np.full((thread_count(), 2 * (points.shape[0] + tables.edges.shape[0])), -1, dtype=np.int32)
     for start in starts:
         block = slice(start, min(n_r, start + BLOCK_RECEIVERS))
         rcv = receivers[block]

@@ -682,15 +682,6 @@ def _plan(work: _Work, method, tol, memory_limit, time_limit, stats):
     ``stats["budget"]``."""
     geometry = work.geometry
     radius = near_radius(geometry, work.medium)
-    shared = nearfield.source_point_table(
-        geometry.points,
-        geometry.normals,
-        work.w12,
-        work.phi,
-        geometry.triangles,
-        geometry.triangle_areas,
-        geometry.triangle_tables(),
-    )
     near_args = dict(
         model_code=kernels.MODELS[work.model],
         geometry=geometry,
@@ -701,7 +692,6 @@ def _plan(work: _Work, method, tol, memory_limit, time_limit, stats):
         medium=work.medium,
         degree3_ratio=0.0 if method == "exact" else NEAR_DEGREE3_RATIO,
         degree3_diameter=NEAR_DEGREE3_DECAY / max(float(np.max(work.medium.sigma_tr)), 1e-300),
-        shared=shared,
     )
     far_field = work.far_field(method, tol) if work.lit.size and method != "exact" else None
     counts = sample_counts(work, far_field, near_args, radius, method)
@@ -787,7 +777,6 @@ def _near_call(args, receivers, offsets, triangle_ids, own=None):
         tables=g.triangle_tables(),
         degree3_ratio=args["degree3_ratio"],
         degree3_diameter=args["degree3_diameter"],
-        shared=args["shared"],
         refined_out=own,
     )
 
@@ -882,9 +871,10 @@ def _near_field(args, inner, radius, plan, report):
     # blocks with their own lists, cut where their memory reaches what the plan gives a block
     grid = geometry.near_grid(radius)
     counts = grid.counts(inner)
-    own = budget.BYTES_PER_OWN_POINT * budget.SAMPLE_SAFETY * plan.own_points
+    own = budget.BYTES_PER_OWN_POINT * budget.SAMPLE_SAFETY * plan.own_points + 4 * budget.BYTES_PER_TABLE_TRIANGLE
     cost = np.cumsum((budget.BYTES_PER_NEAR_ROOM + budget.BYTES_PER_NEAR_TRIANGLE) * counts + own)
-    cap = plan.block_bytes
+    rim = 2 * budget.BYTES_PER_TABLE_TRIANGLE * budget.SAMPLE_SAFETY * float(np.mean(counts)) if counts.size else 0.0
+    cap = max(plan.block_bytes - rim, 1.0)
     list_seconds += time.perf_counter() - start
     lo = 0
     while lo < n_r:
