@@ -29,6 +29,7 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
+from ..geometry.topology import kernel_array
 from .threads import for_ranges
 
 LEAF_SIZE = 8
@@ -201,9 +202,11 @@ def aggregate(order, start, end, left, right, points, normals, w12, flux):
     """
     n_nodes = start.shape[0]
     n_out = flux.shape[1]
-    source_weight = flux.sum(axis=1)
-    weighted = source_weight[:, None] * np.hstack([points, normals, w12])
-    sums = _sums(order, start, end, left, right, np.hstack([flux, source_weight[:, None], weighted]))
+    sums = np.zeros((n_nodes, n_out + 10))
+    leaves, levels = _leaves_then_levels(start, left, right)
+    _leaf_sums(order, start, end, leaves, *(kernel_array(a, np.float64) for a in (points, normals, w12, flux)), sums)
+    for nodes in levels:
+        sums[nodes] = sums[left[nodes]] + sums[right[nodes]]
     node_flux, weight, sums = sums[:, :n_out], sums[:, n_out], sums[:, n_out + 1 :]  # flux-weighted pos, normal, w12
     # weighted sums -> means
     some = weight > 0.0
@@ -217,6 +220,25 @@ def aggregate(order, start, end, left, right, points, normals, w12, flux):
         out[ok] = block[ok] / length[ok, None]
         unit.append(out)
     return node_flux, weight, out_pos, unit[0], unit[1]
+
+
+@numba.njit(cache=True)
+def _leaf_sums(order, start, end, leaves, points, normals, w12, flux, out):
+    """Per leaf, added into ``out (nodes, C + 10)``: the flux per channel, its total over channels ``w``, and
+    the ``w``-weighted sums of position, normal and ``w12`` (no (n, C + 10) table of the sources first)."""
+    n_out = flux.shape[1]
+    for leaf in leaves:
+        for i in range(start[leaf], end[leaf]):
+            j = order[i]
+            w = 0.0
+            for c in range(n_out):
+                out[leaf, c] += flux[j, c]
+                w += flux[j, c]
+            out[leaf, n_out] += w
+            for k in range(3):
+                out[leaf, n_out + 1 + k] += w * points[j, k]
+                out[leaf, n_out + 4 + k] += w * normals[j, k]
+                out[leaf, n_out + 7 + k] += w * w12[j, k]
 
 
 def _sums(order, start, end, left, right, values):
@@ -268,10 +290,14 @@ def aggregated_sources(tree: SourceTree, points, normals, w12, flux) -> Aggregat
     node_flux, node_weight, node_pos, node_nrm, node_dir = aggregate(
         tree.order, tree.start, tree.end, tree.left, tree.right, points, normals, w12, flux
     )
-    table = np.ascontiguousarray(
-        np.concatenate([np.hstack([points, normals, w12]), np.hstack([node_pos, node_nrm, node_dir])]).T
-    )
-    weights = np.ascontiguousarray(np.concatenate([flux, node_flux]).T)
+    n = points.shape[0]
+    table = np.empty((9, n + tree.n_nodes))  # filled in place: no stacked copies of the sources
+    for k, (source, node) in enumerate(((points, node_pos), (normals, node_nrm), (w12, node_dir))):
+        table[3 * k : 3 * k + 3, :n] = source.T
+        table[3 * k : 3 * k + 3, n:] = node.T
+    weights = np.empty((flux.shape[1], n + tree.n_nodes))
+    weights[:, :n] = flux.T
+    weights[:, n:] = node_flux.T
     return AggregatedSources(table, weights, node_weight, flux.sum(axis=1) > 0)
 
 

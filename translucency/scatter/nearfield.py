@@ -43,7 +43,7 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-from ..geometry.measure import edge_lengths
+from ..geometry.measure import edge_lengths, triangle_centroids
 from ..geometry.topology import unique_edges
 from .kernels import FIT_WORK_COLUMNS, QUADRATIC_TERMS, channel_lanes, fitted_pairs, indexed_sum
 from .threads import for_ranges, thread_count
@@ -397,7 +397,7 @@ def triangle_tables(points, triangles) -> TriangleTables:
     edges, edge_of_corner = unique_edges(triangles)
     return TriangleTables(
         edge_lengths(points, triangles).max(axis=1),
-        points[triangles].mean(axis=1),
+        triangle_centroids(points, triangles),
         edges,
         np.ascontiguousarray(edge_of_corner),
     )

@@ -31,6 +31,7 @@ MAIN_JOB_KERNELS = (
     ("translucency.scatter.kernels", "_indexed_rows_directional"),
     ("translucency.scatter.hierarchy", "_traverse"),
     ("translucency.scatter.hierarchy", "_build"),
+    ("translucency.scatter.hierarchy", "_leaf_sums"),
     ("translucency.scatter.nearfield", "_near_pass"),
     ("translucency.scatter.nearfield", "_fill_shared_points"),
     ("translucency.scatter.nearfield", "_list_points"),
@@ -48,6 +49,8 @@ MAIN_JOB_KERNELS = (
     ("translucency.geometry.measure", "_cross_products"),
     ("translucency.geometry.measure", "_vertex_sums"),
     ("translucency.geometry.measure", "_degenerate"),
+    ("translucency.geometry.measure", "_edge_lengths"),
+    ("translucency.geometry.measure", "_centroids"),
     # the up axis of a scan (its default light)
     ("translucency.geometry.measure", "_area_centroids"),
     ("translucency.geometry.measure", "_extremes"),
