@@ -7,7 +7,13 @@ from scipy import sparse
 from scipy.sparse import csgraph
 
 from translucency.geometry.synthetic import icosphere, torus
-from translucency.geometry.topology import count_non_manifold_vertices, face_components, unique_edges
+from translucency.geometry.topology import (
+    count_non_manifold_vertices,
+    duplicate_triangles,
+    face_components,
+    first_at_same_position,
+    unique_edges,
+)
 
 
 def _soups():
@@ -79,3 +85,26 @@ def test_edges_components_and_fans_match_independent_computations(index):
 
     expected_split = int(np.count_nonzero(_fans_per_vertex(triangles, n) > 1))
     assert count_non_manifold_vertices(triangles, edge_of_corner, faces, n) == expected_split
+
+
+def test_duplicate_triangles_are_those_numpy_unique_does_not_keep():
+    """Against np.unique of the sorted rows (first occurrences kept), on soups and a fan of 300 copies."""
+    fan = np.tile([[0, 1, 2]], (300, 1))
+    fan[::2] = fan[::2, ::-1]  # the same vertices in the other order
+    for triangles in [*_soups(), np.vstack([fan, [[0, 2, 3], [3, 2, 0]]])]:
+        _, first = np.unique(np.sort(triangles, axis=1), axis=0, return_index=True)
+        expected = np.ones(len(triangles), dtype=bool)
+        expected[first] = False
+        assert np.array_equal(duplicate_triangles(triangles), expected)
+
+
+def test_first_at_same_position_matches_numpy_unique_on_the_bytes():
+    """Against np.unique of the coordinates' bytes (-0.0 made 0.0), with many repeats and signed zeros."""
+    rng = np.random.default_rng(4)
+    points = rng.integers(-2, 3, size=(5000, 3)).astype(np.float64) * 0.5
+    points[::3] *= -1.0  # -0.0 where a coordinate is 0
+    rows = np.ascontiguousarray(points + 0.0).view(np.dtype((np.void, 24))).ravel()
+    _, first, inverse = np.unique(rows, return_index=True, return_inverse=True)
+    assert np.array_equal(first_at_same_position(points), first[inverse.ravel()])
+    distinct = rng.normal(size=(1000, 3))
+    assert np.array_equal(first_at_same_position(distinct), np.arange(1000))

@@ -48,8 +48,14 @@ from ..errors import InvalidParameterError, MeshError
 from ..geometry.measure import triangle_areas, vertex_normals
 from ..geometry.mesh import TriangleMesh, validate_mesh_arrays
 from ..geometry.orientation import coherent_orientation, flip_triangles, outward_flips
-from ..geometry.topology import count_non_manifold_vertices, face_components, unique_edges
-from .defects import ZERO_AREA_RATIO, MeshDefects, find_defects, triangle_keys, zero_area_mask
+from ..geometry.topology import (
+    count_non_manifold_vertices,
+    duplicate_triangles,
+    face_components,
+    first_at_same_position,
+    unique_edges,
+)
+from .defects import ZERO_AREA_RATIO, MeshDefects, find_defects, zero_area_mask
 from .polydata import as_triangle_mesh
 
 __all__ = ["CleanReport", "clean_mesh", "clean_arrays", "smooth_vertex_normals"]
@@ -462,9 +468,9 @@ def _remove_null_and_duplicate_faces(repair: _Repair, before: MeshDefects) -> No
     )
     triangles = triangles[~null]
     counts["null_faces_removed"] = int(np.count_nonzero(null))
-    _, first = np.unique(triangle_keys(triangles, len(repair.points)), return_index=True)
-    counts["duplicate_faces_removed"] = len(triangles) - len(first)
-    repair.triangles = triangles[np.sort(first)]
+    duplicate = duplicate_triangles(triangles)
+    counts["duplicate_faces_removed"] = int(np.count_nonzero(duplicate))
+    repair.triangles = triangles[~duplicate]
     _require_triangles(repair.triangles, "removing degenerate faces")
 
 
@@ -567,10 +573,7 @@ def _require_triangles(triangles: np.ndarray, step: str) -> None:
 
 def _merge_duplicate_vertices(points, triangles, origin):
     """Merge vertices with identical coordinates; the first of each group stays."""
-    rows = np.ascontiguousarray(points + 0.0)  # -0.0 -> 0.0
-    keys = rows.view(np.dtype((np.void, 24))).ravel()
-    _, first, inverse = np.unique(keys, return_index=True, return_inverse=True)
-    representative = first[inverse.ravel()]
+    representative = first_at_same_position(points)
     keep = representative == np.arange(len(points))
     merged = int(np.count_nonzero(~keep))
     if merged == 0:

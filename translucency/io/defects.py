@@ -39,12 +39,18 @@ import dataclasses
 import numpy as np
 
 from ..geometry.measure import degenerate_triangles
-from ..geometry.topology import boundary_loops, count_non_manifold_vertices, face_components, unique_edges
+from ..geometry.topology import (
+    boundary_loops,
+    count_non_manifold_vertices,
+    duplicate_triangles,
+    face_components,
+    first_at_same_position,
+    unique_edges,
+)
 
 __all__ = [
     "MeshDefects",
     "find_defects",
-    "triangle_keys",
     "zero_area_mask",
     "ZERO_AREA_RATIO",
 ]
@@ -110,27 +116,6 @@ class MeshDefects:
         return dataclasses.asdict(self)
 
 
-def triangle_keys(triangles, n_points: int) -> np.ndarray:
-    """One comparable key per triangle, equal for triangles on the same three vertices in any order.
-
-    Parameters
-    ----------
-    triangles : ndarray, shape (m, 3), int
-    n_points : int
-        Number of vertices (the indices are below it).
-
-    Returns
-    -------
-    ndarray, shape (m,)
-        int64 keys when ``n_points ** 3`` fits in int64, else a void view of the sorted rows.
-    """
-    rows = np.sort(np.asarray(triangles, dtype=np.int64).reshape(-1, 3), axis=1)
-    n = max(int(n_points), 1)
-    if n < 2_000_000:
-        return (rows[:, 0] * n + rows[:, 1]) * n + rows[:, 2]
-    return np.ascontiguousarray(rows).view(np.dtype((np.void, 24))).ravel()
-
-
 def zero_area_mask(points, triangles) -> np.ndarray:
     """True for the triangles whose area is zero relative to their size (see :data:`ZERO_AREA_RATIO`).
 
@@ -150,10 +135,7 @@ def zero_area_mask(points, triangles) -> np.ndarray:
 def _count_duplicate_vertices(points: np.ndarray) -> int:
     if len(points) == 0:
         return 0
-    # +0.0 turns -0.0 into 0.0 so that the byte comparison sees equal coordinates as equal
-    rows = np.ascontiguousarray(points + 0.0)
-    unique = np.unique(rows.view(np.dtype((np.void, 24))).ravel())
-    return int(len(points) - len(unique))
+    return int(np.count_nonzero(first_at_same_position(points) != np.arange(len(points))))
 
 
 def find_defects(points, triangles) -> MeshDefects:
@@ -189,7 +171,7 @@ def find_defects(points, triangles) -> MeshDefects:
         | (triangles[:, 0] == triangles[:, 2])
     )
     proper = triangles[~null]
-    duplicate_faces = len(proper) - len(np.unique(triangle_keys(proper, n)))
+    duplicate_faces = int(np.count_nonzero(duplicate_triangles(proper)))
     zero_area = int(np.count_nonzero(zero_area_mask(points, proper)))
 
     inconsistent = non_manifold_edges = loops = largest = non_manifold_vertices = components = boundary_edges = 0

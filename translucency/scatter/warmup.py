@@ -46,6 +46,8 @@ MAIN_JOB_KERNELS = (
     ("translucency.geometry.topology", "_manifold_pairs"),
     ("translucency.geometry.topology", "_face_components"),
     ("translucency.geometry.topology", "_non_manifold_vertices"),
+    ("translucency.geometry.topology", "_duplicate_triangles"),
+    ("translucency.geometry.topology", "_first_at_same_position"),
     ("translucency.geometry.measure", "_cross_products"),
     ("translucency.geometry.measure", "_vertex_sums"),
     ("translucency.geometry.measure", "_degenerate"),
@@ -149,6 +151,8 @@ def warm_up(force: bool = False) -> float:
     faces_per_edge = np.bincount(edge_of_corner.ravel(), minlength=len(edges))
     topology.count_non_manifold_vertices(triangles, edge_of_corner, faces_per_edge, len(points))
     topology.face_components(triangles, edge_of_corner)
+    topology.duplicate_triangles(triangles)
+    topology.first_at_same_position(points)
     measure.degenerate_triangles(points, triangles, 1e-10)
     measure.vertex_normals(points, triangles)
     # the up axis (translucency.io.upright): the surface's centroid and the convex hull's candidates
