@@ -297,10 +297,15 @@ def cmd_compare(args) -> int:
     """Render and measure a scan in several materials and models into a folder."""
     from ..io.atomic import prepare_output_folder
     from .compare import compare, validate_choices
-    from .options import lights_from_args, quiet, solver_settings
+    from .options import inline_material, lights_from_args, quiet, solver_settings
     from .pipeline import load_scan
     from .settings import DEFAULT_MATERIAL
 
+    if inline_material(args) is not None:
+        raise InvalidParameterError(
+            "compare takes its materials by name or file (--materials marble,jade.toml): write the material of "
+            "--sigma-a/--sigma-s or --reflectance/--mfp into a TOML file (docs/physics.md 6.4) and name it there."
+        )
     settings = solver_settings(args, material=args.material or DEFAULT_MATERIAL).solver_keywords()
     settings.pop("material")
     settings.pop("model")

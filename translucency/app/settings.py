@@ -55,7 +55,7 @@ RESOLUTIONS = ("full", "auto")
 #: Help text of each field (the command line's ``--help``, for ``shadows`` its ``--no-shadows`` flag; the
 #: defaults are added where the option is made).
 HELP = {
-    "material": "catalogue name (see 'translucency materials')",
+    "material": "catalogue name (see 'translucency materials') or a material file, .toml or .json",
     "model": "scattering model",
     "method": "far-field method",
     "tol": "relative error allowed to cutoff/tree",
@@ -203,7 +203,12 @@ class ShadeSettings:
 
 
 def resolve_medium(material):
-    """A :class:`~translucency.scatter.medium.Medium` from a catalogue name, catalogue entry or medium."""
+    """A :class:`~translucency.scatter.medium.Medium` from a catalogue name, catalogue entry, medium,
+    material file (``.toml`` or ``.json``) or definition mapping (:mod:`translucency.scatter.definition`)."""
+    from collections.abc import Mapping
+
+    from ..io.material_file import is_material_file, read_material_table
+    from ..scatter.definition import medium_from_definition
     from ..scatter.materials import Material
     from ..scatter.materials import material as lookup
     from ..scatter.medium import Medium
@@ -212,4 +217,8 @@ def resolve_medium(material):
         return material
     if isinstance(material, Material):
         return material.medium()
+    if isinstance(material, Mapping):
+        return medium_from_definition(material)
+    if is_material_file(material):
+        return medium_from_definition(read_material_table(material), f"material file {material}")
     return lookup(material).medium()
