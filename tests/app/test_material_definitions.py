@@ -125,3 +125,40 @@ def test_compare_takes_material_files_beside_names(tmp_path):
     materials, _, media = validate_choices(f"marble,{tmp_path / 'jade.toml'}", "directional")
     assert media[materials[0]].name == "marble" and media[materials[1]].name == "jade"
     np.testing.assert_allclose(appearance_of(media[materials[1]])[0], [0.55, 0.8, 0.5], rtol=1e-9)
+
+
+def test_a_sweep_over_the_mean_free_path_keeps_the_reflectance():
+    from translucency.app.compare import validate_choices
+
+    labels, _, media = validate_choices("marble", "directional", {"mfp": [0.5, 1, 2, 4]})
+    assert labels == ["marble mfp=0.5", "marble mfp=1", "marble mfp=2", "marble mfp=4"]
+    base, _ = appearance_of(material("marble").medium())
+    for label, path in zip(labels, (0.5, 1, 2, 4)):
+        reflectance, mfp = appearance_of(media[label])
+        np.testing.assert_allclose(reflectance, base, rtol=1e-9)
+        np.testing.assert_allclose(mfp, path, rtol=1e-12)
+    _, _, scaled = validate_choices(["marble"], "directional", {"scale": [2]})
+    np.testing.assert_allclose(scaled["marble scale=2"].sigma_a, 2 * material("marble").medium().sigma_a)
+
+
+@pytest.mark.parametrize(
+    "materials, sweep, words",
+    [
+        ("marble,ketchup", {"mfp": [1]}, "varies one material"),
+        ("marble", {"mfp": [1], "eta": [1.4]}, "one key"),
+        ("marble", {"colour": [1]}, "varies one of"),
+        ("marble", {"mfp": []}, "at least one value"),
+        ("marble", {"reflectance": [1.5]}, "not between 0 and 1"),
+    ],
+)
+def test_sweep_mistakes_are_one_sentence(materials, sweep, words):
+    from translucency.app.compare import validate_choices
+
+    with pytest.raises(InvalidParameterError, match=words):
+        validate_choices(materials, "directional", sweep)
+
+
+def test_the_sweep_option_is_read_or_refused_in_a_sentence(capsys):
+    assert cli._sweep("mfp=0.5,1,2") == {"mfp": [0.5, 1.0, 2.0]}
+    assert cli.main(["compare", "--sweep", "mfp", "-o", "unused"]) == 2
+    assert "--sweep must be KEY=V1,V2" in capsys.readouterr().err

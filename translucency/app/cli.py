@@ -293,6 +293,20 @@ def cmd_view(args) -> int:
     return 0
 
 
+def _sweep(text):
+    """``--sweep KEY=V1,V2,...`` as ``{key: [values]}`` (None when not given); a bad one is a sentence."""
+    if text is None:
+        return None
+    key, _, values = str(text).partition("=")
+    try:
+        numbers = [float(v) for v in values.split(",")]
+    except ValueError:
+        numbers = []
+    if not key.strip() or not numbers:
+        raise InvalidParameterError(f"--sweep must be KEY=V1,V2,... (e.g. mfp=0.5,1,2,4), got {text!r}.")
+    return {key.strip(): numbers}
+
+
 def cmd_compare(args) -> int:
     """Render and measure a scan in several materials and models into a folder."""
     from ..io.atomic import prepare_output_folder
@@ -313,7 +327,10 @@ def cmd_compare(args) -> int:
     reference = args.reference
     if reference is None:
         materials = materials if materials is not None else DEFAULT_MATERIAL
-        materials, models, _ = validate_choices(materials, args.models if args.models is not None else args.model)
+        labels, models, media = validate_choices(
+            materials, args.models if args.models is not None else args.model, _sweep(args.sweep)
+        )
+        materials = [media[label] for label in labels]  # resolved once: files read, sweeps made
     else:  # the materials are checked against the reference's
         _, models, _ = validate_choices(DEFAULT_MATERIAL, args.models if args.models is not None else args.model)
     cell_size = _pixels(args.cell_size, "--cell-size")
@@ -329,6 +346,7 @@ def cmd_compare(args) -> int:
         models,
         lights,
         reference=reference,
+        sweep=None if reference is None else _sweep(args.sweep),  # the sweep is made above; a reference refuses one
         output=args.output,
         shadows=not args.no_shadows,
         up=args.up,
@@ -481,7 +499,15 @@ def _add_view_and_compare_parsers(sub) -> None:
         "profile.png into the output folder; with --reference, also reference.csv/.json and "
         "reference_errors.png (every model against a path-traced reference).",
     )
-    p.add_argument("--materials", metavar="A,B,C", help="catalogue names, comma-separated (default: --material)")
+    p.add_argument(
+        "--materials", metavar="A,B,C", help="catalogue names or material files, comma-separated (default: --material)"
+    )
+    p.add_argument(
+        "--sweep",
+        metavar="KEY=V1,V2,...",
+        help="one column per value of one property of the material: mfp (mm), reflectance, scale or eta "
+        "(e.g. mfp=0.5,1,2,4)",
+    )
     p.add_argument(
         "--models", metavar="M1,M2", help="models, comma-separated; the first is the reference (default: --model)"
     )

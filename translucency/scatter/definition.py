@@ -33,11 +33,11 @@ from collections.abc import Mapping
 import numpy as np
 
 from ..errors import InvalidParameterError
-from .appearance import medium_from_appearance
+from .appearance import appearance_of, medium_from_appearance
 from .materials import material as catalogue_entry
 from .medium import Medium
 
-__all__ = ["FORMS", "OPTIONAL_KEYS", "medium_from_definition"]
+__all__ = ["FORMS", "OPTIONAL_KEYS", "SWEEP_KEYS", "medium_from_definition", "varied"]
 
 #: The three forms of a definition: the keys each needs.
 FORMS = {"coefficients": ("sigma_a", "sigma_s"), "appearance": ("reflectance", "mfp"), "catalogue": ("material",)}
@@ -116,3 +116,28 @@ def _numbers(value, key: str, source: str) -> np.ndarray:
     if not items or any(isinstance(v, bool) or not isinstance(v, (int, float)) for v in items):
         raise InvalidParameterError(f"{source}: {key} must be a number or a list of numbers, got {value!r}.")
     return np.asarray(items, dtype=np.float64) if isinstance(value, (list, tuple)) else np.float64(value)
+
+
+#: What a sweep may vary (:func:`varied`): the mean free path or the reflectance with the other part of
+#: the look kept, the coefficients' scale, or the index of refraction with the coefficients kept.
+SWEEP_KEYS = ("mfp", "reflectance", "scale", "eta")
+
+
+def varied(medium: Medium, key: str, value) -> Medium:
+    """``medium`` with one property set to ``value`` (a number, or one per channel for ``mfp`` and
+    ``reflectance``), named ``"<name> <key>=<value>"``: ``mfp`` (mm) and ``reflectance`` keep the other part
+    of its look (docs/physics.md §6.4), ``scale`` multiplies its coefficients, ``eta`` replaces its index."""
+    if key not in SWEEP_KEYS:
+        raise InvalidParameterError(f"a sweep varies one of {', '.join(SWEEP_KEYS)}, got {key!r}.")
+    label = value if np.ndim(value) == 0 else ",".join(f"{v:g}" for v in np.ravel(value))
+    name = f"{medium.name} {key}={label:g}" if np.ndim(value) == 0 else f"{medium.name} {key}={label}"
+    if key == "scale":
+        return Medium(medium.sigma_a, medium.sigma_s, medium.g, medium.eta, name).scaled(float(value))
+    if key == "eta":
+        return Medium(medium.sigma_a, medium.sigma_s, medium.g, float(value), name)
+    reflectance, path = appearance_of(medium)
+    if key == "mfp":
+        path = value
+    else:
+        reflectance = value
+    return medium_from_appearance(reflectance, path, medium.eta, medium.g, name)
