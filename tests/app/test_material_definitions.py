@@ -10,7 +10,7 @@ from translucency.app import cli
 from translucency.app.options import solver_settings
 from translucency.app.pipeline import Scene
 from translucency.app.settings import ShadeSettings
-from translucency.errors import InvalidParameterError
+from translucency.errors import InvalidParameterError, UnknownMaterialError
 from translucency.geometry.mesh import TriangleMesh
 from translucency.geometry.synthetic import icosphere
 from translucency.scatter.appearance import appearance_of
@@ -162,3 +162,45 @@ def test_the_sweep_option_is_read_or_refused_in_a_sentence(capsys):
     assert cli._sweep("mfp=0.5,1,2") == {"mfp": [0.5, 1.0, 2.0]}
     assert cli.main(["compare", "--sweep", "mfp", "-o", "unused"]) == 2
     assert "--sweep must be KEY=V1,V2" in capsys.readouterr().err
+
+
+def test_materials_show_prints_the_derived_quantities_and_the_look(tmp_path, capsys):
+    assert cli.main(["materials", "--show", "marble"]) == 0
+    out = capsys.readouterr().out
+    reflectance, path = appearance_of(material("marble").medium())
+    rows = {line.split()[0]: line for line in out.splitlines()[3:]}
+    assert {"sigma_a", "sigma_s'", "alpha'", "D", "sigma_tr", "1/sigma_t'", "1/sigma_tr", "d_e", "R_d"} <= set(rows)
+    assert f"{reflectance[0]:.4g}" in rows["R_d"] and f"{path[2]:.4g}" in rows["1/sigma_t'"]
+    (tmp_path / "jade.toml").write_text("reflectance = [0.55, 0.8, 0.5]\nmfp = [1.5, 2.0, 1.2]\neta = 1.6\n")
+    assert cli.main(["materials", "--show", str(tmp_path / "jade.toml")]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("jade: eta 1.6") and "0.55, 0.8, 0.5" in out
+
+
+def test_own_materials_are_found_by_name_after_the_catalogue_and_listed(tmp_path, monkeypatch, capsys):
+    monkeypatch.setenv("TRANSLUCENCY_MATERIALS", str(tmp_path))
+    (tmp_path / "Green Jade.toml").write_text("reflectance = [0.55, 0.8, 0.5]\nmfp = [1.5, 2.0, 1.2]\neta = 1.6\n")
+    (tmp_path / "marble.json").write_text('{"material": "ketchup"}')  # the catalogue's marble comes first
+    assert ShadeSettings("green_jade").material.name == "Green Jade"
+    assert ShadeSettings("marble").material.sigma_a.tolist() == material("marble").medium().sigma_a.tolist()
+    with pytest.raises(UnknownMaterialError, match=f"go in {tmp_path} as NAME.toml"):
+        ShadeSettings("red_jade")
+    assert cli.main(["materials"]) == 0
+    assert "Green Jade" in capsys.readouterr().out
+
+
+def test_without_the_folder_the_listing_says_where_own_materials_go(tmp_path, monkeypatch, capsys):
+    monkeypatch.setenv("TRANSLUCENCY_MATERIALS", str(tmp_path / "none"))
+    assert cli.main(["materials"]) == 0
+    assert "your own materials: none; put NAME.toml" in capsys.readouterr().out
+
+
+def test_the_metadata_holds_a_definition_that_gives_the_material_back(tmp_path):
+    """What a bake records is enough to write the material down again (coefficients) and says its look."""
+    settings = ShadeSettings({"name": "jade", "reflectance": [0.55, 0.8, 0.5], "mfp": [1.5, 2.0, 1.2], "eta": 1.6})
+    recorded = json.loads(json.dumps(settings.metadata([], "full")))["coefficients"]
+    again = ShadeSettings(
+        {k: recorded[f"{k}_per_mm"] for k in ("sigma_a", "sigma_s")} | {"g": recorded["g"], "eta": recorded["eta"]}
+    ).material
+    np.testing.assert_allclose(again.sigma_a, settings.material.sigma_a, rtol=1e-15)
+    np.testing.assert_allclose(recorded["diffuse_reflectance"], [0.55, 0.8, 0.5], rtol=1e-9)

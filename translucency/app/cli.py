@@ -47,6 +47,49 @@ def _table_lines(header, rows) -> list[str]:
     ]
 
 
+def _own_material_lines() -> list[str]:
+    """The user's own materials (their folder and names), for ``translucency materials``."""
+    from .settings import user_material_files, user_materials_folder
+
+    files = user_material_files()
+    if not files:
+        return [f"your own materials: none; put NAME.toml or NAME.json files in {user_materials_folder()}"]
+    names = ", ".join(path.stem for path in files.values())
+    return [f"your own materials, in {user_materials_folder()} (--show NAME for one): {names}"]
+
+
+def _show_material(name) -> int:
+    """``translucency materials --show NAME``: one material (a catalogue name or a material file) with its
+    coefficients, every derived quantity of the models (docs/physics.md §2.1) and its look (§6.4)."""
+    from ..scatter.appearance import appearance_of
+    from .settings import resolve_medium
+
+    medium = resolve_medium(name)
+    reflectance, _ = appearance_of(medium)
+    rows = [
+        ("sigma_a", medium.sigma_a, "1/mm", "absorption"),
+        ("sigma_s", medium.sigma_s, "1/mm", "scattering"),
+        ("g", medium.g, "", "Henyey-Greenstein mean cosine"),
+        ("sigma_s'", medium.sigma_s_reduced, "1/mm", "reduced scattering sigma_s (1 - g)"),
+        ("sigma_t'", medium.sigma_t_reduced, "1/mm", "reduced extinction"),
+        ("alpha'", medium.alpha_reduced, "", "reduced albedo"),
+        ("D", medium.D, "mm", "diffusion coefficient"),
+        ("sigma_tr", medium.sigma_tr, "1/mm", "effective transport coefficient"),
+        ("1/sigma_t'", medium.mean_free_path, "mm", "mean free path (mfp)"),
+        ("1/sigma_tr", medium.diffusion_length, "mm", "diffusion length"),
+        ("d_e", medium.d_e, "mm", "extrapolation distance"),
+        ("R_d", reflectance, "", "diffuse reflectance (better dipole's total)"),
+    ]
+    print(f"{medium.name}: eta {medium.eta:g}, A {medium.A:.4g}; per channel R G B")
+    lines = _table_lines(
+        ("quantity", "R G B", "unit", "meaning"),
+        [(key, _format_triplet(values, "{:.4g}"), unit, meaning) for key, values, unit, meaning in rows],
+    )
+    for line in lines:
+        print(line)
+    return 0
+
+
 def cmd_materials(args) -> int:
     """Print the catalogue: by default name, eta, sigma_a, reduced sigma_s' and diffusion length per
     channel, grouped by source table (fits 100 columns); with ``--wide`` every column, one table."""
@@ -54,6 +97,8 @@ def cmd_materials(args) -> int:
 
     from ..scatter.materials import catalogue, material_tables
 
+    if args.show is not None:
+        return _show_material(args.show)
     tables = material_tables()
     entries = [entry for entry in catalogue() if not args.table or entry.table == args.table]
     lines = []
@@ -115,6 +160,8 @@ def cmd_materials(args) -> int:
         reduced = "reduced sigma_s' (g = 0)" if table["sigma_s_is_reduced"] else "unreduced sigma_s with g"
         note = f"{key}: {table['source']} Units {table['units']}; {reduced}. {table['notes']}"
         print(textwrap.fill(note, MATERIALS_WIDTH, subsequent_indent="  "))
+    for line in _own_material_lines():
+        print(textwrap.fill(line, MATERIALS_WIDTH, subsequent_indent="  "))
     return 0
 
 
@@ -549,6 +596,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument(
         "--wide", action="store_true", help="every column (table, sigma_s, g, 1/sigma_t'), wider than 100 columns"
     )
+    p.add_argument(
+        "--show",
+        metavar="NAME",
+        help="one material (a catalogue name or a .toml/.json material file): every derived quantity and its "
+        "diffuse reflectance",
+    )
     p.set_defaults(func=cmd_materials)
 
     p = sub.add_parser("report", help="versions of the stack and whether off-screen rendering works")
@@ -685,6 +738,9 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("translucency: interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:  # the reader went away (``translucency materials | head``): stop quietly, as cat does
+        sys.stdout = None
+        return 141
 
 
 if __name__ == "__main__":  # pragma: no cover
