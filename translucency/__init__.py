@@ -21,6 +21,8 @@ _LAZY = {
     "material": "translucency.scatter.materials",
     "material_names": "translucency.scatter.materials",
     "catalogue": "translucency.scatter.materials",
+    "medium_from_appearance": "translucency.scatter.appearance",
+    "appearance_of": "translucency.scatter.appearance",
     "directional_dipole": "translucency.scatter.dipoles",
     "standard_dipole_profile": "translucency.scatter.dipoles",
     "better_dipole_profile": "translucency.scatter.dipoles",

@@ -156,3 +156,51 @@ def test_exp_nonpositive_is_accurate():
     exact = np.exp(x[::7])
     assert np.all(np.abs(approx - exact) <= 5e-13 * exact)
     assert kernels.exp_nonpositive(-800.0) == 0.0
+
+
+@pytest.mark.parametrize("model", ["directional", "standard", "better"])
+@pytest.mark.parametrize("channel_of", [[0, 1, 2], [0], [0, 1, 2, 2, 0]])
+def test_grouped_sum_is_the_dense_sum_over_each_groups_list(model, channel_of):
+    """grouped_sum against the reference dipoles summed here over each group's random list (with
+    repeats), for groups of 4 and a last group that is short, every model and 1, 3 or 5 channels."""
+    rng = np.random.default_rng(11)
+    medium = material("skin1").medium()
+    x_i, n_i, light, _, _ = _pairs(rng, 300, 2.0)
+    w12 = fresnel.refract(light, n_i, medium.eta)
+    channel_of = np.array(channel_of, dtype=np.int64)
+    flux = rng.random((300, channel_of.size))
+    params = kernels.channel_parameters(medium.sigma_a, medium.sigma_s, medium.g, medium.eta, model)
+    table = np.ascontiguousarray(np.hstack([x_i, n_i, w12]).T)
+    n_rcv, group = 37, 4
+    n_groups = -(-n_rcv // group)
+    counts = rng.integers(0, 120, size=n_groups)
+    starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
+    columns = rng.integers(0, 300, size=int(counts.sum()))
+    receivers = rng.choice(300, n_rcv, replace=False)
+    B = kernels.grouped_sum(
+        kernels.MODELS[model],
+        x_i[receivers],
+        n_i[receivers],
+        table,
+        np.ascontiguousarray(flux.T),
+        starts,
+        counts,
+        group,
+        columns,
+        kernels.channel_lanes(params, channel_of, channel_of.size),
+    )
+    for r in range(n_rcv):
+        g = r // group
+        listed = columns[starts[g] : starts[g] + counts[g]]
+        for c, row in enumerate(channel_of):
+            coefficients = (medium.sigma_a[row], medium.sigma_s[row], medium.g[row], medium.eta)
+            if model == "directional":
+                S = dipoles.directional_dipole(
+                    x_i[listed], n_i[listed], w12[listed], x_i[receivers[r]], n_i[receivers[r]], *coefficients
+                )
+                S = np.maximum(S, 0.0)
+            else:
+                profile = dipoles.standard_dipole_profile if model == "standard" else dipoles.better_dipole_profile
+                scale = 1.0 / np.pi if model == "standard" else 1.0 / (np.pi * 4.0 * fresnel.C_phi(1.0 / medium.eta))
+                S = scale * profile(np.linalg.norm(x_i[listed] - x_i[receivers[r]], axis=1), *coefficients)
+            assert B[r, c] == pytest.approx(float(S @ flux[listed, c]), rel=1e-11, abs=1e-300)

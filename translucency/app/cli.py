@@ -47,6 +47,49 @@ def _table_lines(header, rows) -> list[str]:
     ]
 
 
+def _own_material_lines() -> list[str]:
+    """The user's own materials (their folder and names), for ``translucency materials``."""
+    from .settings import user_material_files, user_materials_folder
+
+    files = user_material_files()
+    if not files:
+        return [f"your own materials: none; put NAME.toml or NAME.json files in {user_materials_folder()}"]
+    names = ", ".join(path.stem for path in files.values())
+    return [f"your own materials, in {user_materials_folder()} (--show NAME for one): {names}"]
+
+
+def _show_material(name) -> int:
+    """``translucency materials --show NAME``: one material (a catalogue name or a material file) with its
+    coefficients, every derived quantity of the models (docs/physics.md §2.1) and its look (§6.4)."""
+    from ..scatter.appearance import appearance_of
+    from .settings import resolve_medium
+
+    medium = resolve_medium(name)
+    reflectance, _ = appearance_of(medium)
+    rows = [
+        ("sigma_a", medium.sigma_a, "1/mm", "absorption"),
+        ("sigma_s", medium.sigma_s, "1/mm", "scattering"),
+        ("g", medium.g, "", "Henyey-Greenstein mean cosine"),
+        ("sigma_s'", medium.sigma_s_reduced, "1/mm", "reduced scattering sigma_s (1 - g)"),
+        ("sigma_t'", medium.sigma_t_reduced, "1/mm", "reduced extinction"),
+        ("alpha'", medium.alpha_reduced, "", "reduced albedo"),
+        ("D", medium.D, "mm", "diffusion coefficient"),
+        ("sigma_tr", medium.sigma_tr, "1/mm", "effective transport coefficient"),
+        ("1/sigma_t'", medium.mean_free_path, "mm", "mean free path (mfp)"),
+        ("1/sigma_tr", medium.diffusion_length, "mm", "diffusion length"),
+        ("d_e", medium.d_e, "mm", "extrapolation distance"),
+        ("R_d", reflectance, "", "diffuse reflectance (better dipole's total)"),
+    ]
+    print(f"{medium.name}: eta {medium.eta:g}, A {medium.A:.4g}; per channel R G B")
+    lines = _table_lines(
+        ("quantity", "R G B", "unit", "meaning"),
+        [(key, _format_triplet(values, "{:.4g}"), unit, meaning) for key, values, unit, meaning in rows],
+    )
+    for line in lines:
+        print(line)
+    return 0
+
+
 def cmd_materials(args) -> int:
     """Print the catalogue: by default name, eta, sigma_a, reduced sigma_s' and diffusion length per
     channel, grouped by source table (fits 100 columns); with ``--wide`` every column, one table."""
@@ -54,6 +97,8 @@ def cmd_materials(args) -> int:
 
     from ..scatter.materials import catalogue, material_tables
 
+    if args.show is not None:
+        return _show_material(args.show)
     tables = material_tables()
     entries = [entry for entry in catalogue() if not args.table or entry.table == args.table]
     lines = []
@@ -115,6 +160,8 @@ def cmd_materials(args) -> int:
         reduced = "reduced sigma_s' (g = 0)" if table["sigma_s_is_reduced"] else "unreduced sigma_s with g"
         note = f"{key}: {table['source']} Units {table['units']}; {reduced}. {table['notes']}"
         print(textwrap.fill(note, MATERIALS_WIDTH, subsequent_indent="  "))
+    for line in _own_material_lines():
+        print(textwrap.fill(line, MATERIALS_WIDTH, subsequent_indent="  "))
     return 0
 
 
@@ -293,14 +340,33 @@ def cmd_view(args) -> int:
     return 0
 
 
+def _sweep(text):
+    """``--sweep KEY=V1,V2,...`` as ``{key: [values]}`` (None when not given); a bad one is a sentence."""
+    if text is None:
+        return None
+    key, _, values = str(text).partition("=")
+    try:
+        numbers = [float(v) for v in values.split(",")]
+    except ValueError:
+        numbers = []
+    if not key.strip() or not numbers:
+        raise InvalidParameterError(f"--sweep must be KEY=V1,V2,... (e.g. mfp=0.5,1,2,4), got {text!r}.")
+    return {key.strip(): numbers}
+
+
 def cmd_compare(args) -> int:
     """Render and measure a scan in several materials and models into a folder."""
     from ..io.atomic import prepare_output_folder
     from .compare import compare, validate_choices
-    from .options import lights_from_args, quiet, solver_settings
+    from .options import inline_material, lights_from_args, quiet, solver_settings
     from .pipeline import load_scan
     from .settings import DEFAULT_MATERIAL
 
+    if inline_material(args) is not None:
+        raise InvalidParameterError(
+            "compare takes its materials by name or file (--materials marble,jade.toml): write the material of "
+            "--sigma-a/--sigma-s or --reflectance/--mfp into a TOML file (docs/physics.md 6.4) and name it there."
+        )
     settings = solver_settings(args, material=args.material or DEFAULT_MATERIAL).solver_keywords()
     settings.pop("material")
     settings.pop("model")
@@ -308,7 +374,10 @@ def cmd_compare(args) -> int:
     reference = args.reference
     if reference is None:
         materials = materials if materials is not None else DEFAULT_MATERIAL
-        materials, models, _ = validate_choices(materials, args.models if args.models is not None else args.model)
+        labels, models, media = validate_choices(
+            materials, args.models if args.models is not None else args.model, _sweep(args.sweep)
+        )
+        materials = [media[label] for label in labels]  # resolved once: files read, sweeps made
     else:  # the materials are checked against the reference's
         _, models, _ = validate_choices(DEFAULT_MATERIAL, args.models if args.models is not None else args.model)
     cell_size = _pixels(args.cell_size, "--cell-size")
@@ -324,6 +393,7 @@ def cmd_compare(args) -> int:
         models,
         lights,
         reference=reference,
+        sweep=None if reference is None else _sweep(args.sweep),  # the sweep is made above; a reference refuses one
         output=args.output,
         shadows=not args.no_shadows,
         up=args.up,
@@ -476,7 +546,15 @@ def _add_view_and_compare_parsers(sub) -> None:
         "profile.png into the output folder; with --reference, also reference.csv/.json and "
         "reference_errors.png (every model against a path-traced reference).",
     )
-    p.add_argument("--materials", metavar="A,B,C", help="catalogue names, comma-separated (default: --material)")
+    p.add_argument(
+        "--materials", metavar="A,B,C", help="catalogue names or material files, comma-separated (default: --material)"
+    )
+    p.add_argument(
+        "--sweep",
+        metavar="KEY=V1,V2,...",
+        help="one column per value of one property of the material: mfp (mm), reflectance, scale or eta "
+        "(e.g. mfp=0.5,1,2,4)",
+    )
     p.add_argument(
         "--models", metavar="M1,M2", help="models, comma-separated; the first is the reference (default: --model)"
     )
@@ -517,6 +595,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--table", choices=["jensen2001", "narasimhan2006"], help="only one source table")
     p.add_argument(
         "--wide", action="store_true", help="every column (table, sigma_s, g, 1/sigma_t'), wider than 100 columns"
+    )
+    p.add_argument(
+        "--show",
+        metavar="NAME",
+        help="one material (a catalogue name or a .toml/.json material file): every derived quantity and its "
+        "diffuse reflectance",
     )
     p.set_defaults(func=cmd_materials)
 
@@ -654,6 +738,9 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("translucency: interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:  # the reader went away (``translucency materials | head``): stop quietly, as cat does
+        sys.stdout = None
+        return 141
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -58,7 +58,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import __version__
-from ..errors import InvalidParameterError
+from ..errors import InvalidParameterError, option
 from ..io.polydata import to_pyvista
 from ..io.units import RADIANCE_UNIT, unit_metadata
 from ..scatter.budget import DEFAULT_TIME_LIMIT_S
@@ -338,17 +338,43 @@ def _names(values, what) -> list:
     return list(values)
 
 
-def validate_choices(materials, models) -> tuple[list, list, dict]:
+def validate_choices(materials, models, sweep=None) -> tuple[list, list, dict]:
     """Materials and models as lists (a string ``"a,b"`` is split), checked; ``(materials, models, media)``.
 
-    Raises a :class:`~translucency.errors.TranslucencyError` with one sentence for an empty or repeated
-    list, an unknown model or an unknown or non-scattering material.
+    A material is a catalogue name, a material file, a definition mapping or a
+    :class:`~translucency.scatter.medium.Medium` (:func:`~translucency.app.settings.resolve_medium`).
+    ``sweep`` (``{key: [values]}``, one key of :data:`~translucency.scatter.definition.SWEEP_KEYS`) turns the
+    one material given into one per value (:func:`~translucency.scatter.definition.varied`). Raises a
+    :class:`~translucency.errors.TranslucencyError` with one sentence for an empty or repeated list, an
+    unknown model, an unknown or non-scattering material, or a sweep that is not one key over numbers.
     """
     from ..scatter.names import check_model
 
-    materials = _names(materials, "material")
+    entries = [v.strip() for v in materials.split(",")] if isinstance(materials, str) else list(materials)
+    entries = [entry for entry in entries if not isinstance(entry, str) or entry]
+    media = [resolve_medium(entry) for entry in entries]
+    labels = [entry if isinstance(entry, str) else medium.name for entry, medium in zip(entries, media)]
+    if sweep is not None:
+        media = _swept(media, sweep)
+        labels = [medium.name for medium in media]
+    labels = _names(labels, "material")
     models = [check_model(model) for model in _names(models, "model")]
-    return materials, models, {name: resolve_medium(name) for name in materials}
+    return labels, models, dict(zip(labels, media))
+
+
+def _swept(media: list, sweep) -> list:
+    """The one medium of ``media`` varied over the sweep's values (``{key: [values]}``), one per value."""
+    from ..scatter.definition import SWEEP_KEYS, varied
+
+    if not isinstance(sweep, dict) or len(sweep) != 1:
+        raise InvalidParameterError(f"a sweep is one key of {', '.join(SWEEP_KEYS)} with its values, got {sweep!r}.")
+    if len(media) != 1:
+        raise InvalidParameterError(f"a sweep varies one material; give one, not {len(media)}.")
+    ((key, values),) = sweep.items()
+    values = list(values) if isinstance(values, (list, tuple, np.ndarray)) else [values]
+    if not values:
+        raise InvalidParameterError(f"the sweep over {key} needs at least one value.")
+    return [varied(media[0], key, value) for value in values]
 
 
 def compare(
@@ -373,6 +399,7 @@ def compare(
     progress=None,
     unit=None,
     reference=None,
+    sweep=None,
 ) -> Comparison:
     """Render and measure one scan in several materials and models (module docstring for every output).
 
@@ -381,9 +408,10 @@ def compare(
     mesh : TriangleMesh or pyvista.PolyData, optional
         A cleaned mesh in mm, or a PolyData in ``unit`` (converted and repaired,
         :func:`~translucency.app.pipeline.mesh_for_shading`); default: the embedded default scan, cleaned.
-    materials : sequence of str, or str "a,b,c", optional
-        Catalogue names (the grid's columns); default :data:`~translucency.app.settings.DEFAULT_MATERIAL`, or
-        the reference's material with ``reference``.
+    materials : sequence of str or Medium, or str "a,b,c", optional
+        Catalogue names, material files (``.toml``, ``.json``), definition mappings or media (the grid's
+        columns); default :data:`~translucency.app.settings.DEFAULT_MATERIAL`, or the reference's material
+        with ``reference``.
     models : sequence of str, or str
         Scattering models (the grid's rows; the first is the reference of the difference maps).
     lights : light or sequence of lights, optional
@@ -414,6 +442,10 @@ def compare(
         agree with it, else a sentence says what differs. Every model is measured against it per region
         (:mod:`translucency.app.reference_compare`): :attr:`Comparison.reference_rows`, and with an output
         folder ``reference.csv``, ``reference.json`` and ``reference_errors.png``.
+    sweep : dict, optional
+        One property of the one material given over several values, one column each:
+        ``{"mfp": [0.5, 1, 2, 4]}`` (mm), ``reflectance``, ``scale`` or ``eta``
+        (:func:`~translucency.scatter.definition.varied`).
 
     Returns
     -------
@@ -426,12 +458,18 @@ def compare(
     if reference is not None:
         from .reference_compare import reference_setup
 
+        if sweep is not None:
+            raise InvalidParameterError(
+                f"a reference fixes the material; compare against it without {option('sweep')}."
+            )
+
         setup = reference_setup(reference, mesh, materials, lights, unit)
         materials, models, _ = validate_choices([DEFAULT_MATERIAL], models)
         materials, media = [setup.medium.name], {setup.medium.name: setup.medium}
         mesh, lights, unit = setup.mesh, setup.light, None  # the reference's points are in mm
     else:
-        materials, models, media = validate_choices(materials if materials is not None else DEFAULT_MATERIAL, models)
+        materials = materials if materials is not None else DEFAULT_MATERIAL
+        materials, models, media = validate_choices(materials, models, sweep)
     if output is not None:
         from ..io.atomic import prepare_output_folder
 

@@ -142,6 +142,55 @@ def add_light_options(parser: argparse.ArgumentParser) -> None:
     )
 
 
+#: The options that define a material inline (the keys of :mod:`translucency.scatter.definition`).
+INLINE_MATERIAL_OPTIONS = {
+    "--sigma-a": "absorption coefficient, 1/mm",
+    "--sigma-s": "scattering coefficient (not reduced), 1/mm",
+    "--g": "Henyey-Greenstein mean cosine (default 0)",
+    "--eta": "relative index of refraction (default 1.3)",
+    "--reflectance": "diffuse reflectance, strictly between 0 and 1",
+    "--mfp": "mean free path 1/sigma_t', mm",
+}
+
+
+def inline_material(args):
+    """The material the inline options define (a :class:`~translucency.scatter.medium.Medium` named
+    ``custom``), or None when none is given; a wrong combination is a sentence naming the options."""
+    from ..scatter.definition import medium_from_definition
+
+    given = {
+        flag: getattr(args, flag[2:].replace("-", "_"), None)
+        for flag in INLINE_MATERIAL_OPTIONS
+        if getattr(args, flag[2:].replace("-", "_"), None) is not None
+    }
+    if not given:
+        return None
+    if not set(given) - {"--g", "--eta"}:
+        raise InvalidParameterError(
+            f"{' and '.join(given)} need the material they change: add --sigma-a and --sigma-s, or --reflectance "
+            "and --mfp."
+        )
+    pairs = (("--sigma-a", "--sigma-s"), ("--reflectance", "--mfp"))
+    forms = [pair for pair in pairs if set(pair) & set(given)]
+    if len(forms) > 1:
+        raise InvalidParameterError("give --sigma-a and --sigma-s, or --reflectance and --mfp, not both kinds.")
+    missing = [flag for flag in forms[0] if flag not in given]
+    if missing:
+        raise InvalidParameterError(f"{forms[0][0]} and {forms[0][1]} go together: add {missing[0]}.")
+    definition = {}
+    for flag, text in given.items():
+        try:
+            values = [float(part) for part in str(text).split(",")]
+        except ValueError:
+            values = []
+        single = flag in ("--g", "--eta")
+        if len(values) not in ((1,) if single else (1, 3)):
+            shape = "one number" if single else "one number or three numbers R,G,B"
+            raise InvalidParameterError(f"{flag} must be {shape}, got {text!r}.")
+        definition[flag[2:].replace("-", "_")] = values[0] if len(values) == 1 else values
+    return medium_from_definition(definition, "the material options")
+
+
 def add_solver_options(parser: argparse.ArgumentParser) -> None:
     """``--material`` and the solver's settings (help texts and defaults: :mod:`translucency.app.settings`)."""
     from .settings import HELP, ShadeSettings
@@ -153,6 +202,12 @@ def add_solver_options(parser: argparse.ArgumentParser) -> None:
         default=default["material"].default,
         help=f"{HELP['material']} (default {default['material'].default})",
     )
+    inline = parser.add_argument_group(
+        "material by its numbers (instead of --material; docs/physics.md 6.4)",
+        "either --sigma-a and --sigma-s, or --reflectance and --mfp; one number or R,G,B each",
+    )
+    for flag, text in INLINE_MATERIAL_OPTIONS.items():
+        inline.add_argument(flag, metavar="G" if flag == "--g" else "N" if flag == "--eta" else "R,G,B", help=text)
     group.add_argument(
         "--model",
         default=default["model"].default,
@@ -271,8 +326,9 @@ def solver_settings(args, **changes):
     from ..scatter.budget import DEFAULT_TIME_LIMIT_S
     from .settings import ShadeSettings
 
+    custom = inline_material(args)
     fields = {
-        "material": args.material,
+        "material": args.material if custom is None else custom,
         "model": args.model,
         "method": args.method,
         "tol": args.tol,

@@ -31,6 +31,7 @@ import dataclasses
 import math
 import numbers
 from dataclasses import dataclass
+from pathlib import Path
 
 from ..errors import InvalidParameterError, setting_name
 from ..scatter.budget import DEFAULT_TIME_LIMIT_S
@@ -55,7 +56,7 @@ RESOLUTIONS = ("full", "auto")
 #: Help text of each field (the command line's ``--help``, for ``shadows`` its ``--no-shadows`` flag; the
 #: defaults are added where the option is made).
 HELP = {
-    "material": "catalogue name (see 'translucency materials')",
+    "material": "catalogue name (see 'translucency materials') or a material file, .toml or .json",
     "model": "scattering model",
     "method": "far-field method",
     "tol": "relative error allowed to cutoff/tree",
@@ -186,11 +187,15 @@ class ShadeSettings:
         """The settings as a result and a bake record them, with the ``lights`` and the ``resolution``
         used (a description); the exposure used, the unit and the up axis are the result's."""
         from .. import __version__
+        from ..scatter.appearance import appearance_of
 
+        reflectance, _ = appearance_of(self.material)
         return {
             "version": __version__,
             "material": self.material.name,
-            "coefficients": self.material.describe(),
+            # the definition in full: coefficients (a TOML or JSON material file of sigma_a, sigma_s, g, eta
+            # gives it back) and the look they have (docs/physics.md 6.4)
+            "coefficients": {**self.material.describe(), "diffuse_reflectance": reflectance.tolist()},
             "lights": [light.to_dict() for light in lights],
             "model": self.model,
             "method": self.method,
@@ -203,8 +208,14 @@ class ShadeSettings:
 
 
 def resolve_medium(material):
-    """A :class:`~translucency.scatter.medium.Medium` from a catalogue name, catalogue entry or medium."""
-    from ..scatter.materials import Material
+    """A :class:`~translucency.scatter.medium.Medium` from a catalogue name, catalogue entry, medium,
+    material file (``.toml`` or ``.json``) or definition mapping (:mod:`translucency.scatter.definition`)."""
+    from collections.abc import Mapping
+
+    from ..errors import UnknownMaterialError
+    from ..io.material_file import is_material_file, read_material_table
+    from ..scatter.definition import medium_from_definition
+    from ..scatter.materials import Material, lookup_key
     from ..scatter.materials import material as lookup
     from ..scatter.medium import Medium
 
@@ -212,4 +223,45 @@ def resolve_medium(material):
         return material
     if isinstance(material, Material):
         return material.medium()
-    return lookup(material).medium()
+    if isinstance(material, Mapping):
+        return medium_from_definition(material)
+    if is_material_file(material):
+        return medium_from_definition(read_material_table(material), f"material file {material}")
+    try:
+        return lookup(material).medium()
+    except UnknownMaterialError as exc:
+        own = user_material_files().get(lookup_key(str(material)))
+        if own is None:
+            raise UnknownMaterialError(
+                f"{exc} Your own materials go in {user_materials_folder()} as NAME.toml or NAME.json files."
+            ) from None
+        return medium_from_definition(read_material_table(own), f"material file {own}")
+
+
+#: The environment variable naming the folder of the user's own materials (:func:`user_materials_folder`).
+MATERIALS_FOLDER_ENV = "TRANSLUCENCY_MATERIALS"
+
+
+def user_materials_folder() -> Path:
+    """The folder of the user's own materials, one ``NAME.toml`` or ``NAME.json`` file each, found by name
+    after the catalogue: ``$TRANSLUCENCY_MATERIALS``, else ``$XDG_CONFIG_HOME/translucency/materials``, else
+    ``~/.config/translucency/materials``."""
+    import os
+
+    if os.environ.get(MATERIALS_FOLDER_ENV):
+        return Path(os.environ[MATERIALS_FOLDER_ENV]).expanduser()
+    config = os.environ.get("XDG_CONFIG_HOME") or str(Path.home() / ".config")
+    return Path(config) / "translucency" / "materials"
+
+
+def user_material_files() -> dict:
+    """The user's material files by lookup key (:func:`~translucency.scatter.materials.lookup_key` of the
+    file's stem), in name order; empty when the folder does not exist."""
+    from ..io.material_file import MATERIAL_SUFFIXES
+    from ..scatter.materials import lookup_key
+
+    folder = user_materials_folder()
+    if not folder.is_dir():
+        return {}
+    files = sorted(p for p in folder.iterdir() if p.suffix.lower() in MATERIAL_SUFFIXES and p.is_file())
+    return {lookup_key(p.stem): p for p in files}

@@ -1,5 +1,6 @@
 """Light transport: numpy arrays in, arrays out. No files, no PyVista, no UI."""
 
+from .appearance import appearance_of, medium_from_appearance
 from .dipoles import (
     better_dipole_profile,
     better_dipole_total_reflectance,
@@ -16,6 +17,7 @@ from .medium import Medium
 __all__ = [
     "Material",
     "Medium",
+    "appearance_of",
     "better_dipole_profile",
     "better_dipole_total_reflectance",
     "catalogue",
@@ -26,6 +28,7 @@ __all__ = [
     "fresnel_transmittance",
     "material",
     "material_names",
+    "medium_from_appearance",
     "refract",
     "standard_dipole_profile",
     "standard_dipole_total_reflectance",

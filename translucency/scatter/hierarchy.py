@@ -372,8 +372,8 @@ def tree_sum(
     walked once per group of ``group`` consecutive receivers (the solver orders them along a
     space-filling curve) with the tests made for the group's bounding sphere -- for every receiver of
     the group they hold with at least the same margin -- and the group's list of sources and clusters
-    is evaluated at each of its receivers with :func:`~translucency.scatter.kernels.indexed_sum`,
-    ``block`` receivers at a time.
+    is evaluated at each of its receivers with :func:`~translucency.scatter.kernels.grouped_sum` (the list
+    gathered once per group), ``block`` receivers at a time.
 
     Returns
     -------
@@ -381,7 +381,7 @@ def tree_sum(
     direct, clustered : (n_rcv,) int64
         Source pairs evaluated one by one (lit sources only) and cluster evaluations, per receiver.
     """
-    from .kernels import channel_lanes, indexed_sum
+    from .kernels import channel_lanes, grouped_sum
 
     n_channels = sources.weights.shape[0]
     lanes = channel_lanes(params, channel_of, n_channels)
@@ -400,18 +400,7 @@ def tree_sum(
         g_counts = g_direct + g_clustered
         of = np.arange(p.shape[0]) // group  # each receiver's group
         direct[part], clustered[part] = g_direct[of], g_clustered[of]
-        B[part] = indexed_sum(
-            model,
-            p,
-            nrm,
-            sources.table,
-            sources.weights,
-            g_starts[of],
-            g_counts[of],
-            columns,
-            np.ones(columns.size),
-            lanes,
-        )
+        B[part] = grouped_sum(model, p, nrm, sources.table, sources.weights, g_starts, g_counts, group, columns, lanes)
     return B, direct, clustered
 
 

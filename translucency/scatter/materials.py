@@ -90,7 +90,9 @@ class Material:
         )
 
 
-def _normalise(name: str) -> str:
+def lookup_key(name: str) -> str:
+    """What names are compared by: lower case, ``&`` as ``and``, letters and digits only (``"Skim milk"`` and
+    ``skim_milk`` are ``skimmilk``)."""
     return re.sub(r"[^a-z0-9]", "", name.lower().replace("&", "and"))
 
 
@@ -109,7 +111,7 @@ def _load() -> tuple[dict, dict]:
             g=tuple(row["g"]),
             eta=float(row["eta"]),
         )
-        entries[_normalise(entry.key)] = entry
+        entries[lookup_key(entry.key)] = entry
     return entries, data["tables"]
 
 
@@ -139,12 +141,12 @@ def material(name: str) -> Material:
     if isinstance(name, Material):
         return name
     entries = _load()[0]
-    found = entries.get(_normalise(str(name)))
+    found = entries.get(lookup_key(str(name)))
     if found is not None:
         return found
     keys = [m.key for m in entries.values()]
     close = difflib.get_close_matches(str(name).lower().replace(" ", "_"), keys, n=5, cutoff=0.5)
-    close += [k for k in keys if _normalise(str(name)) and _normalise(str(name)) in _normalise(k) and k not in close]
+    close += [k for k in keys if lookup_key(str(name)) and lookup_key(str(name)) in lookup_key(k) and k not in close]
     hint = f" Did you mean: {', '.join(close[:6])}?" if close else ""
     raise UnknownMaterialError(
         f"unknown material {name!r}.{hint} `translucency materials` lists all {len(keys)} names."

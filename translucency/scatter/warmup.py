@@ -29,6 +29,7 @@ import numpy as np
 #: the cleaning of a scan.
 MAIN_JOB_KERNELS = (
     ("translucency.scatter.kernels", "_indexed_rows_directional"),
+    ("translucency.scatter.kernels", "_grouped_rows_directional"),
     ("translucency.scatter.hierarchy", "_traverse"),
     ("translucency.scatter.hierarchy", "_build"),
     ("translucency.scatter.hierarchy", "_leaf_sums"),
