@@ -123,7 +123,7 @@ def area_centroids(points, triangles, labels=None, count: int = 1):
     ``(areas (count,), centroids (count, 3))``; a label without area has its centroid at the origin.
     """
     points, triangles = _kernel_mesh(points, triangles)
-    labels = np.zeros(triangles.shape[0], dtype=np.int64) if labels is None else kernel_array(labels, np.int64)
+    labels = kernel_array(np.zeros(triangles.shape[0], dtype=np.int64) if labels is None else labels, np.int64)
     return _area_centroids(points, triangles, labels, int(count))
 
 
