@@ -123,6 +123,7 @@ def test_compare_takes_material_files_beside_names(tmp_path):
 
     (tmp_path / "jade.toml").write_text("reflectance = [0.55, 0.8, 0.5]\nmfp = [1.5, 2.0, 1.2]\neta = 1.6\n")
     materials, _, media = validate_choices(f"marble,{tmp_path / 'jade.toml'}", "directional")
+    assert materials == ["marble", "jade"]  # a file by its material's name, not its path
     assert media[materials[0]].name == "marble" and media[materials[1]].name == "jade"
     np.testing.assert_allclose(appearance_of(media[materials[1]])[0], [0.55, 0.8, 0.5], rtol=1e-9)
 

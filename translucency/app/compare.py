@@ -348,12 +348,16 @@ def validate_choices(materials, models, sweep=None) -> tuple[list, list, dict]:
     :class:`~translucency.errors.TranslucencyError` with one sentence for an empty or repeated list, an
     unknown model, an unknown or non-scattering material, or a sweep that is not one key over numbers.
     """
+    from ..io.material_file import is_material_file
     from ..scatter.names import check_model
 
     entries = [v.strip() for v in materials.split(",")] if isinstance(materials, str) else list(materials)
     entries = [entry for entry in entries if not isinstance(entry, str) or entry]
     media = [resolve_medium(entry) for entry in entries]
-    labels = [entry if isinstance(entry, str) else medium.name for entry, medium in zip(entries, media)]
+    labels = [  # a name as given; a file or a medium by the material's own name
+        entry if isinstance(entry, str) and not is_material_file(entry) else medium.name
+        for entry, medium in zip(entries, media)
+    ]
     if sweep is not None:
         media = _swept(media, sweep)
         labels = [medium.name for medium in media]
