@@ -55,6 +55,15 @@ BYTES_PER_TRIANGLE = 300
 #: columns of 12 float64). A block of ``b`` receivers lists about ``(sqrt(2 b) + sqrt(k))**2 <= 4 b + 2 k``
 #: triangles (a patch of ``2 b`` triangles and its rim, ``k`` near triangles per receiver).
 BYTES_PER_TABLE_TRIANGLE = 8.5 * 12 * 8
+
+
+def block_table_bytes(near_triangles: float) -> tuple[float, float]:
+    """A near-field block's point table as ``(bytes per receiver of the block, bytes of its rim)`` for
+    ``near_triangles`` near triangles per receiver: ``4 b + 2 k`` triangles of :data:`BYTES_PER_TABLE_TRIANGLE`
+    (the bound above), the plan's and the blocks' one model."""
+    return 4 * BYTES_PER_TABLE_TRIANGLE, 2 * BYTES_PER_TABLE_TRIANGLE * near_triangles
+
+
 #: Bytes per triangle and numba thread: the stamps of the near lists (1 int64) and of the listing
 #: of quadrature points (2 int32 per vertex and per edge).
 BYTES_PER_TRIANGLE_THREAD = 8 + 2 * 4 * 1.5 + 2 * 4 * 0.5
@@ -224,12 +233,12 @@ def estimate(
     far = BYTES_PER_FAR_EVALUATION * counts.far_evaluations if counts.method == "tree" else 9 * 8 * counts.n_lit
     near_triangles = SAMPLE_SAFETY * counts.near_triangles
     lists = BYTES_PER_NEAR_TRIANGLE * n_r * near_triangles
+    table_per_receiver, rim = block_table_bytes(near_triangles)
     per_receiver = (
         BYTES_PER_NEAR_ROOM * near_triangles
         + BYTES_PER_OWN_POINT * SAMPLE_SAFETY * counts.own_points
-        + 4 * BYTES_PER_TABLE_TRIANGLE
+        + table_per_receiver
     )
-    rim = 2 * BYTES_PER_TABLE_TRIANGLE * near_triangles  # the block table's triangles around the patch
     steps = max(1, math.ceil(n_r / PROGRESS_STEPS))
     usual = min(n_r, max(2048, -(-steps // 2048) * 2048))  # a multiple of the near field's own blocks
     keep_peak = base + max(far, lists + rim + per_receiver * usual)

@@ -732,7 +732,6 @@ def near_field_correction(
     rule_points=RULE_POINTS,
     rule_weights=RULE_WEIGHTS,
     fan_nodes=(FAN_ANGULAR, FAN_RADIAL),
-    shared=None,
     refined_out=None,
 ):
     """Correction ``C[r, c]`` of the vertex sum for every receiver ``r`` (see the module docstring).
@@ -749,8 +748,8 @@ def near_field_correction(
     degree3_diameter`` (mm; ``degree3_ratio`` 0: never; nearer than ``D_min``, ``S_d`` varies with the angles
     too, and over a triangle wider than a fraction of ``1 / sigma_tr`` faster than the rule follows).
     ``tables`` are the mesh's
-    :class:`TriangleTables` (made here when not given); ``shared`` the :class:`SourcePoints` of the
-    same inputs (made here when not given, for the triangles these receivers list only).
+    :class:`TriangleTables` (made here when not given). The shared points (:func:`source_point_table`) are
+    made here for the triangles these receivers list only, so that a call holds its neighbourhood's.
     ``refined_out`` (n_receivers,) int64, when given, receives the number of each receiver's own points.
 
     Returns
@@ -765,19 +764,18 @@ def near_field_correction(
     if not np.allclose(rule_points[0], 1.0 / 3.0):
         raise ValueError("the rule's first point must be the centroid (the degree-3 rule shares it)")
     centroid_factor = CENTROID_WEIGHT / float(rule_weights[0])  # its weight is area * w_0 * phi
-    if shared is None:
-        shared = source_point_table(
-            points,
-            normals,
-            w12,
-            phi,
-            triangles,
-            triangle_areas,
-            tables,
-            rule_points,
-            rule_weights,
-            within=triangle_ids[offsets[0] : offsets[-1]],
-        )
+    shared = source_point_table(
+        points,
+        normals,
+        w12,
+        phi,
+        triangles,
+        triangle_areas,
+        tables,
+        rule_points,
+        rule_weights,
+        within=triangle_ids[offsets[0] : offsets[-1]],
+    )
     diameters, centroids = tables.diameters, tables.centroids
     lanes = channel_lanes(params, channel_of, phi.shape[1])
     fan = (*_gauss_legendre_unit(fan_nodes[0]), *_gauss_legendre_unit(fan_nodes[1]))

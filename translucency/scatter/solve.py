@@ -871,9 +871,11 @@ def _near_field(args, inner, radius, plan, report):
     # blocks with their own lists, cut where their memory reaches what the plan gives a block
     grid = geometry.near_grid(radius)
     counts = grid.counts(inner)
-    own = budget.BYTES_PER_OWN_POINT * budget.SAMPLE_SAFETY * plan.own_points + 4 * budget.BYTES_PER_TABLE_TRIANGLE
+    table_per_receiver, rim = budget.block_table_bytes(
+        budget.SAMPLE_SAFETY * float(np.mean(counts)) if counts.size else 0.0
+    )
+    own = budget.BYTES_PER_OWN_POINT * budget.SAMPLE_SAFETY * plan.own_points + table_per_receiver
     cost = np.cumsum((budget.BYTES_PER_NEAR_ROOM + budget.BYTES_PER_NEAR_TRIANGLE) * counts + own)
-    rim = 2 * budget.BYTES_PER_TABLE_TRIANGLE * budget.SAMPLE_SAFETY * float(np.mean(counts)) if counts.size else 0.0
     cap = max(plan.block_bytes - rim, 1.0)
     list_seconds += time.perf_counter() - start
     lo = 0
