@@ -372,10 +372,11 @@ def cmd_compare(args) -> int:
     settings.pop("model")
     materials = args.materials if args.materials is not None else args.material
     reference = args.reference
+    sweep = _sweep(args.sweep)
     if reference is None:
         materials = materials if materials is not None else DEFAULT_MATERIAL
         labels, models, media = validate_choices(
-            materials, args.models if args.models is not None else args.model, _sweep(args.sweep)
+            materials, args.models if args.models is not None else args.model, sweep
         )
         materials = [media[label] for label in labels]  # resolved once: files read, sweeps made
     else:  # the materials are checked against the reference's
@@ -393,7 +394,7 @@ def cmd_compare(args) -> int:
         models,
         lights,
         reference=reference,
-        sweep=None if reference is None else _sweep(args.sweep),  # the sweep is made above; a reference refuses one
+        sweep=None if reference is None else sweep,  # made above into the materials; a reference refuses one
         output=args.output,
         shadows=not args.no_shadows,
         up=args.up,
