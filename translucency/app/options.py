@@ -228,6 +228,7 @@ def add_solver_options(parser: argparse.ArgumentParser) -> None:
     )
     group.add_argument("--no-shadows", action="store_true", help=HELP["shadows"])
     group.add_argument("--per-direction", action="store_true", help=HELP["per_direction"])
+    group.add_argument("--albedo-from-colors", action="store_true", help=HELP["albedo"])
     group.add_argument(
         "--bounces",
         type=whole_number,
@@ -336,6 +337,7 @@ def solver_settings(args, **changes):
         "shadows": not args.no_shadows,
         "per_direction": args.per_direction,
         "bounces": args.bounces,
+        "albedo": "vertex_colors" if getattr(args, "albedo_from_colors", False) else "material",
         "exposure": args.exposure,
         "memory_limit": args.memory_limit,
         "time_limit": DEFAULT_TIME_LIMIT_S if args.time_limit is None else args.time_limit,

@@ -305,6 +305,7 @@ class Scene:
         exposure=None,
         per_direction=False,
         bounces=DEFAULT_BOUNCES,
+        albedo="material",
         progress=None,
         memory_limit=None,
         time_limit=DEFAULT_TIME_LIMIT_S,
@@ -324,6 +325,7 @@ class Scene:
             time_limit,
             self.up_requested,
             bounces,
+            albedo,
         )
         return self.shade_with(settings, lights, progress=progress, warn=warn)
 
@@ -354,11 +356,14 @@ class Scene:
                 geometry, solver_mesh.triangles, lights, medium.eta, per_direction
             )
             timings["incident_light"] = timings.get("incident_light", 0.0) + time.perf_counter() - start
+            solve_with = _albedo_solver(solver_mesh, settings.albedo, solver)
             try:
                 solutions = _solve(
-                    geometry, incident, medium, model, method, tol, progress, per_direction, limits, solver
+                    geometry, incident, medium, model, method, tol, progress, per_direction, limits, solve_with
                 )
-                bounced = self._bounces(geometry, solver_mesh, solutions, lights, settings, progress, limits, solver)
+                bounced = self._bounces(
+                    geometry, solver_mesh, solutions, lights, settings, progress, limits, solve_with
+                )
                 break
             except BudgetError as exc:
                 reason = reason or budget_phrase(exc.estimate)  # of the resolution asked for
@@ -520,6 +525,36 @@ def _warn(message: str) -> None:
     warnings.warn(message, TranslucencyWarning, stacklevel=3)
 
 
+def scan_reflectance(mesh) -> np.ndarray:
+    """The scan's colour per vertex as its diffuse reflectance: ``(n, 3)`` linear values in [0, 1], the 8-bit
+    sRGB colours decoded (docs/physics.md §6.5); a sentence when the scan has none."""
+    from ..errors import InvalidParameterError, command_line_active
+    from .display import srgb_decode
+
+    colors = mesh.point_data.get("colors")
+    if colors is None:
+        name = Path(mesh.source).name if mesh.source is not None else "this mesh"
+        flag = "--albedo-from-colors" if command_line_active() else 'albedo="vertex_colors"'
+        raise InvalidParameterError(
+            f"{name} has no vertex colours or texture to take the albedo from; drop {flag} or give a scan with "
+            "colours (PLY red/green/blue, OBJ with a map_Kd texture, VTK 'colors')."
+        )
+    return srgb_decode(np.asarray(colors, dtype=np.float64)[:, :3] / 255.0)
+
+
+def _albedo_solver(solver_mesh, albedo: str, solver=None):
+    """The solve to call: ``solver`` (or :func:`translucency.scatter.solve.solve`) as it is for the
+    material's albedo, or wrapped by :func:`translucency.scatter.varying.solve_varying` with the solver
+    mesh's colours for ``"vertex_colors"``."""
+    if albedo != "vertex_colors":
+        return solver
+    import functools
+
+    from ..scatter.varying import solve_varying
+
+    return functools.partial(solve_varying, reflectance=scan_reflectance(solver_mesh), solver=solver)
+
+
 def _solve(geometry, incident, medium, model, method, tol, progress, per_direction, limits, solver=None):
     """The solver's :class:`Solution` list: one, or one per light sample with ``per_direction`` (``solver``:
     :func:`translucency.scatter.solve.solve` or what stands in for it)."""
@@ -579,6 +614,7 @@ def shade(
     exposure=None,
     per_direction=False,
     bounces=DEFAULT_BOUNCES,
+    albedo="material",
     up="auto",
     unit=None,
     progress=None,
@@ -622,6 +658,11 @@ def shade(
         :data:`~translucency.scatter.names.DEFAULT_BOUNCES`); the rays are traced even with
         ``shadows=False``. ``result.reentered`` holds that part of ``B`` and ``result.stats["bounces"]``
         its rays, seconds and share.
+    albedo : {"material", "vertex_colors"}
+        ``"vertex_colors"``: the scan's colour per vertex (its texture sampled at the vertices for an OBJ)
+        read as the diffuse reflectance, 8-bit sRGB decoded, with the material's mean free path, g and eta
+        (:func:`translucency.scatter.varying.solve_varying`, docs/physics.md §6.5); several solves, one
+        per reflectance level.
     up : str
         The scan's up axis (``"x"`` ... ``"-z"``, or ``"auto"``: inferred, see :mod:`translucency.io.upright`);
         only the default light and the metadata depend on it.
@@ -651,6 +692,7 @@ def shade(
         exposure=exposure,
         per_direction=per_direction,
         bounces=bounces,
+        albedo=albedo,
         progress=progress,
         memory_limit=memory_limit,
         time_limit=time_limit,

@@ -22,6 +22,7 @@ memory_limit              memory the process may hold (None: what is available) 
 time_limit                seconds a solve may take by its estimate (None: no limit)       s
 up                        the scan's up axis, ``"x"`` ... ``"-z"`` or ``"auto"``           --
 bounces                   times light leaving the surface enters again (0: never)         1
+albedo                    ``"material"`` or ``"vertex_colors"`` (the scan's colour)         --
 ========================= ============================================================== ==========
 """
 
@@ -47,11 +48,22 @@ from ..scatter.names import (
     check_tol,
 )
 
-__all__ = ["ShadeSettings", "HELP", "DEFAULT_MATERIAL", "RESOLUTIONS", "parse_resolution", "resolve_medium"]
+__all__ = [
+    "ShadeSettings",
+    "HELP",
+    "DEFAULT_MATERIAL",
+    "RESOLUTIONS",
+    "ALBEDO_SOURCES",
+    "parse_resolution",
+    "resolve_medium",
+]
 
 DEFAULT_MATERIAL = "marble"
 #: The named resolutions (besides a proxy edge length in mm).
 RESOLUTIONS = ("full", "auto")
+#: Where the albedo comes from: the material's own, or the scan's colour per vertex read as its diffuse
+#: reflectance with the material's mean free path (docs/physics.md §6.5).
+ALBEDO_SOURCES = ("material", "vertex_colors")
 
 #: Help text of each field (the command line's ``--help``, for ``shadows`` its ``--no-shadows`` flag; the
 #: defaults are added where the option is made).
@@ -69,6 +81,8 @@ HELP = {
     "bounces": "times the light that leaves the surface (subsurface exitance and the boundary's mirror "
     f"reflection of the lights) and reaches it again is let in and solved again, 0 to {MAX_BOUNCES}; each "
     "costs a ray gather and a solve",
+    "albedo": "the scan's colours (per vertex, or its texture sampled at the vertices) as the diffuse "
+    "reflectance, with the material's mean free path, g and eta (docs/physics.md 6.5)",
     "time_limit": f"seconds a solve may take by its estimate (default {DEFAULT_TIME_LIMIT_S:g}); over it the solve "
     "runs on a coarser proxy or stops with a message",
 }
@@ -128,6 +142,9 @@ class ShadeSettings:
     bounces : int
         Times the light leaving the surface that reaches it again is let in and solved again
         (docs/physics.md §7.4), 0 to :data:`~translucency.scatter.names.MAX_BOUNCES`.
+    albedo : {"material", "vertex_colors"}
+        The material's albedo, or the scan's colour per vertex read as its diffuse reflectance
+        (:data:`ALBEDO_SOURCES`).
     """
 
     material: object = DEFAULT_MATERIAL
@@ -142,6 +159,7 @@ class ShadeSettings:
     time_limit: float | None = DEFAULT_TIME_LIMIT_S
     up: str = "auto"
     bounces: int = DEFAULT_BOUNCES
+    albedo: str = "material"
 
     def __post_init__(self):
         from ..io.upright import parse_up
@@ -159,6 +177,10 @@ class ShadeSettings:
         object.__setattr__(self, "up", parse_up(self.up))
         object.__setattr__(self, "shadows", bool(self.shadows))
         object.__setattr__(self, "per_direction", bool(self.per_direction))
+        if self.albedo not in ALBEDO_SOURCES:
+            raise InvalidParameterError(
+                f"{setting_name('albedo')} must be one of {', '.join(ALBEDO_SOURCES)}, got {self.albedo!r}."
+            )
 
     def replace(self, **changes) -> ShadeSettings:
         """A copy with some fields changed (validated again)."""
@@ -178,6 +200,7 @@ class ShadeSettings:
                 "exposure",
                 "per_direction",
                 "bounces",
+                "albedo",
                 "memory_limit",
                 "time_limit",
             )
@@ -204,6 +227,7 @@ class ShadeSettings:
             "shadows": self.shadows,
             "light_summation": "per direction" if self.per_direction else "aggregated per vertex",
             "bounces": self.bounces,
+            "albedo": "the scan's colours as its diffuse reflectance" if self.albedo == "vertex_colors" else "material",
         }
 
 

@@ -57,7 +57,15 @@ import numpy as np
 from ..errors import InvalidParameterError
 from .medium import validate_coefficients
 
-__all__ = ["HalfSpaceTally", "simulate_half_space", "fresnel_reflectance_scalar", "sample_hg_cosine", "LAUNCH_MODES"]
+__all__ = [
+    "HalfSpaceTally",
+    "TwoMediaTally",
+    "simulate_half_space",
+    "simulate_two_media",
+    "fresnel_reflectance_scalar",
+    "sample_hg_cosine",
+    "LAUNCH_MODES",
+]
 
 #: Accepted values of ``launch``: per refracted photon or per incident photon.
 LAUNCH_MODES = ("refracted", "incident")
@@ -203,8 +211,21 @@ def _random_walk_batches(
     grid_cells,
     radial_edges,
     max_interactions,
+    sigma_a_right,
+    sigma_s_right,
+    boundary_x,
+    launch_x_low,
+    launch_x_high,
+    strip_half_width,
+    strip_cells,
 ):
     """Run ``n_batches`` independent batches of photons; returns the per-batch tallies.
+
+    Where ``x >= boundary_x`` the medium is ``(sigma_a_right, sigma_s_right)`` (the same ``g`` and
+    ``eta``): free flights are drawn with the larger ``sigma_t`` and a collision in the thinner side is
+    real with probability ``sigma_t(x) / sigma_t_max`` (Woodcock tracking, docs/physics.md §9.1 item 8);
+    with one medium no number is drawn for it, so the walk is the homogeneous one. Photons start at
+    ``x`` uniform in ``[launch_x_low, launch_x_high]`` (one point draws nothing).
 
     Returns
     -------
@@ -221,11 +242,17 @@ def _random_walk_batches(
         Escaped weight per cell, indexed [batch, order, iy, ix].
     radial : ndarray, shape (n_batches, 2, n_annuli)
         Escaped weight per annulus.
+    strip : ndarray, shape (n_batches, strip_cells)
+        Escaped weight per strip ``x`` in ``[-strip_half_width, strip_half_width]``, every ``y``.
     normal_radiance : ndarray, shape (n_batches,)
         Sum over interactions of weight x phase function toward +z x attenuation to the boundary, 1/sr.
     """
-    sigma_t = sigma_a + sigma_s
-    albedo = sigma_s / sigma_t
+    sigma_t_left = sigma_a + sigma_s
+    sigma_t_right = sigma_a_right + sigma_s_right
+    albedo_left = sigma_s / sigma_t_left
+    albedo_right = sigma_s_right / sigma_t_right
+    sigma_t_max = max(sigma_t_left, sigma_t_right)
+    strip_cell = 2.0 * strip_half_width / strip_cells
     inv_eta = 1.0 / eta
     n_annuli = radial_edges.shape[0] - 1
     r_max = radial_edges[n_annuli]
@@ -238,6 +265,7 @@ def _random_walk_batches(
     grid = np.zeros((n_batches, 2, grid_cells, grid_cells))
     radial = np.zeros((n_batches, 2, n_annuli))
     normal_radiance = np.zeros(n_batches)
+    strip = np.zeros((n_batches, strip_cells))
     hg_norm = (1.0 - g * g) / (4.0 * math.pi)
 
     for batch in numba.prange(n_batches):
@@ -245,7 +273,9 @@ def _random_walk_batches(
         _seed_stream(state, seed, batch)
         batch_interactions = 0
         for _photon in range(photons_per_batch):
-            x = 0.0
+            x = launch_x_low
+            if launch_x_high > launch_x_low:
+                x += (launch_x_high - launch_x_low) * _uniform(state)
             y = 0.0
             z = 0.0
             ux = start_x
@@ -254,7 +284,7 @@ def _random_walk_batches(
             w = start_weight
             events = 0
             while True:
-                step = -math.log(_uniform(state)) / sigma_t  # free flight, docs/physics.md §9.1 item 2
+                step = -math.log(_uniform(state)) / sigma_t_max  # free flight, docs/physics.md §9.1 item 2
                 if uz > 0.0 and z + step * uz >= 0.0:
                     # Reaches the boundary: move there, split the weight by Fresnel.
                     to_boundary = -z / uz
@@ -275,6 +305,9 @@ def _random_walk_batches(
                             ir = np.searchsorted(radial_edges, r, side="right") - 1
                             if 0 <= ir < n_annuli:
                                 radial[batch, order, ir] += escaped
+                        ix = int(math.floor((x + strip_half_width) / strip_cell))
+                        if 0 <= ix < strip_cells:
+                            strip[batch, ix] += escaped
                     w -= escaped
                     uz = -uz  # specular reflection of what remains; memoryless, so a new flight
                     if w <= 0.0:
@@ -283,6 +316,10 @@ def _random_walk_batches(
                     x += step * ux
                     y += step * uy
                     z += step * uz
+                    sigma_t = sigma_t_left if x < boundary_x else sigma_t_right
+                    if sigma_t < sigma_t_max and _uniform(state) * sigma_t_max >= sigma_t:
+                        continue  # a null collision: the flight goes on (docs/physics.md §9.1 item 8)
+                    albedo = albedo_left if x < boundary_x else albedo_right
                     # Interaction: implicit capture, then a new direction (docs/physics.md §9.1 item 4).
                     absorbed[batch] += w * (1.0 - albedo)
                     w *= albedo
@@ -320,7 +357,7 @@ def _random_walk_batches(
                     else:
                         break
         interactions[batch] = batch_interactions
-    return totals, absorbed, truncated, interactions, grid, radial, normal_radiance
+    return totals, absorbed, truncated, interactions, grid, radial, normal_radiance, strip
 
 
 # --------------------------------------------------------------------------------------------------
@@ -575,6 +612,52 @@ def simulate_half_space(
             f"got arrays of shape {a.shape}."
         )
     sigma_a, sigma_s, g, eta = float(a), float(s), float(gg), float(e)
+    if grid_extent_mm is None:
+        grid_extent_mm = 4.0 / (sigma_s * (1.0 - g) + sigma_a)
+    walk = _walk(
+        (sigma_a, sigma_s),
+        (sigma_a, sigma_s),
+        math.inf,
+        g,
+        eta,
+        theta_i_deg,
+        n_photons,
+        seed,
+        grid_extent_mm,
+        grid_cells,
+        radial_bins,
+        radial_edges_mm,
+        n_batches,
+        launch,
+        max_interactions,
+        (0.0, 0.0),
+        (1.0, 1),
+    )
+    walk.pop("strip")
+    return HalfSpaceTally(sigma_a=sigma_a, sigma_s=sigma_s, g=g, eta=eta, **walk)
+
+
+def _walk(
+    left,
+    right,
+    boundary_x,
+    g,
+    eta,
+    theta_i_deg,
+    n_photons,
+    seed,
+    grid_extent_mm,
+    grid_cells,
+    radial_bins,
+    radial_edges_mm,
+    n_batches,
+    launch,
+    max_interactions,
+    launch_x,
+    strip,
+):
+    """The checks and the walk shared by :func:`simulate_half_space` and :func:`simulate_two_media`: the
+    tallies' fields as batch means with standard errors (``strip``: escaped weight per photon per mm of x)."""
     try:
         theta_i_deg = float(theta_i_deg)
     except (TypeError, ValueError):
@@ -595,8 +678,6 @@ def simulate_half_space(
         raise InvalidParameterError(f"simulate_half_space: seed must be below 2**63, got {seed}.")
     grid_cells = _check_positive_int("grid_cells", grid_cells, 1)
     max_interactions = _check_positive_int("max_interactions", max_interactions, 1)
-    if grid_extent_mm is None:
-        grid_extent_mm = 4.0 / (sigma_s * (1.0 - g) + sigma_a)
     grid_extent_mm = _check_positive_float("grid_extent_mm", grid_extent_mm)
     if radial_edges_mm is None:
         radial_bins = _check_positive_int("radial_bins", radial_bins, 1)
@@ -626,9 +707,9 @@ def simulate_half_space(
     photons_per_batch = -(-n_photons // n_batches)
     n_total = photons_per_batch * n_batches
     started = time.perf_counter()
-    totals, absorbed, truncated, interactions, grid, radial, normal_radiance = _random_walk_batches(
-        sigma_a,
-        sigma_s,
+    totals, absorbed, truncated, interactions, grid, radial, normal_radiance, strip_weight = _random_walk_batches(
+        left[0],
+        left[1],
         g,
         eta,
         float(w12[0]),
@@ -642,6 +723,13 @@ def simulate_half_space(
         grid_cells,
         radial_edges,
         max_interactions,
+        right[0],
+        right[1],
+        float(boundary_x),
+        float(launch_x[0]),
+        float(launch_x[1]),
+        float(strip[0]),
+        int(strip[1]),
     )
     elapsed = time.perf_counter() - started
 
@@ -658,12 +746,9 @@ def simulate_half_space(
     by_order, by_order_se = _batch_mean_and_se(totals)
     absorbed_mean, absorbed_se = _batch_mean_and_se(absorbed * per_photon)
     normal_radiance_mean, normal_radiance_se = _batch_mean_and_se(normal_radiance * per_photon)
+    strip_mean, strip_se = _batch_mean_and_se(strip_weight * (per_photon * strip[1] / (2.0 * strip[0])))
 
-    return HalfSpaceTally(
-        sigma_a=sigma_a,
-        sigma_s=sigma_s,
-        g=g,
-        eta=eta,
+    return dict(
         theta_i_deg=theta_i_deg,
         n_photons=n_total,
         n_batches=n_batches,
@@ -689,4 +774,166 @@ def simulate_half_space(
         **_by_order("exitance", grid),
         **_by_order("radial_exitance", radial),
         elapsed_s=elapsed,
+        strip=(strip_mean, strip_se),
+    )
+
+
+@dataclass(frozen=True, eq=False)
+class TwoMediaTally:
+    """Result of :func:`simulate_two_media`: the exitance across the boundary ``x = 0`` between two media.
+
+    Attributes
+    ----------
+    left, right : tuple of float
+        ``(sigma_a, sigma_s)`` in 1/mm of the medium at ``x < 0`` and at ``x >= 0``.
+    g, eta, theta_i_deg, launch_x_mm, n_photons, n_batches, seed
+        The settings (``launch_x_mm``: photons start at ``x`` uniform in this range, ``y = 0``).
+    total_reflectance, total_reflectance_se : float
+        Escaped fraction of the launched flux.
+    strip_edges_mm : ndarray, shape (cells + 1,)
+        Edges of the strips along x, mm.
+    strip_exitance, strip_exitance_se : ndarray, shape (cells,)
+        Escaped flux per launched photon per mm of x, every y counted, 1/mm. Under a beam spread
+        uniformly over the launch range (:attr:`uniform_exitance`) this times the range's width is the
+        exitance per unit incident flux density.
+    exitance, exitance_se : ndarray, shape (grid_cells, grid_cells)
+        Cell-averaged exitance ``M(x, y)`` per launched photon, 1/mm^2, indexed ``[iy, ix]`` (a pencil beam).
+    grid_edges_mm : ndarray, shape (grid_cells + 1,)
+        Cell edges of that grid along x and y, mm.
+    """
+
+    left: tuple
+    right: tuple
+    g: float
+    eta: float
+    theta_i_deg: float
+    launch_x_mm: tuple
+    n_photons: int
+    n_batches: int
+    seed: int
+    total_reflectance: float
+    total_reflectance_se: float
+    strip_edges_mm: np.ndarray
+    strip_exitance: np.ndarray
+    strip_exitance_se: np.ndarray
+    exitance: np.ndarray
+    exitance_se: np.ndarray
+    grid_edges_mm: np.ndarray
+
+    @property
+    def strip_centres_mm(self) -> np.ndarray:
+        """Centres of the strips along x, mm."""
+        return 0.5 * (self.strip_edges_mm[1:] + self.strip_edges_mm[:-1])
+
+    @property
+    def uniform_exitance(self) -> tuple:
+        """``(M, standard error)`` per strip under a beam of unit flux density spread over the launch range
+        (dimensionless: exitance over incident flux density; meaningful well inside the range)."""
+        width = self.launch_x_mm[1] - self.launch_x_mm[0]
+        return self.strip_exitance * width, self.strip_exitance_se * width
+
+
+def simulate_two_media(
+    left,
+    right,
+    g,
+    eta,
+    *,
+    launch_x_mm=(0.0, 0.0),
+    theta_i_deg=0.0,
+    n_photons=100_000,
+    seed=0,
+    strip_extent_mm=10.0,
+    strip_cells=100,
+    grid_extent_mm=10.0,
+    grid_cells=101,
+    n_batches=32,
+    max_interactions=10_000_000,
+) -> TwoMediaTally:
+    """Monte Carlo exitance of a half-space made of two media side by side (``x < 0`` and ``x >= 0``),
+    the reference for spatially varying coefficients (docs/physics.md §9.1 item 8).
+
+    The walk is :func:`simulate_half_space`'s (per refracted photon) with Woodcock tracking through the
+    two media; photons enter at ``x`` uniform in ``launch_x_mm`` (mm; equal ends: a pencil beam).
+
+    Parameters
+    ----------
+    left, right : (sigma_a, sigma_s)
+        Absorption and unreduced scattering coefficients of each side, 1/mm.
+    g, eta : float
+        Henyey-Greenstein mean cosine and relative index, shared by both sides.
+    launch_x_mm : (float, float), optional
+        Range of entry points along x, mm.
+    theta_i_deg, n_photons, seed, grid_extent_mm, grid_cells, n_batches, max_interactions
+        As in :func:`simulate_half_space`.
+    strip_extent_mm : float, optional
+        Half-width of the strip tally along x, mm.
+    strip_cells : int, optional
+        Strips over ``[-strip_extent_mm, strip_extent_mm]``.
+
+    Returns
+    -------
+    TwoMediaTally
+    """
+    sides = []
+    for side, coefficients in (("left", left), ("right", right)):
+        try:
+            sigma_a, sigma_s = coefficients
+        except (TypeError, ValueError):
+            raise InvalidParameterError(
+                f"simulate_two_media: {side} must be a pair (sigma_a, sigma_s) in 1/mm, got {coefficients!r}."
+            ) from None
+        a, s, gg, e = validate_coefficients(sigma_a, sigma_s, g, eta, what="simulate_two_media")
+        sides.append((float(a), float(s)))
+    g, eta = float(gg), float(e)
+    try:
+        low, high = (float(v) for v in launch_x_mm)
+    except (TypeError, ValueError):
+        raise InvalidParameterError(
+            f"simulate_two_media: launch_x_mm must be a pair (low, high) of mm, got {launch_x_mm!r}."
+        ) from None
+    if not (math.isfinite(low) and math.isfinite(high) and low <= high):
+        raise InvalidParameterError(
+            f"simulate_two_media: launch_x_mm must be finite with low <= high, got {launch_x_mm!r}."
+        )
+    strip_extent_mm = _check_positive_float("strip_extent_mm", strip_extent_mm)
+    strip_cells = _check_positive_int("strip_cells", strip_cells, 1)
+    walk = _walk(
+        sides[0],
+        sides[1],
+        0.0,
+        g,
+        eta,
+        theta_i_deg,
+        n_photons,
+        seed,
+        grid_extent_mm,
+        grid_cells,
+        1,
+        None,
+        n_batches,
+        "refracted",
+        max_interactions,
+        (low, high),
+        (strip_extent_mm, strip_cells),
+    )
+    strip, strip_se = walk["strip"]
+    return TwoMediaTally(
+        left=sides[0],
+        right=sides[1],
+        g=g,
+        eta=eta,
+        theta_i_deg=walk["theta_i_deg"],
+        launch_x_mm=(low, high),
+        n_photons=walk["n_photons"],
+        n_batches=walk["n_batches"],
+        seed=walk["seed"],
+        total_reflectance=walk["total_reflectance"],
+        total_reflectance_se=walk["total_reflectance_se"],
+        strip_edges_mm=np.linspace(-strip_extent_mm, strip_extent_mm, strip_cells + 1),
+        strip_exitance=strip,
+        strip_exitance_se=strip_se,
+        exitance=walk["exitance"],
+        exitance_se=walk["exitance_se"],
+        grid_edges_mm=walk["grid_edges_mm"],
     )
