@@ -90,3 +90,15 @@ def test_the_command_line_option(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "plain.ply has no vertex colours or texture" in err and "--albedo-from-colors" in err
     assert "Traceback" not in err
+
+
+def test_the_viewer_and_compare_take_the_colours_too():
+    from translucency.app.compare import compare
+    from translucency.app.viewer.state import ViewerState
+
+    mesh = _sphere(_halves)
+    state = ViewerState(mesh, "marble", albedo="vertex_colors", resolution="full", up="+z")
+    red = mesh.points[:, 0] < -5.0
+    assert state.result.B[red, 0].mean() > 2 * state.result.B[red, 2].mean()
+    comparison = compare(mesh, "marble", albedo="vertex_colors", up="+z")
+    assert comparison.results["marble", "directional"].metadata["albedo"] != "material"

@@ -394,6 +394,7 @@ def compare(
     shadows=True,
     per_direction=False,
     bounces=DEFAULT_BOUNCES,
+    albedo="material",
     exposure=None,
     memory_limit=None,
     time_limit=DEFAULT_TIME_LIMIT_S,
@@ -423,7 +424,7 @@ def compare(
         right, above and a little behind (:func:`compare_light_direction`; why: the module docstring).
     output : path-like, optional
         Folder for the files (created; files in it are replaced atomically). None: numbers only.
-    method, tol, resolution, shadows, per_direction, bounces, memory_limit, time_limit
+    method, tol, resolution, shadows, per_direction, bounces, albedo, memory_limit, time_limit
         Solver settings (:meth:`Scene.shade <translucency.app.pipeline.Scene.shade>`; GB, seconds).
     exposure : float, optional
         The common display exposure (default: automatic over all cells).
@@ -479,7 +480,7 @@ def compare(
 
         prepare_output_folder(output)
     # every solver setting checked once, before the scan is loaded; each cell changes material and model
-    solver = (method, tol, resolution, shadows, per_direction, exposure, memory_limit, time_limit, up, bounces)
+    solver = (method, tol, resolution, shadows, per_direction, exposure, memory_limit, time_limit, up, bounces, albedo)
     settings = ShadeSettings(media[materials[0]], models[0], *solver)
     width, height = (int(v) for v in cell_size)
     if width < 16 or height < 16:
@@ -588,6 +589,7 @@ def compare(
                 "shadows": bool(shadows),
                 "per_direction": bool(per_direction),
                 "bounces": settings.bounces,
+                "albedo": settings.albedo,
                 "up": up_axis,
                 "up_inferred": scene.up_requested == "auto",
             },

@@ -145,8 +145,11 @@ def figure_image(
     bounces = metadata.get("bounces")
     if bounces:
         tolerance += f", {bounces} bounce" + ("s" if bounces > 1 else "")
+    material = metadata.get("material", "?")
+    if metadata.get("albedo", "material") != "material":
+        material += " with the scan's colours"
     figure.suptitle(
-        f"{name}: {mesh.n_points:,} vertices, {mesh.extent:.4g} mm across — {metadata.get('material', '?')}, "
+        f"{name}: {mesh.n_points:,} vertices, {mesh.extent:.4g} mm across — {material}, "
         f"{metadata.get('model', '?')} dipole, {method} method ({tolerance})\nlight: {lights}, {shadows}",
         fontsize=10,
     )

@@ -145,8 +145,9 @@ class ViewerState:
         Directions in the scan's own coordinates. Default: one white directional light of 1 W/m²
         above and in front of the scan (:func:`~translucency.app.pipeline.default_light_direction` of
         ``up``). :meth:`set_light` steers the first directional light.
-    model, method, tol, per_direction, bounces, memory_limit, time_limit
-        Passed to :meth:`Scene.shade <translucency.app.pipeline.Scene.shade>` (GB, seconds).
+    model, method, tol, per_direction, bounces, albedo, memory_limit, time_limit
+        Passed to :meth:`Scene.shade <translucency.app.pipeline.Scene.shade>` (GB, seconds); with the scan's
+        colours as its albedo, ``relight`` is solved by ``tree`` (one solve per reflectance level each change).
     resolution : "interactive", "full", "auto" or float
         Where ``B`` is computed on a change: ``"interactive"`` (default) is every vertex with ``relight``
         (a proxy where its operators would not fit the memory budget), otherwise a proxy of about
@@ -185,6 +186,7 @@ class ViewerState:
         shadows=True,
         per_direction=False,
         bounces=DEFAULT_BOUNCES,
+        albedo="material",
         exposure=None,
         memory_limit=None,
         time_limit=DEFAULT_TIME_LIMIT_S,
@@ -214,6 +216,7 @@ class ViewerState:
             time_limit,
             up,
             bounces,
+            albedo,
         )
         if mesh is None:
             mesh, _, default_name = load_scan(None)
@@ -227,6 +230,7 @@ class ViewerState:
         self.resolution = resolution
         self.per_direction = bool(per_direction)
         self.bounces = settings.bounces
+        self.albedo = settings.albedo
         self.limits = {"memory_limit": memory_limit, "time_limit": time_limit}
         self.shadows = bool(shadows)
         self.scene = Scene(mesh, shadows=self.shadows, up=up)
@@ -418,6 +422,7 @@ class ViewerState:
             exposure=self.exposure,
             per_direction=self.per_direction,
             bounces=self.bounces,
+            albedo=self.albedo,
             progress=self._progress,
             **self.limits,
         )

@@ -94,7 +94,7 @@ class Viewer:
         Directions in the scan's own coordinates. Default: one white directional light of 1 W/m²
         above and in front of the scan (:func:`~translucency.app.pipeline.default_light_direction` of
         ``up``). The light sliders steer the first directional light; without one they are not shown.
-    model, method, tol, per_direction, bounces, memory_limit, time_limit
+    model, method, tol, per_direction, bounces, albedo, memory_limit, time_limit
         Passed to :meth:`Scene.shade <translucency.app.pipeline.Scene.shade>` (GB, seconds).
     resolution : "interactive", "full", "auto" or float
         Where ``B`` is computed while controls change: ``"interactive"`` (default) is a proxy of about
@@ -176,6 +176,7 @@ class Viewer:
         shadows=True,
         per_direction=False,
         bounces=DEFAULT_BOUNCES,
+        albedo="material",
         exposure=None,
         memory_limit=None,
         time_limit=DEFAULT_TIME_LIMIT_S,
@@ -204,6 +205,7 @@ class Viewer:
             shadows=shadows,
             per_direction=per_direction,
             bounces=bounces,
+            albedo=albedo,
             exposure=exposure,
             memory_limit=memory_limit,
             time_limit=time_limit,
