@@ -38,9 +38,10 @@ __all__ = [
     "solve_varying",
 ]
 
-#: Largest step (in reflectance) between two levels: 0.8 % at the 99th percentile from a reference with
-#: four times the levels on the bunny with a striped colour (docs/physics.md §6.5).
-REFLECTANCE_STEP = 0.05
+#: Largest step (in reflectance) between two levels: 0.19 % at the 99th percentile from a step of 0.0125
+#: on the bunny with a striped colour, for 6.0 times the solve with one albedo (0.05: 0.83 % for 5.5 times;
+#: each receiver is in about 4.8 levels either way; bench/README.md, "Colour from the scan").
+REFLECTANCE_STEP = 0.025
 #: Reflectances are clamped to this range: 0 and 1 have no albedo (a colour of pure black or white).
 REFLECTANCE_RANGE = (0.01, 0.95)
 _LOW_ALBEDO_WARNED: set = set()  # (material, eta, darkest level): the warning is said once per process
