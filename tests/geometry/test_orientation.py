@@ -68,3 +68,14 @@ def test_flat_grid_is_left_alone():
     points, triangles = grid(3)
     flip, _ = coherent_orientation(triangles)
     assert not flip.any()
+
+
+def test_outward_flips_take_components_already_found():
+    """Given the components (as the cleaning does after finding defects) the flips are the same."""
+    from translucency.geometry.topology import face_components
+
+    points, triangles = icosphere(2)
+    inside_out = flip_triangles(triangles, np.ones(len(triangles), dtype=bool))
+    flips, flipped = outward_flips(points, inside_out)
+    again, flipped_again = outward_flips(points, inside_out, face_components(inside_out))
+    assert flipped == flipped_again == 1 and np.array_equal(flips, again) and flips.all()

@@ -103,3 +103,21 @@ def test_shared_scans_match_the_readme(name, expected):
     mesh = load_scan(name)
     counts = find_defects(mesh.points, mesh.triangles).as_dict()
     assert {key: counts[key] for key in expected} == expected
+
+
+def test_the_components_found_with_the_defects_are_those_of_the_faces():
+    """Two spheres and a stray triangle: the labels given with the defects are face_components' own (a repair
+    that keeps the faces reuses them), and none are given when a face is null (labels would not line up)."""
+    from translucency.geometry.topology import face_components
+    from translucency.io.defects import defects_and_components
+
+    points, triangles = icosphere(2)
+    points = np.concatenate([points, points + 5.0, [[9.0, 9.0, 9.0], [9.5, 9.0, 9.0], [9.0, 9.5, 9.0]]])
+    n = len(points) - 3
+    triangles = np.concatenate([triangles, triangles + n // 2, [[n, n + 1, n + 2]]])
+    defects, (count, labels) = defects_and_components(points, triangles)
+    expected_count, expected = face_components(triangles)
+    assert count == defects.components == expected_count == 3
+    assert np.array_equal(labels, expected)
+    _, none = defects_and_components(points, np.concatenate([triangles, [[0, 0, 1]]]))
+    assert none is None

@@ -83,7 +83,7 @@ def coherent_orientation(triangles) -> tuple[np.ndarray, int]:
     return flip, int(non_orientable)
 
 
-def outward_flips(points, triangles) -> tuple[np.ndarray, int]:
+def outward_flips(points, triangles, components=None) -> tuple[np.ndarray, int]:
     """Which triangles to flip so that every component faces outward (positive signed volume).
 
     The triangles must already be coherently oriented (see :func:`coherent_orientation`).
@@ -93,6 +93,8 @@ def outward_flips(points, triangles) -> tuple[np.ndarray, int]:
     points : array_like, shape (n, 3)
         Vertex positions in mm.
     triangles : array_like of int, shape (m, 3)
+    components : (int, ndarray), optional
+        :func:`~translucency.geometry.topology.face_components` of these triangles, when already known.
 
     Returns
     -------
@@ -104,7 +106,7 @@ def outward_flips(points, triangles) -> tuple[np.ndarray, int]:
     triangles = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
     if len(triangles) == 0:
         return np.zeros(0, dtype=bool), 0
-    count, component = face_components(triangles)
+    count, component = face_components(triangles) if components is None else components
     _, centroid = area_centroids(points, triangles, component, count)
     p0 = points[triangles[:, 0]]
     cross = triangle_cross_products(points, triangles)

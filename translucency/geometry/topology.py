@@ -21,6 +21,7 @@ __all__ = [
     "kernel_array",
     "unique_edges",
     "face_components",
+    "manifold_pairs",
     "boundary_loops",
     "next_corner",
     "count_non_manifold_vertices",
@@ -263,7 +264,9 @@ def boundary_loops(boundary_edges: np.ndarray) -> tuple[int, int]:
     return int(count), int(edges_per_loop.max())
 
 
-def face_components(triangles: np.ndarray, edge_of_corner: np.ndarray | None = None) -> tuple[int, np.ndarray]:
+def face_components(
+    triangles: np.ndarray, edge_of_corner: np.ndarray | None = None, pairs: np.ndarray | None = None
+) -> tuple[int, np.ndarray]:
     """Connected components of triangles linked through manifold edges (edges of exactly two triangles).
 
     A triangle hanging on a non-manifold edge, or touching the rest only at a vertex, is a
@@ -274,6 +277,8 @@ def face_components(triangles: np.ndarray, edge_of_corner: np.ndarray | None = N
     triangles : ndarray, shape (m, 3), int64
     edge_of_corner : ndarray, shape (m, 3), optional
         From :func:`unique_edges` (computed when not given).
+    pairs : ndarray, shape (k, 2), optional
+        From :func:`manifold_pairs` (computed when not given).
 
     Returns
     -------
@@ -282,13 +287,22 @@ def face_components(triangles: np.ndarray, edge_of_corner: np.ndarray | None = N
         Component number of each triangle.
     """
     triangles = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
-    if edge_of_corner is None:
-        _, edge_of_corner = unique_edges(triangles)
-    slot_edge = kernel_array(np.asarray(edge_of_corner).ravel(), np.int64)
-    count, labels = _face_components(
-        _manifold_pairs(slot_edge, kernel_array(np.bincount(slot_edge), np.int64)), len(triangles)
-    )
+    if pairs is None:
+        if edge_of_corner is None:
+            _, edge_of_corner = unique_edges(triangles)
+        pairs = manifold_pairs(edge_of_corner)
+    count, labels = _face_components(pairs, len(triangles))
     return int(count), labels
+
+
+def manifold_pairs(edge_of_corner: np.ndarray, faces_per_edge: np.ndarray | None = None) -> np.ndarray:
+    """The two corner slots (``3 t + i``) of every edge of exactly two triangles, ``(k, 2)`` int64, for
+    :func:`face_components` and :func:`count_non_manifold_vertices` (``faces_per_edge``: computed when not
+    given)."""
+    slot_edge = kernel_array(np.asarray(edge_of_corner).ravel(), np.int64)
+    if faces_per_edge is None:
+        faces_per_edge = np.bincount(slot_edge)
+    return _manifold_pairs(slot_edge, kernel_array(faces_per_edge, np.int64))
 
 
 @numba.njit(cache=True)
@@ -306,15 +320,16 @@ def next_corner(slot: np.ndarray) -> np.ndarray:
 
 
 def count_non_manifold_vertices(
-    triangles: np.ndarray, edge_of_corner: np.ndarray, faces_per_edge: np.ndarray, n: int
+    triangles: np.ndarray, edge_of_corner: np.ndarray, faces_per_edge: np.ndarray, n: int, pairs=None
 ) -> int:
     """Vertices whose incident triangles form more than one fan (linked through manifold edges).
 
     Corners (t, i) are graph nodes 3 t + i; a manifold edge links, at each of its two end vertices,
-    the corners of its two triangles; the fans are the connected components of that graph.
+    the corners of its two triangles; the fans are the connected components of that graph. ``pairs``:
+    :func:`manifold_pairs`, computed when not given.
     """
-    slot_edge = kernel_array(np.asarray(edge_of_corner).ravel(), np.int64)
-    pairs = _manifold_pairs(slot_edge, kernel_array(faces_per_edge, np.int64))
+    if pairs is None:
+        pairs = manifold_pairs(edge_of_corner, faces_per_edge)
     return int(_non_manifold_vertices(pairs, kernel_array(np.asarray(triangles).ravel(), np.int64), n))
 
 

@@ -55,7 +55,7 @@ from ..geometry.topology import (
     first_at_same_position,
     unique_edges,
 )
-from .defects import ZERO_AREA_RATIO, MeshDefects, find_defects, zero_area_mask
+from .defects import ZERO_AREA_RATIO, MeshDefects, defects_and_components, find_defects, zero_area_mask
 from .polydata import as_triangle_mesh
 
 __all__ = ["CleanReport", "clean_mesh", "clean_arrays", "smooth_vertex_normals"]
@@ -310,8 +310,10 @@ def clean_arrays(
         orient_outward,
         smooth_normals,
     )
-    before = find_defects(points, triangles)
-    repair = _Repair(points, triangles, np.arange(len(points), dtype=np.int64), points, triangles)
+    before, components = defects_and_components(points, triangles)
+    repair = _Repair(
+        points, triangles, np.arange(len(points), dtype=np.int64), points, triangles, components=components
+    )
     if settings["merge_duplicate_vertices"]:
         _merge_vertices(repair, before)  # 1
     if settings["remove_degenerate_faces"]:
@@ -424,7 +426,8 @@ class _Repair:
     """The mesh as the repair steps leave it, with what they counted.
 
     ``origin`` is, for each current vertex, the input vertex it comes from; ``counts`` become the
-    :class:`CleanReport`'s fields; ``non_orientable`` the components no flip makes coherent.
+    :class:`CleanReport`'s fields; ``non_orientable`` the components no flip makes coherent;
+    ``components`` the input faces' components found with the defects (or None).
     """
 
     points: np.ndarray
@@ -434,10 +437,17 @@ class _Repair:
     input_triangles: np.ndarray
     counts: dict = dataclasses.field(default_factory=dict)
     non_orientable: int = 0
+    components: tuple | None = None
 
     def pristine(self) -> bool:
         """Whether the arrays are still the input's: then the defects found before tell which steps find nothing."""
         return self.points is self.input_points and self.triangles is self.input_triangles
+
+    def known_components(self):
+        """The components found with the defects while no step has changed which faces there are, else None: a
+        step that removes, adds or reconnects faces replaces the points or changes their count; flips keep them."""
+        same_faces = self.points is self.input_points and len(self.triangles) == len(self.input_triangles)
+        return self.components if same_faces else None
 
     def replace(self, points, triangles, origin) -> None:
         """Take the arrays a step returns."""
@@ -500,7 +510,7 @@ def _remove_small_islands(repair: _Repair, before: MeshDefects, min_island_fract
     """Step 7: remove components with less than ``min_island_fraction`` of the largest one's area."""
     if repair.pristine() and before.components <= 1:
         return
-    count, component = face_components(repair.triangles)
+    count, component = repair.known_components() or face_components(repair.triangles)
     if count > 1:
         area = np.bincount(component, weights=triangle_areas(repair.points, repair.triangles), minlength=count)
         small = area < min_island_fraction * area.max()
@@ -547,7 +557,10 @@ def _orient_outward(repair: _Repair) -> None:
         flip, repair.non_orientable = coherent_orientation(repair.triangles)
         repair.triangles = flip_triangles(repair.triangles, flip)
         counts["faces_flipped_coherent"] = counts.get("faces_flipped_coherent", 0) + int(np.count_nonzero(flip))
-    flip, components_flipped = outward_flips(repair.points, repair.triangles)
+    # the faces' components as found with the defects, while no step has changed which faces there are (a
+    # step that removes, adds or reconnects faces replaces the points or changes the count; flips keep them)
+    same_faces = repair.points is repair.input_points and len(repair.triangles) == len(repair.input_triangles)
+    flip, components_flipped = outward_flips(repair.points, repair.triangles, repair.components if same_faces else None)
     repair.triangles = flip_triangles(repair.triangles, flip)
     counts["components_flipped_outward"] = components_flipped
     counts["faces_flipped_outward"] = int(np.count_nonzero(flip))

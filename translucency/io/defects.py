@@ -45,6 +45,7 @@ from ..geometry.topology import (
     duplicate_triangles,
     face_components,
     first_at_same_position,
+    manifold_pairs,
     unique_edges,
 )
 
@@ -139,7 +140,14 @@ def _count_duplicate_vertices(points: np.ndarray) -> int:
 
 
 def find_defects(points, triangles) -> MeshDefects:
-    """Count the defects of a triangle mesh.
+    """Count the defects of a triangle mesh (:func:`defects_and_components` without the components)."""
+    return defects_and_components(points, triangles)[0]
+
+
+def defects_and_components(points, triangles) -> tuple[MeshDefects, tuple[int, np.ndarray] | None]:
+    """Count the defects of a triangle mesh, and give its face components ``(count, label per triangle)``
+    as :func:`~translucency.geometry.topology.face_components` finds them (None when every face is null),
+    so that a repair which keeps the faces does not find them again (None too when some face is null).
 
     Parameters
     ----------
@@ -159,6 +167,7 @@ def find_defects(points, triangles) -> MeshDefects:
     >>> find_defects(points, [[0, 1, 2]]).unreferenced_vertices
     1
     """
+    labels = None
     points = np.ascontiguousarray(points, dtype=np.float64)
     triangles = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
     n, m = len(points), len(triangles)
@@ -188,10 +197,11 @@ def find_defects(points, triangles) -> MeshDefects:
         boundary = edges[faces_per_edge == 1]
         boundary_edges = len(boundary)
         loops, largest = boundary_loops(boundary)
-        non_manifold_vertices = count_non_manifold_vertices(proper, edge_of_corner, faces_per_edge, n)
-        components, _ = face_components(proper, edge_of_corner)
+        pairs = manifold_pairs(edge_of_corner, faces_per_edge)
+        non_manifold_vertices = count_non_manifold_vertices(proper, edge_of_corner, faces_per_edge, n, pairs)
+        components, labels = face_components(proper, pairs=pairs)
 
-    return MeshDefects(
+    defects = MeshDefects(
         vertices=n,
         triangles=m,
         duplicate_vertices=_count_duplicate_vertices(points),
@@ -207,3 +217,5 @@ def find_defects(points, triangles) -> MeshDefects:
         components=int(components),
         inconsistent_edges=inconsistent,
     )
+    # labels of every triangle only (a null face has none)
+    return defects, (int(components), labels) if labels is not None and len(proper) == m else None
