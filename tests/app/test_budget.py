@@ -50,6 +50,23 @@ def test_over_the_time_budget_the_scan_is_solved_on_a_coarser_proxy():
     assert result.metadata["budget"]["coarser"] == lines[0] and result.metadata["resolution"].startswith("proxy")
 
 
+def test_the_resolution_that_did_not_fit_is_freed_before_the_proxy():
+    """The full resolution's geometry (and with it its caches) is let go when its solve does not fit: at scan
+    size it is most of the memory, and the proxy's decimation needs that memory."""
+    import gc
+    import weakref
+
+    points, triangles = icosphere(5, 20.0)
+    scene = Scene(TriangleMesh(points, triangles), shadows=False)
+    full = scene.shade("marble", time_limit=None)
+    from translucency.app.settings import resolve_medium
+
+    geometry = weakref.ref(scene.solver_mesh(resolve_medium("marble"))[3])
+    scene.shade("marble", time_limit=0.3 * full.stats["solver"]["budget"]["seconds"], warn=lambda line: None)
+    gc.collect()
+    assert geometry() is None
+
+
 def test_too_coarse_a_proxy_is_refused_instead():
     """When the proxy that would fit keeps too few vertices, the sentence of the solver is raised."""
     points, triangles = icosphere(3, 20.0)  # 642 vertices: below the fewest a proxy may keep

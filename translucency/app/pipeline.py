@@ -368,6 +368,10 @@ class Scene:
             except BudgetError as exc:
                 reason = reason or budget_phrase(exc.estimate)  # of the resolution asked for
                 resolution = self._coarser(solver_mesh, exc, attempt)
+                # what the resolution that did not fit built (geometry caches, Embree, incident light) is freed
+                # before the proxy is made: at scan size it is most of the memory held
+                self._forget(geometry)
+                solver_mesh = geometry = incident = None
         if reason is not None:
             coarsened = (
                 f"solving on a proxy of {solver_mesh.n_points:,} of the {self.mesh.n_points:,} vertices "
@@ -469,6 +473,15 @@ class Scene:
             solver=solver,
             **limits,
         )
+
+    def _forget(self, geometry) -> None:
+        """Drop the solver mesh of ``geometry``, its incident light and the Embree scenes and visibility."""
+        for key, kept in list(self._solver_meshes.items()):
+            if kept[3] is geometry:
+                del self._solver_meshes[key]
+        for key in [key for key in self._incident if key[0] == id(geometry)]:
+            del self._incident[key]
+        self.visibility.clear()
 
     def _coarser(self, solver_mesh, exc, attempt):
         """The edge length (mm) of a proxy whose solve should fit the budget ``exc`` was over;

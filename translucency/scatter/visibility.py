@@ -319,6 +319,11 @@ class VisibilityCache:
             self._scenes.popitem(last=False)
         return occluder, False
 
+    def clear(self) -> None:
+        """Drop every scene and visibility array (their memory is freed once nothing else holds them)."""
+        self._scenes.clear()
+        self._visibility.clear()
+
     def get(self, key: tuple):
         """Stored visibility for ``key``, or None."""
         value = self._visibility.get(key)
