@@ -132,3 +132,34 @@ def test_estimate_arithmetic():
     assert budget.memory_budget(None, 10 * budget.GB) == pytest.approx(9 * budget.GB)
     assert budget.memory_budget(None, None) is None
     assert budget.format_bytes(3.2 * budget.GB) == "3.2 GB" and budget.format_seconds(720) == "12 min"
+
+
+@pytest.mark.parametrize("method", ["exact", "cutoff", "tree"])
+def test_the_size_floor_is_below_every_estimate_of_that_size(method):
+    """The floor (no near or far work per receiver) never asks more memory or time than the plan with any
+    sampled counts, and is over a budget the plan is over only when it is over it itself."""
+    rng = np.random.default_rng(3)
+    for _ in range(20):
+        near, points, own, far = rng.uniform(0, 500, 4)
+        counts = budget.SolveCounts(50_000, 100_000, 50_000, 20_000, 3, 2, method, near, points + own, own, far)
+        plan = budget.estimate(counts, None, None)
+        floor = budget.size_floor(counts)
+        assert floor.peak_bytes <= plan.peak_bytes and floor.seconds <= plan.seconds
+    floor = budget.size_floor(counts, budget_bytes=0.5 * floor.peak_bytes)
+    assert not floor.fits and floor.over_memory
+
+
+def test_a_size_no_solve_fits_traces_no_light(monkeypatch):
+    """Under a time limit that even the set-up of a full solve is over, the pipeline goes for a proxy (or
+    says it cannot) without tracing the light for the full mesh first."""
+    from translucency.app.pipeline import Scene
+    from translucency.geometry.mesh import TriangleMesh
+    from translucency.scatter import irradiance
+
+    points, triangles = icosphere(5, 20.0)
+    traced = []
+    original = irradiance.incident_flux
+    monkeypatch.setattr(irradiance, "incident_flux", lambda p, *a, **k: traced.append(len(p)) or original(p, *a, **k))
+    with pytest.raises(BudgetError):
+        Scene(TriangleMesh(points, triangles), shadows=False).shade("marble", time_limit=1e-9)
+    assert len(points) not in traced

@@ -351,13 +351,15 @@ class Scene:
             start = time.perf_counter()
             solver_mesh, decimation, edge, geometry, geometry_reused = self.solver_mesh(medium, resolution)
             timings["geometry"] = timings.get("geometry", 0.0) + time.perf_counter() - start
-            start = time.perf_counter()
-            incident, incident_reused = self.incident(
-                geometry, solver_mesh.triangles, lights, medium.eta, per_direction
-            )
-            timings["incident_light"] = timings.get("incident_light", 0.0) + time.perf_counter() - start
             solve_with = _albedo_solver(solver_mesh, settings.albedo, solver)
             try:
+                if solver is None and method != "relight":  # a size no solve fits: no light traced for it
+                    _check_size_floor(geometry, medium.n_channels, method, limits)
+                start = time.perf_counter()
+                incident, incident_reused = self.incident(
+                    geometry, solver_mesh.triangles, lights, medium.eta, per_direction
+                )
+                timings["incident_light"] = timings.get("incident_light", 0.0) + time.perf_counter() - start
                 solutions = _solve(
                     geometry, incident, medium, model, method, tol, progress, per_direction, limits, solve_with
                 )
@@ -536,6 +538,17 @@ def _warn(message: str) -> None:
     from ..errors import TranslucencyWarning
 
     warnings.warn(message, TranslucencyWarning, stacklevel=3)
+
+
+def _check_size_floor(geometry, n_channels, method, limits) -> None:
+    """A :class:`~translucency.errors.BudgetError` when even the least a solve of this size needs
+    (:func:`translucency.scatter.solve.size_floor_plan`) is over the limits."""
+    from ..errors import BudgetError
+    from ..scatter.solve import over_budget_sentence, size_floor_plan
+
+    floor = size_floor_plan(geometry, n_channels, method, limits["memory_limit"], limits["time_limit"])
+    if not floor.fits:
+        raise BudgetError(over_budget_sentence(floor, geometry.n_vertices), floor)
 
 
 def scan_reflectance(mesh) -> np.ndarray:

@@ -30,6 +30,7 @@ which read what the operating system says.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import os
 from dataclasses import asdict, dataclass
@@ -269,6 +270,17 @@ def estimate(
         time_limit,
         bool(fits),
     )
+
+
+def size_floor(
+    counts: SolveCounts, budget_bytes: float | None = None, time_limit: float | None = None
+) -> SolveEstimate:
+    """The least a solve of ``counts``' size can take: :func:`estimate` with no near triangle, near-field point
+    or far-field evaluation per receiver (the sampled counts are ignored). When even this is over a budget,
+    the solve is, and the sample that the full estimate needs (the geometry's ordered copy, source tree and
+    near grid) need not be built."""
+    floor = dataclasses.replace(counts, near_triangles=0.0, near_points=0.0, own_points=0.0, far_evaluations=0.0)
+    return estimate(floor, budget_bytes, time_limit, keep_lists=False)
 
 
 def check_limits(memory_limit, time_limit) -> None:

@@ -605,6 +605,29 @@ def relight_plan(size: float, counts: dict, memory_limit, time_limit) -> budget.
     return budget.SolveEstimate(0.0, size, 0.0, 0.0, True, 0, 0.0, 0.0, size, seconds, budget_bytes, time_limit, fits)
 
 
+def size_floor_plan(geometry: SurfaceGeometry, n_channels: int, method: str, memory_limit, time_limit):
+    """:func:`translucency.scatter.budget.size_floor` of a solve at every vertex of ``geometry``: when it does
+    not fit, no solve of that size does (checked before the incident light and the solve's set-up are paid for
+    at a size that cannot be solved)."""
+    import numba
+
+    counts = budget.SolveCounts(
+        n_vertices=geometry.n_vertices,
+        n_triangles=len(geometry.triangles),
+        n_receivers=geometry.n_vertices,
+        n_lit=0,
+        n_channels=int(n_channels),
+        threads=max(1, numba.get_num_threads()),
+        method="exact" if method == "relight" else method,
+        near_triangles=0.0,
+        near_points=0.0,
+        own_points=0.0,
+        far_evaluations=0.0,
+    )
+    budget_bytes = budget.memory_budget(memory_limit, budget.available_memory(), budget.resident_memory())
+    return budget.size_floor(counts, budget_bytes, time_limit)
+
+
 def _checked_inputs(geometry, phi, w12, medium, model, method, tol, receivers, memory_limit, time_limit):
     """Validation at the solver's boundary: ``(phi, w12, receivers)`` as float64 / int64 arrays, checked."""
     check_model(model)
