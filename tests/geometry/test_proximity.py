@@ -64,3 +64,18 @@ def test_hausdorff_of_identical_and_shifted_meshes():
     points, triangles = icosphere(2)
     assert vertex_hausdorff_distance(points, triangles, points, triangles) == 0
     assert np.isclose(vertex_hausdorff_distance(points, triangles, points + [0, 0, 0.5], triangles), 0.5, rtol=0.05)
+
+
+def test_queries_in_chunks_give_the_same_answer(monkeypatch):
+    """Looking the candidates up a few queries at a time (as a 10M-vertex mapping does, to bound memory)
+    changes nothing: every query is answered on its own."""
+    from translucency.geometry import proximity
+    from translucency.geometry.synthetic import icosphere
+
+    points, triangles = icosphere(3)
+    query = np.random.default_rng(5).normal(size=(500, 3)) * 1.5
+    whole = proximity.closest_points_on_triangles(query, points, triangles)
+    monkeypatch.setattr(proximity, "QUERY_CHUNK", 7)
+    chunked = proximity.closest_points_on_triangles(query, points, triangles)
+    for a, b in zip(whole, chunked):
+        assert np.array_equal(a, b)

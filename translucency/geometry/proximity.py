@@ -35,6 +35,9 @@ from .topology import kernel_array
 
 __all__ = ["closest_points_on_triangles", "closest_point_barycentric", "vertex_hausdorff_distance"]
 
+#: Queries whose nearest centroids are looked up at once (bounds that step's memory: about 260 bytes each).
+QUERY_CHUNK = 1 << 18
+
 
 def closest_point_barycentric(p: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
     """Barycentric coordinates of the closest point to ``p`` on triangles ``(a, b, c)``, vectorised.
@@ -138,20 +141,26 @@ def closest_points_on_triangles(query, points, triangles, *, k: int = 16):
     radius = np.linalg.norm(corners - centroid[:, None, :], axis=2).max(axis=1)
     scan = _scan_kernel()
 
-    # 1. the k nearest centroids: the exact answer unless a triangle is larger than their spread
+    # 1. the k nearest centroids: the exact answer unless a triangle is larger than their spread; in chunks of
+    # queries, so that the k candidates of every query are never held at once (2.5 GB per 10M queries)
     k = int(min(max(k, 1), m))
-    first_distance, candidate = cKDTree(centroid).query(query, k=k, workers=-1)
-    first_distance = first_distance.reshape(len(query), k)
-    candidate = np.ascontiguousarray(candidate.reshape(len(query), k), dtype=np.int64)
+    centroids = cKDTree(centroid)
     corners = kernel_array(corners, np.float64)  # one signature, whatever the caller's arrays (kernel_array)
-    scan(
-        kernel_array(query, np.float64),
-        corners,
-        kernel_array(candidate, np.int64),
-        best_triangle,
-        best_weights,
-        best_distance,
-    )
+    kth_distance = np.empty(len(query))  # the k-th nearest centroid's distance, for step 2
+    for first in range(0, len(query), QUERY_CHUNK):
+        part = slice(first, min(len(query), first + QUERY_CHUNK))
+        distance, candidate = centroids.query(query[part], k=k, workers=-1)
+        kth_distance[part] = distance.reshape(-1, k)[:, -1]
+        sub_triangle, sub_weights, sub_distance = best_triangle[part], best_weights[part], best_distance[part]
+        scan(
+            kernel_array(query[part], np.float64),
+            corners,
+            kernel_array(candidate.reshape(-1, k), np.int64),
+            sub_triangle,
+            sub_weights,
+            sub_distance,
+        )
+    del centroids
     if k == m:
         return best_triangle, best_weights, best_distance
 
@@ -165,7 +174,7 @@ def closest_points_on_triangles(query, points, triangles, *, k: int = 16):
         members = np.flatnonzero(level == value)
         class_radius = float(radius[members].max())
         reach = best_distance * (1 + 1e-12) + class_radius * (1 + 1e-9) + 1e-300
-        rows = np.flatnonzero(first_distance[:, -1] <= reach)
+        rows = np.flatnonzero(kth_distance <= reach)
         if len(rows) == 0:
             continue
         tree = cKDTree(centroid[members])
