@@ -178,30 +178,48 @@ def closest_points_on_triangles(query, points, triangles, *, k: int = 16):
         if len(rows) == 0:
             continue
         tree = cKDTree(centroid[members])
-        nearest, _ = tree.query(query[rows], k=1, workers=-1)
-        rows = rows[nearest <= reach[rows]]
-        count = min(16, len(members))
-        while len(rows):
-            distance, local = tree.query(query[rows], k=count, workers=-1)
-            distance = distance.reshape(len(rows), count)
-            local = np.minimum(local.reshape(len(rows), count), len(members) - 1)
-            inside = distance <= reach[rows, None]
-            candidate = np.ascontiguousarray(np.where(inside, members[local], -1))
-            sub_triangle, sub_weights, sub_distance = best_triangle[rows], best_weights[rows], best_distance[rows]
-            scan(
-                kernel_array(query[rows], np.float64),
+        for first in range(0, len(rows), QUERY_CHUNK):  # in chunks, as step 1
+            part = rows[first : first + QUERY_CHUNK]
+            nearest, _ = tree.query(query[part], k=1, workers=-1)
+            _search_class(
+                tree,
+                members,
+                query,
+                part[nearest <= reach[part]],
+                reach,
                 corners,
-                kernel_array(candidate, np.int64),
-                sub_triangle,
-                sub_weights,
-                sub_distance,
+                scan,
+                best_triangle,
+                best_weights,
+                best_distance,
             )
-            best_triangle[rows], best_weights[rows], best_distance[rows] = sub_triangle, sub_weights, sub_distance
-            if count >= len(members):
-                break
-            rows = rows[inside[:, -1]]  # all `count` nearest lie within reach: there may be more
-            count = min(4 * count, len(members))
     return best_triangle, best_weights, best_distance
+
+
+def _search_class(tree, members, query, rows, reach, corners, scan, best_triangle, best_weights, best_distance):
+    """Step 2 of :func:`closest_points_on_triangles` for one size class and some queries (``rows``): their
+    nearest centroids of the class within ``reach``, 16 at first and four times more while all lie within it."""
+    count = min(16, len(members))
+    while len(rows):
+        distance, local = tree.query(query[rows], k=count, workers=-1)
+        distance = distance.reshape(len(rows), count)
+        local = np.minimum(local.reshape(len(rows), count), len(members) - 1)
+        inside = distance <= reach[rows, None]
+        candidate = np.ascontiguousarray(np.where(inside, members[local], -1))
+        sub_triangle, sub_weights, sub_distance = best_triangle[rows], best_weights[rows], best_distance[rows]
+        scan(
+            kernel_array(query[rows], np.float64),
+            corners,
+            kernel_array(candidate, np.int64),
+            sub_triangle,
+            sub_weights,
+            sub_distance,
+        )
+        best_triangle[rows], best_weights[rows], best_distance[rows] = sub_triangle, sub_weights, sub_distance
+        if count >= len(members):
+            break
+        rows = rows[inside[:, -1]]  # all `count` nearest lie within reach: there may be more
+        count = min(4 * count, len(members))
 
 
 @functools.cache
