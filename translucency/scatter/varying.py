@@ -35,6 +35,7 @@ __all__ = [
     "REFLECTANCE_RANGE",
     "reflectance_levels",
     "level_weights",
+    "checked_reflectance",
     "solve_varying",
 ]
 
@@ -65,17 +66,17 @@ def level_weights(reflectance: np.ndarray, levels: np.ndarray, k: int) -> np.nda
     return np.clip(1.0 - np.abs(reflectance - levels[k]) / step, 0.0, 1.0)
 
 
-def _level_medium(medium: Medium, reflectance_level: float, copies: int) -> Medium:
+def _level_medium(medium: Medium, reflectance_level: float) -> Medium:
     """The material at one reflectance level: its reduced mean free path, ``g`` and ``eta`` kept, the reduced
-    albedo from the level; the channels repeated ``copies`` times (one set of flux columns each)."""
+    albedo from the level."""
     alpha = reduced_albedo(np.full(medium.n_channels, reflectance_level), medium.eta)
     sigma_t_reduced = medium.sigma_t_reduced
     sigma_s = alpha * sigma_t_reduced / (1.0 - medium.g)
     sigma_a = sigma_t_reduced - alpha * sigma_t_reduced
     return Medium(
-        np.tile(sigma_a, copies),
-        np.tile(sigma_s, copies),
-        np.tile(medium.g, copies),
+        sigma_a,
+        sigma_s,
+        medium.g,
         medium.eta,
         f"{medium.name} at reflectance {reflectance_level:.3g}",
     )
@@ -162,7 +163,7 @@ def solve_varying(geometry, phi, w12, medium: Medium, *, reflectance, solver=Non
                 geometry,
                 phi,
                 w12,
-                _level_medium(medium, float(level), 1),
+                _level_medium(medium, float(level)),
                 receivers=receivers[rows],
                 progress=inner,
                 **options,
