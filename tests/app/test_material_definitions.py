@@ -205,3 +205,15 @@ def test_the_metadata_holds_a_definition_that_gives_the_material_back(tmp_path):
     ).material
     np.testing.assert_allclose(again.sigma_a, settings.material.sigma_a, rtol=1e-15)
     np.testing.assert_allclose(recorded["diffuse_reflectance"], [0.55, 0.8, 0.5], rtol=1e-9)
+
+
+def test_inline_materials_are_named_by_their_numbers():
+    """Two inline definitions get two names (their bakes into one folder do not overwrite each other); the
+    same numbers get the same name."""
+    from translucency.app.options import inline_material
+
+    first = inline_material(_args(["--reflectance", "0.5", "--mfp", "1"]))
+    again = inline_material(_args(["--reflectance", "0.5", "--mfp", "1"]))
+    other = inline_material(_args(["--reflectance", "0.5", "--mfp", "2"]))
+    assert first.name == again.name != other.name
+    assert first.name.startswith("custom-")

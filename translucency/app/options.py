@@ -155,7 +155,10 @@ INLINE_MATERIAL_OPTIONS = {
 
 def inline_material(args):
     """The material the inline options define (a :class:`~translucency.scatter.medium.Medium` named
-    ``custom``), or None when none is given; a wrong combination is a sentence naming the options."""
+    ``custom-`` and six hex digits of its numbers, so that two definitions baked into one folder do not
+    write the same file), or None when none is given; a wrong combination is a sentence naming the options."""
+    import hashlib
+
     from ..scatter.definition import medium_from_definition
 
     given = {
@@ -188,7 +191,8 @@ def inline_material(args):
             shape = "one number" if single else "one number or three numbers R,G,B"
             raise InvalidParameterError(f"{flag} must be {shape}, got {text!r}.")
         definition[flag[2:].replace("-", "_")] = values[0] if len(values) == 1 else values
-    return medium_from_definition(definition, "the material options")
+    digest = hashlib.sha1(repr(sorted(definition.items())).encode()).hexdigest()[:6]
+    return medium_from_definition({**definition, "name": f"custom-{digest}"}, "the material options")
 
 
 def add_solver_options(parser: argparse.ArgumentParser) -> None:
