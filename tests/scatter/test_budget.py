@@ -163,3 +163,21 @@ def test_a_size_no_solve_fits_traces_no_light(monkeypatch):
     with pytest.raises(BudgetError):
         Scene(TriangleMesh(points, triangles), shadows=False).shade("marble", time_limit=1e-9)
     assert len(points) not in traced
+
+
+def test_the_budget_is_the_memory_free_before_the_solve_allocates(monkeypatch):
+    """The plan counts the solve's own set-up (ordered copy, tree, the sample's grid) in its base, so the
+    budget it is held against is what was free before that set-up, not after (which counted it twice)."""
+    geometry, phi, w12, medium = _scene(3, 20.0)
+    free = {"bytes": 8e9}
+    ordered_work = solve._ordered_work
+
+    def allocating(*args, **kwargs):  # the set-up takes 4 GB of what was free
+        free["bytes"] = 4e9
+        return ordered_work(*args, **kwargs)
+
+    monkeypatch.setattr(solve, "_ordered_work", allocating)
+    monkeypatch.setattr(budget, "available_memory", lambda: free["bytes"])
+    monkeypatch.setattr(budget, "resident_memory", lambda: 1e9)
+    solution = solve.solve(geometry, phi, w12, medium, method="tree", tol=0.01)
+    assert solution.stats["budget"]["budget_bytes"] == budget.memory_budget(None, 8e9, 1e9)

@@ -498,13 +498,16 @@ def solve(
     warn_low_albedo(medium)
 
     start = time.perf_counter()
+    # the memory free before this solve allocates anything: the plan's base counts the ordered copy, the tree
+    # and the sample's grid, so the budget must not be measured after they are made (it counted them twice)
+    memory_at_start = (budget.available_memory(), budget.resident_memory())
     work = _ordered_work(geometry, phi, w12, medium, model, receivers, stats)
     timings["setup"] = time.perf_counter() - start
     if method == "relight":
         return _relit(work, receivers, tol, memory_limit, time_limit, report, stats, timings)
 
     start = time.perf_counter()
-    plan, near_args, radius, far_field = _plan(work, method, tol, memory_limit, time_limit, stats)
+    plan, near_args, radius, far_field = _plan(work, method, tol, memory_limit, time_limit, stats, memory_at_start)
     timings["budget"] = time.perf_counter() - start
     if not plan.fits:
         raise BudgetError(over_budget_sentence(plan, geometry.n_vertices), plan)
@@ -699,10 +702,11 @@ def _ordered_work(geometry, phi, w12, medium, model, receivers, stats) -> _Work:
     return _Work(model, medium, geometry, phi, w12, flux, lit, inner, visit, params, channel_of)
 
 
-def _plan(work: _Work, method, tol, memory_limit, time_limit, stats):
+def _plan(work: _Work, method, tol, memory_limit, time_limit, stats, memory_at_start=None):
     """The memory and time plan (:func:`translucency.scatter.budget.estimate`) from a sample of receivers:
     ``(plan, near_args, near radius in mm, the prepared far field or None)``; the plan goes into
-    ``stats["budget"]``."""
+    ``stats["budget"]``. ``memory_at_start``: ``(available, resident)`` bytes before the solve allocated
+    anything (measured now when not given)."""
     geometry = work.geometry
     radius = near_radius(geometry, work.medium)
     near_args = dict(
@@ -718,7 +722,8 @@ def _plan(work: _Work, method, tol, memory_limit, time_limit, stats):
     )
     far_field = work.far_field(method, tol) if work.lit.size and method != "exact" else None
     counts = sample_counts(work, far_field, near_args, radius, method)
-    budget_bytes = budget.memory_budget(memory_limit, budget.available_memory(), budget.resident_memory())
+    available, resident = memory_at_start or (budget.available_memory(), budget.resident_memory())
+    budget_bytes = budget.memory_budget(memory_limit, available, resident)
     plan = budget.estimate(counts, budget_bytes, time_limit)
     stats["budget"] = {**plan.as_dict(), "counts": dataclasses.asdict(counts)}
     return plan, near_args, radius, far_field
