@@ -557,10 +557,7 @@ def _orient_outward(repair: _Repair) -> None:
         flip, repair.non_orientable = coherent_orientation(repair.triangles)
         repair.triangles = flip_triangles(repair.triangles, flip)
         counts["faces_flipped_coherent"] = counts.get("faces_flipped_coherent", 0) + int(np.count_nonzero(flip))
-    # the faces' components as found with the defects, while no step has changed which faces there are (a
-    # step that removes, adds or reconnects faces replaces the points or changes the count; flips keep them)
-    same_faces = repair.points is repair.input_points and len(repair.triangles) == len(repair.input_triangles)
-    flip, components_flipped = outward_flips(repair.points, repair.triangles, repair.components if same_faces else None)
+    flip, components_flipped = outward_flips(repair.points, repair.triangles, repair.known_components())
     repair.triangles = flip_triangles(repair.triangles, flip)
     counts["components_flipped_outward"] = components_flipped
     counts["faces_flipped_outward"] = int(np.count_nonzero(flip))
