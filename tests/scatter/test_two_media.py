@@ -56,3 +56,11 @@ def test_bad_sides_are_one_sentence():
         simulate_two_media(0.1, (0.1, 1.0), 0.0, 1.3)
     with pytest.raises(InvalidParameterError, match="low <= high"):
         simulate_two_media((0.1, 1.0), (0.1, 1.0), 0.0, 1.3, launch_x_mm=(1.0, -1.0))
+
+
+def test_its_sentences_name_it():
+    """A mistake in the shared walk's settings is said in the name of the function the user called."""
+    with pytest.raises(InvalidParameterError, match="^simulate_two_media: n_photons"):
+        simulate_two_media((0.1, 1.0), (0.1, 1.0), 0.0, 1.3, n_photons=0)
+    with pytest.raises(InvalidParameterError, match="^simulate_half_space: n_photons"):
+        simulate_half_space(0.1, 1.0, 0.0, 1.3, n_photons=0)

@@ -525,19 +525,19 @@ def _by_order(name, per_batch):
     return fields
 
 
-def _check_positive_int(name, value, minimum):
+def _check_positive_int(name, value, minimum, what="simulate_half_space"):
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < minimum:
-        raise InvalidParameterError(f"simulate_half_space: {name} must be an integer >= {minimum}, got {value!r}.")
+        raise InvalidParameterError(f"{what}: {name} must be an integer >= {minimum}, got {value!r}.")
     return int(value)
 
 
-def _check_positive_float(name, value):
+def _check_positive_float(name, value, what="simulate_half_space"):
     try:
         value = float(value)
     except (TypeError, ValueError):
-        raise InvalidParameterError(f"simulate_half_space: {name} must be a positive number, got {value!r}.") from None
+        raise InvalidParameterError(f"{what}: {name} must be a positive number, got {value!r}.") from None
     if not (math.isfinite(value) and value > 0.0):
-        raise InvalidParameterError(f"simulate_half_space: {name} must be a positive number, got {value!r}.")
+        raise InvalidParameterError(f"{what}: {name} must be a positive number, got {value!r}.")
     return value
 
 
@@ -655,6 +655,7 @@ def _walk(
     max_interactions,
     launch_x,
     strip,
+    what="simulate_half_space",
 ):
     """The checks and the walk shared by :func:`simulate_half_space` and :func:`simulate_two_media`: the
     tallies' fields as batch means with standard errors (``strip``: escaped weight per photon per mm of x)."""
@@ -662,25 +663,25 @@ def _walk(
         theta_i_deg = float(theta_i_deg)
     except (TypeError, ValueError):
         raise InvalidParameterError(
-            f"simulate_half_space: theta_i_deg must be a number of degrees in [0, 90), got {theta_i_deg!r}."
+            f"{what}: theta_i_deg must be a number of degrees in [0, 90), got {theta_i_deg!r}."
         ) from None
     if not (0.0 <= theta_i_deg < 90.0):
         raise InvalidParameterError(
-            f"simulate_half_space: theta_i_deg must lie in [0, 90) degrees, got {theta_i_deg!r}; "
+            f"{what}: theta_i_deg must lie in [0, 90) degrees, got {theta_i_deg!r}; "
             "grazing or back-facing light does not enter the medium."
         )
     if launch not in LAUNCH_MODES:
-        raise InvalidParameterError(f"simulate_half_space: launch must be one of {LAUNCH_MODES}, got {launch!r}.")
-    n_photons = _check_positive_int("n_photons", n_photons, 1)
-    n_batches = _check_positive_int("n_batches", n_batches, 2)
-    seed = _check_positive_int("seed", seed, 0)
+        raise InvalidParameterError(f"{what}: launch must be one of {LAUNCH_MODES}, got {launch!r}.")
+    n_photons = _check_positive_int("n_photons", n_photons, 1, what)
+    n_batches = _check_positive_int("n_batches", n_batches, 2, what)
+    seed = _check_positive_int("seed", seed, 0, what)
     if seed >= 2**63:
-        raise InvalidParameterError(f"simulate_half_space: seed must be below 2**63, got {seed}.")
-    grid_cells = _check_positive_int("grid_cells", grid_cells, 1)
-    max_interactions = _check_positive_int("max_interactions", max_interactions, 1)
-    grid_extent_mm = _check_positive_float("grid_extent_mm", grid_extent_mm)
+        raise InvalidParameterError(f"{what}: seed must be below 2**63, got {seed}.")
+    grid_cells = _check_positive_int("grid_cells", grid_cells, 1, what)
+    max_interactions = _check_positive_int("max_interactions", max_interactions, 1, what)
+    grid_extent_mm = _check_positive_float("grid_extent_mm", grid_extent_mm, what)
     if radial_edges_mm is None:
-        radial_bins = _check_positive_int("radial_bins", radial_bins, 1)
+        radial_bins = _check_positive_int("radial_bins", radial_bins, 1, what)
         radial_edges = np.linspace(0.0, grid_extent_mm, radial_bins + 1)
     else:
         radial_edges = np.asarray(radial_edges_mm, dtype=np.float64)
@@ -692,7 +693,7 @@ def _walk(
             or np.any(np.diff(radial_edges) <= 0.0)
         ):
             raise InvalidParameterError(
-                "simulate_half_space: radial_edges_mm must be a 1-D increasing array of at least two finite "
+                f"{what}: radial_edges_mm must be a 1-D increasing array of at least two finite "
                 "radii starting at 0 (mm)."
             )
 
@@ -896,8 +897,8 @@ def simulate_two_media(
         raise InvalidParameterError(
             f"simulate_two_media: launch_x_mm must be finite with low <= high, got {launch_x_mm!r}."
         )
-    strip_extent_mm = _check_positive_float("strip_extent_mm", strip_extent_mm)
-    strip_cells = _check_positive_int("strip_cells", strip_cells, 1)
+    strip_extent_mm = _check_positive_float("strip_extent_mm", strip_extent_mm, "simulate_two_media")
+    strip_cells = _check_positive_int("strip_cells", strip_cells, 1, "simulate_two_media")
     walk = _walk(
         sides[0],
         sides[1],
@@ -916,6 +917,7 @@ def simulate_two_media(
         max_interactions,
         (low, high),
         (strip_extent_mm, strip_cells),
+        "simulate_two_media",
     )
     strip, strip_se = walk["strip"]
     return TwoMediaTally(
