@@ -45,7 +45,6 @@ __all__ = [
 REFLECTANCE_STEP = 0.025
 #: Reflectances are clamped to this range: 0 and 1 have no albedo (a colour of pure black or white).
 REFLECTANCE_RANGE = (0.01, 0.95)
-_LOW_ALBEDO_WARNED: set = set()  # (material, eta, darkest level): the warning is said once per process
 
 
 def reflectance_levels(reflectance, step: float | None = None) -> np.ndarray:
@@ -122,7 +121,7 @@ def solve_varying(geometry, phi, w12, medium: Medium, *, reflectance, solver=Non
         ``model``, ``method``, ``tol``, ``receivers``, ``memory_limit``, ``time_limit`` of the solve;
         ``relight`` is solved by ``tree`` (operators per level would replace each other).
     """
-    from .solve import LOW_ALBEDO, Solution, solve
+    from .solve import Solution, solve, warn_low_albedo
 
     solver = solver or solve
     n, C = geometry.n_vertices, medium.n_channels
@@ -132,17 +131,7 @@ def solve_varying(geometry, phi, w12, medium: Medium, *, reflectance, solver=Non
     receivers = options.pop("receivers", None)
     receivers = np.arange(n) if receivers is None else np.asarray(receivers, dtype=np.int64).ravel()
     levels = reflectance_levels(values)
-    low_albedo = float(reduced_albedo(levels[0], medium.eta)[0])
-    key = (medium.name, medium.eta, float(levels[0]))
-    if low_albedo < LOW_ALBEDO and key not in _LOW_ALBEDO_WARNED:
-        _LOW_ALBEDO_WARNED.add(key)
-        warnings.warn(
-            f"{medium.name} with the scan's colours: the darkest colour (reflectance {levels[0]:.2g}) has a reduced "
-            f"albedo of {low_albedo:.3g}, below {LOW_ALBEDO}, where the diffusion models are outside their range; "
-            "treat its subsurface light there as a rough estimate.",
-            TranslucencyWarning,
-            stacklevel=2,
-        )
+    warn_low_albedo(_level_medium(medium, float(levels[0])))  # the darkest colour, said once (solve's own check)
     at_receivers = values[receivers]
     log_sum = np.zeros((receivers.size, C))
     linear_sum = np.zeros((receivers.size, C))
