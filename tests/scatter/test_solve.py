@@ -20,6 +20,21 @@ def _lit(points, triangles, medium, light):
     return normals, np.repeat(phi[:, None], medium.n_channels, axis=1), w12
 
 
+def _every_pair(code, points, normals, w12, o, j, params):
+    """The kernel of model ``code`` at every (receiver ``o``, source ``j``) pair of two index grids: (*o.shape, C)."""
+    from translucency.scatter import kernels
+
+    return kernels.model_pairs(
+        code,
+        points[j].reshape(-1, 3),
+        normals[j].reshape(-1, 3),
+        w12[j].reshape(-1, 3),
+        points[o].reshape(-1, 3),
+        normals[o].reshape(-1, 3),
+        params,
+    ).reshape(*o.shape, params.shape[0])
+
+
 def _unit(v):
     v = np.asarray(v, float)
     return v / np.linalg.norm(v)
@@ -235,15 +250,7 @@ def test_cutoff_kernel_is_the_sum_over_pairs_within_the_radius(model):
             params,
             channel_of,
         )
-        S = kernels.model_pairs(
-            code,
-            points[j].reshape(-1, 3),
-            normals[j].reshape(-1, 3),
-            w12[j].reshape(-1, 3),
-            points[o].reshape(-1, 3),
-            normals[o].reshape(-1, 3),
-            params,
-        ).reshape(*o.shape, rows)
+        S = _every_pair(code, points, normals, w12, o, j, params)
         brute = np.einsum("oj,ojc,jc->oc", inside, S[:, :, channel_of], flux[lit])
         assert np.allclose(B, brute, rtol=1e-12, atol=1e-300)
         assert np.array_equal(evaluated, inside.sum(axis=1)) and evaluated.sum() < len(lit) * len(points)
@@ -259,3 +266,45 @@ def test_no_light_gives_zero_and_complete_stats(method):
     assert np.array_equal(solution.B, np.zeros((len(points), 3)))
     assert solution.stats["pairs_evaluated"] == 0 and solution.stats["pairs_skipped"] == 0
     assert solution.stats["sources_skipped_no_flux"] == len(points)
+
+
+def test_local_part_grows_by_exactly_the_sources_between_two_reaches():
+    """``reach_mm`` keeps the sources within that distance of each receiver: the near field is the same at
+    two reaches, so the difference of the two answers is the vertex sum over the sources between them."""
+    from translucency.scatter import kernels
+
+    medium = material("ketchup").medium()
+    points, triangles = icosphere(3, 15.0)
+    normals, phi, w12 = _lit(points, triangles, medium, _unit([0.3, 0.0, 1.0]))
+    geometry = solve.SurfaceGeometry(points, triangles, normals)
+    floor = solve.local_reach_floor(geometry, medium)
+    near, far = floor + 0.5, floor + 6.0
+    B_near = solve.solve(geometry, phi, w12, medium, method="cutoff", reach_mm=near).B
+    B_far = solve.solve(geometry, phi, w12, medium, method="cutoff", reach_mm=far).B
+    flux = phi * geometry.vertex_areas[:, None]
+    lit = np.flatnonzero(flux.max(axis=1) > 0)
+    o, j = np.meshgrid(np.arange(len(points)), lit, indexing="ij")
+    distance = np.linalg.norm(points[o] - points[j], axis=2)
+    between = (distance > near) & (distance <= far)
+    params = kernels.channel_parameters(medium.sigma_a, medium.sigma_s, medium.g, medium.eta, "directional")
+    S = _every_pair(kernels.MODELS["directional"], points, normals, w12, o, j, params)
+    added = np.einsum("oj,ojc,jc->oc", between, S, flux[lit])
+    assert added.max() > 0.03 * B_far.max()  # the band between the reaches matters
+    assert np.allclose(B_far - B_near, added, rtol=1e-9, atol=1e-12 * B_far.max())
+
+
+def test_a_reach_over_the_object_is_the_whole_answer(sphere_case):
+    geometry, phi, w12, medium, exact = sphere_case
+    whole = solve.solve(geometry, phi, w12, medium, method="cutoff", reach_mm=100.0)
+    # the cutoff's near field takes the degree-3 rule on small far triangles (2-4e-4 from degree 5)
+    assert np.linalg.norm(whole.B - exact.B) / np.linalg.norm(exact.B) < 1e-3
+
+
+@pytest.mark.parametrize(
+    "kwargs, words",
+    [({"method": "tree", "reach_mm": 50.0}, "method='cutoff'"), ({"method": "cutoff", "reach_mm": 0.1}, "at least")],
+)
+def test_a_reach_the_solve_cannot_honour_is_a_sentence(sphere_case, kwargs, words):
+    geometry, phi, w12, medium, _ = sphere_case
+    with pytest.raises(InvalidParameterError, match=words):
+        solve.solve(geometry, phi, w12, medium, **kwargs)

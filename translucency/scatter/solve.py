@@ -55,13 +55,13 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import BudgetError, InvalidParameterError, TranslucencyWarning, option
-from ..geometry.measure import barycentric_vertex_areas, mean_edge_length, triangle_areas
+from ..geometry.measure import barycentric_vertex_areas, edge_lengths, mean_edge_length, triangle_areas
 from ..geometry.morton import morton_order
 from . import budget, cutoff, hierarchy, kernels, nearfield
 from .medium import CHANNELS, Medium
 from .names import DEFAULT_MODEL, METHODS, MODELS, check_method, check_model, check_tol
 
-__all__ = ["SurfaceGeometry", "Solution", "solve", "METHODS", "MODELS"]
+__all__ = ["SurfaceGeometry", "Solution", "solve", "local_reach_floor", "METHODS", "MODELS"]
 
 
 #: ``tol`` bounds the relative error of ``B`` at every receiver whose ``B`` is at least TOL_FLOOR of the
@@ -151,6 +151,13 @@ class SurfaceGeometry:
         if "mean_edge" not in self._cache:
             self._cache["mean_edge"] = float(mean_edge_length(self.points, self.triangles))
         return self._cache["mean_edge"]
+
+    @property
+    def longest_edge(self) -> float:
+        """Longest edge length, mm (0 for a mesh with no triangles)."""
+        if "longest_edge" not in self._cache:
+            self._cache["longest_edge"] = float(edge_lengths(self.points, self.triangles).max(initial=0.0))
+        return self._cache["longest_edge"]
 
     def source_tree(self) -> hierarchy.SourceTree:
         """The kd-tree over all vertices (geometry only; reused across lights and materials)."""
@@ -291,9 +298,10 @@ def _exact_far_field(model, geometry, medium, lit, w12, flux, params, channel_of
     return evaluate
 
 
-def _cutoff_far_field(model, geometry, medium, lit, w12, flux, params, channel_of, tol):
-    """Method ``cutoff``: pairs within the radius of :func:`translucency.scatter.cutoff.cutoff_radius`."""
-    radius = cutoff.cutoff_radius(medium, tol, model)
+def _cutoff_far_field(model, geometry, medium, lit, w12, flux, params, channel_of, tol, reach=None):
+    """Method ``cutoff``: pairs within the radius of :func:`translucency.scatter.cutoff.cutoff_radius`, or
+    within ``reach`` (mm) when it is given (the local part of ``B``: no receiver's radius widened)."""
+    radius = cutoff.cutoff_radius(medium, tol, model) if reach is None else float(reach)
     diagonal = float(np.linalg.norm(np.ptp(geometry.points, axis=0)))
     if not radius < diagonal:  # the radius covers the object: every pair
         every_pair = _exact_far_field(model, geometry, medium, lit, w12, flux, params, channel_of, tol)
@@ -330,7 +338,10 @@ def _cutoff_far_field(model, geometry, medium, lit, w12, flux, params, channel_o
     def evaluate(rcv_points, rcv_normals):
         B, evaluated = within(radius, rcv_points, rcv_normals)
         # receivers whose own B is too small for what the radius may skip get a larger one (§8.4)
-        radii = cutoff.receiver_radii(medium, model, tol, B, total_flux, radius, diagonal, TOL_FLOOR)
+        if reach is None:
+            radii = cutoff.receiver_radii(medium, model, tol, B, total_flux, radius, diagonal, TOL_FLOOR)
+        else:
+            radii = np.full(rcv_points.shape[0], radius)
         for r in np.unique(radii[radii > radius]):
             these = np.flatnonzero(radii == r)
             B[these], evaluated[these] = within(float(r), rcv_points[these], rcv_normals[these])
@@ -433,6 +444,7 @@ def solve(
     method: str = "exact",
     tol: float = 1e-3,
     receivers: np.ndarray | None = None,
+    reach_mm: float | None = None,
     progress: Callable[[str, float], None] | None = None,
     memory_limit: float | None = None,
     time_limit: float | None = None,
@@ -469,6 +481,11 @@ def solve(
         largest in its channel), in (0, 1); ignored by ``exact``; 1e-3 by default.
     receivers : array_like of int, optional
         Vertices to compute ``B`` at (all by default).
+    reach_mm : float, optional
+        With ``method="cutoff"`` only: the local part of ``B``, from the sources within this distance (mm)
+        of each receiver, with no receiver's radius widened (docs/physics.md §8.8; what a proxy solve
+        corrects at full resolution). At least :func:`local_reach_floor` (the near-field radius plus the
+        longest edge, so that every vertex the near field weighs is in the sum).
     progress : callable, optional
         Called as ``progress(stage, fraction)`` while the solver runs: stages ``far field`` and
         ``near field``, each from 0 to 1, many times per stage (after every block of receivers).
@@ -495,6 +512,7 @@ def solve(
     phi, w12, receivers = _checked_inputs(
         geometry, phi, w12, medium, model, method, tol, receivers, memory_limit, time_limit
     )
+    _check_reach(reach_mm, method, geometry, medium)
     warn_low_albedo(medium)
 
     start = time.perf_counter()
@@ -502,6 +520,7 @@ def solve(
     # and the sample's grid, so the budget must not be measured after they are made (it counted them twice)
     memory_at_start = (budget.available_memory(), budget.resident_memory())
     work = _ordered_work(geometry, phi, w12, medium, model, receivers, stats)
+    work.reach = reach_mm
     timings["setup"] = time.perf_counter() - start
     if method == "relight":
         return _relit(work, receivers, tol, memory_limit, time_limit, report, stats, timings)
@@ -651,6 +670,32 @@ def _checked_inputs(geometry, phi, w12, medium, model, method, tol, receivers, m
     return phi, w12, receivers
 
 
+def local_reach_floor(geometry: SurfaceGeometry, medium: Medium) -> float:
+    """The smallest ``reach_mm`` of :func:`solve` (mm): the near-field radius plus the longest edge, so that
+    every vertex of a triangle the near field integrates is among the sources summed."""
+    return near_radius(geometry, medium) + geometry.longest_edge
+
+
+def _check_reach(reach_mm, method, geometry, medium) -> None:
+    """``reach_mm`` is None, or positive with ``method="cutoff"`` and at least :func:`local_reach_floor`."""
+    if reach_mm is None:
+        return
+    if method != "cutoff":
+        raise InvalidParameterError(
+            f"reach_mm limits the cutoff method's sum; pass method='cutoff' with it, not {method!r}."
+        )
+    floor = local_reach_floor(geometry, medium)
+    try:
+        reach = float(reach_mm)
+    except (TypeError, ValueError):
+        reach = math.nan
+    if not (math.isfinite(reach) and reach >= floor):
+        raise InvalidParameterError(
+            f"reach_mm must be a distance of at least {floor:.4g} mm on this mesh (its near-field radius plus its "
+            f"longest edge), not {reach_mm!r}."
+        )
+
+
 @dataclass
 class _Work:
     """A solve's inputs on the spatially ordered surface (:meth:`SurfaceGeometry.spatial_order`).
@@ -672,12 +717,25 @@ class _Work:
     visit: np.ndarray
     params: np.ndarray
     channel_of: np.ndarray
+    reach: float | None = None
 
     def far_field(self, method: str, tol: float):
-        """The far-field ``method`` prepared for these sources (see :data:`_FAR_FIELD`)."""
-        return _FAR_FIELD[method](
-            self.model, self.geometry, self.medium, self.lit, self.w12, self.flux, self.params, self.channel_of, tol
+        """The far-field ``method`` prepared for these sources (see :data:`_FAR_FIELD`; ``cutoff`` within
+        :attr:`reach` when it is set)."""
+        args = (
+            self.model,
+            self.geometry,
+            self.medium,
+            self.lit,
+            self.w12,
+            self.flux,
+            self.params,
+            self.channel_of,
+            tol,
         )
+        if self.reach is not None:
+            return _cutoff_far_field(*args, reach=self.reach)
+        return _FAR_FIELD[method](*args)
 
 
 def _ordered_work(geometry, phi, w12, medium, model, receivers, stats) -> _Work:
