@@ -118,3 +118,22 @@ def test_shared_igea_full_pipeline_timing():
     assert decimation.mapping.weights.shape == (cleaned.n_points, 3)
     assert decimation.mapping.distance.max() < 0.5  # mm, on a 99 mm head
     assert decimation.seconds < 30
+
+
+def test_a_large_decimation_in_its_own_process_gives_the_same_proxy(monkeypatch):
+    """From ISOLATED_TRIANGLES on, fast-simplification runs in a child process (its module-level mesh stays
+    there); the proxy is the one the call in this process makes."""
+    from translucency import processes
+    from translucency.io import decimate
+
+    points, triangles = icosphere(3)
+    here = simplify_arrays(points, triangles, 200)
+    monkeypatch.setattr(decimate, "ISOLATED_TRIANGLES", 0)
+    children = []
+    run = processes.run_in_child
+    monkeypatch.setattr(
+        processes, "run_in_child", lambda function, *args: children.append(function) or run(function, *args)
+    )
+    apart = simplify_arrays(points, triangles, 200)
+    assert children == [decimate.fast_simplify]
+    assert all(np.array_equal(a, b) for a, b in zip(here, apart))

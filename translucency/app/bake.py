@@ -24,17 +24,15 @@ back to the client.
 Faults: the output folders are checked (and swept of an earlier killed run's temporaries, see
 :mod:`translucency.io.atomic`) before any work, and an output name taken by a folder stops the batch
 then; a write that fails later fails that file with one sentence. Local worker processes end with
-their parent, also when it is killed (:func:`end_with_parent`). On Dask the workers belong to the
+their parent, also when it is killed (:func:`translucency.processes.end_with_parent`). On Dask the workers belong to the
 cluster: when the client goes away the scheduler drops its tasks that have not started, and a task
 already running finishes its file, written atomically like every output (a complete PLY or none).
 """
 
 from __future__ import annotations
 
-import contextlib
 import os
 import re
-import signal
 import sys
 import time
 from dataclasses import dataclass, field, fields, replace
@@ -48,6 +46,7 @@ from ..errors import (
     command_line_spelling,
     option,
 )
+from ..processes import end_with_parent
 from ..scatter.budget import DEFAULT_TIME_LIMIT_S
 from ..scatter.names import DEFAULT_BOUNCES, DEFAULT_METHOD, DEFAULT_MODEL, DEFAULT_TOL
 from .settings import DEFAULT_MATERIAL, ShadeSettings
@@ -235,7 +234,6 @@ class ConsoleProgress(BakeProgress):
         self._said: set = set()  # (index, message) already printed while the file was baked
 
     def _stream(self):
-        import sys
 
         return self.file if self.file is not None else sys.stderr
 
@@ -682,71 +680,13 @@ def _start_worker_process(threads: int, parent: int | None = None) -> None:
     """Initialiser of a worker process: ``threads`` threads for numba and for the BLAS libraries it loads.
 
     With ``parent`` (the pid of the process that started the pool) the worker ends when that process
-    does (:func:`end_with_parent`).
+    does (:func:`translucency.processes.end_with_parent`).
     """
     if parent is not None:
         end_with_parent(parent)
     for name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
         os.environ[name] = str(threads)
     _use_threads(threads)
-
-
-#: Seconds between two looks of a worker's watchdog at its parent.
-WATCHDOG_INTERVAL_S = 0.5
-
-_PR_SET_PDEATHSIG = 1  # linux/prctl.h
-
-
-def end_with_parent(parent: int) -> None:
-    """Make this process (and the processes it starts) end when process ``parent`` ends.
-
-    On Linux the kernel kills this process the moment its parent dies (``prctl(PR_SET_PDEATHSIG,
-    SIGKILL)``, through ctypes), even while a numba kernel holds the GIL. Everywhere a watchdog
-    thread also looks at ``os.getppid()`` every :data:`WATCHDOG_INTERVAL_S` s; when the parent is
-    gone it kills this process's own children, then this process. A parent that died before this
-    call is noticed at once.
-
-    Parameters
-    ----------
-    parent : int
-        The pid of the parent process this one must not outlive.
-    """
-    import threading
-
-    if sys.platform.startswith("linux"):
-        try:
-            import ctypes
-
-            libc = ctypes.CDLL(None, use_errno=True)
-            libc.prctl(_PR_SET_PDEATHSIG, int(signal.SIGKILL), 0, 0, 0)
-        except (OSError, AttributeError):  # no prctl here: the watchdog alone
-            pass
-    if os.getppid() != parent:  # the parent died before the signal was armed
-        os._exit(1)
-    threading.Thread(target=_watch_parent, args=(parent,), name="translucency-watchdog", daemon=True).start()
-
-
-def _watch_parent(parent: int) -> None:
-    while True:
-        time.sleep(WATCHDOG_INTERVAL_S)
-        if os.getppid() != parent:
-            for child in _children(os.getpid()):
-                with contextlib.suppress(OSError):
-                    os.kill(child, signal.SIGKILL)
-            os._exit(1)
-
-
-def _children(pid: int) -> list[int]:
-    """Every descendant of process ``pid`` (Linux ``/proc``; empty elsewhere)."""
-    parents = {}
-    for entry in Path("/proc").glob("[0-9]*/stat"):
-        with contextlib.suppress(OSError, IndexError, ValueError):
-            parents[int(entry.parent.name)] = int(entry.read_bytes().rsplit(b")", 1)[1].split()[1])
-    found, frontier = [], [pid]
-    while frontier:
-        frontier = [child for child, parent in parents.items() if parent in frontier]
-        found += frontier
-    return found
 
 
 def _run_in_processes(function, jobs, workers: int, done) -> None:
@@ -756,7 +696,7 @@ def _run_in_processes(function, jobs, workers: int, done) -> None:
     dies (a crash, out of memory) breaks its pool: the jobs that had not finished are then run again
     in a fresh pool of one process, where the job that dies is the first unfinished one, so that only
     it is lost (reported as :class:`~concurrent.futures.process.BrokenProcessPool`). The workers end
-    with this process, even when it is killed (:func:`end_with_parent`).
+    with this process, even when it is killed (:func:`translucency.processes.end_with_parent`).
 
     Spawned, not forked: numba's OpenMP threads and a forked copy of them do not mix.
     """

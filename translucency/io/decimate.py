@@ -119,17 +119,26 @@ def simplify_arrays(
     if target_faces >= len(triangles):
         return _drop_unreferenced(points, triangles)
     if method == "fast-simplification":
-        import fast_simplification
+        from ..processes import run_in_child
 
+        arguments = (
+            np.array(points, dtype=np.float64, order="C"),  # writable copies: the binding needs them
+            np.array(triangles, dtype=np.int32, order="C"),
+            target_faces,
+            float(aggressiveness),
+        )
         try:
-            new_points, new_triangles = fast_simplification.simplify(
-                np.array(points, dtype=np.float64, order="C"),  # writable copies: the binding needs them
-                np.array(triangles, dtype=np.int32, order="C"),
-                target_count=target_faces,
-                agg=float(aggressiveness),
-            )
+            if len(triangles) >= ISOLATED_TRIANGLES:  # its memory goes back when the child ends
+                new_points, new_triangles = run_in_child(fast_simplify, *arguments)
+            else:
+                new_points, new_triangles = fast_simplify(*arguments)
         except (ValueError, RuntimeError) as exc:
             raise MeshError(f"fast-simplification failed on the mesh ({exc}); try method='pymeshlab'.") from exc
+        except ChildProcessError as exc:
+            raise MeshError(
+                "the decimation's process ended before it answered (out of memory?); close other programs or "
+                "lower the mesh's vertex count first."
+            ) from exc
     else:
         from .meshlab import import_pymeshlab
 
@@ -168,6 +177,21 @@ def simplify_arrays(
     if len(new_triangles) == 0:
         raise MeshError(f"decimation to {target_faces} triangles left no triangle; ask for more triangles.")
     return _drop_unreferenced(new_points, new_triangles)
+
+
+#: fast-simplification keeps its mesh in module-level state after it returns (about 290 bytes per triangle
+#: of the input: 1.2 GB after decimating 4.3M triangles); from this many triangles on it runs in a child
+#: process (:func:`translucency.processes.run_in_child`), whose memory goes back when it ends, at the cost
+#: of starting one (about 1 s).
+ISOLATED_TRIANGLES = 1_000_000
+
+
+def fast_simplify(points, triangles, target_faces: int, aggressiveness: float):
+    """fast-simplification's quadric decimation of writable C-ordered arrays (float64 points in mm, int32
+    triangles) to about ``target_faces`` triangles: ``(points, triangles)`` as it returns them."""
+    import fast_simplification
+
+    return fast_simplification.simplify(points, triangles, target_count=target_faces, agg=aggressiveness)
 
 
 def _drop_unreferenced(points: np.ndarray, triangles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
