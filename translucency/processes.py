@@ -44,6 +44,7 @@ def run_in_child(function, *args):
     try:
         with contextlib.suppress(BrokenPipeError):  # a child that died at once: said below
             pickle.dump((function.__module__, function.__qualname__, args), child.stdin, protocol=5)
+        with contextlib.suppress(BrokenPipeError):
             child.stdin.close()
         try:
             failed, value = pickle.load(child.stdout)
@@ -52,10 +53,12 @@ def run_in_child(function, *args):
             raise ChildProcessError(
                 f"the child process ended with status {child.returncode} before it answered"
             ) from None
+    except BaseException:  # interrupted here, or no answer: the child goes too
+        child.kill()
+        raise
     finally:
-        if child.poll() is None:
-            child.stdout.close()
-            child.wait()
+        child.stdout.close()
+        child.wait()
     if failed:
         raise value
     return value
