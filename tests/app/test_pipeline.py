@@ -135,3 +135,26 @@ def test_a_scene_relights_with_operators_it_prepares_once_and_matches_an_exact_s
     exact = scene.shade("marble", light, method="exact").B
     keep = exact >= 1e-4 * exact.max(axis=0)
     assert np.percentile(np.abs(moved.B - exact)[keep] / exact[keep], 99) < 0.01
+
+
+def test_a_scan_size_scene_lets_its_embree_scene_go_during_the_solve_and_gives_the_same_answer(monkeypatch):
+    """From RELEASE_SCENE_VERTICES on the Embree scene is not held through the solve's set-up: the bounce
+    builds it again, and the answer is the one of a scene that kept it."""
+    from translucency.app import pipeline
+    from translucency.scatter import visibility
+
+    built = []
+
+    class Counted(visibility.Occluder):
+        def __init__(self, *args, **kwargs):
+            built.append(1)
+            super().__init__(*args, **kwargs)
+
+    monkeypatch.setattr(visibility, "Occluder", Counted)
+    mesh = sphere()
+    kept = Scene(mesh).shade("marble", method="tree", bounces=1)
+    assert len(built) == 1  # the incident light's scene, used again by the bounce
+    monkeypatch.setattr(pipeline, "RELEASE_SCENE_VERTICES", 0)
+    released = Scene(mesh).shade("marble", method="tree", bounces=1)
+    assert len(built) == 3  # let go after the incident light, built again for the bounce
+    np.testing.assert_array_equal(released.B, kept.B)

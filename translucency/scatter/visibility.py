@@ -324,6 +324,10 @@ class VisibilityCache:
         self._scenes.clear()
         self._visibility.clear()
 
+    def release_scenes(self) -> None:
+        """Drop the Embree scenes (built again on their next use) and keep the visibility arrays."""
+        self._scenes.clear()
+
     def get(self, key: tuple):
         """Stored visibility for ``key``, or None."""
         value = self._visibility.get(key)
