@@ -26,8 +26,7 @@ weights      barycentric coordinates of that point in its triangle     1
 
 from __future__ import annotations
 
-import functools
-
+import numba
 import numpy as np
 from scipy.spatial import cKDTree
 
@@ -139,7 +138,6 @@ def closest_points_on_triangles(query, points, triangles, *, k: int = 16):
         return best_triangle, best_weights, best_distance
     centroid = corners.mean(axis=1)
     radius = np.linalg.norm(corners - centroid[:, None, :], axis=2).max(axis=1)
-    scan = _scan_kernel()
 
     # 1. the k nearest centroids: the exact answer unless a triangle is larger than their spread; in chunks of
     # queries, so that the k candidates of every query are never held at once (2.5 GB per 10M queries)
@@ -152,7 +150,7 @@ def closest_points_on_triangles(query, points, triangles, *, k: int = 16):
         distance, candidate = centroids.query(query[part], k=k, workers=-1)
         kth_distance[part] = distance.reshape(-1, k)[:, -1]
         sub_triangle, sub_weights, sub_distance = best_triangle[part], best_weights[part], best_distance[part]
-        scan(
+        _scan(
             kernel_array(query[part], np.float64),
             corners,
             kernel_array(candidate.reshape(-1, k), np.int64),
@@ -188,7 +186,6 @@ def closest_points_on_triangles(query, points, triangles, *, k: int = 16):
                 part[nearest <= reach[part]],
                 reach,
                 corners,
-                scan,
                 best_triangle,
                 best_weights,
                 best_distance,
@@ -196,7 +193,7 @@ def closest_points_on_triangles(query, points, triangles, *, k: int = 16):
     return best_triangle, best_weights, best_distance
 
 
-def _search_class(tree, members, query, rows, reach, corners, scan, best_triangle, best_weights, best_distance):
+def _search_class(tree, members, query, rows, reach, corners, best_triangle, best_weights, best_distance):
     """Step 2 of :func:`closest_points_on_triangles` for one size class and some queries (``rows``): their
     nearest centroids of the class within ``reach``, 16 at first and four times more while all lie within it."""
     count = min(16, len(members))
@@ -207,7 +204,7 @@ def _search_class(tree, members, query, rows, reach, corners, scan, best_triangl
         inside = distance <= reach[rows, None]
         candidate = np.ascontiguousarray(np.where(inside, members[local], -1))
         sub_triangle, sub_weights, sub_distance = best_triangle[rows], best_weights[rows], best_distance[rows]
-        scan(
+        _scan(
             kernel_array(query[rows], np.float64),
             corners,
             kernel_array(candidate, np.int64),
@@ -222,110 +219,104 @@ def _search_class(tree, members, query, rows, reach, corners, scan, best_triangl
         count = min(4 * count, len(members))
 
 
-@functools.cache
-def _scan_kernel():
-    """Compile (once per process, cached on disk) the numba kernel that scans candidate triangles."""
-    import numba
-
-    @numba.njit(cache=True, nogil=True)
-    def closest_on_triangle(px, py, pz, corners, t, out):  # pragma: no cover - compiled
-        # Ericson (2005) 5.1.5, the same region tests as closest_point_barycentric
-        ax, ay, az = corners[t, 0, 0], corners[t, 0, 1], corners[t, 0, 2]
-        bx, by, bz = corners[t, 1, 0], corners[t, 1, 1], corners[t, 1, 2]
-        cx, cy, cz = corners[t, 2, 0], corners[t, 2, 1], corners[t, 2, 2]
-        abx, aby, abz = bx - ax, by - ay, bz - az
-        acx, acy, acz = cx - ax, cy - ay, cz - az
-        apx, apy, apz = px - ax, py - ay, pz - az
-        bpx, bpy, bpz = px - bx, py - by, pz - bz
-        cpx, cpy, cpz = px - cx, py - cy, pz - cz
-        d1 = abx * apx + aby * apy + abz * apz
-        d2 = acx * apx + acy * apy + acz * apz
-        d3 = abx * bpx + aby * bpy + abz * bpz
-        d4 = acx * bpx + acy * bpy + acz * bpz
-        d5 = abx * cpx + aby * cpy + abz * cpz
-        d6 = acx * cpx + acy * cpy + acz * cpz
-        vc = d1 * d4 - d3 * d2
-        vb = d5 * d2 - d1 * d6
-        va = d3 * d6 - d5 * d4
+@numba.njit(cache=True, nogil=True)
+def _closest_on_triangle(px, py, pz, corners, t, out):  # pragma: no cover - compiled
+    # Ericson (2005) 5.1.5, the same region tests as closest_point_barycentric
+    ax, ay, az = corners[t, 0, 0], corners[t, 0, 1], corners[t, 0, 2]
+    bx, by, bz = corners[t, 1, 0], corners[t, 1, 1], corners[t, 1, 2]
+    cx, cy, cz = corners[t, 2, 0], corners[t, 2, 1], corners[t, 2, 2]
+    abx, aby, abz = bx - ax, by - ay, bz - az
+    acx, acy, acz = cx - ax, cy - ay, cz - az
+    apx, apy, apz = px - ax, py - ay, pz - az
+    bpx, bpy, bpz = px - bx, py - by, pz - bz
+    cpx, cpy, cpz = px - cx, py - cy, pz - cz
+    d1 = abx * apx + aby * apy + abz * apz
+    d2 = acx * apx + acy * apy + acz * apz
+    d3 = abx * bpx + aby * bpy + abz * bpz
+    d4 = acx * bpx + acy * bpy + acz * bpz
+    d5 = abx * cpx + aby * cpy + abz * cpz
+    d6 = acx * cpx + acy * cpy + acz * cpz
+    vc = d1 * d4 - d3 * d2
+    vb = d5 * d2 - d1 * d6
+    va = d3 * d6 - d5 * d4
+    u, v, w = 0.0, 0.0, 0.0
+    degenerate = False
+    if d1 <= 0.0 and d2 <= 0.0:  # vertex region a
+        u = 1.0
+    elif d3 >= 0.0 and d4 <= d3:  # vertex region b
+        v = 1.0
+    elif d6 >= 0.0 and d5 <= d6:  # vertex region c
+        w = 1.0
+    elif vc <= 0.0 and d1 >= 0.0 and d3 <= 0.0:  # edge region ab
+        if d1 - d3 != 0.0:
+            v = d1 / (d1 - d3)
+            u = 1.0 - v
+        else:
+            degenerate = True
+    elif vb <= 0.0 and d2 >= 0.0 and d6 <= 0.0:  # edge region ac
+        if d2 - d6 != 0.0:
+            w = d2 / (d2 - d6)
+            u = 1.0 - w
+        else:
+            degenerate = True
+    elif va <= 0.0 and d4 - d3 >= 0.0 and d5 - d6 >= 0.0:  # edge region bc
+        if (d4 - d3) + (d5 - d6) != 0.0:
+            w = (d4 - d3) / ((d4 - d3) + (d5 - d6))
+            v = 1.0 - w
+        else:
+            degenerate = True
+    else:  # face region
+        denominator = va + vb + vc
+        if denominator != 0.0:
+            v = vb / denominator
+            w = vc / denominator
+            u = 1.0 - v - w
+        tolerance = 1e-6
+        if denominator == 0.0 or not (
+            -tolerance <= u <= 1 + tolerance and -tolerance <= v <= 1 + tolerance and -tolerance <= w <= 1 + tolerance
+        ):
+            degenerate = True
+    if degenerate:  # nearest corner
+        da = apx * apx + apy * apy + apz * apz
+        db = bpx * bpx + bpy * bpy + bpz * bpz
+        dc = cpx * cpx + cpy * cpy + cpz * cpz
         u, v, w = 0.0, 0.0, 0.0
-        degenerate = False
-        if d1 <= 0.0 and d2 <= 0.0:  # vertex region a
+        if da <= db and da <= dc:
             u = 1.0
-        elif d3 >= 0.0 and d4 <= d3:  # vertex region b
+        elif db <= dc:
             v = 1.0
-        elif d6 >= 0.0 and d5 <= d6:  # vertex region c
+        else:
             w = 1.0
-        elif vc <= 0.0 and d1 >= 0.0 and d3 <= 0.0:  # edge region ab
-            if d1 - d3 != 0.0:
-                v = d1 / (d1 - d3)
-                u = 1.0 - v
-            else:
-                degenerate = True
-        elif vb <= 0.0 and d2 >= 0.0 and d6 <= 0.0:  # edge region ac
-            if d2 - d6 != 0.0:
-                w = d2 / (d2 - d6)
-                u = 1.0 - w
-            else:
-                degenerate = True
-        elif va <= 0.0 and d4 - d3 >= 0.0 and d5 - d6 >= 0.0:  # edge region bc
-            if (d4 - d3) + (d5 - d6) != 0.0:
-                w = (d4 - d3) / ((d4 - d3) + (d5 - d6))
-                v = 1.0 - w
-            else:
-                degenerate = True
-        else:  # face region
-            denominator = va + vb + vc
-            if denominator != 0.0:
-                v = vb / denominator
-                w = vc / denominator
-                u = 1.0 - v - w
-            tolerance = 1e-6
-            if denominator == 0.0 or not (
-                -tolerance <= u <= 1 + tolerance
-                and -tolerance <= v <= 1 + tolerance
-                and -tolerance <= w <= 1 + tolerance
-            ):
-                degenerate = True
-        if degenerate:  # nearest corner
-            da = apx * apx + apy * apy + apz * apz
-            db = bpx * bpx + bpy * bpy + bpz * bpz
-            dc = cpx * cpx + cpy * cpy + cpz * cpz
-            u, v, w = 0.0, 0.0, 0.0
-            if da <= db and da <= dc:
-                u = 1.0
-            elif db <= dc:
-                v = 1.0
-            else:
-                w = 1.0
-        u = min(max(u, 0.0), 1.0)
-        v = min(max(v, 0.0), 1.0)
-        w = min(max(w, 0.0), 1.0)
-        out[0] = u
-        out[1] = v
-        out[2] = w
-        qx = u * ax + v * bx + w * cx - px
-        qy = u * ay + v * by + w * cy - py
-        qz = u * az + v * bz + w * cz - pz
-        return np.sqrt(qx * qx + qy * qy + qz * qz)
+    u = min(max(u, 0.0), 1.0)
+    v = min(max(v, 0.0), 1.0)
+    w = min(max(w, 0.0), 1.0)
+    out[0] = u
+    out[1] = v
+    out[2] = w
+    qx = u * ax + v * bx + w * cx - px
+    qy = u * ay + v * by + w * cy - py
+    qz = u * az + v * bz + w * cz - pz
+    return np.sqrt(qx * qx + qy * qy + qz * qz)
 
-    @numba.njit(cache=True, nogil=True)
-    def scan(query, corners, candidates, best_triangle, best_weights, best_distance):  # pragma: no cover - compiled
-        weights = np.empty(3)
-        for i in range(query.shape[0]):
-            px, py, pz = query[i, 0], query[i, 1], query[i, 2]
-            for j in range(candidates.shape[1]):
-                t = candidates[i, j]
-                if t < 0:
-                    continue
-                d = closest_on_triangle(px, py, pz, corners, t, weights)
-                if d < best_distance[i]:
-                    best_distance[i] = d
-                    best_triangle[i] = t
-                    best_weights[i, 0] = weights[0]
-                    best_weights[i, 1] = weights[1]
-                    best_weights[i, 2] = weights[2]
 
-    return scan
+#: Scan candidate triangles for the closest point (module level: numba caches a closure's kernel under a new key
+#: in every process, so it compiled again on every run and its cache grew by one file each time).
+@numba.njit(cache=True, nogil=True)
+def _scan(query, corners, candidates, best_triangle, best_weights, best_distance):  # pragma: no cover - compiled
+    weights = np.empty(3)
+    for i in range(query.shape[0]):
+        px, py, pz = query[i, 0], query[i, 1], query[i, 2]
+        for j in range(candidates.shape[1]):
+            t = candidates[i, j]
+            if t < 0:
+                continue
+            d = _closest_on_triangle(px, py, pz, corners, t, weights)
+            if d < best_distance[i]:
+                best_distance[i] = d
+                best_triangle[i] = t
+                best_weights[i, 0] = weights[0]
+                best_weights[i, 1] = weights[1]
+                best_weights[i, 2] = weights[2]
 
 
 def vertex_hausdorff_distance(points_a, triangles_a, points_b, triangles_b) -> float:
