@@ -43,7 +43,7 @@ from solver import LIGHT, MESHES, SCANS, per_vertex_error, prepare  # noqa: E402
 from translucency import __version__  # noqa: E402,F401  (first: it selects numba's threading layer)
 from translucency.app.pipeline import Scene  # noqa: E402
 from translucency.scatter.materials import material  # noqa: E402
-from translucency.scatter.solve import local_reach_floor, solve  # noqa: E402
+from translucency.scatter.solve import TOL_FLOOR, local_reach_floor, solve  # noqa: E402
 
 RESULTS = ROOT / "bench" / "results"
 METHOD, TOL = "tree", 0.01
@@ -65,11 +65,10 @@ def split_errors(B, reference, lit):
     """The per-vertex figure over all, lit and unlit vertices (``lit``: (n, C) bool), and the rel RMS."""
     figures = {"p99": per_vertex_error(B, reference)}
     for name, keep in (("p99_lit", lit), ("p99_unlit", ~lit)):
-        masked_B, masked_ref = np.where(keep, B, 0.0), np.where(keep, reference, 0.0)
-        # the floor stays 1e-4 of each channel's largest over every vertex, as in the whole figure
-        floor = 1e-4 * reference.max(axis=0)
+        # the floor stays TOL_FLOOR of each channel's largest over every vertex, as in the whole figure
+        floor = TOL_FLOOR * reference.max(axis=0)
         rel = [
-            np.abs(masked_B[k, c] - masked_ref[k, c]) / masked_ref[k, c]
+            np.abs(B[k, c] - reference[k, c]) / reference[k, c]
             for c in range(reference.shape[1])
             for k in [keep[:, c] & (reference[:, c] >= floor[c]) & (reference[:, c] > 0)]
         ]

@@ -234,7 +234,6 @@ class ConsoleProgress(BakeProgress):
         self._said: set = set()  # (index, message) already printed while the file was baked
 
     def _stream(self):
-
         return self.file if self.file is not None else sys.stderr
 
     def _mode(self) -> str:

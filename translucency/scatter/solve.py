@@ -337,18 +337,17 @@ def _cutoff_far_field(model, geometry, medium, lit, w12, flux, params, channel_o
 
     def evaluate(rcv_points, rcv_normals):
         B, evaluated = within(radius, rcv_points, rcv_normals)
-        # receivers whose own B is too small for what the radius may skip get a larger one (§8.4)
-        if reach is None:
+        widened = 0
+        if reach is None:  # receivers whose own B is too small for what the radius may skip get a larger one (§8.4)
             radii = cutoff.receiver_radii(medium, model, tol, B, total_flux, radius, diagonal, TOL_FLOOR)
-        else:
-            radii = np.full(rcv_points.shape[0], radius)
-        for r in np.unique(radii[radii > radius]):
-            these = np.flatnonzero(radii == r)
-            B[these], evaluated[these] = within(float(r), rcv_points[these], rcv_normals[these])
+            for r in np.unique(radii[radii > radius]):
+                these = np.flatnonzero(radii == r)
+                B[these], evaluated[these] = within(float(r), rcv_points[these], rcv_normals[these])
+            widened = int(np.count_nonzero(radii > radius))
         pairs = int(lit.size) * int(rcv_points.shape[0])
         return B, {
             "cutoff_radius_mm": radius,
-            "receivers_widened": int(np.count_nonzero(radii > radius)),
+            "receivers_widened": widened,
             "pairs_evaluated": int(evaluated.sum()),
             "pairs_skipped": pairs - int(evaluated.sum()),
         }
