@@ -30,3 +30,63 @@ def test_every_node_splits_its_points_at_the_median_of_its_longest_axis(n):
         lower = points[tree.order[tree.start[a] : tree.end[a]], axis]
         upper = points[tree.order[tree.start[b] : tree.end[b]], axis]
         assert lower.max() <= upper.min()
+
+
+def _walk_by_definition(tree, weight, lit, centre, spread, theta, min_distance):
+    """Sources plus clusters one group (a sphere: ``centre``, ``spread``, mm) evaluates, walked node by node
+    as the module docstring defines it."""
+    count, stack = 0, [0]
+    while stack:
+        k = stack.pop()
+        if weight[k] <= 0:
+            continue
+        near = np.linalg.norm(centre - tree.centre[k]) - spread
+        if near > tree.radius[k] + min_distance and tree.radius[k] < theta * near:
+            count += 1
+        elif tree.left[k] < 0:
+            count += int(lit[tree.order[tree.start[k] : tree.end[k]]].sum())
+        else:
+            stack += [tree.left[k], tree.right[k]]
+    return count
+
+
+def test_the_budget_counts_what_the_tree_sum_evaluates():
+    """The walk alone (:func:`evaluations_per_receiver`, what the solve's budget samples) counts, per receiver,
+    the sources and clusters of the walk's definition, and as many as :func:`tree_sum` evaluates there."""
+    from translucency.scatter import kernels
+    from translucency.scatter.hierarchy import (
+        GROUP_RECEIVERS,
+        aggregated_sources,
+        evaluations_per_receiver,
+        node_sums,
+        tree_sum,
+    )
+    from translucency.scatter.materials import material
+
+    rng = np.random.default_rng(5)
+    points = rng.normal(size=(3000, 3))
+    points = 20.0 * points / np.linalg.norm(points, axis=1, keepdims=True)  # a sphere of 20 mm
+    normals = points / 20.0
+    flux = np.where(points[:, 2:3] > 0, rng.uniform(0.1, 1.0, (3000, 3)), 0.0)  # the lower half unlit
+    tree = SourceTree(points)
+    theta, min_distance = 0.3, 1.0
+    receivers = points[rng.choice(3000, 401, replace=False)]
+    counted = evaluations_per_receiver(tree, flux, receivers, theta, min_distance)
+
+    weight = node_sums(tree, flux.sum(axis=1)[:, None])[:, 0]
+    lit = flux.sum(axis=1) > 0
+    for g in range(0, 401, GROUP_RECEIVERS):
+        members = receivers[g : g + GROUP_RECEIVERS]
+        centre = members.mean(axis=0)
+        spread = np.linalg.norm(members - centre, axis=1).max()
+        expected = _walk_by_definition(tree, weight, lit, centre, spread, theta, min_distance)
+        assert np.all(counted[g : g + GROUP_RECEIVERS] == expected)
+
+    medium = material("marble").medium()
+    params = kernels.channel_parameters(medium.sigma_a, medium.sigma_s, medium.g, medium.eta)
+    w12 = -normals
+    sources = aggregated_sources(tree, points, normals, w12, flux)
+    _, direct, clustered = tree_sum(
+        0, tree, sources, receivers, receivers / 20.0, params, np.arange(3), theta, min_distance=min_distance
+    )
+    assert np.array_equal(direct + clustered, counted)

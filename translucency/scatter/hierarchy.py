@@ -50,6 +50,12 @@ THETA_PER_SQRT_TOL = 0.7
 CLUSTER_MEAN_FREE_PATHS = 1.0
 
 
+def opening(sigma_t_reduced, tol: float, theta_per_sqrt_tol: float = THETA_PER_SQRT_TOL) -> tuple[float, float]:
+    """The walk's opening ratio ``theta = theta_per_sqrt_tol * sqrt(tol)`` and its smallest cluster distance
+    ``CLUSTER_MEAN_FREE_PATHS / min sigma_t'`` (mm; ``sigma_t_reduced`` per channel, 1/mm; docs/physics.md §8.3)."""
+    return theta_per_sqrt_tol * math.sqrt(tol), CLUSTER_MEAN_FREE_PATHS / float(np.min(sigma_t_reduced))
+
+
 class SourceTree:
     """Binary kd-tree over points: node ``k`` covers ``order[start[k]:end[k]]``.
 
@@ -346,6 +352,18 @@ def walk_lists(
     columns = np.empty(int(g_counts.sum()), dtype=np.int64)
     for_ranges(_traverse, n_groups, *walk, columns, g_starts, g_direct, g_clustered)
     return g_starts, g_direct, g_clustered, columns
+
+
+def evaluations_per_receiver(tree, flux, rcv_points, theta, min_distance=0.0, group=GROUP_RECEIVERS) -> np.ndarray:
+    """Sources and clusters :func:`tree_sum` evaluates at each receiver (positions mm) for the sources' ``flux
+    (n, C)``, from the walk alone: nothing aggregated, listed or evaluated (the budget's sample)."""
+    flux = np.asarray(flux, dtype=np.float64)
+    total = flux.sum(axis=1)
+    node_weight = node_sums(tree, total[:, None])[:, 0]
+    _, direct, clustered, _ = walk_lists(
+        tree, node_weight, total > 0, rcv_points, theta, math.inf, min_distance, group, count_only=True
+    )
+    return np.repeat(direct + clustered, group)[: rcv_points.shape[0]]
 
 
 def tree_sum(

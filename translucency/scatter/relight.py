@@ -197,8 +197,7 @@ THETA_PER_SQRT_TOL = 0.6
 def theta_and_distance(medium, tol: float) -> tuple[float, float]:
     """The far field's opening ratio (:data:`THETA_PER_SQRT_TOL`) and smallest cluster distance (mm, the
     ``tree`` method's, §8.3)."""
-    theta = THETA_PER_SQRT_TOL * math.sqrt(tol)
-    return theta, hierarchy.CLUSTER_MEAN_FREE_PATHS / float(np.min(medium.sigma_t_reduced))
+    return hierarchy.opening(medium.sigma_t_reduced, tol, THETA_PER_SQRT_TOL)
 
 
 def operator_bytes(geometry, medium, tol: float, near_radius: float) -> tuple[float, dict]:

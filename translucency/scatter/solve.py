@@ -360,10 +360,9 @@ def _tree_far_field(model, geometry, medium, lit, w12, flux, params, channel_of,
     aggregates are built once here, for every block of receivers)."""
     model_code = kernels.MODELS[model]
     tree = geometry.source_tree()
-    theta = hierarchy.THETA_PER_SQRT_TOL * float(np.sqrt(tol))
+    theta, min_distance = hierarchy.opening(medium.sigma_t_reduced, tol)
     sources = hierarchy.aggregated_sources(tree, geometry.points, geometry.normals, w12, flux)
     reach = math.inf
-    min_distance = hierarchy.CLUSTER_MEAN_FREE_PATHS / float(np.min(medium.sigma_t_reduced))
 
     def evaluate(rcv_points, rcv_normals):
         B, direct, clustered = hierarchy.tree_sum(
@@ -763,7 +762,11 @@ def _plan(work: _Work, method, tol, memory_limit, time_limit, stats, memory_at_s
     """The memory and time plan (:func:`translucency.scatter.budget.estimate`) from a sample of receivers:
     ``(plan, near_args, near radius in mm, the prepared far field or None)``; the plan goes into
     ``stats["budget"]``. ``memory_at_start``: ``(available, resident)`` bytes before the solve allocated
-    anything (measured now when not given)."""
+    anything (measured now when not given).
+
+    The far field is sampled first, and the plan of that alone (a lower bound on both budgets) refuses a
+    solve it is over before the near field's grid, tables and sample are made (at 10M vertices they held
+    2.8 GB, and the tree's aggregates 1.2 GB, for a solve that was then refused)."""
     geometry = work.geometry
     radius = near_radius(geometry, work.medium)
     near_args = dict(
@@ -777,11 +780,16 @@ def _plan(work: _Work, method, tol, memory_limit, time_limit, stats, memory_at_s
         degree3_ratio=0.0 if method == "exact" else NEAR_DEGREE3_RATIO,
         degree3_diameter=NEAR_DEGREE3_DECAY / max(float(np.max(work.medium.sigma_tr)), 1e-300),
     )
-    far_field = work.far_field(method, tol) if work.lit.size and method != "exact" else None
-    counts = sample_counts(work, far_field, near_args, radius, method)
     available, resident = memory_at_start or (budget.available_memory(), budget.resident_memory())
     budget_bytes = budget.memory_budget(memory_limit, available, resident)
+    sample = _sample_receivers(work.inner)
+    # cutoff's evaluations depend on B (its widened radii): it is prepared and run; tree's are its walk's
+    far_field = work.far_field(method, tol) if work.lit.size and method == "cutoff" else None
+    counts = _far_counts(work, far_field, sample, method, tol)
     plan = budget.estimate(counts, budget_bytes, time_limit)
+    if plan.fits:
+        counts = _with_near_counts(counts, near_args, geometry.near_grid(radius), sample)
+        plan = budget.estimate(counts, budget_bytes, time_limit)
     stats["budget"] = {**plan.as_dict(), "counts": dataclasses.asdict(counts)}
     return plan, near_args, radius, far_field
 
@@ -866,24 +874,55 @@ def _near_call(args, receivers, offsets, triangle_ids, own=None):
     )
 
 
-def sample_counts(work: _Work, far_field, near_args, radius, method) -> budget.SolveCounts:
-    """The budget's counts from a sample of receivers (:data:`SAMPLE_GROUPS` groups of 4 neighbours, all
-    receivers when there are few): near triangles, near-field points and far-field evaluations per receiver
-    (by the prepared ``far_field`` of ``cutoff`` and ``tree``; ``exact`` evaluates every lit source)."""
-    import numba
-
-    geometry, lit, inner = work.geometry, work.lit, work.inner
+def _sample_receivers(inner: np.ndarray) -> np.ndarray:
+    """The budget's sample of the receivers ``inner``: :data:`SAMPLE_GROUPS` random groups of 4 neighbours
+    (the tree's groups), every receiver when there are few."""
     n_r = inner.size
     groups = -(-n_r // 4)
     if groups <= SAMPLE_GROUPS:
-        sample = np.arange(n_r)
-    else:
-        chosen = np.sort(np.random.default_rng(0).choice(groups, SAMPLE_GROUPS, replace=False))
-        sample = np.unique(np.minimum((4 * chosen[:, None] + np.arange(4)).ravel(), n_r - 1))
-    rcv = inner[sample]
-    grid = geometry.near_grid(radius)
+        return inner
+    chosen = np.sort(np.random.default_rng(0).choice(groups, SAMPLE_GROUPS, replace=False))
+    return inner[np.unique(np.minimum((4 * chosen[:, None] + np.arange(4)).ravel(), n_r - 1))]
+
+
+def _far_counts(work: _Work, far_field, rcv, method, tol) -> budget.SolveCounts:
+    """The budget's counts with the far-field evaluations per receiver of the sample ``rcv`` (``exact``: every
+    lit source; ``cutoff``: by its prepared ``far_field``; ``tree``: its walk) and no near field yet."""
+    import numba
+
+    geometry, lit = work.geometry, work.lit
+    far = 0.0
+    if lit.size and rcv.size:
+        if method == "exact":
+            far = float(lit.size)
+        elif method == "tree":
+            theta, min_distance = hierarchy.opening(work.medium.sigma_t_reduced, tol)
+            evaluations = hierarchy.evaluations_per_receiver(
+                geometry.source_tree(), work.flux, geometry.points[rcv], theta, min_distance
+            )
+            far = float(evaluations.mean())
+        else:
+            _, far_stats = (far_field or work.far_field(method, tol))(geometry.points[rcv], geometry.normals[rcv])
+            far = far_stats["pairs_evaluated"] / rcv.size
+    return budget.SolveCounts(
+        geometry.n_vertices,
+        int(geometry.triangles.shape[0]),
+        int(work.inner.size),
+        int(lit.size),
+        int(work.flux.shape[1]),
+        numba.get_num_threads(),
+        method,
+        0.0,
+        0.0,
+        0.0,
+        far,
+    )
+
+
+def _with_near_counts(counts: budget.SolveCounts, near_args, grid, rcv) -> budget.SolveCounts:
+    """``counts`` with the near field's per receiver of the sample ``rcv``: near triangles (by ``grid``),
+    quadrature points and of those the receivers' own (on as many as :data:`SAMPLE_NEAR_ENTRIES` allows)."""
     near = grid.counts(rcv) if rcv.size else np.zeros(0)
-    # the near field on as many sampled receivers as SAMPLE_NEAR_ENTRIES allows (at least two groups)
     take = min(rcv.size, max(8, int(SAMPLE_NEAR_ENTRIES // max(1.0, float(near.mean()) if near.size else 1.0))))
     near_rcv = rcv[np.unique(np.linspace(0, rcv.size - 1, take).astype(np.int64))] if take else rcv
     points = own = np.zeros(0)
@@ -891,27 +930,8 @@ def sample_counts(work: _Work, far_field, near_args, radius, method) -> budget.S
         offsets, ids = grid.lists(near_rcv)
         own = np.zeros(near_rcv.size, dtype=np.int64)
         _, points = _near_call(near_args, near_rcv, offsets, ids, own)
-    far = 0.0
-    if lit.size and rcv.size:
-        if method == "exact":
-            far = float(lit.size)
-        else:
-            _, far_stats = far_field(geometry.points[rcv], geometry.normals[rcv])
-            far = far_stats["pairs_evaluated"] / rcv.size
     mean = lambda a: float(a.mean()) if a.size else 0.0  # noqa: E731
-    return budget.SolveCounts(
-        geometry.n_vertices,
-        int(geometry.triangles.shape[0]),
-        int(n_r),
-        int(lit.size),
-        int(work.flux.shape[1]),
-        numba.get_num_threads(),
-        method,
-        mean(near),
-        mean(points),
-        mean(own),
-        far,
-    )
+    return dataclasses.replace(counts, near_triangles=mean(near), near_points=mean(points), own_points=mean(own))
 
 
 def over_budget_sentence(plan: budget.SolveEstimate, n_vertices: int) -> str:
