@@ -175,3 +175,15 @@ def test_edge_lengths_and_centroids_match_numpy():
         edge_lengths(points, triangles), np.linalg.norm(np.roll(corners, -1, axis=1) - corners, axis=2), rtol=1e-14
     )
     np.testing.assert_allclose(triangle_centroids(points, triangles), corners.mean(axis=1), rtol=1e-14, atol=1e-14)
+
+
+@pytest.mark.parametrize("chunk", [1, 2, 1 << 20])
+def test_mean_edge_length_counts_each_shared_edge_once_whatever_the_chunks(monkeypatch, chunk):
+    """Two triangles of a 2 x 3 mm rectangle: edges 2, 3, 2, 3 and the shared diagonal sqrt(13), each once."""
+    from translucency.geometry import measure
+
+    monkeypatch.setattr(measure, "EDGE_CHUNK", chunk)
+    points = np.array([[0.0, 0, 0], [2, 0, 0], [2, 3, 0], [0, 3, 0]])
+    triangles = np.array([[0, 1, 2], [0, 2, 3]])
+    assert mean_edge_length(points, triangles) == pytest.approx((10 + np.sqrt(13)) / 5, rel=1e-14)
+    assert np.isnan(mean_edge_length(points, np.zeros((0, 3), dtype=np.int64)))

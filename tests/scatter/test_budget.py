@@ -73,6 +73,19 @@ def test_a_solve_over_the_time_limit_on_its_far_field_alone_makes_no_near_field(
     assert refused.over_time and refused.seconds < whole["seconds"]
 
 
+def test_the_near_sample_on_the_surface_around_the_sample_counts_as_on_the_whole(monkeypatch):
+    """The near field's sample taken on the triangles around the sampled receivers (as at scan size, without
+    the whole surface's grid and tables) counts the same near triangles, points and own points, to the bit."""
+    geometry, phi, w12, medium = _scene(5, 20.0)
+    counts = {}
+    for share in (0.0, 1.0):  # 0: always the whole surface; 1: always the part around the sample
+        monkeypatch.setattr(solve, "SAMPLE_SURFACE_SHARE", share)
+        fresh = solve.SurfaceGeometry(geometry.points, geometry.triangles, geometry.normals)
+        counts[share] = solve.solve(fresh, phi, w12, medium, method="tree", tol=1e-2).stats["budget"]["counts"]
+    assert counts[0.0]["near_triangles"] > 0 and counts[0.0]["own_points"] > 0
+    assert counts[1.0] == counts[0.0]
+
+
 def test_memory_budget_of_zero_is_refused():
     """No memory left to the solve: refused with the memory sentence (naming memory_limit=)."""
     geometry, phi, w12, medium = _scene(3, 20.0)

@@ -765,8 +765,9 @@ def _plan(work: _Work, method, tol, memory_limit, time_limit, stats, memory_at_s
     anything (measured now when not given).
 
     The far field is sampled first, and the plan of that alone (a lower bound on both budgets) refuses a
-    solve it is over before the near field's grid, tables and sample are made (at 10M vertices they held
-    2.8 GB, and the tree's aggregates 1.2 GB, for a solve that was then refused)."""
+    solve it is over before the near field is sampled; the near field is sampled on the triangles around
+    the sampled receivers only (:func:`_around`). At 10M vertices the whole surface's near grid, triangle
+    tables and the tree's aggregates had held 4 GB for a solve that was then refused."""
     geometry = work.geometry
     radius = near_radius(geometry, work.medium)
     near_args = dict(
@@ -788,7 +789,7 @@ def _plan(work: _Work, method, tol, memory_limit, time_limit, stats, memory_at_s
     counts = _far_counts(work, far_field, sample, method, tol)
     plan = budget.estimate(counts, budget_bytes, time_limit)
     if plan.fits:
-        counts = _with_near_counts(counts, near_args, geometry.near_grid(radius), sample)
+        counts = _with_near_counts(counts, *_around(work, near_args, sample, radius))
         plan = budget.estimate(counts, budget_bytes, time_limit)
     stats["budget"] = {**plan.as_dict(), "counts": dataclasses.asdict(counts)}
     return plan, near_args, radius, far_field
@@ -917,6 +918,32 @@ def _far_counts(work: _Work, far_field, rcv, method, tol) -> budget.SolveCounts:
         0.0,
         far,
     )
+
+
+#: The near field's sample is taken on the surface around the sampled receivers when that keeps at most this
+#: share of the triangles (else on the whole surface, whose grid the solve then reuses).
+SAMPLE_SURFACE_SHARE = 0.25
+
+
+def _around(work: _Work, near_args, rcv, radius):
+    """``(near_args, grid, rcv)`` for the near field's sample at the receivers ``rcv``: on the triangles with a
+    vertex within ``radius`` (mm) of one of them, as a surface of their own (the near grid lists a receiver's
+    triangles by that test, so their lists and quadrature are the same), or on the whole surface."""
+    from scipy.spatial import cKDTree
+
+    geometry = work.geometry
+    if rcv.size == 0:
+        return near_args, geometry.near_grid(radius), rcv
+    distance, _ = cKDTree(geometry.points[rcv]).query(
+        geometry.points, distance_upper_bound=radius * (1.0 + 1e-9), workers=-1
+    )
+    triangles = geometry.triangles[np.any(np.isfinite(distance)[geometry.triangles], axis=1)]
+    if triangles.shape[0] > SAMPLE_SURFACE_SHARE * geometry.triangles.shape[0]:
+        return near_args, geometry.near_grid(radius), rcv
+    vertices, local = np.unique(triangles, return_inverse=True)
+    surface = SurfaceGeometry(geometry.points[vertices], local.reshape(-1, 3), geometry.normals[vertices])
+    args = {**near_args, "geometry": surface, "w12": near_args["w12"][vertices], "phi": near_args["phi"][vertices]}
+    return args, surface.near_grid(radius), np.searchsorted(vertices, rcv)
 
 
 def _with_near_counts(counts: budget.SolveCounts, near_args, grid, rcv) -> budget.SolveCounts:
