@@ -56,21 +56,20 @@ def test_estimate_is_refused_over_the_time_limit_before_the_work():
     assert calls == []  # refused before the far field started
 
 
-def test_a_solve_over_the_time_limit_on_its_far_field_alone_makes_no_near_field(monkeypatch):
-    """Over the time limit by the far field's sample alone, the solve is refused before the near field's
-    grid and sample are made (at scan size they are GBs), and the plan it gives is a lower bound of the
-    whole one: its time is below the whole plan's for the same solve."""
-    geometry, phi, w12, medium = _scene(4, 20.0)
-    whole = solve.solve(geometry, phi, w12, medium, method="tree", tol=1e-2).stats["budget"]
-    counts = whole["counts"]
-    far_alone = counts["far_evaluations"] * geometry.n_vertices / budget.FAR_RATE["tree"] / counts["threads"]
-    grids = []
-    monkeypatch.setattr(solve.SurfaceGeometry, "near_grid", lambda self, radius: grids.append(radius))
+def test_a_plan_makes_no_near_grid_of_the_whole_surface(monkeypatch):
+    """A solve refused by its plan has made no near-field grid of the whole surface (at scan size: GBs), only
+    of the triangles around the sampled receivers; and its plan counts the near field."""
+    geometry, phi, w12, medium = _scene(7, 20.0)
+    grids, near_grid = [], solve.SurfaceGeometry.near_grid
+    monkeypatch.setattr(
+        solve.SurfaceGeometry,
+        "near_grid",
+        lambda self, radius: grids.append(len(self.triangles)) or near_grid(self, radius),
+    )
     with pytest.raises(BudgetError, match="time_limit=") as info:
-        solve.solve(geometry, phi, w12, medium, method="tree", tol=1e-2, time_limit=0.5 * far_alone)
-    assert grids == []
-    refused = info.value.estimate
-    assert refused.over_time and refused.seconds < whole["seconds"]
+        solve.solve(geometry, phi, w12, medium, method="tree", tol=1e-2, time_limit=1e-3)
+    assert grids and max(grids) < 0.25 * len(geometry.triangles)
+    assert info.value.estimate.over_time and info.value.estimate.own_points > 0
 
 
 def test_the_near_sample_on_the_surface_around_the_sample_counts_as_on_the_whole(monkeypatch):

@@ -764,10 +764,10 @@ def _plan(work: _Work, method, tol, memory_limit, time_limit, stats, memory_at_s
     ``stats["budget"]``. ``memory_at_start``: ``(available, resident)`` bytes before the solve allocated
     anything (measured now when not given).
 
-    The far field is sampled first, and the plan of that alone (a lower bound on both budgets) refuses a
-    solve it is over before the near field is sampled; the near field is sampled on the triangles around
-    the sampled receivers only (:func:`_around`). At 10M vertices the whole surface's near grid, triangle
-    tables and the tree's aggregates had held 4 GB for a solve that was then refused."""
+    Nothing of the whole surface's size is made for the plan but the source tree: the far field's sample is
+    the tree's walk alone (nothing aggregated) and the near field's is taken on the triangles around the
+    sampled receivers (:func:`_around`). At 10M vertices the surface's near grid, triangle tables and the
+    tree's aggregates had held 4 GB for a solve the plan then refused."""
     geometry = work.geometry
     radius = near_radius(geometry, work.medium)
     near_args = dict(
@@ -786,11 +786,10 @@ def _plan(work: _Work, method, tol, memory_limit, time_limit, stats, memory_at_s
     sample = _sample_receivers(work.inner)
     # cutoff's evaluations depend on B (its widened radii): it is prepared and run; tree's are its walk's
     far_field = work.far_field(method, tol) if work.lit.size and method == "cutoff" else None
-    counts = _far_counts(work, far_field, sample, method, tol)
+    counts = _with_near_counts(
+        _far_counts(work, far_field, sample, method, tol), *_around(work, near_args, sample, radius)
+    )
     plan = budget.estimate(counts, budget_bytes, time_limit)
-    if plan.fits:
-        counts = _with_near_counts(counts, *_around(work, near_args, sample, radius))
-        plan = budget.estimate(counts, budget_bytes, time_limit)
     stats["budget"] = {**plan.as_dict(), "counts": dataclasses.asdict(counts)}
     return plan, near_args, radius, far_field
 
