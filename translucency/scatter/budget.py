@@ -7,7 +7,9 @@ kept at once (as without a budget) or the receivers are processed in blocks whos
 and dropped one after the other (the same result, to the bit, with the memory of one block), how
 large the blocks are, the peak memory and the seconds the solve should take. A plan that does not
 fit the memory budget even with the smallest blocks, or whose time is over the time budget, is
-refused (:class:`~translucency.errors.BudgetError`, raised by the solver) before the work starts.
+refused (:class:`~translucency.errors.BudgetError`, raised by the solver) before the work starts. The
+sample itself makes nothing of the surface's size but the source tree: the far field's counts are the
+tree's walk alone, the near field's are taken on the triangles around the sampled receivers.
 
 The byte counts per vertex, triangle, near triangle and quadrature point follow the arrays the
 solver allocates (listed at each constant); the rates are measured (``bench/budget.py``, where the
