@@ -783,12 +783,9 @@ def _plan(work: _Work, method, tol, memory_limit, time_limit, stats, memory_at_s
     )
     available, resident = memory_at_start or (budget.available_memory(), budget.resident_memory())
     budget_bytes = budget.memory_budget(memory_limit, available, resident)
-    sample = _sample_receivers(work.inner)
     # cutoff's evaluations depend on B (its widened radii): it is prepared and run; tree's are its walk's
     far_field = work.far_field(method, tol) if work.lit.size and method == "cutoff" else None
-    counts = _with_near_counts(
-        _far_counts(work, far_field, sample, method, tol), *_around(work, near_args, sample, radius)
-    )
+    counts = sample_counts(work, far_field, near_args, radius, method, tol)
     plan = budget.estimate(counts, budget_bytes, time_limit)
     stats["budget"] = {**plan.as_dict(), "counts": dataclasses.asdict(counts)}
     return plan, near_args, radius, far_field
@@ -885,38 +882,46 @@ def _sample_receivers(inner: np.ndarray) -> np.ndarray:
     return inner[np.unique(np.minimum((4 * chosen[:, None] + np.arange(4)).ravel(), n_r - 1))]
 
 
-def _far_counts(work: _Work, far_field, rcv, method, tol) -> budget.SolveCounts:
-    """The budget's counts with the far-field evaluations per receiver of the sample ``rcv`` (``exact``: every
-    lit source; ``cutoff``: by its prepared ``far_field``; ``tree``: its walk) and no near field yet."""
+def sample_counts(work: _Work, far_field, near_args, radius, method, tol) -> budget.SolveCounts:
+    """The budget's counts on the sample of receivers (:func:`_sample_receivers`): far-field evaluations
+    (:func:`_far_evaluations`) and the near field's (:func:`_near_counts`, on the triangles around the sample,
+    :func:`_around`), per receiver."""
     import numba
 
-    geometry, lit = work.geometry, work.lit
-    far = 0.0
-    if lit.size and rcv.size:
-        if method == "exact":
-            far = float(lit.size)
-        elif method == "tree":
-            theta, min_distance = hierarchy.opening(work.medium.sigma_t_reduced, tol)
-            evaluations = hierarchy.evaluations_per_receiver(
-                geometry.source_tree(), work.flux, geometry.points[rcv], theta, min_distance
-            )
-            far = float(evaluations.mean())
-        else:
-            _, far_stats = (far_field or work.far_field(method, tol))(geometry.points[rcv], geometry.normals[rcv])
-            far = far_stats["pairs_evaluated"] / rcv.size
+    geometry = work.geometry
+    rcv = _sample_receivers(work.inner)
+    near, points, own = _near_counts(*_around(work, near_args, rcv, radius))
     return budget.SolveCounts(
         geometry.n_vertices,
         int(geometry.triangles.shape[0]),
         int(work.inner.size),
-        int(lit.size),
+        int(work.lit.size),
         int(work.flux.shape[1]),
         numba.get_num_threads(),
         method,
-        0.0,
-        0.0,
-        0.0,
-        far,
+        near,
+        points,
+        own,
+        _far_evaluations(work, far_field, rcv, method, tol),
     )
+
+
+def _far_evaluations(work: _Work, far_field, rcv, method, tol) -> float:
+    """Far-field evaluations per receiver of the sample ``rcv``: ``exact`` every lit source, ``cutoff`` by its
+    prepared ``far_field``, ``tree`` by its walk alone (nothing aggregated)."""
+    geometry, lit = work.geometry, work.lit
+    if lit.size == 0 or rcv.size == 0:
+        return 0.0
+    if method == "exact":
+        return float(lit.size)
+    if method == "tree":
+        theta, min_distance = hierarchy.opening(work.medium.sigma_t_reduced, tol)
+        evaluations = hierarchy.evaluations_per_receiver(
+            geometry.source_tree(), work.flux, geometry.points[rcv], theta, min_distance
+        )
+        return float(evaluations.mean())
+    _, far_stats = (far_field or work.far_field(method, tol))(geometry.points[rcv], geometry.normals[rcv])
+    return far_stats["pairs_evaluated"] / rcv.size
 
 
 #: The near field's sample is taken on the surface around the sampled receivers when that keeps at most this
@@ -945,9 +950,9 @@ def _around(work: _Work, near_args, rcv, radius):
     return args, surface.near_grid(radius), np.searchsorted(vertices, rcv)
 
 
-def _with_near_counts(counts: budget.SolveCounts, near_args, grid, rcv) -> budget.SolveCounts:
-    """``counts`` with the near field's per receiver of the sample ``rcv``: near triangles (by ``grid``),
-    quadrature points and of those the receivers' own (on as many as :data:`SAMPLE_NEAR_ENTRIES` allows)."""
+def _near_counts(near_args, grid, rcv) -> tuple[float, float, float]:
+    """The near field's counts per receiver of the sample ``rcv``: near triangles (by ``grid``), and quadrature
+    points and of those the receivers' own (on as many as :data:`SAMPLE_NEAR_ENTRIES` allows)."""
     near = grid.counts(rcv) if rcv.size else np.zeros(0)
     take = min(rcv.size, max(8, int(SAMPLE_NEAR_ENTRIES // max(1.0, float(near.mean()) if near.size else 1.0))))
     near_rcv = rcv[np.unique(np.linspace(0, rcv.size - 1, take).astype(np.int64))] if take else rcv
@@ -957,7 +962,7 @@ def _with_near_counts(counts: budget.SolveCounts, near_args, grid, rcv) -> budge
         own = np.zeros(near_rcv.size, dtype=np.int64)
         _, points = _near_call(near_args, near_rcv, offsets, ids, own)
     mean = lambda a: float(a.mean()) if a.size else 0.0  # noqa: E731
-    return dataclasses.replace(counts, near_triangles=mean(near), near_points=mean(points), own_points=mean(own))
+    return mean(near), mean(points), mean(own)
 
 
 def over_budget_sentence(plan: budget.SolveEstimate, n_vertices: int) -> str:
