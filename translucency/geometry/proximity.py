@@ -30,6 +30,7 @@ import numba
 import numpy as np
 from scipy.spatial import cKDTree
 
+from ..threads import for_ranges
 from .topology import kernel_array
 
 __all__ = ["closest_points_on_triangles", "closest_point_barycentric", "vertex_hausdorff_distance"]
@@ -302,9 +303,11 @@ def _closest_on_triangle(px, py, pz, corners, t, out):  # pragma: no cover - com
 #: Scan candidate triangles for the closest point (module level: numba caches a closure's kernel under a new key
 #: in every process, so it compiled again on every run and its cache grew by one file each time).
 @numba.njit(cache=True, nogil=True)
-def _scan(query, corners, candidates, best_triangle, best_weights, best_distance):  # pragma: no cover - compiled
+def _scan_rows(
+    worker, lo, hi, query, corners, candidates, best_triangle, best_weights, best_distance
+):  # pragma: no cover
     weights = np.empty(3)
-    for i in range(query.shape[0]):
+    for i in range(lo, hi):
         px, py, pz = query[i, 0], query[i, 1], query[i, 2]
         for j in range(candidates.shape[1]):
             t = candidates[i, j]
@@ -317,6 +320,12 @@ def _scan(query, corners, candidates, best_triangle, best_weights, best_distance
                 best_weights[i, 0] = weights[0]
                 best_weights[i, 1] = weights[1]
                 best_weights[i, 2] = weights[2]
+
+
+def _scan(query, corners, candidates, best_triangle, best_weights, best_distance) -> None:
+    """Keep in ``best_*`` the closest point of each query (row of ``query``, mm) over its ``candidates`` (triangle
+    rows, -1 for none) where it beats the best so far; the rows on :func:`~translucency.threads.for_ranges`' threads."""
+    for_ranges(_scan_rows, query.shape[0], query, corners, candidates, best_triangle, best_weights, best_distance)
 
 
 def vertex_hausdorff_distance(points_a, triangles_a, points_b, triangles_b) -> float:

@@ -29,6 +29,7 @@ import numba
 import numpy as np
 from scipy import optimize
 
+from ..threads import for_ranges
 from . import dipoles, fresnel
 from .kernels import (
     MODEL_DIRECTIONAL,
@@ -41,7 +42,6 @@ from .kernels import (
     table_rows,
 )
 from .medium import Medium
-from .threads import for_ranges
 
 
 def _directional_bound(r, D, sigma_tr_, C_phi, C_E, norm):

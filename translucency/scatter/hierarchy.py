@@ -30,7 +30,7 @@ import numba
 import numpy as np
 
 from ..geometry.topology import kernel_array
-from .threads import for_ranges
+from ..threads import for_ranges
 
 LEAF_SIZE = 8
 #: Receivers that share one walk of the tree (consecutive along the solver's space-filling curve).
@@ -450,7 +450,7 @@ def _traverse(
     radii, mm): count the lit sources and clusters it evaluates (``columns`` empty), or write their
     columns (source ``j`` or ``n + node``) from ``starts[o]`` on. A node is a cluster when the sphere is
     outside the node's and ``radius < theta * (distance - spread)``: then ``radius < theta * distance``
-    for every point of the sphere. Groups ``lo .. hi - 1`` (:func:`~translucency.scatter.threads.for_ranges`)."""
+    for every point of the sphere. Groups ``lo .. hi - 1`` (:func:`~translucency.threads.for_ranges`)."""
     n_src = lit.shape[0]
     write = columns.shape[0] > 0
     theta2 = theta * theta

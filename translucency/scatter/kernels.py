@@ -5,7 +5,7 @@ colour channels at once: the geometry (``x``, ``r``, ``n_i*``, ``w_v``, the dot 
 once per pair and shared by the channels; only the radial functions are per channel. One pair
 function (:func:`_lane`, a model index argument) serves every model, and one kernel each traversal
 (every pair, the cutoff grid, index lists), compiled without ``parallel=True`` and run on threads
-(:mod:`translucency.scatter.threads`). Every kernel is tested against the float64 reference
+(:mod:`translucency.threads`). Every kernel is tested against the float64 reference
 (relative 1e-12).
 
 Channel parameters travel as a ``(K, N_PARAMS)`` float64 array built by :func:`channel_parameters`;
@@ -33,10 +33,10 @@ import math
 import numba
 import numpy as np
 
+from ..threads import for_ranges, thread_count
 from . import fresnel, names
 from .dipoles import D_R_FLOOR, PARALLEL_TOLERANCE
 from .medium import alpha_reduced, diffusion_coefficient, extrapolation_distance, sigma_t, sigma_t_reduced, sigma_tr
-from .threads import for_ranges, thread_count
 
 P_D, P_SIGMA_TR, P_D_E, P_VIRTUAL, P_C_PHI, P_C_E, P_NORM, P_BACKLIT = range(8)
 N_PARAMS = 8
@@ -405,7 +405,7 @@ def vertex_sum(model, src_points, src_normals, src_w12, src_flux, rcv_points, rc
     clamped : (n_rcv,) int64
         Per receiver, the number of (pair, row of ``params``) values clamped from below 0 to 0.
 
-    Receivers are done on :func:`~translucency.scatter.threads.for_ranges`' threads, sources in a loop
+    Receivers are done on :func:`~translucency.threads.for_ranges`' threads, sources in a loop
     that vectorises (three channels at a time).
     """
     table, weights = source_columns(src_points, src_normals, src_w12, src_flux)
@@ -560,7 +560,7 @@ def indexed_sum(model, rcv_points, rcv_normals, table, weights, starts, counts, 
     The sources are columns of ``table`` (rows: position mm, unit normal, unit refracted direction) with
     ``weights (C, P)``; ``lanes`` is :func:`channel_lanes` of the parameters; ``model`` as in
     :func:`vertex_sum`. Returns ``(n_rcv, C)`` float64. Receivers run on
-    :func:`~translucency.scatter.threads.for_ranges`' threads, each receiver's list in a loop that
+    :func:`~translucency.threads.for_ranges`' threads, each receiver's list in a loop that
     vectorises.
     """
     out = np.zeros((rcv_points.shape[0], weights.shape[0]))

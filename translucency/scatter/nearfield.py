@@ -45,8 +45,8 @@ import numpy as np
 
 from ..geometry.measure import edge_lengths, triangle_centroids
 from ..geometry.topology import unique_edges
+from ..threads import for_ranges, thread_count
 from .kernels import FIT_WORK_COLUMNS, QUADRATIC_TERMS, channel_lanes, fitted_pairs, indexed_sum
-from .threads import for_ranges, thread_count
 
 # Dunavant (1985) 7-point rule, exact for polynomials of degree 5: barycentric points and weights
 # (weights sum to 1; multiply by the area).
@@ -239,7 +239,7 @@ def _near_pass(
     the order ``visit``: ``stamps`` (threads x triangles) hold the stamp ``stamp_base + receiver`` of the
     receiver that last took one. ``sorted_points`` are the points cell by cell (``points[by_key]``), so
     that a cell's distance checks read contiguous memory. Receivers ``visit[lo:hi]``; ``worker`` picks the
-    row of ``stamps`` (:func:`~translucency.scatter.threads.for_ranges`)."""
+    row of ``stamps`` (:func:`~translucency.threads.for_ranges`)."""
     write = triangle_ids.shape[0] > 0
     r2 = radius * radius
     mine = stamps[worker]

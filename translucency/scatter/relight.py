@@ -45,9 +45,9 @@ from dataclasses import dataclass, field
 import numba
 import numpy as np
 
+from ..threads import for_ranges, thread_count
 from . import hierarchy, kernels, nearfield
 from .kernels import AFFINE_TERMS, FIT_WORK_COLUMNS, QUADRATIC_TERMS, fitted_pairs
-from .threads import for_ranges, thread_count
 
 __all__ = ["RelightOperator", "prepare", "operator_bytes"]
 
