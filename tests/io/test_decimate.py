@@ -137,3 +137,44 @@ def test_a_large_decimation_in_its_own_process_gives_the_same_proxy(monkeypatch)
     apart = simplify_arrays(points, triangles, 200)
     assert children == [decimate.fast_simplify]
     assert all(np.array_equal(a, b) for a, b in zip(here, apart))
+
+
+def test_vertex_clustering_merges_each_cube_into_its_mean():
+    from translucency.geometry.synthetic import grid
+    from translucency.io.decimate import cluster_vertices
+
+    points, triangles = grid(10.0, 1.0)  # 11 x 11 vertices from -5 to 5 mm, normal +z
+    merged_points, merged_triangles = cluster_vertices(points, triangles, 2.0)
+    # cubes of 2 mm from the lowest corner: along each axis the vertices at -5, -4 | -3, -2 | ... | 3, 4 | 5
+    cubes = {}
+    for p in points:
+        cubes.setdefault((int((p[0] + 5) // 2), int((p[1] + 5) // 2)), []).append(p)
+    expected = sorted(tuple(np.mean(members, axis=0)) for members in cubes.values())
+    assert len(merged_points) == 36
+    np.testing.assert_allclose(sorted(map(tuple, merged_points)), expected, atol=1e-12)
+    corners = merged_points[merged_triangles]
+    assert np.all(merged_triangles[:, 0] != merged_triangles[:, 1])
+    assert np.all(merged_triangles[:, 1] != merged_triangles[:, 2])
+    assert np.all(merged_triangles[:, 0] != merged_triangles[:, 2])
+    assert len({tuple(sorted(t)) for t in merged_triangles.tolist()}) == len(merged_triangles)  # no triangle twice
+    normal_z = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])[:, 2]
+    assert np.all(normal_z >= -1e-12) and np.mean(normal_z > 1e-9) > 0.9  # the winding is kept
+    # the merged grid still covers the square but for the half cube lost at the far edges (-4.5 .. 5 mm)
+    assert 0.5 * normal_z.sum() == pytest.approx(9.5**2, rel=1e-9)
+
+
+def test_a_large_reduction_is_begun_by_vertex_clustering(monkeypatch):
+    """Below a quarter of the triangles the decimation clusters vertices first; the proxy keeps the sphere."""
+    from translucency.io import decimate
+
+    points, triangles = icosphere(5, 25.0)  # 20480 triangles
+    calls = []
+    cluster = decimate.cluster_vertices
+    monkeypatch.setattr(decimate, "cluster_vertices", lambda *args: calls.append(len(args[1])) or cluster(*args))
+    proxy_points, proxy_triangles = simplify_arrays(points, triangles, 500)
+    assert calls == [20480]
+    assert 400 <= len(proxy_triangles) <= 520
+    np.testing.assert_allclose(np.linalg.norm(proxy_points, axis=1), 25.0, rtol=0.01)
+    assert vertex_hausdorff_distance(points, triangles, proxy_points, proxy_triangles) < 0.02 * 50
+    simplify_arrays(points, triangles, 20480 // 4)  # a quarter: fast-simplification alone
+    assert calls == [20480]
