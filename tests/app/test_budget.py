@@ -76,3 +76,32 @@ def test_too_coarse_a_proxy_is_refused_instead():
 
 def test_proxy_error_reads_the_measured_table():
     assert proxy_error(0.5) == "2 %" and proxy_error(0.1) == "6 %" and proxy_error(0.001).startswith("more than")
+
+
+def test_far_over_its_time_budget_a_scan_is_refused_before_its_shadows_are_traced(monkeypatch):
+    """From EARLY_PLAN_VERTICES on, a solve planned with every facing vertex lit and over twice the time limit is
+    refused before any shadow ray: the proxy comes at once. On a convex mesh (no shadows cast) that plan is the
+    traced light's, so the answer is the one refused after tracing; a solve over by less is still traced first."""
+    from translucency.app import pipeline
+
+    points, triangles = icosphere(5, 20.0)
+    mesh = TriangleMesh(points, triangles)
+    estimate = Scene(mesh).shade("marble", time_limit=None).stats["solver"]["budget"]["seconds"]
+    traced = []
+    incident = Scene.incident
+
+    def counted(self, geometry, *args, **kwargs):
+        traced.append(geometry.n_vertices)
+        return incident(self, geometry, *args, **kwargs)
+
+    monkeypatch.setattr(Scene, "incident", counted)
+    late = Scene(mesh).shade("marble", time_limit=0.3 * estimate, warn=lambda line: None)
+    assert traced[0] == mesh.n_points and late.stats["solver_vertices"] < mesh.n_points
+    monkeypatch.setattr(pipeline, "EARLY_PLAN_VERTICES", 0)
+    traced.clear()
+    early = Scene(mesh).shade("marble", time_limit=0.3 * estimate, warn=lambda line: None)
+    assert mesh.n_points not in traced and early.stats["solver_vertices"] == late.stats["solver_vertices"]
+    np.testing.assert_array_equal(early.B, late.B)
+    traced.clear()
+    Scene(mesh).shade("marble", time_limit=0.7 * estimate, warn=lambda line: None)  # over, but not twice
+    assert traced[0] == mesh.n_points

@@ -52,6 +52,12 @@ PROXY_MIN_TRIANGLES = 200
 #: not held through the solve's set-up and plan (where a scan's bake peaks: +360 MB at 2.1M vertices,
 #: about 1.7 GB at 10M); the bounce builds it again (4 s at 2.1M). Below, a viewer's next light reuses it.
 RELEASE_SCENE_VERTICES = 1_000_000
+#: From this many vertices on, the solve is planned with every vertex that faces a light lit before the light's
+#: shadows are traced, and refused at once when that plan is over EARLY_REFUSAL_FACTOR times a budget (the
+#: 10M-vertex Igea: 10 times the time limit). What the plan makes (the ordered surface, the source tree) the
+#: solve reuses; the plan's sample costs about 1 s at 1M vertices.
+EARLY_PLAN_VERTICES = 1_000_000
+EARLY_REFUSAL_FACTOR = 2.0
 
 
 def coarsest_proxy_edge(surface_area: float) -> float:
@@ -365,6 +371,8 @@ class Scene:
             try:
                 if solver is None and method != "relight":  # a size no solve fits: no light traced for it
                     _check_size_floor(geometry, medium.n_channels, method, limits)
+                    if geometry.n_vertices >= EARLY_PLAN_VERTICES:
+                        _check_unshadowed_plan(geometry, lights, settings, limits)
                 start = time.perf_counter()
                 incident, incident_reused = self.incident(
                     geometry, solver_mesh.triangles, lights, medium.eta, per_direction
@@ -551,6 +559,36 @@ def _warn(message: str) -> None:
     from ..errors import TranslucencyWarning
 
     warnings.warn(message, TranslucencyWarning, stacklevel=3)
+
+
+def _check_unshadowed_plan(geometry, lights, settings: ShadeSettings, limits) -> None:
+    """A :class:`~translucency.errors.BudgetError` when the solve's plan with every vertex that faces a light lit
+    (:func:`translucency.scatter.solve.plan`, no shadow ray traced) is over :data:`EARLY_REFUSAL_FACTOR` times a
+    budget. Shadows only take light away, so the solve with them would be over its budget too, and the incident
+    light need not be traced at a size that is then not solved (31 s at 10M vertices)."""
+    from ..errors import BudgetError
+    from ..scatter.irradiance import incident_flux
+    from ..scatter.solve import over_budget_sentence, plan
+
+    medium = settings.material
+    facing = incident_flux(geometry.points, geometry.normals, geometry.vertex_areas, lights, medium.eta)
+    estimate = plan(
+        geometry,
+        facing.phi_rgb,
+        facing.w12,
+        medium,
+        model=settings.model,
+        method=settings.method,
+        tol=settings.tol,
+        **limits,
+    )
+    del facing
+    over_time = estimate.time_limit is not None and estimate.seconds > EARLY_REFUSAL_FACTOR * estimate.time_limit
+    over_memory = (
+        estimate.budget_bytes is not None and estimate.peak_bytes > EARLY_REFUSAL_FACTOR * estimate.budget_bytes
+    )
+    if over_time or over_memory:
+        raise BudgetError(over_budget_sentence(estimate, geometry.n_vertices), estimate)
 
 
 def _check_size_floor(geometry, n_channels, method, limits) -> None:

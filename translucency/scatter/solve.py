@@ -551,6 +551,35 @@ def solve(
     return Solution(B=B, receivers=receivers, stats=stats, timings=timings, settings=settings)
 
 
+def plan(
+    geometry: SurfaceGeometry,
+    phi: np.ndarray,
+    w12: np.ndarray,
+    medium: Medium,
+    *,
+    model: str = DEFAULT_MODEL,
+    method: str = "exact",
+    tol: float = 1e-3,
+    memory_limit: float | None = None,
+    time_limit: float | None = None,
+) -> budget.SolveEstimate:
+    """The plan :func:`solve` makes before it starts (its memory and time against the budgets, from the same
+    sample), for these arguments, without solving. The spatially ordered surface and the source tree it makes
+    stay cached on ``geometry``, so a solve that follows does not make them again. Not for ``method="relight"``,
+    whose operators are planned by :meth:`SurfaceGeometry.relight_operator`."""
+    if method == "relight":
+        raise InvalidParameterError(
+            "plan() estimates the solves of exact, cutoff and tree; relight plans its operators."
+        )
+    phi, w12, receivers = _checked_inputs(
+        geometry, phi, w12, medium, model, method, tol, None, memory_limit, time_limit
+    )
+    memory_at_start = (budget.available_memory(), budget.resident_memory())
+    work = _ordered_work(geometry, phi, w12, medium, model, receivers, {})
+    estimate, *_ = _plan(work, method, tol, memory_limit, time_limit, {}, memory_at_start)
+    return estimate
+
+
 def _relit(work, receivers, tol, memory_limit, time_limit, report, stats, timings) -> Solution:
     """Method ``relight``: the surface's prepared operators (made on first use, kept for later calls with the
     same medium, model and ``tol``) applied to this light; nothing is prepared when no light enters."""
