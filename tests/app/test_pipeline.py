@@ -1,6 +1,7 @@
 """The pipeline's Scene: reused work gives the same numbers as fresh work; per-direction summation."""
 
 import numpy as np
+import pytest
 
 from translucency.app.pipeline import Scene, shade
 from translucency.geometry.mesh import TriangleMesh
@@ -158,3 +159,20 @@ def test_a_scan_size_scene_lets_its_embree_scene_go_during_the_solve_and_gives_t
     released = Scene(mesh).shade("marble", method="tree", bounces=1)
     assert len(built) == 3  # let go after the incident light, built again for the bounce
     np.testing.assert_array_equal(released.B, kept.B)
+
+
+def test_the_scene_measures_its_scans_edges_once(monkeypatch):
+    """The mean edge the Scene measures to choose a resolution is the solver's too (7 s at 10M vertices each)."""
+    from translucency.geometry.measure import mean_edge_length
+    from translucency.scatter import solve
+
+    measured = []
+    monkeypatch.setattr(solve, "mean_edge_length", lambda *args: measured.append(1) or mean_edge_length(*args))
+    mesh = sphere()
+    result = Scene(mesh).shade("marble", method="tree", bounces=0)
+    assert measured == [] and result.stats["solver_vertices"] == mesh.n_points
+    given = solve.SurfaceGeometry(mesh.points, mesh.triangles, mesh.vertex_normals(), 1.25)
+    assert given.mean_edge_length == 1.25 and given.spatial_order()[0].mean_edge_length == 1.25
+    assert solve.SurfaceGeometry(mesh.points, mesh.triangles, mesh.vertex_normals()).mean_edge_length == pytest.approx(
+        mean_edge_length(mesh.points, mesh.triangles), rel=1e-15
+    )

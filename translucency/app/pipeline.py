@@ -276,7 +276,9 @@ class Scene:
             return (*self._solver_meshes[key], True)
         mesh, decimation, edge = _solver_mesh(self.mesh, edge)
         normals = mesh.vertex_normals()
-        geometry = SurfaceGeometry(mesh.points, mesh.triangles, normals)
+        geometry = SurfaceGeometry(
+            mesh.points, mesh.triangles, normals, self._mean_edge if decimation is None else None
+        )
         self._solver_meshes[key] = (mesh, decimation, edge, geometry)
         return mesh, decimation, edge, geometry, False
 

@@ -98,11 +98,15 @@ class SurfaceGeometry:
         Vertex indices of each triangle.
     normals : (n, 3) float64
         Outward unit vertex normals.
+    mean_edge_mm : float, optional
+        The mean edge length (mm) when the caller has measured it already (:attr:`mean_edge_length` then takes it
+        instead of measuring the edges again: 7 s at 10M vertices).
     """
 
     points: np.ndarray
     triangles: np.ndarray
     normals: np.ndarray
+    mean_edge_mm: float | None = None
     _cache: dict = field(default_factory=dict, repr=False)
 
     def __post_init__(self):
@@ -121,6 +125,8 @@ class SurfaceGeometry:
         bad = np.abs(lengths - 1.0) > 1e-6
         if np.any(bad & (lengths > 0)):
             self.normals = self.normals / np.where(lengths > 0, lengths, 1.0)[:, None]
+        if self.mean_edge_mm is not None:
+            self._cache["mean_edge"] = float(self.mean_edge_mm)
 
     @property
     def n_vertices(self) -> int:
