@@ -79,3 +79,25 @@ def test_queries_in_chunks_give_the_same_answer(monkeypatch):
     chunked = proximity.closest_points_on_triangles(query, points, triangles)
     for a, b in zip(whole, chunked):
         assert np.array_equal(a, b)
+
+
+def test_queries_near_the_surface_are_certified_by_the_grid(monkeypatch):
+    """A fine mesh's vertices against a coarser mesh of the same sphere (the proxy mapping's case): every query is
+    within the grid's margin, answered by it alone, and the answer is brute force's; queries far off go on."""
+    from translucency.geometry import proximity
+
+    points, triangles = icosphere(2, 5.0)
+    fine, _ = icosphere(4, 5.0)
+    query = fine * (1.0 + np.random.default_rng(1).normal(scale=1e-3, size=(len(fine), 1)))  # noisy, both sides
+    searched = []
+    search = proximity._nearest_search
+    monkeypatch.setattr(proximity, "_nearest_search", lambda q, *args: searched.append(len(q)) or search(q, *args))
+    index, weights, distance = closest_points_on_triangles(query, points, triangles)
+    assert searched == []
+    np.testing.assert_allclose(distance, brute_force(query, points, triangles), rtol=1e-9, atol=1e-12)
+    closest = np.einsum("qi,qij->qj", weights, points[triangles[index]])
+    np.testing.assert_allclose(np.linalg.norm(query - closest, axis=1), distance, rtol=1e-9, atol=1e-12)
+    far = np.vstack([query[:50], query[:50] * 3.0])  # 10 mm off the surface: beyond the margin
+    _, _, distance = closest_points_on_triangles(far, points, triangles)
+    assert searched == [50]
+    np.testing.assert_allclose(distance, brute_force(far, points, triangles), rtol=1e-9, atol=1e-12)

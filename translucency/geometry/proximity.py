@@ -1,20 +1,24 @@
 """Closest points on a triangle mesh, exact and vectorised: the basis of the proxy-to-full-mesh mapping.
 
-For every query point the closest point on a triangle surface is found in three steps:
+The closest point on a triangle is Ericson's (*Real-Time Collision Detection*, 2005, section 5.1.5: the
+Voronoi regions of the vertices, edges and face of the triangle). Which triangles to try, for every query:
 
-1. a k-d tree over the triangle centroids gives each query its ``k`` nearest centroids;
-2. the exact closest point on each candidate triangle is computed (Ericson, *Real-Time Collision
-   Detection*, 2005, section 5.1.5: the Voronoi regions of the vertices, edges and face of the
-   triangle), and the nearest candidate wins;
-3. the answer is **certified**: a triangle ``t`` closer than the winner's distance ``d`` would have its
-   centroid within ``d + R`` of the query, with ``R`` the largest centroid-to-corner distance of any
-   triangle; queries whose ``k``-th centroid is nearer than that are searched again over every
-   centroid within ``d + R``. The result is the exact closest triangle (ties: any of them).
+1. **a grid of grown spheres**: each triangle's bounding sphere about its centroid (radius ``R``, the largest
+   centroid-to-corner distance) grown by a margin ``δ`` (:data:`GRID_MARGIN` times the median ``R``) is listed
+   in the cells of a hierarchical grid that its box overlaps (at the level whose cells are at least the sphere's
+   diameter: at most 8 cells each), and a query tries the triangles listed in its own cell at every level whose
+   grown sphere holds it. A triangle nearer than ``d <= δ`` has its centroid within ``d + R <= δ + R`` of the
+   query, so it is among them: a query found within ``δ`` of the surface is **certified** (the case of a scan's
+   vertices against its proxy: all of them at 10M vertices, in a few seconds);
+2. the others: a k-d tree over the triangle centroids gives each its ``k`` nearest centroids, the nearest of
+   those triangles wins, and the answer is certified per size class of triangles: one closer than the winner's
+   distance ``d`` would have its centroid within ``d + R_class``, so queries whose ``k``-th centroid is nearer
+   than that are searched again over every centroid of the class within ``d + R_class``.
 
-The barycentric weights are exact where it matters for interpolation: a query that coincides with a
-vertex of the mesh gets the weight 1 on that vertex and 0 on the others (the vertex regions of
-step 2 are tested first and return exact one-hot weights), so values interpolated at shared vertices
-are reproduced bit for bit.
+The result is the exact closest triangle (ties: any of them). The barycentric weights are exact where it
+matters for interpolation: a query that coincides with a vertex of the mesh gets the weight 1 on that vertex
+and 0 on the others (the vertex regions are tested first and return exact one-hot weights), so values
+interpolated at shared vertices are reproduced bit for bit.
 
 ============ ========================================================= =====
 name         meaning                                                   unit
@@ -25,6 +29,8 @@ weights      barycentric coordinates of that point in its triangle     1
 """
 
 from __future__ import annotations
+
+import math
 
 import numba
 import numpy as np
@@ -37,6 +43,11 @@ __all__ = ["closest_points_on_triangles", "closest_point_barycentric", "vertex_h
 
 #: Queries whose nearest centroids are looked up at once (bounds that step's memory: about 260 bytes each).
 QUERY_CHUNK = 1 << 18
+#: Step 1's margin δ, in median triangle radii: queries within δ of the surface are certified by the grid.
+GRID_MARGIN = 0.5
+#: Step 1's grid cells per axis at its finest level are counted in 19 bits (keys of 63 bits with 6 for the level):
+#: a surface wider than that many finest cells goes to step 2 whole.
+GRID_BITS = 19
 
 
 def closest_point_barycentric(p: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
@@ -123,9 +134,9 @@ def closest_points_on_triangles(query, points, triangles, *, k: int = 16):
 
     Notes
     -----
-    The certification of step 3 (module docstring) is done per size class of triangles (radii
-    within a factor of 2), so that a few large triangles do not widen the search for all queries.
-    The scan over candidates is a numba kernel (compiled once, cached on disk).
+    Step 1 (module docstring) answers the queries near the surface; step 2's certification is done per size
+    class of triangles (radii within a factor of 2), so that a few large triangles do not widen the search for
+    all queries. The scans over candidates are numba kernels (compiled once, cached on disk) run on every core.
     """
     query = np.ascontiguousarray(query, dtype=np.float64).reshape(-1, 3)
     points = np.asarray(points, dtype=np.float64)
@@ -139,13 +150,121 @@ def closest_points_on_triangles(query, points, triangles, *, k: int = 16):
         return best_triangle, best_weights, best_distance
     centroid = corners.mean(axis=1)
     radius = np.linalg.norm(corners - centroid[:, None, :], axis=2).max(axis=1)
+    corners = kernel_array(corners, np.float64)  # one signature, whatever the caller's arrays (kernel_array)
 
-    # 1. the k nearest centroids: the exact answer unless a triangle is larger than their spread; in chunks of
+    # 1. the grid of grown spheres certifies the queries near the surface; the rest go on
+    rest = np.flatnonzero(~_grid_pass(query, corners, centroid, radius, best_triangle, best_weights, best_distance))
+    if rest.size:
+        found = _nearest_search(query[rest], corners, centroid, radius, k)
+        best_triangle[rest], best_weights[rest], best_distance[rest] = found
+    return best_triangle, best_weights, best_distance
+
+
+def _grid_pass(query, corners, centroid, radius, best_triangle, best_weights, best_distance) -> np.ndarray:
+    """Step 1 of :func:`closest_points_on_triangles`: the best triangle of each query among those whose grown sphere
+    holds it (written into ``best_*``), and which queries that certifies (within the margin of the surface)."""
+    certified = np.zeros(len(query), dtype=bool)
+    margin = GRID_MARGIN * float(np.median(radius))
+    if not margin > 0.0:
+        return certified
+    grown = radius + margin
+    finest = 2.0 * float(np.median(grown))
+    low = np.minimum(query.min(axis=0), (centroid - grown[:, None]).min(axis=0))
+    high = np.maximum(query.max(axis=0), (centroid + grown[:, None]).max(axis=0))
+    if np.max((high - low) / finest) >= 2**GRID_BITS - 1:
+        return certified
+    level = np.maximum(0, np.ceil(np.log2(2.0 * grown / finest))).astype(np.int64)  # cells of at least 2 grown radii
+    sizes = finest * 2.0 ** np.arange(int(level.max()) + 1)
+    size = sizes[level][:, None]
+    first = np.floor((centroid - grown[:, None] - low) / size).astype(np.int64)
+    last = np.floor((centroid + grown[:, None] - low) / size).astype(np.int64)  # first or first + 1 on each axis
+    keys, members = [], []
+    for step in np.ndindex(2, 2, 2):
+        cell = first + np.array(step)
+        inside = np.all(cell <= last, axis=1)
+        keys.append(_cell_keys(level[inside], cell[inside]))
+        members.append(np.flatnonzero(inside))
+    keys, members = np.concatenate(keys), np.concatenate(members)
+    order = np.argsort(keys, kind="stable")
+    keys, members = keys[order], members[order]
+    starts = np.flatnonzero(np.r_[True, keys[1:] != keys[:-1]])
+    cells = keys[starts]
+    starts = np.append(starts, keys.size)
+    del keys, order
+    for_ranges(
+        _grid_rows,
+        len(query),
+        query,
+        corners,
+        kernel_array(centroid, np.float64),
+        kernel_array(grown * grown, np.float64),
+        low,
+        sizes,
+        cells,
+        starts,
+        kernel_array(members, np.int64),
+        best_triangle,
+        best_weights,
+        best_distance,
+    )
+    certified[:] = best_distance <= margin * (1.0 - 1e-9)  # rounding of the sphere test stays inside
+    return certified
+
+
+def _cell_keys(level, cell):
+    """One int64 key per (level, cell index triple) of the grid of step 1."""
+    return ((level * 2**GRID_BITS + cell[:, 0]) * 2**GRID_BITS + cell[:, 1]) * 2**GRID_BITS + cell[:, 2]
+
+
+@numba.njit(cache=True, nogil=True)
+def _grid_rows(
+    worker,
+    lo,
+    hi,
+    query,
+    corners,
+    centroid,
+    grown2,
+    low,
+    sizes,
+    cells,
+    starts,
+    members,
+    best_triangle,
+    best_weights,
+    best_distance,
+):  # pragma: no cover - compiled
+    weights = np.empty(3)
+    scale = 2**GRID_BITS
+    for i in range(lo, hi):
+        px, py, pz = query[i, 0], query[i, 1], query[i, 2]
+        for level in range(sizes.shape[0]):
+            s = sizes[level]
+            key = ((level * scale + math.floor((px - low[0]) / s)) * scale + math.floor((py - low[1]) / s)) * scale
+            key += math.floor((pz - low[2]) / s)
+            at = np.searchsorted(cells, key)
+            if at == cells.shape[0] or cells[at] != key:
+                continue
+            for j in range(starts[at], starts[at + 1]):
+                t = members[j]
+                dx, dy, dz = px - centroid[t, 0], py - centroid[t, 1], pz - centroid[t, 2]
+                if dx * dx + dy * dy + dz * dz > grown2[t]:
+                    continue
+                _keep_closer(px, py, pz, corners, t, weights, i, best_triangle, best_weights, best_distance)
+
+
+def _nearest_search(query, corners, centroid, radius, k):
+    """Step 2 of :func:`closest_points_on_triangles` for ``query``: ``(triangle, weights, distance)``."""
+    m = len(centroid)
+    best_triangle = np.full(len(query), -1, dtype=np.int64)
+    best_weights = np.zeros((len(query), 3), dtype=np.float64)
+    best_distance = np.full(len(query), np.inf, dtype=np.float64)
+
+    # 2a. the k nearest centroids: the exact answer unless a triangle is larger than their spread; in chunks of
     # queries, so that the k candidates of every query are never held at once (2.5 GB per 10M queries)
     k = int(min(max(k, 1), m))
     centroids = cKDTree(centroid)
-    corners = kernel_array(corners, np.float64)  # one signature, whatever the caller's arrays (kernel_array)
-    kth_distance = np.empty(len(query))  # the k-th nearest centroid's distance, for step 2
+    kth_distance = np.empty(len(query))  # the k-th nearest centroid's distance, for 2b
     for first in range(0, len(query), QUERY_CHUNK):
         part = slice(first, min(len(query), first + QUERY_CHUNK))
         distance, candidate = centroids.query(query[part], k=k, workers=-1)
@@ -163,7 +282,7 @@ def closest_points_on_triangles(query, points, triangles, *, k: int = 16):
     if k == m:
         return best_triangle, best_weights, best_distance
 
-    # 2. certification per size class j (radii within a factor 2, largest R_j): a triangle of the
+    # 2b. certification per size class j (radii within a factor 2, largest R_j): a triangle of the
     # class can beat the best distance d only if its centroid lies within d + R_j; all centroids
     # nearer than the k-th one were examined, so only queries with the k-th centroid inside that
     # reach are searched again, over the class's centroids within reach
@@ -177,7 +296,7 @@ def closest_points_on_triangles(query, points, triangles, *, k: int = 16):
         if len(rows) == 0:
             continue
         tree = cKDTree(centroid[members])
-        for first in range(0, len(rows), QUERY_CHUNK):  # in chunks, as step 1
+        for first in range(0, len(rows), QUERY_CHUNK):  # in chunks, as 2a
             part = rows[first : first + QUERY_CHUNK]
             nearest, _ = tree.query(query[part], k=1, workers=-1)
             _search_class(
@@ -300,6 +419,18 @@ def _closest_on_triangle(px, py, pz, corners, t, out):  # pragma: no cover - com
     return np.sqrt(qx * qx + qy * qy + qz * qz)
 
 
+@numba.njit(cache=True, nogil=True, inline="always")
+def _keep_closer(px, py, pz, corners, t, weights, i, best_triangle, best_weights, best_distance):  # pragma: no cover
+    """Query ``i`` at ``(px, py, pz)`` takes triangle ``t`` as its best when its closest point is nearer."""
+    d = _closest_on_triangle(px, py, pz, corners, t, weights)
+    if d < best_distance[i]:
+        best_distance[i] = d
+        best_triangle[i] = t
+        best_weights[i, 0] = weights[0]
+        best_weights[i, 1] = weights[1]
+        best_weights[i, 2] = weights[2]
+
+
 #: Scan candidate triangles for the closest point (module level: numba caches a closure's kernel under a new key
 #: in every process, so it compiled again on every run and its cache grew by one file each time).
 @numba.njit(cache=True, nogil=True)
@@ -313,13 +444,7 @@ def _scan_rows(
             t = candidates[i, j]
             if t < 0:
                 continue
-            d = _closest_on_triangle(px, py, pz, corners, t, weights)
-            if d < best_distance[i]:
-                best_distance[i] = d
-                best_triangle[i] = t
-                best_weights[i, 0] = weights[0]
-                best_weights[i, 1] = weights[1]
-                best_weights[i, 2] = weights[2]
+            _keep_closer(px, py, pz, corners, t, weights, i, best_triangle, best_weights, best_distance)
 
 
 def _scan(query, corners, candidates, best_triangle, best_weights, best_distance) -> None:
