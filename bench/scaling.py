@@ -469,7 +469,12 @@ def plot(rows, exponents, path):
         "k-o",
         label=f"peak RSS of the bake: n^{memory:.2f}" if memory else "peak RSS of the bake",
     )
-    ax.plot(n, [r.get("ru_maxrss_mb", np.nan) for r in done], "C3:s", label="peak RSS of the child (exact included)")
+    ax.plot(
+        n,
+        [r.get("ru_maxrss_mb", np.nan) for r in done],
+        "C3:s",
+        label="peak RSS of the child (exact included, unless run apart)",
+    )
     ax.set(xscale="log", yscale="log", xlabel="vertices", ylabel="MB", title="memory against vertex count")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=7)
@@ -495,7 +500,8 @@ def markdown(rows, exponents):
     lines = [
         "| mesh | vertices | how | bake (s) | first shade (s) | incident light (s) | far field (s) | near lists (s) "
         "| near field (s) | warm shade (s) | exact at 2000 (s) | rel. RMS error | worst lit-vertex error | "
-        "p99 per-vertex error | solved on (vertices) | peak RSS of the bake / with exact (MB) | load | status |",
+        "p99 per-vertex error | solved on (vertices) | "
+        "peak RSS of the bake / of its process, exact included unless apart (MB) | load | status |",
         "|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|",
     ]
     fmt = lambda value, spec: "" if value is None or value != value else format(value, spec)  # noqa: E731
