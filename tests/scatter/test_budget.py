@@ -210,3 +210,19 @@ def test_the_budget_is_the_memory_free_before_the_solve_allocates(monkeypatch):
     monkeypatch.setattr(budget, "resident_memory", lambda: 1e9)
     solution = solve.solve(geometry, phi, w12, medium, method="tree", tol=0.01)
     assert solution.stats["budget"]["budget_bytes"] == budget.memory_budget(None, 8e9, 1e9)
+
+
+@pytest.mark.parametrize("method", ["tree", "exact"])
+def test_plan_is_the_plan_the_solve_makes_and_what_it_makes_the_solve_reuses(method):
+    """solve.plan() estimates what solve() estimates before it starts (the same sample, the same counts), without
+    solving; the ordered surface and the source tree it made are the ones the solve then uses."""
+    geometry, phi, w12, medium = _scene(4, 20.0)
+    planned = solve.plan(geometry, phi, w12, medium, method=method, tol=1e-2, time_limit=1e6).as_dict()
+    ordered = geometry.spatial_order()[0]
+    tree = ordered.source_tree() if method == "tree" else None
+    solved = solve.solve(geometry, phi, w12, medium, method=method, tol=1e-2, time_limit=1e6).stats["budget"]
+    for key in ("base_bytes", "far_bytes", "receiver_bytes", "own_points", "seconds", "keep_lists", "fits"):
+        assert solved[key] == pytest.approx(planned[key], rel=1e-12), key
+    assert geometry.spatial_order()[0] is ordered and (tree is None or ordered.source_tree() is tree)
+    with pytest.raises(InvalidParameterError, match="relight"):
+        solve.plan(geometry, phi, w12, medium, method="relight")
