@@ -212,6 +212,19 @@ def test_the_budget_is_the_memory_free_before_the_solve_allocates(monkeypatch):
     assert solution.stats["budget"]["budget_bytes"] == budget.memory_budget(None, 8e9, 1e9)
 
 
+def test_a_solve_after_its_plan_has_the_budget_of_the_first(monkeypatch):
+    """Where plan() (or an earlier solve) made the ordered copy and the tree already, the process holds them, and
+    the solve's plan counts them again: the budget is measured as if they were not held, the same as the first."""
+    geometry, phi, w12, medium = _scene(4, 20.0)
+    # the operating system's view: what the geometry's ordered copy and tree hold is resident, no longer available
+    monkeypatch.setattr(budget, "available_memory", lambda: 8e9 - geometry.ordered_bytes())
+    monkeypatch.setattr(budget, "resident_memory", lambda: 1e9 + geometry.ordered_bytes())
+    first = solve.plan(geometry, phi, w12, medium, method="tree", tol=0.01, memory_limit=4.0)
+    assert geometry.ordered_bytes() > 1e5  # its ordered copy and tree are held now
+    after = solve.solve(geometry, phi, w12, medium, method="tree", tol=0.01, memory_limit=4.0).stats["budget"]
+    assert after["budget_bytes"] == first.budget_bytes == budget.memory_budget(4.0, 8e9, 1e9)
+
+
 @pytest.mark.parametrize("method", ["tree", "exact"])
 def test_plan_is_the_plan_the_solve_makes_and_what_it_makes_the_solve_reuses(method):
     """solve.plan() estimates what solve() estimates before it starts (the same sample, the same counts), without

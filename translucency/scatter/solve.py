@@ -207,6 +207,20 @@ class SurfaceGeometry:
             self._cache["ordered"] = (ordered, order, rank)
         return self._cache["ordered"]
 
+    def ordered_bytes(self) -> int:
+        """Bytes held by the spatially ordered copy and its source tree when they are already made (by :func:`plan` or
+        an earlier solve), else 0: what a solve's plan counts as still to be made (:func:`memory_at_start`)."""
+        held = self._cache.get("ordered")
+        if held is None:
+            return 0
+        ordered = held[0]
+        arrays = [ordered.points, ordered.triangles, ordered.normals, held[1], held[2]]
+        arrays += [ordered._cache[key] for key in ("vertex_areas", "triangle_areas") if key in ordered._cache]
+        tree = ordered._cache.get("tree")
+        if tree is not None:
+            arrays += [tree.order, tree.start, tree.end, tree.left, tree.right, tree.centre, tree.radius]
+        return int(sum(a.nbytes for a in arrays))
+
     def relight_operator(self, medium, model, tol, *, memory_limit=None, time_limit=None, progress=None):
         """The relighting operators of this (spatially ordered) surface for the medium, model and ``tol``
         (:func:`translucency.scatter.relight.prepare`): ``(operator, reused)``. One set is kept: another
@@ -520,9 +534,7 @@ def solve(
     warn_low_albedo(medium)
 
     start = time.perf_counter()
-    # the memory free before this solve allocates anything: the plan's base counts the ordered copy, the tree
-    # and the sample's grid, so the budget must not be measured after they are made (it counted them twice)
-    memory_at_start = (budget.available_memory(), budget.resident_memory())
+    memory_at_start = _memory_at_start(geometry)
     work = _ordered_work(geometry, phi, w12, medium, model, receivers, stats)
     work.reach = reach_mm
     timings["setup"] = time.perf_counter() - start
@@ -580,10 +592,20 @@ def plan(
     phi, w12, receivers = _checked_inputs(
         geometry, phi, w12, medium, model, method, tol, None, memory_limit, time_limit
     )
-    memory_at_start = (budget.available_memory(), budget.resident_memory())
+    memory_at_start = _memory_at_start(geometry)
     work = _ordered_work(geometry, phi, w12, medium, model, receivers, {})
     estimate, *_ = _plan(work, method, tol, memory_limit, time_limit, {}, memory_at_start)
     return estimate
+
+
+def _memory_at_start(geometry: SurfaceGeometry) -> tuple[float | None, float]:
+    """``(available, resident)`` bytes before a solve allocates anything. The plan's base counts the ordered copy,
+    the tree and the sample's grid, so the budget is measured before they are made, and where an earlier plan or
+    solve made them already (:meth:`SurfaceGeometry.ordered_bytes`), as if they were not held (they were counted
+    twice: a solve after :func:`plan`, or a viewer's next one, had a smaller budget than the first)."""
+    held = geometry.ordered_bytes()
+    available = budget.available_memory()
+    return (None if available is None else available + held), budget.resident_memory() - held
 
 
 def _relit(work, receivers, tol, memory_limit, time_limit, report, stats, timings) -> Solution:
