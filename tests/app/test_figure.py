@@ -83,3 +83,18 @@ def test_the_figure_has_both_views_a_colour_bar_and_is_written_atomically(sphere
     purple = np.flatnonzero(np.all(np.abs(row - lut[64]) < 12, axis=1))
     assert yellow.size and purple.size and purple.mean() < yellow.mean()  # dark on the left, bright on the right
     assert figure_image(mesh, result, scale="linear", quantity="red", panel=120).ndim == 3
+
+
+def test_the_title_says_when_the_colours_were_solved_on_a_proxy(sphere_result):
+    from translucency.app.figure import figure_title
+
+    mesh, result = sphere_result
+    full = figure_title(mesh, result.metadata, "sphere")
+    assert full.startswith("sphere: 642 vertices, ") and "proxy" not in full and "marble" in full
+    proxy = figure_title(mesh, {**result.metadata, "resolution": "proxy, 1096375 vertices, edge 0.157 mm"}, "igea")
+    assert proxy.startswith("igea: 642 vertices (solved on a proxy of 1,096,375 vertices, 0.157 mm edges), ")
+    points, triangles = icosphere(5, 20.0)  # over a tight time limit the pipeline solves on a proxy
+    scene = Scene(TriangleMesh(points, triangles), shadows=False)
+    estimate = scene.shade("marble", time_limit=None).stats["solver"]["budget"]["seconds"]
+    coarse = scene.shade("marble", time_limit=0.3 * estimate, warn=lambda line: None)
+    assert "solved on a proxy of" in figure_title(scene.mesh, coarse.metadata)

@@ -20,11 +20,12 @@ view, as in the viewer, has no single scale). The main job, ``bake --preview`` a
 from __future__ import annotations
 
 import math
+import re
 from pathlib import Path
 
 import numpy as np
 
-__all__ = ["figure_image", "write_figure", "render_views", "nice_length"]
+__all__ = ["figure_image", "figure_title", "write_figure", "render_views", "nice_length"]
 
 #: Narrowest picture, inches at 100 dpi: the title and the colour bar's label fit in it.
 FIGURE_MIN_WIDTH = 11.6
@@ -85,6 +86,28 @@ def render_views(mesh, result, values, clim, scale, camera_direction, up_axis, p
     return image, mm_per_pixel
 
 
+def figure_title(mesh, metadata: dict, name: str | None = None) -> str:
+    """The picture's two-line title: the scan (``name``, else its file name), its size, where ``B`` was solved
+    when on a proxy, the material, model and method, then the lights (from a result's ``metadata``)."""
+    name = name or (Path(mesh.source).stem if getattr(mesh, "source", None) is not None else "scan")
+    method = metadata.get("method", "?")
+    tolerance = "every pair" if method == "exact" else f"tol {metadata.get('tolerance', float('nan')):g}"
+    lights = "; ".join(_light_words(light) for light in metadata.get("lights", ())) or "none"
+    shadows = "with shadows" if metadata.get("shadows", True) else "no shadows"
+    bounces = metadata.get("bounces")
+    if bounces:
+        tolerance += f", {bounces} bounce" + ("s" if bounces > 1 else "")
+    material = metadata.get("material", "?")
+    if metadata.get("albedo", "material") != "material":
+        material += " with the scan's colours"
+    proxy = re.fullmatch(r"proxy, (\d+) vertices, edge (\S+) mm", str(metadata.get("resolution", "full")))
+    solved = f" (solved on a proxy of {int(proxy[1]):,} vertices, {proxy[2]} mm edges)" if proxy else ""
+    return (
+        f"{name}: {mesh.n_points:,} vertices{solved}, {mesh.extent:.4g} mm across — {material}, "
+        f"{metadata.get('model', '?')} dipole, {method} method ({tolerance})\nlight: {lights}, {shadows}"
+    )
+
+
 def figure_image(
     mesh,
     result,
@@ -137,22 +160,7 @@ def figure_image(
     figure = Figure(figsize=(width, (width - 0.4) / 2 + 1.9), dpi=dpi, layout="constrained")
     FigureCanvasAgg(figure)
     grid = figure.add_gridspec(2, 2, height_ratios=[panel, 28])
-    name = name or (Path(mesh.source).stem if getattr(mesh, "source", None) is not None else "scan")
-    method = metadata.get("method", "?")
-    tolerance = "every pair" if method == "exact" else f"tol {metadata.get('tolerance', float('nan')):g}"
-    lights = "; ".join(_light_words(light) for light in metadata.get("lights", ())) or "none"
-    shadows = "with shadows" if metadata.get("shadows", True) else "no shadows"
-    bounces = metadata.get("bounces")
-    if bounces:
-        tolerance += f", {bounces} bounce" + ("s" if bounces > 1 else "")
-    material = metadata.get("material", "?")
-    if metadata.get("albedo", "material") != "material":
-        material += " with the scan's colours"
-    figure.suptitle(
-        f"{name}: {mesh.n_points:,} vertices, {mesh.extent:.4g} mm across — {material}, "
-        f"{metadata.get('model', '?')} dipole, {method} method ({tolerance})\nlight: {lights}, {shadows}",
-        fontsize=10,
-    )
+    figure.suptitle(figure_title(mesh, metadata, name), fontsize=10)
     bar_mm = nice_length(0.25 * panel * mm_per_pixel)
     for column, (view, title) in enumerate(
         zip(
