@@ -59,7 +59,7 @@ sys.path.insert(0, str(ROOT))
 
 import numpy as np  # noqa: E402
 from report import load_average, machine_info, output_dir, write_results  # noqa: E402
-from solver import MESHES, SCANS, errors, prepare  # noqa: E402
+from solver import MESHES, SCANS, TOL_FLOOR, errors, prepare  # noqa: E402
 
 from translucency import __version__  # noqa: E402,F401  (first: it selects numba's threading layer)
 from translucency.errors import BudgetError  # noqa: E402
@@ -304,15 +304,53 @@ def child(path, out_json, repeats):
         phase="done",
         peak_rss_mb=peak_rss_mb(),
         load_average_end=load_average(),
-        **error_record(first, receivers, exact),
+        **error_record(first, receivers, exact, mesh.vertex_normals()),
     )
     save(exact_seconds=exact_seconds)
 
 
-def error_record(first, receivers, exact):
-    """The record's error fields: the bake's first-order ``B`` (at every vertex) at ``receivers`` against ``exact``."""
+def error_record(first, receivers, exact, normals):
+    """The record's error fields: the bake's first-order ``B`` (at every vertex) at ``receivers`` against ``exact``,
+    and where the error is (:func:`error_bands`; ``normals`` the mesh's unit vertex normals)."""
     rms, worst, p99 = errors(first[receivers], exact)
-    return {"receivers": int(receivers.size), "error_rms": rms, "error_worst": worst, "error_p99": p99}
+    record = {"receivers": int(receivers.size), "error_rms": rms, "error_worst": worst, "error_p99": p99}
+    return {**record, **error_bands(first[receivers], exact, normals[receivers])}
+
+
+#: Where a receiver sits against the default light, by the cosine of its normal with it.
+LIGHT_BANDS = {
+    "facing the light (cos > 0.2)": (0.2, 1.0),
+    "at the terminator (cos -0.3 to 0.2)": (-0.3, 0.2),
+    "facing away (cos < -0.3)": (-1.0, -0.3),
+}
+
+
+def error_bands(B, exact, normals):
+    """The share of (receiver, channel) pairs off by more than 1 % and 5 %, and the median and 99th percentile of the
+    per-vertex error per :data:`LIGHT_BANDS` band (pairs with ``exact`` at least 1e-4 of its channel's largest, as
+    :func:`solver.per_vertex_error`)."""
+    from translucency.app.pipeline import DEFAULT_LIGHT_DIRECTION
+
+    keep = exact >= TOL_FLOOR * exact.max(axis=0)
+    relative = np.abs(B - exact) / np.where(keep, exact, 1.0)
+    light = np.asarray(DEFAULT_LIGHT_DIRECTION, dtype=float) / np.linalg.norm(DEFAULT_LIGHT_DIRECTION)
+    cosine = normals @ light
+    bands = {}
+    for name, (low, high) in LIGHT_BANDS.items():
+        inside = keep & ((cosine >= low) & (cosine <= high))[:, None]
+        values = relative[inside]
+        if values.size:
+            bands[name] = {
+                "receivers": int(inside.any(axis=1).sum()),
+                "median": float(np.median(values)),
+                "p99": float(np.percentile(values, 99)),
+            }
+    values = relative[keep]
+    return {
+        "error_over_1pct": float(np.mean(values > 0.01)),
+        "error_over_5pct": float(np.mean(values > 0.05)),
+        "error_bands": bands,
+    }
 
 
 def reference_child(path, out_json):
@@ -329,7 +367,7 @@ def reference_child(path, out_json):
     first = np.zeros((mesh.n_points, exact.shape[1]))
     first[saved["receivers"]] = saved["first"]
     record.update(
-        error_record(first, saved["receivers"], exact),
+        error_record(first, saved["receivers"], exact, mesh.vertex_normals()),
         exact_seconds=exact_seconds,
         exact_apart_peak_rss_mb=peak_rss_mb(),
     )
@@ -567,6 +605,16 @@ def bake_markdown(row):
             lines.append(
                 f"| per-vertex error, 99th percentile (B ≥ 1e-4 of the largest) | {100 * row['error_p99']:.2f} % | "
                 f"≤ 1 %: {met(row['error_p99'] <= GOAL_ERROR)} |"
+            )
+    if "error_bands" in row:
+        lines.append(
+            f"| (vertex, channel) pairs off by more than 1 % / 5 % | {100 * row['error_over_1pct']:.0f} % / "
+            f"{100 * row['error_over_5pct']:.0f} % | |"
+        )
+        for name, band in row["error_bands"].items():
+            lines.append(
+                f"| per-vertex error of the vertices {name}: median / 99th percentile ({band['receivers']} "
+                f"receivers) | {100 * band['median']:.1f} % / {100 * band['p99']:.1f} % | |"
             )
     lines.append(
         f"| peak RSS of the bake (VmHWM after writing) | {row['peak_rss_bake_mb'] / 1024:.2f} GB | "
