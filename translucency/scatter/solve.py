@@ -56,7 +56,7 @@ import numpy as np
 
 from ..errors import BudgetError, InvalidParameterError, TranslucencyWarning, option
 from ..geometry.measure import barycentric_vertex_areas, edge_lengths, mean_edge_length, triangle_areas
-from ..geometry.morton import morton_order
+from ..geometry.morton import by_lowest_vertex, morton_order
 from . import budget, cutoff, hierarchy, kernels, nearfield
 from .medium import CHANNELS, Medium
 from .names import DEFAULT_MODEL, METHODS, MODELS, check_method, check_model, check_tol
@@ -197,8 +197,7 @@ class SurfaceGeometry:
             order = morton_order(self.points)
             rank = np.empty_like(order)
             rank[order] = np.arange(order.size)
-            triangles = rank[self.triangles]
-            triangles = triangles[np.argsort(triangles.min(axis=1), kind="stable")]
+            triangles = by_lowest_vertex(rank[self.triangles], order.size)
             ordered = SurfaceGeometry(self.points[order], triangles, self.normals[order])
             for name, permuted in (("vertex_areas", lambda a: a[order]), ("mean_edge", lambda a: a)):
                 if name in self._cache:  # already computed here: the same surface, relabelled
