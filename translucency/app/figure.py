@@ -87,7 +87,7 @@ def render_views(mesh, result, values, clim, scale, camera_direction, up_axis, p
 
 
 def figure_title(mesh, metadata: dict, name: str | None = None) -> str:
-    """The picture's two-line title: the scan (``name``, else its file name), its size, where ``B`` was solved
+    """The picture's title: the scan (``name``, else its file name), its size, where ``B`` was solved
     when on a proxy, the material, model and method, then the lights (from a result's ``metadata``)."""
     name = name or (Path(mesh.source).stem if getattr(mesh, "source", None) is not None else "scan")
     method = metadata.get("method", "?")
@@ -101,10 +101,14 @@ def figure_title(mesh, metadata: dict, name: str | None = None) -> str:
     if metadata.get("albedo", "material") != "material":
         material += " with the scan's colours"
     proxy = re.fullmatch(r"proxy, (\d+) vertices, edge (\S+) mm", str(metadata.get("resolution", "full")))
-    solved = f" (solved on a proxy of {int(proxy[1]):,} vertices, {proxy[2]} mm edges)" if proxy else ""
+    solved = (
+        f"solved on a proxy of {int(proxy[1]):,} vertices ({proxy[2]} mm edges), interpolated to every vertex\n"
+        if proxy
+        else ""
+    )
     return (
-        f"{name}: {mesh.n_points:,} vertices{solved}, {mesh.extent:.4g} mm across — {material}, "
-        f"{metadata.get('model', '?')} dipole, {method} method ({tolerance})\nlight: {lights}, {shadows}"
+        f"{name}: {mesh.n_points:,} vertices, {mesh.extent:.4g} mm across — {material}, "
+        f"{metadata.get('model', '?')} dipole, {method} method ({tolerance})\n{solved}light: {lights}, {shadows}"
     )
 
 
