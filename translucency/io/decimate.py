@@ -8,9 +8,7 @@ the full mesh.
 Methods
     ``"fast-simplification"`` (default): the quadric edge-collapse of the ``fast-simplification``
     package (Sven Forstmann's Fast-Quadric-Mesh-Simplification), about 12 times faster than
-    pymeshlab on the shared scans; a reduction to under a quarter of the triangles is begun by vertex
-    clustering (:func:`cluster_vertices`, to about three times the triangles asked for), which at scan
-    sizes halves the time and the memory. ``"pymeshlab"``: pymeshlab's quadric edge collapse
+    pymeshlab on the shared scans. ``"pymeshlab"``: pymeshlab's quadric edge collapse
     (``meshing_decimation_quadric_edge_collapse``) with normal and topology preservation, slower
     and more careful.
 
@@ -55,7 +53,6 @@ __all__ = [
     "simplify_arrays",
     "map_to_proxy",
     "decimate_mesh",
-    "cluster_vertices",
 ]
 
 #: Decimation methods: name -> description.
@@ -124,12 +121,6 @@ def simplify_arrays(
     if method == "fast-simplification":
         from ..processes import run_in_child
 
-        if len(triangles) > CLUSTER_FIRST_RATIO * target_faces:  # most of the way by vertex clustering
-            area = float(triangle_areas(points, triangles).sum())
-            points, triangles = cluster_vertices(
-                points, triangles, math.sqrt(2.0 * area / (CLUSTER_KEEP * target_faces))
-            )
-
         arguments = (
             np.array(points, dtype=np.float64, order="C"),  # writable copies: the binding needs them
             np.array(triangles, dtype=np.int32, order="C"),
@@ -186,60 +177,6 @@ def simplify_arrays(
     if len(new_triangles) == 0:
         raise MeshError(f"decimation to {target_faces} triangles left no triangle; ask for more triangles.")
     return _drop_unreferenced(new_points, new_triangles)
-
-
-#: A decimation to fewer than 1 / CLUSTER_FIRST_RATIO of the triangles is begun by :func:`cluster_vertices`, to about
-#: CLUSTER_KEEP times the triangles asked for, and fast-simplification does the rest. On the 10M-vertex Igea (20M
-#: triangles to 2.55M): 6 s of clustering and 30 s of fast-simplification instead of 72 s, its process 2.5 GB
-#: instead of 5.8 GB; the full vertices lie as near the proxy (mean 0.0022 mm, 99th percentile 0.0073 against
-#: 0.0072 mm; the farthest 0.034 against 0.018 mm, for proxy edges of 0.17 mm).
-CLUSTER_FIRST_RATIO = 4
-CLUSTER_KEEP = 3
-
-
-def cluster_vertices(points, triangles, cell_mm: float) -> tuple[np.ndarray, np.ndarray]:
-    """Vertex clustering: the vertices in each cube of a grid of side ``cell_mm`` (mm) merged into their mean,
-    the triangles that lose a corner to the merge dropped, and of triangles with the same three corners one kept.
-
-    Parameters
-    ----------
-    points : (n, 3) float64
-        Vertex positions, mm.
-    triangles : (m, 3) int
-    cell_mm : float
-        Side of the grid's cubes, mm (> 0).
-
-    Returns
-    -------
-    points : (k, 3) float64
-        One vertex per occupied cube, mm.
-    triangles : (l, 3) int64
-        The surviving triangles, their winding kept.
-    """
-    points = np.asarray(points, dtype=np.float64)
-    cube = np.floor((points - points.min(axis=0)) / float(cell_mm)).astype(np.int64)
-    size = cube.max(axis=0) + 1
-    _, merged = np.unique((cube[:, 0] * size[1] + cube[:, 1]) * size[2] + cube[:, 2], return_inverse=True)
-    merged = merged.ravel()
-    del cube
-    k = int(merged.max()) + 1
-    count = np.bincount(merged, minlength=k).astype(np.float64)
-    new_points = np.stack([np.bincount(merged, weights=points[:, a], minlength=k) for a in range(3)], axis=1)
-    new_points /= count[:, None]
-    new_triangles = merged[np.asarray(triangles)]
-    del merged
-    keep = (
-        (new_triangles[:, 0] != new_triangles[:, 1])
-        & (new_triangles[:, 1] != new_triangles[:, 2])
-        & (new_triangles[:, 0] != new_triangles[:, 2])
-    )
-    new_triangles = new_triangles[keep]
-    corners = np.sort(new_triangles, axis=1)
-    first = corners[:, 0] * k + corners[:, 1]
-    order = np.lexsort((corners[:, 2], first))
-    repeated = np.zeros(len(new_triangles), dtype=bool)
-    repeated[order[1:]] = (first[order[1:]] == first[order[:-1]]) & (corners[order[1:], 2] == corners[order[:-1], 2])
-    return _drop_unreferenced(new_points, new_triangles[~repeated])
 
 
 #: fast-simplification keeps its mesh in module-level state after it returns (about 290 bytes per triangle
