@@ -101,3 +101,28 @@ def test_queries_near_the_surface_are_certified_by_the_grid(monkeypatch):
     _, _, distance = closest_points_on_triangles(far, points, triangles)
     assert searched == [50]
     np.testing.assert_allclose(distance, brute_force(far, points, triangles), rtol=1e-9, atol=1e-12)
+    stray = np.vstack([query, [[1e9, 0.0, 0.0]]])  # one query far outside does not send the others on
+    _, _, distance = closest_points_on_triangles(stray, points, triangles)
+    assert searched == [50, 1]
+    np.testing.assert_allclose(distance[:-1], brute_force(query, points, triangles), rtol=1e-9, atol=1e-12)
+
+
+def test_the_grid_lists_large_triangles_at_coarser_levels(monkeypatch):
+    """Triangles far larger than the median sit at coarser levels of the grid; queries near them are answered
+    there, exactly."""
+    from translucency.geometry import proximity
+
+    small, small_triangles = icosphere(3, 5.0)  # 1280 triangles of about 1 mm
+    big = np.array([[-40.0, -40.0, 8.0], [40.0, -40.0, 8.0], [0.0, 40.0, 8.0]])  # one of 80 mm, above them (it holds
+    # the square -10 .. 10 mm where the queries are)
+    points = np.vstack([small, big])
+    triangles = np.vstack([small_triangles, [[len(small), len(small) + 1, len(small) + 2]]])
+    rng = np.random.default_rng(2)
+    on_big = np.column_stack([rng.uniform(-10, 10, size=(200, 2)), 8.0 + rng.normal(scale=0.01, size=200)])
+    query = np.vstack([small * 1.01, on_big])
+    searched = []
+    search = proximity._nearest_search
+    monkeypatch.setattr(proximity, "_nearest_search", lambda q, *args: searched.append(len(q)) or search(q, *args))
+    index, _, distance = closest_points_on_triangles(query, points, triangles)
+    assert searched == [] and np.all(index[len(small) :] == len(small_triangles))
+    np.testing.assert_allclose(distance, brute_force(query, points, triangles), rtol=1e-9, atol=1e-12)

@@ -46,7 +46,7 @@ QUERY_CHUNK = 1 << 18
 #: Step 1's margin δ, in median triangle radii: queries within δ of the surface are certified by the grid.
 GRID_MARGIN = 0.5
 #: Step 1's grid cells per axis at its finest level are counted in 19 bits (keys of 63 bits with 6 for the level):
-#: a surface wider than that many finest cells goes to step 2 whole.
+#: a mesh wider than that many finest cells goes to step 2 whole.
 GRID_BITS = 19
 
 
@@ -169,8 +169,8 @@ def _grid_pass(query, corners, centroid, radius, best_triangle, best_weights, be
         return certified
     grown = radius + margin
     finest = 2.0 * float(np.median(grown))
-    low = np.minimum(query.min(axis=0), (centroid - grown[:, None]).min(axis=0))
-    high = np.maximum(query.max(axis=0), (centroid + grown[:, None]).max(axis=0))
+    low = (centroid - grown[:, None]).min(axis=0)  # the grid covers the triangles; a query outside goes on
+    high = (centroid + grown[:, None]).max(axis=0)
     if np.max((high - low) / finest) >= 2**GRID_BITS - 1:
         return certified
     level = np.maximum(0, np.ceil(np.log2(2.0 * grown / finest))).astype(np.int64)  # cells of at least 2 grown radii
@@ -194,7 +194,7 @@ def _grid_pass(query, corners, centroid, radius, best_triangle, best_weights, be
     for_ranges(
         _grid_rows,
         len(query),
-        query,
+        kernel_array(query, np.float64),
         corners,
         kernel_array(centroid, np.float64),
         kernel_array(grown * grown, np.float64),
@@ -240,8 +240,12 @@ def _grid_rows(
         px, py, pz = query[i, 0], query[i, 1], query[i, 2]
         for level in range(sizes.shape[0]):
             s = sizes[level]
-            key = ((level * scale + math.floor((px - low[0]) / s)) * scale + math.floor((py - low[1]) / s)) * scale
-            key += math.floor((pz - low[2]) / s)
+            ix = math.floor((px - low[0]) / s)
+            iy = math.floor((py - low[1]) / s)
+            iz = math.floor((pz - low[2]) / s)
+            if min(ix, iy, iz) < 0 or max(ix, iy, iz) >= scale:  # outside the grid: in no triangle's grown sphere
+                continue
+            key = ((level * scale + ix) * scale + iy) * scale + iz
             at = np.searchsorted(cells, key)
             if at == cells.shape[0] or cells[at] != key:
                 continue
