@@ -207,18 +207,16 @@ class SurfaceGeometry:
         return self._cache["ordered"]
 
     def ordered_bytes(self) -> int:
-        """Bytes held by the spatially ordered copy and its source tree when they are already made (by :func:`plan` or
-        an earlier solve), else 0: what a solve's plan counts as still to be made (:func:`memory_at_start`)."""
+        """Bytes held by the spatially ordered copy and what is cached on it (the source tree, triangle tables, near
+        grids and lists; not relighting operators, which no solve's plan counts) when they are made already (by
+        :func:`plan` or an earlier solve), else 0: what a solve's plan counts as still to be made
+        (:func:`_memory_at_start`)."""
         held = self._cache.get("ordered")
         if held is None:
             return 0
         ordered = held[0]
-        arrays = [ordered.points, ordered.triangles, ordered.normals, held[1], held[2]]
-        arrays += [ordered._cache[key] for key in ("vertex_areas", "triangle_areas") if key in ordered._cache]
-        tree = ordered._cache.get("tree")
-        if tree is not None:
-            arrays += [tree.order, tree.start, tree.end, tree.left, tree.right, tree.centre, tree.radius]
-        return int(sum(a.nbytes for a in arrays))
+        cached = [value for key, value in ordered._cache.items() if key != "relight"]
+        return _array_bytes([ordered.points, ordered.triangles, ordered.normals, held[1], held[2], *cached])
 
     def relight_operator(self, medium, model, tol, *, memory_limit=None, time_limit=None, progress=None):
         """The relighting operators of this (spatially ordered) surface for the medium, model and ``tol``
@@ -583,7 +581,11 @@ def plan(
     """The plan :func:`solve` makes before it starts (its memory and time against the budgets, from the same
     sample), for these arguments, without solving. The spatially ordered surface and the source tree it makes
     stay cached on ``geometry``, so a solve that follows does not make them again. Not for ``method="relight"``,
-    whose operators are planned by :meth:`SurfaceGeometry.relight_operator`."""
+    whose operators are planned by :meth:`SurfaceGeometry.relight_operator`.
+
+    The arguments are :func:`solve`'s: ``phi`` (n, C) W/m², ``w12`` (n, 3) unit, ``tol`` relative, ``memory_limit``
+    GB (2**30 bytes) and ``time_limit`` s (None: no limit). Returns the
+    :class:`~translucency.scatter.budget.SolveEstimate` (``fits``, ``seconds``, ``peak_bytes``, ...)."""
     if method == "relight":
         raise InvalidParameterError(
             "plan() estimates the solves of exact, cutoff and tree; relight plans its operators."
@@ -595,6 +597,30 @@ def plan(
     work = _ordered_work(geometry, phi, w12, medium, model, receivers, {})
     estimate, *_ = _plan(work, method, tol, memory_limit, time_limit, {}, memory_at_start)
     return estimate
+
+
+def _array_bytes(value, seen=None, depth: int = 4) -> int:
+    """Bytes of the numpy arrays reachable from ``value`` (arrays; lists, tuples and dicts; the attributes of objects,
+    ``depth`` levels down), each buffer counted once (a view counts its base)."""
+    seen = set() if seen is None else seen
+    if isinstance(value, np.ndarray):
+        base = value
+        while isinstance(base.base, np.ndarray):
+            base = base.base
+        if id(base) in seen:
+            return 0
+        seen.add(id(base))
+        return int(base.nbytes)
+    if depth <= 0 or isinstance(value, (str, bytes, int, float, bool, type(None))):
+        return 0
+    if isinstance(value, dict):
+        items = value.values()
+    elif isinstance(value, (list, tuple)):
+        items = value
+    else:
+        items = list(getattr(value, "__dict__", {}).values())
+        items += [getattr(value, name) for name in getattr(type(value), "__slots__", ()) if hasattr(value, name)]
+    return sum(_array_bytes(item, seen, depth - 1) for item in items)
 
 
 def _memory_at_start(geometry: SurfaceGeometry) -> tuple[float | None, float]:
