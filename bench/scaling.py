@@ -224,14 +224,14 @@ def bake(path, out_ply, stage=None):
 
 def exact_at(scene, receivers):
     """``exact`` (the default material and light, as the shade used them) at ``receivers``; ``(B, seconds)``."""
-    from translucency.app.pipeline import DEFAULT_LIGHT_DIRECTION, DEFAULT_MATERIAL, resolve_medium
+    from translucency.app.pipeline import DEFAULT_MATERIAL, default_light_direction, resolve_medium
     from translucency.scatter.lights import DirectionalLight
     from translucency.scatter.solve import solve
 
     medium = resolve_medium(DEFAULT_MATERIAL)
     solver_mesh, _, _, geometry, _ = scene.solver_mesh(medium, "full")
     incident, _ = scene.incident(
-        geometry, solver_mesh.triangles, [DirectionalLight(DEFAULT_LIGHT_DIRECTION, 1.0)], medium.eta
+        geometry, solver_mesh.triangles, [DirectionalLight(default_light_direction(scene.up), 1.0)], medium.eta
     )
     start = time.perf_counter()
     exact = solve(geometry, incident.phi_rgb, incident.w12, medium, method="exact", receivers=receivers)
@@ -304,17 +304,18 @@ def child(path, out_json, repeats):
         phase="done",
         peak_rss_mb=peak_rss_mb(),
         load_average_end=load_average(),
-        **error_record(first, receivers, exact, mesh.vertex_normals()),
+        **error_record(first, receivers, exact, mesh.vertex_normals(), scene.up),
     )
     save(exact_seconds=exact_seconds)
 
 
-def error_record(first, receivers, exact, normals):
+def error_record(first, receivers, exact, normals, up):
     """The record's error fields: the bake's first-order ``B`` (at every vertex) at ``receivers`` against ``exact``,
-    and where the error is (:func:`error_bands`; ``normals`` the mesh's unit vertex normals)."""
+    and where the error is (:func:`error_bands`; ``normals`` the mesh's unit vertex normals, ``up`` the Scene's up
+    axis, which turns the default light into the scan's frame)."""
     rms, worst, p99 = errors(first[receivers], exact)
     record = {"receivers": int(receivers.size), "error_rms": rms, "error_worst": worst, "error_p99": p99}
-    return {**record, **error_bands(first[receivers], exact, normals[receivers])}
+    return {**record, **error_bands(first[receivers], exact, normals[receivers], up)}
 
 
 #: Where a receiver sits against the default light, by the cosine of its normal with it.
@@ -325,15 +326,16 @@ LIGHT_BANDS = {
 }
 
 
-def error_bands(B, exact, normals):
+def error_bands(B, exact, normals, up):
     """The share of (receiver, channel) pairs off by more than 1 % and 5 %, and the median and 99th percentile of the
     per-vertex error per :data:`LIGHT_BANDS` band (pairs with ``exact`` at least 1e-4 of its channel's largest, as
     :func:`solver.per_vertex_error`)."""
-    from translucency.app.pipeline import DEFAULT_LIGHT_DIRECTION
+    from translucency.app.pipeline import default_light_direction
 
     keep = exact >= TOL_FLOOR * exact.max(axis=0)
     relative = np.abs(B - exact) / np.where(keep, exact, 1.0)
-    light = np.asarray(DEFAULT_LIGHT_DIRECTION, dtype=float) / np.linalg.norm(DEFAULT_LIGHT_DIRECTION)
+    light = np.asarray(default_light_direction(up), dtype=float)
+    light /= np.linalg.norm(light)
     cosine = normals @ light
     bands = {}
     for name, (low, high) in LIGHT_BANDS.items():
@@ -362,12 +364,13 @@ def reference_child(path, out_json):
 
     saved = np.load(f"{out_json}.bake.npz")
     mesh, _ = clean_mesh(load_mesh(path, unit="mm"))
-    exact, exact_seconds = exact_at(Scene(mesh), saved["receivers"])
+    scene = Scene(mesh)
+    exact, exact_seconds = exact_at(scene, saved["receivers"])
     record = json.loads(Path(out_json).read_text())
     first = np.zeros((mesh.n_points, exact.shape[1]))
     first[saved["receivers"]] = saved["first"]
     record.update(
-        error_record(first, saved["receivers"], exact, mesh.vertex_normals()),
+        error_record(first, saved["receivers"], exact, mesh.vertex_normals(), scene.up),
         exact_seconds=exact_seconds,
         exact_apart_peak_rss_mb=peak_rss_mb(),
     )
