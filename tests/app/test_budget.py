@@ -98,9 +98,13 @@ def test_far_over_its_time_budget_a_scan_is_refused_before_its_shadows_are_trace
     late = Scene(mesh).shade("marble", time_limit=0.3 * estimate, warn=lambda line: None)
     assert traced[0] == mesh.n_points and late.stats["solver_vertices"] < mesh.n_points
     monkeypatch.setattr(pipeline, "EARLY_PLAN_VERTICES", 0)
+    planned = []
+    check = pipeline._check_unshadowed_plan
+    monkeypatch.setattr(pipeline, "_check_unshadowed_plan", lambda g, *a: planned.append(g.n_vertices) or check(g, *a))
     traced.clear()
     early = Scene(mesh).shade("marble", time_limit=0.3 * estimate, warn=lambda line: None)
     assert mesh.n_points not in traced and early.stats["solver_vertices"] == late.stats["solver_vertices"]
+    assert planned == [mesh.n_points]  # the proxy, sized to fit, is not planned twice
     np.testing.assert_array_equal(early.B, late.B)
     traced.clear()
     Scene(mesh).shade("marble", time_limit=0.7 * estimate, warn=lambda line: None)  # over, but not twice

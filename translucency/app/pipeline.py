@@ -52,10 +52,11 @@ PROXY_MIN_TRIANGLES = 200
 #: not held through the solve's set-up and plan (where a scan's bake peaks: +360 MB at 2.1M vertices,
 #: about 1.7 GB at 10M); the bounce builds it again (4 s at 2.1M). Below, a viewer's next light reuses it.
 RELEASE_SCENE_VERTICES = 1_000_000
-#: From this many vertices on, the solve is planned with every vertex that faces a light lit before the light's
-#: shadows are traced, and refused at once when that plan is over EARLY_REFUSAL_FACTOR times a budget (the
-#: 10M-vertex Igea: 10 times the time limit). What the plan makes (the ordered surface, the source tree) the
-#: solve reuses; the plan's sample costs about 1 s at 1M vertices.
+#: From this many vertices on, the solve at the resolution asked for is planned with every vertex that faces a
+#: light lit before the light's shadows are traced, and refused at once when that plan is over
+#: EARLY_REFUSAL_FACTOR times a budget (the 10M-vertex Igea: 10 times the time limit). What the plan makes (the
+#: ordered surface, the source tree) the solve reuses; the plan's sample costs about 1 s at 1M vertices. A proxy
+#: made because that resolution was over budget is sized to fit, and is not planned twice (3 s at 1.1M vertices).
 EARLY_PLAN_VERTICES = 1_000_000
 EARLY_REFUSAL_FACTOR = 2.0
 
@@ -373,7 +374,7 @@ class Scene:
             try:
                 if solver is None and method != "relight":  # a size no solve fits: no light traced for it
                     _check_size_floor(geometry, medium.n_channels, method, limits)
-                    if geometry.n_vertices >= EARLY_PLAN_VERTICES:
+                    if attempt == 0 and geometry.n_vertices >= EARLY_PLAN_VERTICES:  # a proxy is sized to fit
                         _check_unshadowed_plan(geometry, lights, settings, limits)
                 start = time.perf_counter()
                 incident, incident_reused = self.incident(
