@@ -15,7 +15,15 @@ import sys
 import time
 from pathlib import Path
 
-__all__ = ["end_with_parent", "run_in_child", "WATCHDOG_INTERVAL_S"]
+__all__ = ["available_cores", "descendants", "end_with_parent", "run_in_child", "WATCHDOG_INTERVAL_S"]
+
+
+def available_cores() -> int:
+    """CPU cores this process may run on (its affinity where the platform tells it, else the machine's)."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # not on every platform
+        return max(1, os.cpu_count() or 1)
 
 
 def run_in_child(function, *args):
@@ -123,13 +131,13 @@ def _watch_parent(parent: int) -> None:
     while True:
         time.sleep(WATCHDOG_INTERVAL_S)
         if os.getppid() != parent:
-            for child in _children(os.getpid()):
+            for child in descendants(os.getpid()):
                 with contextlib.suppress(OSError):
                     os.kill(child, signal.SIGKILL)
             os._exit(1)
 
 
-def _children(pid: int) -> list[int]:
+def descendants(pid: int) -> list[int]:
     """Every descendant of process ``pid`` (Linux ``/proc``; empty elsewhere)."""
     parents = {}
     for entry in Path("/proc").glob("[0-9]*/stat"):

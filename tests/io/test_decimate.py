@@ -137,3 +137,81 @@ def test_a_large_decimation_in_its_own_process_gives_the_same_proxy(monkeypatch)
     apart = simplify_arrays(points, triangles, 200)
     assert children == [decimate.fast_simplify]
     assert all(np.array_equal(a, b) for a, b in zip(here, apart))
+
+
+def _edge_uses(triangles):
+    """How many triangles hold each undirected edge."""
+    from translucency.geometry.topology import unique_edges
+
+    _, edge_of_corner = unique_edges(triangles)
+    return np.bincount(edge_of_corner.ravel())
+
+
+@pytest.mark.parametrize("parts", [2, 3])
+def test_a_mesh_decimated_in_parts_is_one_closed_surface_as_close_as_the_whole(monkeypatch, parts):
+    """Parts side by side (each in a child of its own, cuts kept), welded and decimated once more: a closed
+    sphere stays one closed 2-manifold of genus 0 with the triangles asked for, no doubled vertex along the
+    cuts, and as close to the sphere as the proxy decimated whole."""
+    from translucency import processes
+    from translucency.io import decimate
+
+    points, triangles = icosphere(5, radius=25.0)  # 20,480 triangles
+    whole_points, whole_triangles = simplify_arrays(points, triangles, 1000)
+    monkeypatch.setattr(decimate, "decimation_parts", lambda n_triangles: parts)
+    calls = []
+    run = processes.run_in_child
+    monkeypatch.setattr(
+        processes, "run_in_child", lambda function, *args: calls.append(args[4:]) or run(function, *args)
+    )
+    new_points, new_triangles = simplify_arrays(points, triangles, 1000)
+    assert calls == [(True,)] * parts  # each part kept its cut; the last pass (small: here) did not
+    assert len(new_triangles) == pytest.approx(1000, rel=0.02)
+    assert np.all(_edge_uses(new_triangles) == 2)  # closed, and every edge between two triangles
+    assert len(new_points) - len(new_triangles) // 2 == 2  # V - E + F = V - F/2 = 2: one sphere, no handle
+    assert len(np.unique(new_points, axis=0)) == len(new_points)  # the cuts' vertices were welded
+    error = np.abs(np.linalg.norm(new_points, axis=1) - 25.0).max()
+    whole_error = np.abs(np.linalg.norm(whole_points, axis=1) - 25.0).max()
+    assert error <= 2 * whole_error + 1e-3  # mm
+
+
+def test_welding_joins_the_cut_vertices_only():
+    """Two parts that share the cut (0,0,0)-(1,0,0), each with its own copy, and each with a vertex at
+    (5,5,5) that is not on the cut: the cut's copies become one vertex, the other two stay two."""
+    from translucency.io.decimate import _weld
+
+    cut = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]])
+    part_a = (
+        np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 1.0, 0.0], [5.0, 5.0, 5.0]]),
+        np.array([[1, 0, 2], [2, 0, 3]]),
+    )
+    part_b = (
+        np.array([[0.0, -1.0, 0.0], [0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [5.0, 5.0, 5.0]]),
+        np.array([[1, 0, 2], [0, 1, 3]]),
+    )
+    points, triangles = _weld(cut, [part_a, part_b])
+    assert len(points) == 6  # 2 on the cut, (0,1,0), (0,-1,0) and (5,5,5) twice
+    assert np.array_equal(points[triangles[0]], part_a[0][part_a[1][0]])
+    assert np.array_equal(points[triangles[2]], part_b[0][part_b[1][0]])
+    shared = set(triangles[0]) & set(triangles[2])
+    assert sorted(map(tuple, points[sorted(shared)])) == [(0.0, 0.0, 0.0), (1.0, 0.0, 0.0)]
+    assert triangles[1][2] != triangles[3][2]  # the two (5,5,5) vertices stay apart
+
+
+@pytest.mark.parametrize(
+    ("cores", "n_triangles", "parts"),
+    [
+        (2, 1_000_000, 1),  # too small to be worth a second child
+        (2, 4_200_000, 2),  # the Igea subdivided twice: one part per core
+        (2, 20_000_000, 4),  # 10M vertices: parts of at most 5M triangles, two at a time
+        (1, 4_200_000, 1),
+        (1, 20_000_000, 4),  # one core: the parts one after the other, for the memory
+        (8, 20_000_000, 8),
+    ],
+)
+def test_decimation_parts_one_per_core_and_none_too_large(monkeypatch, cores, n_triangles, parts):
+    from translucency import processes
+    from translucency.io import decimate
+
+    monkeypatch.setattr(processes, "available_cores", lambda: cores)
+    assert decimate.PART_TRIANGLES == 2_000_000 and decimate.PART_MAX_TRIANGLES == 5_000_000
+    assert decimate.decimation_parts(n_triangles) == parts

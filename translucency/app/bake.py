@@ -46,7 +46,7 @@ from ..errors import (
     command_line_spelling,
     option,
 )
-from ..processes import end_with_parent
+from ..processes import available_cores, end_with_parent
 from ..scatter.budget import DEFAULT_TIME_LIMIT_S
 from ..scatter.names import DEFAULT_BOUNCES, DEFAULT_METHOD, DEFAULT_MODEL, DEFAULT_TOL
 from .settings import DEFAULT_MATERIAL, ShadeSettings
@@ -660,14 +660,6 @@ def _make_folders(outputs) -> None:
 # --------------------------------------------------------------------------------------------------
 # local processes
 # --------------------------------------------------------------------------------------------------
-def available_cores() -> int:
-    """CPU cores this process may run on."""
-    try:
-        return len(os.sched_getaffinity(0))
-    except AttributeError:  # not on every platform
-        return os.cpu_count() or 1
-
-
 def _use_threads(threads: int) -> None:
     """Run numba's parallel loops called from this thread on ``threads`` threads (numba's limit is per thread)."""
     import numba

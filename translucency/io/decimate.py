@@ -8,7 +8,10 @@ the full mesh.
 Methods
     ``"fast-simplification"`` (default): the quadric edge-collapse of the ``fast-simplification``
     package (Sven Forstmann's Fast-Quadric-Mesh-Simplification), about 12 times faster than
-    pymeshlab on the shared scans. ``"pymeshlab"``: pymeshlab's quadric edge collapse
+    pymeshlab on the shared scans. It runs on one core, so a mesh of millions of triangles is cut into
+    slabs decimated side by side in child processes, each with its cut kept, then welded and decimated
+    once more over the whole (:func:`decimation_parts`; time, memory and the proxy's quality at 10M
+    vertices in bench/README.md). ``"pymeshlab"``: pymeshlab's quadric edge collapse
     (``meshing_decimation_quadric_edge_collapse``) with normal and topology preservation, slower
     and more careful.
 
@@ -43,6 +46,7 @@ from ..errors import InvalidParameterError, MeshError
 from ..geometry.measure import triangle_areas
 from ..geometry.mesh import TriangleMesh, validate_mesh_arrays
 from ..geometry.proximity import closest_points_on_triangles
+from ..geometry.topology import first_at_same_position
 from .polydata import as_triangle_mesh
 
 __all__ = [
@@ -110,7 +114,8 @@ def simplify_arrays(
     Notes
     -----
     fast-simplification keeps its mesh in module-level state: do not call it from several threads
-    at once (processes are fine).
+    at once (processes are fine). A large mesh is decimated in parts side by side first
+    (:func:`decimation_parts`).
     """
     points, triangles = validate_mesh_arrays(points, triangles)
     if method not in METHODS:
@@ -121,14 +126,19 @@ def simplify_arrays(
     if method == "fast-simplification":
         from ..processes import run_in_child
 
-        arguments = (
-            np.array(points, dtype=np.float64, order="C"),  # writable copies: the binding needs them
-            np.array(triangles, dtype=np.int32, order="C"),
-            target_faces,
-            float(aggressiveness),
-        )
         try:
-            if len(triangles) >= ISOLATED_TRIANGLES:  # its memory goes back when the child ends
+            parts = decimation_parts(len(triangles))
+            if parts > 1:
+                points, triangles = _simplify_parts(points, triangles, target_faces, float(aggressiveness), parts)
+            arguments = (
+                np.array(points, dtype=np.float64, order="C"),  # writable copies: the binding needs them
+                np.array(triangles, dtype=np.int32, order="C"),
+                target_faces,
+                float(aggressiveness),
+            )
+            if target_faces >= len(triangles):  # the parts left no more than asked
+                new_points, new_triangles = points, triangles
+            elif len(triangles) >= ISOLATED_TRIANGLES:  # its memory goes back when the child ends
                 new_points, new_triangles = run_in_child(fast_simplify, *arguments)
             else:
                 new_points, new_triangles = fast_simplify(*arguments)
@@ -186,12 +196,112 @@ def simplify_arrays(
 ISOLATED_TRIANGLES = 1_000_000
 
 
-def fast_simplify(points, triangles, target_faces: int, aggressiveness: float):
+#: A mesh is decimated in parts side by side, one per core, when each part has at least this many triangles
+#: (:func:`decimation_parts`).
+PART_TRIANGLES = 2_000_000
+#: A part has at most this many triangles: fast-simplification's child holds about 360 bytes per triangle of
+#: its part at its peak (1.8 GB here), and a larger mesh is cut into more parts than cores, decimated as many
+#: at a time as there are cores.
+PART_MAX_TRIANGLES = 5_000_000
+#: Each part is decimated to this multiple of its share of the target; the last pass over the welded
+#: mesh takes the surplus away, with the fine strips along the cuts.
+PART_SURPLUS = 1.1
+
+
+def decimation_parts(n_triangles: int) -> int:
+    """Parts a mesh of ``n_triangles`` is decimated in: one per core this process may use, each of at least
+    :data:`PART_TRIANGLES` triangles, and more where a part would be over :data:`PART_MAX_TRIANGLES` (1: the
+    whole mesh in one pass)."""
+    from ..processes import available_cores
+
+    n_triangles = int(n_triangles)
+    side_by_side = min(available_cores(), n_triangles // PART_TRIANGLES)
+    return max(1, side_by_side, -(-n_triangles // PART_MAX_TRIANGLES))
+
+
+def fast_simplify(points, triangles, target_faces: int, aggressiveness: float, keep_border: bool = False):
     """fast-simplification's quadric decimation of writable C-ordered arrays (float64 points in mm, int32
-    triangles) to about ``target_faces`` triangles: ``(points, triangles)`` as it returns them."""
+    triangles) to about ``target_faces`` triangles: ``(points, triangles)`` as it returns them.
+
+    ``keep_border``: no edge with a vertex on an open border is collapsed, so those vertices keep their
+    positions bit for bit (a part of a mesh keeps its cut).
+    """
     import fast_simplification
 
-    return fast_simplification.simplify(points, triangles, target_count=target_faces, agg=aggressiveness)
+    return fast_simplification.simplify(
+        points, triangles, target_count=target_faces, agg=aggressiveness, preserve_border=keep_border
+    )
+
+
+def _simplify_parts(points, triangles, target_faces: int, aggressiveness: float, parts: int):
+    """The mesh cut into ``parts`` slabs of triangles along its longest side, each decimated in a child process
+    of its own with its cuts kept (:func:`fast_simplify` with ``keep_border``), as many at once as there are
+    cores, and welded again.
+
+    Each part is asked for its share of ``PART_SURPLUS * target_faces`` triangles and two per vertex on its cut
+    (the triangles along a kept cut stay: a part asked for fewer would be decimated far past its shape).
+    Returns the welded ``(points, triangles)``; along the cuts it keeps the full mesh's vertices, which the
+    caller's pass over the whole mesh decimates.
+    """
+    from concurrent.futures import ThreadPoolExecutor
+
+    from ..processes import available_cores, run_in_child
+
+    points = np.asarray(points, dtype=np.float64)
+    triangles = np.asarray(triangles)
+    axis = int(np.argmax(np.ptp(points, axis=0)))
+    height = points[triangles[:, 0], axis] + points[triangles[:, 1], axis] + points[triangles[:, 2], axis]
+    ranks = [len(height) * k // parts for k in range(1, parts)]
+    cuts = np.partition(height, ranks)[ranks]
+    part_of = np.searchsorted(cuts, height, side="right")
+    del height
+    chosen = [triangles[part_of == part] for part in range(parts)]
+    chosen = [part for part in chosen if len(part)]  # a slab of ties only: none
+    del part_of
+    parts = len(chosen)
+    used = np.zeros((parts, len(points)), dtype=bool)
+    for part in range(parts):
+        used[part, chosen[part].ravel()] = True
+    on_cut = used.sum(axis=0) > 1
+    jobs = []
+    for part in range(parts):
+        new_index = np.cumsum(used[part], dtype=np.int64) - 1
+        share = PART_SURPLUS * target_faces * len(chosen[part]) / len(triangles)
+        kept = 2 * int(np.count_nonzero(on_cut & used[part]))  # about the triangles along the kept cut
+        jobs.append(
+            (
+                np.array(points[used[part]], dtype=np.float64, order="C"),
+                np.array(new_index[chosen[part]], dtype=np.int32, order="C"),
+                min(len(chosen[part]), int(share) + kept),
+                aggressiveness,
+                True,
+            )
+        )
+    del chosen, used
+    with ThreadPoolExecutor(max_workers=min(parts, available_cores())) as pool:  # each thread waits for its child
+        results = list(pool.map(lambda job: run_in_child(fast_simplify, *job), jobs))
+    del jobs
+    return _weld(points[on_cut], results)
+
+
+def _weld(cut_points: np.ndarray, parts) -> tuple[np.ndarray, np.ndarray]:
+    """One mesh from decimated parts that share the vertices at ``cut_points`` (mm, kept bit for bit by each
+    part): a part's vertex at one of those positions becomes that one vertex; every other vertex stays its
+    part's own, even where two parts have one at the same position."""
+    n_cut = len(cut_points)
+    stacked = np.concatenate([cut_points] + [np.asarray(part_points, dtype=np.float64) for part_points, _ in parts])
+    first = first_at_same_position(stacked)[n_cut:]
+    own = first >= n_cut
+    index = np.where(own, n_cut + np.cumsum(own) - 1, first)
+    welded_points = np.concatenate([cut_points, stacked[n_cut:][own]])
+    offsets = np.cumsum([0] + [len(part_points) for part_points, _ in parts])
+    welded_triangles = np.concatenate(
+        [
+            index[offset + np.asarray(part_triangles, dtype=np.int64)]
+            for offset, (_, part_triangles) in zip(offsets, parts)
+        ]
+    )
+    return _drop_unreferenced(welded_points, welded_triangles)
 
 
 def _drop_unreferenced(points: np.ndarray, triangles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

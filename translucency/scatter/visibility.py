@@ -38,7 +38,6 @@ distance   segment length to a point light (None: to infinity)        mm
 from __future__ import annotations
 
 import hashlib
-import os
 from collections import OrderedDict
 from concurrent.futures import ThreadPoolExecutor
 from typing import NamedTuple
@@ -46,6 +45,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..errors import InvalidParameterError, MeshError, TranslucencyError
+from ..processes import available_cores
 
 __all__ = ["Hits", "Occluder", "VisibilityCache", "RELATIVE_OFFSET", "array_digest"]
 
@@ -101,14 +101,6 @@ def array_digest(*arrays) -> str:
     return h.hexdigest()
 
 
-def default_workers() -> int:
-    """Number of CPU cores this process may use."""
-    try:
-        return max(1, len(os.sched_getaffinity(0)))
-    except AttributeError:  # pragma: no cover - not on Linux
-        return max(1, os.cpu_count() or 1)
-
-
 class Occluder:
     """One Embree scene of a triangle mesh, for shadow rays.
 
@@ -159,7 +151,7 @@ class Occluder:
             raise InvalidParameterError(
                 f"occluder: relative_offset must be a positive number, got {relative_offset!r}."
             )
-        self.workers = default_workers() if workers is None else int(workers)
+        self.workers = available_cores() if workers is None else int(workers)
         if self.workers < 1:
             raise InvalidParameterError(f"occluder: workers must be >= 1, got {workers!r}.")
         used = np.zeros(len(points), dtype=bool)
