@@ -29,10 +29,12 @@ Then ``exact`` at a fixed number of random receivers (2000) gives the error of t
 99th percentile, as in ``bench/solver.py``. Numba's compiled code is loaded on a small
 sphere before anything is timed.
 
-Peak memory is the child's peak resident set size: ``VmHWM`` read from ``/proc/self/status`` right
-after the bake is written (the bake's peak) and ``ru_maxrss`` of the finished child (everything,
-``exact`` included). The parent stops a child whose bake runs past ``--time-limit`` seconds or whose
-resident set grows past ``--memory-limit`` GB, and records why.
+Peak memory, three ways: the resident sets of the bake's process and its children (the decimation's
+parts) summed, sampled every 0.2 s during the bake: what the machine must hold, and what the goal is
+about; ``VmHWM`` of the bake's own process, read from ``/proc/self/status`` right after the bake is
+written; and ``ru_maxrss`` of the finished child (its largest process, ``exact`` included unless it runs
+apart). The parent stops a child whose bake runs past ``--time-limit`` seconds or whose processes' resident
+sets grow past ``--memory-limit`` GB together, and records why.
 
 Writes ``scaling.json``, ``scaling.md``, ``bake.md`` and ``scaling.png`` into ``bench/results``
 (``bench/results/tmp`` with ``--quick``: 10k and 30k only).
@@ -63,6 +65,7 @@ from solver import MESHES, SCANS, TOL_FLOOR, errors, prepare  # noqa: E402
 
 from translucency import __version__  # noqa: E402,F401  (first: it selects numba's threading layer)
 from translucency.errors import BudgetError  # noqa: E402
+from translucency.processes import descendants  # noqa: E402
 
 SIZES = ("10k", "30k", "134k", "537k", "1M", "2.1M", "10M")
 #: Standard deviation of the scan-like noise of the 2.1M and 10M meshes, in mean edges (along the normals).
@@ -171,6 +174,33 @@ def peak_rss_mb() -> float:
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
 
 
+class TreePeak:
+    """The largest summed resident set of this process and its descendants (the decimation's children), MB,
+    sampled every ``interval_s`` seconds on a thread while the ``with`` block runs."""
+
+    def __init__(self, interval_s=0.2):
+        import threading
+
+        self.interval_s, self.peak_mb = interval_s, 0.0
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._sample, daemon=True)
+
+    def _sample(self):
+        while True:
+            me = os.getpid()
+            self.peak_mb = max(self.peak_mb, sum(current_rss_mb(pid) for pid in [me] + descendants(me)))
+            if self._stop.wait(self.interval_s):
+                return
+
+    def __enter__(self):
+        self._thread.start()
+        return self
+
+    def __exit__(self, *exc):
+        self._stop.set()
+        self._thread.join()
+
+
 def current_rss_mb(pid) -> float:
     """Resident set size (``VmRSS``) of process ``pid`` now, MB (0 when it is gone)."""
     try:
@@ -262,9 +292,10 @@ def child(path, out_json, repeats):
     save()
     warm_up(folder)
     save(phase="bake", load_average_start=load_average())
-    scene, result, mesh, stages = bake(
-        path, folder / (Path(path).stem + "_baked.ply"), stage=lambda name: save(phase=f"bake: {name}")
-    )
+    with TreePeak() as tree:
+        scene, result, mesh, stages = bake(
+            path, folder / (Path(path).stem + "_baked.ply"), stage=lambda name: save(phase=f"bake: {name}")
+        )
     stages.update({SOLVER_STAGES[k]: result.timings.get(k, 0.0) for k in SOLVER_STAGES})
     save(
         phase="warm shades",
@@ -273,6 +304,7 @@ def child(path, out_json, repeats):
         stages=stages,
         bake_seconds=stages["load"] + stages["clean"] + stages["shade"] + stages["write"],
         peak_rss_bake_mb=peak_rss_mb(),
+        peak_rss_tree_bake_mb=tree.peak_mb,
         load_average_bake=load_average(),
         solver_stats=result.stats["solver"],
         solver_vertices=result.stats["solver_vertices"],
@@ -412,7 +444,7 @@ def _watched(command, out_json, time_limit, memory_limit_gb):
                 else f"failed (exit {os.waitstatus_to_exitcode(code)})"
             )
             break
-        rss = current_rss_mb(process.pid)
+        rss = sum(current_rss_mb(pid) for pid in [process.pid] + descendants(process.pid))
         peak_seen = max(peak_seen, rss)
         record = json.loads(Path(out_json).read_text()) if Path(out_json).exists() else {}
         in_bake = record.get("phase") in (None, "warm-up") or str(record.get("phase")).startswith("bake")
@@ -512,9 +544,15 @@ def plot(rows, exponents, path):
     )
     ax.plot(
         n,
+        [r.get("peak_rss_tree_bake_mb", np.nan) for r in done],
+        "C0--^",
+        label="peak RSS of the bake's processes, summed",
+    )
+    ax.plot(
+        n,
         [r.get("ru_maxrss_mb", np.nan) for r in done],
         "C3:s",
-        label="peak RSS of the child (exact included, unless run apart)",
+        label="peak RSS of the child's largest process (exact included, unless run apart)",
     )
     ax.set(xscale="log", yscale="log", xlabel="vertices", ylabel="MB", title="memory against vertex count")
     ax.grid(True, which="both", alpha=0.3)
@@ -542,7 +580,8 @@ def markdown(rows, exponents):
         "| mesh | vertices | how | bake (s) | first shade (s) | incident light (s) | far field (s) | near lists (s) "
         "| near field (s) | warm shade (s) | exact at 2000 (s) | rel. RMS error | worst lit-vertex error | "
         "p99 per-vertex error | solved on (vertices) | "
-        "peak RSS of the bake / of its process, exact included unless apart (MB) | load | status |",
+        "peak RSS of the bake's processes, summed / of its own process / of the child's largest process, exact "
+        "included unless apart (MB) | load | status |",
         "|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|",
     ]
     fmt = lambda value, spec: "" if value is None or value != value else format(value, spec)  # noqa: E731
@@ -555,7 +594,8 @@ def markdown(rows, exponents):
             + f" | {fmt(r.get('warm_seconds'), '.1f')} | {fmt(r.get('exact_seconds'), '.1f')} | "
             f"{fmt(r.get('error_rms'), '.1e')} | {fmt(r.get('error_worst'), '.1e')} | "
             f"{fmt(r.get('error_p99'), '.1e')} | {r.get('solver_vertices', '')} | "
-            f"{fmt(r.get('peak_rss_bake_mb'), '.0f')} / {fmt(r.get('ru_maxrss_mb'), '.0f')} | "
+            f"{fmt(r.get('peak_rss_tree_bake_mb'), '.0f')} / {fmt(r.get('peak_rss_bake_mb'), '.0f')} / "
+            f"{fmt(r.get('ru_maxrss_mb'), '.0f')} | "
             f"{fmt((r.get('load_average_bake') or [None])[0], '.1f')} | {r['status']} |"
         )
     lines.append("")
@@ -619,12 +659,23 @@ def bake_markdown(row):
                 f"| per-vertex error of the vertices {name}: median / 99th percentile ({band['receivers']} "
                 f"receivers) | {100 * band['median']:.1f} % / {100 * band['p99']:.1f} % | |"
             )
+    memory_goal = lambda mb: (  # noqa: E731
+        f"≤ {GOALS['memory_10M_gb']:g} GB: {met(mb <= GOALS['memory_10M_gb'] * 1024)}" if row["label"] == "10M" else ""
+    )
+    if "peak_rss_tree_bake_mb" in row:  # the goal is the machine's: every process of the bake
+        lines.append(
+            "| peak RSS of the bake's processes (the bake and the decimation's children, summed, sampled every "
+            f"0.2 s) | {row['peak_rss_tree_bake_mb'] / 1024:.2f} GB | {memory_goal(row['peak_rss_tree_bake_mb'])} |"
+        )
     lines.append(
-        f"| peak RSS of the bake (VmHWM after writing) | {row['peak_rss_bake_mb'] / 1024:.2f} GB | "
-        + (f"≤ {GOALS['memory_10M_gb']:g} GB |" if row["label"] == "10M" else "|")
+        f"| peak RSS of the bake's own process (VmHWM after writing) | {row['peak_rss_bake_mb'] / 1024:.2f} GB | "
+        + ("|" if "peak_rss_tree_bake_mb" in row else f"{memory_goal(row['peak_rss_bake_mb'])} |")
     )
     if "exact_apart_ru_maxrss_mb" in row:
-        lines.append(f"| peak RSS of the child (the bake, ru_maxrss) | {row['ru_maxrss_mb'] / 1024:.2f} GB | |")
+        lines.append(
+            f"| peak RSS of the child's largest process (the bake or a decimation child, ru_maxrss) | "
+            f"{row['ru_maxrss_mb'] / 1024:.2f} GB | |"
+        )
         lines.append(
             f"| peak RSS of `exact` at the receivers, in a process of its own | "
             f"{row['exact_apart_ru_maxrss_mb'] / 1024:.2f} GB | |"
