@@ -109,3 +109,37 @@ def test_far_over_its_time_budget_a_scan_is_refused_before_its_shadows_are_trace
     traced.clear()
     Scene(mesh).shade("marble", time_limit=0.7 * estimate, warn=lambda line: None)  # over, but not twice
     assert traced[0] == mesh.n_points
+
+
+def test_the_same_solve_asked_again_goes_straight_to_the_proxy(monkeypatch):
+    """A Scene remembers that the resolution asked for did not fit these settings and lights: asked again, it
+    solves the proxy at once (the same answer and the same line), and says it reused the refusal; another light
+    or another limit is planned again at the resolution asked for."""
+    from translucency.app import pipeline
+    from translucency.scatter.lights import DirectionalLight
+
+    points, triangles = icosphere(5, 20.0)
+    mesh = TriangleMesh(points, triangles)
+    scene = Scene(mesh, shadows=False)
+    limit = 0.3 * scene.shade("marble", time_limit=None).stats["solver"]["budget"]["seconds"]
+    tried = []
+    solve = pipeline._solve
+    monkeypatch.setattr(
+        pipeline, "_solve", lambda geometry, *a: tried.append(geometry.n_vertices) or solve(geometry, *a)
+    )
+    lines = []
+    first = scene.shade("marble", time_limit=limit, warn=lines.append)
+    assert tried[0] == mesh.n_points and first.stats["solver_vertices"] < mesh.n_points
+    tried.clear()
+    again = scene.shade("marble", time_limit=limit, warn=lines.append)
+    assert mesh.n_points not in tried and tried  # the proxy only
+    np.testing.assert_array_equal(again.B, first.B)
+    assert len(lines) == 2 and lines[1] == lines[0]
+    assert "the refusal of the resolution asked for" in again.stats["reused"]
+    assert "the refusal of the resolution asked for" not in first.stats["reused"]
+    tried.clear()
+    scene.shade("marble", DirectionalLight([0.0, 1.0, 0.0]), time_limit=limit, warn=lines.append)
+    assert tried[0] == mesh.n_points
+    tried.clear()
+    scene.shade("marble", time_limit=0.9 * limit, warn=lines.append)
+    assert tried[0] == mesh.n_points

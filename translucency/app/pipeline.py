@@ -255,6 +255,7 @@ class Scene:
         self._incident: dict = {}
         self._normals = None
         self._mean_edge = None
+        self._refused: dict = {}
 
     @property
     def up(self) -> str:
@@ -366,7 +367,14 @@ class Scene:
         )
         limits = {"memory_limit": memory_limit, "time_limit": time_limit}
         coarsened = reason = None
-        for attempt in range(COARSER_ATTEMPTS + 1):
+        # the same solve asked again (a later shade of a script or a viewer) is not planned and refused again at
+        # the resolution asked for: at 10M vertices that plan takes half a minute and 4 GB beside the last result
+        refusal_key = None if solver is not None else _refusal_key(settings, lights)
+        first_attempt = 0
+        if refusal_key in self._refused:
+            reason, resolution = self._refused[refusal_key]
+            first_attempt = 1
+        for attempt in range(first_attempt, COARSER_ATTEMPTS + 1):
             start = time.perf_counter()
             solver_mesh, decimation, edge, geometry, geometry_reused = self.solver_mesh(medium, resolution)
             timings["geometry"] = timings.get("geometry", 0.0) + time.perf_counter() - start
@@ -393,6 +401,8 @@ class Scene:
             except BudgetError as exc:
                 reason = reason or budget_phrase(exc.estimate)  # of the resolution asked for
                 resolution = self._coarser(solver_mesh, exc, attempt, method)
+                if attempt == 0 and refusal_key is not None:
+                    self._refused[refusal_key] = (reason, resolution)
                 # what the resolution that did not fit built (geometry caches, Embree, incident light) is freed
                 # before the proxy is made: at scan size it is most of the memory held
                 self._forget(geometry)
@@ -446,6 +456,7 @@ class Scene:
                 ("incident light", incident_reused),
                 ("Embree scene", incident.stats.scene == "reused"),
                 ("relight operators", any(s.stats.get("operators_reused") for s in solutions)),
+                ("the refusal of the resolution asked for", first_attempt > 0),
             )
             if flag
         ]
@@ -524,6 +535,16 @@ class Scene:
         if self._mean_edge is None:
             self._mean_edge = mean_edge_length(self.mesh.points, self.mesh.triangles)
         return self._mean_edge * (self.mesh.n_points / target) ** 0.5
+
+
+def _refusal_key(settings: ShadeSettings, lights) -> str:
+    """What decides whether a solve fits its budget: every setting but the exposure (the material's coefficients,
+    model, method, tolerance, resolution, bounces, the limits ...) and the lights, as one string."""
+    import json
+
+    described = settings.metadata(lights, str(settings.resolution))
+    described["limits"] = [settings.memory_limit, settings.time_limit]
+    return json.dumps(described, sort_keys=True, default=str)
 
 
 def _bounce_stats(bounced, B) -> dict:
