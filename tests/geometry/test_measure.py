@@ -187,3 +187,22 @@ def test_mean_edge_length_counts_each_shared_edge_once_whatever_the_chunks(monke
     triangles = np.array([[0, 1, 2], [0, 2, 3]])
     assert mean_edge_length(points, triangles) == pytest.approx((10 + np.sqrt(13)) / 5, rel=1e-14)
     assert np.isnan(mean_edge_length(points, np.zeros((0, 3), dtype=np.int64)))
+
+
+def test_row_lengths_are_numpys_norm_bit_for_bit():
+    """The compiled row lengths are np.linalg.norm(axis=1) to the last bit, from 1e-150 to 1e150 mm."""
+    from translucency.geometry.measure import row_lengths
+
+    rng = np.random.default_rng(7)
+    vectors = rng.normal(size=(10_000, 3)) * 10.0 ** rng.uniform(-150, 150, size=(10_000, 1))
+    vectors[:3] = 0.0
+    assert np.array_equal(row_lengths(vectors), np.linalg.norm(vectors, axis=1))
+
+
+def test_unit_rows_of_zero_and_nan_rows_are_zero():
+    from translucency.geometry.measure import _normalise_rows
+
+    vectors = np.array([[0.0, 0.0, 0.0], [np.nan, 1.0, 0.0], [1.0, np.nan, 0.0], [3.0, 0.0, 4.0], [-1e-300, 0, 0]])
+    unit = _normalise_rows(vectors)
+    assert np.array_equal(unit[:3], np.zeros((3, 3)))
+    assert np.array_equal(unit[3:], [[0.6, 0.0, 0.8], [-1.0, 0.0, 0.0]])

@@ -43,6 +43,7 @@ __all__ = [
     "triangle_cross_products",
     "triangle_areas",
     "triangle_normals",
+    "row_lengths",
     "vertex_normals",
     "vertex_areas",
     "barycentric_vertex_areas",
@@ -217,7 +218,7 @@ def triangle_areas(points, triangles) -> np.ndarray:
     ndarray, shape (m,), float64
         Areas in mm².
     """
-    return 0.5 * np.linalg.norm(triangle_cross_products(points, triangles), axis=1)
+    return 0.5 * row_lengths(triangle_cross_products(points, triangles))
 
 
 def triangle_normals(points, triangles) -> np.ndarray:
@@ -239,15 +240,42 @@ def triangle_normals(points, triangles) -> np.ndarray:
     return _normalise_rows(cross)
 
 
+def row_lengths(vectors) -> np.ndarray:
+    """Euclidean length of each row of an ``(n, 3)`` array, in its unit (``np.linalg.norm(vectors, axis=1)`` in
+    one compiled pass, without its temporaries)."""
+    return _row_lengths(kernel_array(np.asarray(vectors).reshape(-1, 3), np.float64))
+
+
+@numba.njit(cache=True, nogil=True)
+def _row_lengths(vectors):
+    lengths = np.empty(vectors.shape[0])
+    for i in range(vectors.shape[0]):
+        x, y, z = vectors[i, 0], vectors[i, 1], vectors[i, 2]
+        lengths[i] = math.sqrt(x * x + y * y + z * z)
+    return lengths
+
+
 def _normalise_rows(vectors: np.ndarray) -> np.ndarray:
+    """Each row of ``vectors`` (n, 3) divided by its length; zero rows, and rows with a NaN, give zero."""
+    return _unit_rows(kernel_array(vectors, np.float64))
+
+
+@numba.njit(cache=True, nogil=True)
+def _unit_rows(vectors):
     # each row is first divided by its largest component, so that rows of subnormal numbers (a scan of
     # 1e-160 mm) do not lose their length to underflow in the squares
-    scale = np.max(np.abs(vectors), axis=1, keepdims=True)
-    scaled = np.zeros_like(vectors)
-    np.divide(vectors, scale, out=scaled, where=scale > 0)
-    length = np.linalg.norm(scaled, axis=1, keepdims=True)
     out = np.zeros_like(vectors)
-    np.divide(scaled, length, out=out, where=length > 0)
+    for i in range(vectors.shape[0]):
+        scale = abs(vectors[i, 0])
+        for k in range(1, 3):
+            if abs(vectors[i, k]) > scale:
+                scale = abs(vectors[i, k])
+        if not scale > 0.0:  # zero, or NaN
+            continue
+        x, y, z = vectors[i, 0] / scale, vectors[i, 1] / scale, vectors[i, 2] / scale
+        length = math.sqrt(x * x + y * y + z * z)
+        if length > 0.0:  # not NaN
+            out[i, 0], out[i, 1], out[i, 2] = x / length, y / length, z / length
     return out
 
 

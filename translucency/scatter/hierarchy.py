@@ -184,19 +184,29 @@ def _leaves_then_levels(start, left, right):
 
 def _bounds(points, order, start, end, left, right):
     """Bounding-box centre (mm) and bounding-sphere radius about it of every node."""
+    lo, hi = _boxes(points, order, start, end, left, right)
+    return 0.5 * (lo + hi), np.sqrt(np.sum((0.5 * (hi - lo)) ** 2, axis=1))
+
+
+@numba.njit(cache=True, nogil=True)
+def _boxes(points, order, start, end, left, right):
+    """Each node's box ``(lo, hi)`` (mm): a leaf's from its points, an inner node's from its two children's
+    (nodes are numbered parent first, so in reverse every node's children come before it)."""
     n_nodes = start.shape[0]
     lo = np.full((n_nodes, 3), np.inf)
     hi = np.full((n_nodes, 3), -np.inf)
-    leaves, levels = _leaves_then_levels(start, left, right)
-    filled = leaves[end[leaves] > start[leaves]]
-    if filled.size:
-        ordered = points[order]
-        lo[filled] = np.minimum.reduceat(ordered, start[filled], axis=0)
-        hi[filled] = np.maximum.reduceat(ordered, start[filled], axis=0)
-    for nodes in levels:
-        lo[nodes] = np.minimum(lo[left[nodes]], lo[right[nodes]])
-        hi[nodes] = np.maximum(hi[left[nodes]], hi[right[nodes]])
-    return 0.5 * (lo + hi), np.sqrt(np.sum((0.5 * (hi - lo)) ** 2, axis=1))
+    for node in range(n_nodes - 1, -1, -1):
+        if left[node] < 0:
+            for j in range(start[node], end[node]):
+                point = order[j]
+                for k in range(3):
+                    lo[node, k] = min(lo[node, k], points[point, k])
+                    hi[node, k] = max(hi[node, k], points[point, k])
+        else:
+            for k in range(3):
+                lo[node, k] = min(lo[left[node], k], lo[right[node], k])
+                hi[node, k] = max(hi[left[node], k], hi[right[node], k])
+    return lo, hi
 
 
 def aggregate(order, start, end, left, right, points, normals, w12, flux):

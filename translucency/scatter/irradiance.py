@@ -53,6 +53,7 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from ..errors import InvalidParameterError
+from ..geometry.measure import row_lengths
 from .fresnel import fresnel_transmittance, refract
 from .lights import POINT_LIGHT_MIN_DISTANCE_MM, PointLight, as_light_list, point_light_irradiance
 from .visibility import Occluder, VisibilityCache, array_digest
@@ -188,7 +189,7 @@ def _validated_arrays(points, normals, areas):
         raise InvalidParameterError(
             f"incident_flux: vertex areas must be >= 0 (mm²), got a minimum of {areas.min():g}."
         )
-    length = np.linalg.norm(normals, axis=1)
+    length = row_lengths(normals)
     degenerate = ~(length > 1e-12)
     normals = normals / np.where(degenerate, 1.0, length)[:, None]
     normals[degenerate] = 0.0
@@ -404,7 +405,7 @@ def incident_flux(
     w12_mean[~lit] = -normals[~lit]  # any inward unit vector will do where no flux enters
     w12_mean[~lit & degenerate] = (0.0, 0.0, -1.0)
     # Every w12_ik points into the medium (w12 . n < 0), so their flux-weighted mean never vanishes.
-    w12 = w12_mean / np.linalg.norm(w12_mean, axis=1, keepdims=True)
+    w12 = w12_mean / row_lengths(w12_mean)[:, None]
     flux = areas[:, None] * phi
 
     stats.n_lit = int(np.count_nonzero(lit))
