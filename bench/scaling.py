@@ -673,7 +673,8 @@ def bake_markdown(row):
     )
     if "exact_apart_ru_maxrss_mb" in row:
         lines.append(
-            f"| peak RSS of the child's largest process (the bake or a decimation child, ru_maxrss) | "
+            f"| peak RSS of the child's largest process over its run (the bake, a decimation child or the later "
+            "shade; ru_maxrss) | "
             f"{row['ru_maxrss_mb'] / 1024:.2f} GB | |"
         )
         lines.append(
