@@ -211,7 +211,8 @@ PART_SURPLUS = 1.1
 def decimation_parts(n_triangles: int) -> int:
     """Parts a mesh of ``n_triangles`` is decimated in: one per core this process may use, each of at least
     :data:`PART_TRIANGLES` triangles, and more where a part would be over :data:`PART_MAX_TRIANGLES` (1: the
-    whole mesh in one pass)."""
+    whole mesh in one pass). The proxy of a mesh decimated in parts depends on their number, so it can differ a
+    little between machines with different numbers of cores (the same shape, to the decimation's accuracy)."""
     from ..processes import available_cores
 
     n_triangles = int(n_triangles)
