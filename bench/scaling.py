@@ -322,6 +322,7 @@ def child(path, out_json, repeats):
         warm_seconds=seconds,
         warm_runs=runs,
         warm_stages={SOLVER_STAGES[k]: timings.get(k, 0.0) for k in SOLVER_STAGES},
+        peak_rss_warm_mb=peak_rss_mb(),
     )
     receivers = np.sort(np.random.default_rng(0).choice(mesh.n_points, min(RECEIVERS, mesh.n_points), replace=False))
     # exact solves the light that enters from the lights; the bake's bounce (light that re-enters) comes off
@@ -673,8 +674,8 @@ def bake_markdown(row):
     )
     if "exact_apart_ru_maxrss_mb" in row:
         lines.append(
-            f"| peak RSS of the child's largest process over its run (the bake, a decimation child or the later "
-            "shade; ru_maxrss) | "
+            "| peak RSS of the child's largest process over its run (the bake, a decimation child, the later shade, "
+            "or `exact` planned beside them before it ran apart; ru_maxrss) | "
             f"{row['ru_maxrss_mb'] / 1024:.2f} GB | |"
         )
         lines.append(
@@ -685,6 +686,11 @@ def bake_markdown(row):
         lines.append(f"| peak RSS of the child (exact included, ru_maxrss) | {row['ru_maxrss_mb'] / 1024:.2f} GB | |")
     if "warm_seconds" in row:
         lines.append(f"| a later shade of the same scene (caches warm) | {row['warm_seconds']:.0f} s | |")
+    if "peak_rss_warm_mb" in row:
+        lines.append(
+            "| peak RSS of the bake's own process after that shade (VmHWM) | "
+            f"{row['peak_rss_warm_mb'] / 1024:.2f} GB | |"
+        )
     lines.append(
         f"| load average (1 min) at the start / end of the bake | {row['load_average_start'][0]:.1f} / "
         f"{row['load_average_bake'][0]:.1f} | |"
