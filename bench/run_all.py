@@ -8,6 +8,7 @@ script              what it measures                                          wh
 solver.py           time against error per scan, material, method, tolerance  always
                     and proxy resolution; the ``exact`` kernel's throughput
 scaling.py          time and memory from 10k to 1M vertices; the 1M bake      always
+decimation.py       the 10M proxy's decimation, whole and in parts            always
 stability.py        the solver's stability at extreme inputs                  when the file exists
 first_run.py        cold (empty numba cache) and warm times of the commands   always (last)
 validate_models.py  the diffusion models against Monte Carlo (slow)           with ``--validate``
@@ -43,6 +44,7 @@ BENCH = ROOT / "bench"
 SUITE = [
     ("solver", "solver.py", ["--quick"], True, False),
     ("scaling", "scaling.py", ["--quick"], True, False),
+    ("decimation", "decimation.py", ["--quick"], False, False),
     ("stability", "stability.py", ["--blocks", "256", "--out", "bench/results/tmp"], False, False),
     ("validate_models", "validate_models.py", ["--quick"], False, True),
     ("first_run", "first_run.py", ["--quick"], True, False),

@@ -221,7 +221,9 @@ class Scene:
       material;
     * the Embree scene and the visibility of every light sample (:class:`VisibilityCache`), reused
       when only the material changes (or when a light comes back);
-    * the incident light per (lights, eta, shadows), reused when only the coefficients change.
+    * the incident light per (lights, eta, shadows), reused when only the coefficients change;
+    * that the resolution asked for did not fit the budget, per settings and lights: the same shade asked
+      again goes straight to the proxy (its line said again).
 
     A viewer keeps one ``Scene`` and calls :meth:`shade` on every change; :func:`shade` is the
     one-call form.
