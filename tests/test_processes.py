@@ -35,3 +35,17 @@ def test_the_child_ends_with_its_parent():
         timeout=60,
     )
     assert child.returncode == 1
+
+
+def test_when_one_of_several_children_fails_the_others_are_killed_at_once():
+    """run_in_children: the failure is raised, and the child still running (a 30 s sleep) is killed, not
+    waited for."""
+    import time
+
+    from translucency.processes import run_in_children
+
+    assert run_in_children(divmod, [(17, 5), (9, 4)], at_once=2) == [(3, 2), (2, 1)]
+    start = time.perf_counter()
+    with pytest.raises(TypeError):
+        run_in_children(time.sleep, [(30.0,), ("not a number",)], at_once=2)
+    assert time.perf_counter() - start < 15

@@ -15,7 +15,14 @@ import sys
 import time
 from pathlib import Path
 
-__all__ = ["available_cores", "descendants", "end_with_parent", "run_in_child", "WATCHDOG_INTERVAL_S"]
+__all__ = [
+    "available_cores",
+    "descendants",
+    "end_with_parent",
+    "run_in_child",
+    "run_in_children",
+    "WATCHDOG_INTERVAL_S",
+]
 
 
 def available_cores() -> int:
@@ -26,7 +33,35 @@ def available_cores() -> int:
         return max(1, os.cpu_count() or 1)
 
 
-def run_in_child(function, *args):
+def run_in_children(function, argument_lists, at_once: int) -> list:
+    """``function(*args)`` for every ``args`` of ``argument_lists``, each in a child process of its own
+    (:func:`run_in_child`), at most ``at_once`` at a time: their results in order.
+
+    When one of them fails, or this process is interrupted (Ctrl-C), the children still running are killed and
+    those not started yet are not started; the first failure (or the interrupt) is raised.
+    """
+    from concurrent.futures import FIRST_EXCEPTION, ThreadPoolExecutor, wait
+
+    started: list = []  # every child's Popen, killed together when one call fails
+    pool = ThreadPoolExecutor(max_workers=max(1, int(at_once)))  # each thread waits for its child
+    try:
+        futures = [pool.submit(run_in_child, function, *args, started=started) for args in argument_lists]
+        wait(futures, return_when=FIRST_EXCEPTION)  # the first failure, not the first call's end, is raised
+        for future in futures:
+            if future.done() and future.exception() is not None:
+                raise future.exception()
+        return [future.result() for future in futures]
+    except BaseException:
+        pool.shutdown(wait=False, cancel_futures=True)
+        for child in list(started):
+            with contextlib.suppress(OSError):
+                child.kill()
+        raise
+    finally:
+        pool.shutdown(wait=True)
+
+
+def run_in_child(function, *args, started: list | None = None):
     """``function(*args)`` in a new Python process that ends with this one (:func:`end_with_parent`): its
     result, or the exception it raised, raised here.
 
@@ -35,6 +70,9 @@ def run_in_child(function, *args):
     output, not :mod:`multiprocessing`: a spawned process imports the caller's main script again, which a
     script without an ``if __name__ == "__main__"`` guard does not survive. What the call prints goes to
     standard error.
+
+    ``started``: a list the child's :class:`subprocess.Popen` is appended to as it starts (for
+    :func:`run_in_children`, which kills them together).
 
     Raises
     ------
@@ -49,6 +87,8 @@ def run_in_child(function, *args):
         stdin=subprocess.PIPE,
         stdout=subprocess.PIPE,
     )
+    if started is not None:
+        started.append(child)
     try:
         with contextlib.suppress(BrokenPipeError):  # a child that died at once: said below
             pickle.dump((function.__module__, function.__qualname__, args), child.stdin, protocol=5)

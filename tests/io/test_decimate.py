@@ -161,7 +161,9 @@ def test_a_mesh_decimated_in_parts_is_one_closed_surface_as_close_as_the_whole(m
     calls = []
     run = processes.run_in_child
     monkeypatch.setattr(
-        processes, "run_in_child", lambda function, *args: calls.append(args[4:]) or run(function, *args)
+        processes,
+        "run_in_child",
+        lambda function, *args, **kwargs: calls.append(args[4:]) or run(function, *args, **kwargs),
     )
     new_points, new_triangles = simplify_arrays(points, triangles, 1000)
     assert calls == [(True,)] * parts  # each part kept its cut; the last pass (small: here) did not
@@ -188,7 +190,7 @@ def test_welding_joins_the_cut_vertices_only():
         np.array([[0.0, -1.0, 0.0], [0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [5.0, 5.0, 5.0]]),
         np.array([[1, 0, 2], [0, 1, 3]]),
     )
-    points, triangles = _weld(cut, [part_a, part_b])
+    points, triangles = _weld(cut, np.array([2, 2]), [part_a, part_b])
     assert len(points) == 6  # 2 on the cut, (0,1,0), (0,-1,0) and (5,5,5) twice
     assert np.array_equal(points[triangles[0]], part_a[0][part_a[1][0]])
     assert np.array_equal(points[triangles[2]], part_b[0][part_b[1][0]])
@@ -208,10 +210,34 @@ def test_welding_joins_the_cut_vertices_only():
         (8, 20_000_000, 8),
     ],
 )
-def test_decimation_parts_one_per_core_and_none_too_large(monkeypatch, cores, n_triangles, parts):
-    from translucency import processes
+def test_decimation_parts_one_per_thread_and_none_too_large(monkeypatch, cores, n_triangles, parts):
+    from translucency import threads
     from translucency.io import decimate
 
-    monkeypatch.setattr(processes, "available_cores", lambda: cores)
+    monkeypatch.setattr(threads, "thread_count", lambda: cores)
     assert decimate.PART_TRIANGLES == 2_000_000 and decimate.PART_MAX_TRIANGLES == 5_000_000
     assert decimate.decimation_parts(n_triangles) == parts
+
+
+def test_a_cut_position_with_more_vertices_than_parts_is_not_welded():
+    """Two vertices of one part at a position of the cut (a mesh with duplicate vertices there): which one
+    belongs to the other part's is not known, so the weld gives up (None) and the caller decimates whole."""
+    from translucency.io.decimate import _weld
+
+    cut = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]])
+    part_a = (np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 1.0, 0.0]]), np.array([[1, 0, 2]]))
+    doubled = (
+        np.array([[0.0, -1.0, 0.0], [0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 0.0]]),
+        np.array([[1, 0, 2], [3, 0, 2]]),
+    )
+    assert _weld(cut, np.array([2, 2]), [part_a, doubled]) is None
+
+
+def test_parts_that_cannot_be_welded_leave_the_mesh_to_one_pass(monkeypatch):
+    from translucency.io import decimate
+
+    points, triangles = icosphere(4, radius=25.0)
+    whole = simplify_arrays(points, triangles, 500)
+    monkeypatch.setattr(decimate, "decimation_parts", lambda n_triangles: 2)
+    monkeypatch.setattr(decimate, "_weld", lambda *args: None)
+    assert all(np.array_equal(a, b) for a, b in zip(whole, simplify_arrays(points, triangles, 500)))

@@ -222,8 +222,8 @@ class Scene:
     * the Embree scene and the visibility of every light sample (:class:`VisibilityCache`), reused
       when only the material changes (or when a light comes back);
     * the incident light per (lights, eta, shadows), reused when only the coefficients change;
-    * that the resolution asked for did not fit the budget, per settings and lights: the same shade asked
-      again goes straight to the proxy (its line said again).
+    * that the resolution asked for would take longer than the time limit, per settings and lights: the same
+      shade asked again goes straight to the proxy (its line said again).
 
     A viewer keeps one ``Scene`` and calls :meth:`shade` on every change; :func:`shade` is the
     one-call form.
@@ -370,7 +370,8 @@ class Scene:
         limits = {"memory_limit": memory_limit, "time_limit": time_limit}
         coarsened = reason = None
         # the same solve asked again (a later shade of a script or a viewer) is not planned and refused again at
-        # the resolution asked for: at 10M vertices that plan takes half a minute and 4 GB beside the last result
+        # the resolution asked for when its time was over the limit: at 10M vertices that plan takes half a
+        # minute and 4 GB beside the last result
         refusal_key = None if solver is not None else _refusal_key(settings, lights)
         first_attempt = 0
         if refusal_key in self._refused:
@@ -403,7 +404,9 @@ class Scene:
             except BudgetError as exc:
                 reason = reason or budget_phrase(exc.estimate)  # of the resolution asked for
                 resolution = self._coarser(solver_mesh, exc, attempt, method)
-                if attempt == 0 and refusal_key is not None:
+                if attempt == 0 and refusal_key is not None and not exc.estimate.over_memory:
+                    # over time only: that estimate depends on the settings and lights alone (the memory
+                    # budget depends on what the machine holds at the time, and is planned again)
                     self._refused[refusal_key] = (reason, resolution)
                 # what the resolution that did not fit built (geometry caches, Embree, incident light) is freed
                 # before the proxy is made: at scan size it is most of the memory held
@@ -540,8 +543,9 @@ class Scene:
 
 
 def _refusal_key(settings: ShadeSettings, lights) -> str:
-    """What decides whether a solve fits its budget: every setting but the exposure (the material's coefficients,
-    model, method, tolerance, resolution, bounces, the limits ...) and the lights, as one string."""
+    """What decides whether a solve fits its time limit: every setting but the exposure (the material's
+    coefficients, model, method, tolerance, resolution, bounces, the limits ...) and the lights, as one string.
+    (Whether it fits the memory budget also depends on what the machine holds at the time.)"""
     import json
 
     described = settings.metadata(lights, str(settings.resolution))

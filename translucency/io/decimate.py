@@ -128,20 +128,24 @@ def simplify_arrays(
 
         try:
             parts = decimation_parts(len(triangles))
+            welded = None
             if parts > 1:
-                points, triangles = _simplify_parts(points, triangles, target_faces, float(aggressiveness), parts)
-            arguments = (
-                np.array(points, dtype=np.float64, order="C"),  # writable copies: the binding needs them
-                np.array(triangles, dtype=np.int32, order="C"),
-                target_faces,
-                float(aggressiveness),
-            )
-            if target_faces >= len(triangles):  # the parts left no more than asked
+                welded = _simplify_parts(points, triangles, target_faces, float(aggressiveness), parts)
+                if welded is not None:
+                    points, triangles = welded
+            if welded is not None and target_faces >= len(triangles):  # the parts left no more than asked
                 new_points, new_triangles = points, triangles
-            elif len(triangles) >= ISOLATED_TRIANGLES:  # its memory goes back when the child ends
-                new_points, new_triangles = run_in_child(fast_simplify, *arguments)
             else:
-                new_points, new_triangles = fast_simplify(*arguments)
+                arguments = (
+                    np.array(points, dtype=np.float64, order="C"),  # writable copies: the binding needs them
+                    np.array(triangles, dtype=np.int32, order="C"),
+                    target_faces,
+                    float(aggressiveness),
+                )
+                if len(triangles) >= ISOLATED_TRIANGLES:  # its memory goes back when the child ends
+                    new_points, new_triangles = run_in_child(fast_simplify, *arguments)
+                else:
+                    new_points, new_triangles = fast_simplify(*arguments)
         except (ValueError, RuntimeError) as exc:
             raise MeshError(f"fast-simplification failed on the mesh ({exc}); try method='pymeshlab'.") from exc
         except ChildProcessError as exc:
@@ -209,14 +213,15 @@ PART_SURPLUS = 1.1
 
 
 def decimation_parts(n_triangles: int) -> int:
-    """Parts a mesh of ``n_triangles`` is decimated in: one per core this process may use, each of at least
+    """Parts a mesh of ``n_triangles`` is decimated in: one per thread this process may use (numba's setting:
+    a batch bake's worker has its share of the cores), each of at least
     :data:`PART_TRIANGLES` triangles, and more where a part would be over :data:`PART_MAX_TRIANGLES` (1: the
     whole mesh in one pass). The proxy of a mesh decimated in parts depends on their number, so it can differ a
     little between machines with different numbers of cores (the same shape, to the decimation's accuracy)."""
-    from ..processes import available_cores
+    from ..threads import thread_count
 
     n_triangles = int(n_triangles)
-    side_by_side = min(available_cores(), n_triangles // PART_TRIANGLES)
+    side_by_side = min(thread_count(), n_triangles // PART_TRIANGLES)
     return max(1, side_by_side, -(-n_triangles // PART_MAX_TRIANGLES))
 
 
@@ -236,17 +241,17 @@ def fast_simplify(points, triangles, target_faces: int, aggressiveness: float, k
 
 def _simplify_parts(points, triangles, target_faces: int, aggressiveness: float, parts: int):
     """The mesh cut into ``parts`` slabs of triangles along its longest side, each decimated in a child process
-    of its own with its cuts kept (:func:`fast_simplify` with ``keep_border``), as many at once as there are
-    cores, and welded again.
+    of its own with its cuts kept (:func:`fast_simplify` with ``keep_border``), as many at once as this process
+    has threads, and welded again.
 
     Each part is asked for its share of ``PART_SURPLUS * target_faces`` triangles and two per vertex on its cut
     (the triangles along a kept cut stay: a part asked for fewer would be decimated far past its shape).
     Returns the welded ``(points, triangles)``; along the cuts it keeps the full mesh's vertices, which the
-    caller's pass over the whole mesh decimates.
+    caller's pass over the whole mesh decimates. None when the parts cannot be welded (:func:`_weld`): the
+    caller decimates the whole mesh in one pass.
     """
-    from concurrent.futures import ThreadPoolExecutor
-
-    from ..processes import available_cores, run_in_child
+    from ..processes import run_in_children
+    from ..threads import thread_count
 
     points = np.asarray(points, dtype=np.float64)
     triangles = np.asarray(triangles)
@@ -263,7 +268,8 @@ def _simplify_parts(points, triangles, target_faces: int, aggressiveness: float,
     used = np.zeros((parts, len(points)), dtype=bool)
     for part in range(parts):
         used[part, chosen[part].ravel()] = True
-    on_cut = used.sum(axis=0) > 1
+    uses = used.sum(axis=0)
+    on_cut = uses > 1
     jobs = []
     for part in range(parts):
         new_index = np.cumsum(used[part], dtype=np.int64) - 1
@@ -279,20 +285,26 @@ def _simplify_parts(points, triangles, target_faces: int, aggressiveness: float,
             )
         )
     del chosen, used
-    with ThreadPoolExecutor(max_workers=min(parts, available_cores())) as pool:  # each thread waits for its child
-        results = list(pool.map(lambda job: run_in_child(fast_simplify, *job), jobs))
+    cut_points, cut_uses = points[on_cut], uses[on_cut]
+    results = run_in_children(fast_simplify, jobs, at_once=thread_count())
     del jobs
-    return _weld(points[on_cut], results)
+    return _weld(cut_points, cut_uses, results)
 
 
-def _weld(cut_points: np.ndarray, parts) -> tuple[np.ndarray, np.ndarray]:
+def _weld(cut_points: np.ndarray, cut_uses: np.ndarray, parts):
     """One mesh from decimated parts that share the vertices at ``cut_points`` (mm, kept bit for bit by each
-    part): a part's vertex at one of those positions becomes that one vertex; every other vertex stays its
-    part's own, even where two parts have one at the same position."""
+    of the ``cut_uses`` parts that hold one): a part's vertex at one of those positions becomes that one vertex,
+    every other vertex stays its part's own. None when some position holds more vertices of the parts than
+    parts shared it (the mesh had several vertices there, and which belong together is not known)."""
     n_cut = len(cut_points)
     stacked = np.concatenate([cut_points] + [np.asarray(part_points, dtype=np.float64) for part_points, _ in parts])
-    first = first_at_same_position(stacked)[n_cut:]
+    first = first_at_same_position(stacked)
+    if np.any(first[:n_cut] != np.arange(n_cut)):  # two cut vertices at one position
+        return None
+    first = first[n_cut:]
     own = first >= n_cut
+    if np.any(np.bincount(first[~own], minlength=n_cut) > cut_uses):
+        return None
     index = np.where(own, n_cut + np.cumsum(own) - 1, first)
     welded_points = np.concatenate([cut_points, stacked[n_cut:][own]])
     offsets = np.cumsum([0] + [len(part_points) for part_points, _ in parts])
