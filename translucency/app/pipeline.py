@@ -280,6 +280,8 @@ class Scene:
             return (*self._solver_meshes[key], True)
         mesh, decimation, edge = _solver_mesh(self.mesh, edge)
         normals = mesh.vertex_normals()
+        if mesh is self.mesh and self._normals is None:  # the result's normals, not computed a second time
+            self._normals = normals
         geometry = SurfaceGeometry(
             mesh.points, mesh.triangles, normals, self._mean_edge if decimation is None else None
         )

@@ -55,7 +55,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import BudgetError, InvalidParameterError, TranslucencyWarning, option
-from ..geometry.measure import barycentric_vertex_areas, edge_lengths, mean_edge_length, triangle_areas
+from ..geometry.measure import barycentric_vertex_areas, edge_lengths, mean_edge_length, row_lengths, triangle_areas
 from ..geometry.morton import by_lowest_vertex, morton_order
 from . import budget, cutoff, hierarchy, kernels, nearfield
 from .medium import CHANNELS, Medium
@@ -119,7 +119,7 @@ class SurfaceGeometry:
             raise InvalidParameterError(
                 f"triangles refer to vertices outside 0..{self.points.shape[0] - 1}; the mesh is corrupt."
             )
-        lengths = np.linalg.norm(self.normals, axis=1)
+        lengths = row_lengths(self.normals)
         if not np.all(np.isfinite(lengths)):
             raise InvalidParameterError("normals contain NaN or infinite values.")
         bad = np.abs(lengths - 1.0) > 1e-6
