@@ -187,8 +187,7 @@ class TreePeak:
 
     def _sample(self):
         while True:
-            me = os.getpid()
-            self.peak_mb = max(self.peak_mb, sum(current_rss_mb(pid) for pid in [me] + descendants(me)))
+            self.peak_mb = max(self.peak_mb, tree_rss_mb(os.getpid()))
             if self._stop.wait(self.interval_s):
                 return
 
@@ -199,6 +198,11 @@ class TreePeak:
     def __exit__(self, *exc):
         self._stop.set()
         self._thread.join()
+
+
+def tree_rss_mb(pid) -> float:
+    """Resident sets of process ``pid`` and of its descendants now, summed, MB."""
+    return sum(current_rss_mb(member) for member in [pid] + descendants(pid))
 
 
 def current_rss_mb(pid) -> float:
@@ -445,7 +449,7 @@ def _watched(command, out_json, time_limit, memory_limit_gb):
                 else f"failed (exit {os.waitstatus_to_exitcode(code)})"
             )
             break
-        rss = sum(current_rss_mb(pid) for pid in [process.pid] + descendants(process.pid))
+        rss = tree_rss_mb(process.pid)
         peak_seen = max(peak_seen, rss)
         record = json.loads(Path(out_json).read_text()) if Path(out_json).exists() else {}
         in_bake = record.get("phase") in (None, "warm-up") or str(record.get("phase")).startswith("bake")

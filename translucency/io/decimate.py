@@ -128,12 +128,12 @@ def simplify_arrays(
 
         try:
             parts = decimation_parts(len(triangles))
-            welded = None
-            if parts > 1:
-                welded = _simplify_parts(points, triangles, target_faces, float(aggressiveness), parts)
-                if welded is not None:
-                    points, triangles = welded
-            if welded is not None and target_faces >= len(triangles):  # the parts left no more than asked
+            welded = (
+                _simplify_parts(points, triangles, target_faces, float(aggressiveness), parts) if parts > 1 else None
+            )
+            if welded is not None:
+                points, triangles = welded
+            if target_faces >= len(triangles):  # the parts left no more than asked (the mesh had more: see above)
                 new_points, new_triangles = points, triangles
             else:
                 arguments = (
