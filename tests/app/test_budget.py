@@ -78,37 +78,43 @@ def test_proxy_error_reads_the_measured_table():
     assert proxy_error(0.5) == "2 %" and proxy_error(0.1) == "6 %" and proxy_error(0.001).startswith("more than")
 
 
-def test_far_over_its_time_budget_a_scan_is_refused_before_its_shadows_are_traced(monkeypatch):
-    """From EARLY_PLAN_VERTICES on, a solve planned with every facing vertex lit and over twice the time limit is
-    refused before any shadow ray: the proxy comes at once. On a convex mesh (no shadows cast) that plan is the
-    traced light's, so the answer is the one refused after tracing; a solve over by less is still traced first."""
+def test_a_refused_resolution_s_light_is_the_one_its_proxy_gets(monkeypatch):
+    """The light traced at every vertex for the resolution asked for is kept when that resolution is refused, and
+    carried onto the proxy: no second trace, and the proxy's flux is the full mesh's, in total."""
     from translucency.app import pipeline
+    from translucency.scatter import irradiance
 
+    monkeypatch.setattr(pipeline, "CARRIED_LIGHT_MAX_SIGMA_TR_EDGE", np.inf)  # whatever the proxy's edge
     points, triangles = icosphere(5, 20.0)
     mesh = TriangleMesh(points, triangles)
     estimate = Scene(mesh).shade("marble", time_limit=None).stats["solver"]["budget"]["seconds"]
     traced = []
-    incident = Scene.incident
+    incident_flux = irradiance.incident_flux
 
-    def counted(self, geometry, *args, **kwargs):
-        traced.append(geometry.n_vertices)
-        return incident(self, geometry, *args, **kwargs)
+    def counted(points, *args, **kwargs):
+        traced.append(len(points))
+        return incident_flux(points, *args, **kwargs)
 
-    monkeypatch.setattr(Scene, "incident", counted)
-    late = Scene(mesh).shade("marble", time_limit=0.3 * estimate, warn=lambda line: None)
-    assert traced[0] == mesh.n_points and late.stats["solver_vertices"] < mesh.n_points
-    monkeypatch.setattr(pipeline, "EARLY_PLAN_VERTICES", 0)
-    planned = []
-    check = pipeline._check_unshadowed_plan
-    monkeypatch.setattr(pipeline, "_check_unshadowed_plan", lambda g, *a: planned.append(g.n_vertices) or check(g, *a))
-    traced.clear()
-    early = Scene(mesh).shade("marble", time_limit=0.3 * estimate, warn=lambda line: None)
-    assert mesh.n_points not in traced and early.stats["solver_vertices"] == late.stats["solver_vertices"]
-    assert planned == [mesh.n_points]  # the proxy, sized to fit, is not planned twice
-    np.testing.assert_array_equal(early.B, late.B)
-    traced.clear()
-    Scene(mesh).shade("marble", time_limit=0.7 * estimate, warn=lambda line: None)  # over, but not twice
-    assert traced[0] == mesh.n_points
+    monkeypatch.setattr(irradiance, "incident_flux", counted)
+    carried = []
+    carried_light = irradiance.carried_light
+    monkeypatch.setattr(
+        irradiance,
+        "carried_light",
+        lambda light, *a: carried.append((light, carried_light(light, *a))) or carried[-1][1],
+    )
+    result = Scene(mesh).shade("marble", time_limit=0.3 * estimate, warn=lambda line: None)
+    assert result.stats["solver_vertices"] < mesh.n_points
+    assert traced == [mesh.n_points]
+    full = carried[0][0]
+    assert all(light is full for light, _ in carried)  # a proxy refused in turn gets the same light, not traced again
+    for _, proxy_light in carried:
+        np.testing.assert_allclose(proxy_light.flux_rgb.sum(axis=0), full.flux_rgb.sum(axis=0), rtol=1e-12)
+    np.testing.assert_array_equal(result.incident_flux, full.phi_rgb)
+    monkeypatch.setattr(pipeline, "CARRIED_LIGHT_MAX_SIGMA_TR_EDGE", 0.0)  # a proxy traces its own light
+    traced.clear(), carried.clear()
+    result = Scene(mesh).shade("marble", time_limit=0.3 * estimate, warn=lambda line: None)
+    assert not carried and traced[0] == mesh.n_points and result.stats["solver_vertices"] in traced[1:]
 
 
 def test_the_same_solve_asked_again_goes_straight_to_the_proxy(monkeypatch):

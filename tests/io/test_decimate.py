@@ -57,6 +57,22 @@ def test_interpolation_shapes_and_constant_fields(sphere_mesh):
         decimation.interpolate(np.ones(n_proxy + 1))
 
 
+def test_gather_is_the_adjoint_of_interpolate_and_keeps_sums(sphere_mesh):
+    """<gather(f), p> = <f, interpolate(p)> for any full values f and proxy values p: what a proxy vertex receives is
+    what it would hand back; the sum over the full mesh is the sum over the proxy."""
+    decimation = decimate_mesh(sphere_mesh, target_faces=300)
+    rng = np.random.default_rng(4)
+    full = rng.random((sphere_mesh.n_points, 3))
+    proxy = rng.random((decimation.proxy.n_points, 3))
+    gathered = decimation.gather(full)
+    assert gathered.shape == proxy.shape
+    np.testing.assert_allclose(np.sum(gathered * proxy), np.sum(full * decimation.interpolate(proxy)), rtol=1e-12)
+    np.testing.assert_allclose(gathered.sum(axis=0), full.sum(axis=0), rtol=1e-12)
+    np.testing.assert_allclose(decimation.gather(full[:, 0]), gathered[:, 0], rtol=1e-15)
+    with pytest.raises(InvalidParameterError, match="one value or row per full-mesh vertex"):
+        decimation.gather(np.ones(sphere_mesh.n_points + 1))
+
+
 def test_no_decimation_needed_is_the_identity(sphere_mesh):
     decimation = decimate_mesh(sphere_mesh, target_faces=10**6)
     assert decimation.method == "none" and decimation.proxy is sphere_mesh

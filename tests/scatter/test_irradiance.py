@@ -7,7 +7,7 @@ from scipy.integrate import quad
 
 from translucency.errors import InvalidParameterError
 from translucency.scatter.fresnel import fresnel_transmittance, refract
-from translucency.scatter.irradiance import incident_flux
+from translucency.scatter.irradiance import carried_light, incident_flux
 from translucency.scatter.lights import DirectionalLight, EnvironmentLight, PointLight, cosine_integral_error
 from translucency.scatter.visibility import Occluder, VisibilityCache
 
@@ -234,3 +234,38 @@ def test_ray_batching_does_not_change_the_result(monkeypatch):
     assert one_call.stats.n_shadowed > 0
     assert np.allclose(one_call.flux_rgb, many_calls.flux_rgb, rtol=1e-14, atol=0)
     assert one_call.stats.as_dict()["n_shadowed"] == many_calls.stats.n_shadowed
+
+
+def test_carried_light_keeps_the_flux_and_its_direction():
+    """A fine mesh's light carried onto a coarse one (each fine vertex shared among coarse vertices with weights summing
+    to 1) keeps the flux in total and per coarse vertex as given, the flux-weighted direction, and per sample."""
+    points, _, normals, areas = icosphere(10.0, 3)
+    lights = [DirectionalLight((0.3, 0.2, 1.0), 1.0), DirectionalLight((-1.0, 0.1, 0.2), 0.5)]
+    light = incident_flux(points, normals, areas, lights, 1.3, per_direction=True)
+    n = len(points)
+    owner = np.arange(n) % 40  # every fine vertex split between two of 40 coarse vertices, 0.7 / 0.3
+    partner = (owner + 1) % 40
+
+    def gather(values):
+        values = np.asarray(values, dtype=float)
+        out = np.zeros((40,) + values.shape[1:])
+        np.add.at(out, owner, 0.7 * values)
+        np.add.at(out, partner, 0.3 * values)
+        return out
+
+    coarse_normals = np.tile((0.0, 0.0, 1.0), (40, 1))
+    coarse_areas = np.full(40, areas.sum() / 40)
+    coarse = carried_light(light, gather, coarse_normals, coarse_areas)
+    np.testing.assert_allclose(coarse.flux_rgb, gather(light.flux_rgb), rtol=1e-12)
+    np.testing.assert_allclose(coarse.flux_rgb.sum(axis=0), light.flux_rgb.sum(axis=0), rtol=1e-12)
+    np.testing.assert_allclose(coarse.phi_rgb, coarse.flux_rgb / coarse_areas[:, None], rtol=1e-12)
+    weight = light.flux_rgb.sum(axis=1)
+    expected = gather(weight[:, None] * light.w12_mean) / gather(weight)[:, None]
+    np.testing.assert_allclose(coarse.w12_mean, expected, rtol=1e-12)
+    np.testing.assert_allclose(np.linalg.norm(coarse.w12, axis=1), 1.0, rtol=1e-12)
+    total = np.zeros((40, 3))
+    for part in coarse.contributions:
+        total[part.vertices] += part.flux_rgb
+    np.testing.assert_allclose(total, coarse.flux_rgb, rtol=1e-12)
+    dark = carried_light(incident_flux(points, normals, areas, [], 1.3), gather, coarse_normals, coarse_areas)
+    assert not dark.phi_rgb.any() and np.array_equal(dark.w12, -coarse_normals)

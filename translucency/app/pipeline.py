@@ -52,13 +52,21 @@ PROXY_MIN_TRIANGLES = 200
 #: not held through the solve's set-up and plan (where a scan's bake peaks: +360 MB at 2.1M vertices,
 #: about 1.7 GB at 10M); the bounce builds it again (4 s at 2.1M). Below, a viewer's next light reuses it.
 RELEASE_SCENE_VERTICES = 1_000_000
-#: From this many vertices on, the solve at the resolution asked for is planned with every vertex that faces a
-#: light lit before the light's shadows are traced, and refused at once when that plan is over
-#: EARLY_REFUSAL_FACTOR times a budget (the 10M-vertex Igea: 10 times the time limit). What the plan makes (the
-#: ordered surface, the source tree) the solve reuses; the plan's sample costs about 1 s at 1M vertices. A proxy
-#: made because that resolution was over budget is sized to fit, and is not planned twice (3 s at 1.1M vertices).
-EARLY_PLAN_VERTICES = 1_000_000
-EARLY_REFUSAL_FACTOR = 2.0
+
+
+#: A proxy whose edge ``h`` is at most this many diffusion lengths (``max σ_tr · h``) is given the light traced at
+#: every vertex of the full mesh, carried onto its vertices with the flux kept; a coarser one traces its own
+#: (docs/physics.md §8.6). Measured (bench/README.md, "Proxy error, measured apart"): on the 10M-vertex Igea's
+#: proxy (0.04) the per-vertex p99 fell from 19 % to 3.7 %; on the Igea's 0.5 mm proxy (0.13) it was 5.7 % against
+#: 5.2 %, and on the "auto" proxies (0.42-0.57) 49-68 % against 36-51 %: the carried flux is spread over a proxy
+#: edge, which a fine proxy does not see and a coarse one does.
+CARRIED_LIGHT_MAX_SIGMA_TR_EDGE = 0.1
+
+
+def carries_full_light(medium, edge) -> bool:
+    """Whether a proxy of edge ``edge`` (mm, None for the full mesh) is given the full mesh's light carried onto it
+    (:data:`CARRIED_LIGHT_MAX_SIGMA_TR_EDGE`) rather than the light traced at its own vertices."""
+    return edge is not None and float(np.max(medium.sigma_tr)) * edge <= CARRIED_LIGHT_MAX_SIGMA_TR_EDGE
 
 
 def coarsest_proxy_edge(surface_area: float) -> float:
@@ -159,9 +167,10 @@ class ShadeResult:
         budget, version.
     incident_flux : ndarray, shape (n, 3), optional
         The solver's input: the flux density entering the surface, ``phi = T12 E cos V`` summed over the
-        light samples, W/m² per channel (:func:`translucency.scatter.irradiance.incident_flux`). On a
-        proxy solve it is the proxy's ``phi`` interpolated to every vertex like ``B`` (what the solver
-        saw: shadow edges as soft as the proxy's); None on a result made by hand.
+        light samples, W/m² per channel (:func:`translucency.scatter.irradiance.incident_flux`). On a proxy
+        solve with the full mesh's light carried onto the proxy (:func:`carries_full_light`) it is that light,
+        traced at every vertex; on a coarser proxy, the proxy's own ``phi`` interpolated to every vertex like
+        ``B`` (what the solver saw: shadow edges as soft as the proxy's); None on a result made by hand.
     reentered : ndarray, shape (n, 3), optional
         The part of ``B`` from light that left the surface and entered again (``bounces``,
         docs/physics.md §7.4), W/(m² sr) per W/m²; None with ``bounces=0``.
@@ -279,9 +288,12 @@ class Scene:
         if key in self._solver_meshes:
             return (*self._solver_meshes[key], True)
         mesh, decimation, edge = _solver_mesh(self.mesh, edge)
-        normals = mesh.vertex_normals()
-        if mesh is self.mesh and self._normals is None:  # the result's normals, not computed a second time
-            self._normals = normals
+        if mesh is self.mesh:  # the result's normals, not computed a second time
+            if self._normals is None:
+                self._normals = mesh.vertex_normals()
+            normals = self._normals
+        else:
+            normals = mesh.vertex_normals()
         geometry = SurfaceGeometry(
             mesh.points, mesh.triangles, normals, self._mean_edge if decimation is None else None
         )
@@ -305,17 +317,67 @@ class Scene:
             cache=self.visibility,
             per_direction=per_direction,
         )
-        while len(self._incident) >= 8:  # a few recent light set-ups; the oldest goes first
-            self._incident.pop(next(iter(self._incident)))
-        self._incident[key] = light
+        self._remember_light(key, light)
         return light, False
 
     def incident_on_mesh(self, medium, lights, per_direction=False):
-        """Incident light at every vertex of the full mesh (memoised as :meth:`incident`); ``(light, reused)``."""
+        """Incident light at every vertex of the full mesh, memoised per (lights, eta, shadows) and kept across
+        proxies; ``(light, reused)``."""
         from ..scatter.lights import as_light_list
 
-        _, _, _, geometry, _ = self.solver_mesh(medium, "full")
-        return self.incident(geometry, self.mesh.triangles, as_light_list(lights), medium.eta, per_direction)
+        return self._light_on_full_mesh(as_light_list(lights), medium.eta, per_direction)
+
+    def solver_light(self, geometry, solver_mesh, decimation, lights, eta, per_direction=False):
+        """Incident light on the solver mesh, memoised as :meth:`incident`; ``(light, reused)``.
+
+        With a ``decimation`` (a proxy, see :func:`carries_full_light`) it is the light traced at every vertex of the
+        full mesh (its own normals, relief and shadow edges) carried onto the proxy's vertices with its flux kept
+        (:func:`translucency.scatter.irradiance.carried_light`, docs/physics.md §8.6); the full mesh's light is
+        kept for the next proxy of the same light (a later shade, another material).
+        """
+        from ..scatter.irradiance import carried_light
+
+        if solver_mesh is self.mesh:
+            return self._light_on_full_mesh(lights, eta, per_direction)
+        if decimation is None:
+            return self.incident(geometry, solver_mesh.triangles, lights, eta, per_direction)
+        # not the key of :meth:`incident`, which traces on the proxy itself; the first item is the mesh's, as there
+        key = (id(geometry), repr([light.to_dict() for light in lights]), float(eta), per_direction, "carried")
+        if key in self._incident:
+            return self._incident[key], True
+        full, _ = self._light_on_full_mesh(lights, eta, per_direction)
+        light = carried_light(full, decimation.gather, geometry.normals, geometry.vertex_areas)
+        self._remember_light(key, light)
+        return light, False
+
+    def _light_on_full_mesh(self, lights, eta, per_direction=False):
+        """Incident light traced at every vertex of the full mesh, ``(light, reused)``; kept when a resolution is
+        refused and across proxies (a solver mesh's own light, :meth:`incident`, is dropped with it)."""
+        from ..scatter.irradiance import incident_flux
+
+        key = ("full mesh", repr([light.to_dict() for light in lights]), float(eta), per_direction)
+        if key in self._incident:
+            return self._incident[key], True
+        if self._normals is None:
+            self._normals = self.mesh.vertex_normals()
+        light = incident_flux(
+            self.mesh.points,
+            self._normals,
+            self.mesh.vertex_areas(),
+            lights,
+            eta,
+            triangles=self.mesh.triangles if self.shadows else None,
+            cache=self.visibility,
+            per_direction=per_direction,
+        )
+        self._remember_light(key, light)
+        return light, False
+
+    def _remember_light(self, key, light) -> None:
+        """Keep an incident light for its key: a few recent light set-ups, the oldest dropped first."""
+        while len(self._incident) >= 8:
+            self._incident.pop(next(iter(self._incident)))
+        self._incident[key] = light
 
     def shade(
         self,
@@ -387,14 +449,16 @@ class Scene:
             try:
                 if solver is None and method != "relight":  # a size no solve fits: no light traced for it
                     _check_size_floor(geometry, medium.n_channels, method, limits)
-                    if attempt == 0 and geometry.n_vertices >= EARLY_PLAN_VERTICES:  # a proxy is sized to fit
-                        _check_unshadowed_plan(geometry, lights, settings, limits)
                 start = time.perf_counter()
-                incident, incident_reused = self.incident(
-                    geometry, solver_mesh.triangles, lights, medium.eta, per_direction
+                carried = carries_full_light(medium, edge)
+                incident, incident_reused = self.solver_light(
+                    geometry, solver_mesh, decimation if carried else None, lights, medium.eta, per_direction
                 )
                 timings["incident_light"] = timings.get("incident_light", 0.0) + time.perf_counter() - start
-                if geometry.n_vertices >= RELEASE_SCENE_VERTICES:  # not held through the solve's set-up
+                if decimation is not None and not carried:  # a refused resolution's light: not held through the solve
+                    for key in [key for key in self._incident if key[0] == "full mesh"]:
+                        del self._incident[key]
+                if self.mesh.n_points >= RELEASE_SCENE_VERTICES:  # not held through the solve's set-up
                     self.visibility.release_scenes()
                 solutions = _solve(
                     geometry, incident, medium, model, method, tol, progress, per_direction, limits, solve_with
@@ -436,7 +500,11 @@ class Scene:
         if decimation is not None:
             start = time.perf_counter()
             B = np.maximum(decimation.interpolate(B), 0.0)
-            phi = np.maximum(decimation.interpolate(phi), 0.0)  # what the solver saw, as B (ShadeResult)
+            phi = (  # what entered, traced at every vertex; or what the proxy's own light saw (ShadeResult)
+                self._light_on_full_mesh(lights, medium.eta, per_direction)[0].phi_rgb
+                if carried
+                else np.maximum(decimation.interpolate(phi), 0.0)
+            )
             if reentered is not None:
                 reentered = np.maximum(decimation.interpolate(reentered), 0.0)
             timings["interpolate_to_full"] = time.perf_counter() - start
@@ -591,36 +659,6 @@ def _warn(message: str) -> None:
     from ..errors import TranslucencyWarning
 
     warnings.warn(message, TranslucencyWarning, stacklevel=3)
-
-
-def _check_unshadowed_plan(geometry, lights, settings: ShadeSettings, limits) -> None:
-    """A :class:`~translucency.errors.BudgetError` when the solve's plan with every vertex that faces a light lit
-    (:func:`translucency.scatter.solve.plan`, no shadow ray traced) is over :data:`EARLY_REFUSAL_FACTOR` times a
-    budget. Shadows only take light away, so the solve with them would be over its budget too, and the incident
-    light need not be traced at a size that is then not solved (31 s at 10M vertices)."""
-    from ..errors import BudgetError
-    from ..scatter.irradiance import incident_flux
-    from ..scatter.solve import over_budget_sentence, plan
-
-    medium = settings.material
-    facing = incident_flux(geometry.points, geometry.normals, geometry.vertex_areas, lights, medium.eta)
-    estimate = plan(
-        geometry,
-        facing.phi_rgb,
-        facing.w12,
-        medium,
-        model=settings.model,
-        method=settings.method,
-        tol=settings.tol,
-        **limits,
-    )
-    del facing
-    over_time = estimate.time_limit is not None and estimate.seconds > EARLY_REFUSAL_FACTOR * estimate.time_limit
-    over_memory = (
-        estimate.budget_bytes is not None and estimate.peak_bytes > EARLY_REFUSAL_FACTOR * estimate.budget_bytes
-    )
-    if over_time or over_memory:
-        raise BudgetError(over_budget_sentence(estimate, geometry.n_vertices), estimate)
 
 
 def _check_size_floor(geometry, n_channels, method, limits) -> None:

@@ -377,6 +377,40 @@ class ProxyMapping:
         # an explicit sum (not einsum/BLAS) so that one-hot weights reproduce values bit for bit
         return gathered[:, 0] * weights[:, 0] + gathered[:, 1] * weights[:, 1] + gathered[:, 2] * weights[:, 2]
 
+    def gather(self, values_on_full) -> np.ndarray:
+        """Carry per-vertex amounts from the full mesh onto the proxy, their sum kept: the adjoint of
+        :meth:`interpolate`.
+
+        Parameters
+        ----------
+        values_on_full : array_like, shape (n_full,) or (n_full, k)
+            One amount (a flux, an area, ...) per full-mesh vertex, any unit.
+
+        Returns
+        -------
+        ndarray, shape (n_proxy,) or (n_proxy, k), float64
+            ``sum_i weights[i, c] * values[i]`` over the full vertices ``i`` mapped onto each proxy vertex (as
+            corner ``c`` of their proxy triangle), in the unit of the input. Each full vertex shares its amount
+            among the corners of its proxy triangle with weights summing to 1, so the column sums are kept
+            and no amount moves farther than a proxy edge.
+        """
+        values = np.asarray(values_on_full, dtype=np.float64)
+        if values.ndim not in (1, 2) or values.shape[0] != len(self.weights):
+            raise InvalidParameterError(
+                f"gather needs one value or row per full-mesh vertex ({len(self.weights)} rows), not an array of "
+                f"shape {values.shape}; pass the values computed on the full mesh."
+            )
+        columns = values.reshape(len(values), -1)
+        out = np.zeros((self.n_proxy_points, columns.shape[1]))
+        for corner in range(3):
+            for k in range(columns.shape[1]):
+                out[:, k] += np.bincount(
+                    self.vertex_index[:, corner],
+                    weights=self.weights[:, corner] * columns[:, k],
+                    minlength=self.n_proxy_points,
+                )
+        return out.reshape((self.n_proxy_points,) + values.shape[1:])
+
 
 def map_to_proxy(full_points, proxy_points, proxy_triangles) -> ProxyMapping:
     """Map full-mesh vertices onto the proxy surface (closest point, barycentric weights).
@@ -431,6 +465,11 @@ class Decimation:
     def interpolate(self, values_on_proxy) -> np.ndarray:
         """Carry per-vertex values from the proxy to the full mesh (see :meth:`ProxyMapping.interpolate`)."""
         return self.mapping.interpolate(values_on_proxy)
+
+    def gather(self, values_on_full) -> np.ndarray:
+        """Carry per-vertex amounts from the full mesh onto the proxy, their sum kept (see
+        :meth:`ProxyMapping.gather`)."""
+        return self.mapping.gather(values_on_full)
 
 
 def decimate_mesh(

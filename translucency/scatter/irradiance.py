@@ -62,6 +62,7 @@ __all__ = [
     "IncidentLight",
     "IncidentStats",
     "LightContribution",
+    "carried_light",
     "incident_flux",
 ]
 
@@ -421,4 +422,73 @@ def incident_flux(
         lights=lights,
         stats=stats,
         contributions=tuple(contributions) if contributions is not None else None,
+    )
+
+
+def carried_light(light: IncidentLight, gather, normals, areas) -> IncidentLight:
+    """The light entering a fine mesh carried onto the vertices of a coarser one that stands for it (a proxy),
+    the flux kept (docs/physics.md §8.6).
+
+    Parameters
+    ----------
+    light : IncidentLight
+        The light traced at every vertex of the fine mesh (its own normals, shadows and relief).
+    gather : callable
+        ``gather(values)``: per-vertex amounts of the fine mesh, shape ``(n_fine, k)``, summed onto the coarse
+        vertices, shape ``(n, k)``, each fine vertex sharing its amount among a few coarse vertices with weights
+        that sum to 1 (:meth:`translucency.io.decimate.ProxyMapping.gather`).
+    normals : array_like, shape (n, 3)
+        The coarse mesh's outward unit vertex normals (the direction given where no light arrives).
+    areas : array_like, shape (n,)
+        The coarse mesh's vertex areas, mm².
+
+    Returns
+    -------
+    IncidentLight
+        On the coarse vertices ``j``: the flux ``Phi_j = sum_i w_ij Phi_i`` (W mm²/m²; the total entering is
+        the fine mesh's), the flux density ``phi_j = Phi_j / A_j`` (W/m²) and the flux-weighted mean refracted
+        direction ``w12_mean_j = sum_i w_ij |Phi_i| w12_mean_i / sum_i w_ij |Phi_i|`` (``|.|`` the channel sum);
+        the per-sample contributions carried the same way. ``stats`` are the fine mesh's (what was traced).
+    """
+    normals = np.asarray(normals, dtype=np.float64)
+    areas = np.asarray(areas, dtype=np.float64)
+
+    def carried(flux_rgb, w12_mean):
+        flux = gather(flux_rgb)
+        weight = gather(flux_rgb.sum(axis=1))
+        lit = weight > 0.0
+        w12_mean_out = -normals.copy()
+        w12_mean_out[lit] = gather(flux_rgb.sum(axis=1)[:, None] * w12_mean)[lit] / weight[lit, None]
+        lengths = row_lengths(w12_mean_out)
+        w12_mean_out[lengths == 0.0] = (0.0, 0.0, -1.0)  # a degenerate normal where no light arrives
+        w12 = w12_mean_out / row_lengths(w12_mean_out)[:, None]
+        phi = np.divide(flux, areas[:, None], out=np.zeros_like(flux), where=areas[:, None] > 0.0)
+        return phi, flux, w12, w12_mean_out, lit
+
+    phi, flux, w12, w12_mean, _ = carried(light.flux_rgb, light.w12_mean)
+    contributions = None
+    if light.contributions is not None:
+        n_fine = len(light.flux_rgb)
+        contributions = []
+        for part in light.contributions:
+            fine_flux = np.zeros((n_fine, 3))
+            fine_w12 = np.zeros((n_fine, 3))
+            fine_flux[part.vertices] = part.flux_rgb
+            fine_w12[part.vertices] = part.w12
+            part_phi, part_flux, part_w12, _, reached = carried(fine_flux, fine_w12)
+            vertices = np.flatnonzero(reached)
+            contributions.append(
+                LightContribution(
+                    part.light, part.direction, vertices, part_phi[vertices], part_flux[vertices], part_w12[vertices]
+                )
+            )
+        contributions = tuple(contributions)
+    return IncidentLight(
+        phi_rgb=phi,
+        flux_rgb=flux,
+        w12=w12,
+        w12_mean=w12_mean,
+        lights=light.lights,
+        stats=light.stats,
+        contributions=contributions,
     )
