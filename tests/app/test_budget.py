@@ -103,9 +103,11 @@ def test_a_refused_resolution_s_light_is_the_one_its_proxy_gets(monkeypatch):
         "carried_light",
         lambda light, *a: carried.append((light, carried_light(light, *a))) or carried[-1][1],
     )
-    result = Scene(mesh).shade("marble", time_limit=0.3 * estimate, warn=lambda line: None)
+    lines = []
+    result = Scene(mesh).shade("marble", time_limit=0.3 * estimate, warn=lines.append)
     assert result.stats["solver_vertices"] < mesh.n_points
     assert traced == [mesh.n_points]
+    assert "99th percentile of vertices, given the light traced at every vertex" in lines[0]
     full = carried[0][0]
     assert all(light is full for light, _ in carried)  # a proxy refused in turn gets the same light, not traced again
     for _, proxy_light in carried:

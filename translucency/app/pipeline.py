@@ -56,11 +56,14 @@ RELEASE_SCENE_VERTICES = 1_000_000
 
 #: A proxy whose edge ``h`` is at most this many diffusion lengths (``max σ_tr · h``) is given the light traced at
 #: every vertex of the full mesh, carried onto its vertices with the flux kept; a coarser one traces its own
-#: (docs/physics.md §8.6). Measured (bench/README.md, "Proxy error, measured apart"): on the 10M-vertex Igea's
-#: proxy (0.04) the per-vertex p99 fell from 19 % to 3.7 %; on the Igea's 0.5 mm proxy (0.13) it was 5.7 % against
+#: (docs/physics.md §8.6). Measured (bench/README.md, "Scaling and memory" and "Proxy error, measured apart"): on
+#: the 10M-vertex Igea's proxy (0.04) the per-vertex p99 fell from 19 % to 3.2-3.7 %, on the 2.1M one's from 9.2 % to
+#: 2.7 %; on the Igea's 0.5 mm proxy (0.13) it was 5.7 % against
 #: 5.2 %, and on the "auto" proxies (0.42-0.57) 49-68 % against 36-51 %: the carried flux is spread over a proxy
 #: edge, which a fine proxy does not see and a coarse one does.
 CARRIED_LIGHT_MAX_SIGMA_TR_EDGE = 0.1
+#: The per-vertex error (99th percentile) of such a proxy, measured on the 2.1M- and 10M-vertex Igea: 2.7 % and 3.2 %.
+CARRIED_LIGHT_ERROR = "3 %"
 
 
 def carries_full_light(medium, edge) -> bool:
@@ -479,11 +482,17 @@ class Scene:
                 self._forget(geometry)
                 solver_mesh = geometry = incident = None
         if reason is not None:
+            expected = (
+                f"about {CARRIED_LIGHT_ERROR} at the 99th percentile of vertices, given the light traced at every "
+                "vertex"
+                if carried
+                else f"relative RMS error about {proxy_error(solver_mesh.n_points / self.mesh.n_points)}, and tens of "
+                "% at the darkest vertices"
+            )
             coarsened = (
                 f"solving on a proxy of {solver_mesh.n_points:,} of the {self.mesh.n_points:,} vertices "
-                f"(edge {edge:.3g} mm), since the resolution asked for {reason}; expected relative RMS error "
-                f"about {proxy_error(solver_mesh.n_points / self.mesh.n_points)}, and tens of % at the darkest "
-                f"vertices (proxy measurements in bench/README.md); raise the limit to solve every vertex."
+                f"(edge {edge:.3g} mm), since the resolution asked for {reason}; expected {expected} (proxy "
+                f"measurements in bench/README.md); raise the limit to solve every vertex."
             )
             (warn or _warn)(coarsened)
         B = sum(solution.B for solution in solutions)
