@@ -119,6 +119,43 @@ def test_a_refused_resolution_s_light_is_the_one_its_proxy_gets(monkeypatch):
     assert not carried and traced[0] == mesh.n_points and result.stats["solver_vertices"] in traced[1:]
 
 
+def test_far_over_its_time_budget_a_scan_is_refused_before_its_shadows_are_traced(monkeypatch):
+    """From EARLY_PLAN_VERTICES on, a solve planned with every facing vertex lit and over twice the time limit is
+    refused before any shadow ray, and no Embree scene of the full mesh is built: its proxy's light is traced at every
+    vertex against the proxy. On a convex mesh nothing casts a shadow, so that light is the full mesh's (no vertex
+    under the proxy's surface shadowed by it) and the answer is the one refused after tracing, to the grazing rays."""
+    from translucency.app import pipeline
+    from translucency.scatter import visibility
+
+    monkeypatch.setattr(pipeline, "CARRIED_LIGHT_MAX_SIGMA_TR_EDGE", np.inf)  # whatever the proxy's edge
+    points, triangles = icosphere(5, 20.0)
+    mesh = TriangleMesh(points, triangles)
+    estimate = Scene(mesh).shade("marble", time_limit=None).stats["solver"]["budget"]["seconds"]
+    scenes = []
+    occluder = visibility.Occluder.__init__
+    monkeypatch.setattr(
+        visibility.Occluder, "__init__", lambda self, p, *a, **k: scenes.append(len(p)) or occluder(self, p, *a, **k)
+    )
+    late = Scene(mesh).shade("marble", time_limit=0.3 * estimate, warn=lambda line: None)
+    assert scenes[0] == mesh.n_points and late.stats["solver_vertices"] < mesh.n_points
+    monkeypatch.setattr(pipeline, "EARLY_PLAN_VERTICES", 0)
+    planned = []
+    check = pipeline._check_unshadowed_plan
+    monkeypatch.setattr(pipeline, "_check_unshadowed_plan", lambda g, *a: planned.append(g.n_vertices) or check(g, *a))
+    scenes.clear()
+    early = Scene(mesh).shade("marble", time_limit=0.3 * estimate, warn=lambda line: None)
+    assert mesh.n_points not in scenes and early.stats["solver_vertices"] == late.stats["solver_vertices"]
+    assert planned == [mesh.n_points]  # the proxy, sized to fit, is not planned twice
+    # the same light but where a ray grazes the surface (the flux there is within 1e-4 of nothing): the proxy's
+    # chords and the mesh's facets meet such a ray at different places
+    differ = np.any(early.incident_flux != late.incident_flux, axis=1)
+    assert differ.mean() < 1e-3 and late.incident_flux[differ].max() < 1e-4 * late.incident_flux.max()
+    np.testing.assert_allclose(early.B, late.B, rtol=1e-6, atol=1e-6 * late.B.max())
+    scenes.clear()
+    Scene(mesh).shade("marble", time_limit=0.7 * estimate, warn=lambda line: None)  # over, but not twice
+    assert scenes[0] == mesh.n_points
+
+
 def test_the_same_solve_asked_again_goes_straight_to_the_proxy(monkeypatch):
     """A Scene remembers that the resolution asked for did not fit these settings and lights: asked again, it
     solves the proxy at once (the same answer and the same line), and says it reused the refusal; another light
