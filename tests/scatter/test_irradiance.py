@@ -264,8 +264,16 @@ def test_carried_light_keeps_the_flux_and_its_direction():
     np.testing.assert_allclose(coarse.w12_mean, expected, rtol=1e-12)
     np.testing.assert_allclose(np.linalg.norm(coarse.w12, axis=1), 1.0, rtol=1e-12)
     total = np.zeros((40, 3))
-    for part in coarse.contributions:
+    for part, fine in zip(coarse.contributions, light.contributions, strict=True):
         total[part.vertices] += part.flux_rgb
+        fine_flux = np.zeros((n, 3))
+        fine_flux[fine.vertices] = fine.flux_rgb
+        np.testing.assert_allclose(part.flux_rgb, gather(fine_flux)[part.vertices], rtol=1e-12)
+        np.testing.assert_allclose(part.phi_rgb, part.flux_rgb / coarse_areas[part.vertices, None], rtol=1e-12)
+        fine_w12 = np.zeros((n, 3))
+        fine_w12[fine.vertices] = fine.w12 * fine.flux_rgb.sum(axis=1)[:, None]
+        direction = gather(fine_w12)[part.vertices]
+        np.testing.assert_allclose(part.w12, direction / np.linalg.norm(direction, axis=1)[:, None], rtol=1e-12)
     np.testing.assert_allclose(total, coarse.flux_rgb, rtol=1e-12)
     dark = carried_light(incident_flux(points, normals, areas, [], 1.3), gather, coarse_normals, coarse_areas)
     assert not dark.phi_rgb.any() and np.array_equal(dark.w12, -coarse_normals)

@@ -48,9 +48,10 @@ PROXY_MIN_RATIO = 1.5
 PROXY_MIN_TRIANGLES = 200
 
 
-#: From this many vertices on, the Embree scene is let go once the incident light is traced, so that it is
-#: not held through the solve's set-up and plan (where a scan's bake peaks: +360 MB at 2.1M vertices,
-#: about 1.7 GB at 10M); the bounce builds it again (4 s at 2.1M). Below, a viewer's next light reuses it.
+#: From a scan of this many vertices on, the Embree scenes (the scan's, or its proxy's) are let go once the incident
+#: light is traced, so that they are not held through the solve's set-up and plan (where a scan's bake peaks:
+#: +360 MB at 2.1M vertices, about 1.7 GB at 10M); the bounce builds the solver mesh's again (4 s at 2.1M, 2 s for
+#: the 10M scan's proxy). Below, a viewer's next light reuses them.
 RELEASE_SCENE_VERTICES = 1_000_000
 
 
@@ -347,10 +348,11 @@ class Scene:
     def solver_light(self, geometry, solver_mesh, decimation, lights, eta, per_direction=False):
         """Incident light on the solver mesh, memoised as :meth:`incident`; ``(light, reused)``.
 
-        With a ``decimation`` (a proxy, see :func:`carries_full_light`) it is the light traced at every vertex of the
-        full mesh (its own normals, relief and shadow edges) carried onto the proxy's vertices with its flux kept
-        (:func:`translucency.scatter.irradiance.carried_light`, docs/physics.md §8.6); the full mesh's light is
-        kept for the next proxy of the same light (a later shade, another material).
+        With a ``decimation`` (a proxy, see :func:`carries_full_light`) it is the light at every vertex of the full
+        mesh (:meth:`full_light_for_proxy`: its own normals and relief) carried onto the proxy's vertices with its flux
+        kept (:func:`translucency.scatter.irradiance.carried_light`, docs/physics.md §8.6). Kept with it is only the
+        full mesh's flux density (:meth:`flux_on_full_mesh`), not the whole light: at 10M vertices its four arrays are
+        1 GB, held through the solve where a bake peaks; another material (another ``eta``) traces it again.
         """
         from ..scatter.irradiance import carried_light
 
@@ -358,14 +360,25 @@ class Scene:
             return self._light_on_full_mesh(lights, eta, per_direction)
         if decimation is None:
             return self.incident(geometry, solver_mesh.triangles, lights, eta, per_direction)
-        # not the key of :meth:`incident`, which traces on the proxy itself; the first item is the mesh's, as there
-        key = (id(geometry), repr([light.to_dict() for light in lights]), float(eta), per_direction, "carried")
+        key = self._carried_key(geometry, lights, eta, per_direction)
         if key in self._incident:
-            return self._incident[key], True
+            return self._incident[key][0], True
         full, _ = self.full_light_for_proxy(geometry, solver_mesh, decimation, lights, eta, per_direction)
         light = carried_light(full, decimation.gather, geometry.normals, geometry.vertex_areas)
-        self._remember_light(key, light)
+        for held in [held for held in self._incident if held[-1] == "full mesh" or held[0] == "full mesh"]:
+            del self._incident[held]  # the whole light: its flux density is kept with the carried light
+        self._remember_light(key, (light, full.phi_rgb))
         return light, False
+
+    def flux_on_full_mesh(self, geometry, lights, eta, per_direction=False) -> np.ndarray:
+        """The flux density (n, 3), W/m², at every vertex of the full mesh of the light carried onto the proxy
+        ``geometry`` by :meth:`solver_light` (which must have run for it)."""
+        return self._incident[self._carried_key(geometry, lights, eta, per_direction)][1]
+
+    @staticmethod
+    def _carried_key(geometry, lights, eta, per_direction):
+        # not the key of :meth:`incident`, which traces on the proxy itself; the first item is the mesh's, as there
+        return (id(geometry), repr([light.to_dict() for light in lights]), float(eta), per_direction, "carried")
 
     def full_light_for_proxy(self, geometry, solver_mesh, decimation, lights, eta, per_direction=False):
         """The light at every vertex of the full mesh that a proxy is given, ``(light, reused)``: the one traced
@@ -374,7 +387,9 @@ class Scene:
         vertices 2 s to build instead of 19.5 s, and 3.8 GB less at its peak; measured on the 10M-vertex Igea, the
         per-vertex p99 4.0 % instead of 3.7 %). Each ray starts off its vertex along the vertex normal by the vertex's
         distance from the proxy (``decimation``'s mapping), then by the proxy's own offset, so that no vertex under
-        the proxy's surface is shadowed by it."""
+        the proxy's surface is shadowed by it; a point light's distance and direction are measured from there too
+        (a relative change of about twice that distance over the light's). The visibility is kept in the Scene's
+        cache, so another material traces no ray again."""
         from ..scatter.irradiance import incident_flux
 
         key = (id(geometry), repr([light.to_dict() for light in lights]), float(eta), per_direction, "full mesh")
@@ -392,6 +407,7 @@ class Scene:
             lights,
             eta,
             occluder=occluder,
+            cache=self.visibility,
             per_direction=per_direction,
         )
         self._remember_light(key, light)
@@ -500,13 +516,13 @@ class Scene:
                         _check_unshadowed_plan(geometry, lights, settings, limits)
                 start = time.perf_counter()
                 carried = carries_full_light(medium, edge)
+                if decimation is not None and not carried:  # a refused resolution's light: not held beside the proxy's
+                    for key in [key for key in self._incident if key[0] == "full mesh"]:
+                        del self._incident[key]
                 incident, incident_reused = self.solver_light(
                     geometry, solver_mesh, decimation if carried else None, lights, medium.eta, per_direction
                 )
                 timings["incident_light"] = timings.get("incident_light", 0.0) + time.perf_counter() - start
-                if decimation is not None and not carried:  # a refused resolution's light: not held through the solve
-                    for key in [key for key in self._incident if key[0] == "full mesh"]:
-                        del self._incident[key]
                 if self.mesh.n_points >= RELEASE_SCENE_VERTICES:  # not held through the solve's set-up
                     self.visibility.release_scenes()
                 solutions = _solve(
@@ -556,9 +572,7 @@ class Scene:
             start = time.perf_counter()
             B = np.maximum(decimation.interpolate(B), 0.0)
             phi = (  # what entered, traced at every vertex; or what the proxy's own light saw (ShadeResult)
-                self.full_light_for_proxy(geometry, solver_mesh, decimation, lights, medium.eta, per_direction)[
-                    0
-                ].phi_rgb
+                self.flux_on_full_mesh(geometry, lights, medium.eta, per_direction)
                 if carried
                 else np.maximum(decimation.interpolate(phi), 0.0)
             )
