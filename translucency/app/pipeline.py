@@ -306,12 +306,7 @@ class Scene:
         if key in self._solver_meshes:
             return (*self._solver_meshes[key], True)
         mesh, decimation, edge = _solver_mesh(self.mesh, edge)
-        if mesh is self.mesh:  # the result's normals, not computed a second time
-            if self._normals is None:
-                self._normals = mesh.vertex_normals()
-            normals = self._normals
-        else:
-            normals = mesh.vertex_normals()
+        normals = self._full_normals() if mesh is self.mesh else mesh.vertex_normals()
         geometry = SurfaceGeometry(
             mesh.points, mesh.triangles, normals, self._mean_edge if decimation is None else None
         )
@@ -322,7 +317,7 @@ class Scene:
         """Incident light on a solver mesh, memoised per (mesh, lights, eta, shadows); ``(light, reused)``."""
         from ..scatter.irradiance import incident_flux
 
-        key = (id(geometry), repr([light.to_dict() for light in lights]), float(eta), per_direction)
+        key = (id(geometry), *_light_key(lights, eta, per_direction))
         if key in self._incident:
             return self._incident[key], True
         light = incident_flux(
@@ -365,8 +360,7 @@ class Scene:
             return self._incident[key][0], True
         full, _ = self.full_light_for_proxy(geometry, solver_mesh, decimation, lights, eta, per_direction)
         light = carried_light(full, decimation.gather, geometry.normals, geometry.vertex_areas)
-        for held in [held for held in self._incident if held[-1] == "full mesh" or held[0] == "full mesh"]:
-            del self._incident[held]  # the whole light: its flux density is kept with the carried light
+        self._drop_full_mesh_lights()  # the whole light: its flux density is kept with the carried light
         self._remember_light(key, (light, full.phi_rgb))
         return light, False
 
@@ -378,7 +372,7 @@ class Scene:
     @staticmethod
     def _carried_key(geometry, lights, eta, per_direction):
         # not the key of :meth:`incident`, which traces on the proxy itself; the first item is the mesh's, as there
-        return (id(geometry), repr([light.to_dict() for light in lights]), float(eta), per_direction, "carried")
+        return (id(geometry), *_light_key(lights, eta, per_direction), "carried")
 
     def full_light_for_proxy(self, geometry, solver_mesh, decimation, lights, eta, per_direction=False):
         """The light at every vertex of the full mesh that a proxy is given, ``(light, reused)``: the one traced
@@ -390,51 +384,63 @@ class Scene:
         the proxy's surface is shadowed by it; a point light's distance and direction are measured from there too
         (a relative change of about twice that distance over the light's). The visibility is kept in the Scene's
         cache, so another material traces no ray again."""
-        from ..scatter.irradiance import incident_flux
-
-        key = (id(geometry), repr([light.to_dict() for light in lights]), float(eta), per_direction, "full mesh")
-        for known in (("full mesh",) + key[1:4], key):
+        key = (id(geometry), *_light_key(lights, eta, per_direction), "full mesh")
+        for known in (("full mesh", *key[1:4]), key):
             if known in self._incident:
                 return self._incident[known], True
-        if self._normals is None:
-            self._normals = self.mesh.vertex_normals()
-        occluder = self.visibility.occluder(geometry.points, solver_mesh.triangles)[0] if self.shadows else None
-        origins = self.mesh.points + decimation.mapping.distance[:, None] * self._normals if self.shadows else None
-        light = incident_flux(
-            self.mesh.points if origins is None else origins,
-            self._normals,
-            self.mesh.vertex_areas(),
-            lights,
-            eta,
-            occluder=occluder,
-            cache=self.visibility,
-            per_direction=per_direction,
-        )
+        if not self.shadows:
+            light = self._traced_on_full_mesh(self.mesh.points, lights, eta, per_direction)
+        else:
+            normals = self._full_normals()
+            light = self._traced_on_full_mesh(
+                self.mesh.points + decimation.mapping.distance[:, None] * normals,
+                lights,
+                eta,
+                per_direction,
+                occluder=self.visibility.occluder(geometry.points, solver_mesh.triangles)[0],
+            )
         self._remember_light(key, light)
         return light, False
 
     def _light_on_full_mesh(self, lights, eta, per_direction=False):
         """Incident light traced at every vertex of the full mesh, ``(light, reused)``; kept when a resolution is
         refused and across proxies (a solver mesh's own light, :meth:`incident`, is dropped with it)."""
-        from ..scatter.irradiance import incident_flux
-
-        key = ("full mesh", repr([light.to_dict() for light in lights]), float(eta), per_direction)
+        key = ("full mesh", *_light_key(lights, eta, per_direction))
         if key in self._incident:
             return self._incident[key], True
-        if self._normals is None:
-            self._normals = self.mesh.vertex_normals()
-        light = incident_flux(
-            self.mesh.points,
-            self._normals,
-            self.mesh.vertex_areas(),
-            lights,
-            eta,
-            triangles=self.mesh.triangles if self.shadows else None,
-            cache=self.visibility,
-            per_direction=per_direction,
+        light = self._traced_on_full_mesh(
+            self.mesh.points, lights, eta, per_direction, triangles=self.mesh.triangles if self.shadows else None
         )
         self._remember_light(key, light)
         return light, False
+
+    def _traced_on_full_mesh(self, origins, lights, eta, per_direction, **visibility):
+        """:func:`~translucency.scatter.irradiance.incident_flux` at every vertex of the full mesh (its normals and
+        areas), the rays from ``origins`` (mm) against ``visibility``'s ``triangles`` or ``occluder``, the
+        visibility kept in the Scene's cache."""
+        from ..scatter.irradiance import incident_flux
+
+        return incident_flux(
+            origins,
+            self._full_normals(),
+            self.mesh.vertex_areas(),
+            lights,
+            eta,
+            cache=self.visibility,
+            per_direction=per_direction,
+            **visibility,
+        )
+
+    def _full_normals(self) -> np.ndarray:
+        """The full mesh's unit vertex normals, computed once (the solver's at full resolution and the result's)."""
+        if self._normals is None:
+            self._normals = self.mesh.vertex_normals()
+        return self._normals
+
+    def _drop_full_mesh_lights(self) -> None:
+        """Let go of every light traced at every vertex of the full mesh (against it, or against a proxy)."""
+        for key in [key for key in self._incident if "full mesh" in (key[0], key[-1])]:
+            del self._incident[key]
 
     def _remember_light(self, key, light) -> None:
         """Keep an incident light for its key: a few recent light set-ups, the oldest dropped first."""
@@ -517,8 +523,7 @@ class Scene:
                 start = time.perf_counter()
                 carried = carries_full_light(medium, edge)
                 if decimation is not None and not carried:  # a refused resolution's light: not held beside the proxy's
-                    for key in [key for key in self._incident if key[0] == "full mesh"]:
-                        del self._incident[key]
+                    self._drop_full_mesh_lights()
                 incident, incident_reused = self.solver_light(
                     geometry, solver_mesh, decimation if carried else None, lights, medium.eta, per_direction
                 )
@@ -593,8 +598,6 @@ class Scene:
             "up_inferred": self.up_requested == "auto",
             "budget": {"memory_limit_gb": memory_limit, "time_limit_s": time_limit, "coarser": coarsened},
         }
-        if self._normals is None:
-            self._normals = self.mesh.vertex_normals()
         reused = [
             name
             for name, flag in (
@@ -629,7 +632,7 @@ class Scene:
             "bounces": _bounce_stats(bounced, B),
         }
         return ShadeResult(
-            self.mesh, B, radiance, colors, exposure, self._normals, stats, timings, metadata, phi, reentered
+            self.mesh, B, radiance, colors, exposure, self._full_normals(), stats, timings, metadata, phi, reentered
         )
 
     def _bounces(self, geometry, solver_mesh, solutions, lights, settings, progress, limits, solver=None):
@@ -681,6 +684,11 @@ class Scene:
         if self._mean_edge is None:
             self._mean_edge = mean_edge_length(self.mesh.points, self.mesh.triangles)
         return self._mean_edge * (self.mesh.n_points / target) ** 0.5
+
+
+def _light_key(lights, eta, per_direction) -> tuple:
+    """What an incident light depends on besides the mesh and its shadows: the lights, ``eta``, per direction."""
+    return repr([light.to_dict() for light in lights]), float(eta), per_direction
 
 
 def _refusal_key(settings: ShadeSettings, lights) -> str:
@@ -735,8 +743,9 @@ def _warn(message: str) -> None:
 def _check_unshadowed_plan(geometry, lights, settings: ShadeSettings, limits) -> None:
     """A :class:`~translucency.errors.BudgetError` when the solve's plan with every vertex that faces a light lit
     (:func:`translucency.scatter.solve.plan`, no shadow ray traced) is over :data:`EARLY_REFUSAL_FACTOR` times a
-    budget. Shadows only take light away, so the solve with them would be over its budget too, and no Embree scene
-    of the full mesh need be built at a size that is then not solved (19.5 s and 3.8 GB at 10M vertices)."""
+    budget. Shadows only take light away (19 % of the 10M-vertex Igea's plan under the default light), so the solve
+    with them would most likely be over its budget too, and no Embree scene of the full mesh need be built at a
+    size that is then not solved (19.5 s and 3.8 GB at 10M vertices)."""
     from ..errors import BudgetError
     from ..scatter.irradiance import incident_flux
     from ..scatter.solve import over_budget_sentence, plan

@@ -455,13 +455,16 @@ def carried_light(light: IncidentLight, gather, normals, areas) -> IncidentLight
 
     def carried(flux_rgb, w12_mean):
         flux = gather(flux_rgb)
-        weight = gather(flux_rgb.sum(axis=1))
+        fine_weight = flux_rgb.sum(axis=1)
+        weight = gather(fine_weight)
         lit = weight > 0.0
         w12_mean_out = -normals.copy()
-        w12_mean_out[lit] = gather(flux_rgb.sum(axis=1)[:, None] * w12_mean)[lit] / weight[lit, None]
+        w12_mean_out[lit] = gather(fine_weight[:, None] * w12_mean)[lit] / weight[lit, None]
         lengths = row_lengths(w12_mean_out)
-        w12_mean_out[lengths == 0.0] = (0.0, 0.0, -1.0)  # a degenerate normal where no light arrives
-        w12 = w12_mean_out / row_lengths(w12_mean_out)[:, None]
+        degenerate = lengths == 0.0  # a degenerate normal where no light arrives
+        w12_mean_out[degenerate] = (0.0, 0.0, -1.0)
+        lengths[degenerate] = 1.0
+        w12 = w12_mean_out / lengths[:, None]
         phi = np.divide(flux, areas[:, None], out=np.zeros_like(flux), where=areas[:, None] > 0.0)
         return phi, flux, w12, w12_mean_out, lit
 
