@@ -372,10 +372,13 @@ class ProxyMapping:
             )
         if values.dtype.kind not in "fc":
             values = values.astype(np.float64)
-        gathered = values[self.vertex_index]  # (n_full, 3, ...)
         weights = self.weights.astype(values.dtype, copy=False).reshape(self.weights.shape + (1,) * (values.ndim - 1))
-        # an explicit sum (not einsum/BLAS) so that one-hot weights reproduce values bit for bit
-        return gathered[:, 0] * weights[:, 0] + gathered[:, 1] * weights[:, 1] + gathered[:, 2] * weights[:, 2]
+        # an explicit sum (not einsum/BLAS) so that one-hot weights reproduce values bit for bit, one corner at a
+        # time so that no (n_full, 3, ...) gather is held (720 MB for RGB at 10M vertices)
+        out = values[self.vertex_index[:, 0]] * weights[:, 0]
+        for corner in (1, 2):
+            out += values[self.vertex_index[:, corner]] * weights[:, corner]
+        return out
 
     def gather(self, values_on_full) -> np.ndarray:
         """Carry per-vertex amounts from the full mesh onto the proxy, their sum kept: the adjoint of
@@ -541,17 +544,16 @@ def decimate_mesh(
             mesh.points, mesh.triangles, target_faces, method=method, aggressiveness=aggressiveness
         )
         point_data = {}
-        if mesh.point_data:
+        carried = {name: values for name, values in mesh.point_data.items() if name != "normals"}
+        if carried:  # the nearest full vertex's values (a k-d tree of the full mesh: 5 s at 10M vertices)
             from scipy.spatial import cKDTree
 
             _, nearest = cKDTree(mesh.points).query(points)
-            point_data = {
-                name: np.asarray(values)[nearest] for name, values in mesh.point_data.items() if name != "normals"
-            }
-            if "normals" in mesh.point_data:
-                from ..geometry.measure import vertex_normals
+            point_data = {name: np.asarray(values)[nearest] for name, values in carried.items()}
+        if "normals" in mesh.point_data:
+            from ..geometry.measure import vertex_normals
 
-                point_data["normals"] = vertex_normals(points, triangles)
+            point_data["normals"] = vertex_normals(points, triangles)
         proxy = mesh.replace(points=points, triangles=triangles, point_data=point_data)
         used_method = method
     mapping = map_to_proxy(mesh.points, proxy.points, proxy.triangles)

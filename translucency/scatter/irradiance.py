@@ -387,23 +387,25 @@ def incident_flux(
         irradiance = np.concatenate([_irradiance(job, stats) for job in batch])
         phi_pairs = (fresnel_transmittance(c, eta) * c)[:, None] * irradiance  # T12 E cos(theta) V
         w12_pairs = refract(w, normals[front], eta)  # docs/physics.md §3.2
-        weight = phi_pairs.sum(axis=1)
-        for channel in range(3):
-            phi[:, channel] += np.bincount(front, weights=phi_pairs[:, channel], minlength=n)
-            weighted_w12[:, channel] += np.bincount(front, weights=weight * w12_pairs[:, channel], minlength=n)
-        if contributions is not None:
-            bounds = np.cumsum(sizes)[:-1]
-            for job, f, p, w12_k in zip(
-                batch, np.split(front, bounds), np.split(phi_pairs, bounds), np.split(w12_pairs, bounds)
-            ):
+        weighted_pairs = phi_pairs.sum(axis=1)[:, None] * w12_pairs
+        bounds = np.cumsum(sizes)[:-1]
+        for job, f, p, w12_k, weighted in zip(
+            batch,
+            np.split(front, bounds),
+            np.split(phi_pairs, bounds),
+            np.split(w12_pairs, bounds),
+            np.split(weighted_pairs, bounds),
+        ):
+            phi[f] += p  # a sample's vertices are distinct: a scatter-add per sample (not a bincount over all n)
+            weighted_w12[f] += weighted
+            if contributions is not None:
                 direction = job.vector.copy() if job.kind == "dir" else None
                 contributions.append(LightContribution(job.light, direction, f, p, areas[f, None] * p, w12_k))
 
     weight = phi.sum(axis=1)
     lit = weight > 0.0
-    w12_mean = np.empty((n, 3))
-    w12_mean[lit] = weighted_w12[lit] / weight[lit, None]
-    w12_mean[~lit] = -normals[~lit]  # any inward unit vector will do where no flux enters
+    w12_mean = np.negative(normals)  # any inward unit vector will do where no flux enters
+    np.divide(weighted_w12, weight[:, None], out=w12_mean, where=lit[:, None])  # (no masked copies: 10M rows)
     w12_mean[~lit & degenerate] = (0.0, 0.0, -1.0)
     # Every w12_ik points into the medium (w12 . n < 0), so their flux-weighted mean never vanishes.
     w12 = w12_mean / row_lengths(w12_mean)[:, None]
