@@ -26,8 +26,10 @@ field, near lists, near field) come from the shade's timings. That first shade b
 of the same scene are timed too (median of ``--repeats`` at up to 200k vertices, one above).
 Then ``exact`` at a fixed number of random receivers (2000) gives the error of the bake (its first-order
 ``B``: the bounce's re-entered light taken off): relative RMS, worst lit-vertex error and the per-vertex
-99th percentile, as in ``bench/solver.py``. Numba's compiled code is loaded on a small
-sphere before anything is timed.
+99th percentile, as in ``bench/solver.py``. Numba's kernels are compiled into its cache in a process of
+their own before the first size (a bake on a small sphere), and each child loads them on that sphere again
+before anything is timed: every bake runs as every run after a user's first does. The process that compiles
+holds more (LLVM's memory stays with it), so its own time and peak are recorded too (``info["compile"]``).
 
 Peak memory, three ways: the resident sets of the bake's process and its children (the decimation's
 parts) summed, sampled every 0.2 s during the bake: what the machine must hold, and what the goal is
@@ -703,11 +705,19 @@ def bake_markdown(row):
 
 
 def run(labels, repeats, time_limit, memory_limit_gb):
-    """Build the meshes, bake each in a child process; the rows (one per size)."""
+    """Fill numba's cache in a process of its own, then build the meshes and bake each in a child process:
+    ``(rows, one per size; the cache fill's seconds and peak, compiling or loading what is there already)``."""
     folder = Path(tempfile.mkdtemp(prefix="translucency-scaling-"))
     rows = []
     try:
         igea, _ = prepare("igea")
+        start = time.perf_counter()
+        subprocess.run([sys.executable, __file__, "--fill-cache", str(folder)], cwd=ROOT, check=True)
+        compile_run = {
+            "seconds": time.perf_counter() - start,
+            "ru_maxrss_mb": resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024,
+        }
+        print(f"numba's cache filled in {compile_run['seconds']:.1f} s, {compile_run['ru_maxrss_mb']:.0f} MB")
         for label in labels:
             start = time.perf_counter()
             points, triangles, how = build_mesh(label, igea)
@@ -727,7 +737,7 @@ def run(labels, repeats, time_limit, memory_limit_gb):
                 stale.unlink()
     finally:
         shutil.rmtree(folder, ignore_errors=True)
-    return rows
+    return rows, compile_run
 
 
 def main(argv=None):
@@ -740,7 +750,11 @@ def main(argv=None):
     parser.add_argument("--memory-limit", type=float, default=16.0, help="GB of resident memory a bake may use")
     parser.add_argument("--child", nargs=2, metavar=("MESH", "JSON"), help=argparse.SUPPRESS)
     parser.add_argument("--reference", nargs=2, metavar=("MESH", "JSON"), help=argparse.SUPPRESS)
+    parser.add_argument("--fill-cache", metavar="FOLDER", help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
+    if args.fill_cache:
+        warm_up(Path(args.fill_cache))
+        return 0
     if args.child:
         child(args.child[0], args.child[1], args.repeats)
         return 0
@@ -753,7 +767,7 @@ def main(argv=None):
     labels = args.sizes or (QUICK_SIZES if args.quick else SIZES)
     info = machine_info()
     start = time.perf_counter()
-    rows = run(labels, args.repeats, args.time_limit, args.memory_limit)
+    rows, info["compile"] = run(labels, args.repeats, args.time_limit, args.memory_limit)
     info["seconds_total"] = time.perf_counter() - start
     done = [r for r in rows if "vertices" in r]
     exponents = {name: fit_exponent([r["vertices"] for r in done], seconds) for name, seconds in curves(done).items()}
