@@ -384,8 +384,9 @@ class Scene:
         the proxy's surface is shadowed by it; a point light's distance and direction are measured from there too
         (a relative change of about twice that distance over the light's). The visibility is kept in the Scene's
         cache, so another material traces no ray again."""
-        key = (id(geometry), *_light_key(lights, eta, per_direction), "full mesh")
-        for known in (("full mesh", *key[1:4]), key):
+        light_key = _light_key(lights, eta, per_direction)
+        key = (id(geometry), *light_key, "full mesh")
+        for known in (("full mesh", *light_key), key):  # traced against the full mesh, or against this proxy
             if known in self._incident:
                 return self._incident[known], True
         if not self.shadows:

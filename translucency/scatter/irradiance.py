@@ -402,13 +402,7 @@ def incident_flux(
                 direction = job.vector.copy() if job.kind == "dir" else None
                 contributions.append(LightContribution(job.light, direction, f, p, areas[f, None] * p, w12_k))
 
-    weight = phi.sum(axis=1)
-    lit = weight > 0.0
-    w12_mean = np.negative(normals)  # any inward unit vector will do where no flux enters
-    np.divide(weighted_w12, weight[:, None], out=w12_mean, where=lit[:, None])  # (no masked copies: 10M rows)
-    w12_mean[~lit & degenerate] = (0.0, 0.0, -1.0)
-    # Every w12_ik points into the medium (w12 . n < 0), so their flux-weighted mean never vanishes.
-    w12 = w12_mean / row_lengths(w12_mean)[:, None]
+    w12_mean, w12, lit = _mean_direction(weighted_w12, phi.sum(axis=1), normals)
     flux = areas[:, None] * phi
 
     stats.n_lit = int(np.count_nonzero(lit))
@@ -425,6 +419,20 @@ def incident_flux(
         stats=stats,
         contributions=tuple(contributions) if contributions is not None else None,
     )
+
+
+def _mean_direction(weighted, weight, normals):
+    """``(w12_mean, w12, lit)``: the flux-weighted mean refracted direction ``weighted / weight`` (n, 3) where any
+    flux enters (``lit``; every ``w12`` there points into the medium, so the mean never vanishes), the inward normal
+    elsewhere (any inward unit vector will do), ``(0, 0, -1)`` where that normal is 0 too; and its unit vector."""
+    lit = weight > 0.0
+    w12_mean = np.negative(normals)
+    np.divide(weighted, weight[:, None], out=w12_mean, where=lit[:, None])  # (no masked copies: 10M rows)
+    lengths = row_lengths(w12_mean)
+    degenerate = lengths == 0.0  # a degenerate normal where no light arrives
+    w12_mean[degenerate] = (0.0, 0.0, -1.0)
+    lengths[degenerate] = 1.0
+    return w12_mean, w12_mean / lengths[:, None], lit
 
 
 def carried_light(light: IncidentLight, gather, normals, areas) -> IncidentLight:
@@ -458,15 +466,7 @@ def carried_light(light: IncidentLight, gather, normals, areas) -> IncidentLight
     def carried(flux_rgb, w12_mean):
         flux = gather(flux_rgb)
         fine_weight = flux_rgb.sum(axis=1)
-        weight = gather(fine_weight)
-        lit = weight > 0.0
-        w12_mean_out = -normals.copy()
-        w12_mean_out[lit] = gather(fine_weight[:, None] * w12_mean)[lit] / weight[lit, None]
-        lengths = row_lengths(w12_mean_out)
-        degenerate = lengths == 0.0  # a degenerate normal where no light arrives
-        w12_mean_out[degenerate] = (0.0, 0.0, -1.0)
-        lengths[degenerate] = 1.0
-        w12 = w12_mean_out / lengths[:, None]
+        w12_mean_out, w12, lit = _mean_direction(gather(fine_weight[:, None] * w12_mean), gather(fine_weight), normals)
         phi = np.divide(flux, areas[:, None], out=np.zeros_like(flux), where=areas[:, None] > 0.0)
         return phi, flux, w12, w12_mean_out, lit
 
