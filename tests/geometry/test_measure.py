@@ -9,6 +9,7 @@ from hypothesis.extra.numpy import arrays
 from translucency.errors import InvalidParameterError
 from translucency.geometry.measure import (
     area_centroids,
+    barycentric_vertex_areas,
     edge_lengths,
     hull_candidates,
     mean_edge_length,
@@ -35,6 +36,15 @@ def test_vertex_areas_sum_to_surface_area(points, triangles, method):
     assert np.all(areas >= -1e-9 * max(total, 1))
     assert areas.sum() == pytest.approx(total, rel=1e-9, abs=1e-9)
     assert np.all(np.isfinite(areas))
+
+
+@settings(max_examples=40, deadline=None)
+@given(points=coordinates, triangles=triangle_lists)
+def test_barycentric_areas_are_the_bincount_of_thirds_to_the_bit(points, triangles):
+    # an independent sum: numpy's bincount over the flattened corners, each weighted by a third of its triangle
+    areas = triangle_areas(points, triangles)
+    expected = np.bincount(triangles.ravel(), weights=np.repeat(areas / 3.0, 3), minlength=len(points))
+    assert np.array_equal(barycentric_vertex_areas(triangles, areas, len(points)), expected)
 
 
 @settings(max_examples=40, deadline=None)

@@ -214,6 +214,23 @@ def test_bad_arguments_are_sentences():
         solve.SurfaceGeometry(points, triangles + 1000, normals)
 
 
+def test_vertex_areas_given_are_the_ones_used_and_checked():
+    # the areas a caller holds (the Scene's of the full mesh) stand in for the summed ones, in the caller's order and
+    # in the spatially ordered copy the solver works on; the same solve to the bit
+    medium = material("marble").medium()
+    points, triangles = icosphere(2, 5.0)
+    normals, phi, w12 = _lit(points, triangles, medium, _unit([0.0, 0.3, 1.0]))
+    summed = solve.SurfaceGeometry(points, triangles, normals)
+    given = solve.SurfaceGeometry(points, triangles, normals, vertex_areas_mm2=summed.vertex_areas.copy())
+    assert np.array_equal(given.vertex_areas, summed.vertex_areas)
+    np.testing.assert_array_equal(
+        solve.solve(given, phi, w12, medium, method="tree", tol=0.01).B,
+        solve.solve(summed, phi, w12, medium, method="tree", tol=0.01).B,
+    )
+    with pytest.raises(InvalidParameterError, match="vertex_areas_mm2"):
+        solve.SurfaceGeometry(points, triangles, normals, vertex_areas_mm2=np.ones(3))
+
+
 @pytest.mark.parametrize("model", ["directional", "standard"])
 def test_cutoff_kernel_is_the_sum_over_pairs_within_the_radius(model):
     from translucency.scatter import cutoff, kernels

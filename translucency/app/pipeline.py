@@ -283,6 +283,7 @@ class Scene:
         self._solver_meshes: dict = {}
         self._incident: dict = {}
         self._normals = None
+        self._areas = None
         self._mean_edge = None
         self._refused: dict = {}
 
@@ -306,9 +307,13 @@ class Scene:
         if key in self._solver_meshes:
             return (*self._solver_meshes[key], True)
         mesh, decimation, edge = _solver_mesh(self.mesh, edge)
-        normals = self._full_normals() if mesh is self.mesh else mesh.vertex_normals()
+        full = decimation is None
         geometry = SurfaceGeometry(
-            mesh.points, mesh.triangles, normals, self._mean_edge if decimation is None else None
+            mesh.points,
+            mesh.triangles,
+            self._full_normals() if full else mesh.vertex_normals(),
+            self._mean_edge if full else None,
+            self._full_areas() if full else None,
         )
         self._solver_meshes[key] = (mesh, decimation, edge, geometry)
         return mesh, decimation, edge, geometry, False
@@ -424,7 +429,7 @@ class Scene:
         return incident_flux(
             origins,
             self._full_normals(),
-            self.mesh.vertex_areas(),
+            self._full_areas(),
             lights,
             eta,
             cache=self.visibility,
@@ -437,6 +442,13 @@ class Scene:
         if self._normals is None:
             self._normals = self.mesh.vertex_normals()
         return self._normals
+
+    def _full_areas(self) -> np.ndarray:
+        """The full mesh's barycentric vertex areas (mm²), computed once (the solver's at full resolution and the
+        light's at every vertex)."""
+        if self._areas is None:
+            self._areas = self.mesh.vertex_areas()
+        return self._areas
 
     def _drop_full_mesh_lights(self) -> None:
         """Let go of every light traced at every vertex of the full mesh (against it, or against a proxy)."""

@@ -356,9 +356,21 @@ def barycentric_vertex_areas(triangles, triangle_areas, n_points: int) -> np.nda
     ndarray, shape (n_points,), float64
         Areas in mm² (zero for unreferenced vertices).
     """
-    triangles = np.asarray(triangles, dtype=np.int64)
-    areas = np.asarray(triangle_areas, dtype=np.float64)
-    return _accumulate(triangles, np.repeat(areas[:, None] / 3.0, 3, axis=1), int(n_points))
+    triangles = kernel_array(np.asarray(triangles).reshape(-1, 3), np.int64)
+    areas = kernel_array(np.asarray(triangle_areas).reshape(-1), np.float64)
+    # one compiled pass, the thirds added in the order a bincount over the flattened corners adds them (the same
+    # sums to the bit) without its (m, 3) weights: 3 s at 20M triangles with them
+    return _barycentric_sum(triangles, areas, int(n_points))
+
+
+@numba.njit(cache=True, nogil=True)
+def _barycentric_sum(triangles, areas, n_points):
+    out = np.zeros(n_points)
+    for t in range(triangles.shape[0]):
+        third = areas[t] / 3.0
+        for c in range(3):
+            out[triangles[t, c]] += third
+    return out
 
 
 def _mixed_voronoi_corner_areas(points: np.ndarray, triangles: np.ndarray) -> np.ndarray:

@@ -101,12 +101,16 @@ class SurfaceGeometry:
     mean_edge_mm : float, optional
         The mean edge length (mm) when the caller has measured it already (:attr:`mean_edge_length` then takes it
         instead of measuring the edges again: 7 s at 10M vertices).
+    vertex_areas_mm2 : (n,) float64, optional
+        The barycentric vertex areas (mm²) when the caller holds them already (:attr:`vertex_areas` then takes them
+        instead of summing the triangles again).
     """
 
     points: np.ndarray
     triangles: np.ndarray
     normals: np.ndarray
     mean_edge_mm: float | None = None
+    vertex_areas_mm2: np.ndarray | None = field(default=None, repr=False)
     _cache: dict = field(default_factory=dict, repr=False)
 
     def __post_init__(self):
@@ -127,6 +131,11 @@ class SurfaceGeometry:
             self.normals = self.normals / np.where(lengths > 0, lengths, 1.0)[:, None]
         if self.mean_edge_mm is not None:
             self._cache["mean_edge"] = float(self.mean_edge_mm)
+        if self.vertex_areas_mm2 is not None:
+            self._cache["vertex_areas"] = _as_array(
+                self.vertex_areas_mm2, np.float64, (self.points.shape[0],), "vertex_areas_mm2"
+            )
+            self.vertex_areas_mm2 = None  # held once, in the cache (which the spatial order permutes)
 
     @property
     def n_vertices(self) -> int:
