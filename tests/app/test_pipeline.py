@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from translucency.app.pipeline import Scene, shade
+from translucency.app.pipeline import Scene, resolve_medium, shade
 from translucency.geometry.mesh import TriangleMesh
 from translucency.geometry.synthetic import icosphere
 from translucency.scatter.lights import DirectionalLight
@@ -159,6 +159,30 @@ def test_a_scan_size_scene_lets_its_embree_scene_go_during_the_solve_and_gives_t
     released = Scene(mesh).shade("marble", method="tree", bounces=1)
     assert len(built) == 3  # let go after the incident light, built again for the bounce
     np.testing.assert_array_equal(released.B, kept.B)
+
+
+def test_the_scene_sums_its_scans_vertex_areas_once(monkeypatch):
+    """The full mesh's vertex areas are summed once per Scene: the solver at full resolution and the light traced at
+    every vertex take the same (read-only) array."""
+    from translucency.geometry import measure
+    from translucency.scatter import solve
+
+    summed = []
+    real = measure.barycentric_vertex_areas
+
+    def counting(*args):
+        summed.append(1)
+        return real(*args)
+
+    monkeypatch.setattr(solve, "barycentric_vertex_areas", counting)
+    monkeypatch.setattr(measure, "barycentric_vertex_areas", counting)
+    mesh = sphere()
+    scene = Scene(mesh)
+    result = scene.shade("marble", method="tree", bounces=0)
+    assert result.stats["solver_vertices"] == mesh.n_points and len(summed) == 1
+    geometry = scene.solver_mesh(resolve_medium("marble"), "full")[3]
+    np.testing.assert_array_equal(geometry.vertex_areas, mesh.vertex_areas())
+    assert not geometry.vertex_areas.flags.writeable
 
 
 def test_the_scene_measures_its_scans_edges_once(monkeypatch):

@@ -215,18 +215,23 @@ def test_bad_arguments_are_sentences():
 
 
 def test_vertex_areas_given_are_the_ones_used_and_checked():
-    # the areas a caller holds (the Scene's of the full mesh) stand in for the summed ones, in the caller's order and
-    # in the spatially ordered copy the solver works on; the same solve to the bit
+    # the areas a caller holds (the Scene's of the full mesh) stand in for the summed ones: in the caller's order, in
+    # the spatially ordered copy the solver works on, and in the solve (the same areas: the same B to the bit; twice
+    # the areas: twice each vertex's flux in the vertex sum, so more B wherever light arrives)
     medium = material("marble").medium()
     points, triangles = icosphere(2, 5.0)
     normals, phi, w12 = _lit(points, triangles, medium, _unit([0.0, 0.3, 1.0]))
     summed = solve.SurfaceGeometry(points, triangles, normals)
-    given = solve.SurfaceGeometry(points, triangles, normals, vertex_areas_mm2=summed.vertex_areas.copy())
-    assert np.array_equal(given.vertex_areas, summed.vertex_areas)
-    np.testing.assert_array_equal(
-        solve.solve(given, phi, w12, medium, method="tree", tol=0.01).B,
-        solve.solve(summed, phi, w12, medium, method="tree", tol=0.01).B,
-    )
+    doubled = 2.0 * summed.vertex_areas
+    given = solve.SurfaceGeometry(points, triangles, normals, vertex_areas_mm2=doubled)
+    assert np.array_equal(given.vertex_areas, doubled)
+    ordered, order, _ = given.spatial_order()
+    assert np.array_equal(ordered.vertex_areas, doubled[order])
+    B = solve.solve(summed, phi, w12, medium, method="exact").B
+    same = solve.SurfaceGeometry(points, triangles, normals, vertex_areas_mm2=summed.vertex_areas.copy())
+    np.testing.assert_array_equal(solve.solve(same, phi, w12, medium, method="exact").B, B)
+    more = solve.solve(given, phi, w12, medium, method="exact").B
+    assert np.all(more[B > 0] > B[B > 0])
     with pytest.raises(InvalidParameterError, match="vertex_areas_mm2"):
         solve.SurfaceGeometry(points, triangles, normals, vertex_areas_mm2=np.ones(3))
 

@@ -312,8 +312,8 @@ class Scene:
             mesh.points,
             mesh.triangles,
             self._full_normals() if full else mesh.vertex_normals(),
-            self._mean_edge if full else None,
-            self._full_areas() if full else None,
+            mean_edge_mm=self._mean_edge if full else None,
+            vertex_areas_mm2=self._full_areas() if full else None,
         )
         self._solver_meshes[key] = (mesh, decimation, edge, geometry)
         return mesh, decimation, edge, geometry, False
@@ -448,6 +448,7 @@ class Scene:
         light's at every vertex)."""
         if self._areas is None:
             self._areas = self.mesh.vertex_areas()
+            self._areas.flags.writeable = False  # shared with the full-resolution SurfaceGeometry's cache
         return self._areas
 
     def _drop_full_mesh_lights(self) -> None:

@@ -345,7 +345,8 @@ def barycentric_vertex_areas(triangles, triangle_areas, n_points: int) -> np.nda
     Parameters
     ----------
     triangles : array_like of int, shape (m, 3)
-        Vertex indices of each triangle.
+        Vertex indices of each triangle, each in ``0 .. n_points - 1`` (not checked here: the meshes that reach
+        this are validated where they are built).
     triangle_areas : array_like, shape (m,)
         Area of each triangle in mm² (:func:`triangle_areas`).
     n_points : int
@@ -358,8 +359,12 @@ def barycentric_vertex_areas(triangles, triangle_areas, n_points: int) -> np.nda
     """
     triangles = kernel_array(np.asarray(triangles).reshape(-1, 3), np.int64)
     areas = kernel_array(np.asarray(triangle_areas).reshape(-1), np.float64)
+    if areas.shape[0] != triangles.shape[0]:
+        raise InvalidParameterError(
+            f"barycentric_vertex_areas needs one area per triangle ({triangles.shape[0]}), not {areas.shape[0]}."
+        )
     # one compiled pass, the thirds added in the order a bincount over the flattened corners adds them (the same
-    # sums to the bit) without its (m, 3) weights: 3 s at 20M triangles with them
+    # sums to the bit), without its (m, 3) weights
     return _barycentric_sum(triangles, areas, int(n_points))
 
 
