@@ -83,15 +83,15 @@ def _cross_products(points, triangles):
 
 
 @numba.njit(cache=True)
-def _vertex_sums(triangles, vectors, n_points):
-    """Each triangle's vector ``(m, 3)`` added to its three vertices, in triangle order: ``(n_points, 3)``."""
-    out = np.zeros((n_points, 3))
+def _vertex_sums(triangles, values, n_points):
+    """Each triangle's row of ``values`` ``(m, k)`` added to its three vertices, in triangle order: ``(n_points, k)``
+    (the order a bincount over the flattened corners adds in)."""
+    out = np.zeros((n_points, values.shape[1]))
     for t in range(triangles.shape[0]):
         for i in range(3):
             v = triangles[t, i]
-            out[v, 0] += vectors[t, 0]
-            out[v, 1] += vectors[t, 1]
-            out[v, 2] += vectors[t, 2]
+            for j in range(values.shape[1]):
+                out[v, j] += values[t, j]
     return out
 
 
@@ -363,19 +363,9 @@ def barycentric_vertex_areas(triangles, triangle_areas, n_points: int) -> np.nda
         raise InvalidParameterError(
             f"barycentric_vertex_areas needs one area per triangle ({triangles.shape[0]}), not {areas.shape[0]}."
         )
-    # one compiled pass, the thirds added in the order a bincount over the flattened corners adds them (the same
-    # sums to the bit), without its (m, 3) weights
-    return _barycentric_sum(triangles, areas, int(n_points))
-
-
-@numba.njit(cache=True, nogil=True)
-def _barycentric_sum(triangles, areas, n_points):
-    out = np.zeros(n_points)
-    for t in range(triangles.shape[0]):
-        third = areas[t] / 3.0
-        for c in range(3):
-            out[triangles[t, c]] += third
-    return out
+    # one compiled pass, the same sums to the bit as a bincount of the thirds over the flattened corners, without
+    # its (m, 3) weights
+    return _vertex_sums(triangles, (areas / 3.0)[:, None], int(n_points))[:, 0]
 
 
 def _mixed_voronoi_corner_areas(points: np.ndarray, triangles: np.ndarray) -> np.ndarray:

@@ -38,7 +38,6 @@ MAIN_JOB_KERNELS = (
     ("translucency.scatter.nearfield", "_fill_shared_points"),
     ("translucency.scatter.nearfield", "_list_points"),
     ("translucency.scatter.nearfield", "_refined_points"),
-    ("translucency.geometry.measure", "_barycentric_sum"),  # its vertex areas
     # the viewer's relighting (its default method)
     ("translucency.scatter.relight", "_fill_coefficients"),
     ("translucency.scatter.relight", "_apply_quantised"),
