@@ -2,7 +2,8 @@
 
 For each shared scan (bunny, horse, Igea) and material (marble, skim milk), one directional light with
 Embree shadows, no bounce, ``tree`` at 1 %: the full-resolution solve is the reference, and on the
-``resolution="auto"`` proxy (a 2 mm one where ``auto`` keeps every vertex; ``B`` solved on the decimated
+proxy of the light's detail (:func:`~translucency.app.pipeline.proxy_edge_length`, what ``resolution="auto"``
+takes at a tolerance of about 0.5; a 2 mm one where that keeps every vertex; ``B`` solved on the decimated
 mesh and interpolated back) the per-vertex
 figure that ``tol`` bounds (docs/physics.md §8.5: 99th percentile of ``|B - B_full| / B_full`` over the
 (vertex, channel) pairs with ``B_full`` at least 1e-4 of the channel's largest), split into
@@ -44,18 +45,19 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 import numpy as np  # noqa: E402
-from solver import LIGHT, MESHES, SCANS, per_vertex_error, prepare  # noqa: E402
+from solver import LIGHT, SCANS, per_vertex_error, prepare, present_scans  # noqa: E402
 
 from translucency import __version__  # noqa: E402,F401  (first: it selects numba's threading layer)
-from translucency.app.pipeline import Scene, carries_full_light  # noqa: E402
+from translucency.app.pipeline import Scene, carries_full_light, proxy_edge_length  # noqa: E402
 from translucency.scatter.materials import material  # noqa: E402
 from translucency.scatter.solve import TOL_FLOOR, local_reach_floor, solve  # noqa: E402
 
 RESULTS = ROOT / "bench" / "results"
 METHOD, TOL = "tree", 0.01
 MATERIALS = ("marble", "skim_milk")
-#: The pipeline's own proxy, and a 2 mm one where "auto" keeps every vertex (the bunny in marble).
-RESOLUTIONS = ("auto", 2.0)
+#: The proxy of the light's detail ("detail": proxy_edge_length), and a 2 mm one where it keeps every vertex (the
+#: bunny in marble).
+RESOLUTIONS = ("detail", 2.0)
 #: A finer proxy besides, where the full mesh's light is near being carried onto it (max σ_tr h = 0.13 in marble).
 FINE_RESOLUTIONS = {"igea": 0.5}
 #: Flux density differences above this fraction of the largest count as "needing a correction".
@@ -110,6 +112,7 @@ def measure(scan: str, name: str, resolution) -> dict | None:
     mesh, _ = prepare(scan)
     medium = material(name).medium()
     scene = Scene(mesh)
+    label, resolution = resolution, proxy_edge_length(medium) if resolution == "detail" else resolution
     if scene.solver_mesh(medium, resolution)[1] is None:
         print(f"{scan}, {name}: resolution {resolution!r} keeps the full mesh")
         return None
@@ -140,7 +143,7 @@ def measure(scan: str, name: str, resolution) -> dict | None:
     row = {
         "scan": scan,
         "material": name,
-        "resolution": resolution,
+        "resolution": label,
         "vertices": mesh.n_points,
         "proxy_vertices": proxy_mesh.n_points,
         "proxy_edge_mm": edge,
@@ -203,7 +206,7 @@ def markdown(rows) -> str:
         )
         lines.append(
             f"| {r['scan']}, {r['material'].replace('_', ' ')} | {r['vertices']:,} ({r['proxy_vertices']:,}, "
-            f"{r['resolution'] if r['resolution'] == 'auto' else str(r['resolution']) + ' mm'}) | "
+            f"{r['resolution'] if r['resolution'] == 'detail' else str(r['resolution']) + ' mm'}) | "
             f"{r['sigma_tr_times_edge']:.2f} | {r['full_seconds']:.1f} s | {r['proxy_seconds']:.1f} s, "
             f"{p['p99']:.0%} ({p['p99_lit']:.0%} / {p['p99_unlit']:.0%}), {p['rms']:.2%} | "
             f"{o['p99']:.1%} ({o['p99_lit']:.1%} / {o['p99_unlit']:.1%}), {o['rms']:.2%}{mark[0]}<br>"
@@ -221,10 +224,7 @@ def main() -> None:
     parser.add_argument("--materials", nargs="+", default=list(MATERIALS))
     args = parser.parse_args()
     rows = []
-    for scan in args.scans:
-        if not (MESHES / SCANS[scan][0]).exists():
-            print(f"skipping {scan}: {SCANS[scan][0]} not in ../shared/meshes")
-            continue
+    for scan in present_scans(args.scans):
         for name in args.materials:
             for resolution in RESOLUTIONS:
                 row = measure(scan, name, resolution)

@@ -12,7 +12,8 @@ Embree shadows: the median wall time of warm solves and the error against ``exac
 
 The settings are the far-field methods at several tolerances on every vertex (``tree``,
 ``cutoff``), and the pipeline's proxy resolution (:meth:`translucency.app.pipeline.Scene.shade` with
-``resolution="auto"`` and explicit proxy edge lengths, ``tree`` at 1 %): ``B`` is solved on a
+the light's detail, :func:`~translucency.app.pipeline.proxy_edge_length`, which ``resolution="auto"`` takes only
+at a loose tolerance, and explicit proxy edge lengths, ``tree`` at 1 %): ``B`` is solved on a
 decimated mesh and interpolated back to every vertex, and its error is measured on the full mesh.
 
 ``exact`` on every vertex of a large scan costs ``n^2`` pair evaluations; the error is therefore
@@ -47,7 +48,7 @@ import numpy as np  # noqa: E402
 from report import load_average, machine_info, output_dir, write_results  # noqa: E402
 
 from translucency import __version__  # noqa: E402,F401  (first: it selects numba's threading layer)
-from translucency.app.pipeline import Scene  # noqa: E402
+from translucency.app.pipeline import Scene, proxy_edge_length  # noqa: E402
 from translucency.io.clean import clean_mesh  # noqa: E402
 from translucency.io.load import load_mesh  # noqa: E402
 from translucency.scatter import kernels  # noqa: E402
@@ -65,8 +66,10 @@ SCANS = {  # file, unit
 }
 MATERIALS = ("marble", "skim_milk", "ketchup")
 SETTINGS = [("tree", 0.1), ("tree", 0.03), ("tree", 0.01), ("tree", 0.003), ("cutoff", 0.01)]
-#: Proxy resolutions of the pipeline (``Scene.shade(resolution=...)``): "auto" and edge lengths in mm.
-PROXY_RESOLUTIONS = ("auto", 2.0, 3.0)
+#: Proxy resolutions of the pipeline (``Scene.shade(resolution=...)``): "detail" (the medium's
+#: :func:`~translucency.app.pipeline.proxy_edge_length`, the proxy "auto" takes at a tolerance of 0.53 and above in
+#: marble) and edge lengths in mm.
+PROXY_RESOLUTIONS = ("detail", 2.0, 3.0)
 PROXY_METHOD, PROXY_TOL = "tree", 0.01
 LIGHT = DirectionalLight((0.35, 0.45, 1.0), 1.0)
 LIGHTS_LABEL = "1 directional, shadows"
@@ -108,6 +111,15 @@ def _fma_loop(xs, rows):
             acc += p
         out[o] = acc
     return out
+
+
+def present_scans(scans):
+    """The scans of ``scans`` whose file is in ../shared/meshes, in order; each missing one said skipped."""
+    for scan in scans:
+        if (MESHES / SCANS[scan][0]).exists():
+            yield scan
+        else:
+            print(f"skipping {scan}: {SCANS[scan][0]} not in ../shared/meshes")
 
 
 def prepare(name):
@@ -279,12 +291,13 @@ def proxy_rows(scan, name, scene, medium, receivers, exact, resolutions, repeats
     rows = []
     n = scene.mesh.n_points
     for resolution in resolutions:
+        setting = proxy_edge_length(medium) if resolution == "detail" else resolution
         result, seconds = timed(
             # no bounce: the error is against a single exact solve
-            lambda: scene.shade(medium, LIGHT, method=PROXY_METHOD, tol=PROXY_TOL, resolution=resolution, bounces=0),
+            lambda: scene.shade(medium, LIGHT, method=PROXY_METHOD, tol=PROXY_TOL, resolution=setting, bounces=0),
             repeats,
         )
-        solver_mesh, decimation, edge, _, _ = scene.solver_mesh(medium, resolution)
+        solver_mesh, decimation, edge, _, _ = scene.solver_mesh(medium, setting)
         rms, worst, p99 = errors(result.B[receivers], exact.B)
         label = f"{resolution:g} mm" if isinstance(resolution, float) else resolution
         label += f": {solver_mesh.n_points} vertices" if decimation is not None else ": full (no proxy)"
@@ -325,10 +338,7 @@ def run(scans, materials, settings, repeats, resolutions=PROXY_RESOLUTIONS, subs
     """
     rows = []
     kernel_speed = None
-    for scan in scans:
-        if not (MESHES / SCANS[scan][0]).exists():
-            print(f"skipping {scan}: {SCANS[scan][0]} not in ../shared/meshes")
-            continue
+    for scan in present_scans(scans):
         mesh, geometry = prepare(scan)
         scene = Scene(mesh)
         n = geometry.n_vertices

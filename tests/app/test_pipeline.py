@@ -106,6 +106,21 @@ def test_unit_is_recorded_in_the_metadata():
     assert metadata["radiance_unit"] == "W/(m^2 sr) per W/m^2 of irradiance of the light"
 
 
+def test_auto_keeps_every_vertex_at_the_default_tolerance_and_a_looser_one_gets_a_proxy_within_it():
+    from translucency.scatter.solve import TOL_FLOOR
+
+    mesh = sphere(5, 8.0)  # 0.25 mm edges: far finer than marble's diffusion length, coarser than 1 % needs
+    light = DirectionalLight((0.3, 0.5, 1.0), 1.0)
+    scene = Scene(mesh)
+    exact = scene.shade("marble", light, method="exact", resolution="full", bounces=0).B
+    keep = exact >= TOL_FLOOR * exact.max(axis=0)
+    assert scene.shade("marble", light, bounces=0).stats["solver_vertices"] == mesh.n_points  # the default: auto
+    for tol in (0.3, 0.6):  # measured: 0.10 and 0.33
+        result = scene.shade("marble", light, tol=tol, bounces=0)
+        assert result.metadata["resolution"].startswith("proxy") and result.stats["solver_vertices"] < mesh.n_points / 8
+        assert np.percentile(np.abs(result.B - exact)[keep] / exact[keep], 99) <= tol
+
+
 def test_a_tiny_object_gets_a_proxy_it_allows_and_a_given_edge_too_coarse_is_one_sentence():
     import pytest
 

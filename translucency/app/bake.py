@@ -431,7 +431,10 @@ def failure_sentence(exc: BaseException) -> str:
             "version, on every worker."
         )
     elif isinstance(exc, MemoryError):
-        text = "ran out of memory; bake it with --resolution auto or on a machine with more memory."
+        text = (
+            "ran out of memory; bake it on a proxy (--resolution with an edge length in mm) or on a machine with "
+            "more memory."
+        )
     elif isinstance(exc, OSError):
         where = f" ({exc.filename})" if exc.filename else ""
         text = f"{exc.strerror or exc}{where}."
@@ -828,7 +831,7 @@ def bake(
     model=DEFAULT_MODEL,
     method=DEFAULT_METHOD,
     tol=DEFAULT_TOL,
-    resolution="full",
+    resolution="auto",
     shadows=True,
     exposure=None,
     per_direction=False,
@@ -860,7 +863,7 @@ def bake(
         Length unit of the files: ``mm``, ``cm``, ``m``, ``in`` or a number of mm per unit; None
         (default): inferred from each file's size, said in one line and recorded in the bake.
     model, method, tol, resolution, shadows, exposure, per_direction, bounces
-        As in :func:`translucency.shade`; ``resolution`` is ``"full"``, ``"auto"`` or a proxy edge
+        As in :func:`translucency.shade`; ``resolution`` is ``"auto"``, ``"full"`` or a proxy edge
         length in mm.
     up : str
         The scans' up axis (``"x"`` ... ``"-z"``, or ``"auto"``: inferred per scan); it places the

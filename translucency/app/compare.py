@@ -390,7 +390,7 @@ def compare(
     output=None,
     method=DEFAULT_METHOD,
     tol=DEFAULT_TOL,
-    resolution="full",
+    resolution="auto",
     shadows=True,
     per_direction=False,
     bounces=DEFAULT_BOUNCES,

@@ -33,15 +33,24 @@ DEFAULT_SCAN_WIDTH_MM = 155.0
 #: scan whose up is +y (the default bunny) this is the direction in the scan's own coordinates too.
 DEFAULT_LIGHT_DIRECTION = (0.35, 1.0, 0.45)
 
-#: Proxy resolution ("auto"): the solver's mesh needs no edges shorter than
-#: min(PROXY_DIFFUSION_FRACTION / max sigma_tr, PROXY_MEAN_FREE_PATHS / max sigma_t'), the detail the
-#: light can show after diffusing (a fraction of the shortest diffusion length, and a few reduced mean
-#: free paths, which set how sharp a shadow edge stays). Meshes finer than PROXY_MIN_RATIO times that
-#: are decimated to it; the result is interpolated back to every vertex of the full mesh. The near
-#: field is still integrated over the proxy's real triangles, so only where B is computed changes.
+#: The detail the light can show after diffusing (:func:`proxy_edge_length`, the viewer's interactive proxy and the
+#: coarsest "auto" proxy): no edges shorter than min(PROXY_DIFFUSION_FRACTION / max sigma_tr,
+#: PROXY_MEAN_FREE_PATHS / max sigma_t'), a fraction of the shortest diffusion length and a few reduced mean free
+#: paths, which set how sharp a shadow edge stays. Meshes finer than PROXY_MIN_RATIO times a proxy's edge are
+#: decimated to it; the result is interpolated back to every vertex of the full mesh. The near field is still
+#: integrated over the proxy's real triangles, so only where B is computed changes.
 PROXY_DIFFUSION_FRACTION = 0.5
 PROXY_MEAN_FREE_PATHS = 5.0
 PROXY_MIN_RATIO = 1.5
+#: Resolution "auto" (the default) takes a proxy only where its error is within the tolerance asked for
+#: (:func:`auto_proxy_edge`, docs/physics.md §8.6). Measured at the 99th percentile of vertices against the full
+#: solve, a proxy of edge h was off by at most this many times max sigma_tr * h: 1.22 on the shared Igea in marble
+#: (h = 0.42 diffusion lengths, 51 %), 0.54-0.99 on the other proxies of proxy_edge_length of the shared scans, 0.4
+#: on the Igea's 0.5 mm proxy (0.13, 5.2 %), 0.65 and 1.06 on the 2.1M- and 10M-vertex Igea's (0.046 and 0.040, 3.0
+#: and 4.3 %) (bench/README.md, "Proxy error, measured apart", "Scaling and memory", "Automatic resolution"). At the
+#: default 1 % that edge (0.03 mm in marble) is finer than any scan measured, so "auto" solves every vertex; a proxy
+#: comes with a looser tolerance.
+AUTO_PROXY_ERROR_SLOPE = 1.25
 #: A proxy keeps at least this many triangles. On an object only a few diffusion lengths across (a
 #: scan read in the wrong unit, say) the "auto" and the viewer's edge lengths are shortened to it,
 #: and a proxy edge length given that leaves fewer is refused with a sentence.
@@ -122,10 +131,20 @@ PROXY_ERRORS = ((0.45, "2 %"), (0.2, "4 %"), (0.09, "6 %"), (0.05, "7 %"), (0.02
 
 
 def proxy_edge_length(medium) -> float:
-    """Edge length (mm) the solver needs for this medium (see :data:`PROXY_DIFFUSION_FRACTION`)."""
-    return float(
-        min(PROXY_DIFFUSION_FRACTION / np.max(medium.sigma_tr), PROXY_MEAN_FREE_PATHS / np.max(medium.sigma_t_reduced))
-    )
+    """Edge length (mm) of the detail the light can show in this medium (:data:`PROXY_DIFFUSION_FRACTION`; without
+    absorption, where the diffusion length is infinite, the mean free paths' part alone)."""
+    sigma_tr = float(np.max(medium.sigma_tr))
+    edge = PROXY_MEAN_FREE_PATHS / float(np.max(medium.sigma_t_reduced))
+    return edge if sigma_tr == 0 else min(edge, PROXY_DIFFUSION_FRACTION / sigma_tr)
+
+
+def auto_proxy_edge(medium, tol) -> float:
+    """Proxy edge length (mm) of resolution "auto" at the per-vertex tolerance ``tol`` (a fraction): the longest
+    edge whose measured error is within it, ``tol / (AUTO_PROXY_ERROR_SLOPE max σ_tr)``
+    (:data:`AUTO_PROXY_ERROR_SLOPE`, docs/physics.md §8.6; without absorption σ_t′ stands in for σ_tr, the
+    shorter length), and no longer than :func:`proxy_edge_length`."""
+    rate = float(np.max(medium.sigma_tr)) or float(np.max(medium.sigma_t_reduced))
+    return min(float(tol) / (AUTO_PROXY_ERROR_SLOPE * rate), proxy_edge_length(medium))
 
 
 def default_scan_path() -> Path:
@@ -296,13 +315,14 @@ class Scene:
             self._up = resolve_up("auto", self.mesh.points, self.mesh.triangles)
         return self._up
 
-    def solver_mesh(self, medium, resolution="full"):
-        """``(solver mesh, Decimation or None, edge or None, SurfaceGeometry, reused)`` for a resolution."""
+    def solver_mesh(self, medium, resolution="full", tol=DEFAULT_TOL):
+        """``(solver mesh, Decimation or None, edge or None, SurfaceGeometry, reused)`` for a resolution (``tol``: the
+        per-vertex tolerance that sets the edge of "auto", :func:`auto_proxy_edge`)."""
         from ..scatter.solve import SurfaceGeometry
 
         if self._mean_edge is None:
             self._mean_edge = mean_edge_length(self.mesh.points, self.mesh.triangles)
-        edge = _proxy_edge(self._mean_edge, medium, resolution, self.mesh)
+        edge = _proxy_edge(self._mean_edge, medium, resolution, tol, self.mesh)
         key = None if edge is None else round(edge, 9)  # decided before decimating: a cache hit costs nothing
         if key in self._solver_meshes:
             return (*self._solver_meshes[key], True)
@@ -470,7 +490,7 @@ class Scene:
         model=DEFAULT_MODEL,
         method=DEFAULT_METHOD,
         tol=DEFAULT_TOL,
-        resolution="full",
+        resolution="auto",
         exposure=None,
         per_direction=False,
         bounces=DEFAULT_BOUNCES,
@@ -526,7 +546,7 @@ class Scene:
             first_attempt = 1
         for attempt in range(first_attempt, COARSER_ATTEMPTS + 1):
             start = time.perf_counter()
-            solver_mesh, decimation, edge, geometry, geometry_reused = self.solver_mesh(medium, resolution)
+            solver_mesh, decimation, edge, geometry, geometry_reused = self.solver_mesh(medium, resolution, tol)
             timings["geometry"] = timings.get("geometry", 0.0) + time.perf_counter() - start
             solve_with = _albedo_solver(solver_mesh, settings.albedo, solver)
             try:
@@ -881,7 +901,7 @@ def shade(
     method=DEFAULT_METHOD,
     tol=DEFAULT_TOL,
     shadows=True,
-    resolution="full",
+    resolution="auto",
     exposure=None,
     per_direction=False,
     bounces=DEFAULT_BOUNCES,
@@ -913,10 +933,12 @@ def shade(
     shadows : bool
         Cast Embree shadow rays (off: every front-facing vertex is lit).
     resolution : "auto", "full" or float
-        Where ``B`` is computed: ``"auto"`` decimates to :func:`proxy_edge_length` when the mesh is much
-        finer, ``"full"`` (default) uses every vertex, a number is a proxy edge length in mm. Measured:
-        the shared Igea (134k vertices, 0.48 mm edges) in marble on an auto proxy of 9.8k vertices is
-        4.2 % relative RMS from ``exact`` on the full mesh, which is why ``"full"`` is the default.
+        Where ``B`` is computed: ``"auto"`` (default) on a proxy of :func:`auto_proxy_edge` where the mesh is
+        much finer than that, so that the proxy's measured per-vertex error is within ``tol`` (at the default 1 %
+        no scan measured is that fine: every vertex); ``"full"`` on every vertex; a number is a proxy edge length
+        in mm. Measured on the shared Igea (134k vertices, 0.48 mm edges) in marble: at ``tol=0.3`` a proxy of 30k
+        vertices, 25 % off ``exact`` at the 99th percentile of vertices in a quarter of the full solve's time
+        (bench/README.md, "Automatic resolution").
     exposure : float, optional
         Display exposure (automatic by default, see :func:`~translucency.app.display.display_colors`).
     per_direction : bool
@@ -1087,14 +1109,15 @@ def write_result(result: ShadeResult, path) -> Path:
     return write_result_file(result, path)
 
 
-def _proxy_edge(mean_edge, medium, resolution, mesh):
-    """Proxy edge length (mm) for a resolution on ``mesh`` of ``mean_edge`` (mm), or None for the full mesh."""
+def _proxy_edge(mean_edge, medium, resolution, tol, mesh):
+    """Proxy edge length (mm) for a resolution (at the per-vertex tolerance ``tol`` for "auto") on ``mesh`` of
+    ``mean_edge`` (mm), or None for the full mesh."""
     from ..errors import InvalidParameterError, option
 
     if resolution == "full":
         return None
     if resolution == "auto":
-        edge = min(proxy_edge_length(medium), coarsest_proxy_edge(mesh.surface_area))
+        edge = min(auto_proxy_edge(medium, tol), coarsest_proxy_edge(mesh.surface_area))
         return edge if edge >= PROXY_MIN_RATIO * mean_edge else None
     edge = parse_resolution(resolution)
     if edge <= mean_edge:

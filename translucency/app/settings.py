@@ -13,8 +13,8 @@ field                     meaning                                               
 material                  catalogue name, entry or medium, stored as a ``Medium``         1/mm
 model                     scattering model (:data:`~translucency.scatter.names.MODELS`)   --
 method                    far-field method (:data:`~translucency.scatter.names.METHODS`)  --
-tol                       relative error allowed to ``cutoff`` and ``tree``               1
-resolution                ``"full"``, ``"auto"`` or a proxy edge length                    mm
+tol                       relative error allowed per vertex (``cutoff``, ``tree``, auto)  1
+resolution                ``"auto"``, ``"full"`` or a proxy edge length                    mm
 shadows                   Embree shadow rays                                              --
 per_direction             one solve per light sample (else aggregated per vertex)         --
 exposure                  display exposure (None: automatic)                              1
@@ -71,8 +71,9 @@ HELP = {
     "material": "catalogue name (see 'translucency materials') or a material file, .toml or .json",
     "model": "scattering model",
     "method": "far-field method",
-    "tol": "relative error allowed to cutoff/tree",
-    "resolution": "where B is computed: full (every vertex), auto, or a proxy edge length in mm",
+    "tol": "relative error allowed per vertex to cutoff/tree and to auto's proxy",
+    "resolution": "where B is computed: auto (on a proxy where its measured error is within the tolerance, else "
+    "every vertex), full (every vertex), or a proxy edge length in mm",
     "shadows": "no shadow rays: every front-facing vertex is lit",
     "per_direction": "solve each light sample with its own refracted direction (exact for several lights)",
     "exposure": "display exposure (default: automatic)",
@@ -124,9 +125,11 @@ class ShadeSettings:
         How the far field is summed (:func:`translucency.scatter.solve.solve`); ``relight`` prepares operators
         on first use that later lights on the same :class:`~translucency.app.pipeline.Scene` reuse.
     tol : float
-        Relative error per vertex allowed to ``cutoff``, ``tree`` and ``relight``, in (0, 1).
-    resolution : "full", "auto" or float
-        Where ``B`` is computed (:func:`translucency.app.pipeline.shade`); a number is a proxy edge in mm.
+        Relative error per vertex allowed to ``cutoff``, ``tree`` and ``relight``, and to the proxy of
+        ``resolution="auto"``, in (0, 1).
+    resolution : "auto", "full" or float
+        Where ``B`` is computed (:func:`translucency.app.pipeline.shade`): ``"auto"`` (default) on a proxy only
+        where its measured error is within ``tol``, ``"full"`` on every vertex, a number is a proxy edge in mm.
     shadows : bool
         Cast Embree shadow rays (off: every front-facing vertex is lit).
     per_direction : bool
@@ -151,7 +154,7 @@ class ShadeSettings:
     model: str = DEFAULT_MODEL
     method: str = DEFAULT_METHOD
     tol: float = DEFAULT_TOL
-    resolution: str | float = "full"
+    resolution: str | float = "auto"
     shadows: bool = True
     per_direction: bool = False
     exposure: float | None = None

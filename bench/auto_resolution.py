@@ -1,0 +1,145 @@
+"""Resolution "auto" against the tolerance it is given: does it keep its promise, and what does it save?
+
+``resolution="auto"`` (the default of bake, compare and :func:`translucency.shade`) solves on a proxy of
+:func:`translucency.app.pipeline.auto_proxy_edge` only where the scan is much finer than that edge, so that the
+proxy's measured error stays within ``tol`` (docs/physics.md §8.6). For each shared scan (bunny, horse, Igea),
+material (marble, skim milk, ketchup) and tolerance (0.01 -- the default -- 0.1, 0.3, 0.6), one directional light
+with Embree shadows and no bounce, ``Scene.shade`` with the defaults but ``tol``: the edge ``auto`` chose, the
+vertices it solved, the wall time of one warm call, and the per-vertex figure ``tol`` bounds (docs/physics.md §8.5:
+the 99th percentile of ``|B - B_exact| / B_exact`` over the (vertex, channel) pairs with ``B_exact`` at least 1e-4
+of the channel's largest) against ``exact`` on the full mesh at 4000 random vertices (its light traced there, the
+same for every row), and, where ``auto`` took a proxy, the same figure against the full solve at the same ``tol``
+(the proxy's own part, the measure of the issue's goal; where ``auto`` solved every vertex it is that solve, 0).
+"met" is the figure against ``exact`` at or below ``tol``. Times are side by side in one run, with the load; the
+proxy's decimation is counted apart (it is made once per scan, material and edge).
+
+Written to ``bench/results/auto_resolution.json`` and ``.md`` (with ``--quick``: the bunny in marble at 0.01 and
+0.6, into ``bench/results/tmp``).
+
+    .venv/bin/python bench/auto_resolution.py           # about 8 min on 2 cores
+    .venv/bin/python bench/auto_resolution.py --quick
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+import numpy as np  # noqa: E402
+from report import load_average, machine_info, output_dir, write_results  # noqa: E402
+from solver import LIGHT, MATERIALS, SCANS, per_vertex_error, prepare, present_scans, timed  # noqa: E402
+
+from translucency import __version__  # noqa: E402,F401  (first: it selects numba's threading layer)
+from translucency.app.pipeline import Scene  # noqa: E402
+from translucency.scatter.materials import material  # noqa: E402
+from translucency.scatter.solve import solve  # noqa: E402
+
+TOLS = (0.01, 0.1, 0.3, 0.6)
+RECEIVERS = 4000
+SEED = 0
+
+
+def measure(scan: str, name: str, tols) -> list[dict]:
+    """Rows of one scan and material: ``auto`` at each tolerance against ``exact`` on the full mesh."""
+    mesh, _ = prepare(scan)
+    medium = material(name).medium()
+    scene = Scene(mesh)
+    receivers = np.sort(np.random.default_rng(SEED).choice(mesh.n_points, min(RECEIVERS, mesh.n_points), replace=False))
+    _, _, _, geometry, _ = scene.solver_mesh(medium, "full")
+    light, _ = scene.incident_on_mesh(medium, [LIGHT])
+    start = time.perf_counter()
+    exact = solve(geometry, light.phi_rgb, light.w12, medium, method="exact", receivers=receivers).B
+    exact_seconds = time.perf_counter() - start
+    rows = []
+    for tol in tols:
+        _, decimation, edge, solver_geometry, _ = scene.solver_mesh(medium, "auto", tol)
+        result, seconds = timed(lambda tol=tol: scene.shade(medium, LIGHT, tol=tol, bounces=0), 1)
+        p99 = per_vertex_error(result.B[receivers], exact)
+        full_seconds = against_full = None
+        if decimation is not None:
+            full, full_seconds = timed(
+                lambda tol=tol: scene.shade(medium, LIGHT, tol=tol, resolution="full", bounces=0), 1
+            )
+            against_full = per_vertex_error(result.B, full.B)
+        row = {
+            "scan": scan,
+            "material": name,
+            "tol": tol,
+            "vertices": mesh.n_points,
+            "mean_edge_mm": geometry.mean_edge_length,
+            "sigma_tr_max_per_mm": float(np.max(medium.sigma_tr)),
+            "proxy_edge_mm": edge,
+            "sigma_tr_times_edge": None if edge is None else float(np.max(medium.sigma_tr) * edge),
+            "vertices_solved": solver_geometry.n_vertices,
+            "seconds": seconds,
+            "decimation_seconds": None if decimation is None else decimation.seconds,
+            "exact_seconds": exact_seconds,
+            "receivers": int(receivers.size),
+            "p99": p99,
+            "p99_against_full": 0.0 if decimation is None else against_full,
+            "full_seconds": full_seconds,
+            "met": p99 <= tol,
+            "coarser": result.stats.get("coarser"),
+            "load": load_average()[0],
+        }
+        rows.append(row)
+        print(
+            f"{scan:6s} {name:10s} tol {tol:<5g} solved {row['vertices_solved']:7d} of {mesh.n_points:7d}  "
+            f"{seconds:6.2f} s  p99 {p99:.4f}  {'met' if row['met'] else 'MISSED'}",
+            flush=True,
+        )
+    return rows
+
+
+def markdown(rows) -> str:
+    """The table of bench/README.md's "Automatic resolution"."""
+    lines = [
+        "| scan, material | vertices (mean edge) | tol | auto's edge (σ_tr h) | vertices solved | time (every vertex) "
+        "| p99 against exact | p99 against every vertex | met |",
+        "|---|---|---:|---|---:|---:|---:|---:|---|",
+    ]
+    for r in rows:
+        full = "" if r["full_seconds"] is None else f" ({r['full_seconds']:.2f} s)"
+        edge = (
+            "every vertex"
+            if r["proxy_edge_mm"] is None
+            else f"{r['proxy_edge_mm']:.2f} mm ({r['sigma_tr_times_edge']:.2f})"
+        )
+        lines.append(
+            f"| {r['scan']}, {r['material'].replace('_', ' ')} | {r['vertices']:,} ({r['mean_edge_mm']:.2f} mm) | "
+            f"{r['tol']:g} | {edge} | {r['vertices_solved']:,} | {r['seconds']:.2f} s{full} | {r['p99']:.2%} | "
+            f"{r['p99_against_full']:.2%} | {'yes' if r['met'] else '**no**'} |"
+        )
+    return "\n".join(lines) + "\n"
+
+
+def main(argv=None) -> int:
+    """Measure every scan, material and tolerance asked for; write the JSON and the table."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--scans", nargs="+", choices=list(SCANS), default=list(SCANS))
+    parser.add_argument("--materials", nargs="+", default=list(MATERIALS))
+    parser.add_argument("--tols", nargs="+", type=float, default=list(TOLS))
+    parser.add_argument("--quick", action="store_true", help="the bunny in marble at 0.01 and 0.6")
+    args = parser.parse_args(argv)
+    if args.quick:
+        args.scans, args.materials, args.tols = ["bunny"], ["marble"], [0.01, 0.6]
+    info = machine_info()
+    start = time.perf_counter()
+    rows = []
+    for scan in present_scans(args.scans):
+        for name in args.materials:
+            rows.extend(measure(scan, name, args.tols))
+    info["seconds_total"] = time.perf_counter() - start
+    table = markdown(rows)
+    write_results(output_dir(args.quick), "auto_resolution", {"info": info, "rows": rows}, table)
+    print(table)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
