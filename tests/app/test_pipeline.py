@@ -107,6 +107,7 @@ def test_unit_is_recorded_in_the_metadata():
 
 
 def test_auto_keeps_every_vertex_at_the_default_tolerance_and_a_looser_one_gets_a_proxy_within_it():
+    from translucency.app.settings import ShadeSettings
     from translucency.scatter.solve import TOL_FLOOR
 
     mesh = sphere(5, 8.0)  # 0.25 mm edges: far finer than marble's diffusion length, coarser than 1 % needs
@@ -119,6 +120,9 @@ def test_auto_keeps_every_vertex_at_the_default_tolerance_and_a_looser_one_gets_
         result = scene.shade("marble", light, tol=tol, bounces=0)
         assert result.metadata["resolution"].startswith("proxy") and result.stats["solver_vertices"] < mesh.n_points / 8
         assert np.percentile(np.abs(result.B - exact)[keep] / exact[keep], 99) <= tol
+    lines = []  # the proxy it chose is said, with its expected error (1.25 sigma_tr h, h = tol / (1.25 sigma_tr))
+    scene.shade_with(ShadeSettings("marble", tol=0.3, bounces=0), light, note=lines.append)
+    assert len(lines) == 1 and "which tol=0.3 allows" in lines[0] and "up to about 30 %" in lines[0]
 
 
 def test_a_tiny_object_gets_a_proxy_it_allows_and_a_given_edge_too_coarse_is_one_sentence():

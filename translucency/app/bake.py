@@ -363,7 +363,7 @@ def bake_file(path, output, settings: BakeSettings, progress=None, said=None, so
         mesh, _, _ = load_scan(path, settings.unit, warn=warn, note=note)
         vertices = mesh.n_points
         report("loading", 1.0)
-        result = shade_scan(mesh, settings, settings.lights, progress=report, warn=warn, solver=solver)
+        result = shade_scan(mesh, settings, settings.lights, progress=report, warn=warn, note=note, solver=solver)
         lit = int(result.stats["incident"]["n_lit"])
         report("writing", 0.0)
         write_result(result, output)

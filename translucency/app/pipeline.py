@@ -518,10 +518,13 @@ class Scene:
         )
         return self.shade_with(settings, lights, progress=progress, warn=warn)
 
-    def shade_with(self, settings: ShadeSettings, lights=None, *, progress=None, warn=None, solver=None) -> ShadeResult:
+    def shade_with(
+        self, settings: ShadeSettings, lights=None, *, progress=None, warn=None, note=None, solver=None
+    ) -> ShadeResult:
         """:meth:`shade` with validated :class:`~translucency.app.settings.ShadeSettings` (their ``shadows``
-        and ``up`` are this Scene's, see :func:`scene_for`). ``solver`` stands in for
-        :func:`translucency.scatter.solve.solve` (the same arguments; a
+        and ``up`` are this Scene's, see :func:`scene_for`). ``note(line)``, when given, hears which proxy the
+        resolution asked for chose and its expected error (a proxy forced by the budget goes to ``warn``).
+        ``solver`` stands in for :func:`translucency.scatter.solve.solve` (the same arguments; a
         :class:`~translucency.app.distributed.BlockSolver` solves on a Dask cluster)."""
         from ..errors import BudgetError
         from ..scatter.fresnel import fresnel_transmittance
@@ -596,6 +599,8 @@ class Scene:
                 f"measurements in bench/README.md); raise the limit to solve every vertex."
             )
             (warn or _warn)(coarsened)
+        elif decimation is not None and note is not None:
+            note(_proxy_line(settings, medium, solver_mesh.n_points, self.mesh.n_points, edge))
         B = sum(solution.B for solution in solutions)
         for solution in solutions:
             for k, v in solution.timings.items():
@@ -1068,7 +1073,8 @@ def shade_scan(
         Default: the white directional light above and in front (:func:`default_light_direction`).
     progress, warn
         As in :func:`shade`; ``warn`` also receives the loader's warnings, and ``note`` the line that
-        says which unit was inferred (default: ``warn``).
+        says which unit was inferred (default: ``warn``) and the one that says which proxy the resolution
+        chose (:meth:`Scene.shade_with`; default: none).
     solver : callable, optional
         Stands in for :func:`translucency.scatter.solve.solve` (:meth:`Scene.shade_with`).
 
@@ -1085,7 +1091,9 @@ def shade_scan(
         mesh = mesh_for_shading(scan, unit, entry="shade_scan")
     else:
         mesh = load_scan(scan, unit, warn=warn, note=note)[0]
-    return scene_for(mesh, settings).shade_with(settings, lights, progress=progress, warn=warn, solver=solver)
+    return scene_for(mesh, settings).shade_with(
+        settings, lights, progress=progress, warn=warn, note=note, solver=solver
+    )
 
 
 def write_result(result: ShadeResult, path) -> Path:
@@ -1107,6 +1115,22 @@ def write_result(result: ShadeResult, path) -> Path:
     from .exports import write_result_file
 
     return write_result_file(result, path)
+
+
+def _proxy_line(settings, medium, proxy_vertices, vertices, edge) -> str:
+    """The line that says which proxy the resolution asked for chose, and the error expected of it (at most
+    :data:`AUTO_PROXY_ERROR_SLOPE` σ_tr h at the 99th percentile of vertices, docs/physics.md §8.6)."""
+    why = (
+        f"which {option('tol', settings.tol)} allows"
+        if settings.resolution == "auto"
+        else f"as {option('resolution', settings.resolution)} asks"
+    )
+    expected = AUTO_PROXY_ERROR_SLOPE * float(np.max(medium.sigma_tr)) * edge
+    return (
+        f"solving on a proxy of {proxy_vertices:,} of the {vertices:,} vertices (edge {edge:.3g} mm), {why}; expected "
+        f"error up to about {100 * expected:.0f} % at the 99th percentile of vertices ({option('resolution', 'full')} "
+        "solves every vertex)."
+    )
 
 
 def _proxy_edge(mean_edge, medium, resolution, tol, mesh):

@@ -71,9 +71,11 @@ HELP = {
     "material": "catalogue name (see 'translucency materials') or a material file, .toml or .json",
     "model": "scattering model",
     "method": "far-field method",
-    "tol": "relative error allowed per vertex to cutoff/tree and to auto's proxy",
-    "resolution": "where B is computed: auto (on a proxy where its measured error is within the tolerance, else "
-    "every vertex), full (every vertex), or a proxy edge length in mm",
+    "tol": "relative error allowed per vertex, at the 99th percentile (0.01: 1 %%): the far field's (cutoff, "
+    "tree) and the proxy's of resolution auto",
+    "resolution": "where B is computed: auto (on a proxy only where its expected error, about 1.25 sigma_tr times "
+    "its edge, is within --tol; at the default tolerance every vertex of any scan measured), full (every vertex), "
+    "or a proxy edge length in mm",
     "shadows": "no shadow rays: every front-facing vertex is lit",
     "per_direction": "solve each light sample with its own refracted direction (exact for several lights)",
     "exposure": "display exposure (default: automatic)",
