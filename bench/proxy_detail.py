@@ -45,10 +45,10 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 import numpy as np  # noqa: E402
-from solver import LIGHT, SCANS, per_vertex_error, prepare, present_scans  # noqa: E402
+from solver import LIGHT, SCANS, detail_resolution, per_vertex_error, prepare, present_scans  # noqa: E402
 
 from translucency import __version__  # noqa: E402,F401  (first: it selects numba's threading layer)
-from translucency.app.pipeline import Scene, carries_full_light, proxy_edge_length  # noqa: E402
+from translucency.app.pipeline import Scene, carries_full_light  # noqa: E402
 from translucency.scatter.materials import material  # noqa: E402
 from translucency.scatter.solve import TOL_FLOOR, local_reach_floor, solve  # noqa: E402
 
@@ -112,7 +112,7 @@ def measure(scan: str, name: str, resolution) -> dict | None:
     mesh, _ = prepare(scan)
     medium = material(name).medium()
     scene = Scene(mesh)
-    label, resolution = resolution, proxy_edge_length(medium) if resolution == "detail" else resolution
+    label, resolution = resolution, detail_resolution(scene, medium) if resolution == "detail" else resolution
     if scene.solver_mesh(medium, resolution)[1] is None:
         print(f"{scan}, {name}: resolution {resolution!r} keeps the full mesh")
         return None

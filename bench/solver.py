@@ -48,7 +48,8 @@ import numpy as np  # noqa: E402
 from report import load_average, machine_info, output_dir, write_results  # noqa: E402
 
 from translucency import __version__  # noqa: E402,F401  (first: it selects numba's threading layer)
-from translucency.app.pipeline import Scene, proxy_edge_length  # noqa: E402
+from translucency.app.pipeline import PROXY_MIN_RATIO, Scene, proxy_edge_length  # noqa: E402
+from translucency.geometry.measure import mean_edge_length  # noqa: E402
 from translucency.io.clean import clean_mesh  # noqa: E402
 from translucency.io.load import load_mesh  # noqa: E402
 from translucency.scatter import kernels  # noqa: E402
@@ -120,6 +121,14 @@ def present_scans(scans):
             yield scan
         else:
             print(f"skipping {scan}: {SCANS[scan][0]} not in ../shared/meshes")
+
+
+def detail_resolution(scene, medium):
+    """The proxy of the light's detail as a resolution: :func:`~translucency.app.pipeline.proxy_edge_length`, or
+    ``"full"`` where the mesh is not :data:`~translucency.app.pipeline.PROXY_MIN_RATIO` times finer than it."""
+    edge = proxy_edge_length(medium)
+    mean_edge = mean_edge_length(scene.mesh.points, scene.mesh.triangles)
+    return edge if edge >= PROXY_MIN_RATIO * mean_edge else "full"
 
 
 def prepare(name):
@@ -291,7 +300,7 @@ def proxy_rows(scan, name, scene, medium, receivers, exact, resolutions, repeats
     rows = []
     n = scene.mesh.n_points
     for resolution in resolutions:
-        setting = proxy_edge_length(medium) if resolution == "detail" else resolution
+        setting = detail_resolution(scene, medium) if resolution == "detail" else resolution
         result, seconds = timed(
             # no bounce: the error is against a single exact solve
             lambda: scene.shade(medium, LIGHT, method=PROXY_METHOD, tol=PROXY_TOL, resolution=setting, bounces=0),

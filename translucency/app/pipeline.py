@@ -43,14 +43,19 @@ PROXY_DIFFUSION_FRACTION = 0.5
 PROXY_MEAN_FREE_PATHS = 5.0
 PROXY_MIN_RATIO = 1.5
 #: Resolution "auto" (the default) takes a proxy only where its error is within the tolerance asked for
-#: (:func:`auto_proxy_edge`, docs/physics.md §8.6). Measured at the 99th percentile of vertices against the full
-#: solve, a proxy of edge h was off by at most this many times max sigma_tr * h: 1.22 on the shared Igea in marble
-#: (h = 0.42 diffusion lengths, 51 %), 0.54-0.99 on the other proxies of proxy_edge_length of the shared scans, 0.4
-#: on the Igea's 0.5 mm proxy (0.13, 5.2 %), 0.65 and 1.06 on the 2.1M- and 10M-vertex Igea's (0.046 and 0.040, 3.0
-#: and 4.3 %) (bench/README.md, "Proxy error, measured apart", "Scaling and memory", "Automatic resolution"). At the
-#: default 1 % that edge (0.03 mm in marble) is finer than any scan measured, so "auto" solves every vertex; a proxy
-#: comes with a looser tolerance.
+#: (:func:`auto_proxy_edge`, docs/physics.md §8.6): a proxy of edge h was off by up to about AUTO_PROXY_ERROR_SLOPE
+#: * rate * h at the 99th percentile of vertices, rate = max(max sigma_tr, AUTO_RATE_PER_SIGMA_T * max sigma_t',
+#: AUTO_RATE_FLOOR_PER_MM). Measured with the far field at 1 % (bench/README.md, "Proxy error, measured apart",
+#: "Scaling and memory", "Automatic resolution"), the ratio of that error to sigma_tr * h was up to 1.22 (the shared
+#: Igea in marble, h = 0.42 diffusion lengths, 51 % against the full solve), 0.75-0.99 on the horse and the Igea,
+#: 0.54-0.71 on the bunny's 2 mm proxies, 0.4 on the Igea's 0.5 mm proxy (0.13, 5.2 %), 0.65 and 1.06 on the 2.1M-
+#: and 10M-vertex Igea's (0.046 and 0.040; 3.0 and 4.3 % against exact). Where the light diffuses little over a
+#: reduced mean free path or over the object, sigma_tr alone undercounts: marble at a diffuse reflectance of 0.99 was
+#: 13 % off on a 0.9 mm proxy of the Igea (sigma_t' h = 2.7), a soy milk (mean free path 12 mm, diffusion length 35
+#: mm) 4 % on a 0.84 mm and 19 % on a 2.8 mm one, about 7 % per mm of edge: the scan's own relief in the flux.
 AUTO_PROXY_ERROR_SLOPE = 1.25
+AUTO_RATE_PER_SIGMA_T = 0.1
+AUTO_RATE_FLOOR_PER_MM = 0.1
 #: A proxy keeps at least this many triangles. On an object only a few diffusion lengths across (a
 #: scan read in the wrong unit, say) the "auto" and the viewer's edge lengths are shortened to it,
 #: and a proxy edge length given that leaves fewer is refused with a sentence.
@@ -82,9 +87,9 @@ EARLY_REFUSAL_FACTOR = 1.25
 #: every vertex of the full mesh, carried onto its vertices with the flux kept; a coarser one traces its own
 #: (docs/physics.md §8.6). Measured (bench/README.md, "Scaling and memory" and "Proxy error, measured apart"): on
 #: the 10M-vertex Igea's proxy (0.04) the per-vertex p99 fell from 19 % to 3.2-4.3 %, on the 2.1M one's from 9.2 % to
-#: 2.7-3.0 %; on the Igea's 0.5 mm proxy (0.13) it was 5.7 % against
-#: 5.2 %, and on the "auto" proxies (0.42-0.57) 49-68 % against 36-51 %: the carried flux is spread over a proxy
-#: edge, which a fine proxy does not see and a coarse one does.
+#: 2.7-3.0 %; on the Igea's 0.5 mm proxy (0.13) it was 5.7 % against 5.2 %, and on the proxies of proxy_edge_length
+#: and the bunny's 2 mm ones (0.42-0.57) 49-68 % against 36-51 %: the carried flux is spread over a proxy edge, which a
+#: fine proxy does not see and a coarse one does.
 CARRIED_LIGHT_MAX_SIGMA_TR_EDGE = 0.1
 #: The per-vertex error (99th percentile) of such a proxy, measured on the 2.1M- and 10M-vertex Igea: 3.0 % and 4.3 %.
 CARRIED_LIGHT_ERROR = "4 %"
@@ -140,11 +145,19 @@ def proxy_edge_length(medium) -> float:
 
 def auto_proxy_edge(medium, tol) -> float:
     """Proxy edge length (mm) of resolution "auto" at the per-vertex tolerance ``tol`` (a fraction): the longest
-    edge whose measured error is within it, ``tol / (AUTO_PROXY_ERROR_SLOPE max σ_tr)``
-    (:data:`AUTO_PROXY_ERROR_SLOPE`, docs/physics.md §8.6; without absorption σ_t′ stands in for σ_tr, the
-    shorter length), and no longer than :func:`proxy_edge_length`."""
-    rate = float(np.max(medium.sigma_tr)) or float(np.max(medium.sigma_t_reduced))
-    return min(float(tol) / (AUTO_PROXY_ERROR_SLOPE * rate), proxy_edge_length(medium))
+    edge whose expected error is within it, ``tol / (AUTO_PROXY_ERROR_SLOPE rate)`` with ``rate`` (1/mm) the largest
+    of max σ_tr, a tenth of max σ_t′ and 0.1/mm (:data:`AUTO_PROXY_ERROR_SLOPE`, docs/physics.md §8.6), and no
+    longer than :func:`proxy_edge_length`."""
+    return min(float(tol) / (AUTO_PROXY_ERROR_SLOPE * _auto_rate(medium)), proxy_edge_length(medium))
+
+
+def _auto_rate(medium) -> float:
+    """How fast a proxy's error grows with its edge (1/mm, :data:`AUTO_PROXY_ERROR_SLOPE`)."""
+    return max(
+        float(np.max(medium.sigma_tr)),
+        AUTO_RATE_PER_SIGMA_T * float(np.max(medium.sigma_t_reduced)),
+        AUTO_RATE_FLOOR_PER_MM,
+    )
 
 
 def default_scan_path() -> Path:
@@ -549,7 +562,11 @@ class Scene:
             first_attempt = 1
         for attempt in range(first_attempt, COARSER_ATTEMPTS + 1):
             start = time.perf_counter()
-            solver_mesh, decimation, edge, geometry, geometry_reused = self.solver_mesh(medium, resolution, tol)
+            solver_mesh, decimation, edge, geometry, geometry_reused = self.solver_mesh(
+                medium,
+                resolution,
+                DEFAULT_TOL if method == "exact" else tol,  # exact's own tolerance: none
+            )
             timings["geometry"] = timings.get("geometry", 0.0) + time.perf_counter() - start
             solve_with = _albedo_solver(solver_mesh, settings.albedo, solver)
             try:
@@ -567,11 +584,14 @@ class Scene:
                 timings["incident_light"] = timings.get("incident_light", 0.0) + time.perf_counter() - start
                 if self.mesh.n_points >= RELEASE_SCENE_VERTICES:  # not held through the solve's set-up
                     self.visibility.release_scenes()
+                # a proxy "auto" chose spends the tolerance on its own error (AUTO_PROXY_ERROR_SLOPE was measured
+                # with the far field at the default tolerance on the proxy): its far field is held to that
+                solve_tol = min(tol, DEFAULT_TOL) if decimation is not None and resolution == "auto" else tol
                 solutions = _solve(
-                    geometry, incident, medium, model, method, tol, progress, per_direction, limits, solve_with
+                    geometry, incident, medium, model, method, solve_tol, progress, per_direction, limits, solve_with
                 )
                 bounced = self._bounces(
-                    geometry, solver_mesh, solutions, lights, settings, progress, limits, solve_with
+                    geometry, solver_mesh, solutions, lights, settings, solve_tol, progress, limits, solve_with
                 )
                 break
             except BudgetError as exc:
@@ -674,9 +694,10 @@ class Scene:
             self.mesh, B, radiance, colors, exposure, self._full_normals(), stats, timings, metadata, phi, reentered
         )
 
-    def _bounces(self, geometry, solver_mesh, solutions, lights, settings, progress, limits, solver=None):
+    def _bounces(self, geometry, solver_mesh, solutions, lights, settings, tol, progress, limits, solver=None):
         """The light that re-enters (:func:`translucency.scatter.bounces.solve_bounces`) after the first
-        solve, on the solver mesh with this Scene's Embree scene; None for ``bounces=0``."""
+        solve, on the solver mesh with this Scene's Embree scene, at the first solve's ``tol``; None for
+        ``bounces=0``."""
         if not settings.bounces:
             return None
         from ..scatter.bounces import solve_bounces
@@ -691,7 +712,7 @@ class Scene:
             bounces=settings.bounces,
             model=settings.model,
             method=settings.method,
-            tol=settings.tol,
+            tol=tol,
             shadows=self.shadows,
             progress=progress,
             solver=solver,
@@ -941,9 +962,9 @@ def shade(
         Where ``B`` is computed: ``"auto"`` (default) on a proxy of :func:`auto_proxy_edge` where the mesh is
         much finer than that, so that the proxy's measured per-vertex error is within ``tol`` (at the default 1 %
         no scan measured is that fine: every vertex); ``"full"`` on every vertex; a number is a proxy edge length
-        in mm. Measured on the shared Igea (134k vertices, 0.48 mm edges) in marble: at ``tol=0.3`` a proxy of 30k
-        vertices, 25 % off ``exact`` at the 99th percentile of vertices in a quarter of the full solve's time
-        (bench/README.md, "Automatic resolution").
+        in mm. Measured on the shared Igea (134k vertices, 0.48 mm edges) in marble: at ``tol=0.45`` a proxy of
+        19k vertices, 32 % off ``exact`` at the 99th percentile of vertices in a third of the time of every vertex
+        at that ``tol`` (bench/README.md, "Automatic resolution").
     exposure : float, optional
         Display exposure (automatic by default, see :func:`~translucency.app.display.display_colors`).
     per_direction : bool
@@ -1125,7 +1146,7 @@ def _proxy_line(settings, medium, proxy_vertices, vertices, edge) -> str:
         if settings.resolution == "auto"
         else f"as {option('resolution', settings.resolution)} asks"
     )
-    expected = AUTO_PROXY_ERROR_SLOPE * float(np.max(medium.sigma_tr)) * edge
+    expected = AUTO_PROXY_ERROR_SLOPE * _auto_rate(medium) * edge
     return (
         f"solving on a proxy of {proxy_vertices:,} of the {vertices:,} vertices (edge {edge:.3g} mm), {why}; expected "
         f"error up to about {100 * expected:.0f} % at the 99th percentile of vertices ({option('resolution', 'full')} "
