@@ -17,7 +17,7 @@ proxy's decimation is counted apart (it is made once per scan, material and edge
 Written to ``bench/results/auto_resolution.json`` and ``.md`` (with ``--quick``: the bunny in marble at 0.01 and
 0.6, into ``bench/results/tmp``).
 
-    .venv/bin/python bench/auto_resolution.py           # about 8 min on 2 cores
+    .venv/bin/python bench/auto_resolution.py           # about 20 min on 2 cores
     .venv/bin/python bench/auto_resolution.py --quick
 """
 
