@@ -91,8 +91,6 @@ EARLY_REFUSAL_FACTOR = 1.25
 #: and the bunny's 2 mm ones (0.42-0.57) 49-68 % against 36-51 %: the carried flux is spread over a proxy edge, which a
 #: fine proxy does not see and a coarse one does.
 CARRIED_LIGHT_MAX_SIGMA_TR_EDGE = 0.1
-#: The per-vertex error (99th percentile) of such a proxy, measured on the 2.1M- and 10M-vertex Igea: 3.0 % and 4.3 %.
-CARRIED_LIGHT_ERROR = "4 %"
 
 
 def carries_full_light(medium, edge) -> bool:
@@ -606,12 +604,10 @@ class Scene:
                 self._forget(geometry)
                 solver_mesh = geometry = incident = None
         if reason is not None:
-            expected = (
-                f"about {CARRIED_LIGHT_ERROR} at the 99th percentile of vertices, given the light traced at every "
-                "vertex"
+            expected = f"up to about {_expected_proxy_error(medium, edge)} at the 99th percentile of vertices" + (
+                ", given the light traced at every vertex"
                 if carried
-                else f"relative RMS error about {proxy_error(solver_mesh.n_points / self.mesh.n_points)}, and tens of "
-                "% at the darkest vertices"
+                else f" (relative RMS about {proxy_error(solver_mesh.n_points / self.mesh.n_points)})"
             )
             coarsened = (
                 f"solving on a proxy of {solver_mesh.n_points:,} of the {self.mesh.n_points:,} vertices "
@@ -1146,12 +1142,18 @@ def _proxy_line(settings, medium, proxy_vertices, vertices, edge) -> str:
         if settings.resolution == "auto"
         else f"as {option('resolution', settings.resolution)} asks"
     )
-    expected = AUTO_PROXY_ERROR_SLOPE * _auto_rate(medium) * edge
     return (
         f"solving on a proxy of {proxy_vertices:,} of the {vertices:,} vertices (edge {edge:.3g} mm), {why}; expected "
-        f"error up to about {100 * expected:.0f} % at the 99th percentile of vertices ({option('resolution', 'full')} "
-        "solves every vertex)."
+        f"error up to about {_expected_proxy_error(medium, edge)} at the 99th percentile of vertices "
+        f"({option('resolution', 'full')} solves every vertex)."
     )
+
+
+def _expected_proxy_error(medium, edge) -> str:
+    """The per-vertex error (99th percentile) expected of a proxy of edge ``edge`` (mm), in words:
+    :data:`AUTO_PROXY_ERROR_SLOPE` times the rate of :func:`auto_proxy_edge` times the edge."""
+    percent = 100 * AUTO_PROXY_ERROR_SLOPE * _auto_rate(medium) * edge
+    return f"{percent:.2g} %" if percent < 100 else f"{percent:.0f} %"
 
 
 def _proxy_edge(mean_edge, medium, resolution, tol, mesh):
