@@ -51,8 +51,8 @@ PROXY_MIN_RATIO = 1.5
 #: 0.54-0.71 on the bunny's 2 mm proxies, 0.4 on the Igea's 0.5 mm proxy (0.13, 5.2 %), 0.65 and 1.06 on the 2.1M-
 #: and 10M-vertex Igea's (0.046 and 0.040; 3.0 and 4.3 % against exact). Where the light diffuses little over a
 #: reduced mean free path or over the object, sigma_tr alone undercounts: marble at a diffuse reflectance of 0.99 was
-#: 13 % off on a 0.9 mm proxy of the Igea (sigma_t' h = 2.7), a soy milk (mean free path 12 mm, diffusion length 35
-#: mm) 4 % on a 0.84 mm and 19 % on a 2.8 mm one, about 7 % per mm of edge: the scan's own relief in the flux.
+#: 13 % off on a 0.9 mm proxy of the Igea (sigma_t' h = 2.7), soy milk (mean free path 12 mm, diffusion length 35 mm)
+#: 5 % off exact on a 0.8 mm one and 22 % on a 2.8 mm one, about 8 % per mm of edge: the scan's own relief in the flux.
 AUTO_PROXY_ERROR_SLOPE = 1.25
 AUTO_RATE_PER_SIGMA_T = 0.1
 AUTO_RATE_FLOOR_PER_MM = 0.1
