@@ -13,7 +13,7 @@ __all__ = ["LIGHT_SPEC_HELP", "parse_light_spec"]
 
 
 LIGHT_SPEC_HELP = (
-    "use 'x,y,z' (white directional light, E = 1 W/m²), 'dir:x,y,z[:E or :r,g,b]', "
+    "use 'x,y,z' (white directional light, E = 1 W/m^2), 'dir:x,y,z[:E or :r,g,b]', "
     "'point:x,y,z[:I or :r,g,b]' (position in mm, I in W/sr) or 'env:L or env:r,g,b[:N]' "
     "(constant radiance, N directions), several joined by ';'"
 )
