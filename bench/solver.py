@@ -48,7 +48,7 @@ import numpy as np  # noqa: E402
 from report import load_average, machine_info, output_dir, write_results  # noqa: E402
 
 from translucency import __version__  # noqa: E402,F401  (first: it selects numba's threading layer)
-from translucency.app.pipeline import PROXY_MIN_RATIO, Scene, proxy_edge_length  # noqa: E402
+from translucency.app.pipeline import Scene, fine_enough_for, proxy_edge_length  # noqa: E402
 from translucency.geometry.measure import mean_edge_length  # noqa: E402
 from translucency.io.clean import clean_mesh  # noqa: E402
 from translucency.io.load import load_mesh  # noqa: E402
@@ -125,10 +125,9 @@ def present_scans(scans):
 
 def detail_resolution(scene, medium):
     """The proxy of the light's detail as a resolution: :func:`~translucency.app.pipeline.proxy_edge_length`, or
-    ``"full"`` where the mesh is not :data:`~translucency.app.pipeline.PROXY_MIN_RATIO` times finer than it."""
+    ``"full"`` where the mesh is not fine enough for it (:func:`~translucency.app.pipeline.fine_enough_for`)."""
     edge = proxy_edge_length(medium)
-    mean_edge = mean_edge_length(scene.mesh.points, scene.mesh.triangles)
-    return edge if edge >= PROXY_MIN_RATIO * mean_edge else "full"
+    return edge if fine_enough_for(edge, mean_edge_length(scene.mesh.points, scene.mesh.triangles)) else "full"
 
 
 def prepare(name):

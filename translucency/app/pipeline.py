@@ -149,6 +149,12 @@ def auto_proxy_edge(medium, tol) -> float:
     return min(float(tol) / (AUTO_PROXY_ERROR_SLOPE * _auto_rate(medium)), proxy_edge_length(medium))
 
 
+def fine_enough_for(edge, mean_edge) -> bool:
+    """Whether a mesh of mean edge ``mean_edge`` (mm) is fine enough to be decimated to a proxy of edge ``edge`` (mm)
+    by "auto" (:data:`PROXY_MIN_RATIO` times finer)."""
+    return edge >= PROXY_MIN_RATIO * mean_edge
+
+
 def _auto_rate(medium) -> float:
     """How fast a proxy's error grows with its edge (1/mm, :data:`AUTO_PROXY_ERROR_SLOPE`)."""
     return max(
@@ -554,17 +560,14 @@ class Scene:
         # the resolution asked for when its time was over the limit: at 10M vertices that plan takes half a
         # minute and 4 GB beside the last result
         refusal_key = None if solver is not None else _refusal_key(settings, lights)
+        auto_tol = DEFAULT_TOL if method == "exact" else tol  # what sets the edge of "auto"; exact has no tolerance
         first_attempt = 0
         if refusal_key in self._refused:
             reason, resolution = self._refused[refusal_key]
             first_attempt = 1
         for attempt in range(first_attempt, COARSER_ATTEMPTS + 1):
             start = time.perf_counter()
-            solver_mesh, decimation, edge, geometry, geometry_reused = self.solver_mesh(
-                medium,
-                resolution,
-                DEFAULT_TOL if method == "exact" else tol,  # exact's own tolerance: none
-            )
+            solver_mesh, decimation, edge, geometry, geometry_reused = self.solver_mesh(medium, resolution, auto_tol)
             timings["geometry"] = timings.get("geometry", 0.0) + time.perf_counter() - start
             solve_with = _albedo_solver(solver_mesh, settings.albedo, solver)
             try:
@@ -616,7 +619,7 @@ class Scene:
             )
             (warn or _warn)(coarsened)
         elif decimation is not None and note is not None:
-            note(_proxy_line(settings, medium, solver_mesh.n_points, self.mesh.n_points, edge))
+            note(_proxy_line(settings.resolution, auto_tol, medium, solver_mesh.n_points, self.mesh.n_points, edge))
         B = sum(solution.B for solution in solutions)
         for solution in solutions:
             for k, v in solution.timings.items():
@@ -956,7 +959,7 @@ def shade(
         Cast Embree shadow rays (off: every front-facing vertex is lit).
     resolution : "auto", "full" or float
         Where ``B`` is computed: ``"auto"`` (default) on a proxy of :func:`auto_proxy_edge` where the mesh is
-        much finer than that, so that the proxy's measured per-vertex error is within ``tol`` (at the default 1 %
+        much finer than that, so that the proxy's expected per-vertex error is within ``tol`` (at the default 1 %
         no scan measured is that fine: every vertex); ``"full"`` on every vertex; a number is a proxy edge length
         in mm. Measured on the shared Igea (134k vertices, 0.48 mm edges) in marble: at ``tol=0.45`` a proxy of
         19k vertices, 32 % off ``exact`` at the 99th percentile of vertices in a third of the time of every vertex
@@ -1134,13 +1137,11 @@ def write_result(result: ShadeResult, path) -> Path:
     return write_result_file(result, path)
 
 
-def _proxy_line(settings, medium, proxy_vertices, vertices, edge) -> str:
-    """The line that says which proxy the resolution asked for chose, and the error expected of it (at most
-    :data:`AUTO_PROXY_ERROR_SLOPE` σ_tr h at the 99th percentile of vertices, docs/physics.md §8.6)."""
+def _proxy_line(resolution, tol, medium, proxy_vertices, vertices, edge) -> str:
+    """The line that says which proxy ``resolution`` chose (at the tolerance ``tol`` for "auto"), and the error
+    expected of it (:func:`_expected_proxy_error`)."""
     why = (
-        f"which {option('tol', settings.tol)} allows"
-        if settings.resolution == "auto"
-        else f"as {option('resolution', settings.resolution)} asks"
+        f"which {option('tol', tol)} allows" if resolution == "auto" else f"as {option('resolution', resolution)} asks"
     )
     return (
         f"solving on a proxy of {proxy_vertices:,} of the {vertices:,} vertices (edge {edge:.3g} mm), {why}; expected "
@@ -1165,7 +1166,7 @@ def _proxy_edge(mean_edge, medium, resolution, tol, mesh):
         return None
     if resolution == "auto":
         edge = min(auto_proxy_edge(medium, tol), coarsest_proxy_edge(mesh.surface_area))
-        return edge if edge >= PROXY_MIN_RATIO * mean_edge else None
+        return edge if fine_enough_for(edge, mean_edge) else None
     edge = parse_resolution(resolution)
     if edge <= mean_edge:
         return None

@@ -73,9 +73,9 @@ HELP = {
     "method": "far-field method",
     "tol": "relative error allowed per vertex, at the 99th percentile (0.01: 1 %%): the far field's (cutoff, "
     "tree) and the proxy's of resolution auto",
-    "resolution": "where B is computed: auto (on a proxy only where its expected error, about 1.25 sigma_tr times "
-    "its edge, is within --tol; at the default tolerance every vertex of any scan measured), full (every vertex), "
-    "or a proxy edge length in mm",
+    "resolution": "where B is computed: auto (on a proxy only where its expected error, measured to grow with its "
+    "edge over the diffusion length, is within --tol; at the default tolerance every vertex of any scan measured), "
+    "full (every vertex), or a proxy edge length in mm",
     "shadows": "no shadow rays: every front-facing vertex is lit",
     "per_direction": "solve each light sample with its own refracted direction (exact for several lights)",
     "exposure": "display exposure (default: automatic)",
@@ -131,7 +131,7 @@ class ShadeSettings:
         ``resolution="auto"``, in (0, 1).
     resolution : "auto", "full" or float
         Where ``B`` is computed (:func:`translucency.app.pipeline.shade`): ``"auto"`` (default) on a proxy only
-        where its measured error is within ``tol``, ``"full"`` on every vertex, a number is a proxy edge in mm.
+        where its expected error is within ``tol``, ``"full"`` on every vertex, a number is a proxy edge in mm.
     shadows : bool
         Cast Embree shadow rays (off: every front-facing vertex is lit).
     per_direction : bool
