@@ -1,7 +1,8 @@
 """Resolution "auto" against the tolerance it is given: does it keep its promise, and what does it save?
 
 ``resolution="auto"`` (the default of bake, compare and :func:`translucency.shade`) solves on a proxy of
-:func:`translucency.app.pipeline.auto_proxy_edge` only where the scan is much finer than that edge, so that the
+:func:`translucency.app.shading.resolution.auto_proxy_edge` only where the scan is much finer than that edge, so that
+the
 proxy's expected error stays within ``tol`` (docs/physics.md §8.6). For each shared scan (bunny, horse, Igea),
 material (marble, skim milk, ketchup, and two whose light diffuses little: soy milk, whose mean free path is 12 mm,
 and marble at a diffuse reflectance of 0.99) and tolerance (0.01 -- the default -- 0.1, 0.3, 0.45, 0.6), one
@@ -36,7 +37,7 @@ from report import load_average, machine_info, output_dir, write_results  # noqa
 from solver import LIGHT, MATERIALS, SCANS, per_vertex_error, prepare, present_scans, timed  # noqa: E402
 
 from translucency import __version__  # noqa: E402,F401  (first: it selects numba's threading layer)
-from translucency.app.pipeline import Scene  # noqa: E402
+from translucency.app.shading.scene import Scene  # noqa: E402
 from translucency.scatter.definition import varied  # noqa: E402
 from translucency.scatter.materials import material  # noqa: E402
 from translucency.scatter.names import DEFAULT_TOL  # noqa: E402
@@ -64,7 +65,7 @@ def measure(scan: str, name: str, tols) -> list[dict]:
     scene = Scene(mesh)
     receivers = np.sort(np.random.default_rng(SEED).choice(mesh.n_points, min(RECEIVERS, mesh.n_points), replace=False))
     _, _, _, geometry, _ = scene.solver_mesh(medium, "full")
-    light, _ = scene.incident_on_mesh(medium, [LIGHT])
+    light, _ = scene.light_cache.incident_on_mesh(medium, [LIGHT])
     start = time.perf_counter()
     exact = solve(geometry, light.phi_rgb, light.w12, medium, method="exact", receivers=receivers).B
     exact_seconds = time.perf_counter() - start

@@ -21,7 +21,9 @@ BINS = (("[-0.3, 0)", -0.3, 0.0), ("[-0.6, -0.3)", -0.6, -0.3), ("[-1, -0.6)", -
 
 def main() -> None:
     """Print the table."""
-    from translucency.app.pipeline import Scene, default_light_direction, load_scan
+    from translucency.app.shading.scan import load_scan
+    from translucency.app.shading.scene import Scene
+    from translucency.app.shading.settings import default_light_direction
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("mesh", nargs="?")

@@ -37,7 +37,8 @@ def run_case(scan: str, unit: str, material: str, memory_limit: float | None) ->
     """One case in this process: load, light, reset the peak mark, shade; the numbers as a dict."""
     import numba
 
-    from translucency.app.pipeline import Scene, load_scan
+    from translucency.app.shading.scan import load_scan
+    from translucency.app.shading.scene import Scene
     from translucency.geometry.measure import mean_edge_length
 
     mesh, _, _ = load_scan(str(MESHES / SCANS[scan]), unit)

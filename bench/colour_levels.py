@@ -27,8 +27,9 @@ REFERENCE_STEP = 0.0125
 
 def main() -> None:
     """Run, print and write the table."""
-    from translucency.app.pipeline import Scene, default_light_direction, load_default_scan
-    from translucency.app.settings import resolve_medium
+    from translucency.app.shading.scan import load_default_scan
+    from translucency.app.shading.scene import Scene
+    from translucency.app.shading.settings import default_light_direction, resolve_medium
     from translucency.errors import TranslucencyWarning
     from translucency.scatter import varying
     from translucency.scatter.lights import DirectionalLight
@@ -38,7 +39,7 @@ def main() -> None:
     medium = resolve_medium("marble")
     scene = Scene(load_default_scan())
     mesh, _, _, geometry, _ = scene.solver_mesh(medium, "full")
-    incident, _ = scene.incident(
+    incident, _ = scene.light_cache.incident(
         geometry, mesh.triangles, [DirectionalLight(default_light_direction(scene.up), 1.0)], medium.eta
     )
     p = geometry.points

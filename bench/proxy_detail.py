@@ -2,7 +2,7 @@
 
 For each shared scan (bunny, horse, Igea) and material (marble, skim milk), one directional light with
 Embree shadows, no bounce, ``tree`` at 1 %: the full-resolution solve is the reference, and on the
-proxy of the light's detail (:func:`~translucency.app.pipeline.proxy_edge_length`, what ``resolution="auto"``
+proxy of the light's detail (:func:`~translucency.app.shading.resolution.proxy_edge_length`, what ``resolution="auto"``
 takes at a tolerance of about 0.5; a 2 mm one where that keeps every vertex; ``B`` solved on the decimated
 mesh and interpolated back) the per-vertex
 figure that ``tol`` bounds (docs/physics.md §8.5: 99th percentile of ``|B - B_full| / B_full`` over the
@@ -48,7 +48,8 @@ import numpy as np  # noqa: E402
 from solver import LIGHT, SCANS, detail_resolution, per_vertex_error, prepare, present_scans  # noqa: E402
 
 from translucency import __version__  # noqa: E402,F401  (first: it selects numba's threading layer)
-from translucency.app.pipeline import Scene, carries_full_light  # noqa: E402
+from translucency.app.shading.resolution import carries_full_light  # noqa: E402
+from translucency.app.shading.scene import Scene  # noqa: E402
 from translucency.scatter.materials import material  # noqa: E402
 from translucency.scatter.solve import TOL_FLOOR, local_reach_floor, solve  # noqa: E402
 
@@ -123,15 +124,15 @@ def measure(scan: str, name: str, resolution) -> dict | None:
     shade("full"), shade(resolution)  # compilation, geometry caches, Embree scenes, the proxy's decimation
     full, full_seconds = timed(lambda: shade("full"))
     proxy, proxy_seconds = timed(lambda: shade(resolution))
-    incident, _ = scene.incident_on_mesh(medium, [LIGHT])
+    incident, _ = scene.light_cache.incident_on_mesh(medium, [LIGHT])
     _, _, _, geometry, _ = scene.solver_mesh(medium, "full")
     proxy_mesh, decimation, edge, proxy_geometry, _ = scene.solver_mesh(medium, resolution)
     lit = incident.phi_rgb > 0
     carried = carries_full_light(medium, edge)
-    proxy_light, _ = scene.solver_light(
+    proxy_light, _ = scene.light_cache.solver_light(
         proxy_geometry, proxy_mesh, decimation if carried else None, [LIGHT], medium.eta
     )
-    other_light, _ = scene.solver_light(
+    other_light, _ = scene.light_cache.solver_light(
         proxy_geometry, proxy_mesh, None if carried else decimation, [LIGHT], medium.eta
     )
     other = solve(proxy_geometry, other_light.phi_rgb, other_light.w12, medium, method=METHOD, tol=TOL).B

@@ -41,7 +41,8 @@ from scaling import build_mesh  # noqa: E402
 from solver import MESHES, SCANS, TOL_FLOOR, prepare  # noqa: E402
 
 from translucency import __version__  # noqa: E402,F401  (first: it selects numba's threading layer)
-from translucency.app.pipeline import DEFAULT_MATERIAL, Scene, default_light_direction, resolve_medium  # noqa: E402
+from translucency.app.shading.scene import Scene  # noqa: E402
+from translucency.app.shading.settings import DEFAULT_MATERIAL, default_light_direction, resolve_medium  # noqa: E402
 from translucency.geometry.mesh import TriangleMesh  # noqa: E402
 from translucency.io.clean import clean_mesh  # noqa: E402
 from translucency.scatter import solve as solver  # noqa: E402
@@ -96,9 +97,9 @@ def measure() -> dict:
     # the proxy the bake chose (over the time limit at full resolution), from the Scene's cache
     proxy, decimation, _, geometry = next(v for v in scene._solver_meshes.values() if v[1] is not None)
     mapping = decimation.mapping
-    carried, _ = scene.solver_light(geometry, proxy, decimation, lights, medium.eta)
-    traced, _ = scene.full_light_for_proxy(geometry, proxy, decimation, lights, medium.eta)
-    own, _ = scene.incident_on_mesh(medium, lights)
+    carried, _ = scene.light_cache.solver_light(geometry, proxy, decimation, lights, medium.eta)
+    traced, _ = scene.light_cache.full_light_for_proxy(geometry, proxy, decimation, lights, medium.eta)
+    own, _ = scene.light_cache.incident_on_mesh(medium, lights)
     normals = mesh.vertex_normals()
     full = solver.SurfaceGeometry(mesh.points, mesh.triangles, normals)
     reference = exact(full, own.phi_rgb, own.w12, medium, receivers)

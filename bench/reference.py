@@ -40,7 +40,7 @@ LIGHT = np.array([0.35, 1.0, 0.45])
 
 def scans(quick: bool):
     """``(name, mesh)`` of the benchmark's scans (the shared bunny only when present)."""
-    from translucency.app.pipeline import load_scan
+    from translucency.app.shading.scan import load_scan
     from translucency.geometry.mesh import TriangleMesh
     from translucency.geometry.synthetic import icosphere
 
@@ -84,8 +84,8 @@ def main() -> None:
     parser.add_argument("--quick", action="store_true", help="a small sphere only, results in bench/results/tmp")
     args = parser.parse_args()
 
-    from translucency.app.pipeline import Scene
     from translucency.app.reference_compare import REGIONS, assign_regions, region_rows
+    from translucency.app.shading.scene import Scene
     from translucency.scatter.lights import DirectionalLight
 
     info = machine_info()

@@ -6,7 +6,7 @@ prepared once on every vertex, then several directional lights with Embree shado
 
 * preparation: wall time (far field, near field), the operators' memory (bytes they hold) and the
   process's peak resident memory after it;
-* per light: the median wall time of :meth:`Scene.shade <translucency.app.pipeline.Scene.shade>` with
+* per light: the median wall time of :meth:`Scene.shade <translucency.app.shading.scene.Scene.shade>` with
   ``bounces=0`` (incident light with shadow rays, the product, colours), and, side by side in the same
   run, the same call with ``method="tree"`` at tolerance 0.01 (the ratio is the speed-up);
 * error: the figure ``tol`` bounds (docs/physics.md §8.5), the 99th percentile of ``|B - B_ref| / B_ref``
@@ -38,7 +38,8 @@ import numpy as np  # noqa: E402
 from report import load_average, machine_info, output_dir, write_results  # noqa: E402
 
 from translucency import __version__  # noqa: E402,F401  (first: it selects numba's threading layer)
-from translucency.app.pipeline import Scene, load_default_scan  # noqa: E402
+from translucency.app.shading.scan import load_default_scan  # noqa: E402
+from translucency.app.shading.scene import Scene  # noqa: E402
 from translucency.errors import BudgetError  # noqa: E402
 from translucency.io.clean import clean_mesh  # noqa: E402
 from translucency.io.load import load_mesh  # noqa: E402

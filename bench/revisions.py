@@ -47,7 +47,7 @@ import json, sys, time, warnings
 import numpy as np
 warnings.simplefilter("ignore")
 import translucency as tl
-from translucency.app.pipeline import Scene
+from translucency.app.shading.scene import Scene  # noqa: E402
 path, unit, solves, out = sys.argv[1], sys.argv[2], int(sys.argv[3]), sys.argv[4]
 mesh, _ = tl.clean_mesh(tl.load_mesh(path, unit=unit))
 scene = Scene(mesh)

@@ -232,7 +232,7 @@ def bake(path, out_ply, stage=None):
             current[0] = name
             stage(f"shade: {name}")
 
-    from translucency.app.pipeline import Scene
+    from translucency.app.shading.scene import Scene
     from translucency.io.baked import write_baked_ply
     from translucency.io.clean import clean_mesh
     from translucency.io.load import load_mesh
@@ -260,13 +260,13 @@ def bake(path, out_ply, stage=None):
 
 def exact_at(scene, receivers):
     """``exact`` (the default material and light, as the shade used them) at ``receivers``; ``(B, seconds)``."""
-    from translucency.app.pipeline import DEFAULT_MATERIAL, default_light_direction, resolve_medium
+    from translucency.app.shading.settings import DEFAULT_MATERIAL, default_light_direction, resolve_medium
     from translucency.scatter.lights import DirectionalLight
     from translucency.scatter.solve import solve
 
     medium = resolve_medium(DEFAULT_MATERIAL)
     solver_mesh, _, _, geometry, _ = scene.solver_mesh(medium, "full")
-    incident, _ = scene.incident(
+    incident, _ = scene.light_cache.incident(
         geometry, solver_mesh.triangles, [DirectionalLight(default_light_direction(scene.up), 1.0)], medium.eta
     )
     start = time.perf_counter()
@@ -369,7 +369,7 @@ def error_bands(B, exact, normals, up):
     """The share of (receiver, channel) pairs off by more than 1 % and 5 %, and the median and 99th percentile of the
     per-vertex error per :data:`LIGHT_BANDS` band (pairs with ``exact`` at least 1e-4 of its channel's largest, as
     :func:`solver.per_vertex_error`)."""
-    from translucency.app.pipeline import default_light_direction
+    from translucency.app.shading.settings import default_light_direction
 
     keep = exact >= TOL_FLOOR * exact.max(axis=0)
     relative = np.abs(B - exact) / np.where(keep, exact, 1.0)
@@ -397,7 +397,7 @@ def error_bands(B, exact, normals, up):
 def reference_child(path, out_json):
     """Child process: ``exact`` at the receivers the bake child saved, on the mesh loaded and cleaned as the bake
     did it, with nothing else held; the error fields added to the bake's record."""
-    from translucency.app.pipeline import Scene
+    from translucency.app.shading.scene import Scene
     from translucency.io.clean import clean_mesh
     from translucency.io.load import load_mesh
 

@@ -11,8 +11,9 @@ Embree shadows: the median wall time of warm solves and the error against ``exac
 * the worst relative error over "lit-enough" vertices (``B`` above 1 % of its 99th percentile).
 
 The settings are the far-field methods at several tolerances on every vertex (``tree``,
-``cutoff``), and the pipeline's proxy resolution (:meth:`translucency.app.pipeline.Scene.shade` with
-the light's detail, :func:`~translucency.app.pipeline.proxy_edge_length`, which ``resolution="auto"`` takes only
+``cutoff``), and the pipeline's proxy resolution (:meth:`translucency.app.shading.scene.Scene.shade` with
+the light's detail, :func:`~translucency.app.shading.resolution.proxy_edge_length`, which ``resolution="auto"`` takes
+only
 at a loose tolerance, and explicit proxy edge lengths, ``tree`` at 1 %): ``B`` is solved on a
 decimated mesh and interpolated back to every vertex, and its error is measured on the full mesh.
 
@@ -48,7 +49,8 @@ import numpy as np  # noqa: E402
 from report import load_average, machine_info, output_dir, write_results  # noqa: E402
 
 from translucency import __version__  # noqa: E402,F401  (first: it selects numba's threading layer)
-from translucency.app.pipeline import Scene, fine_enough_for, proxy_edge_length  # noqa: E402
+from translucency.app.shading.resolution import fine_enough_for, proxy_edge_length  # noqa: E402
+from translucency.app.shading.scene import Scene  # noqa: E402
 from translucency.geometry.measure import mean_edge_length  # noqa: E402
 from translucency.io.clean import clean_mesh  # noqa: E402
 from translucency.io.load import load_mesh  # noqa: E402
@@ -68,7 +70,8 @@ SCANS = {  # file, unit
 MATERIALS = ("marble", "skim_milk", "ketchup")
 SETTINGS = [("tree", 0.1), ("tree", 0.03), ("tree", 0.01), ("tree", 0.003), ("cutoff", 0.01)]
 #: Proxy resolutions of the pipeline (``Scene.shade(resolution=...)``): "detail" (the medium's
-#: :func:`~translucency.app.pipeline.proxy_edge_length`, the proxy "auto" takes at a tolerance of 0.53 and above in
+#: :func:`~translucency.app.shading.resolution.proxy_edge_length`, the proxy "auto" takes at a tolerance of 0.53 and
+#: above in
 #: marble) and edge lengths in mm.
 PROXY_RESOLUTIONS = ("detail", 2.0, 3.0)
 PROXY_METHOD, PROXY_TOL = "tree", 0.01
@@ -124,8 +127,10 @@ def present_scans(scans):
 
 
 def detail_resolution(scene, medium):
-    """The proxy of the light's detail as a resolution: :func:`~translucency.app.pipeline.proxy_edge_length`, or
-    ``"full"`` where the mesh is not fine enough for it (:func:`~translucency.app.pipeline.fine_enough_for`)."""
+    """The proxy of the light's detail as a resolution: :func:`~translucency.app.shading.resolution.proxy_edge_length`,
+    or
+    ``"full"`` where the mesh is not fine enough for it
+    (:func:`~translucency.app.shading.resolution.fine_enough_for`)."""
     edge = proxy_edge_length(medium)
     return edge if fine_enough_for(edge, mean_edge_length(scene.mesh.points, scene.mesh.triangles)) else "full"
 

@@ -6,8 +6,9 @@ import plyfile
 import pytest
 
 from translucency.app import cli
-from translucency.app.pipeline import Scene, scan_reflectance
-from translucency.app.settings import ShadeSettings
+from translucency.app.shading.scan import scan_reflectance
+from translucency.app.shading.scene import Scene
+from translucency.app.shading.settings import ShadeSettings
 from translucency.errors import InvalidParameterError
 from translucency.geometry.mesh import TriangleMesh
 from translucency.geometry.synthetic import icosphere

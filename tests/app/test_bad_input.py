@@ -16,7 +16,7 @@ import pytest
 
 from tests.io.test_broken_files import CORPUS, POINTS, TRIANGLES, binary_ply, binary_stl
 from translucency.app import cli
-from translucency.app.pipeline import shade
+from translucency.app.shading.scene import shade
 from translucency.errors import InvalidParameterError, TranslucencyError, UnknownMaterialError
 from translucency.io import TriangleMesh, load_mesh, save_mesh
 from translucency.scatter.materials import material

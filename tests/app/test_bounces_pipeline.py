@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from translucency.app import options
-from translucency.app.pipeline import Scene, shade, shade_scan
-from translucency.app.settings import ShadeSettings
+from translucency.app.shading.scene import Scene, shade, shade_scan
+from translucency.app.shading.settings import ShadeSettings
 from translucency.errors import InvalidParameterError, TranslucencyError
 from translucency.geometry.mesh import TriangleMesh
 from translucency.geometry.synthetic import icosphere
@@ -30,7 +30,7 @@ def test_no_bounce_is_the_single_solve_bit_for_bit():
     scene = Scene(mesh)
     result = scene.shade("marble", LIGHT, bounces=0)
     _, _, _, geometry, _ = scene.solver_mesh(result_medium(), "full")
-    incident, _ = scene.incident(geometry, mesh.triangles, (LIGHT,), result_medium().eta)
+    incident, _ = scene.light_cache.incident(geometry, mesh.triangles, (LIGHT,), result_medium().eta)
     alone = solve(
         geometry, incident.phi_rgb, incident.w12, result_medium(), model="directional", method="tree", tol=0.01
     )

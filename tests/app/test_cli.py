@@ -214,7 +214,7 @@ def test_main_job_bakes_the_embedded_default(tmp_path):
 
 
 def test_shade_on_a_proxy_interpolates_back_to_every_vertex():
-    from translucency.app.pipeline import shade
+    from translucency.app.shading.scene import shade
     from translucency.geometry.mesh import TriangleMesh
     from translucency.geometry.synthetic import icosphere
 

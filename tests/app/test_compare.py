@@ -10,7 +10,6 @@ import pytest
 from translucency.app import cli
 from translucency.app import compare as compare_module
 from translucency.app.compare import compare, profile_cut, radiance_statistics, relative_difference
-from translucency.app.pipeline import Scene
 from translucency.errors import TranslucencyError
 from translucency.geometry.mesh import TriangleMesh
 from translucency.geometry.synthetic import icosphere
@@ -137,7 +136,8 @@ def test_a_failed_run_leaves_the_output_folder_as_it_was(sphere, tmp_path, monke
 
 def test_one_model_gives_no_difference_map_and_reuses_the_scene(sphere, tmp_path, monkeypatch):
     built = []
-    monkeypatch.setattr(compare_module, "Scene", lambda *a, **k: built.append(1) or Scene(*a, **k))
+    scene_for = compare_module.scene_for
+    monkeypatch.setattr(compare_module, "scene_for", lambda *a, **k: built.append(1) or scene_for(*a, **k))
     result = compare(sphere, "marble,skim_milk,ketchup", "directional", output=tmp_path / "o", cell_size=CELL)
     assert len(built) == 1
     assert "differences" not in result.files and not (tmp_path / "o" / "differences.png").exists()
@@ -207,7 +207,7 @@ def test_the_cli_writes_what_the_api_computes(sphere, tmp_path, capsys):
     # progress: one line per solve on stderr, none on stdout
     assert sum(line.startswith("solved ") for line in captured.err.splitlines()) == 4
     assert "solved " not in stdout
-    from translucency.app.pipeline import load_scan
+    from translucency.app.shading.scan import load_scan
 
     mesh, _, _ = load_scan(path)
     api = compare(
@@ -264,8 +264,9 @@ def test_the_profile_legend_lies_beside_the_data(two_by_two):
 
 def test_the_default_light_puts_a_tenth_of_what_the_camera_sees_in_shadow():
     from translucency.app.compare import visible_shadow_fraction, visible_vertices
-    from translucency.app.pipeline import DEFAULT_LIGHT_DIRECTION, load_scan
     from translucency.app.render import camera_position
+    from translucency.app.shading.scan import load_scan
+    from translucency.app.shading.settings import DEFAULT_LIGHT_DIRECTION
     from translucency.io.upright import to_scan_frame
 
     mesh, _, _ = load_scan(None)

@@ -8,7 +8,6 @@ import pytest
 
 from translucency.app import cli
 from translucency.app.compare import compare
-from translucency.app.pipeline import Scene
 from translucency.app.reference_compare import (
     ALL_REGION,
     MIN_PRECISE_VERTICES,
@@ -16,7 +15,8 @@ from translucency.app.reference_compare import (
     assign_regions,
     reference_figure_size,
 )
-from translucency.app.settings import resolve_medium
+from translucency.app.shading.scene import Scene
+from translucency.app.shading.settings import resolve_medium
 from translucency.errors import InvalidParameterError
 from translucency.geometry.mesh import TriangleMesh
 from translucency.geometry.synthetic import icosphere, torus
@@ -102,7 +102,10 @@ def test_shadowed_vertices_of_a_torus_lit_from_the_side():
     mesh = TriangleMesh(points, triangles)
     light = np.array([1.0, 0.0, 0.0])
     lit = (
-        Scene(mesh).incident_on_mesh(resolve_medium("marble"), DirectionalLight(light, 1.0))[0].phi_rgb.max(axis=1) > 0
+        Scene(mesh)
+        .light_cache.incident_on_mesh(resolve_medium("marble"), DirectionalLight(light, 1.0))[0]
+        .phi_rgb.max(axis=1)
+        > 0
     )
     regions = assign_regions(mesh.vertex_normals(), light, lit)
     u = np.arctan2(points[:, 1], points[:, 0])

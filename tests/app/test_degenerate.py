@@ -9,7 +9,7 @@ import pytest
 from scipy import integrate
 
 from tests.io.test_load import write_ply
-from translucency.app.pipeline import shade
+from translucency.app.shading.scene import shade
 from translucency.errors import MeshError
 from translucency.geometry.measure import signed_volume
 from translucency.geometry.synthetic import icosphere

@@ -43,7 +43,7 @@ def lit_torus():
 
 @pytest.mark.parametrize("method", ["tree", "exact"])
 def test_blocks_on_the_cluster_equal_the_local_solve(cluster, lit_torus, method):
-    from translucency.app.distributed import BlockSolver
+    from translucency.app.shading.distributed import BlockSolver
 
     geometry, phi, w12 = lit_torus
     local = solve(geometry, phi, w12, MARBLE, method=method, tol=0.01)

@@ -9,7 +9,8 @@ import numpy as np
 import plyfile
 import pytest
 
-from translucency.app.pipeline import Scene, shade, write_result
+from translucency.app.shading.result import write_result
+from translucency.app.shading.scene import Scene, shade
 from translucency.errors import InvalidParameterError
 from translucency.geometry.mesh import TriangleMesh
 from translucency.geometry.synthetic import icosphere

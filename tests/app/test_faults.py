@@ -38,11 +38,11 @@ DRIVER = textwrap.dedent("""
             return function(*args, **kwargs)
         return waiting
     if point == "load":
-        from translucency.app import pipeline
-        pipeline.load_scan = pause(pipeline.load_scan)
+        from translucency.app.shading import scan
+        scan.load_scan = pause(scan.load_scan)
     elif point == "shade":
-        from translucency.app import pipeline
-        pipeline.Scene.shade_with = pause(pipeline.Scene.shade_with)
+        from translucency.app.shading import scene
+        scene.Scene.shade_with = pause(scene.Scene.shade_with)
     elif point == "fsync":
         from translucency.io import atomic
         atomic._fsync = pause(atomic._fsync)
@@ -301,7 +301,7 @@ def test_a_simulated_full_disk_is_exit_1_for_every_command(sphere, tmp_path, cap
 
 @pytest.mark.parametrize("command", ["bake", "compare", "inspect", "view", "main job"])
 def test_a_read_only_disk_is_found_before_any_work(sphere, tmp_path, capsys, monkeypatch, command):
-    from translucency.app import pipeline
+    from translucency.app.shading import scene as pipeline
 
     def no_work(*args, **kwargs):
         raise AssertionError("the work started")

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from translucency.app.figure import figure_image, nice_length, render_views, write_figure
-from translucency.app.pipeline import Scene
+from translucency.app.shading.scene import Scene
 from translucency.geometry.mesh import TriangleMesh
 from translucency.geometry.synthetic import icosphere
 from translucency.scatter.lights import DirectionalLight

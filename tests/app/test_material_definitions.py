@@ -8,8 +8,8 @@ import pytest
 
 from translucency.app import cli
 from translucency.app.options import solver_settings
-from translucency.app.pipeline import Scene
-from translucency.app.settings import ShadeSettings
+from translucency.app.shading.scene import Scene
+from translucency.app.shading.settings import ShadeSettings
 from translucency.errors import InvalidParameterError, UnknownMaterialError
 from translucency.geometry.mesh import TriangleMesh
 from translucency.geometry.synthetic import icosphere

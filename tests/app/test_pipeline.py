@@ -3,7 +3,8 @@
 import numpy as np
 import pytest
 
-from translucency.app.pipeline import Scene, resolve_medium, shade
+from translucency.app.shading.scene import Scene, shade
+from translucency.app.shading.settings import resolve_medium
 from translucency.geometry.mesh import TriangleMesh
 from translucency.geometry.synthetic import icosphere
 from translucency.scatter.lights import DirectionalLight
@@ -77,7 +78,7 @@ def _plinth(up_index=2):
 
 
 def test_default_light_is_above_and_in_front_for_the_up_axis_and_recorded():
-    from translucency.app.pipeline import DEFAULT_LIGHT_DIRECTION, default_light_direction
+    from translucency.app.shading.settings import DEFAULT_LIGHT_DIRECTION, default_light_direction
 
     np.testing.assert_array_equal(default_light_direction("+y"), DEFAULT_LIGHT_DIRECTION)  # unchanged for +y
     np.testing.assert_allclose(default_light_direction("+z"), (0.35, -0.45, 1.0))  # above: +z, in front: -y
@@ -107,7 +108,7 @@ def test_unit_is_recorded_in_the_metadata():
 
 
 def test_auto_keeps_every_vertex_at_the_default_tolerance_and_a_looser_one_gets_a_proxy_within_it():
-    from translucency.app.settings import ShadeSettings
+    from translucency.app.shading.settings import ShadeSettings
     from translucency.scatter.solve import TOL_FLOOR
 
     mesh = sphere(5, 8.0)  # 0.30 mm edges: far finer than marble's diffusion length, coarser than 1 % needs
@@ -145,7 +146,7 @@ def test_auto_counts_a_light_that_hardly_diffuses_and_exact_keeps_every_vertex()
 def test_a_tiny_object_gets_a_proxy_it_allows_and_a_given_edge_too_coarse_is_one_sentence():
     import pytest
 
-    from translucency.app.pipeline import PROXY_MIN_TRIANGLES
+    from translucency.app.shading.resolution import PROXY_MIN_TRIANGLES
     from translucency.errors import InvalidParameterError, command_line_spelling
 
     tiny = sphere(4, 0.08)  # 0.16 mm across (a bunny read in the wrong unit): smaller than marble's diffusion length
@@ -177,7 +178,7 @@ def test_a_scene_relights_with_operators_it_prepares_once_and_matches_an_exact_s
 def test_a_scan_size_scene_lets_its_embree_scene_go_during_the_solve_and_gives_the_same_answer(monkeypatch):
     """From RELEASE_SCENE_VERTICES on the Embree scene is not held through the solve's set-up: the bounce
     builds it again, and the answer is the one of a scene that kept it."""
-    from translucency.app import pipeline
+    from translucency.app.shading import scene as scene_module
     from translucency.scatter import visibility
 
     built = []
@@ -191,7 +192,7 @@ def test_a_scan_size_scene_lets_its_embree_scene_go_during_the_solve_and_gives_t
     mesh = sphere()
     kept = Scene(mesh).shade("marble", method="tree", bounces=1)
     assert len(built) == 1  # the incident light's scene, used again by the bounce
-    monkeypatch.setattr(pipeline, "RELEASE_SCENE_VERTICES", 0)
+    monkeypatch.setattr(scene_module, "RELEASE_SCENE_VERTICES", 0)
     released = Scene(mesh).shade("marble", method="tree", bounces=1)
     assert len(built) == 3  # let go after the incident light, built again for the bounce
     np.testing.assert_array_equal(released.B, kept.B)

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from translucency.app import cli
-from translucency.app.pipeline import Scene
 from translucency.app.render import render_colors
+from translucency.app.shading.scene import Scene
 from translucency.app.viewer import Viewer, interactive_edge_length, light_angles, light_direction
 from translucency.errors import InvalidParameterError
 from translucency.geometry.mesh import TriangleMesh
@@ -58,7 +58,8 @@ def test_light_angles_round_trip():
 
 
 def test_interactive_edge_gives_about_the_vertex_budget(sphere):
-    from translucency.app.pipeline import proxy_edge_length, resolve_medium
+    from translucency.app.shading.resolution import proxy_edge_length
+    from translucency.app.shading.settings import resolve_medium
 
     marble = resolve_medium("marble")
     big = sphere.replace(points=sphere.points * 10)  # 400 mm across: 64x the area of the sphere
@@ -225,7 +226,8 @@ def test_view_screenshot_equals_the_api_image(sphere, tmp_path):
     import imageio.v3 as iio
 
     image = iio.imread(out).astype(float)
-    from translucency.app.pipeline import load_scan, resolve_medium
+    from translucency.app.shading.scan import load_scan
+    from translucency.app.shading.settings import resolve_medium
 
     mesh, _, _ = load_scan(path)
     medium = resolve_medium("skim_milk")
@@ -264,7 +266,8 @@ def test_view_without_a_display_says_how_to_render_off_screen(monkeypatch, capsy
 
 
 def test_interactive_proxy_of_a_tiny_object_is_one_the_mesh_allows():
-    from translucency.app.pipeline import coarsest_proxy_edge, resolve_medium
+    from translucency.app.shading.resolution import coarsest_proxy_edge
+    from translucency.app.shading.settings import resolve_medium
 
     points, triangles = icosphere(4, 0.08)  # 0.16 mm across: the shared bunny read with --unit mm
     tiny = TriangleMesh(points, triangles)
@@ -293,7 +296,7 @@ def test_z_up_puts_the_camera_in_front_and_above_and_the_light_above():
 
 @needs_display
 def test_shared_angel_is_shown_z_up_by_default(shared_meshes):
-    from translucency.app.pipeline import load_scan
+    from translucency.app.shading.scan import load_scan
 
     mesh, _, _ = load_scan(shared_meshes / "ggg_angel_sfm.ply")
     view = Viewer(mesh, "marble", window_size=(160, 120), off_screen=True, widgets=False, resolution=12.0)

@@ -177,7 +177,7 @@ def test_a_given_unit_is_not_inferred_and_says_nothing():
 
 
 def test_embedded_default_keeps_its_size_and_is_not_inferred():
-    from translucency.app.pipeline import DEFAULT_SCAN_WIDTH_MM, load_default_scan
+    from translucency.app.shading.scan import DEFAULT_SCAN_WIDTH_MM, load_default_scan
 
     with warnings.catch_warnings():
         warnings.simplefilter("error")

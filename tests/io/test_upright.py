@@ -109,7 +109,7 @@ def test_shared_scans_keep_their_up_when_tilted_a_little(name, unit, expected):
 
 
 def test_embedded_default_is_y_up():
-    from translucency.app.pipeline import load_default_scan
+    from translucency.app.shading.scan import load_default_scan
 
     mesh = load_default_scan()
     assert infer_up(mesh.points, mesh.triangles)[0] == "+y"

@@ -181,7 +181,7 @@ def test_the_size_floor_is_below_every_estimate_of_that_size(method):
 def test_a_size_no_solve_fits_traces_no_light(monkeypatch):
     """Under a time limit that even the set-up of a full solve is over, the pipeline goes for a proxy (or
     says it cannot) without tracing the light for the full mesh first."""
-    from translucency.app.pipeline import Scene
+    from translucency.app.shading.scene import Scene
     from translucency.geometry.mesh import TriangleMesh
     from translucency.scatter import irradiance
 

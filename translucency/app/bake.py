@@ -9,7 +9,7 @@
   of ``translucency bake``; :class:`ConsoleProgress` shows its progress (bars on a terminal, lines elsewhere).
 
 Output names are ``<stem>_<material>.<format>`` in the output folder (``format`` ply, vtp, vtk, glb
-or gltf: :func:`translucency.app.pipeline.write_result`; default ply); a stem met twice (``a/scan.ply``,
+or gltf: :func:`translucency.app.shading.result.write_result`; default ply); a stem met twice (``a/scan.ply``,
 ``b/scan.obj``) gets ``-2``, ``-3``, ... and a name is never that of an input, so no input is ever
 written over. A single scan may be baked to one file named by ``output`` (``x.vtp``: that format). Each
 file is written atomically: a failed file leaves no partial output.
@@ -47,9 +47,7 @@ from ..errors import (
     option,
 )
 from ..processes import available_cores, end_with_parent
-from ..scatter.budget import DEFAULT_TIME_LIMIT_S
-from ..scatter.names import DEFAULT_BOUNCES, DEFAULT_METHOD, DEFAULT_MODEL, DEFAULT_TOL
-from .settings import DEFAULT_MATERIAL, ShadeSettings
+from .shading.settings import ShadeSettings, settings_with
 
 __all__ = [
     "BakeSettings",
@@ -84,7 +82,7 @@ class BakeSettings(ShadeSettings):
     ----------
     material, model, method, tol, resolution, shadows, per_direction, exposure, memory_limit, time_limit, up, bounces,
     albedo
-        As in :class:`~translucency.app.settings.ShadeSettings` (``up`` places the default light and is
+        As in :class:`~translucency.app.shading.settings.ShadeSettings` (``up`` places the default light and is
         recorded; the memory limit in GB, the time limit in seconds).
     lights : light or sequence of lights, optional
         Default: the pipeline's white directional light (1 W/m²).
@@ -330,13 +328,15 @@ def bake_file(path, output, settings: BakeSettings, progress=None, said=None, so
         they are in the record too.
     solver : callable, optional
         Stands in for :func:`translucency.scatter.solve.solve` (a
-        :class:`~translucency.app.distributed.BlockSolver`: one scan's receivers on a Dask cluster).
+        :class:`~translucency.app.shading.distributed.BlockSolver`: one scan's receivers on a Dask cluster).
 
     Returns
     -------
     BakeRecord
     """
-    from .pipeline import load_scan, shade_scan, write_result
+    from .shading.result import write_result
+    from .shading.scan import load_scan
+    from .shading.scene import shade_scan
 
     report = progress or (lambda stage, fraction: None)
     start = time.perf_counter()
@@ -411,7 +411,7 @@ def _bake_file_spelled(command_line: bool, path, output, settings: BakeSettings)
 
 def _source_label(path) -> str:
     if path is None:
-        from .pipeline import default_scan_path
+        from .shading.scan import default_scan_path
 
         return f"{default_scan_path().name} (embedded default scan)"
     return str(path)
@@ -517,7 +517,7 @@ def _key(path) -> str:
 
 
 def _default_stem() -> str:
-    from .pipeline import default_scan_path
+    from .shading.scan import default_scan_path
 
     return default_scan_path().stem
 
@@ -551,7 +551,7 @@ def bake_files(
         Bake on a Dask cluster: the scheduler's address (``tcp://host:8786``) or a client. Several
         scans go one per task: the workers read the scans and write the PLYs, so both must be reachable
         from them. A single scan is loaded and written here and its receivers are solved in blocks on
-        the workers (:class:`~translucency.app.distributed.BlockSolver`).
+        the workers (:class:`~translucency.app.shading.distributed.BlockSolver`).
     progress : BakeProgress, optional
     format : {"ply", "vtp", "vtk", "glb", "gltf"}, optional
         Format of the files in an output folder (default ply); a file output's suffix names its own.
@@ -597,7 +597,7 @@ def bake_files(
         progress.start(labels, [str(o) for o in outputs])
         try:
             if client is not None and len(sources) == 1:  # one scan: here, its receivers in blocks on the cluster
-                from .distributed import BlockSolver
+                from .shading.distributed import BlockSolver
 
                 def stage(name, fraction):
                     progress.stage(0, name, fraction)
@@ -824,26 +824,17 @@ def exit_code(records) -> int:
 def bake(
     meshes=None,
     output=None,
-    material=DEFAULT_MATERIAL,
+    material=None,
     lights=None,
     *,
+    settings: ShadeSettings | None = None,
     unit=None,
-    model=DEFAULT_MODEL,
-    method=DEFAULT_METHOD,
-    tol=DEFAULT_TOL,
-    resolution="auto",
-    shadows=True,
-    exposure=None,
-    per_direction=False,
-    bounces=DEFAULT_BOUNCES,
-    up="auto",
-    memory_limit=None,
-    time_limit=DEFAULT_TIME_LIMIT_S,
     workers=1,
     scheduler=None,
     progress=None,
     format=None,
     preview=False,
+    **changes,
 ) -> list[BakeRecord]:
     """Bake scans to files of per-vertex translucent radiance (PLY by default), one file per scan.
 
@@ -855,22 +846,19 @@ def bake(
         A file for one scan (``.ply``, ``.vtp``, ``.vtk``, ``.glb`` or ``.gltf``: the suffix names the
         format), else a folder (created when missing), default ``translucency-output``; files are
         named ``<stem>_<material>.<format>``.
-    material : str or Material or Medium
-        Catalogue name or coefficients (1/mm).
+    material : str or Material or Medium, optional
+        Shortcut for the ``material`` setting: catalogue name or coefficients (1/mm).
     lights : light or sequence of lights, optional
         Default: one white directional light of 1 W/m².
+    settings : ShadeSettings, optional
+        Every setting of the solve (default: the defaults; :class:`~translucency.app.shading.settings.ShadeSettings`);
+        ``up`` places the default light above and in front of each scan and is recorded in the bake.
+    **changes
+        Any field of the settings by name (``tol=0.05``, ``time_limit=None``, ...), replacing the one of
+        ``settings``, as in :func:`translucency.shade`.
     unit : str or float, optional
         Length unit of the files: ``mm``, ``cm``, ``m``, ``in`` or a number of mm per unit; None
         (default): inferred from each file's size, said in one line and recorded in the bake.
-    model, method, tol, resolution, shadows, exposure, per_direction, bounces
-        As in :func:`translucency.shade`; ``resolution`` is ``"auto"``, ``"full"`` or a proxy edge
-        length in mm.
-    up : str
-        The scans' up axis (``"x"`` ... ``"-z"``, or ``"auto"``: inferred per scan); it places the
-        default light above and in front, and is recorded in the bake.
-    memory_limit, time_limit : float, optional
-        GB the process may hold and seconds a solve may take (estimated before it starts; None: no
-        time limit); over them a scan is solved on a coarser proxy, or fails with a sentence.
     workers : int
         Local processes to bake in (1: in this process).
     scheduler : str or distributed.Client, optional
@@ -880,7 +868,7 @@ def bake(
         E.g. :class:`ConsoleProgress` for progress bars.
     format : {"ply", "vtp", "vtk", "glb", "gltf"}, optional
         Format of the files in an output folder (default ply; see
-        :func:`translucency.app.pipeline.write_result`).
+        :func:`translucency.app.shading.result.write_result`).
     preview : bool
         Also write ``<stem>_<material>.png`` beside each output: its sRGB and false-colour views, labelled.
 
@@ -892,21 +880,7 @@ def bake(
     """
     if meshes is not None and isinstance(meshes, (str, os.PathLike)):
         meshes = [meshes]
-    settings = BakeSettings(
-        material,
-        model,
-        method,
-        tol,
-        resolution,
-        shadows,
-        per_direction,
-        exposure,
-        memory_limit,
-        time_limit,
-        up,
-        bounces,
-        lights=lights,
-        unit=unit,
-        preview=preview,
-    )
+    if material is not None:
+        changes["material"] = material
+    settings = BakeSettings.of(settings_with(settings, **changes), lights=lights, unit=unit, preview=preview)
     return bake_files(meshes, output, settings, workers=workers, scheduler=scheduler, progress=progress, format=format)

@@ -49,7 +49,7 @@ def _table_lines(header, rows) -> list[str]:
 
 def _own_material_lines() -> list[str]:
     """The user's own materials (their folder and names), for ``translucency materials``."""
-    from .settings import user_material_files, user_materials_folder
+    from .shading.settings import user_material_files, user_materials_folder
 
     files = user_material_files()
     if not files:
@@ -62,7 +62,7 @@ def _show_material(name) -> int:
     """``translucency materials --show NAME``: one material (a catalogue name or a material file) with its
     coefficients, every derived quantity of the models (docs/physics.md §2.1) and its look (§6.4)."""
     from ..scatter.appearance import appearance_of
-    from .settings import resolve_medium
+    from .shading.settings import resolve_medium
 
     medium = resolve_medium(name)
     reflectance, _ = appearance_of(medium)
@@ -284,7 +284,7 @@ def cmd_view(args) -> int:
 
     from ..io.atomic import prepare_output_file
     from .options import lights_from_args, solver_settings
-    from .pipeline import load_scan
+    from .shading.scan import load_scan
 
     window_size = _pixels(args.window_size, "--window-size")
     if args.screenshot is not None:
@@ -299,7 +299,8 @@ def cmd_view(args) -> int:
         )
     if not (0 < args.roughness <= 1):
         raise TranslucencyError(f"--roughness must be a GGX alpha in (0, 1], got {args.roughness!r}.")
-    from ..scatter.names import DEFAULT_METHOD, DEFAULT_TOL, VIEWER_METHOD, VIEWER_TOL
+    from ..scatter.names import DEFAULT_METHOD, DEFAULT_TOL
+    from .shading.settings import VIEWER_METHOD, VIEWER_TOL
 
     one_picture = args.screenshot is not None  # no later light to reuse relighting operators for
     if args.method is None:
@@ -308,9 +309,6 @@ def cmd_view(args) -> int:
         args.tol = DEFAULT_TOL if one_picture else VIEWER_TOL
     interactive = args.resolution == "interactive"
     settings = solver_settings(args, resolution="full") if interactive else solver_settings(args)
-    keywords = settings.solver_keywords()
-    if interactive:
-        keywords["resolution"] = "interactive"
     lights = lights_from_args(args)
     mesh, _, name = load_scan(args.mesh, args.unit, warn=_warn, note=_note)
     from .viewer import Viewer
@@ -318,17 +316,16 @@ def cmd_view(args) -> int:
     viewer = Viewer(
         mesh,
         lights=lights,
-        shadows=not args.no_shadows,
+        settings=settings,
+        resolution="interactive" if interactive else settings.resolution,
         view_dependent=args.view_dependent,
         specular=args.specular,
         roughness=args.roughness,
         window_size=window_size,
-        up=args.up,
         off_screen=args.screenshot is not None,
         widgets=args.screenshot is None,
         output=args.output,
         name=Path(name).stem,
-        **keywords,
     )
     print(viewer.status)
     if args.screenshot is not None:
@@ -359,17 +356,15 @@ def cmd_compare(args) -> int:
     from ..io.atomic import prepare_output_folder
     from .compare import compare, validate_choices
     from .options import inline_material, lights_from_args, quiet, solver_settings
-    from .pipeline import load_scan
-    from .settings import DEFAULT_MATERIAL
+    from .shading.scan import load_scan
+    from .shading.settings import DEFAULT_MATERIAL
 
     if inline_material(args) is not None:
         raise InvalidParameterError(
             "compare takes its materials by name or file (--materials marble,jade.toml): write the material of "
             "--sigma-a/--sigma-s or --reflectance/--mfp into a TOML file (docs/physics.md 6.4) and name it there."
         )
-    settings = solver_settings(args, material=args.material or DEFAULT_MATERIAL).solver_keywords()
-    settings.pop("material")
-    settings.pop("model")
+    settings = solver_settings(args, material=args.material or DEFAULT_MATERIAL)
     materials = args.materials if args.materials is not None else args.material
     reference = args.reference
     sweep = _sweep(args.sweep)
@@ -395,12 +390,10 @@ def cmd_compare(args) -> int:
         lights,
         reference=reference,
         sweep=None if reference is None else sweep,  # made above into the materials; a reference refuses one
+        settings=settings,
         output=args.output,
-        shadows=not args.no_shadows,
-        up=args.up,
         cell_size=cell_size,
         progress=None if quiet(args) else (lambda line: print(f"solved {line}", file=sys.stderr, flush=True)),
-        **settings,
     )
     if reference is not None:
         _print_reference_tables(result)
@@ -463,8 +456,8 @@ def cmd_reference(args) -> int:
     from ..reference.pathtrace import check_spp
     from .ground_truth import trace_reference, write_reference
     from .options import parse_vector, quiet
-    from .pipeline import load_scan
     from .progress import REFERENCE_PROGRESS_SECONDS, throttled_lines
+    from .shading.scan import load_scan
 
     spp = check_spp(args.spp)
     output = Path(args.output)
@@ -521,7 +514,8 @@ def _add_view_and_compare_parsers(sub) -> None:
         "with --screenshot, one picture) and --resolution to 'interactive': every vertex with relight, a "
         "proxy of about 7,500 vertices otherwise.",
     )
-    from ..scatter.names import DEFAULT_METHOD, DEFAULT_TOL, VIEWER_METHOD, VIEWER_TOL
+    from ..scatter.names import DEFAULT_METHOD, DEFAULT_TOL
+    from .shading.settings import VIEWER_METHOD, VIEWER_TOL
 
     # the viewer's own defaults: relight (operators worth preparing for the lights to come), but tree for
     # --screenshot, which shows one light

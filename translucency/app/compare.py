@@ -1,6 +1,6 @@
 """Scripted comparisons: one scan, view and light in several materials and models.
 
-:func:`compare` solves every (material, model) pair on one :class:`~translucency.app.pipeline.Scene`
+:func:`compare` solves every (material, model) pair on one :class:`~translucency.app.shading.scene.Scene`
 (the geometry, Embree scene and visibility are computed once) and returns the numbers; with an output
 folder it also writes
 
@@ -37,7 +37,7 @@ that faces the light most (positive toward ``up``). Dotted lines mark where the 
 shadow terminator, and cast shadows), so the plot shows how far light bleeds past it in each material.
 
 Default light: its own, :data:`COMPARE_LIGHT_DIRECTION`, not the pipeline's. The main job and the viewer
-light a scan from above and in front (:data:`~translucency.app.pipeline.DEFAULT_LIGHT_DIRECTION`), a
+light a scan from above and in front (:data:`~translucency.app.shading.settings.DEFAULT_LIGHT_DIRECTION`), a
 key light that leaves 13 % of the vertices the camera sees of the default bunny in shadow, mostly
 under the chin and the haunch; but materials differ most where light crosses a shadow edge and where
 it shines through thin parts, so compare lights from the right, above and a little behind: 32 % of
@@ -61,10 +61,8 @@ from .. import __version__
 from ..errors import InvalidParameterError, option
 from ..io.polydata import to_pyvista
 from ..io.units import RADIANCE_UNIT, unit_metadata
-from ..scatter.budget import DEFAULT_TIME_LIMIT_S
-from ..scatter.names import DEFAULT_BOUNCES, DEFAULT_METHOD, DEFAULT_MODEL, DEFAULT_TOL
+from ..scatter.names import DEFAULT_MODEL
 from .display import display_colors
-from .pipeline import Scene, mesh_for_shading, resolve_medium
 from .render import (
     DEFAULT_CAMERA_DIRECTION,
     DEFAULT_UP,
@@ -73,7 +71,9 @@ from .render import (
     default_camera_direction,
     new_plotter,
 )
-from .settings import DEFAULT_MATERIAL, ShadeSettings
+from .shading.scan import mesh_for_shading
+from .shading.scene import scene_for
+from .shading.settings import DEFAULT_MATERIAL, ShadeSettings, resolve_medium, settings_with
 
 __all__ = [
     "COMPARE_LIGHT_DIRECTION",
@@ -219,13 +219,13 @@ def visible_shadow_fraction(mesh, lights=None, camera_direction=None, up="auto")
     from ..scatter.lights import DirectionalLight
 
     up_axis = resolve_up(up, mesh.points, mesh.triangles)
-    scene = Scene(mesh, up=up_axis)
+    scene = scene_for(mesh, ShadeSettings(up=up_axis))
     lights = lights if lights is not None else DirectionalLight(compare_light_direction(up_axis), 1.0)
     camera_direction = default_camera_direction(up_axis) if camera_direction is None else camera_direction
     low, high = mesh.points.min(axis=0), mesh.points.max(axis=0)
     eye = camera_position(0.5 * (low + high), float(np.linalg.norm(high - low)), camera_direction)[0]
     seen = visible_vertices(mesh, eye)
-    lit = scene.incident_on_mesh(resolve_medium(DEFAULT_MATERIAL), lights)[0].phi_rgb.max(axis=1) > 0
+    lit = scene.light_cache.incident_on_mesh(resolve_medium(DEFAULT_MATERIAL), lights)[0].phi_rgb.max(axis=1) > 0
     return float(np.count_nonzero(seen & ~lit) / max(np.count_nonzero(seen), 1))
 
 
@@ -342,7 +342,7 @@ def validate_choices(materials, models, sweep=None) -> tuple[list, list, dict]:
     """Materials and models as lists (a string ``"a,b"`` is split), checked; ``(materials, models, media)``.
 
     A material is a catalogue name, a material file, a definition mapping or a
-    :class:`~translucency.scatter.medium.Medium` (:func:`~translucency.app.settings.resolve_medium`).
+    :class:`~translucency.scatter.medium.Medium` (:func:`~translucency.app.shading.settings.resolve_medium`).
     ``sweep`` (``{key: [values]}``, one key of :data:`~translucency.scatter.definition.SWEEP_KEYS`) turns the
     one material given into one per value (:func:`~translucency.scatter.definition.varied`). Raises a
     :class:`~translucency.errors.TranslucencyError` with one sentence for an empty or repeated list, an
@@ -387,24 +387,15 @@ def compare(
     models=(DEFAULT_MODEL,),
     lights=None,
     *,
+    settings: ShadeSettings | None = None,
     output=None,
-    method=DEFAULT_METHOD,
-    tol=DEFAULT_TOL,
-    resolution="auto",
-    shadows=True,
-    per_direction=False,
-    bounces=DEFAULT_BOUNCES,
-    albedo="material",
-    exposure=None,
-    memory_limit=None,
-    time_limit=DEFAULT_TIME_LIMIT_S,
     camera_direction=None,
-    up="auto",
     cell_size=(480, 480),
     progress=None,
     unit=None,
     reference=None,
     sweep=None,
+    **changes,
 ) -> Comparison:
     """Render and measure one scan in several materials and models (module docstring for every output).
 
@@ -412,10 +403,10 @@ def compare(
     ----------
     mesh : TriangleMesh or pyvista.PolyData, optional
         A cleaned mesh in mm, or a PolyData in ``unit`` (converted and repaired,
-        :func:`~translucency.app.pipeline.mesh_for_shading`); default: the embedded default scan, cleaned.
+        :func:`~translucency.app.shading.scan.mesh_for_shading`); default: the embedded default scan, cleaned.
     materials : sequence of str or Medium, or str "a,b,c", optional
         Catalogue names, material files (``.toml``, ``.json``), definition mappings or media (the grid's
-        columns); default :data:`~translucency.app.settings.DEFAULT_MATERIAL`, or the reference's material
+        columns); default :data:`~translucency.app.shading.settings.DEFAULT_MATERIAL`, or the reference's material
         with ``reference``.
     models : sequence of str, or str
         Scattering models (the grid's rows; the first is the reference of the difference maps).
@@ -424,17 +415,18 @@ def compare(
         right, above and a little behind (:func:`compare_light_direction`; why: the module docstring).
     output : path-like, optional
         Folder for the files (created; files in it are replaced atomically). None: numbers only.
-    method, tol, resolution, shadows, per_direction, bounces, albedo, memory_limit, time_limit
-        Solver settings (:meth:`Scene.shade <translucency.app.pipeline.Scene.shade>`; GB, seconds).
-    exposure : float, optional
-        The common display exposure (default: automatic over all cells).
+    settings : ShadeSettings, optional
+        Every setting of the solves (default: the defaults; :class:`~translucency.app.shading.settings.ShadeSettings`):
+        each cell takes its material and model, and ``exposure`` is the common display exposure (default:
+        automatic over all cells); ``up`` is the scan's up axis, ``"x"`` ... ``"-z"`` or ``"auto"`` (inferred
+        from the mesh, :mod:`translucency.io.upright`): the view-up, the second axis of the profile's plane, and
+        where the default camera and light are.
+    **changes
+        Any field of the settings by name (``method="exact"``, ``bounces=0``, ...), replacing the one of
+        ``settings``, as in :func:`translucency.shade`.
     camera_direction : sequence of 3 float, optional
         From the mesh's centre toward the camera, in the scan's coordinates (default: in front and a
         little above, :func:`~translucency.app.render.default_camera_direction` of ``up``).
-    up : str
-        The scan's up axis, ``"x"`` ... ``"-z"`` or ``"auto"`` (inferred from the mesh,
-        :mod:`translucency.io.upright`): the view-up, the second axis of the profile's plane, and
-        where the default camera and light are.
     cell_size : (int, int)
         Width and height of one grid cell, pixels; ``grid.png`` is ``(columns * width, rows * height)``.
     progress : callable, optional
@@ -459,45 +451,82 @@ def compare(
     from ..io.upright import up_vector
     from ..scatter.lights import DirectionalLight, as_light_list
 
-    setup = None
-    if reference is not None:
-        from .reference_compare import reference_setup
-
-        if sweep is not None:
-            raise InvalidParameterError(
-                f"a reference fixes the material; compare against it without {option('sweep')}."
-            )
-
-        setup = reference_setup(reference, mesh, materials, lights, unit)
-        materials, models, _ = validate_choices([DEFAULT_MATERIAL], models)
-        materials, media = [setup.medium.name], {setup.medium.name: setup.medium}
-        mesh, lights, unit = setup.mesh, setup.light, None  # the reference's points are in mm
-    else:
-        materials = materials if materials is not None else DEFAULT_MATERIAL
-        materials, models, media = validate_choices(materials, models, sweep)
+    setup, mesh, lights, unit, materials, models, media = _choices(
+        reference, sweep, mesh, materials, models, lights, unit
+    )
     if output is not None:
         from ..io.atomic import prepare_output_folder
 
         prepare_output_folder(output)
     # every solver setting checked once, before the scan is loaded; each cell changes material and model
-    solver = (method, tol, resolution, shadows, per_direction, exposure, memory_limit, time_limit, up, bounces, albedo)
-    settings = ShadeSettings(media[materials[0]], models[0], *solver)
+    settings = settings_with(settings, **changes).replace(material=media[materials[0]], model=models[0])
     width, height = (int(v) for v in cell_size)
     if width < 16 or height < 16:
         raise InvalidParameterError(f"cell_size must be at least 16 x 16 pixels, got {cell_size!r}.")
     if mesh is None:
-        from .pipeline import load_scan
+        from .shading.scan import load_scan
 
         mesh, _, _ = load_scan(None)
     else:
         mesh = mesh_for_shading(mesh, unit, entry="compare")
-    scene = Scene(mesh, shadows=settings.shadows, up=settings.up)
+    scene = scene_for(mesh, settings)
     up_axis = scene.up
     up = tuple(up_vector(up_axis))
     if camera_direction is None:
         camera_direction = default_camera_direction(up_axis)
     lights = as_light_list(lights if lights is not None else DirectionalLight(compare_light_direction(up_axis), 1.0))
 
+    results, times = _solve_cells(scene, settings, media, materials, models, lights, progress)
+    exposure = settings.exposure
+    if exposure is None:
+        _, exposure = display_colors(np.concatenate([r.radiance for r in results.values()]))
+    lit = {
+        material: scene.light_cache.incident_on_mesh(media[material], lights)[0].phi_rgb.max(axis=1) > 0
+        for material in materials
+    }
+    statistics = _statistics(results, times, lit)
+    relative, differences = _differences(results, materials, models, lit)
+    key_light = next((light for light in lights if isinstance(light, DirectionalLight)), None)
+    light_direction = key_light.direction if key_light is not None else np.asarray(up, dtype=np.float64)
+    profiles, plane = _profiles(mesh, results, lit[materials[0]], light_direction, up, camera_direction)
+    comparison = Comparison(
+        materials, models, float(exposure), results, times, statistics, differences, profiles, plane
+    )
+    if setup is not None:
+        _measure_against_reference(comparison, setup, mesh, lit[materials[0]])
+    if output is not None:
+        recorded = {
+            **{name: getattr(settings, name) for name in ("method", "tol", "resolution", "shadows", "per_direction")},
+            "bounces": settings.bounces,
+            "albedo": settings.albedo,
+            "up": up_axis,
+            "up_inferred": scene.up_requested == "auto",
+        }
+        comparison.files = _write_files(
+            Path(output), mesh, comparison, relative, lights, camera_direction, up, (width, height), recorded
+        )
+    return comparison
+
+
+def _choices(reference, sweep, mesh, materials, models, lights, unit):
+    """``(setup or None, mesh, lights, unit, materials, models, media)``: the reference's scan, material and
+    light when one is given (what else is given must agree with it), else the materials and models checked."""
+    if reference is None:
+        materials = materials if materials is not None else DEFAULT_MATERIAL
+        materials, models, media = validate_choices(materials, models, sweep)
+        return None, mesh, lights, unit, materials, models, media
+    from .reference_compare import reference_setup
+
+    if sweep is not None:
+        raise InvalidParameterError(f"a reference fixes the material; compare against it without {option('sweep')}.")
+    setup = reference_setup(reference, mesh, materials, lights, unit)
+    _, models, _ = validate_choices([DEFAULT_MATERIAL], models)
+    materials, media = [setup.medium.name], {setup.medium.name: setup.medium}
+    return setup, setup.mesh, setup.light, None, materials, models, media  # the reference's points are in mm
+
+
+def _solve_cells(scene, settings, media, materials, models, lights, progress):
+    """Every (material, model) cell solved on one scene: ``(results, seconds)`` by cell."""
     results, times = {}, {}
     for material in materials:
         for model in models:
@@ -507,14 +536,12 @@ def compare(
             times[material, model] = time.perf_counter() - start
             if progress is not None:
                 progress(f"{material}, {model}: {times[material, model]:.2f} s")
-    if exposure is None:
-        _, exposure = display_colors(np.concatenate([r.radiance for r in results.values()]))
-    exposure = float(exposure)
+    return results, times
 
-    lit = {
-        material: scene.incident_on_mesh(media[material], lights)[0].phi_rgb.max(axis=1) > 0 for material in materials
-    }
-    statistics, differences = [], []
+
+def _statistics(results, times, lit) -> list:
+    """The radiance statistics of every cell, over all vertices and the lit ones, per channel."""
+    statistics = []
     for (material, model), result in results.items():
         for subset, mask in (("all", None), ("lit", lit[material])):
             for channel, row in radiance_statistics(result.radiance, mask).items():
@@ -528,7 +555,12 @@ def compare(
                         "time_s": times[material, model],
                     }
                 )
-    relative = {}
+    return statistics
+
+
+def _differences(results, materials, models, lit):
+    """``(relative differences by cell, rows)``: each model's radiance against the first model's, per material."""
+    relative, differences = {}, []
     for material in materials:
         for model in models[1:]:
             relative[material, model] = difference = relative_difference(
@@ -550,51 +582,33 @@ def compare(
                         **{f"p{p}": float(np.percentile(values, p)) for p in (5, 50, 95)},
                     )
                 differences.append(row)
+    return relative, differences
 
-    key_light = next((light for light in lights if isinstance(light, DirectionalLight)), None)
-    light_direction = key_light.direction if key_light is not None else np.asarray(up, dtype=np.float64)
+
+def _profiles(mesh, results, lit, light_direction, up, camera_direction):
+    """``(profiles by cell, plane)``: every cell's radiance along the cut through the light and the up axis, and
+    where the light's boundary crosses it (mm)."""
     names = {key: f"{key[0]}/{key[1]}" for key in results}
     values = {names[key]: result.radiance for key, result in results.items()}
-    values["lit"] = lit[materials[0]].astype(np.float64)
+    values["lit"] = lit.astype(np.float64)
     position, samples, plane = profile_cut(mesh, values, light_direction, up, camera_direction)
     inside = samples["lit"] >= 0.5
     plane["light_boundaries_mm"] = (0.5 * (position[1:] + position[:-1]))[inside[1:] != inside[:-1]].tolist()
-    profiles = {key: (position, samples[names[key]]) for key in results}
+    return {key: (position, samples[names[key]]) for key in results}, plane
 
-    comparison = Comparison(materials, models, exposure, results, times, statistics, differences, profiles, plane)
-    if setup is not None:
-        from .reference_compare import assign_regions, region_rows
 
-        comparison.reference = setup
-        comparison.regions = assign_regions(mesh.vertex_normals(), setup.light.direction, lit[materials[0]])
-        for model in models:
-            result = results[materials[0], model]
-            comparison.reference_rows += region_rows(
-                model, result.radiance, setup.reference, comparison.regions, times[materials[0], model]
-            )
-    if output is not None:
-        comparison.files = _write_files(
-            Path(output),
-            mesh,
-            comparison,
-            relative,
-            lights,
-            camera_direction,
-            up,
-            (width, height),
-            {
-                "method": method,
-                "tol": tol,
-                "resolution": resolution,
-                "shadows": bool(shadows),
-                "per_direction": bool(per_direction),
-                "bounces": settings.bounces,
-                "albedo": settings.albedo,
-                "up": up_axis,
-                "up_inferred": scene.up_requested == "auto",
-            },
+def _measure_against_reference(comparison, setup, mesh, lit) -> None:
+    """Every model's radiance against the path-traced reference per region (:attr:`Comparison.reference_rows`)."""
+    from .reference_compare import assign_regions, region_rows
+
+    material = comparison.materials[0]
+    comparison.reference = setup
+    comparison.regions = assign_regions(mesh.vertex_normals(), setup.light.direction, lit)
+    for model in comparison.models:
+        result = comparison.results[material, model]
+        comparison.reference_rows += region_rows(
+            model, result.radiance, setup.reference, comparison.regions, comparison.times[material, model]
         )
-    return comparison
 
 
 def _write_files(folder, mesh, comparison, relative, lights, camera_direction, up, cell_size, settings) -> dict:

@@ -15,9 +15,11 @@ from pathlib import Path
 from ..io.atomic import prepare_output_folder
 from ..io.clean import clean_mesh
 from .figure import write_figure
-from .pipeline import default_scan_path, load_default_scan, scene_for, write_result
 from .progress import StageProgress
-from .settings import DEFAULT_MATERIAL, ShadeSettings
+from .shading.result import write_result
+from .shading.scan import default_scan_path, load_default_scan
+from .shading.scene import scene_for
+from .shading.settings import DEFAULT_MATERIAL, ShadeSettings
 
 OUTPUT_FOLDER = Path("translucency-output")
 
@@ -35,7 +37,7 @@ def run_default_job(output: Path = OUTPUT_FOLDER, material: str = DEFAULT_MATERI
     print(f"  {mesh.n_points} vertices, {mesh.n_triangles} triangles, {mesh.extent:.1f} mm across")
     mesh, report = clean_mesh(mesh)
     print("  repair: " + ("nothing to change" if not report.changed else report.summary().replace("\n", "\n  ")))
-    settings = ShadeSettings(material)
+    settings = ShadeSettings(material=material)
     print(
         f"shading with {material} ({settings.model} dipole, {settings.method} method, tol {settings.tol:g}, "
         f"{settings.bounces} bounce{'s' if settings.bounces != 1 else ''}, Embree shadows) ..."

@@ -1,6 +1,6 @@
 """A result for other programs: a PyVista PolyData of every per-vertex array, and files chosen by suffix.
 
-This module only builds arrays from a :class:`~translucency.app.pipeline.ShadeResult`; the files are
+This module only builds arrays from a :class:`~translucency.app.shading.result.ShadeResult`; the files are
 written by the io layer (:mod:`translucency.io.baked`, :mod:`translucency.io.baked_vtk`,
 :mod:`translucency.io.baked_gltf`), each atomically and each with every setting of the run.
 
@@ -107,7 +107,7 @@ def result_polydata(result):
     ``field_data``: the settings flattened to strings and numbers
     (:func:`translucency.io.baked.flat_metadata`), among them ``length_unit`` ("mm"),
     ``radiance_unit`` and ``incident_flux_unit``. See :meth:`ShadeResult.to_pyvista
-    <translucency.app.pipeline.ShadeResult.to_pyvista>`.
+    <translucency.app.shading.result.ShadeResult.to_pyvista>`.
     """
     from ..geometry.mesh import TriangleMesh
     from ..io.polydata import to_pyvista

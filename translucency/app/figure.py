@@ -14,7 +14,7 @@ and lays the two views out with matplotlib:
 
 The views are parallel projections, so the scale bar holds at every depth of the object (a perspective
 view, as in the viewer, has no single scale). The main job, ``bake --preview`` and anyone with a
-:class:`~translucency.app.pipeline.ShadeResult` write it with :func:`write_figure`.
+:class:`~translucency.app.shading.result.ShadeResult` write it with :func:`write_figure`.
 """
 
 from __future__ import annotations

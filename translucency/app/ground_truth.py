@@ -70,7 +70,7 @@ def trace_reference(
     seed : int
         Seed of the random numbers.
     unit, up
-        As for :func:`~translucency.app.pipeline.shade`.
+        As for :func:`~translucency.app.shading.scene.shade`.
     progress : callable, optional
         ``progress(fraction, message)`` every few seconds.
     """
@@ -78,8 +78,8 @@ def trace_reference(
     from ..io.upright import resolve_up
     from ..reference.pathtrace import trace_radiance
     from ..scatter.medium import Medium
-    from .pipeline import default_light_direction, load_default_scan, mesh_for_shading
-    from .settings import resolve_medium
+    from .shading.scan import load_default_scan, mesh_for_shading
+    from .shading.settings import default_light_direction, resolve_medium
 
     mesh = load_default_scan() if mesh is None else mesh_for_shading(mesh, unit, entry="trace_reference")
     medium = material if isinstance(material, Medium) else resolve_medium(material)

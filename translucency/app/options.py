@@ -3,7 +3,7 @@
 One place turns the words a user types into the API's objects, so every subcommand accepts and
 rejects the same things with the same sentences:
 
-* :func:`add_scan_options` (read by :func:`translucency.app.pipeline.load_scan`) -- a mesh file (or
+* :func:`add_scan_options` (read by :func:`translucency.app.shading.scan.load_scan`) -- a mesh file (or
   the embedded default), its unit (inferred from the size when not given) and its up axis;
 * :func:`add_light_options` / :func:`lights_from_args` -- ``--light-dir X,Y,Z`` (from the object toward
   the light), ``--light SPEC`` (any mix, see :data:`~translucency.app.lightspec.LIGHT_SPEC_HELP`),
@@ -13,7 +13,7 @@ rejects the same things with the same sentences:
 * :func:`add_solver_options` / :func:`solver_settings` -- ``--model``, ``--method``, ``--tol``,
   ``--resolution``, ``--no-shadows``, ``--per-direction``, ``--bounces``, ``--exposure``, ``--memory-limit``,
   ``--time-limit``,
-  made from and read into :class:`~translucency.app.settings.ShadeSettings` (help texts, defaults, checks);
+  made from and read into :class:`~translucency.app.shading.settings.ShadeSettings` (help texts, defaults, checks);
 * :func:`add_quiet_option` / :func:`quiet` -- ``-q``/``--quiet``: no progress (see :mod:`translucency.app.progress`).
 
 Every option that has a default says it in its help (``--help``).
@@ -196,8 +196,8 @@ def inline_material(args):
 
 
 def add_solver_options(parser: argparse.ArgumentParser) -> None:
-    """``--material`` and the solver's settings (help texts and defaults: :mod:`translucency.app.settings`)."""
-    from .settings import HELP, ShadeSettings
+    """``--material`` and the solver's settings (help texts and defaults: :mod:`translucency.app.shading.settings`)."""
+    from .shading.settings import HELP, ShadeSettings
 
     default = {field.name: field for field in dataclasses.fields(ShadeSettings)}
     group = parser.add_argument_group("material and solver")
@@ -325,11 +325,10 @@ def lights_from_args(args) -> tuple | None:
 
 
 def solver_settings(args, **changes):
-    """The :class:`~translucency.app.settings.ShadeSettings` the options describe (``changes`` replace
+    """The :class:`~translucency.app.shading.settings.ShadeSettings` the options describe (``changes`` replace
     fields before the check, e.g. ``resolution="full"``); a bad value is a sentence naming its flag."""
     from ..errors import command_line_spelling
-    from ..scatter.budget import DEFAULT_TIME_LIMIT_S
-    from .settings import ShadeSettings
+    from .shading.settings import DEFAULT_TIME_LIMIT_S, ShadeSettings
 
     custom = inline_material(args)
     fields = {

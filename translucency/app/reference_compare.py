@@ -160,8 +160,8 @@ def reference_setup(reference, mesh=None, materials=None, lights=None, unit=None
     from ..geometry.mesh import TriangleMesh
     from ..scatter.lights import DirectionalLight, as_light_list
     from ..scatter.medium import Medium
-    from .pipeline import mesh_for_shading
-    from .settings import resolve_medium
+    from .shading.scan import mesh_for_shading
+    from .shading.settings import resolve_medium
 
     ref, path = load_reference(reference)
     meta = ref.metadata

@@ -14,7 +14,7 @@ radiance_r radiance_g radiance_b float32   linear outgoing radiance toward the n
                                            W/(m^2 sr) per W/m^2 of irradiance of the light
 b_r b_g b_b                      float32   the view-independent factor B(x_o) of DESIGN.md, same unit
 quality                          float32   Rec. 709 luminance of the radiance, same unit (when given;
-                                           :func:`translucency.app.pipeline.write_result` always does)
+                                           :func:`translucency.app.shading.result.write_result` always does)
 ================================ ========= ==========================================================
 
 followed by a ``face`` element (``list uchar int vertex_indices``, triangles). The header carries

@@ -2,7 +2,7 @@
 
 Every per-vertex array of the PolyData is kept as it is, as ``point_data`` (PyVista, ParaView and VTK
 read them by name), and the settings as ``field_data`` (strings and numbers). The pipeline's
-:meth:`~translucency.app.pipeline.ShadeResult.to_pyvista` builds that PolyData:
+:meth:`~translucency.app.shading.result.ShadeResult.to_pyvista` builds that PolyData:
 
 ============== ============ ==============================================================
 point array    shape, type  meaning, unit
@@ -44,7 +44,8 @@ def write_baked_polydata(path, poly, *, source=None) -> Path:
     path : str or path-like
         Destination ending in ``.vtp`` or ``.vtk``; its folder must exist.
     poly : pyvista.PolyData
-        The mesh to write, e.g. :meth:`ShadeResult.to_pyvista() <translucency.app.pipeline.ShadeResult.to_pyvista>`.
+        The mesh to write, e.g.
+        :meth:`ShadeResult.to_pyvista() <translucency.app.shading.result.ShadeResult.to_pyvista>`.
     source : path-like, optional
         The scan the values were computed on, which is never written over.
 

@@ -44,9 +44,6 @@ GB = 2**30
 #: Head-room left of the available memory: this fraction of it, and at least this many bytes.
 HEADROOM_FRACTION = 0.10
 HEADROOM_BYTES = 256 * 2**20
-#: Seconds a solve may take unless told otherwise (``time_limit``); the estimate is checked against it.
-DEFAULT_TIME_LIMIT_S = 300.0
-
 #: Bytes per vertex the solve holds throughout: positions and normals (given and Morton-ordered),
 #: flux density and refracted direction (given, ordered, flux), areas, the source tree and its
 #: aggregated table, the near field's shared point table (vertex columns), ``B`` and its correction.

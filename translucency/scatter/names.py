@@ -4,7 +4,7 @@ Plain data with no numba behind it, so that the command line and the settings ca
 choices without compiling or importing the kernels; :mod:`translucency.scatter.kernels` maps each model
 name to its code and :mod:`translucency.scatter.solve` accepts exactly these names. :func:`check_model`,
 :func:`check_method`, :func:`check_tol` and :func:`check_bounces` are the one check of each choice, used
-by the solver and by :class:`~translucency.app.settings.ShadeSettings` alike.
+by the solver and by :class:`~translucency.app.shading.settings.ShadeSettings` alike.
 """
 
 from __future__ import annotations
@@ -20,8 +20,6 @@ __all__ = [
     "DEFAULT_MODEL",
     "DEFAULT_METHOD",
     "DEFAULT_TOL",
-    "VIEWER_METHOD",
-    "VIEWER_TOL",
     "check_model",
     "check_method",
     "check_tol",
@@ -41,13 +39,6 @@ DEFAULT_MODEL = "directional"
 DEFAULT_METHOD = "tree"
 #: Relative error per vertex allowed to ``cutoff`` and ``tree`` (ignored by ``exact``).
 DEFAULT_TOL = 1e-2
-#: The viewer's own method and tolerance (:mod:`translucency.app.viewer`): relighting operators
-#: (docs/physics.md §8.7), prepared once per material, model and tolerance on every vertex, then a new
-#: light is a sparse product. At 0.1 on the default bunny they take about 1.1 GB and 0.15 s per light,
-#: within 6 % of ``tree`` at 1e-3 at the 99th percentile (median 0.15 %); at 1e-2 they would take 5.7 GB
-#: (bench/README.md, "Relighting").
-VIEWER_METHOD = "relight"
-VIEWER_TOL = 0.1
 #: Times light that leaves the surface is let in again (docs/physics.md §7.4; the default is measured
 #: in bench/README.md, "Bounces").
 DEFAULT_BOUNCES = 1

@@ -1,7 +1,7 @@
 """What the viewer shows, without a window: the settings, the Scene that solves again, the colours, the status.
 
 :class:`ViewerState` holds every choice the controls change (light angles, material, model, scale,
-exposure, the two view-dependent layers) and one persistent :class:`~translucency.app.pipeline.Scene`.
+exposure, the two view-dependent layers) and one persistent :class:`~translucency.app.shading.scene.Scene`.
 Its ``set_*`` methods solve again when the change needs it and say whether the picture changed; it
 hands out the per-vertex display colours ``sRGB(exposure L)`` and a status text. It never imports
 PyVista or VTK: a window (:mod:`translucency.app.viewer.widgets`) or a test drives it the same way,
@@ -47,8 +47,7 @@ from pathlib import Path
 import numpy as np
 
 from ...errors import InvalidParameterError
-from ...scatter.budget import DEFAULT_TIME_LIMIT_S
-from ...scatter.names import DEFAULT_BOUNCES, DEFAULT_MODEL, DEFAULT_TOL, VIEWER_METHOD, VIEWER_TOL
+from ...scatter.names import DEFAULT_TOL
 from ..display import (
     FALSE_COLOUR_QUANTITIES,
     FALSE_COLOUR_SCALES,
@@ -57,17 +56,18 @@ from ..display import (
     false_colour_range,
     false_colour_values,
 )
-from ..pipeline import (
-    Scene,
-    coarsest_proxy_edge,
-    default_light_direction,
-    mesh_for_shading,
-    proxy_edge_length,
-    resolve_medium,
-    write_result,
-)
 from ..render import DEFAULT_UP
-from ..settings import DEFAULT_MATERIAL, ShadeSettings
+from ..shading.resolution import coarsest_proxy_edge, proxy_edge_length
+from ..shading.result import write_result
+from ..shading.scan import mesh_for_shading
+from ..shading.scene import Scene, scene_for
+from ..shading.settings import (
+    ShadeSettings,
+    default_light_direction,
+    resolve_medium,
+    settings_with,
+    viewer_settings,
+)
 
 #: Vertices of the interactive proxy (the measurements behind it: bench/README.md, "Interactive proxy").
 INTERACTIVE_VERTICES = 7500
@@ -78,9 +78,9 @@ def interactive_edge_length(mesh, medium, vertices: int = INTERACTIVE_VERTICES) 
 
     A closed mesh has about two triangles per vertex; the edge is that of equilateral triangles covering
     the surface, ``l = sqrt(4 A / (sqrt(3) 2 N))`` for area ``A`` (mm²) and ``N`` vertices. It is never
-    finer than :func:`~translucency.app.pipeline.proxy_edge_length` of the medium (the detail the light
+    finer than :func:`~translucency.app.shading.resolution.proxy_edge_length` of the medium (the detail the light
     can show after diffusing, docs/physics.md §8.6), and never coarser than
-    :func:`~translucency.app.pipeline.coarsest_proxy_edge` (an object only a few diffusion lengths
+    :func:`~translucency.app.shading.resolution.coarsest_proxy_edge` (an object only a few diffusion lengths
     across still gets a proxy of some triangles).
     """
     triangle_area = mesh.surface_area / (2.0 * vertices)
@@ -138,33 +138,31 @@ class ViewerState:
     ----------
     mesh : TriangleMesh or pyvista.PolyData, optional
         A cleaned mesh in mm, or a PolyData in ``unit`` (converted and repaired,
-        :func:`~translucency.app.pipeline.mesh_for_shading`); default: the embedded default scan, cleaned.
-    material : str or Material or Medium
-        The starting material (catalogue name, 1/mm coefficients).
+        :func:`~translucency.app.shading.scan.mesh_for_shading`); default: the embedded default scan, cleaned.
+    material : str or Material or Medium, optional
+        Shortcut for the starting material (catalogue name, 1/mm coefficients).
     lights : light or sequence of lights, optional
         Directions in the scan's own coordinates. Default: one white directional light of 1 W/m²
-        above and in front of the scan (:func:`~translucency.app.pipeline.default_light_direction` of
+        above and in front of the scan (:func:`~translucency.app.shading.settings.default_light_direction` of
         ``up``). :meth:`set_light` steers the first directional light.
-    model, method, tol, per_direction, bounces, albedo, memory_limit, time_limit
-        Passed to :meth:`Scene.shade <translucency.app.pipeline.Scene.shade>` (GB, seconds); with the scan's
-        colours as its albedo, ``relight`` is solved by ``tree`` (one solve per reflectance level each change).
+    settings : ShadeSettings, optional
+        The starting settings (default :func:`viewer_settings`: the viewer's method and tolerance), passed to
+        :meth:`Scene.shade_with <translucency.app.shading.scene.Scene.shade_with>`; ``exposure`` is the display
+        exposure (linear factor; automatic from the first solve by default, then kept, so that brightness changes
+        between materials and lights stay visible), ``up`` the axis of the light's azimuth and where the default
+        light is. With the scan's colours as its albedo, ``relight`` is solved by ``tree`` (one solve per
+        reflectance level each change).
+    **changes
+        Any field of the settings by name (``tol=0.05``, ``up="z"``, ...), replacing the one of ``settings``.
     resolution : "interactive", "full", "auto" or float
         Where ``B`` is computed on a change: ``"interactive"`` (default) is every vertex with ``relight``
         (a proxy where its operators would not fit the memory budget), otherwise a proxy of about
         :data:`INTERACTIVE_VERTICES` vertices (:func:`interactive_edge_length`); the others are the
-        pipeline's (a number is a proxy edge length in mm).
-    shadows : bool
-        Embree shadow rays.
-    exposure : float, optional
-        Display exposure (linear factor); automatic from the first solve by default, then kept, so that
-        brightness changes between materials and lights stay visible.
+        shading policy's (a number is a proxy edge length in mm); it replaces the settings' resolution.
     view_dependent, specular : bool
         Show ``T21(eta, n . w_o) B`` instead of ``T21(eta, 1) B``; add the specular highlight.
     roughness : float
         GGX ``alpha`` of the highlight.
-    up : str
-        The scan's up axis, ``"x"`` ... ``"-z"`` or ``"auto"`` (inferred from the mesh, see
-        :mod:`translucency.io.upright`): the axis of the light's azimuth and where the default light is.
     name : str, optional
         Stem of saved files (default: the mesh's file name, or ``scan``).
     solve : bool
@@ -176,48 +174,31 @@ class ViewerState:
     def __init__(
         self,
         mesh=None,
-        material=DEFAULT_MATERIAL,
+        material=None,
         lights=None,
         *,
-        model=DEFAULT_MODEL,
-        method=VIEWER_METHOD,
-        tol=VIEWER_TOL,
+        settings: ShadeSettings | None = None,
         resolution="interactive",
-        shadows=True,
-        per_direction=False,
-        bounces=DEFAULT_BOUNCES,
-        albedo="material",
-        exposure=None,
-        memory_limit=None,
-        time_limit=DEFAULT_TIME_LIMIT_S,
         view_dependent=False,
         specular=False,
         roughness=0.25,
-        up="auto",
         name=None,
         solve=True,
         unit=None,
+        **changes,
     ):
         from ...io.upright import up_vector
         from ...scatter.lights import DirectionalLight, as_light_list
-        from ..pipeline import load_scan
+        from ..shading.scan import load_scan
 
         # every setting checked once, before the scan is loaded ("interactive" is the viewer's own resolution)
-        settings = ShadeSettings(
-            material,
-            model,
-            method,
-            tol,
-            "full" if resolution == "interactive" else resolution,
-            shadows,
-            per_direction,
-            exposure,
-            memory_limit,
-            time_limit,
-            up,
-            bounces,
-            albedo,
-        )
+        if material is not None:
+            changes["material"] = material
+        settings = settings_with(viewer_settings() if settings is None else settings, **changes)
+        if resolution != "interactive":
+            settings = settings.replace(resolution=resolution)
+        model, method, tol = settings.model, settings.method, settings.tol
+        per_direction, shadows, exposure = settings.per_direction, settings.shadows, settings.exposure
         if mesh is None:
             mesh, _, default_name = load_scan(None)
             name = name or default_name
@@ -231,9 +212,9 @@ class ViewerState:
         self.per_direction = bool(per_direction)
         self.bounces = settings.bounces
         self.albedo = settings.albedo
-        self.limits = {"memory_limit": memory_limit, "time_limit": time_limit}
+        self.limits = {"memory_limit": settings.memory_limit, "time_limit": settings.time_limit}
         self.shadows = bool(shadows)
-        self.scene = Scene(mesh, shadows=self.shadows, up=up)
+        self.scene = scene_for(mesh, settings)
         self.up_axis = self.scene.up
         self.up = tuple(float(u) for u in up_vector(self.up_axis))
         self.lights = as_light_list(
@@ -550,7 +531,7 @@ class ViewerState:
         from ...scatter.fresnel import fresnel_transmittance
 
         if self._highlight_inputs is None:
-            incident, _ = self.scene.incident_on_mesh(self.medium, self.lights, per_direction=True)
+            incident, _ = self.scene.light_cache.incident_on_mesh(self.medium, self.lights, per_direction=True)
             normals = self.result.normals
             inputs = []
             for part in incident.contributions:

@@ -22,7 +22,7 @@ the scan looks like, with the colour bar in false colour, never a slider or a ch
 Controls (each calls a method, so the viewer can be driven from code the same way): sliders for
 the light's azimuth and elevation (degrees, around the ``up`` axis; they steer the first directional
 light, other lights stay as they are), the material (the catalogue's diffusive materials), the model,
-the scale (mm per unit of the file: the mesh is scaled and a new :class:`~translucency.app.pipeline.Scene`
+the scale (mm per unit of the file: the mesh is scaled and a new :class:`~translucency.app.shading.scene.Scene`
 made; the picture keeps its framing) and the exposure (log2, display only: no solve); check boxes for
 the two view-dependent layers; key ``s`` saves a screenshot and the current bake (PLY) into the output
 folder, ``Return`` solves the current state on every vertex (``resolution="full"``), so that ``s`` then
@@ -36,8 +36,6 @@ from pathlib import Path
 
 import numpy as np
 
-from ...scatter.budget import DEFAULT_TIME_LIMIT_S
-from ...scatter.names import DEFAULT_BOUNCES, DEFAULT_MODEL, VIEWER_METHOD, VIEWER_TOL
 from ..render import (
     LIGHT_GLYPH_COLOR,
     add_colored_mesh,
@@ -47,7 +45,6 @@ from ..render import (
     light_glyph,
     new_plotter,
 )
-from ..settings import DEFAULT_MATERIAL
 from .state import ViewerState, diffusive_materials
 
 #: Range of the scale slider, as factors of the mesh's own mm per unit.
@@ -87,33 +84,28 @@ class Viewer:
     ----------
     mesh : TriangleMesh or pyvista.PolyData, optional
         A cleaned mesh in mm, or a PolyData in ``unit`` (converted and repaired,
-        :func:`~translucency.app.pipeline.mesh_for_shading`); default: the embedded default scan, cleaned.
-    material : str or Material or Medium
-        The starting material (catalogue name, 1/mm coefficients).
+        :func:`~translucency.app.shading.scan.mesh_for_shading`); default: the embedded default scan, cleaned.
+    material : str or Material or Medium, optional
+        Shortcut for the starting material (catalogue name, 1/mm coefficients).
     lights : light or sequence of lights, optional
         Directions in the scan's own coordinates. Default: one white directional light of 1 W/m²
-        above and in front of the scan (:func:`~translucency.app.pipeline.default_light_direction` of
+        above and in front of the scan (:func:`~translucency.app.shading.settings.default_light_direction` of
         ``up``). The light sliders steer the first directional light; without one they are not shown.
-    model, method, tol, per_direction, bounces, albedo, memory_limit, time_limit
-        Passed to :meth:`Scene.shade <translucency.app.pipeline.Scene.shade>` (GB, seconds).
+    settings : ShadeSettings, optional
+        The starting settings (default :func:`~translucency.app.shading.settings.viewer_settings`), as in
+        :class:`~translucency.app.viewer.state.ViewerState`; ``up`` is also the camera's view-up and where the
+        default camera is (above and in front).
+    **changes
+        Any field of the settings by name (``tol=0.05``, ``up="z"``, ...), replacing the one of ``settings``.
     resolution : "interactive", "full", "auto" or float
         Where ``B`` is computed while controls change: ``"interactive"`` (default) is a proxy of about
         :data:`~translucency.app.viewer.state.INTERACTIVE_VERTICES` vertices
         (:func:`~translucency.app.viewer.state.interactive_edge_length`); the others are the
-        pipeline's (a number is a proxy edge length in mm).
-    shadows : bool
-        Embree shadow rays.
-    exposure : float, optional
-        Display exposure (linear factor); automatic from the first solve by default, then kept, so that
-        brightness changes between materials and lights stay visible.
+        shading policy's (a number is a proxy edge length in mm).
     view_dependent, specular : bool
         Show ``T21(eta, n . w_o) B`` instead of ``T21(eta, 1) B``; add the specular highlight.
     roughness : float
         GGX ``alpha`` of the highlight.
-    up : str
-        The scan's up axis, ``"x"`` ... ``"-z"`` or ``"auto"`` (inferred from the mesh, see
-        :mod:`translucency.io.upright`): the camera's view-up, the axis of the light's azimuth, and
-        where the default camera and light are (above and in front).
     camera_direction : sequence of 3 float, optional
         From the mesh's centre toward the camera at the start, in the scan's coordinates (default:
         :func:`~translucency.app.render.default_camera_direction` of ``up``).
@@ -166,24 +158,14 @@ class Viewer:
     def __init__(
         self,
         mesh=None,
-        material=DEFAULT_MATERIAL,
+        material=None,
         lights=None,
         *,
-        model=DEFAULT_MODEL,
-        method=VIEWER_METHOD,
-        tol=VIEWER_TOL,
+        settings=None,
         resolution="interactive",
-        shadows=True,
-        per_direction=False,
-        bounces=DEFAULT_BOUNCES,
-        albedo="material",
-        exposure=None,
-        memory_limit=None,
-        time_limit=DEFAULT_TIME_LIMIT_S,
         view_dependent=False,
         specular=False,
         roughness=0.25,
-        up="auto",
         camera_direction=None,
         window_size=(1024, 768),
         off_screen=False,
@@ -192,30 +174,22 @@ class Viewer:
         name=None,
         unit=None,
         plotter=None,
+        **changes,
     ):
         # settings checked and the scan loaded first; the window before the (slower) first solve
         self.state = ViewerState(
             mesh,
             material,
             lights,
-            model=model,
-            method=method,
-            tol=tol,
+            settings=settings,
             resolution=resolution,
-            shadows=shadows,
-            per_direction=per_direction,
-            bounces=bounces,
-            albedo=albedo,
-            exposure=exposure,
-            memory_limit=memory_limit,
-            time_limit=time_limit,
             view_dependent=view_dependent,
             specular=specular,
             roughness=roughness,
-            up=up,
             name=name,
             solve=False,
             unit=unit,
+            **changes,
         )
         self.output = Path(output)
         self.widgets = {}

@@ -20,8 +20,7 @@ import uuid
 
 import numpy as np
 
-from ..scatter.hierarchy import GROUP_RECEIVERS
-from ..scatter.solve import Solution, SurfaceGeometry, solve
+from ...scatter.transport import GROUP_RECEIVERS, Solution, SurfaceGeometry, solve
 
 __all__ = ["BlockSolver", "BLOCK_RECEIVERS"]
 

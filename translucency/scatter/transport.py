@@ -1,0 +1,304 @@
+"""The one door from the shading policy into the solver: light on a surface gives ``B`` and its re-entered part,
+planned against the budget (docs/physics.md §5.3, §7.4, §8).
+
+:mod:`translucency.app.shading` reaches the solver only through this module. What goes in is plain data: the
+surface record (:class:`SurfaceGeometry`: points in mm, triangles, unit vertex normals; the algorithms keep their
+prepared work on it), the incident light (:class:`IncidentLight`, from :func:`incident_flux` or
+:func:`carried_light`), the medium (1/mm) and one :class:`TransportOptions`; what comes back is a
+:class:`Transport`. Behind the door, in order:
+
+1. :func:`check_size`: the least any solve of the surface's size needs, against the budgets, before the light
+   is traced;
+2. :func:`check_unshadowed`: at scan size, the plan with every vertex that faces a light lit, before any shadow
+   ray (shadows only take light away);
+3. :func:`transport`: the solve (:func:`translucency.scatter.solve.solve`; once per light sample with
+   ``per_direction``; with a reflectance per vertex through :func:`translucency.scatter.varying.solve_varying`),
+   then the light that leaves the surface and enters again (:func:`translucency.scatter.bounces.solve_bounces`).
+
+========= ============================================================ ==============
+symbol    meaning                                                      unit
+========= ============================================================ ==============
+phi       incident flux density after the boundary                     W/m²
+B         diffuse radiance factor, first solve plus re-entered light   W/(m² sr)
+T21       Fresnel transmittance out of the medium along the normal      1
+========= ============================================================ ==============
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import BudgetError
+from .budget import format_bytes, format_seconds
+from .hierarchy import GROUP_RECEIVERS
+from .irradiance import IncidentLight, carried_light, incident_flux
+from .solve import Solution, SurfaceGeometry, solve
+from .visibility import VisibilityCache
+
+__all__ = [
+    "GROUP_RECEIVERS",
+    "IncidentLight",
+    "Solution",
+    "SurfaceGeometry",
+    "Transport",
+    "TransportOptions",
+    "VisibilityCache",
+    "carried_light",
+    "check_size",
+    "check_unshadowed",
+    "format_bytes",
+    "format_seconds",
+    "incident_flux",
+    "normal_transmittance",
+    "solve",
+    "transport",
+]
+
+
+@dataclass(frozen=True)
+class TransportOptions:
+    """How a light is carried through a surface: the solver's choices and budgets, built by keyword.
+
+    Attributes
+    ----------
+    model, method : str
+        Names of :mod:`translucency.scatter.names`.
+    tol : float
+        The relative error allowed per vertex, 1.
+    per_direction : bool
+        One solve per light sample.
+    bounces : int
+        Times the light leaving the surface enters again (0: never).
+    shadows : bool
+        Whether the bounces' mirror reflection of the lights is shadowed.
+    memory_limit, time_limit : float or None
+        GB and seconds (None: no limit).
+    """
+
+    model: str
+    method: str
+    tol: float
+    per_direction: bool = False
+    bounces: int = 0
+    shadows: bool = True
+    memory_limit: float | None = None
+    time_limit: float | None = None
+
+    @property
+    def limits(self) -> dict:
+        """``memory_limit`` and ``time_limit`` as the solver's keywords."""
+        return {"memory_limit": self.memory_limit, "time_limit": self.time_limit}
+
+    @property
+    def solve_keywords(self) -> dict:
+        """``model``, ``method``, ``tol`` and the limits as the keywords of
+        :func:`~translucency.scatter.solve.solve`."""
+        return {"model": self.model, "method": self.method, "tol": self.tol, **self.limits}
+
+
+@dataclass
+class Transport:
+    """What :func:`transport` returns, on the surface's vertices.
+
+    Attributes
+    ----------
+    B : ndarray, shape (n, C)
+        The diffuse radiance factor, the first solve's plus the re-entered part, W/(m² sr) per W/m².
+    reentered : ndarray, shape (n, C), or None
+        The part of ``B`` from light that left the surface and entered again; None with no bounce.
+    solutions : list of Solution
+        The first solve's, one per light sample with ``per_direction``.
+    bounces : dict
+        The bounces' statistics (``{"bounces": 0}`` without), with ``share_of_B`` per channel.
+    timings : dict
+        Seconds per stage: ``solve_<stage>`` summed over the solves, ``bounce_gather`` and ``bounce_solve``.
+    """
+
+    B: np.ndarray
+    reentered: np.ndarray | None
+    solutions: list
+    bounces: dict
+    timings: dict = field(default_factory=dict)
+
+    @property
+    def solver_stats(self) -> dict:
+        """The first solve's statistics; for several solves their count and summed pairs and points."""
+        if len(self.solutions) == 1:
+            return self.solutions[0].stats
+        summed = ("pairs_evaluated", "pairs_skipped", "near_points")
+        return {"solves": len(self.solutions), **{k: sum(s.stats.get(k, 0) for s in self.solutions) for k in summed}}
+
+    @property
+    def operators_reused(self) -> bool:
+        """Whether relighting operators prepared by an earlier light were applied."""
+        return any(s.stats.get("operators_reused") for s in self.solutions)
+
+
+def normal_transmittance(eta: float) -> float:
+    """``T21(eta, 1)``: the share of ``B`` that leaves toward the normal, ``L = T21 B`` (docs/physics.md §2)."""
+    from .fresnel import fresnel_transmittance
+
+    return float(fresnel_transmittance(1.0, eta))
+
+
+def check_size(surface: SurfaceGeometry, n_channels: int, options: TransportOptions) -> None:
+    """A :class:`~translucency.errors.BudgetError` when even the least a solve of the surface's size needs
+    (:func:`translucency.scatter.solve.size_floor_plan`) is over the limits; relighting plans its own."""
+    from .solve import over_budget_sentence, size_floor_plan
+
+    if options.method == "relight":
+        return
+    floor = size_floor_plan(surface, n_channels, options.method, options.memory_limit, options.time_limit)
+    if not floor.fits:
+        raise BudgetError(over_budget_sentence(floor, surface.n_vertices), floor)
+
+
+def check_unshadowed(surface: SurfaceGeometry, lights, medium, options: TransportOptions, factor: float) -> None:
+    """A :class:`~translucency.errors.BudgetError` when the solve's plan with every vertex that faces a light lit
+    (:func:`translucency.scatter.solve.plan`, no shadow ray traced) is over ``factor`` times a budget. Shadows only
+    take light away, so the solve with them would most likely be over its budget too, and no Embree scene of the
+    surface need be built at a size that is then not solved. The ordered surface and source tree the plan makes
+    stay on ``surface`` for the solve."""
+    from .solve import over_budget_sentence, plan
+
+    if options.method == "relight":
+        return
+    facing = incident_flux(surface.points, surface.normals, surface.vertex_areas, lights, medium.eta)
+    estimate = plan(
+        surface,
+        facing.phi_rgb,
+        facing.w12,
+        medium,
+        **options.solve_keywords,
+    )
+    del facing
+    over_time = estimate.time_limit is not None and estimate.seconds > factor * estimate.time_limit
+    over_memory = estimate.budget_bytes is not None and estimate.peak_bytes > factor * estimate.budget_bytes
+    if over_time or over_memory:
+        raise BudgetError(over_budget_sentence(estimate, surface.n_vertices), estimate)
+
+
+def transport(
+    surface: SurfaceGeometry,
+    light: IncidentLight,
+    medium,
+    options: TransportOptions,
+    *,
+    lights=(),
+    visibility: VisibilityCache | None = None,
+    reflectance=None,
+    progress=None,
+    solver=None,
+) -> Transport:
+    """``B`` of ``light`` on ``surface`` and its re-entered part (module docstring, steps 3).
+
+    Parameters
+    ----------
+    surface, light, medium, options
+        The surface (mm), the incident light on its vertices, the medium (1/mm) and the solver's choices.
+    lights : sequence of lights
+        The lights themselves, whose mirror reflection the bounces let in again.
+    visibility : VisibilityCache, optional
+        Where the bounces' Embree scene of ``surface`` is kept (a new one by default).
+    reflectance : (n, C) array_like, optional
+        A diffuse reflectance per vertex that replaces the medium's albedo (docs/physics.md §6.5).
+    progress : callable, optional
+        ``progress(stage, fraction)``, many times per stage.
+    solver : callable, optional
+        Stands in for :func:`translucency.scatter.solve.solve` (the same arguments).
+
+    Raises
+    ------
+    BudgetError
+        Before the work, when a solve's estimate is over its budget.
+    """
+    solve_one = _solver(solver, reflectance)
+    if options.per_direction:
+        solutions = _solve_per_direction(surface, light, medium, options, progress, solve_one)
+    else:
+        solutions = [
+            solve_one(
+                surface,
+                light.phi_rgb,
+                light.w12,
+                medium,
+                progress=progress,
+                **options.solve_keywords,
+            )
+        ]
+    timings: dict = {}
+    for solution in solutions:
+        for stage, seconds in solution.timings.items():
+            timings[f"solve_{stage}"] = timings.get(f"solve_{stage}", 0.0) + seconds
+    B = sum(solution.B for solution in solutions)
+    if not options.bounces:
+        return Transport(B, None, solutions, {"bounces": 0}, timings)
+    from .bounces import solve_bounces
+
+    visibility = VisibilityCache() if visibility is None else visibility
+    occluder, _ = visibility.occluder(surface.points, surface.triangles)
+    bounced = solve_bounces(
+        surface,
+        occluder,
+        B,
+        lights,
+        medium,
+        bounces=options.bounces,
+        model=options.model,
+        method=options.method,
+        tol=options.tol,
+        shadows=options.shadows,
+        progress=progress,
+        solver=solve_one,
+        **options.limits,
+    )
+    timings["bounce_gather"] = bounced.stats["seconds"]["gather"] + bounced.stats["seconds"]["specular"]
+    timings["bounce_solve"] = bounced.stats["seconds"]["solve"]
+    B = B + bounced.B
+    return Transport(B, bounced.B, solutions, _bounce_stats(bounced, B), timings)
+
+
+def _solver(solver, reflectance):
+    """The solve to call: ``solver`` (or :func:`~translucency.scatter.solve.solve`) as it is, or wrapped by
+    :func:`~translucency.scatter.varying.solve_varying` with a reflectance per vertex."""
+    if reflectance is None:
+        return solver or solve
+    import functools
+
+    from .varying import solve_varying
+
+    return functools.partial(solve_varying, reflectance=reflectance, solver=solver)
+
+
+def _solve_per_direction(surface, light, medium, options: TransportOptions, progress, solve_one) -> list:
+    """One solve per light sample (each with its own refracted direction); their ``B`` add up."""
+    n = surface.n_vertices
+    parts = light.contributions
+    solutions = []
+    for k, part in enumerate(parts):
+        phi = np.zeros((n, 3))
+        w12 = np.tile((0.0, 0.0, -1.0), (n, 1))
+        phi[part.vertices] = part.phi_rgb
+        w12[part.vertices] = part.w12
+        inner = None if progress is None else (lambda stage, f, k=k: progress(stage, (k + f) / len(parts)))
+        solutions.append(
+            solve_one(
+                surface,
+                phi,
+                w12,
+                medium,
+                progress=inner,
+                **options.solve_keywords,
+            )
+        )
+    return solutions
+
+
+def _bounce_stats(bounced, B) -> dict:
+    """The bounces' statistics: bounces done, rays, seconds of the gather and of the extra solves, and the share of
+    ``B`` (summed over the vertices, per channel) that re-entered."""
+    total = np.asarray(B, dtype=np.float64).sum(axis=0)
+    share = np.asarray(bounced.B, dtype=np.float64).sum(axis=0) / np.where(total > 0.0, total, np.inf)
+    return {**bounced.stats, "share_of_B": share.tolist()}
