@@ -4,7 +4,7 @@ Each command runs in its own process, in a temporary folder, with ``NUMBA_CACHE_
 fresh empty folder (cold) and then at the same folder again (warm). A small driver around the command
 line records the split of the time: numba compilation (the top-level ``numba:compile`` events),
 the imports of the heavy libraries (numba, SciPy, PyVista/VTK, pymeshlab, Embree, Matplotlib) and
-the rest (the work itself). Also measured: ``python -m translucency.scatter.warmup`` (what
+the rest (the work itself). Also measured: ``python -m translucency.app.warmup`` (what
 ``scripts/setup.sh`` runs) on an empty cache, and the main job after it. Every row records the load
 average before it ran; the table shows medians over ``--repeats``.
 
@@ -39,7 +39,7 @@ JOBS = {
         "d",
     ],
 }
-WARMUP = "`python -m translucency.scatter.warmup` (set-up)"
+WARMUP = "`python -m translucency.app.warmup` (set-up)"
 AFTER_WARMUP = "main job after the set-up's warm-up"
 
 # Runs one command line in-process and writes its split of the time to the JSON file in argv[1].
@@ -63,7 +63,7 @@ class Timer(event.Listener):
 event.register("numba:compile", Timer())
 code = 0
 if sys.argv[2:] == ["warmup"]:
-    from translucency.scatter.warmup import main
+    from translucency.app.warmup import main
     code = main([])
 else:
     from translucency.app.cli import main

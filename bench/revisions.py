@@ -47,13 +47,18 @@ import json, sys, time, warnings
 import numpy as np
 warnings.simplefilter("ignore")
 import translucency as tl
-from translucency.app.shading.scene import Scene  # noqa: E402
+try:  # the shading room's Scene; before it, the pipeline's
+    from translucency.app.shading import Scene
+except ImportError:
+    from translucency.app.pipeline import Scene
 path, unit, solves, out = sys.argv[1], sys.argv[2], int(sys.argv[3]), sys.argv[4]
 mesh, _ = tl.clean_mesh(tl.load_mesh(path, unit=unit))
 scene = Scene(mesh)
 # one solve per call in every revision: revisions with bounces run without them
 import inspect
-single = {"bounces": 0} if "bounces" in inspect.signature(Scene.shade).parameters else {}
+parameters = inspect.signature(Scene.shade).parameters
+keywords = any(p.kind is inspect.Parameter.VAR_KEYWORD for p in parameters.values())  # settings by keyword
+single = {"bounces": 0} if "bounces" in parameters or keywords else {}
 result = scene.shade("marble", **single)
 times, stages = [], []
 for _ in range(solves):

@@ -55,4 +55,4 @@ if [[ ! -f $stamp || "$(cat "$stamp")" != "$want" ]]; then
     rm -f "$log"
     echo "$want" > "$stamp"
 fi
-.venv/bin/python -m translucency.scatter.warmup
+.venv/bin/python -m translucency.app.warmup

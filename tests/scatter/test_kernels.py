@@ -3,6 +3,7 @@
 import numpy as np
 import pytest
 
+from tests.scatter import pairs
 from translucency.scatter import dipoles, fresnel, kernels
 from translucency.scatter.materials import material
 
@@ -25,7 +26,7 @@ def test_pair_matches_every_reference_vector(dirpole_vectors):
         w12 = fresnel.refract(case["w_i"], case["n_i"], case["eta"])
         params = kernels.channel_parameters(case["sigma_a"], case["sigma_s"], case["g"], case["eta"])
         out = np.empty(1)
-        kernels.directional_dipole_pair(*case["x_i"], *case["n_i"], *w12, *case["x_o"], *case["n_o"], params, out)
+        pairs.directional_dipole_pair(*case["x_i"], *case["n_i"], *w12, *case["x_o"], *case["n_o"], params, out)
         if case["S_d"] == 0:
             assert out[0] == pytest.approx(0.0, abs=1e-15)
         else:
@@ -41,7 +42,7 @@ def test_all_channels_at_once_match_reference(name, model):
     x_o[:5] = x_i[:5]  # r = 0 included
     w12 = fresnel.refract(light, n_i, medium.eta)
     params = kernels.channel_parameters(medium.sigma_a, medium.sigma_s, medium.g, medium.eta, model)
-    got = kernels.model_pairs(kernels.MODELS[model], x_i, n_i, w12, x_o, n_o, params)
+    got = pairs.model_pairs(kernels.MODELS[model], x_i, n_i, w12, x_o, n_o, params)
     r = np.linalg.norm(x_o - x_i, axis=1)
     for c in range(3):
         args = (medium.sigma_a[c], medium.sigma_s[c], medium.g[c], medium.eta)

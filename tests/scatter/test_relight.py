@@ -4,6 +4,7 @@ import numba
 import numpy as np
 import pytest
 
+from tests.scatter import pairs
 from translucency.errors import BudgetError
 from translucency.geometry.synthetic import icosphere, torus
 from translucency.scatter import kernels
@@ -62,7 +63,7 @@ def test_fitted_coefficients_follow_the_pair_kernel_over_refracted_directions(te
     dirs, pinv = kernels.fit_directions(MARBLE.eta, terms)
     errors = []
     for x, ni, no, w in _random_pairs(np.random.default_rng(7), distance):
-        exact = kernels.model_pairs(0, np.zeros((1, 3)), ni[None], w[None], x[None], no[None], params)[0]
+        exact = pairs.model_pairs(0, np.zeros((1, 3)), ni[None], w[None], x[None], no[None], params)[0]
         if np.all(exact > 0):
             fitted = _fits(0, x, ni, no, params, dirs, pinv, terms) @ _monomials(w)[:terms]
             errors.append(np.max(np.abs(fitted / exact - 1.0)))
@@ -77,7 +78,7 @@ def test_radial_models_fit_exactly_with_no_direction_terms(model):
     x, ni, no = np.array([1.5, -0.4, 0.1]), np.array([0.0, 0.0, 1.0]), np.array([0.0, 0.1, 0.995])
     code = kernels.MODELS[model]
     fitted = _fits(code, x, ni, no, params, dirs, pinv, kernels.QUADRATIC_TERMS)
-    exact = kernels.model_pairs(code, np.zeros((1, 3)), ni[None], -ni[None], x[None], no[None], params)[0]
+    exact = pairs.model_pairs(code, np.zeros((1, 3)), ni[None], -ni[None], x[None], no[None], params)[0]
     np.testing.assert_allclose(fitted[:, 0], exact, rtol=1e-12)
     assert np.all(fitted[:, 1:] == 0.0)
 

@@ -3,6 +3,7 @@
 import numpy as np
 import pytest
 
+from tests.scatter import pairs
 from translucency.errors import InvalidParameterError
 from translucency.geometry.measure import vertex_normals
 from translucency.geometry.synthetic import disc, grid, icosphere, subdivide
@@ -22,9 +23,8 @@ def _lit(points, triangles, medium, light):
 
 def _every_pair(code, points, normals, w12, o, j, params):
     """The kernel of model ``code`` at every (receiver ``o``, source ``j``) pair of two index grids: (*o.shape, C)."""
-    from translucency.scatter import kernels
 
-    return kernels.model_pairs(
+    return pairs.model_pairs(
         code,
         points[j].reshape(-1, 3),
         normals[j].reshape(-1, 3),

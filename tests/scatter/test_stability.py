@@ -10,6 +10,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from tests.scatter import pairs
 from translucency.scatter import dipoles, extremes, fresnel, kernels
 from translucency.scatter.medium import diffusion_coefficient, extrapolation_distance, sigma_tr
 
@@ -37,7 +38,7 @@ def test_exit_point_at_the_virtual_source_is_finite(sign):
         reference = float(dipoles.directional_dipole(x_i, n_i, w12, x_o, n_o, *coeff))
     params = kernels.channel_parameters(*coeff[:3], coeff[3])
     out = np.empty(1)
-    kernels.directional_dipole_pair(*x_i, *n_i, *w12, *x_o, *n_o, params, out)
+    pairs.directional_dipole_pair(*x_i, *n_i, *w12, *x_o, *n_o, params, out)
     summed, _ = kernels.vertex_sum(
         0, x_i[None], n_i[None], w12[None], np.ones((1, 1)), x_o[None], n_o[None], params, np.zeros(1, dtype=np.int64)
     )
@@ -154,7 +155,7 @@ def configurations(draw):
         draw(directions),
         draw(unit_vectors),
     )
-    return extremes.single_block(eta, sigma_a, sigma_s, g, x_i, n_i, w12, x_o, n_o)
+    return single_block(eta, sigma_a, sigma_s, g, x_i, n_i, w12, x_o, n_o)
 
 
 @settings(max_examples=120, deadline=None, derandomize=True)
@@ -168,3 +169,22 @@ def test_every_implementation_is_finite_and_non_negative(block, precision):
         _assert_clean(extremes.reference(b, model), (model, "reference"))
         _assert_clean(extremes.kernel_pairs(b, model), (model, "model_pair"))
         _assert_clean(extremes.kernel_sums(block, model, flux)[0], (model, "vertex_sum"))
+
+
+def single_block(eta, sigma_a, sigma_s, g, x_i, n_i, w12, x_o, n_o) -> extremes.Blocks:
+    """One block of one pair (the form property tests draw): vectors of 3, coefficients of 3 channels."""
+    vec = lambda v: np.asarray(v, dtype=np.float64).reshape(1, 1, 3)  # noqa: E731
+    chan = lambda v: np.broadcast_to(np.asarray(v, dtype=np.float64), (3,)).reshape(1, 3).copy()  # noqa: E731
+    return extremes.Blocks(
+        np.array([float(eta)]),
+        chan(sigma_a),
+        chan(sigma_s),
+        chan(g),
+        np.array([1.0]),
+        vec(x_i),
+        vec(n_i),
+        vec(w12),
+        vec(x_o),
+        vec(n_o),
+        np.zeros(1, dtype=np.int64),
+    )

@@ -699,7 +699,7 @@ def _first_run_notice(solves: bool):
 
     if not solves:
         return contextlib.nullcontext()
-    from ..scatter.warmup import NOTICE, compile_notice
+    from .warmup import NOTICE, compile_notice
 
     return compile_notice(lambda: print(f"translucency: {NOTICE}", file=sys.stderr, flush=True))
 

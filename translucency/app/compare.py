@@ -62,14 +62,13 @@ from ..errors import InvalidParameterError, option
 from ..io.polydata import to_pyvista
 from ..io.units import RADIANCE_UNIT, unit_metadata
 from ..scatter.names import DEFAULT_MODEL
+from .compare_figures import difference_image, grid_image, profile_figure
 from .display import display_colors
 from .render import (
     DEFAULT_CAMERA_DIRECTION,
     DEFAULT_UP,
-    add_colored_mesh,
     camera_position,
     default_camera_direction,
-    new_plotter,
 )
 from .shading.scan import mesh_for_shading
 from .shading.scene import scene_for
@@ -97,10 +96,6 @@ LUMINANCE = np.array([0.2126, 0.7152, 0.0722])
 #: The difference's denominator is at least this fraction of the reference's 99th percentile.
 DIFFERENCE_FLOOR = 1e-3
 CHANNELS = ("R", "G", "B")
-#: Height of the band under the difference maps that holds the colour bar, in cell heights.
-COLOUR_BAR_BAND = 0.3
-#: The profile's log axis spans this fraction of the largest radiance and up (darker values sit on the floor).
-PROFILE_RANGE = 1e-6
 #: From the object toward compare's default light, in the display frame (right, up, front; turned into the
 #: scan's frame by its up axis like the pipeline's default): from the right, above and a little behind, so
 #: that the camera (front right, :data:`~translucency.app.render.DEFAULT_CAMERA_DIRECTION`) sees the shadow
@@ -434,15 +429,12 @@ def compare(
     unit : {"mm", "cm", "m", "in"} or float, optional
         A PolyData's length unit (None: its ``field_data["length_unit"]``, else inferred from its size).
     reference : path-like or ReferenceFile, optional
-        A path-traced reference (``translucency reference``): the scan, material and light are then the
-        reference's (its vertices shaded as they are); a ``mesh``, ``materials`` or ``lights`` given too must
-        agree with it, else a sentence says what differs. Every model is measured against it per region
-        (:mod:`translucency.app.reference_compare`): :attr:`Comparison.reference_rows`, and with an output
-        folder ``reference.csv``, ``reference.json`` and ``reference_errors.png``.
+        A path-traced reference (``translucency reference``) whose scan, material and light are then used (what
+        is given too must agree); every model is measured against it per region
+        (:mod:`translucency.app.reference_compare`, :attr:`Comparison.reference_rows`; files ``reference.*``).
     sweep : dict, optional
-        One property of the one material given over several values, one column each:
-        ``{"mfp": [0.5, 1, 2, 4]}`` (mm), ``reflectance``, ``scale`` or ``eta``
-        (:func:`~translucency.scatter.definition.varied`).
+        One property of the one material over several values, one column each: ``{"mfp": [0.5, 1, 2, 4]}`` (mm),
+        ``reflectance``, ``scale`` or ``eta`` (:func:`~translucency.scatter.definition.varied`).
 
     Returns
     -------
@@ -460,15 +452,8 @@ def compare(
         prepare_output_folder(output)
     # every solver setting checked once, before the scan is loaded; each cell changes material and model
     settings = settings_with(settings, **changes).replace(material=media[materials[0]], model=models[0])
-    width, height = (int(v) for v in cell_size)
-    if width < 16 or height < 16:
-        raise InvalidParameterError(f"cell_size must be at least 16 x 16 pixels, got {cell_size!r}.")
-    if mesh is None:
-        from .shading.scan import load_scan
-
-        mesh, _, _ = load_scan(None)
-    else:
-        mesh = mesh_for_shading(mesh, unit, entry="compare")
+    width, height = _cell_size(cell_size)
+    mesh = _scan(mesh, unit)
     scene = scene_for(mesh, settings)
     up_axis = scene.up
     up = tuple(up_vector(up_axis))
@@ -495,17 +480,47 @@ def compare(
     if setup is not None:
         _measure_against_reference(comparison, setup, mesh, lit[materials[0]])
     if output is not None:
-        recorded = {
-            **{name: getattr(settings, name) for name in ("method", "tol", "resolution", "shadows", "per_direction")},
-            "bounces": settings.bounces,
-            "albedo": settings.albedo,
-            "up": up_axis,
-            "up_inferred": scene.up_requested == "auto",
-        }
         comparison.files = _write_files(
-            Path(output), mesh, comparison, relative, lights, camera_direction, up, (width, height), recorded
+            Path(output),
+            mesh,
+            comparison,
+            relative,
+            lights,
+            camera_direction,
+            up,
+            (width, height),
+            _recorded(settings, scene),
         )
     return comparison
+
+
+def _cell_size(cell_size) -> tuple[int, int]:
+    """The grid cell's width and height in pixels, at least 16 each (else a sentence)."""
+    width, height = (int(v) for v in cell_size)
+    if width < 16 or height < 16:
+        raise InvalidParameterError(f"cell_size must be at least 16 x 16 pixels, got {cell_size!r}.")
+    return width, height
+
+
+def _scan(mesh, unit):
+    """The mesh compared: the embedded default scan cleaned, or ``mesh`` as shading takes it."""
+    if mesh is None:
+        from .shading.scan import load_scan
+
+        return load_scan(None)[0]
+    return mesh_for_shading(mesh, unit, entry="compare", stacklevel=4)
+
+
+def _recorded(settings, scene) -> dict:
+    """The settings a comparison's files record (the material and model are the cells')."""
+    recorded = {name: getattr(settings, name) for name in ("method", "tol", "resolution", "shadows", "per_direction")}
+    return {
+        **recorded,
+        "bounces": settings.bounces,
+        "albedo": settings.albedo,
+        "up": scene.up,
+        "up_inferred": scene.up_requested == "auto",
+    }
 
 
 def _choices(reference, sweep, mesh, materials, models, lights, unit):
@@ -625,11 +640,11 @@ def _write_files(folder, mesh, comparison, relative, lights, camera_direction, u
             reference_csv="reference.csv", reference_json="reference.json", reference_errors="reference_errors.png"
         )
     with staged_folder(folder) as staging:
-        write_png(staging / names["grid"], _grid_image(mesh, comparison, camera_direction, up, cell_size))
+        write_png(staging / names["grid"], grid_image(mesh, comparison, camera_direction, up, cell_size))
         if relative:
             write_png(
                 staging / names["differences"],
-                _difference_image(mesh, comparison, relative, camera_direction, up, cell_size),
+                difference_image(mesh, comparison, relative, camera_direction, up, cell_size),
             )
         _profile_plot(comparison, staging / names["profile"])
         write_csv(staging / names["csv"], comparison.statistics, CSV_COLUMNS)
@@ -692,126 +707,6 @@ CSV_COLUMNS = (
 )
 
 
-def _cells(plotter, rows, columns):
-    """Make every subplot current in turn; yields (row, column)."""
-    for row in range(rows):
-        for column in range(columns):
-            plotter.subplot(row, column)
-            yield row, column
-
-
-def _grid_image(mesh, comparison, camera_direction, up, cell_size) -> np.ndarray:
-    rows, columns = len(comparison.models), len(comparison.materials)
-    plotter = new_plotter((columns * cell_size[0], rows * cell_size[1]), shape=(rows, columns))
-    camera = None
-    for row, column in _cells(plotter, rows, columns):
-        material, model = comparison.materials[column], comparison.models[row]
-        colors, _ = display_colors(comparison.results[material, model].radiance, comparison.exposure)
-        poly = add_colored_mesh(plotter, mesh, colors)
-        camera = camera or camera_position(poly.center, poly.length, camera_direction, up)
-        plotter.camera_position = camera
-        plotter.add_text(f"{material}, {model}", position="upper_left", font_size=10, color="white")
-    plotter.subplot(0, 0)
-    plotter.add_text(
-        f"exposure {comparison.exposure:.3g} (all cells)", position="lower_left", font_size=7, color="white"
-    )
-    image = plotter.screenshot(return_img=True)
-    plotter.close()
-    return image
-
-
-def _difference_image(mesh, comparison, relative, camera_direction, up, cell_size) -> np.ndarray:
-    """Relative-difference maps, one row per model after the first, and one colour bar in a band below."""
-    rows, columns = len(comparison.models) - 1, len(comparison.materials)
-    reference = comparison.models[0]
-    limit = max(float(np.percentile(np.abs(np.concatenate(list(relative.values()))), 99)), 1e-3)
-    band = COLOUR_BAR_BAND
-    plotter = new_plotter(
-        (columns * cell_size[0], int(round((rows + band) * cell_size[1]))),
-        shape=(rows + 1, columns),
-        row_weights=[1.0] * rows + [band],
-        groups=[(rows, np.s_[:])],
-    )
-    camera, actor = None, None
-    for row, column in _cells(plotter, rows, columns):
-        material, model = comparison.materials[column], comparison.models[row + 1]
-        poly = to_pyvista(mesh)
-        poly.point_data["relative difference"] = relative[material, model]
-        actor = plotter.add_mesh(
-            poly,
-            scalars="relative difference",
-            cmap="RdBu_r",
-            clim=(-limit, limit),
-            lighting=False,
-            show_scalar_bar=False,
-        )
-        camera = camera or camera_position(poly.center, poly.length, camera_direction, up)
-        plotter.camera_position = camera
-        plotter.add_text(f"{material}: {model} vs {reference}", position="upper_left", font_size=10, color="white")
-    plotter.subplot(rows, 0)
-    font = int(np.clip(columns * cell_size[0] / 40, 8, 14))  # the title fits the band's width
-    title = f"(Y - Y_{reference}) / Y_{reference}"
-    # the title at the band's top, apart from the bar: VTK puts a horizontal bar's title among its tick labels
-    plotter.add_text(title, position="upper_edge", font_size=max(font // 2, 5), color="white")
-    bar = plotter.add_scalar_bar(
-        title=title,
-        mapper=actor.mapper,
-        color="white",
-        fmt="%.2f",
-        position_x=0.1,
-        position_y=0.05,
-        width=0.8,
-        height=0.6,
-        title_font_size=font,
-        label_font_size=font - 2,
-    )
-    bar.SetTitle("")
-    image = plotter.screenshot(return_img=True)
-    plotter.close()
-    return image
-
-
 def _profile_plot(comparison, path) -> None:
     """Write :func:`profile_figure` as a PNG."""
     profile_figure(comparison).savefig(path, format="png")
-
-
-def profile_figure(comparison):
-    """Radiance along the cut, one panel per channel, legend beside the panels (a matplotlib Figure,
-    no global state)."""
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
-    figure = Figure(figsize=(12, 4), dpi=100, layout="constrained")
-    FigureCanvasAgg(figure)
-    axes = figure.subplots(1, 3, sharex=True)
-    styles = ["-", "--", ":", "-."]
-    colours = [f"C{k % 10}" for k in range(len(comparison.materials))]
-    top = max([float(radiance.max()) for _, radiance in comparison.profiles.values() if radiance.size] + [0.0]) or 1.0
-    plane = comparison.profile_plane
-    for c, (ax, channel) in enumerate(zip(axes, ("red", "green", "blue"))):
-        for (material, model), (position, radiance) in comparison.profiles.items():
-            ax.plot(
-                position,
-                np.maximum(radiance[:, c], PROFILE_RANGE * top),
-                styles[comparison.models.index(model) % len(styles)],
-                color=colours[comparison.materials.index(material)],
-                lw=1.0,
-                label=f"{material}, {model}",
-            )
-        for x in plane["light_boundaries_mm"]:
-            ax.axvline(x, color="0.6", lw=0.6, ls=":")
-        ax.set_yscale("log")
-        ax.set_ylim(bottom=PROFILE_RANGE * top)
-        ax.set_xlabel("position along the cut (mm; 0 faces the light)")
-        ax.set_title(f"{channel} channel")
-    axes[0].set_ylabel("radiance toward the normal, W/(m² sr) per W/m²")
-    handles, labels = axes[0].get_legend_handles_labels()
-    # under the panels, off the data and off the title
-    figure.legend(handles, labels, fontsize=7, loc="outside lower center", ncols=min(len(labels), 4))
-    figure.suptitle(
-        f"profile across the light boundary: the plane through the centre containing the light cuts the "
-        f"surface in a line of {plane['length_mm']:.0f} mm; dotted: where the direct light ends",
-        fontsize=9,
-    )
-    return figure

@@ -15,8 +15,9 @@ import numpy as np
 
 __all__ = ["DEFAULT_SPP", "GroundTruth", "trace_reference", "write_reference"]
 
-#: Paths per vertex and channel when none is given: a median standard error of about 25 % per vertex on
-#: the bunny in marble (tables and binned figures average many vertices; give more for maps).
+#: Paths per vertex and channel when none is given: enough for tables and binned figures, which average many
+#: vertices, though single vertices stay noisy (the error falls as 1/sqrt(paths); give more for maps;
+#: bench/README.md, "Against the path-traced reference").
 DEFAULT_SPP = 16
 
 

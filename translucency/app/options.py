@@ -33,6 +33,7 @@ import sys
 import numpy as np
 
 from ..errors import InvalidParameterError
+from ..scatter.medium import DEFAULT_ETA
 from ..scatter.names import METHODS, MODELS
 
 #: Help of ``--unit`` (``inspect`` has it too).
@@ -147,7 +148,7 @@ INLINE_MATERIAL_OPTIONS = {
     "--sigma-a": "absorption coefficient, 1/mm",
     "--sigma-s": "scattering coefficient (not reduced), 1/mm",
     "--g": "Henyey-Greenstein mean cosine (default 0)",
-    "--eta": "relative index of refraction (default 1.3)",
+    "--eta": f"relative index of refraction (default {DEFAULT_ETA:g})",
     "--reflectance": "diffuse reflectance, strictly between 0 and 1",
     "--mfp": "mean free path 1/sigma_t', mm",
 }

@@ -39,6 +39,7 @@ from ..errors import InvalidParameterError
 from .topology import kernel_array, unique_edges
 
 __all__ = [
+    "CLEANING_KERNELS",
     "degenerate_triangles",
     "triangle_cross_products",
     "triangle_areas",
@@ -156,7 +157,8 @@ def hull_candidates(points) -> np.ndarray:
 
     The extreme points along :data:`CULL_DIRECTIONS` directions span a polytope inside the hull; a
     point strictly inside that polytope is strictly inside the hull and is dropped (Akl and Toussaint's
-    heuristic). On a 2M-vertex scan this keeps under 1 % of the points, in one pass each in numba.
+    heuristic). On a dense scan this keeps a small fraction of the points (those near the hull), in one pass
+    each in numba.
     """
     from scipy.spatial import ConvexHull, QhullError
 
@@ -393,7 +395,7 @@ def _mixed_voronoi_corner_areas(points: np.ndarray, triangles: np.ndarray) -> np
 
 def edge_lengths(points, triangles) -> np.ndarray:
     """Lengths of the three edges of every triangle, (m, 3) in mm (edge i goes from corner i to i+1); one
-    pass in numba, with no (m, 3, 3) temporaries (5 GB at 20M triangles)."""
+    pass in numba, with no (m, 3, 3) temporaries (72 bytes per triangle each)."""
     points, triangles = _kernel_mesh(points, triangles)
     return _edge_lengths(points, triangles)
 
@@ -426,8 +428,8 @@ def _centroids(points, triangles):
     return out
 
 
-#: Edges measured at once by :func:`mean_edge_length` (its temporaries: about 80 bytes each; at 30M edges
-#: in one go they had taken 2.1 GB at the solve's peak).
+#: Edges measured at once by :func:`mean_edge_length` (its temporaries: about 80 bytes per edge, so that a
+#: chunk, not the mesh, bounds them).
 EDGE_CHUNK = 1 << 20
 
 
@@ -466,3 +468,20 @@ def signed_volume(points, triangles, origin=None) -> float:
     p = points - np.asarray(origin, dtype=np.float64)
     p0, p1, p2 = p[triangles[:, 0]], p[triangles[:, 1]], p[triangles[:, 2]]
     return float(np.einsum("ij,ij->i", p0, np.cross(p1, p2)).sum() / 6.0)
+
+
+#: The compiled kernels of a scan's normals, areas and edges, and its up axis (centroids, hull candidates): numba
+#: compiles each on first use; the set-up compiles them ahead
+#: (:mod:`translucency.app.warmup`).
+CLEANING_KERNELS = (
+    _cross_products,
+    _row_lengths,
+    _unit_rows,
+    _vertex_sums,
+    _degenerate,
+    _edge_lengths,
+    _centroids,
+    _area_centroids,
+    _extremes,
+    _outside_or_on,
+)

@@ -8,8 +8,8 @@ Voronoi regions of the vertices, edges and face of the triangle). Which triangle
    in the cells of a hierarchical grid that its box overlaps (at the level whose cells are at least the sphere's
    diameter: at most 8 cells each), and a query tries the triangles listed in its own cell at every level whose
    grown sphere holds it. A triangle nearer than ``d <= δ`` has its centroid within ``d + R <= δ + R`` of the
-   query, so it is among them: a query found within ``δ`` of the surface is **certified** (the case of a scan's
-   vertices against its proxy: all of them at 10M vertices, in a few seconds);
+   query, so it is among them: a query found within ``δ`` of the surface is **certified** (the usual case of a
+   scan's vertices against its proxy, which lie close to its surface);
 2. the others: a k-d tree over the triangle centroids gives each its ``k`` nearest centroids, the nearest of
    those triangles wins, and the answer is certified per size class of triangles: one closer than the winner's
    distance ``d`` would have its centroid within ``d + R_class``, so queries whose ``k``-th centroid is nearer
@@ -265,7 +265,7 @@ def _nearest_search(query, corners, centroid, radius, k):
     best_distance = np.full(len(query), np.inf, dtype=np.float64)
 
     # 2a. the k nearest centroids: the exact answer unless a triangle is larger than their spread; in chunks of
-    # queries, so that the k candidates of every query are never held at once (2.5 GB per 10M queries)
+    # queries, so that the k candidates of every query are never held at once (a distance and an index each)
     k = int(min(max(k, 1), m))
     centroids = cKDTree(centroid)
     kth_distance = np.empty(len(query))  # the k-th nearest centroid's distance, for 2b

@@ -2,9 +2,8 @@
 
 Pure functions of ``triangles`` (m, 3) int64; they count and label, they neither validate nor repair
 (:mod:`translucency.io.defects` builds the repair inventory from them). The edges are bucketed by their
-smaller vertex and the components joined by union-find in numba, in time linear in the triangles (a
-scan of 10 million vertices is cleaned in seconds; sorting 60 million corner edges, as ``np.unique``
-does, took most of the cleaning's time).
+smaller vertex and the components joined by union-find in numba, in time linear in the triangles (sorting
+every corner edge, as ``np.unique`` does, grows as ``m log m`` and dominates the cleaning of a large scan).
 
 Corners ``(t, i)`` are numbered ``3 t + i`` (the "slot" of corner i of triangle t); the edge of slot
 ``3 t + i`` runs from corner i to corner i + 1.
@@ -18,6 +17,7 @@ from scipy import sparse
 from scipy.sparse import csgraph
 
 __all__ = [
+    "CLEANING_KERNELS",
     "kernel_array",
     "unique_edges",
     "face_components",
@@ -61,7 +61,7 @@ def duplicate_triangles(triangles) -> np.ndarray:
     """True for each triangle on the same three vertices (in any order) as an earlier one, ``(m,)`` bool.
 
     Triangles are put into buckets by their smallest vertex and compared within a bucket only (linear
-    time; a sort of 24-byte keys took seconds at 10M triangles).
+    time, where a sort of 24-byte keys grows as ``m log m``).
     """
     triangles = kernel_array(np.asarray(triangles, dtype=np.int64).reshape(-1, 3), np.int64)
     n = int(triangles.max()) + 1 if triangles.size else 1
@@ -108,7 +108,7 @@ def first_at_same_position(points) -> np.ndarray:
     """For each point, the first point at exactly its position (itself when it is the first), ``(n,)`` int64.
 
     ``-0.0`` and ``0.0`` are the same position. One pass with a hash table of the coordinates' bits
-    (linear time; a sort of 24-byte keys took seconds at 10M points).
+    (linear time, where a sort of 24-byte keys grows as ``n log n``).
     """
     bits = np.ascontiguousarray(np.asarray(points, dtype=np.float64).reshape(-1, 3) + 0.0).view(np.uint64)
     return _first_at_same_position(bits)
@@ -358,3 +358,16 @@ def _non_manifold_vertices(pairs, corner_vertex, n):
         elif fan[v] != r:
             split[v] = True
     return np.count_nonzero(split)
+
+
+#: The compiled kernels of a scan's defect count (edges, components, non-manifold and duplicate elements): numba
+#: compiles each on first use; the set-up compiles them ahead
+#: (:mod:`translucency.app.warmup`).
+CLEANING_KERNELS = (
+    _unique_edges,
+    _manifold_pairs,
+    _face_components,
+    _non_manifold_vertices,
+    _duplicate_triangles,
+    _first_at_same_position,
+)

@@ -7,11 +7,11 @@ the full mesh.
 
 Methods
     ``"fast-simplification"`` (default): the quadric edge-collapse of the ``fast-simplification``
-    package (Sven Forstmann's Fast-Quadric-Mesh-Simplification), about 12 times faster than
-    pymeshlab on the shared scans. It runs on one core, so a mesh of millions of triangles is cut into
+    package (Sven Forstmann's Fast-Quadric-Mesh-Simplification), much faster than pymeshlab's.
+    It runs on one core, so a mesh of millions of triangles is cut into
     slabs decimated side by side in child processes, each with its cut kept, then welded and decimated
-    once more over the whole (:func:`decimation_parts`; time, memory and the proxy's quality at 10M
-    vertices in bench/README.md). ``"pymeshlab"``: pymeshlab's quadric edge collapse
+    once more over the whole (:func:`decimation_parts`; time, memory and the proxy's quality:
+    bench/README.md, "Decimation in parts"). ``"pymeshlab"``: pymeshlab's quadric edge collapse
     (``meshing_decimation_quadric_edge_collapse``) with normal and topology preservation, slower
     and more careful.
 
@@ -193,19 +193,19 @@ def simplify_arrays(
     return _drop_unreferenced(new_points, new_triangles)
 
 
-#: fast-simplification keeps its mesh in module-level state after it returns (about 290 bytes per triangle
-#: of the input: 1.2 GB after decimating 4.3M triangles); from this many triangles on it runs in a child
-#: process (:func:`translucency.processes.run_in_child`), whose memory goes back when it ends, at the cost
-#: of starting one (about 1 s).
+#: fast-simplification keeps its mesh in module-level state after it returns (memory in proportion to the
+#: input's triangles); from this many triangles on it runs in a child process
+#: (:func:`translucency.processes.run_in_child`), whose memory goes back when it ends, at the cost of starting
+#: one (a fixed cost, which a smaller mesh's memory does not repay).
 ISOLATED_TRIANGLES = 1_000_000
 
 
 #: A mesh is decimated in parts side by side, one per core, when each part has at least this many triangles
 #: (:func:`decimation_parts`).
 PART_TRIANGLES = 2_000_000
-#: A part has at most this many triangles: fast-simplification's child holds about 360 bytes per triangle of
-#: its part at its peak (1.8 GB here), and a larger mesh is cut into more parts than cores, decimated as many
-#: at a time as there are cores.
+#: A part has at most this many triangles: fast-simplification's child holds memory in proportion to its part's
+#: triangles at its peak, and a larger mesh is cut into more parts than cores, decimated as many at a time as
+#: there are cores (bench/README.md, "Decimation in parts").
 PART_MAX_TRIANGLES = 5_000_000
 #: Each part is decimated to this multiple of its share of the target; the last pass over the welded
 #: mesh takes the surplus away, with the fine strips along the cuts.
@@ -374,7 +374,7 @@ class ProxyMapping:
             values = values.astype(np.float64)
         weights = self.weights.astype(values.dtype, copy=False).reshape(self.weights.shape + (1,) * (values.ndim - 1))
         # an explicit sum (not einsum/BLAS) so that one-hot weights reproduce values bit for bit, one corner at a
-        # time so that no (n_full, 3, ...) gather is held (720 MB for RGB at 10M vertices)
+        # time so that no (n_full, 3, ...) gather is held (three times the size of the result)
         out = values[self.vertex_index[:, 0]] * weights[:, 0]
         for corner in (1, 2):
             out += values[self.vertex_index[:, corner]] * weights[:, corner]
@@ -545,7 +545,7 @@ def decimate_mesh(
         )
         point_data = {}
         carried = {name: values for name, values in mesh.point_data.items() if name != "normals"}
-        if carried:  # the nearest full vertex's values (a k-d tree of the full mesh: 5 s at 10M vertices)
+        if carried:  # the nearest full vertex's values (a k-d tree of the full mesh, built only when there are any)
             from scipy.spatial import cKDTree
 
             _, nearest = cKDTree(mesh.points).query(points)

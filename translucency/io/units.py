@@ -14,8 +14,8 @@ repositories and glTF (whose unit is the metre). Between the two the switch sits
 both readings are equally far (in log scale) from a typical 160 mm object; centimetres and inches are
 never inferred, as their sizes overlap those of the two others (pass them). A file outside 0.005 to
 5000 units is plausible in no unit and is refused with a sentence; the shared scans come out at
-their real size (bunny 156 mm, horse 183 mm, Igea 99 mm from metres; angel 322 mm, birdbath 308 mm
-from millimetres). The choice is said in one line (:class:`UnitInferredWarning`) and recorded
+their real size (those of scanning repositories from metres, the photogrammetry ones from
+millimetres). The choice is said in one line (:class:`UnitInferredWarning`) and recorded
 (:attr:`TriangleMesh.unit_inferred <translucency.geometry.mesh.TriangleMesh.unit_inferred>`).
 
 ================ ========================================================== =====

@@ -19,24 +19,12 @@ placed above and in front of the scan.
    a single-view range scan) up is :data:`FALLBACK_UP`, the convention of scanning repositories;
    equal scores (a cube) are decided in the order of :data:`TIE_ORDER`.
 
-Measured on the shared scans and the embedded default (score of the best side, and of the next):
-
-========================= ======== ========================= ==================================
-scan                      auto up  best score (down side)    next
-========================= ======== ========================= ==================================
-stanford_bunny_zipper     +y       0.044 (-y)                0.0056 (+z)
-cyberware_horse           +z       0.022 (-z, the hooves)    0.0081 (+x, its flank)
-cyberware_igea            +y       0.0003, fallback          0.0003
-ggg_angel_sfm             +z       0.037 (-z, the pedestal)  0.023 (+z, the bowl's rim)
-ggg_birdbath_sfm          +z       0.078 (-z)                0.0014 (-x)
-embedded default bunny    +y       0.044 (-y)                0.0054 (+z)
-pymeshlab face000 (range) +y       0.0032 (+z), fallback     --
-========================= ======== ========================= ==================================
-
-All seven come out the same when the scan is first turned by 3 or 6 degrees about two axes; it takes
-20-60 ms on 18-48k vertices and 0.2 s on the Igea's 134k (one convex hull);
-1.8 s on the Igea subdivided to 2.1M, where the hull is built from the points that the polytope of 64
-extreme points does not contain (:func:`~translucency.geometry.measure.hull_candidates`; 15 s before).
+On scans of objects that stand (a pedestal, hooves, a flat bottom) the best side scores several times
+:data:`MIN_SCORE`; a bust or a single-view range scan has no side that reaches it and falls back. Turning a
+scan by a few degrees leaves the answer as it was (facets within :data:`BASE_ANGLE` of the axis still make
+the base).
+The cost is one convex hull of the vertices; on a large scan the hull is built only from the points that
+the polytope of 64 extreme points does not contain (:func:`~translucency.geometry.measure.hull_candidates`).
 
 The display frame (:func:`display_frame`) maps the scan's axes to right, up and front (a right-handed
 frame): for ``+y`` it is the identity (front +z), for ``+z`` front is -y (the "front view" of Z-up

@@ -14,10 +14,10 @@ by
 The reflectance inverted is the better dipole's closed-form total ``R_d(alpha'; eta)`` (Hery's form,
 docs/physics.md §6.2 and §6.4), whichever model then renders. It rises monotonically from 0 at
 ``alpha' = 0`` to 1 at ``alpha' = 1``, so every reflectance in (0, 1) has exactly one reduced albedo;
-against the Monte Carlo totals of docs/physics.md §10.4 (all orders) it is 2 % low at ``alpha' = 0.99``,
-9 % at 0.95 and 16 % at 0.9, so a given reflectance inverts to a slightly higher albedo than a
-random walk would need where the material is dark. (The directional dipole's own total exceeds 1 for marble, 1.019,
-so it cannot serve as the thing to invert.) The root is found by Brent's method on ``[0, 1]``
+it is below the Monte Carlo totals of docs/physics.md §10.4 (all orders), the more the lower the albedo
+(figures in docs/physics.md §6.4), so a given reflectance inverts to a slightly higher albedo than a
+random walk would need where the material is dark. (The directional dipole's own total exceeds 1 at high
+albedo, marble's for one, so it cannot serve as the thing to invert.) The root is found by Brent's method on ``[0, 1]``
 (:func:`scipy.optimize.brentq`, to ``1e-15`` in ``alpha'``), then
 
     sigma_t' = 1 / l,   sigma_s' = alpha' sigma_t',   sigma_a = sigma_t' - sigma_s',   sigma_s = sigma_s' / (1 - g).
@@ -37,7 +37,7 @@ import numpy as np
 
 from ..errors import InvalidParameterError
 from .dipoles import better_dipole_total_reflectance
-from .medium import CHANNELS, Medium
+from .medium import CHANNELS, DEFAULT_ETA, Medium
 
 __all__ = ["ALBEDO_TOLERANCE", "reduced_albedo", "medium_from_appearance", "appearance_of"]
 
@@ -61,7 +61,7 @@ def _channel_name(c: int, n: int) -> str:
     return CHANNELS[c] if n == len(CHANNELS) else f"channel {c}"
 
 
-def reduced_albedo(reflectance, eta: float = 1.3) -> np.ndarray:
+def reduced_albedo(reflectance, eta: float = DEFAULT_ETA) -> np.ndarray:
     """The reduced albedo ``alpha'`` per channel whose better-dipole total diffuse reflectance (docs/physics.md
     §6.4) is ``reflectance`` (in (0, 1), per unit flux that entered) at relative index ``eta``.
 
@@ -93,7 +93,9 @@ def reduced_albedo(reflectance, eta: float = 1.3) -> np.ndarray:
     )
 
 
-def medium_from_appearance(reflectance, mean_free_path, eta: float = 1.3, g=0.0, name: str = "custom") -> Medium:
+def medium_from_appearance(
+    reflectance, mean_free_path, eta: float = DEFAULT_ETA, g=0.0, name: str = "custom"
+) -> Medium:
     """A :class:`~translucency.scatter.medium.Medium` from its look (module docstring): total diffuse
     reflectance per channel in (0, 1), reduced mean free path ``1 / sigma_t'`` per channel in mm, relative
     index ``eta`` and mean cosine ``g`` (default 0: ``sigma_s`` is then the reduced one)."""

@@ -59,15 +59,13 @@ __all__ = [
 ]
 
 #: Rays per vertex of the gather (docs/physics.md §7.4). The solver spreads the gathered flux over many
-#: vertices, so most of the per-vertex noise averages out in ``B``: on the bunny two seeds give ``B_0 + B_1``
-#: 0.5 % apart at the median vertex (16 rays: 0.8 %, 64: 0.3 %), but up to 100 % at the 99th percentile,
-#: in the darkest concavities where few rays see the lit side (bench/README.md, "Bounces").
+#: vertices, so most of the per-vertex noise averages out in ``B``; it stays large only in the darkest
+#: concavities, where few rays see the lit side. The noise falls as 1/sqrt(rays) and the gather's time grows
+#: with them (bench/README.md, "Bounces").
 GATHER_RAYS = 32
 #: The bounce solves of ``cutoff`` and ``tree`` run at this many times the user's tolerance (at most
-#: :data:`MAX_BOUNCE_TOL`): the re-entered part is a share of ``B``, so its error counts for less. Measured
-#: on the default bunny (bench/README.md, "Bounces"): ``B_0 + B_1`` with ``B_1`` at 10 x 0.01 differs
-#: from ``B_1`` at 0.01 by 0.86 % (marble, ketchup) to 0.96 % (skim milk) at the 99th percentile of the
-#: vertices (marble at 30 x: 2.9 %), and the bounce solve takes a third of the time.
+#: :data:`MAX_BOUNCE_TOL`): the re-entered part is a share of ``B``, so its error counts for less in the total,
+#: and a looser bounce solve is much cheaper (bench/README.md, "Bounces").
 BOUNCE_TOL_FACTOR = 10.0
 #: The bounce solves' tolerance is at most this (and at least the user's).
 MAX_BOUNCE_TOL = 0.5

@@ -12,8 +12,9 @@ sample itself makes nothing of the surface's size but the source tree: the far f
 tree's walk alone, the near field's are taken on the triangles around the sampled receivers.
 
 The byte counts per vertex, triangle, near triangle and quadrature point follow the arrays the
-solver allocates (listed at each constant); the rates are measured (``bench/budget.py``, where the
-estimates are compared with the measured peak memory and time; summary in ``bench/README.md``).
+solver allocates (listed at each constant); the rates are calibrations (``bench/budget.py``, where the
+estimates are compared with the measured peak memory and time; summary in ``bench/README.md``, "Memory and
+time budget").
 
 =================== ================================================================ ======
 symbol              meaning                                                          unit
@@ -71,7 +72,8 @@ BYTES_PER_TRIANGLE_THREAD = 8 + 2 * 4 * 1.5 + 2 * 4 * 0.5
 BYTES_PER_NEAR_TRIANGLE = 4
 #: Every receiver's near lists are kept (for a later solve of the same surface: the viewer's) only up to this
 #: size; above, each block of receivers lists its own and frees them (listing is a few % of a solve), so that
-#: the memory of a large scan does not grow with them (1.7 GB on a 2.6M-vertex scan).
+#: the memory of a large scan does not grow with them (they take the vertices times the near triangles per
+#: receiver times :data:`BYTES_PER_NEAR_TRIANGLE`).
 KEPT_LISTS_BYTES = 256 * 2**20
 #: Bytes per near triangle while a receiver's points are listed: room for 10 columns (3 vertices and
 #: 7 rule points) of an int64 index and a float64 factor.
@@ -88,10 +90,10 @@ PROGRESS_STEPS = 16
 #: Safety factor on the sampled per-receiver counts (blocks are sized on the sample's mean).
 SAMPLE_SAFETY = 1.5
 
-#: Measured rates, per numba thread: far-field evaluations per second by method, near-field
-#: quadrature points per second, near-list entries per second (counting and filling), and the
-#: seconds per vertex of the set-up (ordering, tables, tree); measured on the 2-core machine at a load
-#: of about 4, so pessimistic on a quiet one. See ``bench/budget.py``.
+#: Rates per numba thread: far-field evaluations per second by method, near-field quadrature points per
+#: second, near-list entries per second (counting and filling), and the seconds per vertex of the set-up
+#: (ordering, tables, tree). Calibrations on timed solves with other work sharing the machine, so the
+#: estimate is pessimistic on a quiet one (``bench/budget.py``; bench/README.md, "Memory and time budget").
 FAR_RATE = {"exact": 40e6, "cutoff": 15e6, "tree": 12e6}
 NEAR_RATE = 3e6
 LIST_RATE = 60e6
@@ -191,7 +193,7 @@ class SolveEstimate:
 
 
 def solve_seconds(counts: SolveCounts) -> float:
-    """Estimated wall time (s) of a solve from its counts and the measured rates."""
+    """Estimated wall time (s) of a solve from its counts and the calibrated rates (:data:`FAR_RATE`, ...)."""
     threads = max(1, counts.threads)
     n_r = counts.n_receivers
     far = n_r * counts.far_evaluations / FAR_RATE.get(counts.method, FAR_RATE["exact"])

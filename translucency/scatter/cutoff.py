@@ -62,7 +62,7 @@ def _directional_bound(r, D, sigma_tr_, C_phi, C_E, norm):
 def cutoff_radius(medium: Medium, tol: float, model: str = "directional") -> float:
     """Radius (mm) beyond which pairs may be skipped with at most ``tol`` of the energy dropped.
 
-    Memoised on the coefficients (a few quadratures and a root search: ~50 ms per call otherwise)."""
+    Memoised on the coefficients (otherwise a few quadratures and a root search per call)."""
     key = (
         tuple(np.asarray(medium.sigma_a, float).tolist()),
         tuple(np.asarray(medium.sigma_s, float).tolist()),

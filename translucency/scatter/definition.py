@@ -2,8 +2,8 @@
 :class:`~translucency.scatter.medium.Medium`.
 
 The same keys serve a TOML or JSON file (``--material jade.toml``), the command line's inline options and
-Python. One of three forms, with the optional keys ``name``, ``eta`` (default 1.3), ``g`` (default 0)
-and ``scale``:
+Python. One of three forms, with the optional keys ``name``, ``eta`` (default
+:data:`~translucency.scatter.medium.DEFAULT_ETA`), ``g`` (default 0) and ``scale``:
 
 ============================= ====================================================================
 keys                          meaning
@@ -35,7 +35,7 @@ import numpy as np
 from ..errors import InvalidParameterError
 from .appearance import appearance_of, medium_from_appearance
 from .materials import material as catalogue_entry
-from .medium import Medium
+from .medium import DEFAULT_ETA, Medium
 
 __all__ = ["FORMS", "OPTIONAL_KEYS", "SWEEP_KEYS", "medium_from_definition", "varied"]
 
@@ -43,7 +43,6 @@ __all__ = ["FORMS", "OPTIONAL_KEYS", "SWEEP_KEYS", "medium_from_definition", "va
 FORMS = {"coefficients": ("sigma_a", "sigma_s"), "appearance": ("reflectance", "mfp"), "catalogue": ("material",)}
 #: Keys any form may add.
 OPTIONAL_KEYS = ("name", "eta", "g", "scale")
-DEFAULT_ETA = 1.3
 
 
 def medium_from_definition(definition: Mapping, source: str = "the material definition") -> Medium:

@@ -229,25 +229,6 @@ def random_blocks(n_blocks: int, n_sources: int = 8, receivers_per_source: int =
     return Blocks(eta, sigma_a, sigma_s, g, size, x_i, n_i, w12, x_o, n_o, source_of)
 
 
-def single_block(eta, sigma_a, sigma_s, g, x_i, n_i, w12, x_o, n_o) -> Blocks:
-    """One block of one pair (the form property tests draw): vectors of 3, coefficients of 3 channels."""
-    vec = lambda v: np.asarray(v, dtype=np.float64).reshape(1, 1, 3)  # noqa: E731
-    chan = lambda v: np.broadcast_to(np.asarray(v, dtype=np.float64), (3,)).reshape(1, 3).copy()  # noqa: E731
-    return Blocks(
-        np.array([float(eta)]),
-        chan(sigma_a),
-        chan(sigma_s),
-        chan(g),
-        np.array([1.0]),
-        vec(x_i),
-        vec(n_i),
-        vec(w12),
-        vec(x_o),
-        vec(n_o),
-        np.zeros(1, dtype=np.int64),
-    )
-
-
 # --------------------------------------------------------------------------------------------------
 # evaluation
 # --------------------------------------------------------------------------------------------------

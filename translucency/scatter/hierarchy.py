@@ -34,15 +34,14 @@ from ..threads import for_ranges
 
 LEAF_SIZE = 8
 #: Receivers that share one walk of the tree (consecutive along the solver's space-filling curve).
-#: Measured on the bunny and the Igea (marble, ketchup; tol 0.1-0.003; relative RMS): groups of 4 with
-#: THETA_PER_SQRT_TOL = 2.5 give the error of single receivers with 2.0 (0.6-0.9 x tol) in 60-75 % of
-#: the far-field time (8 and 16 evaluate more clusters than the shared walk saves).
+#: The group's bounding sphere is tested, which is conservative for each member, so a group reaches the error
+#: of single receivers with a larger theta and in less far-field time; larger groups evaluate more clusters
+#: than the shared walk saves (bench/README.md, "Kernel throughput").
 GROUP_RECEIVERS = 4
 #: theta = THETA_PER_SQRT_TOL * sqrt(tol); calibrated so that the per-vertex error that tol bounds
-#: (99th percentile, docs/physics.md §8.5) stays below tol. Measured on the whole bunny in marble at tol
-#: 1e-2 (p99 against exact): 2.5 -> 8.7e-2, 1.2 -> 2.1e-2, 1.0 -> 1.4e-2, 0.75 -> 6.4e-3 (the error goes
-#: as theta^2.5, the cluster evaluations as theta^-2); 0.8 left the horse at 1.1e-2 (marble) and 3.4e-2 at tol
-#: 3e-2, 0.7 gives 7.8e-3 and 2.7e-2 there for 15 % more time; tests/scatter/test_tolerance.py checks it on spheres.
+#: (99th percentile, docs/physics.md §8.5) stays below tol on the benchmark scans in every material
+#: (bench/README.md, "Kernel throughput"); a lower value costs time, as the cluster evaluations grow as
+#: theta^-2. tests/scatter/test_tolerance.py checks it on spheres.
 THETA_PER_SQRT_TOL = 0.7
 #: No cluster closer than CLUSTER_MEAN_FREE_PATHS / min sigma_t' to the receiver (the solver's
 #: ``min_distance``): nearer than that S_d varies with the angles between normals and refracted
@@ -506,3 +505,14 @@ def _traverse(
                 top += 2
         direct[o] = n_direct
         clustered[o] = n_cluster
+
+
+#: The compiled kernels of the source tree's build and traversal: numba compiles each on first use; the set-up compiles
+#: them ahead
+#: (:mod:`translucency.app.warmup`).
+TREE_KERNELS = (
+    _traverse,
+    _build,
+    _boxes,
+    _leaf_sums,
+)

@@ -338,7 +338,8 @@ def incident_flux(
         Reuse scenes and visibility from earlier calls (and store this call's).
     per_direction : bool, optional
         Also return every sample's contribution (``contributions``), for per-direction summation.
-        Memory grows with the number of samples (about 1.2 MB per sample per 17k lit vertices).
+        Memory grows with the number of samples (per sample and vertex it reaches: an index and three rows of
+        3 float64, :class:`LightContribution`).
 
     Returns
     -------
@@ -427,7 +428,7 @@ def _mean_direction(weighted, weight, normals):
     elsewhere (any inward unit vector will do), ``(0, 0, -1)`` where that normal is 0 too; and its unit vector."""
     lit = weight > 0.0
     w12_mean = np.negative(normals)
-    np.divide(weighted, weight[:, None], out=w12_mean, where=lit[:, None])  # (no masked copies: 10M rows)
+    np.divide(weighted, weight[:, None], out=w12_mean, where=lit[:, None])  # (no masked copies of (n, 3) rows)
     lengths = row_lengths(w12_mean)
     degenerate = lengths == 0.0  # a degenerate normal where no light arrives
     w12_mean[degenerate] = (0.0, 0.0, -1.0)

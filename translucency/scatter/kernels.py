@@ -328,43 +328,6 @@ def model_pair(model, xi0, xi1, xi2, ni0, ni1, ni2, w0, w1, w2, xo0, xo1, xo2, n
     return clamped
 
 
-@numba.njit(cache=True)
-def directional_dipole_pair(xi0, xi1, xi2, ni0, ni1, ni2, w0, w1, w2, xo0, xo1, xo2, no0, no1, no2, params, out):
-    """:func:`model_pair` of the directional dipole (FHK14); returns the clamp count."""
-    return model_pair(
-        MODEL_DIRECTIONAL, xi0, xi1, xi2, ni0, ni1, ni2, w0, w1, w2, xo0, xo1, xo2, no0, no1, no2, params, out
-    )
-
-
-@numba.njit(cache=True)
-def model_pairs(model, x_i, n_i, w12, x_o, n_o, params):
-    """``S_d`` for aligned rows of pairs: ``out[p, k]`` for pair ``p`` and channel ``k`` (testing aid)."""
-    n = x_i.shape[0]
-    out = np.empty((n, params.shape[0]))
-    for p in range(n):
-        model_pair(
-            model,
-            x_i[p, 0],
-            x_i[p, 1],
-            x_i[p, 2],
-            n_i[p, 0],
-            n_i[p, 1],
-            n_i[p, 2],
-            w12[p, 0],
-            w12[p, 1],
-            w12[p, 2],
-            x_o[p, 0],
-            x_o[p, 1],
-            x_o[p, 2],
-            n_o[p, 0],
-            n_o[p, 1],
-            n_o[p, 2],
-            params,
-            out[p],
-        )
-    return out
-
-
 def channel_lanes(params, channel_of, n_out):
     """Parameter rows in output-channel order, padded to a multiple of three with the last: lane ``c`` of
     :func:`pair_three` is output channel ``c``; ``(3 ceil(n_out / 3), N_PARAMS)`` float64."""
@@ -712,10 +675,9 @@ def grouped_sum(model, rcv_points, rcv_normals, table, weights, g_starts, g_coun
     g_counts[g]]`` (factor 1).
 
     Each group's sources are gathered once into a contiguous buffer of the thread, and every receiver of
-    the group runs the exact kernel's loop (:func:`vertex_sum`'s) over it: a quarter of the scattered
-    reads for groups of 4, and a loop that vectorises. Measured side by side against :func:`indexed_sum`
-    (marble, tol 0.01, three solves each, load 1-1.8): the far field of the bunny 2.4 -> 2.0 s, of the
-    Igea 11.4 -> 9.5 s, the same ``B``. Returns ``(n_rcv, C)`` float64.
+    the group runs the exact kernel's loop (:func:`vertex_sum`'s) over it: ``1 / group`` of the scattered
+    reads, and a loop that vectorises, for the same ``B`` as :func:`indexed_sum`. Returns ``(n_rcv, C)``
+    float64.
     """
     n_channels = weights.shape[0]
     out = np.zeros((rcv_points.shape[0], n_channels))
@@ -892,9 +854,9 @@ def fitted_pairs(model, x0, x1, x2, ni0, ni1, ni2, no0, no1, no2, params, dirs, 
 
     The virtual source is affine in ``w`` and goes in exactly; the real source depends on ``w`` also through
     its corrected distance ``d_r(w)`` (§4.3), evaluated at each direction (interpolated in ``d_r`` from three
-    evaluations where the distances differ by less than :data:`FIT_INTERPOLATED_SPREAD`; even far away, where
-    the real and the virtual source nearly cancel, one evaluation at a middle distance is 0.2-0.6 % off at
-    40 mm in marble). The geometry is
+    evaluations where the distances differ by less than :data:`FIT_INTERPOLATED_SPREAD`; one evaluation at a
+    middle distance is not enough even far away, where the real and the virtual source nearly cancel and a
+    small error in the real source is a large one in their difference). The geometry is
     shared by the channels. ``work`` is scratch space, ``(max(len(dirs), 9), FIT_WORK_COLUMNS)`` float64 (no
     allocation here: this runs once per operator entry). Written to ``out[c]``: ``a, b0, b1, b2`` then ``Q00,
     Q11, Q22, 2 Q01, 2 Q02, 2 Q12`` (the coefficients of ``1, w_x, w_y, w_z, w_x^2, w_y^2, w_z^2, w_x w_y, w_x
@@ -1006,3 +968,12 @@ def fitted_pairs(model, x0, x1, x2, ni0, ni1, ni2, no0, no1, no2, params, dirs, 
                 for m in range(3):
                     total += axes[k][i] * ql[k][m] * axes[m][j]
             out[c, at] = factor * total
+
+
+#: The compiled kernels of the directional dipole's far-field rows (a ``tree`` solve's): numba compiles each on first
+#: use; the set-up compiles them ahead
+#: (:mod:`translucency.app.warmup`).
+DIRECTIONAL_ROW_KERNELS = (
+    _indexed_rows_directional,
+    _grouped_rows_directional,
+)

@@ -33,6 +33,7 @@ from ..errors import InvalidParameterError
 from . import fresnel
 
 __all__ = [
+    "DEFAULT_ETA",
     "Medium",
     "validate_coefficients",
     "sigma_s_reduced",
@@ -45,6 +46,8 @@ __all__ = [
 ]
 
 CHANNELS = ("red", "green", "blue")
+#: Relative index of refraction of the catalogue's materials unless their table gives another.
+DEFAULT_ETA = 1.3
 
 
 def sigma_s_reduced(sigma_s, g):
@@ -154,7 +157,7 @@ class Medium:
     sigma_a: np.ndarray
     sigma_s: np.ndarray
     g: np.ndarray = field(default_factory=lambda: np.zeros(3))
-    eta: float = 1.3
+    eta: float = DEFAULT_ETA
     name: str = "custom"
 
     def __post_init__(self):
@@ -175,7 +178,7 @@ class Medium:
         object.__setattr__(self, "eta", float(eta.flat[0]))
 
     @classmethod
-    def from_reduced(cls, sigma_a, sigma_s_reduced, eta: float = 1.3, name: str = "custom") -> Medium:
+    def from_reduced(cls, sigma_a, sigma_s_reduced, eta: float = DEFAULT_ETA, name: str = "custom") -> Medium:
         """A medium from reduced scattering coefficients ``sigma_s'`` (1/mm) with ``g = 0``."""
         return cls(sigma_a, sigma_s_reduced, np.zeros(np.shape(sigma_s_reduced)), eta, name)
 

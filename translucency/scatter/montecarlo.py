@@ -469,16 +469,6 @@ class HalfSpaceTally:
         """Area of one grid cell, mm^2."""
         return float((self.grid_edges_mm[1] - self.grid_edges_mm[0]) ** 2)
 
-    @property
-    def radial_centres_mm(self) -> np.ndarray:
-        """Mid-radii of the annuli, mm."""
-        return 0.5 * (self.radial_edges_mm[1:] + self.radial_edges_mm[:-1])
-
-    @property
-    def specular_reflectance(self) -> float:
-        """Fresnel reflectance of the beam at entry, ``1 - T12`` (not part of any tally)."""
-        return 1.0 - self.entry_transmittance
-
     def summary(self) -> dict:
         """Settings and totals as plain numbers (for JSON and tables)."""
         return {

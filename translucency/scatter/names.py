@@ -39,8 +39,8 @@ DEFAULT_MODEL = "directional"
 DEFAULT_METHOD = "tree"
 #: Relative error per vertex allowed to ``cutoff`` and ``tree`` (ignored by ``exact``).
 DEFAULT_TOL = 1e-2
-#: Times light that leaves the surface is let in again (docs/physics.md §7.4; the default is measured
-#: in bench/README.md, "Bounces").
+#: Times light that leaves the surface is let in again (docs/physics.md §7.4; the measurements behind the
+#: default: bench/README.md, "Bounces").
 DEFAULT_BOUNCES = 1
 #: Most bounces accepted (each one is a gather and a solve).
 MAX_BOUNCES = 8

@@ -194,15 +194,9 @@ def near_triangles(points, triangles, receivers, radius):
     offsets : (n_receivers + 1,) int64
     triangle_ids : (offsets[-1],) int32 (int64 for meshes of 2**31 triangles or more)
         CSR lists: the near triangles of receiver ``r`` are ``triangle_ids[offsets[r]:offsets[r+1]]``. They
-        are the largest arrays of a solve (about 160 entries per receiver on a fine scan), hence 4 bytes.
+        are the largest arrays of a solve (an entry per near triangle of every receiver), hence 4 bytes.
     """
     return near_grid(points, triangles, radius).lists(receivers)
-
-
-def near_triangle_counts(points, triangles, receivers, radius):
-    """Number of near triangles of each receiver (:func:`near_triangles` without the lists), ``(n_receivers,)``
-    int64; memory: the grid and one stamp per triangle and thread."""
-    return near_grid(points, triangles, radius).counts(receivers)
 
 
 def _cell_keys(points, low, cell, dims):
@@ -672,10 +666,9 @@ def _fan(points, tri, corner, beta, scale_min, ang_x, ang_w, rad_x, rad_w, out):
     integrand smooth even at obtuse corners) and, along every ray, in ``u = log(1 + r / c)`` on
     ``[0, log(1 + L / c)]`` with ``c = beta * scale_min`` and ``dr = (r + c) du``: the peak of width
     ``D`` at the receiver and the ``1/r^3`` tail beyond it both become smooth in ``u`` (split into
-    stretches of at most :data:`FAN_SPAN` on triangles much larger than ``c``). Measured on the
-    directional dipole over 1.5-2 mm triangles (tests/scatter/test_nearfield.py) and on the bunny
-    (marble, ketchup, skim milk): 3 x 5 nodes per sector give the adaptive subdivision's answer to
-    about 1e-4 with a third of its points.
+    stretches of at most :data:`FAN_SPAN` on triangles much larger than ``c``). So few nodes, 3 x 5 per
+    sector, give the adaptive subdivision's answer with far fewer points (tests/scatter/test_nearfield.py
+    checks it against an adaptive integral; bench/README.md, "Kernel throughput").
 
     Writes :func:`_fan_count` rows ``(b_0, b_1, b_2, weight / area)`` in the triangle's corner order to
     ``out`` (none for a degenerate triangle).
@@ -891,7 +884,8 @@ def near_field_correction(
     return correction, n_points
 
 
-#: Receivers whose quadrature points are listed at a time (bounds the memory: ~150 KB per receiver).
+#: Receivers whose quadrature points are listed at a time (bounds the memory of the listing, which grows with
+#: the receivers of a block times their near triangles).
 BLOCK_RECEIVERS = 2048
 
 
@@ -1455,3 +1449,15 @@ def _operator_rows(
         for i in range(size):
             for j in range(width):
                 coefs[starts[r] + i, j] = acc[i, j]
+
+
+#: The compiled kernels of the near field's lists and quadrature, and its operator rows for relighting: numba compiles
+#: each on first use; the set-up compiles them ahead
+#: (:mod:`translucency.app.warmup`).
+NEAR_FIELD_KERNELS = (
+    _near_pass,
+    _fill_shared_points,
+    _list_points,
+    _refined_points,
+    _operator_rows,
+)

@@ -49,16 +49,16 @@ from ..threads import for_ranges, thread_count
 from . import hierarchy, kernels, nearfield
 from .kernels import AFFINE_TERMS, FIT_WORK_COLUMNS, QUADRATIC_TERMS, fitted_pairs
 
-__all__ = ["RelightOperator", "prepare", "operator_bytes"]
+__all__ = ["RELIGHT_KERNELS", "RelightOperator", "prepare", "operator_bytes"]
 
 #: Bytes per far-field entry per channel (four int16 and a power of two, :func:`_quantised`) and per
 #: near-field entry per channel (ten float32), plus a column index (int32) per entry.
 FAR_ENTRY_BYTES = 2 * AFFINE_TERMS + 1
 NEAR_ENTRY_BYTES = 4 * QUADRATIC_TERMS
 INDEX_BYTES = 4
-#: Seconds per far-field entry and per near-field entry of the preparation on one thread (measured on the
-#: default bunny in marble, skim milk and ketchup at tol 0.1-0.01 on the 2-core machine: 7-9e-7 and
-#: 2.4-5e-5; the time estimate the budget compares against ``time_limit``).
+#: Seconds per far-field entry and per near-field entry of the preparation on one thread: the rates of the time
+#: estimate the budget compares against ``time_limit``, calibrated on timed preparations (bench/README.md,
+#: "Relighting").
 FAR_ENTRY_SECONDS = 9e-7
 NEAR_ENTRY_SECONDS = 3e-5
 
@@ -187,17 +187,18 @@ def operator_key(medium, model: str, tol: float) -> tuple:
     )
 
 
-#: theta = THETA_PER_SQRT_TOL * sqrt(tol), lower than the ``tree``'s 0.7: a cluster here is one source at a
-#: fixed anchor (the area-weighted mean of its vertices) where the ``tree`` puts it at the flux-weighted mean.
-#: Measured on the default bunny at tol 0.1 against ``tree`` at 1e-3 (99th percentile, four lights): with
-#: 0.7 marble 6.8 %, skim milk 11.4 % (over tol); with 0.6 (bench/README.md, "Relighting").
-THETA_PER_SQRT_TOL = 0.6
+#: theta = RELIGHT_THETA_PER_SQRT_TOL * sqrt(tol), lower than the ``tree``'s
+#: :data:`~translucency.scatter.hierarchy.THETA_PER_SQRT_TOL`: an operator is made before the light is known, so
+#: a cluster here is one source at a fixed anchor (the area-weighted mean of its vertices), not at the
+#: flux-weighted mean where the ``tree`` puts it, and it is accurate to theta^2 only; with the ``tree``'s value
+#: the per-vertex error that tol bounds goes over tol (bench/README.md, "Relighting").
+RELIGHT_THETA_PER_SQRT_TOL = 0.6
 
 
 def theta_and_distance(medium, tol: float) -> tuple[float, float]:
-    """The far field's opening ratio (:data:`THETA_PER_SQRT_TOL`) and smallest cluster distance (mm, the
+    """The far field's opening ratio (:data:`RELIGHT_THETA_PER_SQRT_TOL`) and smallest cluster distance (mm, the
     ``tree`` method's, §8.3)."""
-    return hierarchy.opening(medium.sigma_t_reduced, tol, THETA_PER_SQRT_TOL)
+    return hierarchy.opening(medium.sigma_t_reduced, tol, RELIGHT_THETA_PER_SQRT_TOL)
 
 
 def operator_bytes(geometry, medium, tol: float, near_radius: float) -> tuple[float, dict]:
@@ -494,3 +495,13 @@ def _apply_rows(worker, lo, hi, starts, counts, columns, offsets, coefs, values,
                 total[c] += s
         for c in range(n_c):
             out[r, c] += total[c]
+
+
+#: The compiled kernels of the relighting operators' fill and products: numba compiles each on first use; the set-up
+#: compiles them ahead
+#: (:mod:`translucency.app.warmup`).
+RELIGHT_KERNELS = (
+    _fill_coefficients,
+    _apply_quantised,
+    _apply_rows,
+)

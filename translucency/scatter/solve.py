@@ -72,14 +72,15 @@ TOL_FLOOR = 1e-4
 NEAR_EDGES = 3.0
 NEAR_MEAN_FREE_PATHS = 1.0
 #: Refinement ratio of the adaptive quadrature (piece diameter over its distance to the receiver; also
-#: the fan rule's radial scale, NEAR_BETA * D_min). Measured on planes (ketchup, marble; 1-2 mm
-#: triangles) when the receiver's own triangles were subdivided too: 1.5 gave the same B as 1.0 to
-#: 0.005 % with 20 % fewer pieces, 2.0 accepted the piece holding the receiver too early (1-16 %).
+#: the fan rule's radial scale, NEAR_BETA * D_min). A piece is accepted once it is this many times smaller
+#: than its distance: a smaller ratio gives the same B with more pieces, a larger one accepts the piece that
+#: holds the receiver before the peak of S_d there is resolved.
 NEAR_BETA = 1.5
 #: Whole triangles with diameter <= NEAR_DEGREE3_RATIO * distance get the degree-3 rule of shared points
 #: instead of Dunavant's degree-5 rule (``cutoff`` and ``tree``; ``exact`` uses Dunavant's everywhere).
-#: Measured on the bunny (3000 receivers, marble and ketchup): 2-4e-4 relative RMS from the degree-5
-#: answer with 45 % fewer near-field points.
+#: Beyond its diameter a triangle sees S_d vary slowly enough for degree 3, whose points are shared with
+#: the neighbouring triangles; its error against degree 5 is well below the tolerances
+#: (bench/README.md, "Kernel throughput").
 NEAR_DEGREE3_RATIO = 1.0
 #: ... and only for triangles no wider than NEAR_DEGREE3_DECAY / max sigma_tr: across a wider one S_d
 #: changes by more than exp(NEAR_DEGREE3_DECAY) (docs/physics.md §8.2).
@@ -100,7 +101,7 @@ class SurfaceGeometry:
         Outward unit vertex normals.
     mean_edge_mm : float, optional
         The mean edge length (mm) when the caller has measured it already (:attr:`mean_edge_length` then takes it
-        instead of measuring the edges again: 7 s at 10M vertices).
+        instead of measuring the edges again, a pass over every edge).
     vertex_areas_mm2 : (n,) float64, optional
         The barycentric vertex areas (mm²) when the caller holds them already (:attr:`vertex_areas` then takes them
         instead of summing the triangles again).
@@ -857,8 +858,8 @@ def _plan(work: _Work, method, tol, memory_limit, time_limit, stats, memory_at_s
 
     Nothing of the whole surface's size is made for the plan but the source tree: the far field's sample is
     the tree's walk alone (nothing aggregated) and the near field's is taken on the triangles around the
-    sampled receivers (:func:`_around`). At 10M vertices the surface's near grid, triangle tables and the
-    tree's aggregates had held 4 GB for a solve the plan then refused."""
+    sampled receivers (:func:`_around`), so that a solve the plan refuses has not already held the surface's
+    near grid, triangle tables and the tree's aggregates, which grow with the scan."""
     geometry = work.geometry
     radius = near_radius(geometry, work.medium)
     near_args = dict(

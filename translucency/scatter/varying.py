@@ -14,8 +14,8 @@ their mean against a two-media random walk, and says why the receiver's.
 The solver takes one medium. The reflectances are covered by levels ``R_k`` at most :data:`REFLECTANCE_STEP`
 apart; each level is solved at the receivers with a channel between its neighbours, and a receiver's ``B``
 is interpolated between the two levels around its reflectance, linearly in ``log B`` (``B`` falls off
-nearly exponentially with the albedo's transport coefficient; linear in ``B`` it takes four times the
-levels for the same error). One reflectance everywhere is the homogeneous solve.
+nearly exponentially with the albedo's transport coefficient; linear in ``B`` it takes more levels for
+the same error). One reflectance everywhere is the homogeneous solve.
 """
 
 from __future__ import annotations
@@ -39,9 +39,9 @@ __all__ = [
     "solve_varying",
 ]
 
-#: Largest step (in reflectance) between two levels: 0.19 % at the 99th percentile from a step of 0.0125
-#: on the bunny with a striped colour, for 6.0 times the solve with one albedo (0.05: 0.83 % for 5.5 times;
-#: each receiver is in about 4.8 levels either way; bench/README.md, "Colour from the scan").
+#: Largest step (in reflectance) between two levels: ``B`` is interpolated between the levels, so a
+#: smaller step lowers the interpolation error at the cost of more levels to solve, each a solve with one
+#: albedo (bench/README.md, "Colour from the scan").
 REFLECTANCE_STEP = 0.025
 #: Reflectances are clamped to this range: 0 and 1 have no albedo (a colour of pure black or white).
 REFLECTANCE_RANGE = (0.01, 0.95)

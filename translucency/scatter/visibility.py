@@ -6,17 +6,16 @@ answers "is the way from these surface points toward the light free?" for rays t
 also says which triangle a ray meets first, and where (the bounce gather,
 :mod:`translucency.scatter.bounces`). Rays start at the surface point moved along its normal by a
 scale-aware offset ``epsilon``; without it nearly every ray hits one of the faces around its own
-vertex (measured on the shared scans: 99.6-99.9 % of the front-facing rays with no offset). Large ray
-sets run in chunks on a thread pool: embreex releases the GIL while it traces.
+vertex (float32 rounding puts the origin on either side of them). Large ray sets run in chunks on a
+thread pool: embreex releases the GIL while it traces.
 
-Choice of the offset (measured on the five shared scans, 8 random light directions, vertices with
-``n . w > 0``): any offset from ``1e-7 * diagonal`` up removes every self-hit caused by float32
-rounding (no ray hits a face of its own one-ring that faces the light). What remains are hits on
-one-ring faces that face *away* from the light: vertices at the shadow terminator or in a crease,
-which the surrounding geometry really does block; they carry 0.08-0.3 % of the cosine-weighted
-flux on the clean scans (bunny, horse, Igea) and ~3.5 % on raw photogrammetry. The default
-``RELATIVE_OFFSET = 1e-4`` of the bounding-box diagonal (0.025 mm on a 250 mm bunny, about 2 % of
-its mean edge) is far above rounding, removes a quarter to half of those terminator hits, and is
+Choice of the offset (vertices with ``n . w > 0``): an offset well above float32 rounding removes every
+self-hit caused by rounding (no ray hits a face of its own one-ring that faces the light). What remains
+are hits on one-ring faces that face *away* from the light: vertices at the shadow terminator or in a
+crease, which the surrounding geometry really does block; they carry a small share of the
+cosine-weighted flux, more on raw photogrammetry than on clean scans. The default
+``RELATIVE_OFFSET = 1e-4`` of the bounding-box diagonal (0.025 mm for a 250 mm diagonal, a small
+fraction of a scan's mean edge) is far above rounding, removes part of those terminator hits, and is
 too small to leak light through any feature a scan resolves. It is floored at 64 float32 ulps of
 the largest coordinate, so a mesh far from the origin still gets a working offset.
 

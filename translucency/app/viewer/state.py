@@ -468,7 +468,7 @@ class ViewerState:
         if stage == "relight operators" and fraction == 0.0:
             self.add_note(
                 f"preparing the relighting operators for {self.medium.name} on {self.scene.mesh.n_points:,} vertices "
-                "(once per material and model; about half a minute per 30,000 vertices)..."
+                "(once per material and model; the time grows with the vertices)..."
             )
             if self.notify is not None:
                 self.notify()

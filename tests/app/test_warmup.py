@@ -7,7 +7,7 @@ import sys
 import numba
 import pytest
 
-from translucency.scatter import warmup
+from translucency.app import warmup
 
 
 def _compiled_function(module):
@@ -45,7 +45,7 @@ def test_warm_up_fills_the_cache_in_numba_cache_dir_once(tmp_path):
     """An empty NUMBA_CACHE_DIR: the warm-up says it compiles and fills it; the second run finds every
     kernel of the main job in the cache, compiles nothing and prints nothing."""
     env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "cache")}
-    command = [sys.executable, "-m", "translucency.scatter.warmup"]
+    command = [sys.executable, "-m", "translucency.app.warmup"]
     first = subprocess.run(command, env=env, capture_output=True, text=True, timeout=600)
     assert first.returncode == 0, first.stderr
     assert first.stdout.count(warmup.NOTICE) == 1 and "ready" in first.stdout
@@ -53,7 +53,7 @@ def test_warm_up_fills_the_cache_in_numba_cache_dir_once(tmp_path):
     second = subprocess.run(command, env=env, capture_output=True, text=True, timeout=600)
     assert second.returncode == 0 and second.stdout == ""
     check = subprocess.run(
-        [sys.executable, "-c", "from translucency.scatter.warmup import cold_kernels; print(cold_kernels())"],
+        [sys.executable, "-c", "from translucency.app.warmup import cold_kernels; print(cold_kernels())"],
         env=env,
         capture_output=True,
         text=True,
@@ -61,7 +61,7 @@ def test_warm_up_fills_the_cache_in_numba_cache_dir_once(tmp_path):
     )
     assert check.stdout.strip() == "[]"
     empty = subprocess.run(
-        [sys.executable, "-c", "from translucency.scatter.warmup import cold_kernels; print(len(cold_kernels()))"],
+        [sys.executable, "-c", "from translucency.app.warmup import cold_kernels; print(len(cold_kernels()))"],
         env={**env, "NUMBA_CACHE_DIR": str(tmp_path / "other")},
         capture_output=True,
         text=True,

@@ -2,13 +2,13 @@
 
 numba compiles a kernel the first time it is called and keeps the machine code in its cache (next to
 the sources, or in ``NUMBA_CACHE_DIR``); later runs load it. A first run therefore waits for the
-compiler (about 10 s on two cores for what the main job uses). Two helpers:
+compiler (bench/README.md, "First run", measures how long). Two helpers:
 
 * :func:`compile_notice` calls a function once, when numba really starts compiling one of the
   solver's kernels (numba's ``numba:compile`` event, which fires on a cache miss only), so the
   command line can say why it is quiet;
-* :func:`warm_up` (``python -m translucency.scatter.warmup``, run by ``scripts/setup.sh``) compiles
-  the kernels the main job uses by solving a small synthetic surface, unless every one of them is
+* :func:`warm_up` (``python -m translucency.app.warmup``, run by ``scripts/setup.sh``) compiles
+  the kernels the main job uses by shading a small synthetic surface, unless every one of them is
   already in the cache (:func:`cold_kernels`, read from numba's cache index).
 """
 
@@ -25,45 +25,21 @@ from pathlib import Path
 
 import numpy as np
 
-#: Kernels (module, name) the main job's solve calls (``tree`` method, near field), the viewer's relighting and
-#: the cleaning of a scan.
+from ..geometry import measure, topology
+from ..scatter import hierarchy, kernels, nearfield, relight
+
+#: The compiled kernels the main job's solve calls (``tree`` method, near field), the viewer's relighting and the
+#: cleaning of a scan, as each module lists them.
 MAIN_JOB_KERNELS = (
-    ("translucency.scatter.kernels", "_indexed_rows_directional"),
-    ("translucency.scatter.kernels", "_grouped_rows_directional"),
-    ("translucency.scatter.hierarchy", "_traverse"),
-    ("translucency.scatter.hierarchy", "_build"),
-    ("translucency.scatter.hierarchy", "_boxes"),
-    ("translucency.scatter.hierarchy", "_leaf_sums"),
-    ("translucency.scatter.nearfield", "_near_pass"),
-    ("translucency.scatter.nearfield", "_fill_shared_points"),
-    ("translucency.scatter.nearfield", "_list_points"),
-    ("translucency.scatter.nearfield", "_refined_points"),
-    # the viewer's relighting (its default method)
-    ("translucency.scatter.relight", "_fill_coefficients"),
-    ("translucency.scatter.relight", "_apply_quantised"),
-    ("translucency.scatter.relight", "_apply_rows"),
-    ("translucency.scatter.nearfield", "_operator_rows"),
-    # the cleaning of a scan (its defect count, orientation and normals)
-    ("translucency.geometry.topology", "_unique_edges"),
-    ("translucency.geometry.topology", "_manifold_pairs"),
-    ("translucency.geometry.topology", "_face_components"),
-    ("translucency.geometry.topology", "_non_manifold_vertices"),
-    ("translucency.geometry.topology", "_duplicate_triangles"),
-    ("translucency.geometry.topology", "_first_at_same_position"),
-    ("translucency.geometry.measure", "_cross_products"),
-    ("translucency.geometry.measure", "_row_lengths"),
-    ("translucency.geometry.measure", "_unit_rows"),
-    ("translucency.geometry.measure", "_vertex_sums"),
-    ("translucency.geometry.measure", "_degenerate"),
-    ("translucency.geometry.measure", "_edge_lengths"),
-    ("translucency.geometry.measure", "_centroids"),
-    # the up axis of a scan (its default light)
-    ("translucency.geometry.measure", "_area_centroids"),
-    ("translucency.geometry.measure", "_extremes"),
-    ("translucency.geometry.measure", "_outside_or_on"),
+    *kernels.DIRECTIONAL_ROW_KERNELS,
+    *hierarchy.TREE_KERNELS,
+    *nearfield.NEAR_FIELD_KERNELS,
+    *relight.RELIGHT_KERNELS,
+    *topology.CLEANING_KERNELS,
+    *measure.CLEANING_KERNELS,
 )
 
-NOTICE = "compiling the solver's kernels (first run only, about 30-90 s) ..."
+NOTICE = "compiling the solver's kernels (first run only, a minute or two) ..."
 
 
 @contextlib.contextmanager
@@ -120,9 +96,7 @@ def _is_cached(dispatcher) -> bool:
 def cold_kernels() -> list[str]:
     """Names of the main job's kernels that numba's cache holds no compiled version of (all of them
     when the cache cannot be read)."""
-    import importlib
-
-    return [name for module, name in MAIN_JOB_KERNELS if not _is_cached(getattr(importlib.import_module(module), name))]
+    return [kernel.py_func.__qualname__ for kernel in MAIN_JOB_KERNELS if not _is_cached(kernel)]
 
 
 def _plane(n: int = 24, spacing: float = 1.0):
@@ -138,15 +112,16 @@ def _plane(n: int = 24, spacing: float = 1.0):
 
 
 def warm_up(force: bool = False) -> float:
-    """Compile the kernels the main job and the viewer use (the cleaning of a small plane, a ``tree`` solve of
+    """Compile the kernels the main job and the viewer use (the cleaning of a small plane, a ``tree`` shade of
     it in marble, and one with ``relight``); returns the seconds it took (0 when every kernel was already
     cached and ``force`` is false)."""
     if not force and not cold_kernels():
         return 0.0
-    from ..geometry import measure, proximity, topology
-    from .materials import material
-    from .names import DEFAULT_METHOD, DEFAULT_TOL, VIEWER_METHOD, VIEWER_TOL
-    from .solve import SurfaceGeometry, solve
+    from ..geometry import proximity
+    from ..geometry.mesh import TriangleMesh
+    from ..scatter.lights import DirectionalLight
+    from .shading.scene import Scene
+    from .shading.settings import VIEWER_METHOD, VIEWER_TOL, ShadeSettings
 
     start = time.perf_counter()
     points, triangles, normals = _plane()
@@ -164,19 +139,16 @@ def warm_up(force: bool = False) -> float:
     measure.hull_candidates(np.random.default_rng(0).normal(size=(4 * measure.CULL_DIRECTIONS + 1, 3)))
     # and the mapping of a scan onto its proxy (the viewer's screenshot)
     proximity.closest_points_on_triangles(points + 0.1 * normals, points, triangles)
-    medium = material("marble").medium()
-    phi = np.ones((points.shape[0], medium.n_channels))
-    phi[::5] = 0.0  # unlit vertices too, as under shadows
-    w12 = np.tile([0.0, 0.0, -1.0], (points.shape[0], 1))
-    surface = SurfaceGeometry(points, triangles, normals)
-    solve(surface, phi, w12, medium, method=DEFAULT_METHOD, tol=DEFAULT_TOL)
-    solve(surface, phi, w12, medium, method=VIEWER_METHOD, tol=VIEWER_TOL)
+    scene = Scene(TriangleMesh(points, triangles), shadows=False, up="+z")
+    light = DirectionalLight((0.3, 0.2, 1.0), 1.0)
+    for method, tol in (("tree", 1e-2), (VIEWER_METHOD, VIEWER_TOL)):
+        scene.shade_with(ShadeSettings(method=method, tol=tol, bounces=0, resolution="full", up="+z"), light)
     return time.perf_counter() - start
 
 
 def main(argv: list[str] | None = None) -> int:
-    """``python -m translucency.scatter.warmup [--force]``: compile the main job's kernels once."""
-    parser = argparse.ArgumentParser(prog="python -m translucency.scatter.warmup", description=main.__doc__)
+    """``python -m translucency.app.warmup [--force]``: compile the main job's kernels once."""
+    parser = argparse.ArgumentParser(prog="python -m translucency.app.warmup", description=main.__doc__)
     parser.add_argument("--force", action="store_true", help="solve the warm-up surface even when the cache is warm")
     args = parser.parse_args(argv)
     with compile_notice(lambda: print(NOTICE, flush=True)):
