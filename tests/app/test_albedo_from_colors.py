@@ -40,9 +40,9 @@ def test_colours_change_the_light_where_they_change():
     from translucency.scatter.lights import DirectionalLight
 
     scene = Scene(mesh, shadows=False, up="+z")
-    plain = scene.shade_with(ShadeSettings("marble", method="exact", up="+z"), DirectionalLight(light, 1.0))
+    plain = scene.shade_with(ShadeSettings(material="marble", method="exact", up="+z"), DirectionalLight(light, 1.0))
     coloured = scene.shade_with(
-        ShadeSettings("marble", method="exact", up="+z", albedo="vertex_colors"), DirectionalLight(light, 1.0)
+        ShadeSettings(material="marble", method="exact", up="+z", albedo="vertex_colors"), DirectionalLight(light, 1.0)
     )
     red = mesh.points[:, 0] < -5.0
     blue = mesh.points[:, 0] > 5.0

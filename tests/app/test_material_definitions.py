@@ -55,7 +55,7 @@ def test_four_ways_to_give_a_material_give_the_same_coefficients_and_B(tmp_path)
         np.testing.assert_allclose(medium.sigma_a, marble.sigma_a, rtol=1e-9, atol=1e-12)
         np.testing.assert_allclose(medium.sigma_s, marble.sigma_s, rtol=1e-9)
         assert medium.eta == marble.eta
-        results.append(scene.shade_with(ShadeSettings(medium, bounces=0, time_limit=None)).B)
+        results.append(scene.shade_with(ShadeSettings(material=medium, bounces=0, time_limit=None)).B)
     for B in results[1:]:
         np.testing.assert_allclose(B, results[0], rtol=1e-7, atol=1e-12 * results[0].max())
 
@@ -63,13 +63,13 @@ def test_four_ways_to_give_a_material_give_the_same_coefficients_and_B(tmp_path)
 def test_a_json_file_and_a_python_mapping_are_the_same_definition(tmp_path):
     definition = {"name": "jade", "reflectance": [0.55, 0.8, 0.5], "mfp": [1.5, 2.0, 1.2], "eta": 1.6, "scale": 2}
     (tmp_path / "jade.json").write_text(json.dumps(definition))
-    from_file = ShadeSettings(str(tmp_path / "jade.json")).material
-    from_mapping = ShadeSettings(definition).material
+    from_file = ShadeSettings(material=str(tmp_path / "jade.json")).material
+    from_mapping = ShadeSettings(material=definition).material
     assert from_file.name == from_mapping.name == "jade"
     np.testing.assert_array_equal(from_file.sigma_a, from_mapping.sigma_a)
     _, path = appearance_of(from_file)
     np.testing.assert_allclose(path, np.array([1.5, 2.0, 1.2]) / 2)  # scale 2: coefficients doubled
-    assert ShadeSettings(str(tmp_path / "jade.json")).metadata([], "full")["material"] == "jade"
+    assert ShadeSettings(material=str(tmp_path / "jade.json")).metadata([], "full")["material"] == "jade"
 
 
 @pytest.mark.parametrize(
@@ -104,13 +104,13 @@ def test_inline_mistakes_are_one_sentence(argv, words):
 def test_material_file_mistakes_name_the_file(tmp_path, name, text, words):
     (tmp_path / name).write_text(text)
     with pytest.raises(InvalidParameterError, match=words) as info:
-        ShadeSettings(str(tmp_path / name))
+        ShadeSettings(material=str(tmp_path / name))
     assert name in str(info.value)
 
 
 def test_a_missing_material_file_says_so(tmp_path):
     with pytest.raises(InvalidParameterError, match="does not exist"):
-        ShadeSettings(str(tmp_path / "nowhere.toml"))
+        ShadeSettings(material=str(tmp_path / "nowhere.toml"))
 
 
 def test_compare_refuses_inline_numbers_in_a_sentence(capsys):
@@ -182,10 +182,10 @@ def test_own_materials_are_found_by_name_after_the_catalogue_and_listed(tmp_path
     monkeypatch.setenv("TRANSLUCENCY_MATERIALS", str(tmp_path))
     (tmp_path / "Green Jade.toml").write_text("reflectance = [0.55, 0.8, 0.5]\nmfp = [1.5, 2.0, 1.2]\neta = 1.6\n")
     (tmp_path / "marble.json").write_text('{"material": "ketchup"}')  # the catalogue's marble comes first
-    assert ShadeSettings("green_jade").material.name == "Green Jade"
-    assert ShadeSettings("marble").material.sigma_a.tolist() == material("marble").medium().sigma_a.tolist()
+    assert ShadeSettings(material="green_jade").material.name == "Green Jade"
+    assert ShadeSettings(material="marble").material.sigma_a.tolist() == material("marble").medium().sigma_a.tolist()
     with pytest.raises(UnknownMaterialError, match=f"go in {tmp_path} as NAME.toml"):
-        ShadeSettings("red_jade")
+        ShadeSettings(material="red_jade")
     assert cli.main(["materials"]) == 0
     assert "Green Jade" in capsys.readouterr().out
 
@@ -198,10 +198,13 @@ def test_without_the_folder_the_listing_says_where_own_materials_go(tmp_path, mo
 
 def test_the_metadata_holds_a_definition_that_gives_the_material_back(tmp_path):
     """What a bake records is enough to write the material down again (coefficients) and says its look."""
-    settings = ShadeSettings({"name": "jade", "reflectance": [0.55, 0.8, 0.5], "mfp": [1.5, 2.0, 1.2], "eta": 1.6})
+    settings = ShadeSettings(
+        material={"name": "jade", "reflectance": [0.55, 0.8, 0.5], "mfp": [1.5, 2.0, 1.2], "eta": 1.6}
+    )
     recorded = json.loads(json.dumps(settings.metadata([], "full")))["coefficients"]
     again = ShadeSettings(
-        {k: recorded[f"{k}_per_mm"] for k in ("sigma_a", "sigma_s")} | {"g": recorded["g"], "eta": recorded["eta"]}
+        material={k: recorded[f"{k}_per_mm"] for k in ("sigma_a", "sigma_s")}
+        | {"g": recorded["g"], "eta": recorded["eta"]}
     ).material
     np.testing.assert_allclose(again.sigma_a, settings.material.sigma_a, rtol=1e-15)
     np.testing.assert_allclose(recorded["diffuse_reflectance"], [0.55, 0.8, 0.5], rtol=1e-9)

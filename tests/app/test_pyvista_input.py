@@ -32,7 +32,7 @@ def test_scene_shade_scan_compare_and_viewer_state_take_a_polydata():
     poly = _sphere_m()
     scene = tl.Scene(poly, unit="m")
     assert scene.mesh.extent == pytest.approx(20.0, rel=1e-3)
-    scanned = tl.shade_scan(poly, tl.ShadeSettings("marble"), unit="m")
+    scanned = tl.shade_scan(poly, tl.ShadeSettings(material="marble"), unit="m")
     np.testing.assert_allclose(scanned.B, scene.shade("marble").B, rtol=1e-12)
     comparison = tl.compare(poly, ["marble", "ketchup"], unit="m")
     assert comparison.mean("ketchup", "directional").shape == (3,)

@@ -73,7 +73,7 @@ _CRASHED = (
 )
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class BakeSettings(ShadeSettings):
     """Everything a bake needs besides the file names: the shading settings, the lights and the files'
     unit; validated on construction.

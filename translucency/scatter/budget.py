@@ -257,19 +257,19 @@ def estimate(
     seconds = solve_seconds(counts)
     fits = (budget_bytes is None or peak <= budget_bytes) and (time_limit is None or seconds <= time_limit)
     return SolveEstimate(
-        base,
-        far,
-        lists,
-        per_receiver,
-        bool(keep_lists),
-        max(1, block),
-        block_bytes,
-        counts.own_points,
-        peak,
-        seconds,
-        budget_bytes,
-        time_limit,
-        bool(fits),
+        base_bytes=base,
+        far_bytes=far,
+        lists_bytes=lists,
+        receiver_bytes=per_receiver,
+        keep_lists=bool(keep_lists),
+        block_receivers=max(1, block),
+        block_bytes=block_bytes,
+        own_points=counts.own_points,
+        peak_bytes=peak,
+        seconds=seconds,
+        budget_bytes=budget_bytes,
+        time_limit=time_limit,
+        fits=bool(fits),
     )
 
 

@@ -714,7 +714,21 @@ def relight_plan(size: float, counts: dict, memory_limit, time_limit) -> budget.
     seconds = (counts["far_entries"] * FAR_ENTRY_SECONDS + counts["near_entries"] * NEAR_ENTRY_SECONDS) / threads
     budget_bytes = budget.memory_budget(memory_limit, budget.available_memory(), budget.resident_memory())
     fits = (budget_bytes is None or size <= budget_bytes) and (time_limit is None or seconds <= time_limit)
-    return budget.SolveEstimate(0.0, size, 0.0, 0.0, True, 0, 0.0, 0.0, size, seconds, budget_bytes, time_limit, fits)
+    return budget.SolveEstimate(
+        base_bytes=0.0,
+        far_bytes=size,
+        lists_bytes=0.0,
+        receiver_bytes=0.0,
+        keep_lists=True,
+        block_receivers=0,
+        block_bytes=0.0,
+        own_points=0.0,
+        peak_bytes=size,
+        seconds=seconds,
+        budget_bytes=budget_bytes,
+        time_limit=time_limit,
+        fits=fits,
+    )
 
 
 def size_floor_plan(geometry: SurfaceGeometry, n_channels: int, method: str, memory_limit, time_limit):

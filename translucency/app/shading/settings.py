@@ -19,7 +19,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import numbers
-from dataclasses import dataclass
+from dataclasses import KW_ONLY, dataclass
 from pathlib import Path
 
 import numpy as np
@@ -118,7 +118,8 @@ def parse_resolution(value):
 @dataclass(frozen=True)
 class ShadeSettings:
     """Every setting of a solve, validated on construction and built by keyword; the fields, their units and
-    defaults are written once, in their declarations, and listed below. ``material`` is stored as a
+    defaults are written once, in their declarations, and listed below; every field but the material is given by
+    name. ``material`` is stored as a
     :class:`~translucency.scatter.medium.Medium`, ``up`` as ``"+x"`` ... ``"-z"`` or ``"auto"``."""
 
     material: object = _setting(
@@ -127,6 +128,7 @@ class ShadeSettings:
         "catalogue name (see 'translucency materials'), a material file (.toml or .json), a catalogue entry or "
         "a Medium",
     )
+    _: KW_ONLY  # the material may be given by position, every other field by name
     model: str = _setting(
         DEFAULT_MODEL, "--", "scattering model: directional (FHK14), standard (Jensen 2001) or better (d'Eon 2012)"
     )
