@@ -214,3 +214,26 @@ def test_a_proxy_s_light_shadows_no_vertex_under_the_proxy():
     facing = reference.phi_rgb[:, 0] > 0.2 * reference.phi_rgb[:, 0].max()  # the relief shadows grazing light only
     assert facing.sum() > 500
     np.testing.assert_array_equal(light.phi_rgb[facing], reference.phi_rgb[facing])
+
+
+def test_a_proxy_the_budget_forces_is_solved_at_the_tolerance_asked_for(monkeypatch):
+    """Only a proxy that resolution "auto" chose holds its far field to the default tolerance (it spends the
+    tolerance on its own error); one the budget forced, after "auto" kept every vertex, is solved at the ``tol``
+    asked for."""
+    from translucency.scatter import transport
+
+    points, triangles = icosphere(5, 20.0)  # 0.75 mm edges: "auto" at 0.3 keeps every vertex in marble
+    mesh = TriangleMesh(points, triangles)
+    scene = Scene(mesh, shadows=False)
+    full = scene.shade("marble", tol=0.3, bounces=0, time_limit=None)
+    assert full.stats["solver_vertices"] == mesh.n_points
+    tols = []
+    carry = transport.transport
+    monkeypatch.setattr(
+        transport,
+        "transport",
+        lambda g, light, m, options, **k: tols.append(options.tol) or carry(g, light, m, options, **k),
+    )
+    limit = 0.3 * full.stats["solver"]["budget"]["seconds"]
+    result = scene.shade("marble", tol=0.3, bounces=0, time_limit=limit, warn=lambda line: None)
+    assert result.stats["solver_vertices"] < mesh.n_points and len(tols) > 1 and set(tols) == {0.3}

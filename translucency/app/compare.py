@@ -71,7 +71,7 @@ from .render import (
     default_camera_direction,
 )
 from .shading.scan import mesh_for_shading
-from .shading.scene import scene_for
+from .shading.scene import Scene, scene_for
 from .shading.settings import DEFAULT_MATERIAL, ShadeSettings, resolve_medium, settings_with
 
 __all__ = [
@@ -214,7 +214,7 @@ def visible_shadow_fraction(mesh, lights=None, camera_direction=None, up="auto")
     from ..scatter.lights import DirectionalLight
 
     up_axis = resolve_up(up, mesh.points, mesh.triangles)
-    scene = scene_for(mesh, ShadeSettings(up=up_axis))
+    scene = Scene(mesh, up=up_axis)
     lights = lights if lights is not None else DirectionalLight(compare_light_direction(up_axis), 1.0)
     camera_direction = default_camera_direction(up_axis) if camera_direction is None else camera_direction
     low, high = mesh.points.min(axis=0), mesh.points.max(axis=0)
@@ -451,7 +451,7 @@ def compare(
 
         prepare_output_folder(output)
     # every solver setting checked once, before the scan is loaded; each cell changes material and model
-    settings = settings_with(settings, **changes).replace(material=media[materials[0]], model=models[0])
+    settings = settings_with(settings, **{**changes, "material": media[materials[0]], "model": models[0]})
     width, height = _cell_size(cell_size)
     mesh = _scan(mesh, unit)
     scene = scene_for(mesh, settings)

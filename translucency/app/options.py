@@ -329,7 +329,7 @@ def solver_settings(args, **changes):
     """The :class:`~translucency.app.shading.settings.ShadeSettings` the options describe (``changes`` replace
     fields before the check, e.g. ``resolution="full"``); a bad value is a sentence naming its flag."""
     from ..errors import command_line_spelling
-    from .shading.settings import DEFAULT_TIME_LIMIT_S, ShadeSettings
+    from .shading.settings import ShadeSettings
 
     custom = inline_material(args)
     fields = {
@@ -344,8 +344,9 @@ def solver_settings(args, **changes):
         "albedo": "vertex_colors" if getattr(args, "albedo_from_colors", False) else "material",
         "exposure": args.exposure,
         "memory_limit": args.memory_limit,
-        "time_limit": DEFAULT_TIME_LIMIT_S if args.time_limit is None else args.time_limit,
         "up": getattr(args, "up", "auto"),
     }
+    if args.time_limit is not None:  # else the record's own default
+        fields["time_limit"] = args.time_limit
     with command_line_spelling():
         return ShadeSettings(**{**fields, **changes})

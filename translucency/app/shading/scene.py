@@ -155,7 +155,7 @@ class Scene:
             )
         if material is not None:
             changes["material"] = material
-        settings = settings_with(settings, **changes).replace(shadows=self.shadows, up=self.up_requested)
+        settings = settings_with(settings, **changes, shadows=self.shadows, up=self.up_requested)
         return self.shade_with(settings, lights, progress=progress, warn=warn)
 
     def shade_with(
@@ -205,7 +205,14 @@ class Scene:
             timings["geometry"] += time.perf_counter() - start
             try:
                 solved = self._attempt(
-                    settings, lights, attempt, solver_mesh, decimation, edge, geometry, progress, solver, timings
+                    settings,
+                    lights,
+                    attempt,
+                    resolution,
+                    (solver_mesh, decimation, edge, geometry),
+                    progress,
+                    solver,
+                    timings,
                 )
             except BudgetError as exc:
                 reason = reason or budget_phrase(exc.estimate)  # of the resolution asked for
@@ -226,17 +233,16 @@ class Scene:
             return solved
         raise AssertionError("unreachable: coarser_edge raises when the attempts are spent")
 
-    def _attempt(
-        self, settings, lights, attempt, solver_mesh, decimation, edge, geometry, progress, solver, timings
-    ) -> Solved:
-        """One solve on ``solver_mesh``: checked against the budget before the light is traced, then the light and
-        the solver's transport; a :class:`~translucency.errors.BudgetError` when over a budget."""
+    def _attempt(self, settings, lights, attempt, resolution, solver_surface, progress, solver, timings) -> Solved:
+        """One solve on the solver surface of ``resolution`` (``(mesh, decimation, edge, geometry)``), checked
+        against the budget before the light is traced, then the light and the solver's transport; a
+        :class:`~translucency.errors.BudgetError` when over a budget."""
+        solver_mesh, decimation, edge, geometry = solver_surface
         medium = settings.material
         reflectance = scan_reflectance(solver_mesh) if settings.albedo == "vertex_colors" else None
-        # a proxy "auto" chose spends the tolerance on its own error: its far field is held to the default
-        solve_tol = (
-            min(settings.tol, DEFAULT_TOL) if decimation is not None and settings.resolution == "auto" else settings.tol
-        )
+        # a proxy "auto" chose spends the tolerance on its own error: its far field is held to the default (a proxy
+        # the budget forced is solved at the tolerance asked for)
+        solve_tol = min(settings.tol, DEFAULT_TOL) if decimation is not None and resolution == "auto" else settings.tol
         options = transport.TransportOptions(
             model=settings.model,
             method=settings.method,

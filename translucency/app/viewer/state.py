@@ -194,9 +194,9 @@ class ViewerState:
         # every setting checked once, before the scan is loaded ("interactive" is the viewer's own resolution)
         if material is not None:
             changes["material"] = material
-        settings = settings_with(viewer_settings() if settings is None else settings, **changes)
         if resolution != "interactive":
-            settings = settings.replace(resolution=resolution)
+            changes["resolution"] = resolution
+        settings = settings_with(viewer_settings() if settings is None else settings, **changes)
         model, method, tol = settings.model, settings.method, settings.tol
         per_direction, shadows, exposure = settings.per_direction, settings.shadows, settings.exposure
         if mesh is None:
