@@ -243,7 +243,13 @@ def add_solver_options(parser: argparse.ArgumentParser) -> None:
     )
     group.add_argument("--exposure", type=float, default=None, help=HELP["exposure"])
     group.add_argument("--memory-limit", type=float, default=None, metavar="GB", help=HELP["memory_limit"])
-    group.add_argument("--time-limit", type=float, default=None, metavar="S", help=HELP["time_limit"])
+    group.add_argument(
+        "--time-limit",
+        type=float,
+        default=None,
+        metavar="S",
+        help=f"{HELP['time_limit']} (default {default['time_limit'].default:g})",
+    )
 
 
 def whole_number(text: str):

@@ -76,10 +76,11 @@ RESOLUTIONS = ("full", "auto")
 ALBEDO_SOURCES = ("material", "vertex_colors")
 
 
-def _setting(default, unit: str, help: str):
+def _setting(default, unit: str, help: str, flag: str | None = None):
     """A field of :class:`ShadeSettings`: its default, its unit and its help text (``%%`` for a per cent
-    sign, as argparse reads it), declared once."""
-    return dataclasses.field(default=default, metadata={"unit": unit, "help": help})
+    sign, as argparse reads it), declared once; ``flag`` is the command line's help where its option reads
+    otherwise (a flag that switches the setting, or values only Python can pass left out)."""
+    return dataclasses.field(default=default, metadata={"unit": unit, "help": help, "flag": flag or help})
 
 
 def default_light_direction(up: str = "+y") -> np.ndarray:
@@ -127,6 +128,7 @@ class ShadeSettings:
         "1/mm",
         "catalogue name (see 'translucency materials'), a material file (.toml or .json), a catalogue entry or "
         "a Medium",
+        flag="catalogue name (see 'translucency materials') or a material file, .toml or .json",
     )
     _: KW_ONLY  # the material may be given by position, every other field by name
     model: str = _setting(
@@ -151,7 +153,12 @@ class ShadeSettings:
         "the diffusion length, is within the tolerance; at the default tolerance that is every vertex of any "
         "scan measured), full (every vertex), or a proxy edge length in mm",
     )
-    shadows: bool = _setting(True, "--", "Embree shadow rays (off, --no-shadows: every front-facing vertex is lit)")
+    shadows: bool = _setting(
+        True,
+        "--",
+        "Embree shadow rays (off: every front-facing vertex is lit)",
+        flag="no shadow rays: every front-facing vertex is lit",
+    )
     per_direction: bool = _setting(
         False, "--", "solve each light sample with its own refracted direction (exact for several lights)"
     )
@@ -165,8 +172,10 @@ class ShadeSettings:
     time_limit: object = _setting(
         DEFAULT_TIME_LIMIT_S,
         "s",
-        "seconds a solve may take by its estimate (None in Python: no limit); over it the solve runs on a "
-        "coarser proxy or stops with a message",
+        "seconds a solve may take by its estimate (None: no limit); over it the solve runs on a coarser proxy or "
+        "stops with a message",
+        flag="seconds a solve may take by its estimate; over it the solve runs on a coarser proxy or stops with a "
+        "message",
     )
     up: str = _setting("auto", "--", "the scan's up axis, x, y, z, -x, -y, -z, or auto (inferred from the shape)")
     bounces: int = _setting(
@@ -179,9 +188,10 @@ class ShadeSettings:
     albedo: str = _setting(
         "material",
         "--",
-        "material, or vertex_colors (--albedo-from-colors): the scan's colours (per vertex, or its texture "
-        "sampled at the vertices) as the diffuse reflectance, with the material's mean free path, g and eta "
-        "(docs/physics.md 6.5)",
+        "material, or vertex_colors: the scan's colours (per vertex, or its texture sampled at the vertices) as "
+        "the diffuse reflectance, with the material's mean free path, g and eta (docs/physics.md 6.5)",
+        flag="the scan's colours (per vertex, or its texture sampled at the vertices) as the diffuse reflectance, "
+        "with the material's mean free path, g and eta (docs/physics.md 6.5)",
     )
 
     def __post_init__(self):
@@ -248,7 +258,7 @@ def viewer_settings() -> ShadeSettings:
 #: The fields of :class:`ShadeSettings` by name.
 FIELDS = {field.name: field for field in dataclasses.fields(ShadeSettings)}
 #: Help text of each field, as the command line's ``--help`` gives it (argparse's ``%%`` for a per cent sign).
-HELP = {name: field.metadata["help"] for name, field in FIELDS.items()}
+HELP = {name: field.metadata["flag"] for name, field in FIELDS.items()}
 
 
 def settings_with(settings: ShadeSettings | None = None, **changes) -> ShadeSettings:
