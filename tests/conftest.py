@@ -27,3 +27,20 @@ def shared_meshes():
     if not MESHES.is_dir():
         pytest.skip("the shared scans (../shared/meshes) are not present")
     return MESHES
+
+
+@pytest.fixture
+def fifo(tmp_path):
+    """A function that makes a FIFO (named pipe) in the test's folder and returns its path; skips where the
+    system has none. Opening one for reading waits for a writer: what every reader must refuse before opening."""
+    import os
+
+    if not hasattr(os, "mkfifo"):
+        pytest.skip("no FIFOs on this system")
+
+    def make(name):
+        path = tmp_path / name
+        os.mkfifo(path)
+        return path
+
+    return make

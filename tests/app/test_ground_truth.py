@@ -5,7 +5,7 @@ import pytest
 
 from translucency.app import cli
 from translucency.app.ground_truth import trace_reference, write_reference
-from translucency.errors import InvalidParameterError
+from translucency.errors import InvalidParameterError, MeshError
 from translucency.geometry.mesh import TriangleMesh
 from translucency.geometry.synthetic import icosphere
 from translucency.io.reference_file import REFERENCE_ARRAYS, read_reference_file
@@ -63,3 +63,53 @@ def test_bad_input_is_one_sentence(sphere_file, tmp_path, capsys):
     np.savez(tmp_path / "other.npz", a=np.zeros(3))
     with pytest.raises(InvalidParameterError, match="not a reference file"):
         read_reference_file(tmp_path / "other.npz")
+
+
+def _reference_arrays(n=4):
+    points = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]], dtype=float)[:n]
+    radiance = np.full((n, 3), 0.1)
+    return {
+        "points": points,
+        "triangles": np.array([[0, 1, 2], [1, 3, 2]])[: max(0, n - 2)],
+        "normals": np.tile([0.0, 0.0, 1.0], (n, 1)),
+        "radiance": radiance,
+        "radiance_stderr": radiance / 10,
+        "radiance_reentered": radiance / 100,
+        "metadata": np.array("{}"),
+    }
+
+
+@pytest.mark.parametrize(
+    "change, words",
+    [
+        ({"radiance": np.full((4, 3), np.inf)}, "radiance has infinite, NaN or negative values"),
+        ({"radiance": np.full((4, 3), -1.0)}, "radiance has infinite, NaN or negative values"),
+        ({"radiance": np.full((4, 3), np.nan)}, "no vertex was traced"),
+        ({"radiance_stderr": np.full((3, 3), 0.1)}, r"radiance_stderr has shape \(3, 3\), not \(4, 3\)"),
+        ({"triangles": np.array([[0, 1, 7]])}, "triangles are not an"),
+        ({"metadata": np.array("not json")}, "settings .metadata. are not a JSON table"),
+        ({"metadata": np.array("[1, 2]")}, "settings .metadata. are not a JSON table"),
+    ],
+)
+def test_a_corrupt_reference_is_refused_in_one_sentence(tmp_path, change, words):
+    """Corrupt references are refused when read (they used to be compared with exit 0): infinite, negative or
+    never-traced radiance, arrays whose rows disagree with the mesh, settings that are not JSON."""
+    np.savez(tmp_path / "bad.npz", **{**_reference_arrays(), **change})
+    with pytest.raises(MeshError, match=words) as caught:
+        read_reference_file(tmp_path / "bad.npz")
+    assert "make the reference again" in str(caught.value)
+
+
+@pytest.mark.parametrize("content", [b"", b"PK\x03\x04 truncated", bytes(range(256)) * 4])
+def test_an_npz_that_is_not_an_archive_is_one_sentence_without_library_text(tmp_path, content):
+    (tmp_path / "r.npz").write_bytes(content)
+    with pytest.raises(MeshError) as caught:
+        read_reference_file(tmp_path / "r.npz")
+    text = str(caught.value)
+    assert "not an .npz archive of arrays" in text
+    assert "pickle" not in text and "allow_pickle" not in text and "Error" not in text
+
+
+def test_a_reference_that_is_a_fifo_is_refused_without_opening_it(fifo):
+    with pytest.raises(InvalidParameterError, match=r"is a FIFO \(named pipe\), not a regular file"):
+        read_reference_file(fifo("r.npz"))

@@ -94,3 +94,25 @@ def test_display_images_and_bad_arrays_are_rejected(tmp_path):
         read_equirectangular(tmp_path / "cube.npy")
     with pytest.raises(EnvironmentMapError, match="scale"):
         load_environment(tmp_path / "negative.npy", scale=-1.0)
+
+
+def test_a_header_that_claims_too_many_pixels_is_refused_before_decoding(tmp_path):
+    """A decompression bomb: a few bytes whose header claims 1e10 pixels (600 GB decoded) would abort the process
+    inside the reader; it is refused from the header, in one sentence naming the size."""
+    (tmp_path / "bomb.hdr").write_bytes(b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 100000 +X 100000\n" + bytes(64))
+    with pytest.raises(EnvironmentMapError, match=r"claims 100000 x 100000 pixels, 600\.0 GB to decode.*resample"):
+        read_equirectangular(tmp_path / "bomb.hdr")
+    with open(tmp_path / "bomb.npy", "wb") as stream:  # a NumPy header claiming 2**30 pixels, and 16 bytes of data
+        np.lib.format.write_array_header_1_0(
+            stream, {"descr": "<f4", "fortran_order": False, "shape": (32768, 32768, 3)}
+        )
+        stream.write(bytes(16))
+    with pytest.raises(EnvironmentMapError, match=r"claims 32768 x 32768 pixels"):
+        read_equirectangular(tmp_path / "bomb.npy")
+
+
+def test_a_fifo_or_a_folder_is_refused_without_opening_it(tmp_path, fifo):
+    with pytest.raises(EnvironmentMapError, match=r"is a FIFO \(named pipe\), not a regular file; pass an image file"):
+        read_equirectangular(fifo("sky.hdr"))
+    with pytest.raises(EnvironmentMapError, match="is a directory, not an image file"):
+        read_equirectangular(tmp_path)

@@ -4,6 +4,7 @@ refusal before the work, and progress during the solve."""
 import numpy as np
 import pytest
 
+from translucency import memory
 from translucency.errors import BudgetError, InvalidParameterError
 from translucency.geometry.measure import vertex_normals
 from translucency.geometry.synthetic import icosphere
@@ -113,7 +114,7 @@ def test_receivers_in_blocks_give_the_same_result_to_the_bit(monkeypatch):
     # an available memory that leaves room for a few blocks but not for every list
     room = plan["base_bytes"] + plan["far_bytes"] + 0.1 * plan["lists_bytes"] + 64 * plan["receiver_bytes"]
     available = (room + budget.HEADROOM_BYTES) / (1 - budget.HEADROOM_FRACTION) + budget.HEADROOM_BYTES
-    monkeypatch.setattr(budget, "available_memory", lambda: room + budget.HEADROOM_BYTES)
+    monkeypatch.setattr(memory, "available_memory", lambda: room + budget.HEADROOM_BYTES)
     calls = []
     blocked = solve.solve(
         solve.SurfaceGeometry(geometry.points, geometry.triangles, geometry.normals),
@@ -206,8 +207,8 @@ def test_the_budget_is_the_memory_free_before_the_solve_allocates(monkeypatch):
         return ordered_work(*args, **kwargs)
 
     monkeypatch.setattr(solve, "_ordered_work", allocating)
-    monkeypatch.setattr(budget, "available_memory", lambda: free["bytes"])
-    monkeypatch.setattr(budget, "resident_memory", lambda: 1e9)
+    monkeypatch.setattr(memory, "available_memory", lambda: free["bytes"])
+    monkeypatch.setattr(memory, "resident_memory", lambda: 1e9)
     solution = solve.solve(geometry, phi, w12, medium, method="tree", tol=0.01)
     assert solution.stats["budget"]["budget_bytes"] == budget.memory_budget(None, 8e9, 1e9)
 
@@ -217,8 +218,8 @@ def test_a_solve_after_its_plan_has_the_budget_of_the_first(monkeypatch):
     the solve's plan counts them again: the budget is measured as if they were not held, the same as the first."""
     geometry, phi, w12, medium = _scene(4, 20.0)
     # the operating system's view: what the geometry's ordered copy and tree hold is resident, no longer available
-    monkeypatch.setattr(budget, "available_memory", lambda: 8e9 - geometry.ordered_bytes())
-    monkeypatch.setattr(budget, "resident_memory", lambda: 1e9 + geometry.ordered_bytes())
+    monkeypatch.setattr(memory, "available_memory", lambda: 8e9 - geometry.ordered_bytes())
+    monkeypatch.setattr(memory, "resident_memory", lambda: 1e9 + geometry.ordered_bytes())
     first = solve.plan(geometry, phi, w12, medium, method="tree", tol=0.01, memory_limit=4.0)
     assert geometry.ordered_bytes() > 1e5  # its ordered copy and tree are held now
     after = solve.solve(geometry, phi, w12, medium, method="tree", tol=0.01, memory_limit=4.0).stats["budget"]
@@ -237,8 +238,8 @@ def test_a_second_solve_has_the_budget_of_the_first(monkeypatch):
     tracemalloc.start()
     try:
         start = tracemalloc.get_traced_memory()[0]
-        monkeypatch.setattr(budget, "available_memory", lambda: 8e9 - (tracemalloc.get_traced_memory()[0] - start))
-        monkeypatch.setattr(budget, "resident_memory", lambda: 1e9 + (tracemalloc.get_traced_memory()[0] - start))
+        monkeypatch.setattr(memory, "available_memory", lambda: 8e9 - (tracemalloc.get_traced_memory()[0] - start))
+        monkeypatch.setattr(memory, "resident_memory", lambda: 1e9 + (tracemalloc.get_traced_memory()[0] - start))
         first = solve.solve(geometry, phi, w12, medium, method="tree", tol=0.01, memory_limit=4.0).stats["budget"]
         gc.collect()
         held = tracemalloc.get_traced_memory()[0] - start

@@ -414,7 +414,7 @@ def cmd_compare(args) -> int:
             rgb = "  ".join  # fixed-width columns, three significant digits in scientific notation
             print(
                 f"  {material:<{width}}  {model:<11}  lit ({n_lit}): "
-                + rgb(f"{c} {v:.2e}" for c, v in zip("RGB", lit))
+                + (rgb(f"{c} {v:.2e}" for c, v in zip("RGB", lit)) if n_lit else "no vertex is lit")
                 + ";  all: "
                 + rgb(f"{c} {v:.2e}" for c, v in zip("RGB", every))
             )
@@ -440,26 +440,22 @@ def _print_reference_tables(result) -> None:
         print(line)
 
 
-def _duration(seconds: float) -> str:
-    """``"40 s"``, ``"12 min"`` or ``"2.5 h"``."""
-    if seconds < 90:
-        return f"{seconds:.0f} s"
-    return f"{seconds / 60:.0f} min" if seconds < 5400 else f"{seconds / 3600:.1f} h"
-
-
 def cmd_reference(args) -> int:
     """Path-trace the radiance along the normal at every vertex of a scan and write it with its mesh."""
     from pathlib import Path
 
     from ..io.atomic import prepare_output_file
     from ..io.reference_file import REFERENCE_SUFFIXES
-    from ..reference.pathtrace import check_spp
+    from ..reference.trace_settings import check_seed, check_spp
+    from ..scatter.budget import check_limits, format_seconds
     from .ground_truth import trace_reference, write_reference
     from .options import parse_vector, quiet
     from .progress import REFERENCE_PROGRESS_SECONDS, throttled_lines
     from .shading.scan import load_scan
 
     spp = check_spp(args.spp)
+    check_seed(args.seed)
+    check_limits(None, args.time_limit)
     output = Path(args.output)
     if output.suffix.lower() not in REFERENCE_SUFFIXES:
         raise InvalidParameterError(f"-o must name a .npz or .vtp file, got {args.output!r}.")
@@ -474,6 +470,7 @@ def cmd_reference(args) -> int:
         spp=spp,
         seed=args.seed,
         up=args.up,
+        time_limit=args.time_limit,
         progress=None if quiet(args) else throttled_lines(REFERENCE_PROGRESS_SECONDS, f"{Path(name).name}: tracing: "),
     )
     written = write_reference(truth, output)
@@ -481,7 +478,7 @@ def cmd_reference(args) -> int:
     print(
         f"traced {meta['stats']['paths']:,} paths in {meta['seconds']:.1f} s; median standard error "
         f"{100 * meta['median_relative_stderr']:.1f} % of the radiance per vertex; half that takes --spp "
-        f"{4 * spp}, about {_duration(4 * meta['seconds'])}"
+        f"{4 * spp}, about {format_seconds(4 * meta['seconds'])}"
     )
     print(f"wrote {written}")
     return 0
@@ -573,6 +570,49 @@ def _add_view_and_compare_parsers(sub) -> None:
     p.set_defaults(func=cmd_compare)
 
 
+def _add_reference_parser(sub) -> None:
+    """The ``reference`` subcommand: a scan, a material and a light, the paths per vertex and their budget."""
+    from .ground_truth import DEFAULT_SPP, REFERENCE_TIME_LIMIT_S
+    from .options import add_quiet_option, add_scan_options
+
+    p = sub.add_parser(
+        "reference",
+        help="path-trace the radiance at every vertex: the ground truth the models are measured against",
+        description="Unbiased Monte Carlo light transport in the closed scan (smooth dielectric boundary, "
+        "homogeneous medium, one directional light): the radiance leaving each vertex along its normal, its "
+        "standard error and the part that re-entered the surface, written with the mesh to OUT.npz or OUT.vtp.",
+    )
+    add_scan_options(p)
+    p.add_argument("--material", default="marble", help="catalogue name (default marble)")
+    p.add_argument(
+        "--light-dir",
+        metavar="X,Y,Z",
+        help="direction toward a white directional light of 1 W/m^2, scan coordinates (default: above and in "
+        "front, by --up)",
+    )
+    p.add_argument(
+        "--spp",
+        type=int,
+        default=DEFAULT_SPP,
+        metavar="N",
+        help=f"paths per vertex and channel; the noise falls as 1/sqrt(N) (default {DEFAULT_SPP})",
+    )
+    p.add_argument("--seed", type=int, default=0, help="seed of the random numbers (default 0)")
+    p.add_argument(
+        "--time-limit",
+        type=float,
+        default=REFERENCE_TIME_LIMIT_S,
+        metavar="SECONDS",
+        help="refuse, after the first seconds of tracing, an --spp that would take longer "
+        f"(default {REFERENCE_TIME_LIMIT_S})",
+    )
+    p.add_argument(
+        "-o", "--output", default="translucency-output/reference.npz", help="OUT.npz or OUT.vtp (default %(default)s)"
+    )
+    add_quiet_option(p)
+    p.set_defaults(func=cmd_reference)
+
+
 def build_parser() -> argparse.ArgumentParser:
     from .options import ArgumentParser
 
@@ -659,36 +699,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     _add_view_and_compare_parsers(sub)
 
-    from .ground_truth import DEFAULT_SPP
-
-    p = sub.add_parser(
-        "reference",
-        help="path-trace the radiance at every vertex: the ground truth the models are measured against",
-        description="Unbiased Monte Carlo light transport in the closed scan (smooth dielectric boundary, "
-        "homogeneous medium, one directional light): the radiance leaving each vertex along its normal, its "
-        "standard error and the part that re-entered the surface, written with the mesh to OUT.npz or OUT.vtp.",
-    )
-    add_scan_options(p)
-    p.add_argument("--material", default="marble", help="catalogue name (default marble)")
-    p.add_argument(
-        "--light-dir",
-        metavar="X,Y,Z",
-        help="direction toward a white directional light of 1 W/m^2, scan coordinates (default: above and in "
-        "front, by --up)",
-    )
-    p.add_argument(
-        "--spp",
-        type=int,
-        default=DEFAULT_SPP,
-        metavar="N",
-        help=f"paths per vertex and channel; the noise falls as 1/sqrt(N) (default {DEFAULT_SPP})",
-    )
-    p.add_argument("--seed", type=int, default=0, help="seed of the random numbers (default 0)")
-    p.add_argument(
-        "-o", "--output", default="translucency-output/reference.npz", help="OUT.npz or OUT.vtp (default %(default)s)"
-    )
-    add_quiet_option(p)
-    p.set_defaults(func=cmd_reference)
+    _add_reference_parser(sub)
     parser.set_defaults(func=cmd_main_job)
     return parser
 

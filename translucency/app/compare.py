@@ -314,7 +314,9 @@ def profile_cut(mesh, values, light_direction, up=DEFAULT_UP, camera_direction=D
     position = arc - arc[start]
     if closed:  # wrap onto (-length / 2, length / 2]
         position = (position + 0.5 * length) % length - 0.5 * length
-    if np.mean(((points - center) @ second)[position > 0]) < np.mean(((points - center) @ second)[position < 0]):
+    height = (points - center) @ second
+    ahead, behind = height[position > 0], height[position < 0]
+    if ahead.size and behind.size and ahead.mean() < behind.mean():
         position = -position  # positive toward up
     order = np.argsort(position, kind="stable")
     plane["length_mm"] = float(length)

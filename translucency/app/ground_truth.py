@@ -19,6 +19,9 @@ __all__ = ["DEFAULT_SPP", "GroundTruth", "trace_reference", "write_reference"]
 #: vertices, though single vertices stay noisy (the error falls as 1/sqrt(paths); give more for maps;
 #: bench/README.md, "Against the path-traced reference").
 DEFAULT_SPP = 16
+#: Seconds a reference may trace unless told otherwise (``--time-limit``): an hour, the longest a user waits
+#: for a ground truth without planning it.
+REFERENCE_TIME_LIMIT_S = 3600
 
 
 @dataclasses.dataclass(frozen=True)
@@ -55,6 +58,7 @@ def trace_reference(
     unit=None,
     up="auto",
     progress: Callable[[float, str], None] | None = None,
+    time_limit: float | None = None,
 ) -> GroundTruth:
     """Path-traced radiance along the normal at every vertex of a scan (docs/physics.md §9.5).
 
@@ -74,6 +78,10 @@ def trace_reference(
         As for :func:`~translucency.app.shading.scene.shade`.
     progress : callable, optional
         ``progress(fraction, message)`` every few seconds.
+    time_limit : float, optional
+        Seconds the tracing may take: a ``spp`` that would take longer is refused with a
+        :class:`~translucency.errors.BudgetError` once the first seconds have told the rate (the command line's
+        default is :data:`REFERENCE_TIME_LIMIT_S`).
     """
     from ..io.units import unit_metadata
     from ..io.upright import resolve_up
@@ -89,7 +97,16 @@ def trace_reference(
     light = np.asarray(light_direction, dtype=np.float64)
     normals = mesh.vertex_normals()
     traced = trace_radiance(
-        mesh.points, mesh.triangles, mesh.points, normals, medium, light, spp=spp, seed=seed, progress=progress
+        mesh.points,
+        mesh.triangles,
+        mesh.points,
+        normals,
+        medium,
+        light,
+        spp=spp,
+        seed=seed,
+        progress=progress,
+        time_limit=time_limit,
     )
     metadata = {
         "quantity": "radiance leaving the surface along the vertex normal, subsurface part, path traced",

@@ -204,7 +204,7 @@ def add_solver_options(parser: argparse.ArgumentParser) -> None:
     group = parser.add_argument_group("material and solver")
     group.add_argument(
         "--material",
-        default=default["material"].default,
+        default=None,  # None: the record's default, and the material options may name the material instead
         help=f"{HELP['material']} (default {default['material'].default})",
     )
     inline = parser.add_argument_group(
@@ -338,8 +338,12 @@ def solver_settings(args, **changes):
     from .shading.settings import ShadeSettings
 
     custom = inline_material(args)
+    if custom is not None and args.material is not None:
+        raise InvalidParameterError(
+            f"give --material {args.material} or the material's numbers (--reflectance and --mfp, or --sigma-a and "
+            "--sigma-s), not both."
+        )
     fields = {
-        "material": args.material if custom is None else custom,
         "model": args.model,
         "method": args.method,
         "tol": args.tol,
@@ -354,5 +358,7 @@ def solver_settings(args, **changes):
     }
     if args.time_limit is not None:  # else the record's own default
         fields["time_limit"] = args.time_limit
+    if custom is not None or args.material is not None:  # else the record's own default
+        fields["material"] = args.material if custom is None else custom
     with command_line_spelling():
         return ShadeSettings(**{**fields, **changes})

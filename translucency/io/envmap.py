@@ -26,26 +26,75 @@ H, W      image height (polar angle) and width (azimuth)         pixels
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import TranslucencyError
+from ..memory import available_memory
+from .readable import regular_file
 
 __all__ = ["EnvironmentMapError", "read_equirectangular", "RADIANCE_EXTENSIONS"]
 
 RADIANCE_EXTENSIONS = (".hdr", ".pic")
 IMPLAUSIBLE_RADIANCE = 1e30  # RGBE goes up to ~1.7e38; anything this large is a decoding failure
+#: Bytes a decoded pixel takes while it is read: the reader's float32 RGB, and two float64 RGB copies.
+DECODED_PIXEL_BYTES = 3 * (4 + 8 + 8)
+#: The most pixels a map may have whatever the memory: 2**28 (16384 x 16384), beyond any sky map in use.
+MAX_PIXELS = 2**28
+_RADIANCE_RESOLUTION = re.compile(rb"^[-+][XY] +(\d+) +[-+][XY] +(\d+)$")
 
 
 class EnvironmentMapError(TranslucencyError, ValueError):
     """An environment map file that cannot be read or is not a radiance image."""
 
 
+def check_pixel_count(name: str, height: int, width: int) -> None:
+    """Refuse an image whose header claims more pixels than :data:`MAX_PIXELS` or than the free memory can
+    decode (:data:`DECODED_PIXEL_BYTES` each), before anything is decoded: a header costs nothing to write."""
+    need = height * width * DECODED_PIXEL_BYTES
+    free = available_memory()
+    if height * width > MAX_PIXELS or (free is not None and need > free):
+        room = "" if free is None else f", and this machine has {free / 1e9:.1f} GB free"
+        raise EnvironmentMapError(
+            f"{name} claims {width} x {height} pixels, {need / 1e9:.1f} GB to decode{room}; "
+            "resample the map to at most 4096 x 2048 pixels."
+        )
+
+
+def _radiance_size(path: Path) -> tuple[int, int] | None:
+    """``(height, width)`` from a Radiance file's header (the resolution line after the first empty line), or
+    None when the header cannot be read that way (the reader then decides)."""
+    with open(path, "rb") as stream:
+        head = stream.read(65536)
+    lines = head.split(b"\n")
+    for at, line in enumerate(lines[:-1]):
+        if not line.strip():
+            match = _RADIANCE_RESOLUTION.match(lines[at + 1].strip())
+            if match is None:
+                return None
+            first, second = int(match.group(1)), int(match.group(2))
+            return (first, second) if lines[at + 1].strip()[1:2] == b"Y" else (second, first)
+    return None
+
+
+def _npy_shape(path: Path) -> tuple:
+    """The array shape a NumPy ``.npy`` file's header declares, read without its data."""
+    with open(path, "rb") as stream:
+        version = np.lib.format.read_magic(stream)
+        read = np.lib.format.read_array_header_1_0 if version == (1, 0) else np.lib.format.read_array_header_2_0
+        return read(stream)[0]
+
+
 def _read_radiance_hdr(path: Path) -> np.ndarray:
     """Radiance RGBE file through VTK, as (H, W, 3) float64 with row 0 at the top of the image."""
     from vtkmodules.util.numpy_support import vtk_to_numpy
     from vtkmodules.vtkIOImage import vtkHDRReader
+
+    size = _radiance_size(path)
+    if size is not None:
+        check_pixel_count(path.name, *size)
 
     reader = vtkHDRReader()
     if not reader.CanReadFile(str(path)):
@@ -71,13 +120,18 @@ def _read_with_imageio(path: Path) -> np.ndarray:
     import imageio.v3 as iio
 
     try:
+        shape = iio.improps(path).shape
+    except Exception:  # noqa: BLE001 - no reader for it: imread below says so
+        shape = ()
+    if len(shape) >= 2:
+        check_pixel_count(path.name, int(shape[0]), int(shape[1]))
+    try:
         pixels = iio.imread(path)
-    except Exception as exc:  # imageio raises OSError, ValueError or a plugin's own error
+    except Exception:  # imageio raises OSError, ValueError or a plugin's own error
         raise EnvironmentMapError(
             f"{path.name} cannot be read as an image: no installed reader handles "
-            f"{repr(path.suffix) + ' files' if path.suffix else 'files without an extension'} "
-            f"({type(exc).__name__}); convert the map to Radiance .hdr, or install a backend imageio can use "
-            "for it (e.g. 'pip install imageio[opencv]' for .exr)."
+            f"{repr(path.suffix) + ' files' if path.suffix else 'files without an extension'}; convert the map to "
+            "Radiance .hdr, or install a backend imageio can use for it (e.g. 'pip install imageio[opencv]' for .exr)."
         ) from None
     pixels = np.asarray(pixels)
     if not np.issubdtype(pixels.dtype, np.floating):
@@ -107,19 +161,25 @@ def read_equirectangular(path) -> np.ndarray:
     EnvironmentMapError
         With a sentence, for a missing, unreadable, non-float or non-radiance file.
     """
-    path = Path(path)
-    if not path.is_file():  # a regular file only: a FIFO or a device would never end
-        raise EnvironmentMapError(
-            f"environment map {str(path)!r} does not exist or is not a regular file; pass an image file stored on disk."
-        )
+    path = regular_file(path, EnvironmentMapError, "environment map", "image file")
     suffix = path.suffix.lower()
     if suffix in RADIANCE_EXTENSIONS:
         pixels = _read_radiance_hdr(path)
     elif suffix == ".npy":
+        unreadable = EnvironmentMapError(
+            f"{path.name} is not a NumPy array file of numbers; save the map with numpy.save as an (H, W, 3) "
+            "float array."
+        )
+        try:
+            shape = _npy_shape(path)
+        except (OSError, ValueError, EOFError):
+            raise unreadable from None
+        if len(shape) >= 2:
+            check_pixel_count(path.name, int(shape[0]), int(shape[1]))
         try:
             pixels = np.load(path, allow_pickle=False)
-        except (OSError, ValueError) as exc:
-            raise EnvironmentMapError(f"{path.name} is not a readable NumPy array file ({exc}).") from None
+        except (OSError, ValueError, EOFError):
+            raise unreadable from None
     else:
         pixels = _read_with_imageio(path)
     pixels = np.asarray(pixels, dtype=np.float64)

@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import os
 import re
-import stat
 import warnings
 from pathlib import Path
 
@@ -32,6 +31,7 @@ from .formats.ply import read_ply
 from .formats.pymeshlab import PYMESHLAB_FORMATS, read_with_pymeshlab
 from .formats.stl import read_stl
 from .formats.vtk import VTK_FORMATS, mesh_from_vtk_polydata, read_with_vtk
+from .readable import regular_file
 from .units import UnitInferredWarning, check_extent, infer_unit, inferred_unit_message, parse_unit
 
 __all__ = [
@@ -257,33 +257,9 @@ def _misnamed(path: Path, suffix: str, sniffed: str) -> str:
 # --------------------------------------------------------------------------------------------------
 # file checks
 # --------------------------------------------------------------------------------------------------
-def _special_kind(mode: int) -> str:
-    """What a file that is not a regular file is, in words ("a FIFO (named pipe)", ...)."""
-    for test, words in (
-        (stat.S_ISFIFO, "a FIFO (named pipe)"),
-        (stat.S_ISCHR, "a character device"),
-        (stat.S_ISBLK, "a block device"),
-        (stat.S_ISSOCK, "a socket"),
-    ):
-        if test(mode):
-            return words
-    return "a special file"
-
-
 def _check_readable(path: Path, format: str | None) -> str:
     """Check that the file exists and can be read, and return the suffix of the format to read it as."""
-    try:
-        mode = os.stat(path).st_mode  # follows links: what would be opened
-    except FileNotFoundError:
-        mode = None
-    except OSError as exc:
-        raise MeshError(f"{path.name} cannot be read ({exc.strerror or exc}); check the file and the disk.") from None
-    if mode is None:
-        raise MeshError(f"{path} does not exist; check the path and the file name.")
-    if stat.S_ISDIR(mode):
-        raise MeshError(f"{path} is a directory, not a mesh file; pass the path of a mesh file inside it.")
-    if not stat.S_ISREG(mode):  # opening a FIFO would wait for a writer, a device would read forever
-        raise MeshError(f"{path} is {_special_kind(mode)}, not a regular file; pass a mesh file stored on disk.")
+    regular_file(path, MeshError, kind="mesh file")
     try:
         with open(path, "rb") as stream:
             first = stream.read(1)

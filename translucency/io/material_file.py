@@ -11,6 +11,7 @@ import json
 from pathlib import Path
 
 from ..errors import InvalidParameterError
+from .readable import regular_file
 
 __all__ = ["MATERIAL_SUFFIXES", "is_material_file", "read_material_table"]
 
@@ -39,13 +40,17 @@ def _toml():
 
 def read_material_table(path) -> dict:
     """The table of a TOML or JSON material file, with ``name`` set to the file's stem when it has none."""
-    path = Path(path)
+    path = regular_file(path, InvalidParameterError, "material file", "TOML or JSON file")
     try:
         text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise InvalidParameterError(f"material file {path} does not exist; check the path.") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InvalidParameterError(f"material file {path} cannot be read ({exc.__class__.__name__}).") from None
+    except UnicodeDecodeError:
+        raise InvalidParameterError(
+            f"material file {path} is not UTF-8 text; save it as a TOML or JSON text file."
+        ) from None
+    except OSError as exc:
+        raise InvalidParameterError(
+            f"material file {path} cannot be read ({exc.strerror or 'refused'}); check the file and the disk."
+        ) from None
     if path.suffix.lower() == ".toml":
         toml = _toml()
         try:

@@ -28,7 +28,8 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InvalidParameterError, MeshError, WriteError
-from .atomic import write_bytes
+from .atomic import write_bytes, write_error
+from .readable import regular_file
 
 __all__ = ["REFERENCE_ARRAYS", "REFERENCE_SUFFIXES", "ReferenceFile", "read_reference_file", "write_reference_file"]
 
@@ -73,7 +74,8 @@ def _suffix(path: Path) -> str:
 
 
 def write_reference_file(path, points, triangles, normals, arrays: dict, metadata: dict) -> Path:
-    """Write a reference (mesh in mm, normals, :data:`REFERENCE_ARRAYS`, settings) to ``.npz`` or ``.vtp``, atomically.
+    """Write a reference (mesh in mm, normals, :data:`REFERENCE_ARRAYS`, settings) to ``.npz`` or ``.vtp``, atomically;
+    its folder is made when missing.
 
     Raises
     ------
@@ -92,6 +94,10 @@ def write_reference_file(path, points, triangles, normals, arrays: dict, metadat
         if value.shape != (n, 3):
             raise InvalidParameterError(f"reference file: {name} must have shape ({n}, 3), got {value.shape}.")
     text = json.dumps(metadata, default=_plain)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise write_error(path, exc) from None
     if suffix == ".npz":
         buffer = io.BytesIO()
         np.savez_compressed(
@@ -130,22 +136,26 @@ def read_reference_file(path) -> ReferenceFile:
     Raises
     ------
     InvalidParameterError
-        Another suffix, or a file without the reference's arrays (one sentence naming what is missing).
+        Another suffix, a path that is not a regular file, or a file without the reference's arrays (one sentence
+        naming what is missing).
     MeshError
-        A file that cannot be read.
+        A file that cannot be read, settings that are not JSON, arrays whose shapes disagree with the mesh, or
+        radiance that is infinite, negative or never traced.
     """
     path = Path(path)
     suffix = _suffix(path)
-    if not path.is_file():
+    if not path.exists():
         raise InvalidParameterError(f"reference file {path} does not exist; make one with 'translucency reference'.")
+    regular_file(path, InvalidParameterError, "reference file", "reference file")
     needed = ("normals", *REFERENCE_ARRAYS)
     if suffix == ".npz":
         try:
             with np.load(path, allow_pickle=False) as data:
                 values = {name: np.array(data[name]) for name in data.files}
-        except (OSError, ValueError) as exc:
+        except Exception:  # noqa: BLE001 - numpy raises OSError, ValueError, EOFError or zipfile's BadZipFile
             raise MeshError(
-                f"cannot read {path.name} ({exc}); is it an .npz written by 'translucency reference'?"
+                f"cannot read {path.name}: it is not an .npz archive of arrays (empty, truncated or another kind of "
+                "file); make the reference again with 'translucency reference'."
             ) from None
         missing = [name for name in ("points", "triangles", *needed) if name not in values]
         if missing:
@@ -153,7 +163,7 @@ def read_reference_file(path) -> ReferenceFile:
                 f"{path.name} is not a reference file (no {', '.join(missing)}); make one with "
                 "'translucency reference'."
             )
-        metadata = json.loads(str(values["metadata"])) if "metadata" in values else {}
+        metadata = _metadata(values.get("metadata"), path)
     else:
         import pyvista as pv
 
@@ -176,13 +186,57 @@ def read_reference_file(path) -> ReferenceFile:
             )
         values = {"points": points, "triangles": triangles}
         values.update({name: np.asarray(point_data[name], dtype=np.float64) for name in needed})
-        metadata = json.loads(str(poly.field_data["metadata"][0])) if "metadata" in poly.field_data else {}
-    return ReferenceFile(
-        points=np.asarray(values["points"], dtype=np.float64),
-        triangles=np.asarray(values["triangles"], dtype=np.int64),
-        normals=values["normals"],
-        radiance=values["radiance"],
-        radiance_stderr=values["radiance_stderr"],
-        radiance_reentered=values["radiance_reentered"],
-        metadata=metadata,
-    )
+        metadata = _metadata(poly.field_data["metadata"][0] if "metadata" in poly.field_data else None, path)
+    return _checked(values, metadata, path)
+
+
+def _metadata(value, path: Path) -> dict:
+    """The settings a reference was traced with, from their JSON text (empty when the file has none)."""
+    if value is None:
+        return {}
+    try:
+        metadata = json.loads(str(value))
+    except ValueError:
+        metadata = None
+    if not isinstance(metadata, dict):
+        raise MeshError(
+            f"{path.name}: its settings (metadata) are not a JSON table; make the reference again with "
+            "'translucency reference'."
+        )
+    return metadata
+
+
+def _checked(values: dict, metadata: dict, path: Path) -> ReferenceFile:
+    """A :class:`ReferenceFile` from the arrays read, once their shapes agree with the mesh and the radiance is
+    finite (NaN where not traced) and not negative, with at least one vertex traced."""
+
+    def refuse(what: str):
+        raise MeshError(f"{path.name}: {what}; make the reference again with 'translucency reference'.")
+
+    try:
+        points = np.asarray(values["points"], dtype=np.float64)
+        triangles = np.asarray(values["triangles"], dtype=np.int64)
+        arrays = {name: np.asarray(values[name], dtype=np.float64) for name in ("normals", *REFERENCE_ARRAYS)}
+    except (TypeError, ValueError):
+        refuse("its arrays are not numbers")
+    n = len(points)
+    if points.ndim != 2 or points.shape[1:] != (3,) or n == 0 or not np.all(np.isfinite(points)):
+        refuse("its points are not an (n, 3) array of finite numbers")
+    if (
+        triangles.ndim != 2
+        or triangles.shape[1:] != (3,)
+        or (triangles.size and not 0 <= triangles.min() <= triangles.max() < n)
+    ):
+        refuse(f"its triangles are not an (m, 3) array of vertex indices below {n}")
+    for name, value in arrays.items():
+        if value.shape != (n, 3):
+            refuse(f"{name} has shape {value.shape}, not ({n}, 3) for its {n} points")
+    radiance = arrays["radiance"]
+    traced = ~np.isnan(radiance)
+    if not traced.any():
+        refuse("no vertex was traced (the radiance is NaN everywhere)")
+    for name in REFERENCE_ARRAYS:
+        value = arrays[name][traced]
+        if not np.all(np.isfinite(value)) or value.min() < 0:
+            refuse(f"{name} has infinite, NaN or negative values where the radiance was traced")
+    return ReferenceFile(points=points, triangles=triangles, **arrays, metadata=metadata)

@@ -68,13 +68,15 @@ from scipy.spatial import cKDTree
 from ..errors import InvalidParameterError, MeshError
 from ..geometry.measure import signed_volume, triangle_normals
 from ..geometry.topology import unique_edges
+from ..scatter.budget import check_limits
 from ..scatter.fresnel import fresnel_transmittance, refract
 from ..scatter.kernels import orthonormal_frame
 from ..scatter.medium import Medium
 from ..scatter.montecarlo import fresnel_reflectance_scalar, sample_hg_cosine
 from ..scatter.visibility import Occluder
+from .trace_settings import check_seed, check_spp, check_time
 
-__all__ = ["ReferenceRadiance", "check_spp", "trace_radiance", "NEE_MAX_OPTICAL_DEPTH"]
+__all__ = ["ReferenceRadiance", "trace_radiance", "NEE_MAX_OPTICAL_DEPTH"]
 
 #: An interaction farther than this many mean free paths ``1/sigma_t`` from every facet the light enters
 #: skips the next event (it would add less than ``exp(-40)`` of the entering light) ...
@@ -94,6 +96,8 @@ DEPTH_GRID_CELLS = 96
 PATHS_PER_WAVE = 1 << 17
 #: Seconds between two progress reports.
 PROGRESS_SECONDS = 2.0
+#: Seconds of tracing after which the rate is known well enough to hold ``spp`` to the time limit.
+CALIBRATION_SECONDS = 2.0
 
 # Event codes of one flight.
 _SCATTER = 0
@@ -556,8 +560,9 @@ class _Paths:
             setattr(self, name, getattr(self, name)[rows])
 
 
-def _walk(boundary, light, start_points, start_normals, queue, coefficients, eta, rng, sums, stats, report):
-    """Trace one path per entry of ``queue`` (``sensor * n_channels + channel``), keeping up to
+def _walk(boundary, light, start_points, start_normals, n_paths, coefficients, eta, rng, sums, stats, report):
+    """Trace ``n_paths`` paths, path ``i`` for ``i % (sensors * n_channels)`` (``sensor * n_channels + channel``),
+    keeping up to
     ``PATHS_PER_WAVE`` in flight; add each path's estimate, its square and its re-entered part to ``sums``
     (3, k, n_channels). ``coefficients`` holds ``sigma_t``, the albedo and ``g`` per channel (3, n_channels)."""
     n_channels = coefficients.shape[1]
@@ -568,9 +573,12 @@ def _walk(boundary, light, start_points, start_normals, queue, coefficients, eta
     started = 0
     finished = 0
     flat = sums.reshape(3, -1)
-    while started < len(queue) or len(paths.sensor):
-        if started < len(queue) and len(paths.sensor) < PATHS_PER_WAVE // 2:
-            take = queue[started : started + PATHS_PER_WAVE - len(paths.sensor)]
+    slots = sums.shape[1] * n_channels
+    while started < n_paths or len(paths.sensor):
+        if started < n_paths and len(paths.sensor) < PATHS_PER_WAVE // 2:
+            take = (
+                np.arange(started, min(n_paths, started + PATHS_PER_WAVE - len(paths.sensor)), dtype=np.int64) % slots
+            )
             paths.add(take // n_channels, take % n_channels, start_points, start_normals, eps, w0)
             started += len(take)
         p = paths
@@ -621,15 +629,8 @@ def _walk(boundary, light, start_points, start_normals, queue, coefficients, eta
             finished += rows.size
             paths.keep(np.flatnonzero(~done))
             report(finished)
-    stats["paths"] += len(queue)
+    stats["paths"] += n_paths
     stats["rays"] = boundary.occluder.rays_cast
-
-
-def check_spp(spp) -> int:
-    """``spp`` as an int of at least 2 (a standard error needs two paths), or a sentence naming ``spp``/``--spp``."""
-    if isinstance(spp, bool) or not isinstance(spp, (int, np.integer)) or spp < 2:
-        raise InvalidParameterError(f"spp (--spp) must be an integer of at least 2 paths per vertex, got {spp!r}.")
-    return int(spp)
 
 
 def _checked_mesh(points, triangles):
@@ -684,6 +685,7 @@ def trace_radiance(
     seed: int = 0,
     workers: int | None = None,
     progress: Callable[[float, str], None] | None = None,
+    time_limit: float | None = None,
 ) -> ReferenceRadiance:
     """Path-traced radiance along the normal at surface points of a closed mesh (docs/physics.md §9.5).
 
@@ -711,6 +713,10 @@ def trace_radiance(
     progress : callable, optional
         ``progress(fraction_done, message)`` every few seconds (the fraction of paths done, the time so far and
         the median relative standard error reached).
+    time_limit : float, optional
+        Seconds the tracing may take. Once :data:`CALIBRATION_SECONDS` of tracing have told the rate, a ``spp``
+        whose paths would take longer is refused (:class:`~translucency.errors.BudgetError`, naming the ``spp``
+        that fits), before the rest is traced.
 
     Returns
     -------
@@ -724,6 +730,8 @@ def trace_radiance(
         raise InvalidParameterError("reference: light_direction must be a finite, non-zero 3-vector.")
     w_light = w_light / np.linalg.norm(w_light)
     spp = check_spp(spp)
+    seed = check_seed(seed)
+    check_limits(None, time_limit)
     n_channels = medium.n_channels
     E = np.broadcast_to(np.asarray(irradiance, dtype=np.float64), (n_channels,))
     if not np.all(np.isfinite(E)) or np.any(E < 0):
@@ -751,7 +759,7 @@ def trace_radiance(
     # error is the same everywhere and the progress line can tell the time to a given noise; the channels
     # walk together, so the few long paths at the end are waited for once
     n_distinct = len(distinct)
-    queue = np.tile(np.arange(k * n_distinct, dtype=np.int64), spp)
+    n_paths = spp * k * n_distinct  # path i is for slot i % (k * n_distinct): the queue is never held
     results = np.zeros((3, k, n_distinct))
     coefficients = np.stack(
         [distinct[:, 0] + distinct[:, 1], distinct[:, 1] / (distinct[:, 0] + distinct[:, 1]), distinct[:, 2]]
@@ -761,13 +769,15 @@ def trace_radiance(
 
     def report(finished):
         now = time.perf_counter()
-        if progress is None or (now - last[0] < PROGRESS_SECONDS and finished < len(queue)):
+        if time_limit is not None and CALIBRATION_SECONDS <= now - started and finished < n_paths:
+            check_time(time_limit, now - started, finished, n_paths, spp)
+        if progress is None or (now - last[0] < PROGRESS_SECONDS and finished < n_paths):
             return
         last[0] = now
-        done = finished / len(queue)
+        done = finished / n_paths
         progress(done, _progress_line(done, now - started, finished // (k * n_distinct), results))
 
-    _walk(boundary, light, sensor_points, sensor_normals, queue, coefficients, eta, rng, results, stats, report)
+    _walk(boundary, light, sensor_points, sensor_normals, n_paths, coefficients, eta, rng, results, stats, report)
     mean, stderr = _mean_and_stderr(results, spp)
     reentered = results[2] / spp
     return ReferenceRadiance(

@@ -37,7 +37,7 @@ import numpy as np
 
 from ..errors import InvalidParameterError
 from .dipoles import better_dipole_total_reflectance
-from .medium import CHANNELS, DEFAULT_ETA, Medium
+from .medium import CHANNELS, DEFAULT_ETA, Medium, check_eta
 
 __all__ = ["ALBEDO_TOLERANCE", "reduced_albedo", "medium_from_appearance", "appearance_of"]
 
@@ -78,6 +78,7 @@ def reduced_albedo(reflectance, eta: float = DEFAULT_ETA) -> np.ndarray:
                 "slab of any albedo reflects less than all and more than none of the light that enters; give a "
                 "value strictly between 0 and 1."
             )
+    check_eta(eta)
     eta = float(eta)
     return np.array(
         [

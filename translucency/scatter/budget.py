@@ -27,16 +27,17 @@ far                 far-field evaluations (sources and clusters) of a receiver  
 budget              memory the solve may take on top of what the process holds       bytes
 =================== ================================================================ ======
 
-Everything here is arithmetic on numbers, except :func:`available_memory` and :func:`resident_memory`,
-which read what the operating system says.
+Everything here is arithmetic on numbers; what the operating system says about memory comes from
+:mod:`translucency.memory`.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import math
-import os
 from dataclasses import asdict, dataclass
+
+import numpy as np
 
 from ..errors import InvalidParameterError, option
 
@@ -289,10 +290,7 @@ def check_limits(memory_limit, time_limit) -> None:
     for name, value, unit in (("memory_limit", memory_limit, "GB"), ("time_limit", time_limit, "seconds")):
         if value is None:
             continue
-        try:
-            number = float(value)
-        except (TypeError, ValueError):
-            number = float("nan")
+        number = value if isinstance(value, (int, float, np.integer, np.floating)) else float("nan")
         if isinstance(value, bool) or not (math.isfinite(number) and number > 0):
             raise InvalidParameterError(f"{option(name)} must be a positive number of {unit}, got {value!r}.")
 
@@ -322,43 +320,3 @@ def format_seconds(seconds: float) -> str:
     if seconds < 5400:
         return f"{seconds / 60:.0f} min"
     return f"{seconds / 3600:.1f} h"
-
-
-# ----------------------------------------------------------------------------------------------------
-# what the operating system says
-# ----------------------------------------------------------------------------------------------------
-def available_memory() -> float | None:
-    """Bytes this process can still take: ``MemAvailable`` of ``/proc/meminfo``, lowered to what a
-    cgroup memory limit (v2 ``memory.max``, v1 ``memory.limit_in_bytes``) leaves; None where unknown."""
-    values = []
-    try:
-        with open("/proc/meminfo") as f:
-            for line in f:
-                if line.startswith("MemAvailable:"):
-                    values.append(float(line.split()[1]) * 1024)
-                    break
-    except (OSError, ValueError, IndexError):
-        pass
-    for limit_file, usage_file in (
-        ("/sys/fs/cgroup/memory.max", "/sys/fs/cgroup/memory.current"),
-        ("/sys/fs/cgroup/memory/memory.limit_in_bytes", "/sys/fs/cgroup/memory/memory.usage_in_bytes"),
-    ):
-        try:
-            with open(limit_file) as f:
-                limit = f.read().strip()
-            with open(usage_file) as f:
-                usage = float(f.read().strip())
-        except (OSError, ValueError):
-            continue
-        if limit != "max" and float(limit) < 2**60:  # "max" or a huge number: no limit
-            values.append(max(0.0, float(limit) - usage))
-    return min(values) if values else None
-
-
-def resident_memory() -> float:
-    """Bytes of memory this process holds now (resident set); 0 where unknown."""
-    try:
-        with open("/proc/self/statm") as f:
-            return float(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE")
-    except (OSError, ValueError, IndexError):
-        return 0.0

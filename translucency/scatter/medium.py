@@ -85,6 +85,28 @@ def extrapolation_distance(sigma_a, sigma_s, g):
     return 2.131 * diffusion_coefficient(sigma_a, sigma_s, g) / np.sqrt(alpha_reduced(sigma_a, sigma_s, g))
 
 
+def check_eta(eta, what: str = "") -> None:
+    """Refuse a relative index of refraction (a number or an array) that is not finite or lies outside
+    [1, :data:`~translucency.scatter.fresnel.ETA_MAX`], in one sentence (starting with ``what``, when given)."""
+    lead = f"{what}: " if what else ""
+    try:
+        e = np.asarray(eta, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise InvalidParameterError(f"{lead}eta must be a number, got {eta!r}.") from None
+    if not np.all(np.isfinite(e)):
+        raise InvalidParameterError(f"{lead}eta must be finite, got {e.tolist()}.")
+    if np.any(e < 1):
+        raise InvalidParameterError(
+            f"{lead}eta = n_inside / n_outside must be >= 1, got {e.tolist()}; "
+            "the diffusion models assume light enters an optically denser medium."
+        )
+    if np.any(e > fresnel.ETA_MAX):
+        raise InvalidParameterError(
+            f"{lead}eta = n_inside / n_outside must be at most {fresnel.ETA_MAX}, got {e.tolist()}; "
+            "the Fresnel moment fits of the diffusion models hold from 1 to that value (docs/physics.md §3.3)."
+        )
+
+
 def validate_coefficients(sigma_a, sigma_s, g, eta, *, what: str = "medium"):
     """Check optical coefficients and return them as broadcast float64 arrays.
 
@@ -116,16 +138,7 @@ def validate_coefficients(sigma_a, sigma_s, g, eta, *, what: str = "medium"):
         raise InvalidParameterError(f"{what}: sigma_s must be >= 0 (1/mm), got {s.tolist()}.")
     if np.any((gg <= -1) | (gg >= 1)):
         raise InvalidParameterError(f"{what}: g must lie in (-1, 1), got {gg.tolist()}.")
-    if np.any(e < 1):
-        raise InvalidParameterError(
-            f"{what}: eta = n_inside / n_outside must be >= 1, got {e.tolist()}; "
-            "the diffusion models assume light enters an optically denser medium."
-        )
-    if np.any(e > fresnel.ETA_MAX):
-        raise InvalidParameterError(
-            f"{what}: eta = n_inside / n_outside must be at most {fresnel.ETA_MAX}, got {e.tolist()}; "
-            "the Fresnel moment fits of the diffusion models hold from 1 to that value (docs/physics.md §3.3)."
-        )
+    check_eta(e, what)
     if np.any(s * (1 - gg) <= 0):
         raise InvalidParameterError(
             f"{what}: the medium must scatter (sigma_s (1 - g) > 0), got sigma_s = {s.tolist()}, "

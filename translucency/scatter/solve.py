@@ -54,6 +54,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .. import memory
 from ..errors import BudgetError, InvalidParameterError, TranslucencyWarning, option
 from ..geometry.measure import barycentric_vertex_areas, edge_lengths, mean_edge_length, row_lengths, triangle_areas
 from ..geometry.morton import by_lowest_vertex, morton_order
@@ -639,8 +640,8 @@ def _memory_at_start(geometry: SurfaceGeometry) -> tuple[float | None, float]:
     solve made them already (:meth:`SurfaceGeometry.ordered_bytes`), as if they were not held (they were counted
     twice: a solve after :func:`plan`, or a viewer's next one, had a smaller budget than the first)."""
     held = geometry.ordered_bytes()
-    available = budget.available_memory()
-    return (None if available is None else available + held), budget.resident_memory() - held
+    available = memory.available_memory()
+    return (None if available is None else available + held), memory.resident_memory() - held
 
 
 def _relit(work, receivers, tol, memory_limit, time_limit, report, stats, timings) -> Solution:
@@ -712,7 +713,7 @@ def relight_plan(size: float, counts: dict, memory_limit, time_limit) -> budget.
 
     threads = max(1, numba.get_num_threads())
     seconds = (counts["far_entries"] * FAR_ENTRY_SECONDS + counts["near_entries"] * NEAR_ENTRY_SECONDS) / threads
-    budget_bytes = budget.memory_budget(memory_limit, budget.available_memory(), budget.resident_memory())
+    budget_bytes = budget.memory_budget(memory_limit, memory.available_memory(), memory.resident_memory())
     fits = (budget_bytes is None or size <= budget_bytes) and (time_limit is None or seconds <= time_limit)
     return budget.SolveEstimate(
         base_bytes=0.0,
@@ -750,7 +751,7 @@ def size_floor_plan(geometry: SurfaceGeometry, n_channels: int, method: str, mem
         own_points=0.0,
         far_evaluations=0.0,
     )
-    budget_bytes = budget.memory_budget(memory_limit, budget.available_memory(), budget.resident_memory())
+    budget_bytes = budget.memory_budget(memory_limit, memory.available_memory(), memory.resident_memory())
     return budget.size_floor(counts, budget_bytes, time_limit)
 
 
@@ -887,7 +888,7 @@ def _plan(work: _Work, method, tol, memory_limit, time_limit, stats, memory_at_s
         degree3_ratio=0.0 if method == "exact" else NEAR_DEGREE3_RATIO,
         degree3_diameter=NEAR_DEGREE3_DECAY / max(float(np.max(work.medium.sigma_tr)), 1e-300),
     )
-    available, resident = memory_at_start or (budget.available_memory(), budget.resident_memory())
+    available, resident = memory_at_start or (memory.available_memory(), memory.resident_memory())
     budget_bytes = budget.memory_budget(memory_limit, available, resident)
     # cutoff's evaluations depend on B (its widened radii): it is prepared and run; tree's are its walk's
     far_field = work.far_field(method, tol) if work.lit.size and method == "cutoff" else None
