@@ -10,7 +10,7 @@ from scipy import integrate
 
 from tests.io.test_load import write_ply
 from translucency.app.shading.scene import shade
-from translucency.errors import MeshError
+from translucency.errors import MeshError, TranslucencyWarning
 from translucency.geometry.measure import signed_volume
 from translucency.geometry.synthetic import icosphere
 from translucency.io import TriangleMesh, clean_mesh, load_mesh
@@ -182,8 +182,10 @@ def test_single_triangle_matches_the_integral_of_the_model():
 
 
 def test_micrometre_triangle_is_finite():
+    """Finite, and said to mean little: marble's mean free path is 30,000 times the triangle."""
     mesh = TriangleMesh(np.array([[0.0, 0, 0], [1e-5, 0, 0], [0, 1e-5, 0]]), np.array([[0, 1, 2]]))
-    assert _shade(mesh).B.max() > 0
+    with pytest.warns(TranslucencyWarning, match="a mean free path longer than the object"):
+        assert _shade(mesh, allow=(".*mean free path longer than the object",)).B.max() > 0
 
 
 # ------------------------------------------------------------------------------------------- units
@@ -238,6 +240,8 @@ def _shade_quietly(mesh):
 )
 def test_extreme_materials_on_a_sphere(medium, method):
     lights = [LIGHT, DirectionalLight((1.0, 0.0, 0.0), 2.0)]  # the second grazes a great circle
-    # a reduced albedo below 0.5 is said once per material (tests/scatter/test_tolerance.py); nothing else may warn
-    result = _shade(_sphere(), medium, lights=lights, method=method, allow=(".*reduced albedo below 0.5",))
+    # a reduced albedo below 0.5 is said once per material (tests/scatter/test_tolerance.py), a mean free path
+    # longer than the sphere once per material and size (tests/app/test_hostile_input.py); nothing else may warn
+    allow = (".*reduced albedo below 0.5", ".*mean free path longer than the object")
+    result = _shade(_sphere(), medium, lights=lights, method=method, allow=allow)
     assert result.B.max() > 0

@@ -16,13 +16,10 @@ from translucency.errors import InvalidParameterError
 from translucency.geometry.synthetic import icosphere
 
 
-def _write(path, points, triangles, colors=None):
+def _write(path, points, triangles):
     import pyvista as pv
 
-    poly = pv.PolyData(points, np.hstack([np.full((len(triangles), 1), 3), triangles]).ravel())
-    if colors is not None:
-        poly.point_data["RGB"] = colors
-    poly.save(path)
+    pv.PolyData(points, np.hstack([np.full((len(triangles), 1), 3), triangles]).ravel()).save(path)
     return path
 
 
@@ -124,3 +121,120 @@ def test_a_memory_limit_that_is_not_a_number_is_one_sentence(value):
     points, triangles = icosphere(1, radius=6.0)
     with pytest.raises(InvalidParameterError, match="memory_limit= must be a positive number of GB"):
         tl.shade(tl.TriangleMesh(points, triangles), memory_limit=value)
+
+
+# -------------------------------------------------------------------------------------------------
+# corrupt data in a scan
+# -------------------------------------------------------------------------------------------------
+def _coloured_sphere(tmp_path, colors_of):
+    """A sphere PLY with float red, green, blue per vertex (0.5, then changed by ``colors_of``)."""
+    from plyfile import PlyData, PlyElement
+
+    points, triangles = icosphere(2, radius=6.0)
+    colors = np.full((len(points), 3), 0.5)
+    colors_of(colors)
+    vertex = np.empty(len(points), dtype=[(k, "f4") for k in ("x", "y", "z", "red", "green", "blue")])
+    for k, column in zip(("x", "y", "z"), points.T):
+        vertex[k] = column
+    for k, column in zip(("red", "green", "blue"), colors.T):
+        vertex[k] = column
+    faces = np.empty(len(triangles), dtype=[("vertex_indices", "i4", (3,))])
+    faces["vertex_indices"] = triangles
+    path = tmp_path / "coloured.ply"
+    PlyData([PlyElement.describe(vertex, "vertex"), PlyElement.describe(faces, "face")]).write(str(path))
+    return path
+
+
+@pytest.mark.parametrize("value", [np.nan, np.inf])
+def test_colours_that_are_not_numbers_are_left_out_with_a_warning(tmp_path, capsys, value):
+    """A NaN colour was read as black, and one infinite colour made every float colour read on the 0-255 scale
+    (every vertex dark). Now the scan's colours are left out with a warning, and an albedo from the colours is
+    refused in one sentence."""
+
+    def spoil(colors):
+        colors[3] = value
+
+    path = _coloured_sphere(tmp_path, spoil)
+    code = cli.main(["bake", str(path), "--unit", "mm", "--albedo-from-colors", "-o", str(tmp_path / "o.ply")])
+    err = capsys.readouterr().err
+    assert code != 0
+    assert "translucency: warning: coloured.ply: 1 of 162 vertex colours are NaN or infinite" in err
+    assert "has no vertex colours" in err and "Traceback" not in err
+
+
+def test_a_few_bright_outliers_do_not_turn_0_to_1_colours_dark(tmp_path):
+    from translucency.io.load import load_mesh
+
+    def spoil(colors):
+        colors[0] = 7.0  # one vertex over 1 on a 0-1 scan: clipped to white, the others stay mid grey
+
+    mesh = load_mesh(_coloured_sphere(tmp_path, spoil), unit="mm")
+    colors = mesh.point_data["colors"]
+    assert np.all(colors[1:, :3] == 128) and np.all(colors[0, :3] == 255)
+
+
+# -------------------------------------------------------------------------------------------------
+# library text
+# -------------------------------------------------------------------------------------------------
+def test_a_corrupt_vtp_reference_is_one_sentence_without_vtk_s_messages(small_sphere, tmp_path, capfd):
+    import pyvista as pv
+
+    pv.Sphere().save(tmp_path / "good.vtp")
+    data = (tmp_path / "good.vtp").read_bytes()
+    (tmp_path / "cut.vtp").write_bytes(data[: len(data) // 2])
+    code = cli.main(["compare", "--reference", str(tmp_path / "cut.vtp"), "-o", str(tmp_path / "out")])
+    err = capfd.readouterr().err
+    assert code == 2
+    assert one_sentence(err) == (
+        "translucency: error: cannot read cut.vtp as VTK PolyData; is it a .vtp written by 'translucency reference'?"
+    )
+    assert "vtk" not in err.replace(".vtp", "").replace("VTK PolyData", "").lower()
+
+
+@pytest.mark.parametrize(
+    "flag, words", [("---o", "unknown option ---o (did you mean -o?)"), ("--tool", "(did you mean --tol?)")]
+)
+def test_a_misspelt_option_names_the_nearest_one(small_sphere, tmp_path, capsys, flag, words):
+    with pytest.raises(SystemExit) as stopped:
+        cli.main(["bake", str(small_sphere), flag, "0.1"])
+    assert stopped.value.code == 2
+    assert words in capsys.readouterr().err
+
+
+def test_a_mesh_of_another_format_names_the_renaming_not_python_keywords(tmp_path, small_sphere, capsys):
+    misnamed = tmp_path / "sphere.abc"
+    misnamed.write_bytes(small_sphere.read_bytes())
+    assert cli.main(["bake", str(misnamed), "--unit", "mm", "-o", str(tmp_path / "o.ply")]) != 0
+    out = capsys.readouterr().out
+    assert "rename it to sphere.ply" in out
+    assert "format=" not in out and "SUPPORTED_FORMATS" not in out
+
+
+# -------------------------------------------------------------------------------------------------
+# numbers where the model's answer means nothing
+# -------------------------------------------------------------------------------------------------
+def test_coefficients_beyond_any_material_are_refused_before_the_solve():
+    from translucency.scatter.medium import Medium
+
+    with pytest.raises(InvalidParameterError, match=r"sigma_s = 1e\+300/mm is beyond any material.*at most 1e9\."):
+        Medium([1e-3] * 3, [1e300] * 3, [0.0] * 3, 1.3, "absurd")
+
+
+def test_a_nearly_transparent_medium_warns_that_the_answer_means_little():
+    import translucency as tl
+    from translucency.errors import TranslucencyWarning
+
+    points, triangles = icosphere(2, radius=6.0)
+    medium = tl.Medium([0.0] * 3, [1e-9] * 3, [0.0] * 3, 1.3, "clear")
+    with pytest.warns(TranslucencyWarning, match=r"clear: a mean free path longer than the object"):
+        tl.shade(tl.TriangleMesh(points, triangles), medium, bounces=0)
+
+
+def test_a_point_light_on_the_surface_warns(tmp_path):
+    import translucency as tl
+    from translucency.errors import TranslucencyWarning
+
+    points, triangles = icosphere(2, radius=6.0)
+    on_surface = tl.PointLight(points[0] * (1 + 1e-12), 1.0)
+    with pytest.warns(TranslucencyWarning, match=r"a point light at .* mm from the surface, nearer than its vertex"):
+        tl.shade(tl.TriangleMesh(points, triangles), "marble", lights=[on_surface], bounces=0)

@@ -88,6 +88,39 @@ class ArgumentParser(argparse.ArgumentParser):
         """As argparse's, after :func:`join_negative_values` (``args`` default: ``sys.argv[1:]``)."""
         return super().parse_known_args(join_negative_values(sys.argv[1:] if args is None else args), namespace)
 
+    def parse_args(self, args=None, namespace=None):
+        """As argparse's, with arguments it does not know named in one sentence, with the nearest option."""
+        parsed, extras = self.parse_known_args(args, namespace)
+        if extras:
+            self.error(unknown_arguments(extras, self._known_options(parsed)))
+        return parsed
+
+    def _known_options(self, parsed) -> list[str]:
+        """The option strings of this parser and of the subcommand ``parsed`` chose."""
+        known = [flag for action in self._actions for flag in action.option_strings]
+        for action in self._actions:
+            if isinstance(action, argparse._SubParsersAction):
+                for sub in action.choices.values():
+                    if getattr(parsed, "func", None) is sub.get_default("func"):
+                        known += [flag for a in sub._actions for flag in a.option_strings]
+        return known
+
+
+def unknown_arguments(extras, known) -> str:
+    """The sentence for arguments no option takes: the first unknown option with the nearest known one, or the
+    first stray value."""
+    import difflib
+
+    options = [token for token in extras if token.startswith("-")]
+    if options:
+        token = options[0].split("=", 1)[0]
+        near = difflib.get_close_matches(token, known, n=1, cutoff=0.5) or difflib.get_close_matches(
+            "-" + token.lstrip("-"), known, n=1, cutoff=0.5
+        )
+        hint = f" (did you mean {near[0]}?)" if near else ""
+        return f"unknown option {token}{hint}; --help lists the options."
+    return f"unexpected argument {extras[0]!r}: no option or input takes it; --help lists the arguments."
+
 
 def add_scan_options(parser: argparse.ArgumentParser, *, several: bool = False) -> None:
     """``MESH`` (optional: the embedded default scan), ``--unit`` and ``--up``."""

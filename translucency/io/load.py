@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import MeshError
+from ..errors import MeshError, command_line_active
 from ..geometry.mesh import TriangleMesh, validate_mesh_arrays
 from .formats.obj import read_obj
 from .formats.off import read_off
@@ -52,7 +52,6 @@ SUPPORTED_FORMATS: dict[str, str] = {
     **PYMESHLAB_FORMATS,
 }
 
-_COMMON_FORMATS = ".ply, .obj, .stl, .off, .vtk, .vtp"
 
 # content signatures that are unambiguous: a file that shows one of them under another suffix is misnamed
 _CONFIDENT_SIGNATURES = {".ply", ".off", ".vtk", ".vtp", ".vtu", ".vtm", ".glb"}
@@ -246,11 +245,16 @@ def detect_format(path) -> str | None:
     return None
 
 
+def _rename_or_pass(path: Path, sniffed: str) -> str:
+    """What to do with a file whose content is another format: rename it, or (in Python) pass ``format=``."""
+    rename = f"rename it to {path.stem}{sniffed}"
+    return rename if command_line_active() else f"{rename} or pass format={sniffed[1:]!r}"
+
+
 def _misnamed(path: Path, suffix: str, sniffed: str) -> str:
     expected = SUPPORTED_FORMATS[suffix].split(" (")[0]
     return (
-        f"{path.name} does not hold {expected} data but {sniffed[1:].upper()} data; "
-        f"rename it to {path.stem}{sniffed} or pass format={sniffed[1:]!r}."
+        f"{path.name} does not hold {expected} data but {sniffed[1:].upper()} data; {_rename_or_pass(path, sniffed)}."
     )
 
 
@@ -280,14 +284,11 @@ def _check_readable(path: Path, format: str | None) -> str:
         if suffix not in SUPPORTED_FORMATS:
             sniffed = detect_format(path) if first else None
             hint = (
-                f" (its content looks like {sniffed[1:].upper()}: rename it to {path.stem}{sniffed} or pass "
-                f"format={sniffed[1:]!r})"
-                if sniffed
-                else ""
+                f" (its content looks like {sniffed[1:].upper()}: {_rename_or_pass(path, sniffed)})" if sniffed else ""
             )
             raise MeshError(
                 f"{path.name} has an unknown mesh format {repr(suffix) if suffix else '(no extension)'}{hint}; "
-                f"use a supported one ({_COMMON_FORMATS} or another of translucency.io.SUPPORTED_FORMATS)."
+                f"use a supported one: {', '.join(s[1:] for s in SUPPORTED_FORMATS)}."
             )
     if not first:
         raise MeshError(f"{path.name} is empty (0 bytes); export the mesh again.")

@@ -167,16 +167,17 @@ def read_reference_file(path) -> ReferenceFile:
     else:
         import pyvista as pv
 
-        from .formats.vtk import mesh_from_vtk_polydata
+        from .formats.vtk import mesh_from_vtk_polydata, read_vtk_data
 
+        unreadable = MeshError(
+            f"cannot read {path.name} as VTK PolyData; is it a .vtp written by 'translucency reference'?"
+        )
         try:
-            poly = pv.read(path)
-        except (OSError, ValueError, RuntimeError):
-            poly = None
-        if not isinstance(poly, pv.PolyData) or poly.n_points == 0:
-            raise MeshError(
-                f"cannot read {path.name} as VTK PolyData; is it a .vtp written by 'translucency reference'?"
-            )
+            poly = read_vtk_data(path, suffix)
+        except MeshError:
+            raise unreadable from None
+        if not isinstance(poly, pv.PolyData):
+            raise unreadable
         points, triangles, point_data = mesh_from_vtk_polydata(poly, what=path.name)
         missing = [name for name in needed if name not in point_data]
         if missing:

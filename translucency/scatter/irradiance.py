@@ -48,11 +48,12 @@ eta        relative index of refraction n_inside / n_outside              1
 from __future__ import annotations
 
 import time
+import warnings
 from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
-from ..errors import InvalidParameterError
+from ..errors import InvalidParameterError, TranslucencyWarning
 from ..geometry.measure import row_lengths
 from .fresnel import fresnel_transmittance, refract
 from .lights import POINT_LIGHT_MIN_DISTANCE_MM, PointLight, as_light_list, point_light_irradiance
@@ -252,6 +253,28 @@ def _job(sample, points, normals) -> _Job:
     return _Job(light, kind, vector, rgb, front, cos[front], w[front], distance[front])
 
 
+def warn_near_point_lights(lights, points, areas) -> None:
+    """A :class:`~translucency.errors.TranslucencyWarning` for each point light nearer to a vertex than the
+    mesh's vertex spacing (the square root of the median vertex area, mm): the irradiance ``I / d^2`` of its
+    nearest vertices is then set by where the light sits between them, not by the surface, and ``B`` there means
+    little (a light on the surface gives any value up to ``I / (1 um)^2``)."""
+    if not len(points):
+        return
+    spacing = float(np.sqrt(np.median(areas)))
+    for light in lights:
+        if not isinstance(light, PointLight):
+            continue
+        nearest = float(np.min(np.linalg.norm(points - light.position_mm[None, :], axis=1)))
+        if nearest < spacing:
+            warnings.warn(
+                f"a point light at {', '.join(f'{v:.4g}' for v in light.position_mm)} mm is {nearest:.2g} mm from "
+                f"the surface, nearer than its vertex spacing ({spacing:.2g} mm): its irradiance (1/d^2) at the "
+                f"nearest vertices says little about the surface; move it at least {spacing:.2g} mm away.",
+                TranslucencyWarning,
+                stacklevel=3,
+            )
+
+
 def _irradiance(job, stats) -> np.ndarray:
     """Irradiance (W/m², k x 3) of a job's sample on a surface facing it, at its vertices."""
     if job.kind == "dir":
@@ -349,6 +372,7 @@ def incident_flux(
     points, normals, areas, degenerate = _validated_arrays(points, normals, areas)
     eta = _validated_eta(eta)
     lights = as_light_list(lights)
+    warn_near_point_lights(lights, points, areas)
     n = len(points)
     stats = IncidentStats(n_vertices=n, n_degenerate_normals=int(degenerate.sum()))
 

@@ -85,6 +85,11 @@ def extrapolation_distance(sigma_a, sigma_s, g):
     return 2.131 * diffusion_coefficient(sigma_a, sigma_s, g) / np.sqrt(alpha_reduced(sigma_a, sigma_s, g))
 
 
+#: The largest sigma_a or sigma_s (1/mm) a medium may have: a mean free path of a picometre, far below an atom's
+#: size (1e-7 mm). Beyond it the model's arithmetic overflows (at about 1e150/mm) long before any material is met.
+MAX_COEFFICIENT_PER_MM = 1e9
+
+
 def check_eta(eta, what: str = "") -> None:
     """Refuse a relative index of refraction (a number or an array) that is not finite or lies outside
     [1, :data:`~translucency.scatter.fresnel.ETA_MAX`], in one sentence (starting with ``what``, when given)."""
@@ -139,6 +144,14 @@ def validate_coefficients(sigma_a, sigma_s, g, eta, *, what: str = "medium"):
     if np.any((gg <= -1) | (gg >= 1)):
         raise InvalidParameterError(f"{what}: g must lie in (-1, 1), got {gg.tolist()}.")
     check_eta(e, what)
+    for name, value in (("sigma_a", a), ("sigma_s", s)):
+        if np.any(value > MAX_COEFFICIENT_PER_MM):
+            raise InvalidParameterError(
+                f"{what}: {name} = {value.max():g}/mm is beyond any material (a mean free path of "
+                f"{1 / value.max():.2g} mm, far below an atom's size); give coefficients in 1/mm, at most "
+                f"{MAX_COEFFICIENT_PER_MM:.0e}".replace("e+0", "e")
+                + "."
+            )
     if np.any(s * (1 - gg) <= 0):
         raise InvalidParameterError(
             f"{what}: the medium must scatter (sigma_s (1 - g) > 0), got sigma_s = {s.tolist()}, "

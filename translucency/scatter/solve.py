@@ -448,6 +448,29 @@ def warn_low_albedo(medium: Medium) -> None:
     )
 
 
+_TRANSPARENT_WARNED: set = set()
+
+
+def warn_transparent(medium: Medium, size_mm: float) -> None:
+    """A :class:`~translucency.errors.TranslucencyWarning` (once per material and size per process) when a
+    channel's reduced mean free path ``1 / sigma_t'`` is longer than the object (``size_mm``, its bounding box's
+    diagonal): light then crosses it without diffusing, and the diffusion models' ``B`` means little."""
+    long = np.flatnonzero(medium.mean_free_path > size_mm)
+    key = (medium.name, medium.sigma_a.tobytes(), medium.sigma_s.tobytes(), medium.g.tobytes(), round(size_mm, 6))
+    if not long.size or key in _TRANSPARENT_WARNED:
+        return
+    _TRANSPARENT_WARNED.add(key)
+    names = CHANNELS if medium.n_channels == len(CHANNELS) else [f"channel {c}" for c in range(medium.n_channels)]
+    which = ", ".join(f"{names[c]} {medium.mean_free_path[c]:.3g} mm" for c in long)
+    warnings.warn(
+        f"{medium.name}: a mean free path longer than the object ({which}; the object is {size_mm:.3g} mm across): "
+        "light crosses it without diffusing, and the diffusion models' answer means little; trace it instead "
+        "(translucency reference).",
+        TranslucencyWarning,
+        stacklevel=3,
+    )
+
+
 def unique_channels(medium: Medium):
     """Distinct coefficient sets of the medium's channels: ``(rows, channel_of)`` (identical channels once)."""
     table = np.stack([medium.sigma_a, medium.sigma_s, medium.g], axis=1)
@@ -540,6 +563,7 @@ def solve(
     )
     _check_reach(reach_mm, method, geometry, medium)
     warn_low_albedo(medium)
+    warn_transparent(medium, float(np.linalg.norm(np.ptp(geometry.points, axis=0))))
 
     start = time.perf_counter()
     memory_at_start = _memory_at_start(geometry)

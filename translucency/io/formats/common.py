@@ -2,19 +2,46 @@
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 
-__all__ = ["as_rgb8", "short_reason"]
+from ...errors import TranslucencyWarning
+
+__all__ = ["as_rgb8", "set_colors", "short_reason"]
+
+#: Float colours are read on the 0-255 scale when more than this fraction of their values exceeds 1, else on
+#: the 0-1 scale (values above 1 then clip to white): a few outliers do not turn a 0-1 scan black.
+SCALE_255_FRACTION = 0.01
 
 
 def as_rgb8(colors: np.ndarray) -> np.ndarray:
-    """Colours as uint8; float colours in [0, 1] are scaled by 255."""
+    """Finite colours as uint8: integers clipped to 0-255, floats on the 0-1 or the 0-255 scale by
+    :data:`SCALE_255_FRACTION`."""
     if colors.dtype == np.uint8:
         return colors
-    colors = colors.astype(np.float64)
-    if colors.size and np.nanmax(colors) <= 1.0:
-        colors = colors * 255.0
-    return np.clip(np.round(np.nan_to_num(colors)), 0, 255).astype(np.uint8)
+    values = colors.astype(np.float64)
+    if colors.dtype.kind == "f" and values.size and np.mean(values > 1.0) <= SCALE_255_FRACTION:
+        values = values * 255.0
+    return np.clip(np.round(values), 0, 255).astype(np.uint8)
+
+
+def set_colors(point_data: dict, colors, name: str) -> None:
+    """Put a scan's vertex colours into ``point_data["colors"]`` as 8-bit RGB(A) (:func:`as_rgb8`), or leave them
+    out with a warning naming ``name`` when any is NaN or infinite: a colour that is not a number says nothing of
+    the surface, and reading it as black would darken an albedo taken from the colours in silence."""
+    colors = np.asarray(colors)
+    if colors.dtype.kind == "f":
+        bad = int(np.count_nonzero(~np.all(np.isfinite(colors), axis=1)))
+        if bad:
+            warnings.warn(
+                f"{name}: {bad} of {len(colors)} vertex colours are NaN or infinite; the scan's colours are left "
+                "out (an albedo from the colours has none to take); export the colours again.",
+                TranslucencyWarning,
+                stacklevel=2,
+            )
+            return
+    point_data["colors"] = as_rgb8(colors)
 
 
 def short_reason(exc: BaseException) -> str:

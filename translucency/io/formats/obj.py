@@ -9,7 +9,7 @@ import numpy as np
 
 from ...errors import MeshError
 from ..triangulate import triangulate_polygons
-from .common import as_rgb8
+from .common import set_colors
 
 __all__ = ["read_obj"]
 
@@ -58,7 +58,7 @@ def read_obj(path: Path):
         ) from None
     point_data: dict[str, np.ndarray] = {}
     if width >= 6:  # v x y z r g b
-        point_data["colors"] = as_rgb8(values[:, 3:6])
+        set_colors(point_data, values[:, 3:6], path.name)
     # OBJ indices start at 1; negative ones count back from the last vertex defined before the face
     before = np.repeat(np.asarray(vertices_before_face, dtype=np.int64), sizes)
     corners = np.where(corners > 0, corners - 1, np.where(corners < 0, before + corners, -(len(values) + 1)))

@@ -9,7 +9,7 @@ import numpy as np
 
 from ...errors import MeshError
 from ..triangulate import triangulate_polygons
-from .common import as_rgb8
+from .common import set_colors
 
 __all__ = ["read_off"]
 
@@ -74,9 +74,7 @@ def read_off(path: Path):
     if match.group(2) and width >= column + 3:
         n_channels = 4 if width >= column + 4 else 3
         colors = values[:, column : column + n_channels]
-        point_data["colors"] = (
-            as_rgb8(colors) if colors.max(initial=0) <= 1.0 else np.clip(np.round(colors), 0, 255).astype(np.uint8)
-        )
+        set_colors(point_data, colors, path.name)
         column += n_channels
     if match.group(1) and width >= column + 2:
         point_data["texture_coordinates"] = values[:, column : column + 2]

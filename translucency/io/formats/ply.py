@@ -18,7 +18,7 @@ import numpy as np
 
 from ...errors import MeshError
 from ..triangulate import triangulate_polygon_lists, triangulate_polygons, triangulate_strips
-from .common import as_rgb8, short_reason
+from .common import set_colors, short_reason
 
 __all__ = ["PlyHeader", "read_ply"]
 
@@ -124,7 +124,7 @@ def read_ply(path: Path):
     if strips is not None:
         triangles.append(strips)
     triangles = np.concatenate(triangles) if triangles else np.empty((0, 3), np.int64)
-    point_data = _ply_point_data(vertex_data, [p for p in vertex[2] if p[1] is None])
+    point_data = _ply_point_data(vertex_data, [p for p in vertex[2] if p[1] is None], path.name)
     return points, triangles, point_data
 
 
@@ -222,7 +222,7 @@ def _read_ply_ascii_fast(path: Path, header: PlyHeader):
     return vertex_data, faces[:, 1:].copy(), None
 
 
-def _ply_point_data(vertex_data: dict, properties) -> dict[str, np.ndarray]:
+def _ply_point_data(vertex_data: dict, properties, file_name: str) -> dict[str, np.ndarray]:
     """Per-vertex properties other than x, y, z; colours as uint8 "colors", normals as "normals"."""
     native = {
         name: np.asarray(values).astype(np.asarray(values).dtype.newbyteorder("="), copy=False)
@@ -234,7 +234,7 @@ def _ply_point_data(vertex_data: dict, properties) -> dict[str, np.ndarray]:
         keys = [prefix + c for c in ("red", "green", "blue")]
         if all(k in native for k in keys) and "colors" not in point_data:
             channels = keys + ([prefix + "alpha"] if prefix + "alpha" in native else [])
-            point_data["colors"] = as_rgb8(np.stack([native[k] for k in channels], axis=1))
+            set_colors(point_data, np.stack([native[k] for k in channels], axis=1), file_name)
             used.update(channels)
     if all(k in native for k in ("nx", "ny", "nz")):
         point_data["normals"] = np.stack([native[k] for k in ("nx", "ny", "nz")], axis=1).astype(np.float64)

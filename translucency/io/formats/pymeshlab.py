@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from ...errors import MeshError
-from .common import as_rgb8, short_reason
+from .common import set_colors, short_reason
 
 __all__ = ["PYMESHLAB_FORMATS", "read_with_pymeshlab"]
 
@@ -58,7 +58,7 @@ def read_with_pymeshlab(path: Path, suffix: str):
     triangles = np.array(mesh.face_matrix(), dtype=np.int64).reshape(-1, 3)
     point_data: dict[str, np.ndarray] = {}
     if mesh.has_vertex_color():
-        point_data["colors"] = as_rgb8(np.array(mesh.vertex_color_matrix()))
+        set_colors(point_data, np.array(mesh.vertex_color_matrix()), path.name)
     if mesh.has_vertex_scalar():
         point_data["quality"] = np.array(mesh.vertex_scalar_array(), dtype=np.float64)
     return points, triangles, point_data

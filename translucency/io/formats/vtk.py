@@ -14,7 +14,7 @@ import numpy as np
 
 from ...errors import MeshError
 from ..triangulate import triangulate_polygons, triangulate_strips
-from .common import as_rgb8
+from .common import set_colors
 
 __all__ = ["VTK_FORMATS", "read_with_vtk", "mesh_from_vtk_polydata", "encode_polydata"]
 
@@ -33,6 +33,23 @@ VTK_FORMATS = {
 
 
 def read_with_vtk(path: Path, suffix: str):
+    """Points, triangles and per-vertex arrays of a VTK file (:func:`read_vtk_data`, then its surface)."""
+    import pyvista
+
+    data = read_vtk_data(path, suffix)
+    if not isinstance(data, pyvista.PolyData):
+        from vtkmodules.vtkFiltersGeometry import vtkDataSetSurfaceFilter
+
+        surface = vtkDataSetSurfaceFilter()
+        surface.SetInputData(data)
+        surface.Update()
+        data = pyvista.wrap(surface.GetOutput())
+    return mesh_from_vtk_polydata(data, what=path.name)
+
+
+def read_vtk_data(path: Path, suffix: str):
+    """A VTK file as a PyVista dataset (blocks combined), read with VTK's own messages kept from the user: a file
+    VTK cannot read, or one without vertices, is one sentence (:class:`MeshError`)."""
     import importlib
 
     import pyvista
@@ -56,14 +73,7 @@ def read_with_vtk(path: Path, suffix: str):
         raise MeshError(
             f"{path.name} holds no vertices (an empty or unreadable {description} file); export the mesh again."
         )
-    if not isinstance(data, pyvista.PolyData):
-        from vtkmodules.vtkFiltersGeometry import vtkDataSetSurfaceFilter
-
-        surface = vtkDataSetSurfaceFilter()
-        surface.SetInputData(data)
-        surface.Update()
-        data = pyvista.wrap(surface.GetOutput())
-    return mesh_from_vtk_polydata(data, what=path.name)
+    return data
 
 
 def mesh_from_vtk_polydata(poly, *, what: str = "the PolyData"):
@@ -110,12 +120,12 @@ def mesh_from_vtk_polydata(poly, *, what: str = "the PolyData"):
         values = np.array(poly.point_data[name])
         if values.ndim == 0 or len(values) != len(points) or values.dtype == object:
             continue
-        key = name
         if name.lower() in ("rgb", "rgba", "colors", "colours") and values.ndim == 2 and values.shape[1] in (3, 4):
-            key, values = "colors", as_rgb8(values)
+            set_colors(point_data, values, what)
         elif name.lower() == "normals" and values.ndim == 2 and values.shape[1] == 3:
-            key = "normals"
-        point_data[key] = values
+            point_data["normals"] = values
+        else:
+            point_data[name] = values
     return points, triangles, point_data
 
 
