@@ -427,47 +427,49 @@ _FAR_FIELD = {"exact": _exact_far_field, "cutoff": _cutoff_far_field, "tree": _t
 #: Reduced albedo below which the diffusion models are outside their range (README, "Models"): a solve
 #: warns once per material and process (:func:`warn_low_albedo`).
 LOW_ALBEDO = 0.5
-_LOW_ALBEDO_WARNED: set = set()
+#: The warnings about a material's range already given in this process, by (kind, material, size).
+_WARNED: set = set()
+
+
+def _warn_channels(kind: str, medium: Medium, channels, values, text: str, size_mm: float | None = None) -> None:
+    """Once per ``kind``, material (name and coefficients) and object size per process: a
+    :class:`~translucency.errors.TranslucencyWarning` ``text`` with ``{which}`` replaced by the named ``channels``
+    and their ``values`` (formatted text)."""
+    key = (kind, medium.name, medium.sigma_a.tobytes(), medium.sigma_s.tobytes(), medium.g.tobytes(), size_mm)
+    if not len(channels) or key in _WARNED:
+        return
+    _WARNED.add(key)
+    names = CHANNELS if medium.n_channels == len(CHANNELS) else [f"channel {c}" for c in range(medium.n_channels)]
+    which = ", ".join(f"{names[c]} {values[c]}" for c in channels)
+    warnings.warn(text.format(which=which), TranslucencyWarning, stacklevel=4)
 
 
 def warn_low_albedo(medium: Medium) -> None:
     """A :class:`~translucency.errors.TranslucencyWarning` (one sentence, once per material per process)
     when a channel's reduced albedo is below :data:`LOW_ALBEDO`."""
-    low = np.flatnonzero(medium.alpha_reduced < LOW_ALBEDO)
-    key = (medium.name, medium.sigma_a.tobytes(), medium.sigma_s.tobytes(), medium.g.tobytes())
-    if not low.size or key in _LOW_ALBEDO_WARNED:
-        return
-    _LOW_ALBEDO_WARNED.add(key)
-    names = CHANNELS if medium.n_channels == len(CHANNELS) else [f"channel {c}" for c in range(medium.n_channels)]
-    which = ", ".join(f"{names[c]} {medium.alpha_reduced[c]:.2g}" for c in low)
-    warnings.warn(
-        f"{medium.name}: reduced albedo below {LOW_ALBEDO} ({which}), where the diffusion models are outside "
+    _warn_channels(
+        "low albedo",
+        medium,
+        np.flatnonzero(medium.alpha_reduced < LOW_ALBEDO),
+        [f"{value:.2g}" for value in medium.alpha_reduced],
+        f"{medium.name}: reduced albedo below {LOW_ALBEDO} ({{which}}), where the diffusion models are outside "
         "their range; treat its subsurface light there as a rough estimate.",
-        TranslucencyWarning,
-        stacklevel=3,
     )
-
-
-_TRANSPARENT_WARNED: set = set()
 
 
 def warn_transparent(medium: Medium, size_mm: float) -> None:
     """A :class:`~translucency.errors.TranslucencyWarning` (once per material and size per process) when a
     channel's reduced mean free path ``1 / sigma_t'`` is longer than the object (``size_mm``, its bounding box's
     diagonal): light then crosses it without diffusing, and the diffusion models' ``B`` means little."""
-    long = np.flatnonzero(medium.mean_free_path > size_mm)
-    key = (medium.name, medium.sigma_a.tobytes(), medium.sigma_s.tobytes(), medium.g.tobytes(), round(size_mm, 6))
-    if not long.size or key in _TRANSPARENT_WARNED:
-        return
-    _TRANSPARENT_WARNED.add(key)
-    names = CHANNELS if medium.n_channels == len(CHANNELS) else [f"channel {c}" for c in range(medium.n_channels)]
-    which = ", ".join(f"{names[c]} {medium.mean_free_path[c]:.3g} mm" for c in long)
-    warnings.warn(
-        f"{medium.name}: a mean free path longer than the object ({which}; the object is {size_mm:.3g} mm across): "
-        "light crosses it without diffusing, and the diffusion models' answer means little; trace it instead "
-        "(translucency reference).",
-        TranslucencyWarning,
-        stacklevel=3,
+    _warn_channels(
+        "transparent",
+        medium,
+        np.flatnonzero(medium.mean_free_path > size_mm),
+        [f"{value:.3g} mm" for value in medium.mean_free_path],
+        f"{medium.name}: a mean free path longer than the object ({{which}}; the object is {size_mm:.3g} mm "
+        "across): light crosses it without diffusing, and the diffusion models' answer means little; trace it "
+        "instead (translucency reference).",
+        round(size_mm, 6),
     )
 
 
