@@ -179,7 +179,7 @@ def test_the_input_scan_is_never_overwritten(tmp_path, sphere_mesh):
     [
         (dict(radiance=np.zeros((3, 3))), "shape"),
         (dict(radiance=np.full((642, 3), np.nan)), "NaN"),
-        (dict(b=np.full((642, 3), 1e39)), "overflowing"),
+        (dict(b=np.full((642, 3), 1e39)), "beyond float32"),
         (dict(colors_rgb8=np.full((642, 3), 0.5)), "8-bit"),
         (dict(colors_rgb8=np.full((642, 3), 300)), "8-bit"),
         (dict(metadata={"material": "marble"}), "lacks coefficients"),

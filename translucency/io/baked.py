@@ -371,8 +371,8 @@ def _per_vertex(name: str, values, n: int, dtype) -> np.ndarray:
     if not np.all(np.isfinite(as_stored)):
         bad = int(np.count_nonzero(~np.all(np.isfinite(as_stored), axis=1)))
         raise InvalidParameterError(
-            f"{name} has {bad} vertices with NaN, infinite or float32-overflowing values; fix the computation "
-            "before baking."
+            f"{name} has {bad} vertices that are NaN, infinite or beyond float32 (3.4e38); nothing was written: a "
+            "baked file holds finite values only."
         )
     return as_stored
 

@@ -169,7 +169,10 @@ def _at_hits(triangles, normals, hits):
     unit normal (k, 3) (rays that escaped: any triangle, zero weights and normal)."""
     hit = hits.triangle >= 0
     corners = triangles[np.where(hit, hits.triangle, 0)]
-    weights = np.stack([1.0 - hits.u - hits.v, hits.u, hits.v], axis=1) * hit[:, None]
+    # Embree's (u, v) may leave the triangle by a rounding error (1 - u - v = -1e-9 on an edge): clipped and
+    # renormalised, every weight is >= 0, so the light that enters is >= 0 by construction
+    weights = np.clip(np.stack([1.0 - hits.u - hits.v, hits.u, hits.v], axis=1), 0.0, 1.0)
+    weights = weights / np.maximum(weights.sum(axis=1), 1e-300)[:, None] * hit[:, None]
     normal = np.einsum("kj,kjc->kc", weights, normals[corners])
     length = np.linalg.norm(normal, axis=1, keepdims=True)
     return corners, weights, normal / np.where(length > 0.0, length, 1.0)

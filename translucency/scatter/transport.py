@@ -26,11 +26,12 @@ T21       Fresnel transmittance out of the medium along the normal      1
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import BudgetError
+from ..errors import BudgetError, TranslucencyError, TranslucencyWarning, option
 from .budget import format_bytes, format_seconds
 from .hierarchy import GROUP_RECEIVERS
 from .irradiance import IncidentLight, carried_light, incident_flux
@@ -239,21 +240,32 @@ def transport(
 
     visibility = VisibilityCache() if visibility is None else visibility
     occluder, _ = visibility.occluder(surface.points, surface.triangles)
-    bounced = solve_bounces(
-        surface,
-        occluder,
-        B,
-        lights,
-        medium,
-        bounces=options.bounces,
-        model=options.model,
-        method=options.method,
-        tol=options.tol,
-        shadows=options.shadows,
-        progress=progress,
-        solver=solve_one,
-        **options.limits,
-    )
+    try:
+        bounced = solve_bounces(
+            surface,
+            occluder,
+            B,
+            lights,
+            medium,
+            bounces=options.bounces,
+            model=options.model,
+            method=options.method,
+            tol=options.tol,
+            shadows=options.shadows,
+            progress=progress,
+            solver=solve_one,
+            **options.limits,
+        )
+    except TranslucencyError as exc:
+        # after the first solve's work, at the resolution asked for: keep it and say what is missing (over the
+        # budget, a coarser proxy for everything would lose far more than the bounce adds: B at full resolution)
+        warnings.warn(
+            f"the light that enters the surface again was not added ({str(exc).rstrip('.')}); the result is the "
+            f"first-order light alone ({option('bounces', 0)} asks for that from the start).",
+            TranslucencyWarning,
+            stacklevel=2,
+        )
+        return Transport(B, None, solutions, {"bounces": 0, "bounce_failed": str(exc)}, timings)
     timings["bounce_gather"] = bounced.stats["seconds"]["gather"] + bounced.stats["seconds"]["specular"]
     timings["bounce_solve"] = bounced.stats["seconds"]["solve"]
     B = B + bounced.B
