@@ -237,3 +237,19 @@ def test_a_proxy_the_budget_forces_is_solved_at_the_tolerance_asked_for(monkeypa
     limit = 0.3 * full.stats["solver"]["budget"]["seconds"]
     result = scene.shade("marble", tol=0.3, bounces=0, time_limit=limit, warn=lambda line: None)
     assert result.stats["solver_vertices"] < mesh.n_points and len(tols) > 1 and set(tols) == {0.3}
+
+
+def test_a_proxy_the_budget_forces_is_said_before_its_solve_works():
+    """The line naming the proxy comes before the proxy's far field starts, not after the bake's work."""
+    points, triangles = icosphere(5, 20.0)
+    scene = Scene(TriangleMesh(points, triangles), shadows=False)
+    estimate = scene.shade("marble", time_limit=None).stats["solver"]["budget"]["seconds"]
+    events = []
+    scene.shade(
+        "marble",
+        time_limit=0.3 * estimate,
+        warn=lambda line: events.append("said"),
+        progress=lambda stage, fraction: events.append(stage),
+    )
+    assert events.count("said") == 1
+    assert events.index("said") < events.index("far field")

@@ -49,3 +49,31 @@ def test_an_unreadable_texture_is_one_sentence(tmp_path):
     bad.write_bytes(b"not a picture")
     with pytest.raises(MeshError, match="bad.png could not be read"):
         read_texture(bad)
+
+
+def test_a_texture_whose_header_claims_too_many_pixels_is_refused_before_decoding(tmp_path):
+    """A decompression bomb: a PNG of a few bytes whose header claims 100000 x 100000 pixels."""
+    import struct
+    import zlib
+
+    def chunk(kind, data):
+        return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data))
+
+    header = struct.pack(">IIBBBBB", 100_000, 100_000, 8, 2, 0, 0, 0)  # 8-bit RGB
+    idat = zlib.compress(b"\0" * 64)
+    (tmp_path / "bomb.png").write_bytes(
+        b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", header) + chunk(b"IDAT", idat) + chunk(b"IEND", b"")
+    )
+    with pytest.raises(MeshError, match=r"the texture bomb.png claims 100000 x 100000 pixels.*resample it"):
+        read_texture(tmp_path / "bomb.png")
+
+
+def test_an_unreadable_texture_names_no_library_text(tmp_path):
+    bad = tmp_path / "bad.png"
+    bad.write_bytes(b"not a picture")
+    with pytest.raises(MeshError) as caught:
+        read_texture(bad)
+    assert str(caught.value) == (
+        "the texture bad.png could not be read as an image (damaged, or in a format no installed reader handles); "
+        "check the file or save it as PNG."
+    )

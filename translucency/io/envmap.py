@@ -32,8 +32,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import TranslucencyError
-from ..memory import available_memory
-from .readable import regular_file
+from .readable import check_pixels, image_size, regular_file
 
 __all__ = ["EnvironmentMapError", "read_equirectangular", "RADIANCE_EXTENSIONS"]
 
@@ -41,8 +40,6 @@ RADIANCE_EXTENSIONS = (".hdr", ".pic")
 IMPLAUSIBLE_RADIANCE = 1e30  # RGBE goes up to ~1.7e38; anything this large is a decoding failure
 #: Bytes a decoded pixel takes while it is read: the reader's float32 RGB, and two float64 RGB copies.
 DECODED_PIXEL_BYTES = 3 * (4 + 8 + 8)
-#: The most pixels a map may have whatever the memory: 2**28 (16384 x 16384), beyond any sky map in use.
-MAX_PIXELS = 2**28
 _RADIANCE_RESOLUTION = re.compile(rb"^[-+][XY] +(\d+) +[-+][XY] +(\d+)$")
 
 
@@ -51,16 +48,10 @@ class EnvironmentMapError(TranslucencyError, ValueError):
 
 
 def check_pixel_count(name: str, height: int, width: int) -> None:
-    """Refuse an image whose header claims more pixels than :data:`MAX_PIXELS` or than the free memory can
-    decode (:data:`DECODED_PIXEL_BYTES` each), before anything is decoded: a header costs nothing to write."""
-    need = height * width * DECODED_PIXEL_BYTES
-    free = available_memory()
-    if height * width > MAX_PIXELS or (free is not None and need > free):
-        room = "" if free is None else f", and this machine has {free / 1e9:.1f} GB free"
-        raise EnvironmentMapError(
-            f"{name} claims {width} x {height} pixels, {need / 1e9:.1f} GB to decode{room}; "
-            "resample the map to at most 4096 x 2048 pixels."
-        )
+    """Refuse a map whose header claims too many pixels to decode (:func:`~translucency.io.readable.check_pixels`)."""
+    check_pixels(
+        name, height, width, DECODED_PIXEL_BYTES, EnvironmentMapError, "resample the map to at most 4096 x 2048 pixels"
+    )
 
 
 def _radiance_size(path: Path) -> tuple[int, int] | None:
@@ -119,12 +110,9 @@ def _read_radiance_hdr(path: Path) -> np.ndarray:
 def _read_with_imageio(path: Path) -> np.ndarray:
     import imageio.v3 as iio
 
-    try:
-        shape = iio.improps(path).shape
-    except Exception:  # noqa: BLE001 - no reader for it: imread below says so
-        shape = ()
-    if len(shape) >= 2:
-        check_pixel_count(path.name, int(shape[0]), int(shape[1]))
+    size = image_size(path)
+    if size is not None:
+        check_pixel_count(path.name, *size)
     try:
         pixels = iio.imread(path)
     except Exception:  # imageio raises OSError, ValueError or a plugin's own error

@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import MeshError
-from .formats.common import short_reason
+from .readable import check_pixels, image_size
 
 __all__ = ["read_texture", "sample_at_vertices"]
 
@@ -24,12 +24,18 @@ def read_texture(path: Path) -> np.ndarray:
 
     import imageio.v3 as iio
 
+    size = image_size(path)
+    if size is not None:  # 8-bit RGBA as read, and float64 RGB
+        check_pixels(f"the texture {path.name}", *size, 4 + 24, MeshError, "resample it to at most 8192 x 8192 pixels")
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # imageio's plugins warn while they try an unknown file
             image = np.asarray(iio.imread(path))
-    except Exception as exc:  # imageio raises many types; the sentence names the file and the reason
-        raise MeshError(f"the texture {path.name} could not be read ({short_reason(exc)}); check the file.") from None
+    except Exception:  # imageio raises many types, with its own words: the sentence has the file and what to do
+        raise MeshError(
+            f"the texture {path.name} could not be read as an image (damaged, or in a format no installed reader "
+            "handles); check the file or save it as PNG."
+        ) from None
     if image.ndim == 2:
         image = np.repeat(image[:, :, None], 3, axis=2)
     if image.ndim != 3 or image.shape[2] < 3:

@@ -41,6 +41,25 @@ __all__ = ["Scene", "shade", "shade_scan", "scene_for", "RELEASE_SCENE_VERTICES"
 RELEASE_SCENE_VERTICES = 1_000_000
 
 
+class _SaidBeforeWork:
+    """The progress callback of one attempt, which says a proxy's line (the budget forced it) once, when the
+    solve reports its first stage: after its plan has accepted the proxy, before its heavy work."""
+
+    def __init__(self, line, warn, progress):
+        self.line, self.warn, self.progress = line, warn, progress
+
+    def say(self) -> None:
+        """Say the line, once."""
+        if self.line is not None:
+            self.warn(self.line)
+            self.line = None
+
+    def __call__(self, stage, fraction):
+        self.say()
+        if self.progress is not None:
+            self.progress(stage, fraction)
+
+
 class Scene:
     """One mesh prepared for repeated shading, keeping every piece of work that a new call can reuse.
 
@@ -171,10 +190,8 @@ class Scene:
         lights = as_light_list(
             lights if lights is not None else DirectionalLight(default_light_direction(self.up), 1.0)
         )
-        solved = self._solve_within_budget(settings, lights, progress, solver)
-        if solved.coarsened is not None:
-            (warn or _warn)(solved.coarsened)
-        elif solved.decimation is not None and note is not None:
+        solved = self._solve_within_budget(settings, lights, progress, solver, warn or _warn)
+        if solved.coarsened is None and solved.decimation is not None and note is not None:
             auto_tol = _auto_tol(settings)
             note(
                 proxy_line(
@@ -188,10 +205,10 @@ class Scene:
             )
         return shade_result(self, settings, lights, solved)
 
-    def _solve_within_budget(self, settings: ShadeSettings, lights, progress, solver) -> Solved:
+    def _solve_within_budget(self, settings: ShadeSettings, lights, progress, solver, warn) -> Solved:
         """The solve at the resolution asked for, or on a coarser proxy while it is over a budget
         (:mod:`~translucency.app.shading.fallback`); the same solve asked again after a refusal over time goes
-        straight to its proxy."""
+        straight to its proxy. A proxy the budget forces is said to ``warn`` before it is solved."""
         refusal = None if solver is not None else refusal_key(settings, lights)
         resolution, reason, first = settings.resolution, None, 0
         if refusal in self._refused:
@@ -203,6 +220,13 @@ class Scene:
                 settings.material, resolution, _auto_tol(settings)
             )
             timings["geometry"] += time.perf_counter() - start
+            line = None
+            if reason is not None:
+                carried = carries_full_light(settings.material, edge)
+                line = coarsened_line(
+                    reason, settings.material, solver_mesh.n_points, self.mesh.n_points, edge, carried
+                )
+            said = _SaidBeforeWork(line, warn, progress)
             try:
                 solved = self._attempt(
                     settings,
@@ -210,7 +234,7 @@ class Scene:
                     attempt,
                     resolution,
                     (solver_mesh, decimation, edge, geometry),
-                    progress,
+                    said,
                     solver,
                     timings,
                 )
@@ -226,10 +250,8 @@ class Scene:
                 self._forget(geometry)
                 continue
             solved.geometry_reused, solved.refusal_reused = geometry_reused, first > 0
-            if reason is not None:
-                solved.coarsened = coarsened_line(
-                    reason, settings.material, solver_mesh.n_points, self.mesh.n_points, edge, solved.carried
-                )
+            said.say()  # a solver that reports no progress: said now
+            solved.coarsened = line
             return solved
         raise AssertionError("unreachable: coarser_edge raises when the attempts are spent")
 
