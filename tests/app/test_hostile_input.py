@@ -274,3 +274,13 @@ def test_a_bounce_that_breaks_keeps_the_first_order_result_and_says_so(monkeypat
     with pytest.warns(TranslucencyWarning, match=r"was not added .*the first-order light alone \(bounces=0 asks"):
         kept = tl.shade(mesh, "marble", bounces=1)
     assert np.array_equal(kept.B, first.B)
+
+
+@pytest.mark.parametrize("sigma_a, sigma_s", [(0.0, 1e-300), (1e9, 1e-300), (1e-300, 1e-300)])
+def test_a_medium_that_scatters_too_little_for_arithmetic_is_refused(sigma_a, sigma_s):
+    """A reduced scattering coefficient of 1e-300/mm made the kernels' arithmetic overflow after the solve (NaN
+    radiance, numpy's warnings); it is refused when the medium is made."""
+    from translucency.scatter.medium import Medium
+
+    with pytest.raises(InvalidParameterError, match=r"scatters too little for any diffuse light.*at least 1e-20/mm"):
+        Medium([sigma_a] * 3, [sigma_s] * 3, [0.0] * 3, 1.3, "thin")

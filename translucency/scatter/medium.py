@@ -88,6 +88,9 @@ def extrapolation_distance(sigma_a, sigma_s, g):
 #: The largest sigma_a or sigma_s (1/mm) a medium may have: a mean free path of a picometre, far below an atom's
 #: size (1e-7 mm). Beyond it the model's arithmetic overflows (at about 1e150/mm) long before any material is met.
 MAX_COEFFICIENT_PER_MM = 1e9
+#: The smallest reduced scattering coefficient sigma_s (1 - g) (1/mm): a reduced scattering length of 1e17 km,
+#: beyond any object. Below it the model's arithmetic under- and overflows (at about 1e-300/mm).
+MIN_REDUCED_SCATTERING_PER_MM = 1e-20
 
 
 def check_eta(eta, what: str = "") -> None:
@@ -152,6 +155,12 @@ def validate_coefficients(sigma_a, sigma_s, g, eta, *, what: str = "medium"):
                 f"{MAX_COEFFICIENT_PER_MM:.0e}".replace("e+0", "e")
                 + "."
             )
+    if np.any((s * (1 - gg) > 0) & (s * (1 - gg) < MIN_REDUCED_SCATTERING_PER_MM)):
+        raise InvalidParameterError(
+            f"{what}: the medium scatters too little for any diffuse light (sigma_s (1 - g) = "
+            f"{(s * (1 - gg)).min():.2g}/mm, a reduced scattering length of {1 / (s * (1 - gg)).min():.2g} mm); give "
+            f"sigma_s (1 - g) of at least {MIN_REDUCED_SCATTERING_PER_MM:.0e}/mm."
+        )
     if np.any(s * (1 - gg) <= 0):
         raise InvalidParameterError(
             f"{what}: the medium must scatter (sigma_s (1 - g) > 0), got sigma_s = {s.tolist()}, "
