@@ -101,3 +101,17 @@ class BudgetError(TranslucencyError):
 
 class TranslucencyWarning(UserWarning):
     """Something the user should know that did not stop the work (a coarser solve to fit a budget, say)."""
+
+
+def warn_user(message: str, category: type[Warning] = TranslucencyWarning) -> None:
+    """:func:`warnings.warn` of ``message`` attributed to the first caller outside this package: Python then shows
+    the user's own line (``script.py:12``), not the package's source, however deep the warning was raised."""
+    import os
+    import sys
+    import warnings
+
+    package = os.path.dirname(os.path.abspath(__file__)) + os.sep
+    frame, level = sys._getframe(1), 2
+    while frame is not None and os.path.abspath(frame.f_code.co_filename).startswith(package):
+        frame, level = frame.f_back, level + 1
+    warnings.warn(message, category, stacklevel=level)

@@ -284,3 +284,17 @@ def test_a_medium_that_scatters_too_little_for_arithmetic_is_refused(sigma_a, si
 
     with pytest.raises(InvalidParameterError, match=r"scatters too little for any diffuse light.*at least 1e-20/mm"):
         Medium([sigma_a] * 3, [sigma_s] * 3, [0.0] * 3, 1.3, "thin")
+
+
+def test_the_package_s_warnings_point_at_the_user_s_line():
+    """Python shows a warning with the file and line it is attributed to: the caller's own line, not the package's
+    source (``.../pipeline.py:883`` then ``solve(``), however deep in the package it was raised."""
+    import translucency as tl
+
+    points, triangles = icosphere(2, radius=6.0)
+    medium = tl.Medium([0.0] * 3, [1e-6] * 3, [0.0] * 3, 1.3, "clearer")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        tl.shade(tl.TriangleMesh(points, triangles), medium, bounces=0)
+    ours = [w for w in caught if "mean free path longer" in str(w.message)]
+    assert ours and all(w.filename == __file__ for w in ours)

@@ -510,7 +510,7 @@ def _scan(mesh, unit):
         from .shading.scan import load_scan
 
         return load_scan(None)[0]
-    return mesh_for_shading(mesh, unit, entry="compare", stacklevel=4)
+    return mesh_for_shading(mesh, unit, entry="compare")
 
 
 def _recorded(settings, scene) -> dict:

@@ -18,12 +18,11 @@ from __future__ import annotations
 
 import os
 import re
-import warnings
 from pathlib import Path
 
 import numpy as np
 
-from ..errors import MeshError, command_line_active
+from ..errors import MeshError, command_line_active, warn_user
 from ..geometry.mesh import TriangleMesh, validate_mesh_arrays
 from .formats.obj import read_obj
 from .formats.off import read_off
@@ -109,11 +108,11 @@ def load_mesh(path, unit: str | float | None = None, *, format: str | None = Non
         parse_unit(unit)  # a bad unit is refused before the file is read
     path = Path(path)
     points, triangles, point_data = read_mesh_arrays(path, format=format)
-    points, mm_per_unit = to_millimetres(points, triangles, unit, path.name, stacklevel=3)
+    points, mm_per_unit = to_millimetres(points, triangles, unit, path.name)
     return TriangleMesh(points, triangles, point_data, source=path, mm_per_unit=mm_per_unit, unit_inferred=unit is None)
 
 
-def to_millimetres(points, triangles, unit, name: str, *, stacklevel: int = 2) -> tuple[np.ndarray, float]:
+def to_millimetres(points, triangles, unit, name: str) -> tuple[np.ndarray, float]:
     """Mesh coordinates in their own ``unit`` converted to mm: ``(points in mm, mm per unit)``.
 
     The rule every mesh entering the library follows (files and in-memory meshes alike): ``unit`` is
@@ -132,14 +131,14 @@ def to_millimetres(points, triangles, unit, name: str, *, stacklevel: int = 2) -
     if unit is None:
         extent_in_file = _extent(points, triangles)
         inferred = infer_unit(extent_in_file, name)
-        warnings.warn(inferred_unit_message(name, extent_in_file, inferred), UnitInferredWarning, stacklevel=stacklevel)
+        warn_user(inferred_unit_message(name, extent_in_file, inferred), UnitInferredWarning)
         mm_per_unit = parse_unit(inferred)
     else:
         mm_per_unit = parse_unit(unit)
     points = np.asarray(points, dtype=np.float64) * mm_per_unit
     if not np.isfinite(points).all():
         raise MeshError(f"{name} has coordinates too large to convert to mm; check its unit and coordinates.")
-    check_extent(_extent(points, triangles), mm_per_unit, name, stacklevel=stacklevel)
+    check_extent(_extent(points, triangles), mm_per_unit, name)
     return points, mm_per_unit
 
 

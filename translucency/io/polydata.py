@@ -62,7 +62,7 @@ def is_pyvista_mesh(value) -> bool:
     return vtk_object is not None and isinstance(value, vtk_object.vtkDataSet)
 
 
-def as_triangle_mesh(mesh, unit=None, *, entry: str = "this function", stacklevel: int = 3) -> TriangleMesh:
+def as_triangle_mesh(mesh, unit=None, *, entry: str = "this function") -> TriangleMesh:
     """``mesh`` as a :class:`TriangleMesh` in mm: a TriangleMesh as it is, a PyVista (or VTK) dataset
     converted.
 
@@ -80,9 +80,6 @@ def as_triangle_mesh(mesh, unit=None, *, entry: str = "this function", stackleve
         already in mm, and a unit given with one is refused.
     entry : str
         The function's name, for the error sentences.
-    stacklevel : int
-        Where the unit warnings point: 2 is the caller of this function, 3 (default) its caller's caller
-        (the user's line when an entry point calls this directly).
 
     Raises
     ------
@@ -126,5 +123,5 @@ def as_triangle_mesh(mesh, unit=None, *, entry: str = "this function", stackleve
         unit = recorded
     points, triangles, point_data = mesh_from_vtk_polydata(data, what=name)
     points, triangles = validate_mesh_arrays(points, triangles, what=name)
-    points, mm_per_unit = to_millimetres(points, triangles, unit, name, stacklevel=stacklevel + 1)
+    points, mm_per_unit = to_millimetres(points, triangles, unit, name)
     return TriangleMesh(points, triangles, point_data, mm_per_unit=mm_per_unit, unit_inferred=unit is None)

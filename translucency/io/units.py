@@ -36,9 +36,8 @@ from __future__ import annotations
 
 import math
 import numbers
-import warnings
 
-from ..errors import InvalidParameterError, MeshError, option
+from ..errors import InvalidParameterError, MeshError, option, warn_user
 
 __all__ = [
     "UNITS",
@@ -278,7 +277,7 @@ def implausible_size_message(extent_mm: float, mm_per_unit: float, name: str = "
     )
 
 
-def check_extent(extent_mm: float, mm_per_unit: float, name: str = "the mesh", *, stacklevel: int = 2) -> None:
+def check_extent(extent_mm: float, mm_per_unit: float, name: str = "the mesh") -> None:
     """Raise for an absurd size, warn for an implausible one, else do nothing.
 
     Parameters
@@ -289,8 +288,6 @@ def check_extent(extent_mm: float, mm_per_unit: float, name: str = "the mesh", *
         The unit factor that was applied, in mm per file unit.
     name : str
         How the sentences name the mesh.
-    stacklevel : int
-        Passed to :func:`warnings.warn` (counted from the caller of this function).
 
     Raises
     ------
@@ -319,4 +316,4 @@ def check_extent(extent_mm: float, mm_per_unit: float, name: str = "the mesh", *
         )
     message = implausible_size_message(extent_mm, mm_per_unit, name)
     if message is not None:
-        warnings.warn(message, ImplausibleSizeWarning, stacklevel=stacklevel + 1)
+        warn_user(message, ImplausibleSizeWarning)

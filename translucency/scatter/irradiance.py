@@ -48,12 +48,11 @@ eta        relative index of refraction n_inside / n_outside              1
 from __future__ import annotations
 
 import time
-import warnings
 from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
-from ..errors import InvalidParameterError, TranslucencyWarning
+from ..errors import InvalidParameterError, warn_user
 from ..geometry.measure import row_lengths
 from .fresnel import fresnel_transmittance, refract
 from .lights import POINT_LIGHT_MIN_DISTANCE_MM, PointLight, as_light_list, point_light_irradiance
@@ -266,12 +265,10 @@ def warn_near_point_lights(lights, points, areas) -> None:
             continue
         nearest = float(np.min(np.linalg.norm(points - light.position_mm[None, :], axis=1)))
         if nearest < spacing:
-            warnings.warn(
+            warn_user(
                 f"a point light at {', '.join(f'{v:.4g}' for v in light.position_mm)} mm is {nearest:.2g} mm from "
                 f"the surface, nearer than its vertex spacing ({spacing:.2g} mm): its irradiance (1/d^2) at the "
-                f"nearest vertices says little about the surface; move it at least {spacing:.2g} mm away.",
-                TranslucencyWarning,
-                stacklevel=3,
+                f"nearest vertices says little about the surface; move it at least {spacing:.2g} mm away."
             )
 
 

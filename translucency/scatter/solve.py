@@ -48,14 +48,13 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
-import warnings
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from .. import memory
-from ..errors import BudgetError, InvalidParameterError, TranslucencyWarning, option
+from ..errors import BudgetError, InvalidParameterError, option, warn_user
 from ..geometry.measure import barycentric_vertex_areas, edge_lengths, mean_edge_length, row_lengths, triangle_areas
 from ..geometry.morton import by_lowest_vertex, morton_order
 from . import budget, cutoff, hierarchy, kernels, nearfield
@@ -441,7 +440,7 @@ def _warn_channels(kind: str, medium: Medium, channels, values, text: str, size_
     _WARNED.add(key)
     names = CHANNELS if medium.n_channels == len(CHANNELS) else [f"channel {c}" for c in range(medium.n_channels)]
     which = ", ".join(f"{names[c]} {values[c]}" for c in channels)
-    warnings.warn(text.format(which=which), TranslucencyWarning, stacklevel=4)
+    warn_user(text.format(which=which))
 
 
 def warn_low_albedo(medium: Medium) -> None:
@@ -721,12 +720,10 @@ def _checked_against_tree(work, B, tol) -> float:
         return 0.0
     error = float(np.percentile(np.abs(B - reference)[keep] / reference[keep], 99))
     if error > tol:
-        warnings.warn(
+        warn_user(
             f"{work.medium.name}: the relighting operators are {100 * error:.2g} % off a tree solve of the first "
             f"light at the 99th percentile, over the tolerance of {100 * tol:.2g} % (their fit to the refracted "
-            "direction, docs/physics.md §8.7); solve with method tree where that matters.",
-            TranslucencyWarning,
-            stacklevel=4,
+            "direction, docs/physics.md §8.7); solve with method tree where that matters."
         )
     return error
 

@@ -26,12 +26,11 @@ T21       Fresnel transmittance out of the medium along the normal      1
 
 from __future__ import annotations
 
-import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import BudgetError, TranslucencyError, TranslucencyWarning, option
+from ..errors import BudgetError, TranslucencyError, option, warn_user
 from .budget import format_bytes, format_seconds
 from .hierarchy import GROUP_RECEIVERS
 from .irradiance import IncidentLight, carried_light, incident_flux
@@ -259,11 +258,9 @@ def transport(
     except TranslucencyError as exc:
         # after the first solve's work, at the resolution asked for: keep it and say what is missing (over the
         # budget, a coarser proxy for everything would lose far more than the bounce adds: B at full resolution)
-        warnings.warn(
+        warn_user(
             f"the light that enters the surface again was not added ({str(exc).rstrip('.')}); the result is the "
-            f"first-order light alone ({option('bounces', 0)} asks for that from the start).",
-            TranslucencyWarning,
-            stacklevel=2,
+            f"first-order light alone ({option('bounces', 0)} asks for that from the start)."
         )
         return Transport(B, None, solutions, {"bounces": 0, "bounce_failed": str(exc)}, timings)
     timings["bounce_gather"] = bounced.stats["seconds"]["gather"] + bounced.stats["seconds"]["specular"]

@@ -78,19 +78,19 @@ def load_scan(path, unit=None, *, warn=None, note=None):
     return mesh, report, name
 
 
-def mesh_for_shading(mesh, unit=None, *, entry: str, stacklevel: int = 3):
+def mesh_for_shading(mesh, unit=None, *, entry: str):
     """The mesh an entry point shades: a :class:`~translucency.geometry.mesh.TriangleMesh` as it is (already
     cleaned, in mm), a ``pyvista.PolyData`` (or other PyVista dataset) converted in ``unit``
     (:func:`~translucency.io.polydata.as_triangle_mesh`: None reads its ``field_data["length_unit"]`` or
     infers the unit from the size) and repaired with :func:`~translucency.io.clean.clean_mesh`, as a scan
-    file would be. ``stacklevel`` as in :func:`~translucency.io.polydata.as_triangle_mesh`."""
+    file would be."""
     from ...geometry.mesh import TriangleMesh
     from ...io.clean import clean_mesh
     from ...io.polydata import as_triangle_mesh
 
     if isinstance(mesh, TriangleMesh):
         return as_triangle_mesh(mesh, unit, entry=entry)
-    mesh = as_triangle_mesh(mesh, unit, entry=entry, stacklevel=stacklevel + 1)
+    mesh = as_triangle_mesh(mesh, unit, entry=entry)
     return clean_mesh(mesh)[0]
 
 

@@ -333,11 +333,9 @@ def _auto_tol(settings: ShadeSettings) -> float:
 
 
 def _warn(message: str) -> None:
-    import warnings
+    from ...errors import warn_user
 
-    from ...errors import TranslucencyWarning
-
-    warnings.warn(message, TranslucencyWarning, stacklevel=3)
+    warn_user(message)
 
 
 def shade(

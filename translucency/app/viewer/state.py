@@ -203,7 +203,7 @@ class ViewerState:
             mesh, _, default_name = load_scan(None)
             name = name or default_name
         else:
-            mesh = mesh_for_shading(mesh, unit, entry="Viewer", stacklevel=4)
+            mesh = mesh_for_shading(mesh, unit, entry="Viewer")
         self.base_mesh = mesh
         self.name = name or (Path(mesh.source).stem if mesh.source is not None else "scan")
         self.medium = settings.material

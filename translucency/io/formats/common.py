@@ -2,11 +2,9 @@
 
 from __future__ import annotations
 
-import warnings
-
 import numpy as np
 
-from ...errors import TranslucencyWarning
+from ...errors import warn_user
 
 __all__ = ["as_rgb8", "set_colors", "short_reason"]
 
@@ -34,11 +32,9 @@ def set_colors(point_data: dict, colors, name: str) -> None:
     if colors.dtype.kind == "f":
         bad = int(np.count_nonzero(~np.all(np.isfinite(colors), axis=1)))
         if bad:
-            warnings.warn(
+            warn_user(
                 f"{name}: {bad} of {len(colors)} vertex colours are NaN or infinite; the scan's colours are left "
-                "out (an albedo from the colours has none to take); export the colours again.",
-                TranslucencyWarning,
-                stacklevel=2,
+                "out (an albedo from the colours has none to take); export the colours again."
             )
             return
     point_data["colors"] = as_rgb8(colors)
