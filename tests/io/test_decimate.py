@@ -257,3 +257,21 @@ def test_parts_that_cannot_be_welded_leave_the_mesh_to_one_pass(monkeypatch):
     monkeypatch.setattr(decimate, "decimation_parts", lambda n_triangles: 2)
     monkeypatch.setattr(decimate, "_weld", lambda *args: None)
     assert all(np.array_equal(a, b) for a, b in zip(whole, simplify_arrays(points, triangles, 500)))
+
+
+def test_under_a_memory_limit_the_parts_are_smaller_and_go_fewer_at_a_time(monkeypatch):
+    """The decimating children's memory (``CHILD_BYTES_PER_TRIANGLE`` per triangle of a part) is held within the
+    room a memory limit leaves beside what the process holds: a 6M-triangle mesh with 1 GB of room goes in three
+    parts of 2M triangles (700 MB each), one at a time; without a limit, one part per thread side by side."""
+    from translucency import memory
+    from translucency.io import decimate
+
+    monkeypatch.setattr(memory, "resident_memory", lambda: 1e9)
+    monkeypatch.setattr("translucency.threads.thread_count", lambda: 2)
+    assert decimate.decimation_plan(6_000_000) == (2, 2)
+    parts, at_once = decimate.decimation_plan(6_000_000, memory_limit_bytes=2e9)
+    assert (parts, at_once) == (3, 1)
+    assert -(-6_000_000 // parts) * decimate.CHILD_BYTES_PER_TRIANGLE <= 1e9
+    parts, at_once = decimate.decimation_plan(6_000_000, memory_limit_bytes=1.5e9)  # 0.5 GB of room
+    assert parts == 5 and at_once == 1
+    assert decimate.decimation_plan(1_000_000, memory_limit_bytes=2e9) == (1, 2)  # fits whole: as without a limit

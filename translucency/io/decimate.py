@@ -90,7 +90,13 @@ def target_face_count(surface_area: float, edge_length: float) -> int:
 
 
 def simplify_arrays(
-    points, triangles, target_faces: int, *, method: str = "fast-simplification", aggressiveness: float = 7.0
+    points,
+    triangles,
+    target_faces: int,
+    *,
+    method: str = "fast-simplification",
+    aggressiveness: float = 7.0,
+    memory_limit_bytes: float | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Decimate triangle arrays to about ``target_faces`` triangles (array-level form of :func:`decimate_mesh`).
 
@@ -104,6 +110,9 @@ def simplify_arrays(
     method : {"fast-simplification", "pymeshlab"}
     aggressiveness : float, default 7
         fast-simplification's ``agg`` (lower keeps the shape better and takes longer).
+    memory_limit_bytes : float, optional
+        What this process and its decimating children may hold together, bytes: the parts are made smaller and go
+        fewer at a time so that the children fit beside what the process holds (:func:`decimation_plan`).
 
     Returns
     -------
@@ -127,9 +136,11 @@ def simplify_arrays(
         from ..processes import run_in_child
 
         try:
-            parts = decimation_parts(len(triangles))
+            parts, at_once = decimation_plan(len(triangles), memory_limit_bytes)
             welded = (
-                _simplify_parts(points, triangles, target_faces, float(aggressiveness), parts) if parts > 1 else None
+                _simplify_parts(points, triangles, target_faces, float(aggressiveness), parts, at_once)
+                if parts > 1
+                else None
             )
             if welded is not None:
                 points, triangles = welded
@@ -225,6 +236,33 @@ def decimation_parts(n_triangles: int) -> int:
     return max(1, side_by_side, -(-n_triangles // PART_MAX_TRIANGLES))
 
 
+#: Bytes a decimating child holds per triangle of its part at its peak (its copy of the part and
+#: fast-simplification's own structures), calibrated on the decimation benchmark (bench/README.md, "Decimation in
+#: parts"): what a memory limit is spent on when parts are sized to it.
+CHILD_BYTES_PER_TRIANGLE = 350
+#: Under a memory limit a part has at least this many triangles (smaller parts weld into more cut strips).
+MIN_LIMITED_PART_TRIANGLES = 100_000
+
+
+def decimation_plan(n_triangles: int, memory_limit_bytes: float | None = None) -> tuple[int, int]:
+    """``(parts, at_once)``: the parts of :func:`decimation_parts`, and how many are decimated side by side (one per
+    thread). Under ``memory_limit_bytes`` (what this process and its children may hold, bytes), the room left beside
+    what the process holds now is shared: parts of at most ``room / CHILD_BYTES_PER_TRIANGLE`` triangles (at least
+    :data:`MIN_LIMITED_PART_TRIANGLES`), as many at once as fit."""
+    from ..memory import resident_memory
+    from ..threads import thread_count
+
+    parts, at_once = decimation_parts(n_triangles), thread_count()
+    if memory_limit_bytes is None:
+        return parts, at_once
+    room = max(float(memory_limit_bytes) - resident_memory(), 0.0)
+    largest = max(MIN_LIMITED_PART_TRIANGLES, int(room / CHILD_BYTES_PER_TRIANGLE))
+    if n_triangles > largest:
+        parts = max(parts, -(-int(n_triangles) // largest))
+    part_bytes = -(-int(n_triangles) // parts) * CHILD_BYTES_PER_TRIANGLE
+    return parts, max(1, min(at_once, int(room // part_bytes)))
+
+
 def fast_simplify(points, triangles, target_faces: int, aggressiveness: float, keep_border: bool = False):
     """fast-simplification's quadric decimation of writable C-ordered arrays (float64 points in mm, int32
     triangles) to about ``target_faces`` triangles: ``(points, triangles)`` as it returns them.
@@ -239,10 +277,10 @@ def fast_simplify(points, triangles, target_faces: int, aggressiveness: float, k
     )
 
 
-def _simplify_parts(points, triangles, target_faces: int, aggressiveness: float, parts: int):
+def _simplify_parts(points, triangles, target_faces: int, aggressiveness: float, parts: int, at_once: int):
     """The mesh cut into ``parts`` slabs of triangles along its longest side, each decimated in a child process
-    of its own with its cuts kept (:func:`fast_simplify` with ``keep_border``), as many at once as this process
-    has threads, and welded again.
+    of its own with its cuts kept (:func:`fast_simplify` with ``keep_border``), ``at_once`` at a time, and
+    welded again.
 
     Each part is asked for its share of ``PART_SURPLUS * target_faces`` triangles and two per vertex on its cut
     (the triangles along a kept cut stay: a part asked for fewer would be decimated far past its shape).
@@ -251,7 +289,6 @@ def _simplify_parts(points, triangles, target_faces: int, aggressiveness: float,
     caller decimates the whole mesh in one pass.
     """
     from ..processes import run_in_children
-    from ..threads import thread_count
 
     points = np.asarray(points, dtype=np.float64)
     triangles = np.asarray(triangles)
@@ -286,7 +323,7 @@ def _simplify_parts(points, triangles, target_faces: int, aggressiveness: float,
         )
     del chosen, used
     cut_points, cut_uses = points[on_cut], uses[on_cut]
-    results = run_in_children(fast_simplify, jobs, at_once=thread_count())
+    results = run_in_children(fast_simplify, jobs, at_once=at_once)
     del jobs
     return _weld(cut_points, cut_uses, results)
 
@@ -483,6 +520,7 @@ def decimate_mesh(
     target_edge_length: float | None = None,
     method: str = "fast-simplification",
     aggressiveness: float = 7.0,
+    memory_limit_bytes: float | None = None,
 ) -> Decimation:
     """Decimate a mesh to a proxy and map the full mesh onto it.
 
@@ -502,6 +540,8 @@ def decimate_mesh(
         See :data:`METHODS`.
     aggressiveness : float, default 7
         fast-simplification's ``agg``.
+    memory_limit_bytes : float, optional
+        What this process and the decimation's children may hold together, bytes (:func:`simplify_arrays`).
 
     Returns
     -------
@@ -541,7 +581,12 @@ def decimate_mesh(
         proxy, used_method = mesh, "none"
     else:
         points, triangles = simplify_arrays(
-            mesh.points, mesh.triangles, target_faces, method=method, aggressiveness=aggressiveness
+            mesh.points,
+            mesh.triangles,
+            target_faces,
+            method=method,
+            aggressiveness=aggressiveness,
+            memory_limit_bytes=memory_limit_bytes,
         )
         point_data = {}
         carried = {name: values for name, values in mesh.point_data.items() if name != "normals"}

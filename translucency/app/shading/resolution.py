@@ -146,13 +146,16 @@ def proxy_edge(mean_edge, medium, resolution, tol, mesh):
     return edge
 
 
-def solver_mesh_for(mesh, edge):
-    """The mesh the solver runs on: ``(mesh or proxy, Decimation or None, proxy edge length or None)``."""
+def solver_mesh_for(mesh, edge, memory_limit=None):
+    """The mesh the solver runs on: ``(mesh or proxy, Decimation or None, proxy edge length or None)``; a proxy's
+    decimation holds the process and its children within ``memory_limit`` (GB) when given."""
     from ...io.decimate import decimate_mesh
+    from ...scatter.budget import GB
 
     if edge is None:
         return mesh, None, None
-    decimation = decimate_mesh(mesh, target_edge_length=edge)
+    limit_bytes = None if memory_limit is None else memory_limit * GB
+    decimation = decimate_mesh(mesh, target_edge_length=edge, memory_limit_bytes=limit_bytes)
     if decimation.method == "none":
         return mesh, None, None
     return decimation.proxy, decimation, edge

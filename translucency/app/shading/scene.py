@@ -141,15 +141,16 @@ class Scene:
             self._areas.flags.writeable = False  # shared with the full-resolution surface's cache
         return self._areas
 
-    def solver_mesh(self, medium, resolution="full", tol=DEFAULT_TOL):
+    def solver_mesh(self, medium, resolution="full", tol=DEFAULT_TOL, memory_limit=None):
         """``(solver mesh, Decimation or None, edge or None, SurfaceGeometry, reused)`` for a resolution (``tol``: the
         per-vertex tolerance that sets the edge of "auto",
-        :func:`~translucency.app.shading.resolution.auto_proxy_edge`)."""
+        :func:`~translucency.app.shading.resolution.auto_proxy_edge`; ``memory_limit``, GB: what a proxy's
+        decimation may hold)."""
         edge = proxy_edge(self.mean_edge, medium, resolution, tol, self.mesh)
         key = None if edge is None else round(edge, 9)  # decided before decimating: a cache hit costs nothing
         if key in self._solver_meshes:
             return (*self._solver_meshes[key], True)
-        mesh, decimation, edge = solver_mesh_for(self.mesh, edge)
+        mesh, decimation, edge = solver_mesh_for(self.mesh, edge, memory_limit)
         full = decimation is None
         geometry = transport.SurfaceGeometry(
             mesh.points,
@@ -217,7 +218,7 @@ class Scene:
         for attempt in range(first, COARSER_ATTEMPTS + 1):
             start = time.perf_counter()
             solver_mesh, decimation, edge, geometry, geometry_reused = self.solver_mesh(
-                settings.material, resolution, _auto_tol(settings)
+                settings.material, resolution, _auto_tol(settings), settings.memory_limit
             )
             timings["geometry"] += time.perf_counter() - start
             line = None
