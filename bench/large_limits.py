@@ -23,6 +23,7 @@ records why. Writes ``large_limits.json`` and ``large_limits.md`` into ``bench/r
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import subprocess
 import sys
@@ -84,7 +85,8 @@ def run_case(name: str, folder: Path, time_limit: float) -> dict:
                 break
             time.sleep(0.2)
     seconds = time.perf_counter() - start
-    lines = [line.strip() for line in log.read_text(errors="replace").replace("\r", "\n").splitlines() if line.strip()]
+    text = log.read_text(errors="replace").replace("\r", "\n").replace(f"{folder}{os.sep}", "")  # names only
+    lines = [line.strip() for line in text.splitlines() if line.strip()]
     status = status or ("baked" if process.returncode == 0 else f"failed (exit {process.returncode})")
     return {
         "case": name,
@@ -129,7 +131,18 @@ def main():
         for name in args.only or list(CASES):
             payload["rows"].append(run_case(name, Path(folder), args.time_limit))
             print(payload["rows"][-1], flush=True)
-    write_results(output_dir(False), "large_limits", payload, table(payload["rows"]))
+    write_results(output_dir(False), "large_limits", *merged(payload))
+
+
+def merged(payload) -> tuple[str, dict, str]:
+    """``(name, payload, table)`` with the rows of an earlier run kept for the cases this run did not make (a run
+    with ``--only`` replaces its own rows)."""
+    earlier = output_dir(False) / "large_limits.json"
+    if earlier.exists():
+        made = {row["case"] for row in payload["rows"]}
+        kept = [row for row in json.loads(earlier.read_text()).get("rows", []) if row["case"] not in made]
+        payload["rows"] = sorted(kept + payload["rows"], key=lambda row: list(CASES).index(row["case"]))
+    return "large_limits", payload, table(payload["rows"])
 
 
 if __name__ == "__main__":
