@@ -298,3 +298,50 @@ def test_the_package_s_warnings_point_at_the_user_s_line():
         tl.shade(tl.TriangleMesh(points, triangles), medium, bounces=0)
     ours = [w for w in caught if "mean free path longer" in str(w.message)]
     assert ours and all(w.filename == __file__ for w in ours)
+
+
+@pytest.mark.parametrize(
+    "content, words",
+    [
+        (b"\xff\xfe\x00binary", "is not UTF-8 text; save it as a TOML or JSON text file"),
+        (b'{"reflectance": 0.5, "mfp":', "is not valid JSON"),
+        (b"[1, 2, 3]", "must hold one table of keys and values"),
+    ],
+)
+def test_a_corrupt_material_file_is_one_sentence_without_an_exception_name(
+    tmp_path, small_sphere, capsys, content, words
+):
+    (tmp_path / "jade.json").write_bytes(content)
+    code = cli.main(
+        [
+            "bake",
+            str(small_sphere),
+            "--unit",
+            "mm",
+            "--material",
+            str(tmp_path / "jade.json"),
+            "-o",
+            str(tmp_path / "o"),
+        ]
+    )
+    line = one_sentence(capsys.readouterr().err)
+    assert code == 2 and words in line
+    assert "Error" not in line.replace("translucency: error:", "")
+
+
+def test_a_material_file_that_is_a_folder_is_one_sentence(tmp_path, small_sphere, capsys):
+    (tmp_path / "jade.json").mkdir()
+    code = cli.main(
+        [
+            "bake",
+            str(small_sphere),
+            "--unit",
+            "mm",
+            "--material",
+            str(tmp_path / "jade.json"),
+            "-o",
+            str(tmp_path / "o"),
+        ]
+    )
+    assert code == 2
+    assert "is a directory, not a TOML or JSON file" in one_sentence(capsys.readouterr().err)
