@@ -247,7 +247,8 @@ def test_the_output_suffix_or_format_names_the_format(tmp_path):
         tmp_path / "o" / "b_m.glb",
     ]
     assert batch.output_paths([a], tmp_path / "x.vtp", "m", "vtp") == [tmp_path / "x.vtp"]
-    assert batch.output_paths([a], tmp_path / "x.obj", "m") == [tmp_path / "x.obj" / "a_m.ply"]  # a folder
+    with pytest.raises(InvalidParameterError, match=r"names a \.obj file, which a bake does not write"):
+        batch.output_paths([a], tmp_path / "x.obj", "m")  # a mesh's suffix names a file, not a folder
     with pytest.raises(InvalidParameterError, match="names a .vtp file but format='glb' was given"):
         batch.output_paths([a], tmp_path / "x.vtp", "m", "glb")
     with pytest.raises(InvalidParameterError, match="format must be one of ply, vtp, vtk, glb, gltf"):
@@ -351,7 +352,7 @@ def test_console_progress_prints_failures_and_warnings(tmp_path):
     text = stream.getvalue()
     assert "a.ply: far field" in text and "2/2" in text
     assert "translucency: warning: a.ply: a is 0.2 mm across" in text
-    assert "translucency: error: b.ply: b.ply is empty." in text
+    assert "translucency: error: b.ply is empty." in text
 
 
 def test_summary_table():

@@ -216,7 +216,7 @@ def test_a_mesh_of_another_format_names_the_renaming_not_python_keywords(tmp_pat
 def test_coefficients_beyond_any_material_are_refused_before_the_solve():
     from translucency.scatter.medium import Medium
 
-    with pytest.raises(InvalidParameterError, match=r"sigma_s = 1e\+300/mm is beyond any material.*at most 1e9\."):
+    with pytest.raises(InvalidParameterError, match=r"sigma_s = 1e\+300/mm is beyond any material.*at most 1e12\."):
         Medium([1e-3] * 3, [1e300] * 3, [0.0] * 3, 1.3, "absurd")
 
 
@@ -276,7 +276,7 @@ def test_a_bounce_that_breaks_keeps_the_first_order_result_and_says_so(monkeypat
     assert np.array_equal(kept.B, first.B)
 
 
-@pytest.mark.parametrize("sigma_a, sigma_s", [(0.0, 1e-300), (1e9, 1e-300), (1e-300, 1e-300)])
+@pytest.mark.parametrize("sigma_a, sigma_s", [(0.0, 1e-300), (1e12, 1e-300), (1e-300, 1e-300)])
 def test_a_medium_that_scatters_too_little_for_arithmetic_is_refused(sigma_a, sigma_s):
     """A reduced scattering coefficient of 1e-300/mm made the kernels' arithmetic overflow after the solve (NaN
     radiance, numpy's warnings); it is refused when the medium is made."""
@@ -345,3 +345,35 @@ def test_a_material_file_that_is_a_folder_is_one_sentence(tmp_path, small_sphere
     )
     assert code == 2
     assert "is a directory, not a TOML or JSON file" in one_sentence(capsys.readouterr().err)
+
+
+# -------------------------------------------------------------------------------------------------
+# small faults of the command line
+# -------------------------------------------------------------------------------------------------
+def test_an_output_that_names_a_file_a_bake_does_not_write_is_refused(small_sphere, tmp_path, capsys):
+    """``-o x.obj`` used to bake into a folder named ``x.obj``."""
+    code = cli.main(["bake", str(small_sphere), "--unit", "mm", "-o", str(tmp_path / "x.obj")])
+    assert code == 2
+    assert "names a .obj file, which a bake does not write" in one_sentence(capsys.readouterr().err)
+    assert not (tmp_path / "x.obj").exists()
+
+
+def test_no_output_folder_is_left_when_every_input_failed(tmp_path, capsys):
+    out = tmp_path / "made" / "deeper"
+    assert cli.main(["bake", str(tmp_path / "missing.ply"), "-o", str(out)]) != 0
+    err = capsys.readouterr().err
+    assert not (tmp_path / "made").exists()
+    line = one_sentence(err)
+    assert line.count("missing.ply") == 1, line  # the path once, not "missing.ply: .../missing.ply does not exist"
+
+
+def test_a_low_albedo_is_not_rounded_up_to_the_threshold_it_is_below():
+    import translucency as tl
+    from translucency.errors import TranslucencyWarning
+
+    points, triangles = icosphere(2, radius=20.0)
+    medium = tl.Medium([0.5004] * 3, [0.4996] * 3, [0.0] * 3, 1.3, "at the edge")
+    with pytest.warns(
+        TranslucencyWarning, match=r"reduced albedo below 0\.5 \(red 0\.4996, green 0\.4996, blue 0\.4996\)"
+    ):
+        tl.shade(tl.TriangleMesh(points, triangles), medium, bounces=0)

@@ -90,7 +90,7 @@ def test_console_progress_of_worker_files_is_one_line_per_file():
     progress.finished(0, batch.BakeRecord("a/a.ply", "o/a.ply", seconds=1.5))
     progress.end()
     assert stream.getvalue().splitlines() == [
-        "translucency: error: b.ply: b.ply is empty.",
+        "translucency: error: b.ply is empty.",
         "[1/2] b.ply: failed (0.01 s)",
         "[2/2] a.ply: baked (1.50 s)",
     ]
@@ -106,7 +106,7 @@ def test_console_progress_quiet_keeps_errors_and_warnings_only():
     progress.end()
     assert stream.getvalue().splitlines() == [
         "translucency: warning: a.ply is 0.2 mm across; did you mean m?",
-        "translucency: error: b.ply: b.ply is empty.",
+        "translucency: error: b.ply is empty.",
     ]
 
 

@@ -31,6 +31,7 @@ already running finishes its file, written atomically like every output (a compl
 
 from __future__ import annotations
 
+import contextlib
 import os
 import re
 import time
@@ -312,6 +313,15 @@ def failure_sentence(exc: BaseException) -> str:
 # --------------------------------------------------------------------------------------------------
 # output names
 # --------------------------------------------------------------------------------------------------
+def _other_file_suffixes() -> set:
+    """Suffixes that name a file a bake does not write (the meshes it reads, pictures, tables): an output ending in
+    one is a mistake, not a folder's name."""
+    from ..io.load import SUPPORTED_FORMATS
+    from .exports import RESULT_SUFFIXES
+
+    return (set(SUPPORTED_FORMATS) | {".png", ".jpg", ".jpeg", ".npz", ".csv", ".json", ".txt"}) - set(RESULT_SUFFIXES)
+
+
 def output_paths(sources, output, material_name: str, format: str | None = None) -> list[Path]:
     """The file each source is baked to (``<stem>_<material>.<format>``); creates nothing.
 
@@ -364,6 +374,11 @@ def output_paths(sources, output, material_name: str, format: str | None = None)
         raise InvalidParameterError(
             f"the output {text} is an existing file, not a folder; pass a folder, or a file name ending in "
             f"{', '.join(RESULT_SUFFIXES)} when baking one mesh."
+        )
+    if suffix in _other_file_suffixes() and not output.is_dir() and not text.endswith(("/", os.sep)):
+        raise InvalidParameterError(
+            f"the output {text} names a {suffix} file, which a bake does not write; end it in "
+            f"{', '.join(RESULT_SUFFIXES)}, or give a folder ({output.with_suffix('')}/)."
         )
     taken = set(inputs)
     paths = []
@@ -448,8 +463,9 @@ def bake_files(
     labels = [_source_label(source) for source in sources]
     _check_outputs(outputs)
     client = None if scheduler is None else _dask_client(scheduler)
+    made: list = []
     try:
-        _make_folders(outputs)
+        made = _make_folders(outputs)
         records: list = [None] * len(sources)
 
         def done(index, result):
@@ -496,6 +512,9 @@ def bake_files(
     finally:
         if client is not None and client is not scheduler:
             client.close()
+        for folder in made:  # made for this bake and still empty (every input failed): not left behind
+            with contextlib.suppress(OSError):
+                folder.rmdir()
     return records
 
 
@@ -516,14 +535,18 @@ def _check_outputs(outputs) -> None:
             )
 
 
-def _make_folders(outputs) -> None:
+def _make_folders(outputs) -> list[Path]:
+    """Make the outputs' folders; the ones made here, deepest first."""
+    made = set()
     for folder in {Path(o).parent for o in outputs}:
+        made.update(p for p in (folder, *folder.parents) if not p.exists())
         try:
             folder.mkdir(parents=True, exist_ok=True)
         except OSError as exc:
             raise TranslucencyError(
                 f"cannot create the output folder {folder} ({exc.strerror or exc}); choose a writable place."
             ) from exc
+    return sorted(made, key=lambda path: len(path.parts), reverse=True)
 
 
 # --------------------------------------------------------------------------------------------------

@@ -110,9 +110,15 @@ class ConsoleProgress(BakeProgress):
 
     @staticmethod
     def _line(source: str, kind: str, message: str) -> str:
-        """``translucency: [warning: ]<file>: <message>``, the file named once (most messages name it)."""
-        about = "" if not source or message.startswith(Path(source).name) else f"{source}: "
-        return f"translucency: {'warning: ' if kind == 'warning' else ''}{about}{message}"
+        """``translucency: [warning: |error: ]<file>: <message>``, the file named once (most messages start with its
+        name; an error names it as given, with its folder, which tells apart two files of one name in a batch)."""
+        lead = {"warning": "warning: ", "error": "error: "}.get(kind, "")
+        name = Path(source).name if source else ""
+        if not source or message.startswith(source):
+            return f"translucency: {lead}{message}"
+        if name and message.startswith(name):
+            return f"translucency: {lead}{source if kind == 'error' else name}{message[len(name) :]}"
+        return f"translucency: {lead}{source}: {message}"
 
     def finished(self, index, record):
         """Count the file; print its notes, warnings and error not printed yet, and its line when not on a
@@ -125,7 +131,7 @@ class ConsoleProgress(BakeProgress):
                 if (index, message) not in self._said:
                     self._print(self._line(record.source, kind, message))
         if not record.ok:
-            self._print(f"translucency: error: {record.source}: {record.error}")
+            self._print(self._line(record.source, "error", record.error))
         if self._files is not None:
             self._files.update(1)
         elif self._mode() == "lines":

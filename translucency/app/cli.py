@@ -595,7 +595,7 @@ def _add_reference_parser(sub) -> None:
         type=int,
         default=DEFAULT_SPP,
         metavar="N",
-        help=f"paths per vertex and channel; the noise falls as 1/sqrt(N) (default {DEFAULT_SPP})",
+        help=f"paths per vertex and channel, at least 2; the noise falls as 1/sqrt(N) (default {DEFAULT_SPP})",
     )
     p.add_argument("--seed", type=int, default=0, help="seed of the random numbers (default 0)")
     p.add_argument(

@@ -25,6 +25,7 @@ A               boundary reflection parameter (fresnel.py)               1
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -85,9 +86,9 @@ def extrapolation_distance(sigma_a, sigma_s, g):
     return 2.131 * diffusion_coefficient(sigma_a, sigma_s, g) / np.sqrt(alpha_reduced(sigma_a, sigma_s, g))
 
 
-#: The largest sigma_a or sigma_s (1/mm) a medium may have: a mean free path of a picometre, far below an atom's
-#: size (1e-7 mm). Beyond it the model's arithmetic overflows (at about 1e150/mm) long before any material is met.
-MAX_COEFFICIENT_PER_MM = 1e9
+#: The largest sigma_a or sigma_s (1/mm) a medium may have: a mean free path of a femtometre, far below an atom's
+#: size (1e-7 mm). Far beyond it the model's arithmetic overflows (at about 1e150/mm).
+MAX_COEFFICIENT_PER_MM = 1e12
 #: The smallest reduced scattering coefficient sigma_s (1 - g) (1/mm): a reduced scattering length of 1e17 km,
 #: beyond any object. Below it the model's arithmetic under- and overflows (at about 1e-300/mm).
 MIN_REDUCED_SCATTERING_PER_MM = 1e-20
@@ -149,11 +150,10 @@ def validate_coefficients(sigma_a, sigma_s, g, eta, *, what: str = "medium"):
     check_eta(e, what)
     for name, value in (("sigma_a", a), ("sigma_s", s)):
         if np.any(value > MAX_COEFFICIENT_PER_MM):
+            largest = f"1e{round(math.log10(MAX_COEFFICIENT_PER_MM))}"
             raise InvalidParameterError(
                 f"{what}: {name} = {value.max():g}/mm is beyond any material (a mean free path of "
-                f"{1 / value.max():.2g} mm, far below an atom's size); give coefficients in 1/mm, at most "
-                f"{MAX_COEFFICIENT_PER_MM:.0e}".replace("e+0", "e")
-                + "."
+                f"{1 / value.max():.2g} mm, far below an atom's size); give coefficients in 1/mm, at most {largest}."
             )
     if np.any((s * (1 - gg) > 0) & (s * (1 - gg) < MIN_REDUCED_SCATTERING_PER_MM)):
         raise InvalidParameterError(

@@ -443,6 +443,15 @@ def _warn_channels(kind: str, medium: Medium, channels, values, text: str, size_
     warn_user(text.format(which=which))
 
 
+def _shown_below(value: float, limit: float) -> str:
+    """``value`` with as few significant digits as keep it visibly below ``limit`` (0.4996 as "0.4996", not "0.5")."""
+    for digits in (2, 3, 4, 6):
+        text = f"{value:.{digits}g}"
+        if float(text) < limit:
+            return text
+    return repr(float(value))
+
+
 def warn_low_albedo(medium: Medium) -> None:
     """A :class:`~translucency.errors.TranslucencyWarning` (one sentence, once per material per process)
     when a channel's reduced albedo is below :data:`LOW_ALBEDO`."""
@@ -450,7 +459,7 @@ def warn_low_albedo(medium: Medium) -> None:
         "low albedo",
         medium,
         np.flatnonzero(medium.alpha_reduced < LOW_ALBEDO),
-        [f"{value:.2g}" for value in medium.alpha_reduced],
+        [_shown_below(value, LOW_ALBEDO) for value in medium.alpha_reduced],
         f"{medium.name}: reduced albedo below {LOW_ALBEDO} ({{which}}), where the diffusion models are outside "
         "their range; treat its subsurface light there as a rough estimate.",
     )
