@@ -399,7 +399,7 @@ def test_a_dying_worker_loses_only_its_own_job():
     batch._run_in_processes(square_or_die, [(1,), (2,), (-1,), (4,), (5,)], 2, results.__setitem__)
     assert sorted(results) == [0, 1, 2, 3, 4]
     assert [results[i] for i in (0, 1, 3, 4)] == [1, 4, 16, 25]
-    assert isinstance(results[2], BrokenProcessPool)
+    assert isinstance(results[2], ChildProcessError) and "stopped while baking this file" in str(results[2])
 
 
 def test_dask_cluster_bakes_the_same_files(scans, tmp_path, capsys):
@@ -500,3 +500,28 @@ def test_preview_writes_the_picture_beside_each_bake_also_from_worker_processes(
     records = translucency.bake([scans["small"]], tmp_path / "plain", "marble", method="exact")
     assert records[0].ok and [p.suffix for p in (tmp_path / "plain").iterdir()] == [".ply"]
     assert batch.BakeSettings(preview=True).preview and not batch.BakeSettings().preview
+
+
+def test_the_parallel_bake_works_from_a_plain_script(tmp_path):
+    """The README's ``tl.bake([...], "baked/", "marble", workers=2)`` in a script without an
+    ``if __name__ == "__main__":`` guard: the workers are ``python -c`` children, which do not import the script
+    again (spawned ones did, and every file was reported as a crashed worker, with exit 0 and nothing baked)."""
+    import subprocess
+    import sys
+    import textwrap
+
+    scans = [write_sphere(tmp_path / f"{name}.ply", 2, 20.0) for name in ("a", "b")]
+    script = tmp_path / "plain.py"
+    script.write_text(
+        textwrap.dedent(f"""
+            import translucency as tl
+            records = tl.bake({[str(s) for s in scans]!r}, {str(tmp_path / "baked")!r}, "marble", unit="mm",
+                              workers=2, shadows=False)
+            print("baked", sum(r.ok for r in records))
+        """)
+    )
+    done = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=300, cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    assert "baked 2" in done.stdout
+    assert sorted(os.listdir(tmp_path / "baked")) == ["a_marble.ply", "b_marble.ply"]
+    assert "Traceback" not in done.stderr

@@ -46,7 +46,7 @@ from ..errors import (
     command_line_spelling,
     option,
 )
-from ..processes import available_cores, end_with_parent
+from ..processes import available_cores, run_in_child
 from .bake_progress import BakeProgress, ConsoleProgress, format_summary
 from .shading.settings import ShadeSettings, settings_with
 
@@ -290,7 +290,7 @@ def failure_sentence(exc: BaseException) -> str:
 
     if isinstance(exc, TranslucencyError):
         text = str(exc)
-    elif isinstance(exc, BrokenProcessPool):
+    elif isinstance(exc, (BrokenProcessPool, ChildProcessError)):
         text = _CRASHED
     elif isinstance(exc, ImportError):  # a Dask worker without the package
         text = (
@@ -559,65 +559,57 @@ def _use_threads(threads: int) -> None:
     numba.set_num_threads(max(1, min(threads, numba.config.NUMBA_NUM_THREADS)))
 
 
-def _start_worker_process(threads: int, parent: int | None = None) -> None:
-    """Initialiser of a worker process: ``threads`` threads for numba and for the BLAS libraries it loads.
+def in_worker(threads: int, module: str, name: str, *args):
+    """In a worker process: ``threads`` threads for numba and for the BLAS libraries it loads, then ``module.name``
+    called with ``args`` (what :func:`_run_in_processes` runs in each child)."""
+    import importlib
 
-    With ``parent`` (the pid of the process that started the pool) the worker ends when that process
-    does (:func:`translucency.processes.end_with_parent`).
-    """
-    if parent is not None:
-        end_with_parent(parent)
-    for name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
-        os.environ[name] = str(threads)
+    for variable in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+        os.environ[variable] = str(threads)
     _use_threads(threads)
+    return getattr(importlib.import_module(module), name)(*args)
 
 
 def _run_in_processes(function, jobs, workers: int, done) -> None:
-    """Call ``function(*job)`` for every job in ``workers`` spawned processes; ``done(index, result)``.
+    """Call ``function(*job)`` for every job, each in a worker process of its own, ``workers`` at a time;
+    ``done(index, result)``.
 
-    ``result`` is what the function returned, or the exception it raised. A worker process that
-    dies (a crash, out of memory) breaks its pool: the jobs that had not finished are then run again
-    in a fresh pool of one process, where the job that dies is the first unfinished one, so that only
-    it is lost (reported as :class:`~concurrent.futures.process.BrokenProcessPool`). The workers end
-    with this process, even when it is killed (:func:`translucency.processes.end_with_parent`).
-
-    Spawned, not forked: numba's OpenMP threads and a forked copy of them do not mix.
+    ``result`` is what the function returned, or the exception it raised; a worker that dies (a crash, out of
+    memory) loses its own job only (a :class:`ChildProcessError`, :data:`_CRASHED`). The workers are ``python -c``
+    children (:func:`translucency.processes.run_in_child`), not :mod:`multiprocessing`'s: a spawned process imports
+    the caller's main script again, so a plain script without ``if __name__ == "__main__":`` would start its bake
+    again in every worker. They end with this process, even when it is killed
+    (:func:`translucency.processes.end_with_parent`). Not forked: numba's threads and a forked copy of them do not
+    mix.
     """
-    import multiprocessing
-    from concurrent.futures import ProcessPoolExecutor, as_completed
-    from concurrent.futures.process import BrokenProcessPool
+    from concurrent.futures import ThreadPoolExecutor, as_completed
 
-    context = multiprocessing.get_context("spawn")
-    pending, size = list(range(len(jobs))), workers
-    while pending:
-        size = min(size, len(pending))
-        executor = ProcessPoolExecutor(
-            size,
-            mp_context=context,
-            initializer=_start_worker_process,
-            initargs=(max(1, available_cores() // size), os.getpid()),
-        )
-        unfinished = []
-        try:
-            futures = {executor.submit(function, *jobs[index]): index for index in pending}
-            for future in as_completed(futures):
-                try:
-                    result = future.result()
-                except BrokenProcessPool:
-                    unfinished.append(futures[future])
-                    continue
-                except Exception as exc:  # noqa: BLE001 -- e.g. an argument that does not pickle
-                    result = exc
-                done(futures[future], result)
-        except BaseException:
-            executor.shutdown(wait=False, cancel_futures=True)
-            raise
-        executor.shutdown(wait=True)
-        unfinished.sort()
-        if unfinished and size == 1:
-            culprit = unfinished.pop(0)
-            done(culprit, BrokenProcessPool(_CRASHED))
-        pending, size = unfinished, 1
+    threads = max(1, available_cores() // workers)
+    started: list = []  # every worker's Popen, killed together on an interrupt
+    pool = ThreadPoolExecutor(max_workers=workers)  # each thread waits for its worker
+    try:
+        futures = {
+            pool.submit(
+                run_in_child, in_worker, threads, function.__module__, function.__qualname__, *job, started=started
+            ): index
+            for index, job in enumerate(jobs)
+        }
+        for future in as_completed(futures):
+            try:
+                result = future.result()
+            except ChildProcessError:
+                result = ChildProcessError(_CRASHED)
+            except Exception as exc:  # noqa: BLE001 -- e.g. an argument that does not pickle
+                result = exc
+            done(futures[future], result)
+    except BaseException:
+        pool.shutdown(wait=False, cancel_futures=True)
+        for child in list(started):
+            with contextlib.suppress(OSError):
+                child.kill()
+        raise
+    finally:
+        pool.shutdown(wait=True)
 
 
 # --------------------------------------------------------------------------------------------------
