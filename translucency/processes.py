@@ -17,6 +17,7 @@ from pathlib import Path
 
 __all__ = [
     "available_cores",
+    "child_pool",
     "descendants",
     "end_with_parent",
     "run_in_child",
@@ -40,17 +41,28 @@ def run_in_children(function, argument_lists, at_once: int) -> list:
     When one of them fails, or this process is interrupted (Ctrl-C), the children still running are killed and
     those not started yet are not started; the first failure (or the interrupt) is raised.
     """
-    from concurrent.futures import FIRST_EXCEPTION, ThreadPoolExecutor, wait
+    from concurrent.futures import FIRST_EXCEPTION, wait
 
-    started: list = []  # every child's Popen, killed together when one call fails
-    pool = ThreadPoolExecutor(max_workers=max(1, int(at_once)))  # each thread waits for its child
-    try:
+    with child_pool(at_once) as (pool, started):
         futures = [pool.submit(run_in_child, function, *args, started=started) for args in argument_lists]
         wait(futures, return_when=FIRST_EXCEPTION)  # the first failure, not the first call's end, is raised
         for future in futures:
             if future.done() and future.exception() is not None:
                 raise future.exception()
         return [future.result() for future in futures]
+
+
+@contextlib.contextmanager
+def child_pool(at_once: int):
+    """``(pool, started)``: a thread pool of ``at_once`` threads, each waiting for one child
+    (``pool.submit(run_in_child, ..., started=started)``). When the block raises or is interrupted, the children
+    still running are killed and the calls not started are dropped."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    started: list = []  # every child's Popen, killed together
+    pool = ThreadPoolExecutor(max_workers=max(1, int(at_once)))
+    try:
+        yield pool, started
     except BaseException:
         pool.shutdown(wait=False, cancel_futures=True)
         for child in list(started):

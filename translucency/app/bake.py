@@ -46,7 +46,7 @@ from ..errors import (
     command_line_spelling,
     option,
 )
-from ..processes import available_cores, run_in_child
+from ..processes import available_cores, child_pool, run_in_child
 from .bake_progress import BakeProgress, ConsoleProgress, format_summary
 from .shading.settings import ShadeSettings, settings_with
 
@@ -582,12 +582,10 @@ def _run_in_processes(function, jobs, workers: int, done) -> None:
     (:func:`translucency.processes.end_with_parent`). Not forked: numba's threads and a forked copy of them do not
     mix.
     """
-    from concurrent.futures import ThreadPoolExecutor, as_completed
+    from concurrent.futures import as_completed
 
     threads = max(1, available_cores() // workers)
-    started: list = []  # every worker's Popen, killed together on an interrupt
-    pool = ThreadPoolExecutor(max_workers=workers)  # each thread waits for its worker
-    try:
+    with child_pool(workers) as (pool, started):
         futures = {
             pool.submit(
                 run_in_child, in_worker, threads, function.__module__, function.__qualname__, *job, started=started
@@ -602,14 +600,6 @@ def _run_in_processes(function, jobs, workers: int, done) -> None:
             except Exception as exc:  # noqa: BLE001 -- e.g. an argument that does not pickle
                 result = exc
             done(futures[future], result)
-    except BaseException:
-        pool.shutdown(wait=False, cancel_futures=True)
-        for child in list(started):
-            with contextlib.suppress(OSError):
-                child.kill()
-        raise
-    finally:
-        pool.shutdown(wait=True)
 
 
 # --------------------------------------------------------------------------------------------------
