@@ -113,3 +113,24 @@ def test_an_npz_that_is_not_an_archive_is_one_sentence_without_library_text(tmp_
 def test_a_reference_that_is_a_fifo_is_refused_without_opening_it(fifo):
     with pytest.raises(InvalidParameterError, match=r"is a FIFO \(named pipe\), not a regular file"):
         read_reference_file(fifo("r.npz"))
+
+
+def test_the_advice_for_an_open_scan_closes_it(shared_meshes, tmp_path, capsys):
+    """``reference`` on the open shared angel names the command that closes it, and that command does: the
+    reference of its output gets past the check (and stops at the tiny time limit instead)."""
+    import re
+
+    angel = shared_meshes / "ggg_angel_sfm.ply"
+    assert cli.main(["reference", str(angel), "--spp", "2", "-o", str(tmp_path / "r.npz")]) != 0
+    line = capsys.readouterr().err.strip().splitlines()[-1]
+    command = re.search(r"'translucency (inspect MESH [^']*)'", line).group(1).split()
+    command = [
+        str(angel) if word == "MESH" else str(tmp_path / word) if word == "closed.ply" else word for word in command
+    ]
+    assert cli.main(command) == 0
+    capsys.readouterr()
+    closed = str(tmp_path / "closed.ply")
+    cli.main(["reference", closed, "--spp", "2", "--time-limit", "0.01", "-o", str(tmp_path / "r.npz")])
+    err = capsys.readouterr().err
+    assert "holes" not in err and "edges with one triangle" not in err
+    assert "over the time limit" in err

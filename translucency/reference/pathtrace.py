@@ -67,7 +67,7 @@ from scipy.spatial import cKDTree
 
 from ..errors import InvalidParameterError, MeshError
 from ..geometry.measure import signed_volume, triangle_normals
-from ..geometry.topology import unique_edges
+from ..geometry.topology import boundary_loops, unique_edges
 from ..scatter.budget import check_limits
 from ..scatter.fresnel import fresnel_transmittance, refract
 from ..scatter.kernels import orthonormal_frame
@@ -647,12 +647,17 @@ def _checked_mesh(points, triangles):
         raise MeshError("reference: triangles must be a non-empty (m, 3) integer array.")
     if triangles.min() < 0 or triangles.max() >= len(points):
         raise MeshError(f"reference: triangle indices must lie in [0, {len(points) - 1}].")
-    _, edge_of_corner = unique_edges(triangles)
-    open_edges = int(np.count_nonzero(np.bincount(edge_of_corner.reshape(-1)) == 1))
-    if open_edges:
+    edges, edge_of_corner = unique_edges(triangles)
+    open_edge = np.bincount(edge_of_corner.reshape(-1), minlength=len(edges)) == 1
+    if open_edge.any():
+        holes, largest = boundary_loops(edges[open_edge])
+        # twice the largest: pymeshlab counts a hole's edges its own way, and a hole at the limit can stay open
+        limit = max(2 * largest, 100)
         raise MeshError(
-            f"reference: the mesh has {open_edges} edges with one triangle (holes); the path tracer needs a closed "
-            "surface, so close the holes first (for example with 'translucency inspect MESH -o closed.ply')."
+            f"reference: the mesh has {int(open_edge.sum())} edges with one triangle ({holes} "
+            f"{'hole' if holes == 1 else 'holes'}, the largest of {largest} edges); the path tracer needs a closed "
+            f"surface, so close them first: 'translucency inspect MESH --max-hole-edges {limit} -o closed.ply', "
+            "then trace closed.ply."
         )
     if signed_volume(points, triangles) <= 0:
         raise MeshError("reference: the triangles face inward (negative enclosed volume); reverse their vertex order.")
