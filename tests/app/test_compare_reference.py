@@ -14,6 +14,7 @@ from translucency.app.reference_compare import (
     REGIONS,
     assign_regions,
     reference_figure_size,
+    reference_table_text,
 )
 from translucency.app.shading.scene import Scene
 from translucency.app.shading.settings import resolve_medium
@@ -275,3 +276,24 @@ def test_a_traced_reference_compares_within_a_factor_of_two(tmp_path):
     for model in result.models:
         assert np.all((result.ratio(model, "lit") > 0.5) & (result.ratio(model, "lit") < 2.0))
     assert (tmp_path / "out" / "reference_errors.png").exists()
+
+
+def test_the_table_keeps_its_columns_whatever_the_noise():
+    """A median error of 172,592 % (a reference of a few paths in a dark region) printed whole broke the table's
+    alignment; beyond 999 % it reads ">999"."""
+    row = {
+        "ratio": 1.02,
+        "ratio_stderr": 0.01,
+        "relative_error_median": 1725.92,
+        "reentered_share": 0.05,
+        "n_vertices": 10,
+    }
+    rows = [
+        {**row, "model": "directional", "region": region, "channel": c}
+        for region in [name for name, _ in REGIONS] + [ALL_REGION]
+        for c in "RGB"
+    ]
+    lines = reference_table_text(rows, ["directional"], {"directional": 1.0})
+    body = [line for line in lines if line.startswith("  ") and "region" not in line]
+    assert body and all(">999/>999/>999 %" in line for line in body)
+    assert len({len(line) for line in body}) == 1  # aligned

@@ -547,15 +547,26 @@ def reference_table_text(rows, models, times) -> list:
         for region in [name for name, _ in REGIONS] + [ALL_REGION]:
             cells = {row["channel"]: row for row in own if row["region"] == region}
             ratios = " ".join(f"{_ratio_text(cells[c]):<12}" for c in "RGB")
-            errors = "/".join(
-                "-" if cells[c]["relative_error_median"] is None else f"{100 * cells[c]['relative_error_median']:.0f}"
-                for c in "RGB"
-            )
+            errors = "/".join(_percent_text(cells[c]["relative_error_median"]) for c in "RGB")
             share = cells["G"]["reentered_share"]
             share = "-" if share is None else f"{100 * share:.1f} %"
             n = max(cells[c]["n_vertices"] for c in "RGB")
             lines.append(f"  {region:<15}{n:>8}  {ratios} {errors + ' %':<16}{share:>7}")
     return lines
+
+
+#: The largest median error a table prints (in %): beyond it the reference's noise or a dark region's tiny mean
+#: decides the figure, and ">999" keeps the column aligned.
+LARGEST_PRINTED_PERCENT = 999
+
+
+def _percent_text(fraction) -> str:
+    """A median relative error as a whole percentage, "-" when there is none, ">999" beyond
+    :data:`LARGEST_PRINTED_PERCENT`."""
+    if fraction is None:
+        return "-"
+    percent = 100 * fraction
+    return f"{percent:.0f}" if percent < LARGEST_PRINTED_PERCENT + 0.5 else f">{LARGEST_PRINTED_PERCENT}"
 
 
 def _ratio_text(row) -> str:
