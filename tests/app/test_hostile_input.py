@@ -377,3 +377,13 @@ def test_a_low_albedo_is_not_rounded_up_to_the_threshold_it_is_below():
         TranslucencyWarning, match=r"reduced albedo below 0\.5 \(red 0\.4996, green 0\.4996, blue 0\.4996\)"
     ):
         tl.shade(tl.TriangleMesh(points, triangles), medium, bounces=0)
+
+
+def test_a_second_compare_into_the_same_folder_says_it_replaces_the_first(small_sphere, tmp_path, capsys):
+    out = str(tmp_path / "out")
+    assert cli.main(["compare", str(small_sphere), "--unit", "mm", "-q", "-o", out]) == 0
+    assert "earlier compare" not in capsys.readouterr().err
+    assert cli.main(["compare", str(small_sphere), "--unit", "mm", "-q", "-o", out]) == 0
+    assert "holds an earlier compare's results (statistics.json, grid.png); they will be replaced" in (
+        capsys.readouterr().err
+    )

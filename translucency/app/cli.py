@@ -353,6 +353,8 @@ def _sweep(text):
 
 def cmd_compare(args) -> int:
     """Render and measure a scan in several materials and models into a folder."""
+    from pathlib import Path
+
     from ..io.atomic import prepare_output_folder
     from .compare import compare, validate_choices
     from .options import inline_material, lights_from_args, quiet, solver_settings
@@ -378,6 +380,9 @@ def cmd_compare(args) -> int:
         _, models, _ = validate_choices(DEFAULT_MATERIAL, args.models if args.models is not None else args.model)
     cell_size = _pixels(args.cell_size, "--cell-size")
     prepare_output_folder(args.output)
+    earlier = [name for name in ("statistics.json", "grid.png") if (Path(args.output) / name).exists()]
+    if earlier:  # said before the work, not replaced in silence
+        _note(f"{args.output} holds an earlier compare's results ({', '.join(earlier)}); they will be replaced")
     lights = lights_from_args(args)
     mesh = None
     if reference is None or args.mesh is not None:
