@@ -218,7 +218,8 @@ def test_gltf_holds_linear_colours_metres_and_the_settings(result, tmp_path, suf
     np.testing.assert_array_equal(np.round(linear_to_srgb(colour) * 255).astype(np.uint8), result.colors)
     np.testing.assert_array_equal(accessor(document, buffer, attributes["_RADIANCE"]), f32(result.radiance))
     np.testing.assert_array_equal(accessor(document, buffer, attributes["_B"]), f32(result.B))
-    np.testing.assert_array_equal(accessor(document, buffer, attributes["_LUMINANCE"]), f32(result.radiance @ REC709))
+    luminance = accessor(document, buffer, attributes["_LUMINANCE"])  # three copies: Blender needs one width
+    np.testing.assert_array_equal(luminance, np.repeat(f32(result.radiance @ REC709)[:, None], 3, axis=1))
     material = document["materials"][primitive["material"]]
     assert "KHR_materials_unlit" in material["extensions"] and "KHR_materials_unlit" in document["extensionsUsed"]
     extras = document["scenes"][0]["extras"]
@@ -247,7 +248,7 @@ def test_gltf_read_back_with_trimesh_and_pyvista(result, tmp_path, suffix):
     np.testing.assert_allclose(block.points, result.mesh.points / 1000, rtol=1e-6, atol=1e-9)
     np.testing.assert_allclose(block.point_data["COLOR_0"][:, :3], linear, rtol=1e-6, atol=1e-7)
     np.testing.assert_array_equal(block.point_data["_RADIANCE"], f32(result.radiance))
-    np.testing.assert_array_equal(block.point_data["_LUMINANCE"], f32(result.radiance @ REC709))
+    np.testing.assert_array_equal(block.point_data["_LUMINANCE"][:, 0], f32(result.radiance @ REC709))
 
 
 def test_gltf_turns_a_z_up_scan_to_y_up(result, tmp_path):

@@ -14,8 +14,13 @@ COLOR_0        float VEC3   the display colours decoded to linear RGB (glTF's co
 _RADIANCE      float VEC3   linear radiance toward the normal, W/(m^2 sr) per W/m^2 of
                             irradiance of the light (custom attribute; trimesh reads it)
 _B             float VEC3   the view-independent factor B(x_o), same unit
-_LUMINANCE     float        Rec. 709 luminance of the radiance, same unit
+_LUMINANCE     float VEC3   Rec. 709 luminance of the radiance, same unit, the same value in its
+                            three components
 ============== ============ ================================================================
+
+Every custom attribute is three floats wide: Blender's glTF importer gathers a primitive's custom attributes in
+an order that changes from run to run (a set of their names) and stops when their widths differ, so a scalar is
+written as three copies of itself.
 
 and one material, white and unlit (``KHR_materials_unlit``; for viewers without that extension
 a rough dielectric, metallic 0, roughness 1), so the vertex colours are shown as they are: the
@@ -44,6 +49,9 @@ from .baked import check_bake_path, complete_metadata, json_metadata
 from .upright import display_frame
 
 __all__ = ["GLTF_BAKE_SUFFIXES", "MM_PER_METRE", "write_baked_gltf"]
+
+#: The width of every custom attribute (module docstring: Blender's importer needs them all of one width).
+CUSTOM_WIDTH = 3
 
 #: Suffixes :func:`write_baked_gltf` writes: binary glTF and text glTF with an embedded buffer.
 GLTF_BAKE_SUFFIXES = (".glb", ".gltf")
@@ -75,9 +83,9 @@ def write_baked_gltf(
     normals : array_like, shape (n, 3), optional
         Vertex normals; default ``mesh.point_data["normals"]`` or the area-weighted normals.
     attributes : dict of str to array_like, optional
-        More per-vertex float arrays, ``(n,)`` or ``(n, k)`` with k up to 4, written as custom
-        attributes named ``_<NAME>`` (upper case): the pipeline gives ``radiance``, ``B`` and
-        ``luminance``.
+        More per-vertex float arrays, ``(n,)`` or ``(n, 3)``, written as custom attributes named ``_<NAME>``
+        (upper case), three floats wide (a scalar three times: module docstring): the pipeline gives
+        ``radiance``, ``B`` and ``luminance``.
     up : str, optional
         The scan's up axis (``"+x"`` ... ``"-z"``) turned to glTF's +Y; default ``metadata["up"]``,
         else +y.
@@ -119,11 +127,12 @@ def write_baked_gltf(
     for name, values in (attributes or {}).items():
         array = np.asarray(values)
         width = 1 if array.ndim == 1 else (array.shape[1] if array.ndim == 2 else 0)
-        if not 1 <= width <= 4:
+        if width not in (1, CUSTOM_WIDTH):
             raise InvalidParameterError(
-                f"the attribute {name!r} has shape {array.shape}; pass one value or a row of up to 4 per vertex."
+                f"the attribute {name!r} has shape {array.shape}; pass one value or a row of {CUSTOM_WIDTH} per vertex."
             )
-        vertex_attributes["_" + name.upper()] = _float_rows(name, array.reshape(len(array), width), n, width)
+        rows = _float_rows(name, array.reshape(len(array), width), n, width)
+        vertex_attributes["_" + name.upper()] = np.repeat(rows, CUSTOM_WIDTH // width, axis=1)
     extras = {
         **json_metadata(settings),
         "length_unit": "m",
