@@ -204,9 +204,8 @@ def deadline(seconds):
         signal.signal(signal.SIGALRM, previous)
 
 
-def test_a_fifo_fails_at_once_and_the_batch_goes_on(sphere, tmp_path, capsys):
-    fifo = tmp_path / "pipe.ply"
-    os.mkfifo(fifo)
+def test_a_fifo_fails_at_once_and_the_batch_goes_on(sphere, tmp_path, capsys, fifo):
+    fifo = fifo("pipe.ply")
     out = tmp_path / "out"
     with deadline(120):
         code = cli.main(["bake", str(fifo), str(sphere), "-o", str(out), "--no-shadows"])

@@ -300,6 +300,24 @@ def test_the_package_s_warnings_point_at_the_user_s_line():
     assert ours and all(w.filename == __file__ for w in ours)
 
 
+def _bake_with_material_file(small_sphere, tmp_path, capsys) -> tuple[int, str]:
+    """``bake`` of the small sphere with ``--material jade.json`` (in ``tmp_path``): the exit code and the one error
+    line."""
+    code = cli.main(
+        [
+            "bake",
+            str(small_sphere),
+            "--unit",
+            "mm",
+            "--material",
+            str(tmp_path / "jade.json"),
+            "-o",
+            str(tmp_path / "o"),
+        ]
+    )
+    return code, one_sentence(capsys.readouterr().err)
+
+
 @pytest.mark.parametrize(
     "content, words",
     [
@@ -312,39 +330,16 @@ def test_a_corrupt_material_file_is_one_sentence_without_an_exception_name(
     tmp_path, small_sphere, capsys, content, words
 ):
     (tmp_path / "jade.json").write_bytes(content)
-    code = cli.main(
-        [
-            "bake",
-            str(small_sphere),
-            "--unit",
-            "mm",
-            "--material",
-            str(tmp_path / "jade.json"),
-            "-o",
-            str(tmp_path / "o"),
-        ]
-    )
-    line = one_sentence(capsys.readouterr().err)
+    code, line = _bake_with_material_file(small_sphere, tmp_path, capsys)
     assert code == 2 and words in line
     assert "Error" not in line.replace("translucency: error:", "")
 
 
 def test_a_material_file_that_is_a_folder_is_one_sentence(tmp_path, small_sphere, capsys):
     (tmp_path / "jade.json").mkdir()
-    code = cli.main(
-        [
-            "bake",
-            str(small_sphere),
-            "--unit",
-            "mm",
-            "--material",
-            str(tmp_path / "jade.json"),
-            "-o",
-            str(tmp_path / "o"),
-        ]
-    )
+    code, line = _bake_with_material_file(small_sphere, tmp_path, capsys)
     assert code == 2
-    assert "is a directory, not a TOML or JSON file" in one_sentence(capsys.readouterr().err)
+    assert "is a directory, not a TOML or JSON file" in line
 
 
 # -------------------------------------------------------------------------------------------------
