@@ -738,13 +738,14 @@ def _checked_against_tree(work, B, tol) -> float:
 
 
 def relight_plan(size: float, counts: dict, memory_limit, time_limit) -> budget.SolveEstimate:
-    """The budget plan of preparing relighting operators of ``size`` bytes (their entry ``counts``)."""
+    """The budget plan of preparing relighting operators of ``size`` bytes (``counts``: the far field's fits and
+    the near field's entries)."""
     import numba
 
-    from .relight import FAR_ENTRY_SECONDS, NEAR_ENTRY_SECONDS
+    from .relight import FIT_SECONDS, NEAR_ENTRY_SECONDS
 
     threads = max(1, numba.get_num_threads())
-    seconds = (counts["far_entries"] * FAR_ENTRY_SECONDS + counts["near_entries"] * NEAR_ENTRY_SECONDS) / threads
+    seconds = (counts["far_fits"] * FIT_SECONDS + counts["near_entries"] * NEAR_ENTRY_SECONDS) / threads
     budget_bytes = budget.memory_budget(memory_limit, memory.available_memory(), memory.resident_memory())
     fits = (budget_bytes is None or size <= budget_bytes) and (time_limit is None or seconds <= time_limit)
     return budget.SolveEstimate(

@@ -1,0 +1,147 @@
+"""The far field as a hierarchical matrix: its blocks cover every pair once, and its product follows the sum of
+every fitted pair to the error its cross approximations were asked for."""
+
+import numba
+import numpy as np
+import pytest
+
+from translucency.geometry.synthetic import icosphere, torus
+from translucency.scatter import cutoff, kernels, lowrank
+from translucency.scatter.hierarchy import SourceTree
+from translucency.scatter.materials import material
+
+MARBLE = material("marble").medium()
+
+
+@numba.njit(cache=True)
+def _every_pair(model, P, N, params, dirs, pinv, values):
+    """``sum_j (a + b . w)_oj`` over every source ``j``, per receiver and channel (the fits of
+    :func:`~translucency.scatter.kernels.fitted_pairs` one pair at a time)."""
+    n, n_c = P.shape[0], params.shape[0]
+    out = np.zeros((n, n_c))
+    work = np.empty((max(dirs.shape[0], 9), kernels.FIT_WORK_COLUMNS))
+    fit = np.empty((n_c, kernels.AFFINE_TERMS))
+    for o in range(n):
+        for j in range(n):
+            kernels.fitted_pairs(
+                model, P[o, 0] - P[j, 0], P[o, 1] - P[j, 1], P[o, 2] - P[j, 2], N[j, 0], N[j, 1], N[j, 2],
+                N[o, 0], N[o, 1], N[o, 2], params, dirs, pinv, work, fit,
+            )  # fmt: skip
+            for c in range(n_c):
+                for t in range(kernels.AFFINE_TERMS):
+                    out[o, c] += fit[c, t] * values[j, c, t]
+    return out
+
+
+def _surface(kind):
+    if kind == "sphere":
+        points, triangles = icosphere(4, 20.0)
+    else:
+        points, triangles = torus(20.0, 8.0, 64, 32)
+    normals = points - points.mean(axis=0) if kind == "sphere" else _torus_normals(points)
+    return np.ascontiguousarray(points), np.ascontiguousarray(normals / np.linalg.norm(normals, axis=1)[:, None])
+
+
+def _torus_normals(points):
+    ring = points.copy()
+    ring[:, 2] = 0.0
+    ring *= 20.0 / np.linalg.norm(ring, axis=1)[:, None]
+    return points - ring
+
+
+def _light(points, normals, rng):
+    """Flux and ``Psi`` of a directional light (no shadows) with a refracted direction bent off ``-n``."""
+    light = np.array([0.3, 0.5, 0.8]) / np.linalg.norm([0.3, 0.5, 0.8])
+    flux = np.clip(normals @ light, 0.0, None)
+    w = -(0.8 * normals - 0.2 * light)
+    w /= np.linalg.norm(w, axis=1)[:, None]
+    values = np.zeros((len(points), 3, 4))
+    values[:, :, 0] = flux[:, None] * rng.uniform(0.5, 1.0, size=(len(points), 3))
+    values[:, :, 1:] = values[:, :, :1] * w[:, None, :]
+    return values
+
+
+def _build(points, normals, eps, model="directional", held=None, medium=MARBLE):
+    params = kernels.channel_parameters(medium.sigma_a, medium.sigma_s, medium.g, medium.eta, model)
+    fit = kernels.fit_directions(medium.eta, kernels.AFFINE_TERMS)
+    n = len(points)
+    held = held or (np.zeros(n + 1, dtype=np.int64), np.zeros(0, dtype=np.int64))
+    gap = 1.0 / float(np.min(medium.sigma_t_reduced))
+    matrix = lowrank.build(
+        kernels.MODELS[model], points, normals, params, fit, eps, gap,
+        lambda r: cutoff.pair_bound(medium, model, r), held,
+    )  # fmt: skip
+    return matrix, params, fit
+
+
+def test_the_blocks_cover_every_pair_once_and_far_blocks_are_well_separated():
+    points, _ = _surface("sphere")
+    tree = SourceTree(points, lowrank.LEAF_SIZE)
+    far, dense = lowrank.partition(tree, gap=0.5)
+    covered = np.zeros((len(points), len(points)), dtype=np.int64)
+    for a, b in np.concatenate([far, dense]):
+        covered[tree.start[a] : tree.end[a], tree.start[b] : tree.end[b]] += 1
+    assert np.all(covered == 1)
+    distance = np.linalg.norm(tree.centre[far[:, 0]] - tree.centre[far[:, 1]], axis=1)
+    larger = np.maximum(tree.radius[far[:, 0]], tree.radius[far[:, 1]])
+    assert np.all(larger <= lowrank.ETA * distance)
+    assert np.all(distance - tree.radius[far[:, 0]] - tree.radius[far[:, 1]] >= 0.5)
+    assert len(far) > 100  # the sphere is large against its leaves: most of it is far
+
+
+@pytest.mark.parametrize("kind", ["sphere", "torus"])
+@pytest.mark.parametrize("eps", [1e-2, 1e-3])
+def test_the_product_follows_every_pair_to_eps_per_receiver(kind, eps):
+    points, normals = _surface(kind)
+    values = _light(points, normals, np.random.default_rng(0))
+    matrix, params, (dirs, pinv) = _build(points, normals, eps)
+    assert matrix.stats["far_blocks"] > 0 and matrix.stats["rank_mean"] > 1
+    reference = _every_pair(0, points, normals, params, dirs, pinv, values)
+    keep = reference > 1e-4 * reference.max(axis=0)  # the receivers tol holds (docs/physics.md §8.5)
+    error = np.abs(matrix.apply(values) - reference)[keep] / reference[keep]
+    # each row is held to eps; a receiver's error adds over its far blocks
+    assert np.percentile(error, 99) < 2 * eps
+    assert error.max() < 10 * eps
+    if eps >= 1e-2:  # compressed: fewer numbers than the pairs it stands for (four per channel each)
+        assert matrix.stats["far_floats"] + matrix.stats["dense_floats"] < 0.5 * len(points) ** 2 * 12
+
+
+def test_a_radial_model_has_no_direction_terms_and_is_followed_too():
+    points, normals = _surface("sphere")
+    values = _light(points, normals, np.random.default_rng(1))
+    matrix, params, (dirs, pinv) = _build(points, normals, 1e-3, model="standard")
+    reference = _every_pair(1, points, normals, params, dirs, pinv, values)
+    keep = reference > 1e-4 * reference.max(axis=0)
+    error = np.abs(matrix.apply(values) - reference)[keep] / reference[keep]
+    assert np.percentile(error, 99) < 2e-3
+
+
+def test_held_pairs_are_zero_in_dense_blocks_and_given_where_a_low_rank_block_holds_them():
+    points, normals = _surface("sphere")
+    n = len(points)
+    rng = np.random.default_rng(2)
+    receivers = rng.choice(n, 12, replace=False)
+    # each receiver holds its nearest vertex (a dense block) and one a quarter round the sphere (a low-rank one;
+    # not across it: there the receiver is on the source's normal line, where the modified tangent plane turns
+    # abruptly (docs/physics.md §4.1), and the blocks need more crosses than they may take, so they are dense)
+    distance = np.linalg.norm(points[receivers, None] - points[None], axis=2)
+    distance[np.arange(12), receivers] = np.inf
+    nearest = np.argmin(distance, axis=1)
+    farthest = np.argmin(np.abs(distance - 20.0 * np.sqrt(2.0)), axis=1)
+    starts = np.zeros(n + 1, dtype=np.int64)
+    counts = np.zeros(n, dtype=np.int64)
+    counts[receivers] = 2
+    np.cumsum(counts, out=starts[1:])
+    columns = np.empty(starts[-1], dtype=np.int64)
+    columns[starts[receivers]] = nearest
+    columns[starts[receivers] + 1] = farthest
+    matrix, _, _ = _build(points, normals, 1e-3, held=(starts, columns))
+    held = matrix.low_rank_entries(starts, columns)
+    for r, o in enumerate(receivers):
+        for j, k in ((nearest[r], starts[o]), (farthest[r], starts[o] + 1)):
+            values = np.zeros((n, 3, 4))
+            values[j] = rng.normal(size=(3, 4))
+            B = matrix.apply(values)[o]  # the matrix's entry (o, j): 0 where a dense block leaves it out
+            np.testing.assert_allclose(B, np.sum(held[k] * values[j], axis=1), rtol=1e-5, atol=1e-30)
+        assert np.all(held[starts[o]] == 0.0)  # the nearest is in a dense block, left out there
+    assert np.mean([np.any(held[starts[o] + 1] != 0.0) for o in receivers]) >= 0.75

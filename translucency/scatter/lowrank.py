@@ -1,0 +1,591 @@
+"""The far field as a hierarchical matrix: blocks between well-separated clusters as cross approximations.
+
+The relighting operator's far field (docs/physics.md §8.7, §8.9) maps the light that enters at every vertex,
+per channel ``Phi`` and ``Psi = Phi w12`` (four numbers), to ``B`` at every vertex. Its entries are the affine
+fits ``a + b . w12`` of :func:`~translucency.scatter.kernels.fitted_pairs`. The vertices are ordered by a
+kd-tree (:class:`~translucency.scatter.hierarchy.SourceTree`, leaves of :data:`LEAF_SIZE`); a pair of nodes
+is a block of the matrix, and
+
+* a block whose nodes are far apart (gap at least ``gap`` mm and ``max radius <= ETA * centre distance``) is
+  a product ``U V`` of low rank found by **adaptive cross approximation** with partial pivoting (Bebendorf
+  2000): rows are the receivers, columns the (source, channel, term) triples, so every channel shares the
+  receivers' basis. It stops when the last cross is below ``eps`` of the block's Frobenius norm; a block
+  that needs more than :func:`rank_limit` crosses is split into its children's blocks;
+* a pair of leaves that is not far apart is stored whole (a dense block), less the pairs the near field
+  holds (``held``: they are summed there, docs/physics.md §8.7); where such a pair is in a low-rank block
+  instead, :meth:`FarMatrix.low_rank_entries` gives the value the block holds, for the near field to take off.
+
+The error is set by ``eps`` (the rank), not by the opening ratio: ``ETA`` stays at 0.5 for every ``tol``.
+Columns are scaled per channel by the bound of §8.4 at the block's distance before the approximation, so
+that no channel's smaller values are lost to another's. Stored in float32 (``V`` in 16-bit fixed point); a light
+reads every block once.
+
+=========== ================================================================ ==============
+symbol      meaning                                                          unit
+=========== ================================================================ ==============
+eps         relative Frobenius error at which a cross approximation stops    1
+gap         smallest distance between the bounding spheres of a far block    mm
+=========== ================================================================ ==============
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numba
+import numpy as np
+
+from ..threads import for_ranges, thread_count
+from .hierarchy import SourceTree
+from .kernels import AFFINE_TERMS, FIT_WORK_COLUMNS, fitted_pairs
+
+__all__ = ["ETA", "LEAF_SIZE", "FarMatrix", "build", "partition"]
+
+#: Vertices per leaf of the block tree: dense blocks are pairs of leaves.
+LEAF_SIZE = 32
+#: A block is far (low rank) when the larger of its two bounding radii is at most ``ETA`` times the distance
+#: of their centres.
+ETA = 0.5
+
+#: ``V`` is stored as int16: a cross's ``V`` is its pivot row over the pivot, the row's largest, so every entry is
+#: in [-1, 1] and is kept to 2**-15 of it (far below ``eps``).
+V_STEP = 1.0 / 32767.0
+
+
+def rank_limit(rows: int, columns: int) -> int:
+    """Crosses a block of ``rows x columns`` may take before it is split: below half of what storing it whole
+    costs (``k (rows + columns) < rows columns / 2``), and at most 96."""
+    return int(max(1, min(96, rows * columns // (2 * (rows + columns)))))
+
+
+@dataclass
+class FarMatrix:
+    """The far field of one surface, medium, model and ``eps`` (:func:`build`), in the tree's vertex order.
+
+    Attributes
+    ----------
+    order : (n,) int64
+        The tree's order: row and column ``k`` of every block is vertex ``order[k]``.
+    n_channels : int
+    low_rank : (L, 8) int64
+        Per block and channel: first and last row, first and last column (tree order), the channel, rank
+        ``k``, and where its ``U (rows, k)`` and ``V (k, columns x 4)`` start in ``U`` and ``V``.
+    U : float32
+    V : int16
+        The crosses, row-major (``V`` in steps of :data:`V_STEP`); ``V``'s columns are (source, term).
+    dense : (M, 7) int64
+        Per dense block: first and last row, first and last column, first and last channel, and where its
+        ``(rows, columns x 4 channels)`` entries start in ``D``.
+    D : float32
+    stats : dict
+    """
+
+    order: np.ndarray
+    n_channels: int
+    low_rank: np.ndarray
+    U: np.ndarray
+    V: np.ndarray
+    dense: np.ndarray
+    D: np.ndarray
+    stats: dict = field(default_factory=dict)
+
+    @property
+    def nbytes(self) -> int:
+        """Memory the blocks hold, bytes."""
+        return int(sum(a.nbytes for a in (self.order, self.low_rank, self.U, self.V, self.dense, self.D)))
+
+    def apply(self, values: np.ndarray) -> np.ndarray:
+        """``B (n, C)`` for ``values (n, C, 4)``: per vertex and channel ``Phi, Psi_x, Psi_y, Psi_z`` (vertex
+        order), times the far field's fits (1/(mm^2 sr) per unit flux)."""
+        n = self.order.size
+        sorted_values = np.ascontiguousarray(values[self.order], dtype=np.float64).reshape(n, -1)
+        workers = thread_count()
+        out = np.zeros((workers, n, self.n_channels))
+        for_ranges(_apply_low_rank, self.low_rank.shape[0], self.low_rank, self.U, self.V, sorted_values, out)
+        for_ranges(_apply_dense, self.dense.shape[0], self.dense, self.D, sorted_values, out)
+        B = np.empty((n, self.n_channels))
+        B[self.order] = out.sum(axis=0)
+        return B
+
+    def low_rank_entries(self, starts: np.ndarray, columns: np.ndarray) -> np.ndarray:
+        """The low-rank blocks' values ``(E, C, 4)`` of the pairs (receiver ``o``, source
+        ``columns[starts[o] : starts[o + 1]]``), vertex indices; 0 for pairs in dense blocks."""
+        held_starts, held_columns, rows = _held_in_order(self.order, starts, columns)
+        values = np.zeros((held_columns.size, self.n_channels, AFFINE_TERMS))
+        for_ranges(
+            _entries_of, self.low_rank.shape[0], self.low_rank, self.U, self.V, held_starts, held_columns, values
+        )
+        out = np.empty_like(values)
+        out[rows] = values
+        return out
+
+
+def partition(tree: SourceTree, gap: float, eta: float = ETA) -> tuple[np.ndarray, np.ndarray]:
+    """The blocks of ``tree`` against itself: ``(far (F, 2), dense (M, 2))`` node pairs. Far: the bounding
+    spheres at least ``gap`` (mm) apart and the larger radius at most ``eta`` times the centres' distance;
+    dense: pairs of leaves that are not. Every (row, column) pair of vertices is in exactly one block."""
+    return _partition(tree.left, tree.right, tree.centre, tree.radius, float(gap), float(eta))
+
+
+@numba.njit(cache=True)
+def _partition(left, right, centre, radius, gap, eta):
+    far = np.empty((64, 2), dtype=np.int64)
+    dense = np.empty((64, 2), dtype=np.int64)
+    n_far = 0
+    n_dense = 0
+    stack = np.empty((4096, 2), dtype=np.int64)
+    stack[0, 0], stack[0, 1] = 0, 0
+    top = 1
+    while top > 0:
+        top -= 1
+        a, b = stack[top, 0], stack[top, 1]
+        d = math.sqrt(
+            (centre[a, 0] - centre[b, 0]) ** 2 + (centre[a, 1] - centre[b, 1]) ** 2 + (centre[a, 2] - centre[b, 2]) ** 2
+        )
+        if d - radius[a] - radius[b] >= gap and max(radius[a], radius[b]) <= eta * d:
+            if n_far == far.shape[0]:
+                far = np.concatenate((far, np.empty_like(far)))
+            far[n_far, 0], far[n_far, 1] = a, b
+            n_far += 1
+        elif left[a] < 0 and left[b] < 0:
+            if n_dense == dense.shape[0]:
+                dense = np.concatenate((dense, np.empty_like(dense)))
+            dense[n_dense, 0], dense[n_dense, 1] = a, b
+            n_dense += 1
+        else:
+            if top + 2 > stack.shape[0]:
+                stack = np.concatenate((stack, np.empty_like(stack)))
+            if left[b] < 0 or (left[a] >= 0 and radius[a] >= radius[b]):
+                stack[top, 0], stack[top, 1] = left[a], b
+                stack[top + 1, 0], stack[top + 1, 1] = right[a], b
+            else:
+                stack[top, 0], stack[top, 1] = a, left[b]
+                stack[top + 1, 0], stack[top + 1, 1] = a, right[b]
+            top += 2
+    return far[:n_far].copy(), dense[:n_dense].copy()
+
+
+@numba.njit(cache=True, inline="always")
+def _fit(model, P, N, o, i, params, dirs, pinv, work, out):
+    """The affine fit ``out (C, 4)`` of source ``i`` at receiver ``o`` (rows of ``P``, ``N``)."""
+    fitted_pairs(
+        model, P[o, 0] - P[i, 0], P[o, 1] - P[i, 1], P[o, 2] - P[i, 2], N[i, 0], N[i, 1], N[i, 2],
+        N[o, 0], N[o, 1], N[o, 2], params, dirs, pinv, work, out,
+    )  # fmt: skip
+
+
+#: A cross approximation also stops when this many rows in a row (the next pivot, then rows drawn at random) are
+#: each held to ``eps`` of their own norm by the crosses so far.
+CHECK_ROWS = 3
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _cross(model, P, N, r0, r1, c0, c1, params, dirs, pinv, scale, row_scale, eps, kmax, U, V):
+    """Adaptive cross approximation with partial pivoting of rows ``r0:r1`` x sources ``c0:c1`` (columns
+    ``(j - c0) 4 C + 4 c + t``), each entry scaled by ``row_scale[row] scale[c]``: the crosses in ``U[:m, :k]``
+    and ``V[:k, :4 C n]`` (``U V`` unscaled on return); ``k``, or -1 when ``kmax`` crosses were not enough.
+
+    It stops when the last cross is below ``eps`` of the block's Frobenius norm (Bebendorf's estimate, on the
+    scaled entries: each row relative to its own receiver's scale), or when the next pivot row and
+    :data:`CHECK_ROWS` - 1 rows drawn at random are each held to ``eps`` of their own norm."""
+    n_c = params.shape[0]
+    width = AFFINE_TERMS * n_c
+    m = r1 - r0
+    n = (c1 - c0) * width
+    work = np.empty((max(dirs.shape[0], 9), FIT_WORK_COLUMNS))
+    fit = np.empty((n_c, AFFINE_TERMS))
+    used = np.zeros(m, dtype=np.bool_)
+    column_cache = np.empty((m, width))
+    cached = -1
+    row = np.empty(n)
+    seed = (r0 * 7919 + c0 * 104729 + 1) & 0x7FFFFFFF
+    i = 0
+    k = 0
+    passed = 0
+    visited = 0
+    norm2 = 0.0
+    while True:
+        used[i] = True
+        visited += 1
+        full2 = 0.0
+        for b in range(c1 - c0):
+            _fit(model, P, N, r0 + i, c0 + b, params, dirs, pinv, work, fit)
+            for c in range(n_c):
+                for t in range(AFFINE_TERMS):
+                    value = fit[c, t] * scale[c] * row_scale[i]
+                    row[b * width + c * AFFINE_TERMS + t] = value
+                    full2 += value * value
+        for q in range(k):
+            u = U[i, q]
+            for j in range(n):
+                row[j] -= u * V[q, j]
+        j = 0
+        best = 0.0
+        residual2 = 0.0
+        for q in range(n):
+            residual2 += row[q] * row[q]
+            if abs(row[q]) > best:
+                best = abs(row[q])
+                j = q
+        if residual2 <= eps * eps * full2:  # this row is held: check another, drawn at random
+            passed += 1
+            if passed >= CHECK_ROWS or visited >= m:
+                break
+            seed = (seed * 1103515245 + 12345) & 0x7FFFFFFF
+            i = seed % m
+            for _ in range(m):
+                if not used[i]:
+                    break
+                i = (i + 1) % m
+            continue
+        passed = 0
+        if k == kmax:
+            return -1
+        source = j // width
+        if source != cached:
+            for a in range(m):
+                _fit(model, P, N, r0 + a, c0 + source, params, dirs, pinv, work, fit)
+                for c in range(n_c):
+                    for t in range(AFFINE_TERMS):
+                        column_cache[a, c * AFFINE_TERMS + t] = fit[c, t] * scale[c] * row_scale[a]
+            cached = source
+        term = j % width
+        pivot = row[j]
+        best = -1.0
+        following = -1
+        for a in range(m):
+            value = column_cache[a, term]
+            for q in range(k):
+                value -= U[a, q] * V[q, j]
+            U[a, k] = value
+            if not used[a] and abs(value) > best:
+                best = abs(value)
+                following = a
+        v2 = 0.0
+        for q in range(n):
+            V[k, q] = row[q] / pivot
+            v2 += V[k, q] * V[k, q]
+        u2 = 0.0
+        for a in range(m):
+            u2 += U[a, k] * U[a, k]
+        cross = 0.0
+        for q in range(k):
+            uu = 0.0
+            for a in range(m):
+                uu += U[a, k] * U[a, q]
+            vv = 0.0
+            for p in range(n):
+                vv += V[k, p] * V[q, p]
+            cross += uu * vv
+        norm2 += u2 * v2 + 2.0 * cross
+        k += 1
+        if following < 0:
+            break
+        i = following
+        if u2 * v2 <= eps * eps * abs(norm2):
+            break
+    # unscaled in U, whose rows then have the receivers' own magnitudes: V stays near 1, and neither leaves
+    # float32's range where the rows of a block differ by more than it spans
+    for q in range(k):
+        for b in range(c1 - c0):
+            for c in range(n_c):
+                for t in range(AFFINE_TERMS):
+                    V[q, b * width + c * AFFINE_TERMS + t] *= scale[0] / scale[c]
+        for a in range(m):
+            U[a, q] /= row_scale[a] * scale[0]
+    return k
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _fill_dense(worker, lo, hi, model, P, N, dense, params, dirs, pinv, held_starts, held_columns, stamps, D):
+    """Dense blocks ``lo .. hi - 1``: every fit of the block for its channels, 0 where the near field holds the
+    pair (source ``j`` listed for receiver ``o`` in ``held_columns[held_starts[o] : held_starts[o + 1]]``, tree
+    order)."""
+    n_c = params.shape[0]
+    work = np.empty((max(dirs.shape[0], 9), FIT_WORK_COLUMNS))
+    fit = np.empty((n_c, AFFINE_TERMS))
+    mark = stamps[worker]
+    for k in range(lo, hi):
+        r0, r1, c0, c1, first, last, at = (
+            dense[k, 0],
+            dense[k, 1],
+            dense[k, 2],
+            dense[k, 3],
+            dense[k, 4],
+            dense[k, 5],
+            dense[k, 6],
+        )
+        width = AFFINE_TERMS * (last - first)
+        n = (c1 - c0) * width
+        for a in range(r1 - r0):
+            o = r0 + a
+            for h in range(held_starts[o], held_starts[o + 1]):
+                mark[held_columns[h]] = o
+            base = at + a * n
+            for b in range(c1 - c0):
+                if mark[c0 + b] == o:
+                    for q in range(width):
+                        D[base + b * width + q] = 0.0
+                    continue
+                _fit(model, P, N, o, c0 + b, params, dirs, pinv, work, fit)
+                for c in range(first, last):
+                    for t in range(AFFINE_TERMS):
+                        D[base + b * width + (c - first) * AFFINE_TERMS + t] = fit[c, t]
+
+
+@numba.njit(cache=True, inline="always")
+def _low_rank_block(blocks, k):
+    """Row ``k`` of :attr:`FarMatrix.low_rank`: rows, columns, channel, rank and where ``U`` and ``V`` start."""
+    return (
+        blocks[k, 0],
+        blocks[k, 1],
+        blocks[k, 2],
+        blocks[k, 3],
+        blocks[k, 4],
+        blocks[k, 5],
+        blocks[k, 6],
+        blocks[k, 7],
+    )
+
+
+@numba.njit(cache=True, inline="always")
+def _terms(coefs, at, value, first):
+    """One (receiver, source) entry's four terms ``coefs[at : at + 4]`` times ``value[first : first + 4]``."""
+    return (
+        coefs[at] * value[first]
+        + coefs[at + 1] * value[first + 1]
+        + coefs[at + 2] * value[first + 2]
+        + coefs[at + 3] * value[first + 3]
+    )
+
+
+@numba.njit(cache=True, nogil=True, fastmath=True, error_model="numpy")
+def _apply_low_rank(worker, lo, hi, blocks, U, V, values, out):
+    """``out[worker, rows, c] += U (V values[columns, c])`` for the low-rank blocks ``lo .. hi - 1``."""
+    target = out[worker]
+    inner = np.zeros(128)
+    for k in range(lo, hi):
+        r0, r1, c0, c1, c, rank, u_at, v_at = _low_rank_block(blocks, k)
+        n = (c1 - c0) * AFFINE_TERMS
+        if inner.shape[0] < rank:
+            inner = np.zeros(2 * rank)
+        for q in range(rank):
+            row = v_at + q * n
+            s = 0.0
+            for b in range(c1 - c0):
+                s += _terms(V, row + b * AFFINE_TERMS, values[c0 + b], c * AFFINE_TERMS)
+            inner[q] = s * V_STEP
+        for a in range(r1 - r0):
+            row = u_at + a * rank
+            s = 0.0
+            for q in range(rank):
+                s += U[row + q] * inner[q]
+            target[r0 + a, c] += s
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _entries_of(worker, lo, hi, blocks, U, V, starts, columns, out):
+    """``out[h, c] = (U V)[o, j]`` for every pair ``h`` (receiver ``o``, source ``j = columns[h]``, ``h`` in
+    ``starts[o] : starts[o + 1]``, tree order) in the low-rank blocks ``lo .. hi - 1``."""
+    for k in range(lo, hi):
+        r0, r1, c0, c1, c, rank, u_at, v_at = _low_rank_block(blocks, k)
+        n = (c1 - c0) * AFFINE_TERMS
+        for o in range(r0, r1):
+            for h in range(starts[o], starts[o + 1]):
+                j = columns[h]
+                if j < c0 or j >= c1:
+                    continue
+                for t in range(AFFINE_TERMS):
+                    s = 0.0
+                    for q in range(rank):
+                        s += U[u_at + (o - r0) * rank + q] * V[v_at + q * n + (j - c0) * AFFINE_TERMS + t]
+                    out[h, c, t] = s * V_STEP
+
+
+@numba.njit(cache=True, nogil=True, fastmath=True, error_model="numpy")
+def _apply_dense(worker, lo, hi, blocks, D, values, out):
+    """``out[worker, rows, c] += D values[columns, c]`` for the dense blocks ``lo .. hi - 1`` and their
+    channels."""
+    target = out[worker]
+    for k in range(lo, hi):
+        r0, r1, c0, c1, first, last, at = (
+            blocks[k, 0], blocks[k, 1], blocks[k, 2], blocks[k, 3], blocks[k, 4], blocks[k, 5], blocks[k, 6]
+        )  # fmt: skip
+        width = AFFINE_TERMS * (last - first)
+        n = (c1 - c0) * width
+        for a in range(r1 - r0):
+            base = at + a * n
+            for c in range(first, last):
+                s = 0.0
+                for b in range(c1 - c0):
+                    s += _terms(D, base + b * width + (c - first) * AFFINE_TERMS, values[c0 + b], c * AFFINE_TERMS)
+                target[r0 + a, c] += s
+
+
+def _fixed_point(V: np.ndarray) -> np.ndarray:
+    """``V`` (entries in [-1, 1]) as int16 multiples of :data:`V_STEP`."""
+    return np.clip(np.rint(V / V_STEP), -32767, 32767).astype(np.int16)
+
+
+def _scratch(held: list, rows: int, ranks: int, columns: int) -> tuple[np.ndarray, np.ndarray]:
+    """A worker's ``U (rows, ranks)`` and ``V (ranks, columns)`` buffers, grown when a block needs more."""
+    U, V = held
+    if U.shape[0] < rows or U.shape[1] < ranks:
+        held[0] = U = np.empty((max(rows, U.shape[0]), max(ranks, U.shape[1])))
+    if V.shape[0] < ranks or V.shape[1] < columns:
+        held[1] = V = np.empty((max(ranks, V.shape[0]), max(columns, V.shape[1])))
+    return U, V
+
+
+def build(
+    model: int,
+    points: np.ndarray,
+    normals: np.ndarray,
+    params: np.ndarray,
+    fit: tuple,
+    eps: float,
+    gap: float,
+    channel_bound,
+    held: tuple,
+    tree: SourceTree | None = None,
+    progress=None,
+) -> FarMatrix:
+    """The far field of the surface ``points`` (mm), ``normals`` for the kernel ``model`` (code) and channel
+    parameters ``params``: far blocks by cross approximation to ``eps`` per channel, the rest dense.
+
+    ``fit`` is :func:`~translucency.scatter.kernels.fit_directions`'s ``(dirs, pinv)`` for the affine terms;
+    ``gap`` (mm) the smallest distance of a far block's spheres (at least the near field's reach);
+    ``channel_bound(r)`` the §8.4 bound per channel at distances ``r`` (mm), ``(C, len(r))``, by which every
+    receiver's row is scaled; ``held = (starts, columns)`` the pairs the near field holds (CSR by receiver,
+    vertex indices), left out. ``progress(fraction)`` is called as blocks are done.
+    """
+    tree = tree or SourceTree(points, LEAF_SIZE)
+    order = tree.order
+    P = np.ascontiguousarray(points[order], dtype=np.float64)
+    N = np.ascontiguousarray(normals[order], dtype=np.float64)
+    n = P.shape[0]
+    n_c = params.shape[0]
+    dirs, pinv = fit
+    held_starts, held_columns, _ = _held_in_order(order, *held)
+    far_pairs, dense_pairs = partition(tree, gap)
+    report = progress or (lambda fraction: None)
+    found, dense_extra = _crosses(model, tree, P, N, params, dirs, pinv, eps, channel_bound, far_pairs, report)
+    dense_pairs = np.concatenate(
+        [
+            np.column_stack([dense_pairs, np.zeros(len(dense_pairs), np.int64), np.full(len(dense_pairs), n_c)]),
+            np.array([(a, b, c, c + 1) for a, b, c in sorted(dense_extra)], dtype=np.int64).reshape(-1, 4),
+        ]
+    )
+    start, end = tree.start, tree.end
+
+    low_rank = np.zeros((len(found), 8), dtype=np.int64)
+    U_all = np.empty(sum(entry[3].size for entry in found), dtype=np.float32)
+    V_all = np.empty(sum(entry[4].size for entry in found), dtype=np.int16)
+    u_at = v_at = 0
+    for k, (a, b, c, U, V) in enumerate(found):
+        low_rank[k] = (start[a], end[a], start[b], end[b], c, U.shape[1], u_at, v_at)
+        U_all[u_at : u_at + U.size] = U.ravel()
+        V_all[v_at : v_at + V.size] = V.ravel()
+        u_at += U.size
+        v_at += V.size
+
+    dense = np.zeros((len(dense_pairs), 7), dtype=np.int64)
+    rows, cols = dense_pairs[:, 0], dense_pairs[:, 1]
+    sizes = (
+        (end[rows] - start[rows]) * (end[cols] - start[cols]) * AFFINE_TERMS * (dense_pairs[:, 3] - dense_pairs[:, 2])
+    )
+    dense[:, 0], dense[:, 1], dense[:, 2], dense[:, 3] = start[rows], end[rows], start[cols], end[cols]
+    dense[:, 4:6] = dense_pairs[:, 2:4]
+    dense[1:, 6] = np.cumsum(sizes)[:-1]
+    D = np.empty(int(np.sum(sizes)), dtype=np.float32)
+    stamps = np.full((thread_count(), n), -1, dtype=np.int64)
+    for_ranges(_fill_dense, len(dense), model, P, N, dense, params, dirs, pinv, held_starts, held_columns, stamps, D)
+    report(1.0)
+    ranks = low_rank[:, 5]
+    matrix = FarMatrix(order, n_c, low_rank, U_all, V_all, dense, D)
+    matrix.stats = {
+        "eps": eps,
+        "eta": ETA,
+        "far_blocks": int(len(low_rank)),
+        "dense_blocks": int(len(dense)),
+        "rank_mean": float(ranks.mean()) if ranks.size else 0.0,
+        "rank_max": int(ranks.max()) if ranks.size else 0,
+        "far_floats": int(U_all.size + V_all.size),
+        "dense_floats": int(D.size),
+        "bytes": matrix.nbytes,
+    }
+    return matrix
+
+
+def _held_in_order(order, starts, columns):
+    """The pairs ``(starts, columns)`` (CSR by receiver, vertex indices) in the tree's order: ``(starts,
+    columns, rows)``, ``rows`` the position in ``columns`` of each."""
+    n = order.size
+    rank_of = np.empty(n, dtype=np.int64)
+    rank_of[order] = np.arange(n)
+    counts = np.diff(starts)[order]
+    held_starts = np.zeros(n + 1, dtype=np.int64)
+    np.cumsum(counts, out=held_starts[1:])
+    rows = np.repeat(starts[order] - held_starts[:-1], counts) + np.arange(int(held_starts[-1]))
+    return held_starts, rank_of[np.asarray(columns, dtype=np.int64)[rows]], rows
+
+
+def _crosses(model, tree, P, N, params, dirs, pinv, eps, channel_bound, far_pairs, report):
+    """Cross approximations of every far block and channel: ``(found, dense)``, ``found`` a list of ``(row
+    node, column node, channel, U float32 (m, k), V float32 (k, 4 n))``; a block that needs more crosses than
+    :func:`rank_limit` is split into its children's blocks, and a pair of leaves that does is added to
+    ``dense`` as ``(row node, column node, channel)``."""
+    n_c = params.shape[0]
+    start, end, centre = tree.start, tree.end, tree.centre
+    channels = [np.ascontiguousarray(params[c : c + 1]) for c in range(n_c)]
+    kept_by = [[] for _ in range(thread_count())]
+    buffers = [[np.empty((0, 0)), np.empty((0, 0))] for _ in range(thread_count())]
+
+    def run(worker, lo, hi, items):
+        kept = kept_by[worker]
+        for p in range(lo, hi):
+            a, b, c = items[p]
+            m, cols = int(end[a] - start[a]), int(end[b] - start[b]) * AFFINE_TERMS
+            kmax = rank_limit(m, cols)
+            U, V = _scratch(buffers[worker], m, kmax, cols)
+            # each receiver's row scaled by the bound at its own distance: the rows are held alike, not only the
+            # block's brightest (a dark receiver's B is all far field)
+            d = float(np.linalg.norm(centre[a] - centre[b]))
+            r = np.linalg.norm(P[start[a] : end[a]] - centre[b], axis=1)
+            bound = channel_bound(np.append(np.maximum(r, 1e-12), max(d, 1e-12)))[c]
+            scale = np.array([1.0 / max(bound[-1], 1e-300)])
+            row_scale = np.clip(bound[-1] / np.maximum(bound[:-1], 1e-300), 1e-150, 1e150)
+            k = _cross(model, P, N, start[a], end[a], start[b], end[b], channels[c], dirs, pinv, scale, row_scale,
+                       eps, kmax, U, V)  # fmt: skip
+            if k < 0:
+                kept.append((a, b, c, None, None))
+            else:
+                kept.append((a, b, c, U[:m, :k].astype(np.float32), _fixed_point(V[:k, :cols])))
+
+    found, dense = [], set()
+    items = np.array([(a, b, c) for a, b in far_pairs for c in range(n_c)], dtype=np.int64).reshape(-1, 3)
+    done, total = 0, max(len(items), 1)
+    while len(items):
+        for_ranges(run, len(items), items)
+        following = []
+        for kept in kept_by:
+            for a, b, c, U, V in kept:
+                if U is not None:
+                    found.append((a, b, c, U, V))
+                elif tree.left[a] < 0 and tree.left[b] < 0:
+                    dense.add((int(a), int(b), int(c)))
+                else:
+                    rows = [a] if tree.left[a] < 0 else [tree.left[a], tree.right[a]]
+                    cols = [b] if tree.left[b] < 0 else [tree.left[b], tree.right[b]]
+                    following += [(r, s, c) for r in rows for s in cols]
+            kept.clear()
+        done += len(items)
+        report(min(0.9, 0.9 * done / total))
+        items = np.array(following, dtype=np.int64).reshape(-1, 3)
+    return found, dense
+
+
+#: The compiled kernels of the far field's cross approximations and products: numba compiles each on first use;
+#: the set-up compiles them ahead (:mod:`translucency.app.warmup`).
+LOW_RANK_KERNELS = (_partition, _cross, _fill_dense, _entries_of, _apply_low_rank, _apply_dense)
