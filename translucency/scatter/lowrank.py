@@ -76,7 +76,7 @@ class FarMatrix:
         The crosses, row-major (``V`` in steps of :data:`V_STEP`); ``V``'s columns are (source, term).
     dense : (M, 7) int64
         Per dense block: first and last row, first and last column, first and last channel, and where its
-        ``(rows, columns x 4 channels)`` entries start in ``D``.
+        ``(channels, rows, columns x 4)`` entries start in ``D``.
     D : float32
     stats : dict
     """
@@ -99,7 +99,9 @@ class FarMatrix:
         """``B (n, C)`` for ``values (n, C, 4)``: per vertex and channel ``Phi, Psi_x, Psi_y, Psi_z`` (vertex
         order), times the far field's fits (1/(mm^2 sr) per unit flux)."""
         n = self.order.size
-        sorted_values = np.ascontiguousarray(values[self.order], dtype=np.float64).reshape(n, -1)
+        # per channel, the sources' four terms one after another: a block's columns are one contiguous run
+        sorted_values = np.ascontiguousarray(np.asarray(values, dtype=np.float64)[self.order].transpose(1, 0, 2))
+        sorted_values = sorted_values.reshape(self.n_channels, n * AFFINE_TERMS)
         workers = thread_count()
         out = np.zeros((workers, n, self.n_channels))
         for_ranges(_apply_low_rank, self.low_rank.shape[0], self.low_rank, self.U, self.V, sorted_values, out)
@@ -316,22 +318,20 @@ def _fill_dense(worker, lo, hi, model, P, N, dense, params, dirs, pinv, held_sta
             dense[k, 5],
             dense[k, 6],
         )
-        width = AFFINE_TERMS * (last - first)
-        n = (c1 - c0) * width
-        for a in range(r1 - r0):
+        m = r1 - r0
+        n = (c1 - c0) * AFFINE_TERMS
+        for a in range(m):
             o = r0 + a
             for h in range(held_starts[o], held_starts[o + 1]):
                 mark[held_columns[h]] = o
-            base = at + a * n
             for b in range(c1 - c0):
-                if mark[c0 + b] == o:
-                    for q in range(width):
-                        D[base + b * width + q] = 0.0
-                    continue
-                _fit(model, P, N, o, c0 + b, params, dirs, pinv, work, fit)
+                held = mark[c0 + b] == o
+                if not held:
+                    _fit(model, P, N, o, c0 + b, params, dirs, pinv, work, fit)
                 for c in range(first, last):
+                    at_b = at + ((c - first) * m + a) * n + b * AFFINE_TERMS
                     for t in range(AFFINE_TERMS):
-                        D[base + b * width + (c - first) * AFFINE_TERMS + t] = fit[c, t]
+                        D[at_b + t] = 0.0 if held else fit[c, t]
 
 
 @numba.njit(cache=True, inline="always")
@@ -349,20 +349,10 @@ def _low_rank_block(blocks, k):
     )
 
 
-@numba.njit(cache=True, inline="always")
-def _terms(coefs, at, value, first):
-    """One (receiver, source) entry's four terms ``coefs[at : at + 4]`` times ``value[first : first + 4]``."""
-    return (
-        coefs[at] * value[first]
-        + coefs[at + 1] * value[first + 1]
-        + coefs[at + 2] * value[first + 2]
-        + coefs[at + 3] * value[first + 3]
-    )
-
-
 @numba.njit(cache=True, nogil=True, fastmath=True, error_model="numpy")
 def _apply_low_rank(worker, lo, hi, blocks, U, V, values, out):
-    """``out[worker, rows, c] += U (V values[columns, c])`` for the low-rank blocks ``lo .. hi - 1``."""
+    """``out[worker, rows, c] += U (V values[c, columns])`` for the low-rank blocks ``lo .. hi - 1`` (``values``
+    per channel, four terms per source)."""
     target = out[worker]
     inner = np.zeros(128)
     for k in range(lo, hi):
@@ -370,11 +360,12 @@ def _apply_low_rank(worker, lo, hi, blocks, U, V, values, out):
         n = (c1 - c0) * AFFINE_TERMS
         if inner.shape[0] < rank:
             inner = np.zeros(2 * rank)
+        source = values[c, c0 * AFFINE_TERMS : c1 * AFFINE_TERMS]
         for q in range(rank):
             row = v_at + q * n
             s = 0.0
-            for b in range(c1 - c0):
-                s += _terms(V, row + b * AFFINE_TERMS, values[c0 + b], c * AFFINE_TERMS)
+            for j in range(n):
+                s += V[row + j] * source[j]
             inner[q] = s * V_STEP
         for a in range(r1 - r0):
             row = u_at + a * rank
@@ -405,21 +396,22 @@ def _entries_of(worker, lo, hi, blocks, U, V, starts, columns, out):
 
 @numba.njit(cache=True, nogil=True, fastmath=True, error_model="numpy")
 def _apply_dense(worker, lo, hi, blocks, D, values, out):
-    """``out[worker, rows, c] += D values[columns, c]`` for the dense blocks ``lo .. hi - 1`` and their
-    channels."""
+    """``out[worker, rows, c] += D values[c, columns]`` for the dense blocks ``lo .. hi - 1`` and their
+    channels (``values`` per channel, four terms per source)."""
     target = out[worker]
     for k in range(lo, hi):
         r0, r1, c0, c1, first, last, at = (
             blocks[k, 0], blocks[k, 1], blocks[k, 2], blocks[k, 3], blocks[k, 4], blocks[k, 5], blocks[k, 6]
         )  # fmt: skip
-        width = AFFINE_TERMS * (last - first)
-        n = (c1 - c0) * width
-        for a in range(r1 - r0):
-            base = at + a * n
-            for c in range(first, last):
+        m = r1 - r0
+        n = (c1 - c0) * AFFINE_TERMS
+        for c in range(first, last):
+            source = values[c, c0 * AFFINE_TERMS : c1 * AFFINE_TERMS]
+            for a in range(m):
+                row = at + ((c - first) * m + a) * n
                 s = 0.0
-                for b in range(c1 - c0):
-                    s += _terms(D, base + b * width + (c - first) * AFFINE_TERMS, values[c0 + b], c * AFFINE_TERMS)
+                for j in range(n):
+                    s += D[row + j] * source[j]
                 target[r0 + a, c] += s
 
 
@@ -531,37 +523,55 @@ def _held_in_order(order, starts, columns):
     return held_starts, rank_of[np.asarray(columns, dtype=np.int64)[rows]], rows
 
 
+#: Blocks whose row scales are computed together (one call of the bound per channel over all their rows).
+SCALE_CHUNK = 2048
+#: The channel scale of :func:`_cross` when the rows carry all of it.
+ONE = np.ones(1)
+
+
+def _row_scales(tree, P, items, channel_bound):
+    """Per block and channel ``(row node, column node, channel)`` of ``items``: each receiver's row scale, one
+    over the channel's §8.4 bound at the receiver's distance from the column node's centre, so that the crosses
+    hold every row alike, not only the block's brightest (a dark receiver's B is all far field):
+    ``(offsets, row_scales)``, block ``p``'s rows at ``row_scales[offsets[p] : offsets[p + 1]]``."""
+    a, b, c = items[:, 0], items[:, 1], items[:, 2]
+    m = tree.end[a] - tree.start[a]
+    offsets = np.zeros(len(items) + 1, dtype=np.int64)
+    np.cumsum(m, out=offsets[1:])
+    owner = np.repeat(np.arange(len(items)), m)
+    rows = tree.start[a][owner] + np.arange(int(offsets[-1])) - offsets[:-1][owner]
+    r = np.maximum(np.linalg.norm(P[rows] - tree.centre[b][owner], axis=1), 1e-12)
+    own = channel_bound(r)[c[owner], np.arange(r.size)]
+    return offsets, 1.0 / np.clip(own, 1e-280, 1e280)
+
+
 def _crosses(model, tree, P, N, params, dirs, pinv, eps, channel_bound, far_pairs, report):
     """Cross approximations of every far block and channel: ``(found, dense)``, ``found`` a list of ``(row
     node, column node, channel, U float32 (m, k), V float32 (k, 4 n))``; a block that needs more crosses than
     :func:`rank_limit` is split into its children's blocks, and a pair of leaves that does is added to
     ``dense`` as ``(row node, column node, channel)``."""
     n_c = params.shape[0]
-    start, end, centre = tree.start, tree.end, tree.centre
+    start, end = tree.start, tree.end
     channels = [np.ascontiguousarray(params[c : c + 1]) for c in range(n_c)]
     kept_by = [[] for _ in range(thread_count())]
     buffers = [[np.empty((0, 0)), np.empty((0, 0))] for _ in range(thread_count())]
 
     def run(worker, lo, hi, items):
         kept = kept_by[worker]
-        for p in range(lo, hi):
-            a, b, c = items[p]
-            m, cols = int(end[a] - start[a]), int(end[b] - start[b]) * AFFINE_TERMS
-            kmax = rank_limit(m, cols)
-            U, V = _scratch(buffers[worker], m, kmax, cols)
-            # each receiver's row scaled by the bound at its own distance: the rows are held alike, not only the
-            # block's brightest (a dark receiver's B is all far field)
-            d = float(np.linalg.norm(centre[a] - centre[b]))
-            r = np.linalg.norm(P[start[a] : end[a]] - centre[b], axis=1)
-            bound = channel_bound(np.append(np.maximum(r, 1e-12), max(d, 1e-12)))[c]
-            scale = np.array([1.0 / max(bound[-1], 1e-300)])
-            row_scale = np.clip(bound[-1] / np.maximum(bound[:-1], 1e-300), 1e-150, 1e150)
-            k = _cross(model, P, N, start[a], end[a], start[b], end[b], channels[c], dirs, pinv, scale, row_scale,
-                       eps, kmax, U, V)  # fmt: skip
-            if k < 0:
-                kept.append((a, b, c, None, None))
-            else:
-                kept.append((a, b, c, U[:m, :k].astype(np.float32), _fixed_point(V[:k, :cols])))
+        for first in range(lo, hi, SCALE_CHUNK):
+            chunk = items[first : min(hi, first + SCALE_CHUNK)]
+            offsets, row_scales = _row_scales(tree, P, chunk, channel_bound)
+            for p, (a, b, c) in enumerate(chunk):
+                m, cols = int(end[a] - start[a]), int(end[b] - start[b]) * AFFINE_TERMS
+                kmax = rank_limit(m, cols)
+                U, V = _scratch(buffers[worker], m, kmax, cols)
+                row_scale = row_scales[offsets[p] : offsets[p + 1]]
+                k = _cross(model, P, N, start[a], end[a], start[b], end[b], channels[c], dirs, pinv, ONE, row_scale,
+                           eps, kmax, U, V)  # fmt: skip
+                if k < 0:
+                    kept.append((a, b, c, None, None))
+                else:
+                    kept.append((a, b, c, U[:m, :k].astype(np.float32), _fixed_point(V[:k, :cols])))
 
     found, dense = [], set()
     items = np.array([(a, b, c) for a, b in far_pairs for c in range(n_c)], dtype=np.int64).reshape(-1, 3)
