@@ -61,11 +61,11 @@ FAR_FLOAT_BYTES = 4
 EPS_PER_TOL = 3.0
 #: Crosses per block and channel the memory estimate counts per decade of ``1 / eps`` (the rank of a block
 #: grows with the digits asked; :func:`operator_bytes`).
-RANK_PER_DECADE = 6.0
+RANK_PER_DECADE = 4.5
 #: Seconds of one fit on one thread (:func:`~translucency.scatter.kernels.fitted_pairs`, one channel), and per
 #: near-field entry: the rates of the time estimate the budget compares against ``time_limit``, calibrated on
 #: timed preparations (bench/README.md, "Relighting").
-FIT_SECONDS = 1.2e-7
+FIT_SECONDS = 5e-7
 NEAR_ENTRY_SECONDS = 3e-5
 
 
