@@ -7,18 +7,20 @@ kd-tree (:class:`~translucency.scatter.hierarchy.SourceTree`, leaves of :data:`L
 is a block of the matrix, and
 
 * a block whose nodes are far apart (gap at least ``gap`` mm and ``max radius <= ETA * centre distance``) is
-  a product ``U V`` of low rank found by **adaptive cross approximation** with partial pivoting (Bebendorf
-  2000): rows are the receivers, columns the (source, channel, term) triples, so every channel shares the
-  receivers' basis. It stops when the last cross is below ``eps`` of the block's Frobenius norm; a block
-  that needs more than :func:`rank_limit` crosses is split into its children's blocks;
+  a product ``U V`` of low rank per channel, found by **adaptive cross approximation** with partial pivoting
+  (Bebendorf 2000): rows are the receivers, columns the (source, term) pairs. It stops when the last cross
+  is below ``eps`` of the block's Frobenius norm (or when the rows it checks are held to ``eps``); a block
+  that needs more than :func:`rank_limit` crosses is split into its children's blocks, down to dense pairs
+  of leaves;
 * a pair of leaves that is not far apart is stored whole (a dense block), less the pairs the near field
   holds (``held``: they are summed there, docs/physics.md §8.7); where such a pair is in a low-rank block
   instead, :meth:`FarMatrix.low_rank_entries` gives the value the block holds, for the near field to take off.
 
 The error is set by ``eps`` (the rank), not by the opening ratio: ``ETA`` stays at 0.5 for every ``tol``.
-Columns are scaled per channel by the bound of §8.4 at the block's distance before the approximation, so
-that no channel's smaller values are lost to another's. Stored in float32 (``V`` in 16-bit fixed point); a light
-reads every block once.
+Each receiver's row is divided by the channel's bound of §8.4 at its own distance before the approximation,
+so that the stopping rule holds the rows of distant (dark) receivers too, not only the block's brightest.
+``U`` is stored in float32, ``V`` in 16-bit fixed point, dense blocks in float32; a light reads every block
+once.
 
 =========== ================================================================ ==============
 symbol      meaning                                                          unit
@@ -547,7 +549,7 @@ def _row_scales(tree, P, items, channel_bound):
 
 def _crosses(model, tree, P, N, params, dirs, pinv, eps, channel_bound, far_pairs, report):
     """Cross approximations of every far block and channel: ``(found, dense)``, ``found`` a list of ``(row
-    node, column node, channel, U float32 (m, k), V float32 (k, 4 n))``; a block that needs more crosses than
+    node, column node, channel, U float32 (m, k), V int16 (k, 4 n))``; a block that needs more crosses than
     :func:`rank_limit` is split into its children's blocks, and a pair of leaves that does is added to
     ``dense`` as ``(row node, column node, channel)``."""
     n_c = params.shape[0]
