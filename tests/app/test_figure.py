@@ -63,6 +63,25 @@ def test_the_views_measure_the_scan_in_mm(sphere_result):
     assert np.median(distance_to_map(pixels, lut)) <= 6
 
 
+def test_a_false_colour_below_its_range_keeps_its_outline_on_the_dark_background(sphere_result):
+    # every value below the range takes the map's lowest colour, nearly black: without the grey outline the
+    # scan would vanish into the background
+    mesh, result = sphere_result
+    from translucency.app.render import SILHOUETTE_COLOUR
+
+    panel = 300
+    values = np.full(mesh.n_points, 1e-9)
+    image, mm_per_pixel = render_views(mesh, result, values, (1e-3, 1.0), "log", None, "+y", panel)
+    right = image[:, panel:].astype(int)
+    grey = int(SILHOUETTE_COLOUR[1:3], 16)
+    outline = (np.abs(right - grey) <= 40).all(axis=2)
+    rows, cols = np.nonzero(outline)
+    assert outline.sum() > 100
+    # the outline goes round the 40 mm sphere
+    assert 36.0 < (rows.max() - rows.min() + 1) * mm_per_pixel < 42.0
+    assert 36.0 < (cols.max() - cols.min() + 1) * mm_per_pixel < 42.0
+
+
 def test_the_figure_has_both_views_a_colour_bar_and_is_written_atomically(sphere_result, tmp_path):
     import imageio.v3 as iio
     from matplotlib import colormaps

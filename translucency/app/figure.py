@@ -63,6 +63,7 @@ def render_views(mesh, result, values, clim, scale, camera_direction, up_axis, p
     )
 
     plotter = new_plotter((2 * panel, panel), shape=(1, 2), border=False)
+    plotter.link_views()  # before the meshes: the outline of the false colour follows the camera it is made with
     try:
         directions = [light["direction"] for light in result.metadata.get("lights", ()) if "direction" in light]
         for column in (0, 1):
@@ -70,7 +71,7 @@ def render_views(mesh, result, values, clim, scale, camera_direction, up_axis, p
             if column == 0:
                 poly = add_colored_mesh(plotter, mesh, result.colors)
             else:
-                poly, _, _ = add_false_colour_mesh(plotter, mesh, values, clim, scale)
+                poly, _, _ = add_false_colour_mesh(plotter, mesh, values, clim, scale, outline=True)
             for direction in directions:
                 plotter.add_mesh(light_glyph(poly.center, 0.5 * poly.length, direction), color=LIGHT_GLYPH_COLOR)
         plotter.subplot(0, 0)
@@ -78,7 +79,6 @@ def render_views(mesh, result, values, clim, scale, camera_direction, up_axis, p
         plotter.camera_position = camera_position(poly.center, poly.length, direction, tuple(up_vector(up_axis)))
         plotter.enable_parallel_projection()
         plotter.reset_camera()
-        plotter.link_views()
         mm_per_pixel = 2.0 * float(plotter.camera.parallel_scale) / panel
         image = plotter.screenshot(return_img=True)
     finally:

@@ -178,14 +178,20 @@ def light_glyph(center, radius, direction):
     return pyvista.Arrow(start=tail, direction=-d, tip_length=0.3, tip_radius=0.12, shaft_radius=0.045, scale=length)
 
 
-def add_false_colour_mesh(plotter, mesh, values, clim, scale="log", *, title=None, scalar_bar=None):
+#: The outline drawn around a false-colour mesh (a mid grey, seen on the dark background and against the map).
+SILHOUETTE_COLOUR = "#8c8c8c"
+
+
+def add_false_colour_mesh(plotter, mesh, values, clim, scale="log", *, title=None, scalar_bar=None, outline=False):
     """Add a mesh (mm) showing per-vertex ``values`` through the false colour map.
 
     ``values`` are in physical units (:func:`translucency.app.display.false_colour_values`), ``clim`` their
     range (:func:`~translucency.app.display.false_colour_range`); on a log scale values below the range
     take its lowest colour. With a ``title`` a colour bar is drawn (``scalar_bar``: more keywords of
     PyVista's ``add_scalar_bar``). The values are the array ``"false colour"`` of the PolyData: change it
-    in place to show new ones.
+    in place to show new ones. ``outline``: the silhouette in :data:`SILHOUETTE_COLOUR` (the map's lowest colour
+    is nearly black, and a dark region's edge would vanish on a dark background), made with the plotter's
+    camera as it is when the mesh is added.
 
     Returns
     -------
@@ -205,6 +211,7 @@ def add_false_colour_mesh(plotter, mesh, values, clim, scale="log", *, title=Non
         log_scale=scale == "log",
         lighting=False,
         show_scalar_bar=False,
+        silhouette={"color": SILHOUETTE_COLOUR, "line_width": 2.0} if outline else False,
     )
     bar = None
     if title is not None:
