@@ -185,22 +185,21 @@ CHECK_ROWS = 3
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
-def _cross(model, P, N, r0, r1, c0, c1, params, dirs, pinv, scale, row_scale, eps, kmax, U, V):
-    """Adaptive cross approximation with partial pivoting of rows ``r0:r1`` x sources ``c0:c1`` (columns
-    ``(j - c0) 4 C + 4 c + t``), each entry scaled by ``row_scale[row] scale[c]``: the crosses in ``U[:m, :k]``
-    and ``V[:k, :4 C n]`` (``U V`` unscaled on return); ``k``, or -1 when ``kmax`` crosses were not enough.
+def _cross(model, P, N, r0, r1, c0, c1, params, dirs, pinv, row_scale, eps, kmax, U, V):
+    """Adaptive cross approximation with partial pivoting of one channel (``params`` of one row): rows ``r0:r1``
+    x sources ``c0:c1`` (columns ``4 (j - c0) + t``), each row scaled by ``row_scale[row]``: the crosses in
+    ``U[:m, :k]`` and ``V[:k, :4 n]`` (``U V`` unscaled on return); ``k``, or -1 when ``kmax`` crosses were not
+    enough.
 
     It stops when the last cross is below ``eps`` of the block's Frobenius norm (Bebendorf's estimate, on the
     scaled entries: each row relative to its own receiver's scale), or when the next pivot row and
     :data:`CHECK_ROWS` - 1 rows drawn at random are each held to ``eps`` of their own norm."""
-    n_c = params.shape[0]
-    width = AFFINE_TERMS * n_c
     m = r1 - r0
-    n = (c1 - c0) * width
+    n = (c1 - c0) * AFFINE_TERMS
     work = np.empty((max(dirs.shape[0], 9), FIT_WORK_COLUMNS))
-    fit = np.empty((n_c, AFFINE_TERMS))
+    fit = np.empty((1, AFFINE_TERMS))
     used = np.zeros(m, dtype=np.bool_)
-    column_cache = np.empty((m, width))
+    column_cache = np.empty((m, AFFINE_TERMS))
     cached = -1
     row = np.empty(n)
     seed = (r0 * 7919 + c0 * 104729 + 1) & 0x7FFFFFFF
@@ -215,11 +214,10 @@ def _cross(model, P, N, r0, r1, c0, c1, params, dirs, pinv, scale, row_scale, ep
         full2 = 0.0
         for b in range(c1 - c0):
             _fit(model, P, N, r0 + i, c0 + b, params, dirs, pinv, work, fit)
-            for c in range(n_c):
-                for t in range(AFFINE_TERMS):
-                    value = fit[c, t] * scale[c] * row_scale[i]
-                    row[b * width + c * AFFINE_TERMS + t] = value
-                    full2 += value * value
+            for t in range(AFFINE_TERMS):
+                value = fit[0, t] * row_scale[i]
+                row[b * AFFINE_TERMS + t] = value
+                full2 += value * value
         for q in range(k):
             u = U[i, q]
             for j in range(n):
@@ -246,15 +244,14 @@ def _cross(model, P, N, r0, r1, c0, c1, params, dirs, pinv, scale, row_scale, ep
         passed = 0
         if k == kmax:
             return -1
-        source = j // width
+        source = j // AFFINE_TERMS
         if source != cached:
             for a in range(m):
                 _fit(model, P, N, r0 + a, c0 + source, params, dirs, pinv, work, fit)
-                for c in range(n_c):
-                    for t in range(AFFINE_TERMS):
-                        column_cache[a, c * AFFINE_TERMS + t] = fit[c, t] * scale[c] * row_scale[a]
+                for t in range(AFFINE_TERMS):
+                    column_cache[a, t] = fit[0, t] * row_scale[a]
             cached = source
-        term = j % width
+        term = j % AFFINE_TERMS
         pivot = row[j]
         best = -1.0
         following = -1
@@ -289,15 +286,11 @@ def _cross(model, P, N, r0, r1, c0, c1, params, dirs, pinv, scale, row_scale, ep
         i = following
         if u2 * v2 <= eps * eps * abs(norm2):
             break
-    # unscaled in U, whose rows then have the receivers' own magnitudes: V stays near 1, and neither leaves
+    # unscaled in U, whose rows then have the receivers' own magnitudes: V stays in [-1, 1], and neither leaves
     # float32's range where the rows of a block differ by more than it spans
     for q in range(k):
-        for b in range(c1 - c0):
-            for c in range(n_c):
-                for t in range(AFFINE_TERMS):
-                    V[q, b * width + c * AFFINE_TERMS + t] *= scale[0] / scale[c]
         for a in range(m):
-            U[a, q] /= row_scale[a] * scale[0]
+            U[a, q] /= row_scale[a]
     return k
 
 
@@ -311,15 +304,7 @@ def _fill_dense(worker, lo, hi, model, P, N, dense, params, dirs, pinv, held_sta
     fit = np.empty((n_c, AFFINE_TERMS))
     mark = stamps[worker]
     for k in range(lo, hi):
-        r0, r1, c0, c1, first, last, at = (
-            dense[k, 0],
-            dense[k, 1],
-            dense[k, 2],
-            dense[k, 3],
-            dense[k, 4],
-            dense[k, 5],
-            dense[k, 6],
-        )
+        r0, r1, c0, c1, first, last, at = _dense_block(dense, k)
         m = r1 - r0
         n = (c1 - c0) * AFFINE_TERMS
         for a in range(m):
@@ -334,6 +319,12 @@ def _fill_dense(worker, lo, hi, model, P, N, dense, params, dirs, pinv, held_sta
                     at_b = at + ((c - first) * m + a) * n + b * AFFINE_TERMS
                     for t in range(AFFINE_TERMS):
                         D[at_b + t] = 0.0 if held else fit[c, t]
+
+
+@numba.njit(cache=True, inline="always")
+def _dense_block(blocks, k):
+    """Row ``k`` of :attr:`FarMatrix.dense`: rows, columns, first and last channel, and where ``D``'s start."""
+    return blocks[k, 0], blocks[k, 1], blocks[k, 2], blocks[k, 3], blocks[k, 4], blocks[k, 5], blocks[k, 6]
 
 
 @numba.njit(cache=True, inline="always")
@@ -402,9 +393,7 @@ def _apply_dense(worker, lo, hi, blocks, D, values, out):
     channels (``values`` per channel, four terms per source)."""
     target = out[worker]
     for k in range(lo, hi):
-        r0, r1, c0, c1, first, last, at = (
-            blocks[k, 0], blocks[k, 1], blocks[k, 2], blocks[k, 3], blocks[k, 4], blocks[k, 5], blocks[k, 6]
-        )  # fmt: skip
+        r0, r1, c0, c1, first, last, at = _dense_block(blocks, k)
         m = r1 - r0
         n = (c1 - c0) * AFFINE_TERMS
         for c in range(first, last):
@@ -483,6 +472,7 @@ def build(
         V_all[v_at : v_at + V.size] = V.ravel()
         u_at += U.size
         v_at += V.size
+        found[k] = None  # each block's own arrays go as they are copied: the crosses are not held twice
 
     dense = np.zeros((len(dense_pairs), 7), dtype=np.int64)
     rows, cols = dense_pairs[:, 0], dense_pairs[:, 1]
@@ -527,8 +517,6 @@ def _held_in_order(order, starts, columns):
 
 #: Blocks whose row scales are computed together (one call of the bound per channel over all their rows).
 SCALE_CHUNK = 2048
-#: The channel scale of :func:`_cross` when the rows carry all of it.
-ONE = np.ones(1)
 
 
 def _row_scales(tree, P, items, channel_bound):
@@ -568,8 +556,8 @@ def _crosses(model, tree, P, N, params, dirs, pinv, eps, channel_bound, far_pair
                 kmax = rank_limit(m, cols)
                 U, V = _scratch(buffers[worker], m, kmax, cols)
                 row_scale = row_scales[offsets[p] : offsets[p + 1]]
-                k = _cross(model, P, N, start[a], end[a], start[b], end[b], channels[c], dirs, pinv, ONE, row_scale,
-                           eps, kmax, U, V)  # fmt: skip
+                k = _cross(model, P, N, start[a], end[a], start[b], end[b], channels[c], dirs, pinv, row_scale, eps,
+                           kmax, U, V)  # fmt: skip
                 if k < 0:
                     kept.append((a, b, c, None, None))
                 else:

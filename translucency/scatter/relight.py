@@ -167,7 +167,7 @@ def _block_tree(geometry) -> SourceTree:
 def _gap(medium) -> float:
     """The smallest distance (mm) between the spheres of a far block: a reduced mean free path, the ``tree``'s
     smallest cluster distance (§8.3)."""
-    return hierarchy.opening(medium.sigma_t_reduced, 1.0)[1]
+    return hierarchy.CLUSTER_MEAN_FREE_PATHS / float(np.min(medium.sigma_t_reduced))
 
 
 def operator_bytes(geometry, medium, tol: float, near_radius: float) -> tuple[float, dict]:
