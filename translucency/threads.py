@@ -19,6 +19,8 @@ import numba
 
 #: Ranges per thread: more than one so that threads whose rows are cheap take over the rest.
 PIECES_PER_THREAD = 4
+#: Ranges per thread when :func:`for_ranges` reports progress (each report is a chance to stop).
+PROGRESS_PIECES_PER_THREAD = 32
 
 _lock = threading.Lock()
 _pool: ThreadPoolExecutor | None = None
@@ -40,7 +42,7 @@ def _executor(size: int) -> ThreadPoolExecutor:
         return _pool
 
 
-def for_ranges(kernel, n: int, *args, pieces_per_thread: int = PIECES_PER_THREAD) -> None:
+def for_ranges(kernel, n: int, *args, pieces_per_thread: int = PIECES_PER_THREAD, progress=None) -> None:
     """Call ``kernel(worker, lo, hi, *args)`` over ``range(n)`` cut into contiguous ranges, in parallel.
 
     Parameters
@@ -51,28 +53,40 @@ def for_ranges(kernel, n: int, *args, pieces_per_thread: int = PIECES_PER_THREAD
         Number of rows.
     pieces_per_thread : int
         Ranges per thread (taken in turn by whichever thread is free).
+    progress : callable, optional
+        ``progress(fraction)`` after each range the calling thread does (the ranges are then
+        :data:`PROGRESS_PIECES_PER_THREAD` per thread). If it raises, no further range is started and the
+        exception is raised once the ranges running have ended.
     """
     threads = min(thread_count(), max(int(n), 1))
     if threads == 1:
         if n > 0:
             kernel(0, 0, n, *args)
         return
+    if progress is not None:
+        pieces_per_thread = max(pieces_per_thread, PROGRESS_PIECES_PER_THREAD)
     pieces = pieces_per_thread * threads
     bounds = [n * i // pieces for i in range(pieces + 1)]
     turn = itertools.count()  # next() on a count is atomic under the GIL
+    stopped = threading.Event()
 
     def run(worker):
-        while True:
+        while not stopped.is_set():
             i = next(turn)
             if i >= pieces:
                 return
             if bounds[i] < bounds[i + 1]:
                 kernel(worker, bounds[i], bounds[i + 1], *args)
+            if worker == 0 and progress is not None:
+                progress(min(i + 1, pieces) / pieces)
 
     pool = _executor(threads - 1)
     helpers = [pool.submit(run, worker) for worker in range(1, threads)]
     try:
         run(0)
+    except BaseException:
+        stopped.set()
+        raise
     finally:
         for helper in helpers:
             helper.result()

@@ -484,7 +484,13 @@ def build(
     dense[1:, 6] = np.cumsum(sizes)[:-1]
     D = np.empty(int(np.sum(sizes)), dtype=np.float32)
     stamps = np.full((thread_count(), n), -1, dtype=np.int64)
-    for_ranges(_fill_dense, len(dense), model, P, N, dense, params, dirs, pinv, held_starts, held_columns, stamps, D)
+    for_ranges(
+        _fill_dense,
+        len(dense),
+        model,
+        *(P, N, dense, params, dirs, pinv, held_starts, held_columns, stamps, D),
+        progress=lambda f: report(0.9 + 0.1 * f),
+    )
     report(1.0)
     ranks = low_rank[:, 5]
     matrix = FarMatrix(order, n_c, low_rank, U_all, V_all, dense, D)
@@ -567,7 +573,8 @@ def _crosses(model, tree, P, N, params, dirs, pinv, eps, channel_bound, far_pair
     items = np.array([(a, b, c) for a, b in far_pairs for c in range(n_c)], dtype=np.int64).reshape(-1, 3)
     done, total = 0, max(len(items), 1)
     while len(items):
-        for_ranges(run, len(items), items)
+        at, share = done / total, len(items) / total
+        for_ranges(run, len(items), items, progress=lambda f, at=at, share=share: report(0.9 * (at + f * share)))
         following = []
         for kept in kept_by:
             for a, b, c, U, V in kept:

@@ -1154,6 +1154,7 @@ def near_field_operator(
     rule_points=RULE_POINTS,
     rule_weights=RULE_WEIGHTS,
     fan_nodes=(FAN_ANGULAR, FAN_RADIAL),
+    progress=None,
 ):
     """The correction of :func:`near_field_correction` as a linear operator on the vertices' flux, for relighting.
 
@@ -1175,6 +1176,9 @@ def near_field_operator(
         ``(dirs, pinv)`` of :func:`~translucency.scatter.kernels.fit_directions` for the quadratic fit.
     vertex_areas : (n,) float64
         Barycentric vertex areas, mm^2 (a vertex of area 0 gets no coefficient).
+    progress : callable, optional
+        ``progress(fraction)`` as receivers are done (:func:`~translucency.threads.for_ranges`; if it raises,
+        the work stops there).
 
     Returns
     -------
@@ -1219,6 +1223,7 @@ def near_field_operator(
         starts,
         columns,
         coefs,
+        progress=progress,
     )
     return starts, columns, coefs
 

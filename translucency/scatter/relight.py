@@ -237,6 +237,7 @@ def prepare(
         float(np.min(medium.D)),
         kernels.fit_directions(medium.eta, QUADRATIC_TERMS),
         tables=geometry.triangle_tables(),
+        progress=lambda fraction: report("relight operators", 0.5 * fraction),
     )
     near_seconds = time.perf_counter() - start
     report("relight operators", 0.5)
