@@ -217,6 +217,12 @@ class TriangleMesh:
         """Return a new mesh with some fields replaced (``points``, ``triangles``, ``point_data``, ...)."""
         return dataclasses.replace(self, **changes)
 
+    def __reduce__(self):
+        """Pickled as its fields (the read-only view of ``point_data`` is not picklable itself): a mesh can be
+        sent to and from another process."""
+        fields = (self.points, self.triangles, dict(self.point_data), self.source, self.mm_per_unit, self.unit_inferred)
+        return (TriangleMesh, fields)
+
     def __repr__(self) -> str:
         name = self.source.name if self.source is not None else "no file"
         keys = ", ".join(self.point_data) or "none"

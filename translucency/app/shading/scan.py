@@ -109,3 +109,13 @@ def scan_reflectance(mesh) -> np.ndarray:
             "colours (PLY red/green/blue, OBJ with a map_Kd texture, VTK 'colors')."
         )
     return srgb_decode(np.asarray(colors, dtype=np.float64)[:, :3] / 255.0)
+
+
+def load_scan_quietly(path, unit=None):
+    """:func:`load_scan` with what it would say collected: ``(mesh in mm, name, notes)``, ``notes`` a list of
+    sentences (the unit inferred, warnings). Picklable arguments and result, for a call in a child process
+    (:func:`translucency.processes.run_in_child`): the desktop viewer loads scans there, because the mesh
+    library's own Qt must not share a process with the viewer's."""
+    notes = []
+    mesh, _, name = load_scan(path, unit, warn=notes.append, note=notes.append)
+    return mesh, name, notes
