@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Set up everything translucency needs on a Debian machine, idempotently:
 #   1. system libraries (apt): OpenGL for pymeshlab, EGL for off-screen VTK, OpenMP for numba,
-#      Xvfb for the tests that open a real window, and Python's venv module;
+#      the X11 libraries Qt's window needs (the desktop viewer), Xvfb for the tests that open a real window,
+#      and Python's venv module;
 #   2. a virtual environment in .venv with the package (editable), its test and Dask extras and the
 #      reference extra (Mitsuba 3, for the path-traced check; its scalar variant needs no system library);
 #   3. the solver's kernels compiled into numba's cache, so that the first real run does not wait for
@@ -11,7 +12,9 @@ set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$root"
 
-system_packages=(libgl1 libopengl0 libegl1 libgomp1 xvfb xauth)
+system_packages=(libgl1 libopengl0 libegl1 libgomp1 xvfb xauth
+    libxkbcommon-x11-0 libxcb-cursor0 libxcb-icccm4 libxcb-keysyms1 libxcb-image0 libxcb-render-util0
+    libxcb-shape0 libxcb-randr0 libxcb-xinerama0 libxcb-xkb1 libdbus-1-3 libfontconfig1)
 missing=()
 for pkg in "${system_packages[@]}"; do
     if ! dpkg-query -W -f='${Status}' "$pkg" 2>/dev/null | grep -q "install ok installed"; then

@@ -264,7 +264,7 @@ def test_the_profile_legend_lies_beside_the_data(two_by_two):
 
 def test_the_default_light_puts_a_tenth_of_what_the_camera_sees_in_shadow():
     from translucency.app.compare import visible_shadow_fraction, visible_vertices
-    from translucency.app.render import camera_position
+    from translucency.app.framing import camera_position
     from translucency.app.shading.scan import load_scan
     from translucency.app.shading.settings import DEFAULT_LIGHT_DIRECTION
     from translucency.io.upright import to_scan_frame

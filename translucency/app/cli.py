@@ -278,16 +278,16 @@ def _note(message: str) -> None:
 
 
 def cmd_view(args) -> int:
-    """Open the viewer on a scan; with ``--screenshot`` render its first picture off-screen and exit."""
+    """Open the desktop viewer on a scan; with ``--screenshot`` render its first picture off-screen and exit."""
     import os
     from pathlib import Path
 
     from ..io.atomic import prepare_output_file
     from .options import lights_from_args, solver_settings
-    from .shading.scan import load_scan
 
-    window_size = _pixels(args.window_size, "--window-size")
-    if args.screenshot is not None:
+    one_picture = args.screenshot is not None  # no later light to reuse relighting operators for
+    window_size = _pixels(args.window_size or (SCREENSHOT_SIZE if one_picture else WINDOW_SIZE), "--window-size")
+    if one_picture:
         screenshot = Path(args.screenshot)
         if screenshot.suffix.lower() != ".png":
             raise TranslucencyError(f"--screenshot {args.screenshot} is not a .png file name; pass e.g. view.png.")
@@ -302,7 +302,6 @@ def cmd_view(args) -> int:
     from ..scatter.names import DEFAULT_METHOD, DEFAULT_TOL
     from .shading.settings import VIEWER_METHOD, VIEWER_TOL
 
-    one_picture = args.screenshot is not None  # no later light to reuse relighting operators for
     if args.method is None:
         args.method = DEFAULT_METHOD if one_picture else VIEWER_METHOD
     if args.tol is None:
@@ -310,9 +309,25 @@ def cmd_view(args) -> int:
     interactive = args.resolution == "interactive"
     settings = solver_settings(args, resolution="full") if interactive else solver_settings(args)
     lights = lights_from_args(args)
-    mesh, _, name = load_scan(args.mesh, args.unit, warn=_warn, note=_note)
+    if not one_picture:
+        from .desktop import check_can_start, run
+
+        check_can_start()
+        return run(
+            args.mesh,
+            settings=settings,
+            lights=lights,
+            unit=args.unit,
+            output=args.output,
+            view_dependent=args.view_dependent,
+            specular=args.specular,
+            roughness=args.roughness,
+            window_size=window_size,
+        )
+    from .shading.scan import load_scan
     from .viewer import Viewer
 
+    mesh, _, name = load_scan(args.mesh, args.unit, warn=_warn, note=_note)
     viewer = Viewer(
         mesh,
         lights=lights,
@@ -322,19 +337,20 @@ def cmd_view(args) -> int:
         specular=args.specular,
         roughness=args.roughness,
         window_size=window_size,
-        off_screen=args.screenshot is not None,
-        widgets=args.screenshot is None,
+        off_screen=True,
+        widgets=False,
         output=args.output,
         name=Path(name).stem,
     )
     print(viewer.status)
-    if args.screenshot is not None:
-        viewer.screenshot(args.screenshot)
-        viewer.close()
-        print(f"wrote {args.screenshot}")
-    else:
-        viewer.show()
+    viewer.screenshot(args.screenshot)
+    viewer.close()
+    print(f"wrote {args.screenshot}")
     return 0
+
+
+#: The desktop viewer's window and ``view --screenshot``'s picture, pixels (``--window-size`` replaces them).
+WINDOW_SIZE, SCREENSHOT_SIZE = "1400x900", "1024x768"
 
 
 def _sweep(text):
@@ -510,8 +526,8 @@ def _add_view_and_compare_parsers(sub) -> None:
     p = scene_parser(
         "view",
         "show a scan as a translucent object, with controls that solve again",
-        "Open the interactive viewer (sliders for light, material, model, scale and exposure; key s "
-        "saves a screenshot and the bake, Return solves on every vertex by tree). Here --method defaults "
+        "Open the desktop viewer: the scan in a window with a side panel (material, model, tolerance, light, "
+        "exposure, false colour), a light you drag in the view, File menu, and h for the keys. Here --method defaults "
         "to relight at --tol 0.1 (operators prepared once, then every light on every vertex; tree at 0.01 "
         "with --screenshot, one picture) and --resolution to 'interactive': every vertex with relight, a "
         "proxy of about 7,500 vertices otherwise.",
@@ -531,7 +547,12 @@ def _add_view_and_compare_parsers(sub) -> None:
     p.add_argument("--view-dependent", action="store_true", help="show T21(eta, n.w_o) B toward the camera")
     p.add_argument("--specular", action="store_true", help="add the boundary's specular highlight (GGX)")
     p.add_argument("--roughness", type=float, default=0.25, help="GGX alpha of the highlight (default 0.25)")
-    p.add_argument("--window-size", default="1024x768", metavar="WxH", help="window size in pixels (default 1024x768)")
+    p.add_argument(
+        "--window-size",
+        default=None,
+        metavar="WxH",
+        help=f"window size in pixels (default {WINDOW_SIZE}; {SCREENSHOT_SIZE} with --screenshot)",
+    )
     p.add_argument("-o", "--output", default=".", help="folder for what key s saves (default . : here)")
     p.set_defaults(func=cmd_view)
 

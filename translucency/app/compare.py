@@ -64,12 +64,7 @@ from ..io.units import RADIANCE_UNIT, unit_metadata
 from ..scatter.names import DEFAULT_MODEL
 from .compare_figures import difference_image, grid_image, profile_figure
 from .display import display_colors
-from .render import (
-    DEFAULT_CAMERA_DIRECTION,
-    DEFAULT_UP,
-    camera_position,
-    default_camera_direction,
-)
+from .framing import DEFAULT_CAMERA_DIRECTION, DEFAULT_UP
 from .shading.scan import mesh_for_shading
 from .shading.scene import Scene, scene_for
 from .shading.settings import DEFAULT_MATERIAL, ShadeSettings, resolve_medium, settings_with
@@ -98,7 +93,7 @@ DIFFERENCE_FLOOR = 1e-3
 CHANNELS = ("R", "G", "B")
 #: From the object toward compare's default light, in the display frame (right, up, front; turned into the
 #: scan's frame by its up axis like the pipeline's default): from the right, above and a little behind, so
-#: that the camera (front right, :data:`~translucency.app.render.DEFAULT_CAMERA_DIRECTION`) sees the shadow
+#: that the camera (front right, :data:`~translucency.app.framing.DEFAULT_CAMERA_DIRECTION`) sees the shadow
 #: edge and the glow through thin parts (module docstring: 32 % of the visible vertices of the default
 #: bunny in shadow).
 COMPARE_LIGHT_DIRECTION = (0.9, 1.0, -0.2)
@@ -185,6 +180,21 @@ def compare_light_direction(up: str = "+y") -> np.ndarray:
     return to_scan_frame(COMPARE_LIGHT_DIRECTION, up)
 
 
+def compare_view(mesh, up_axis: str, camera_direction=None, lights=None):
+    """``(camera direction, lights)`` of compare's pictures: by default the scan's front
+    (:func:`~translucency.app.framing.front_direction`) and compare's light (:func:`compare_light_direction`)
+    turned about the up axis with the camera, so that the light keeps its place relative to the view."""
+    from ..io.upright import up_vector
+    from ..scatter.lights import DirectionalLight
+    from .framing import front_direction, turned_to_front
+
+    up = up_vector(up_axis)
+    front = front_direction(mesh, up)
+    if lights is None:
+        lights = DirectionalLight(turned_to_front(compare_light_direction(up_axis), up, front), 1.0)
+    return (front if camera_direction is None else camera_direction), lights
+
+
 def visible_vertices(mesh, eye, normals=None) -> np.ndarray:
     """Which vertices a camera at ``eye`` (mm) sees: facing it (``n . (eye - p) > 0``) and not hidden by
     the mesh (an Embree ray toward the eye hits nothing), (n,) bool."""
@@ -206,19 +216,17 @@ def visible_vertices(mesh, eye, normals=None) -> np.ndarray:
 def visible_shadow_fraction(mesh, lights=None, camera_direction=None, up="auto") -> float:
     """Share of the vertices the default camera sees that get no direct light (incident flux 0).
 
-    ``lights`` default to compare's (:func:`compare_light_direction`), ``camera_direction`` to
-    :func:`~translucency.app.render.default_camera_direction`, both placed by ``up`` (the camera at
-    :func:`~translucency.app.render.camera_position`, as in ``grid.png``).
+    ``lights`` and ``camera_direction`` default to compare's (:func:`compare_view`: the scan's front, and the light
+    turned with it), placed by ``up`` (the camera at :func:`~translucency.app.framing.scan_camera`, as in
+    ``grid.png``).
     """
-    from ..io.upright import resolve_up
-    from ..scatter.lights import DirectionalLight
+    from ..io.upright import resolve_up, up_vector
+    from .framing import scan_camera
 
     up_axis = resolve_up(up, mesh.points, mesh.triangles)
     scene = Scene(mesh, up=up_axis)
-    lights = lights if lights is not None else DirectionalLight(compare_light_direction(up_axis), 1.0)
-    camera_direction = default_camera_direction(up_axis) if camera_direction is None else camera_direction
-    low, high = mesh.points.min(axis=0), mesh.points.max(axis=0)
-    eye = camera_position(0.5 * (low + high), float(np.linalg.norm(high - low)), camera_direction)[0]
+    camera_direction, lights = compare_view(mesh, up_axis, camera_direction, lights)
+    eye = scan_camera(mesh, up_vector(up_axis), 1.0, camera_direction)[0]
     seen = visible_vertices(mesh, eye)
     lit = scene.light_cache.incident_on_mesh(resolve_medium(DEFAULT_MATERIAL), lights)[0].phi_rgb.max(axis=1) > 0
     return float(np.count_nonzero(seen & ~lit) / max(np.count_nonzero(seen), 1))
@@ -422,8 +430,8 @@ def compare(
         Any field of the settings by name (``method="exact"``, ``bounces=0``, ...), replacing the one of
         ``settings``, as in :func:`translucency.shade`.
     camera_direction : sequence of 3 float, optional
-        From the mesh's centre toward the camera, in the scan's coordinates (default: in front and a
-        little above, :func:`~translucency.app.render.default_camera_direction` of ``up``).
+        From the mesh's centre toward the camera, in the scan's coordinates (default: the scan's front, a
+        little above, :func:`compare_view`; the default light turns with it).
     cell_size : (int, int)
         Width and height of one grid cell, pixels; ``grid.png`` is ``(columns * width, rows * height)``.
     progress : callable, optional
@@ -459,9 +467,8 @@ def compare(
     scene = scene_for(mesh, settings)
     up_axis = scene.up
     up = tuple(up_vector(up_axis))
-    if camera_direction is None:
-        camera_direction = default_camera_direction(up_axis)
-    lights = as_light_list(lights if lights is not None else DirectionalLight(compare_light_direction(up_axis), 1.0))
+    camera_direction, lights = compare_view(mesh, up_axis, camera_direction, lights)
+    lights = as_light_list(lights)
 
     results, times = _solve_cells(scene, settings, media, materials, models, lights, progress)
     exposure = settings.exposure

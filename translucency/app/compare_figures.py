@@ -8,7 +8,8 @@ import numpy as np
 
 from ..io.polydata import to_pyvista
 from .display import display_colors
-from .render import add_colored_mesh, camera_position, new_plotter
+from .framing import camera_position, scan_camera
+from .render import add_colored_mesh, new_plotter
 
 __all__ = ["grid_image", "difference_image", "profile_figure"]
 
@@ -33,8 +34,8 @@ def grid_image(mesh, comparison, camera_direction, up, cell_size) -> np.ndarray:
     for row, column in _cells(plotter, rows, columns):
         material, model = comparison.materials[column], comparison.models[row]
         colors, _ = display_colors(comparison.results[material, model].radiance, comparison.exposure)
-        poly = add_colored_mesh(plotter, mesh, colors)
-        camera = camera or camera_position(poly.center, poly.length, camera_direction, up)
+        add_colored_mesh(plotter, mesh, colors)
+        camera = camera or scan_camera(mesh, up, cell_size[0] / cell_size[1], camera_direction)
         plotter.camera_position = camera
         plotter.add_text(f"{material}, {model}", position="upper_left", font_size=10, color="white")
     plotter.subplot(0, 0)

@@ -52,12 +52,11 @@ def _light_words(light: dict) -> str:
 def render_views(mesh, result, values, clim, scale, camera_direction, up_axis, panel):
     """The two views as one (panel, 2 panel, 3) image with one parallel camera; returns (image, mm per pixel)."""
     from ..io.upright import up_vector
+    from .framing import camera_position, front_direction
     from .render import (
         LIGHT_GLYPH_COLOR,
         add_colored_mesh,
         add_false_colour_mesh,
-        camera_position,
-        default_camera_direction,
         light_glyph,
         new_plotter,
     )
@@ -75,7 +74,7 @@ def render_views(mesh, result, values, clim, scale, camera_direction, up_axis, p
             for direction in directions:
                 plotter.add_mesh(light_glyph(poly.center, 0.5 * poly.length, direction), color=LIGHT_GLYPH_COLOR)
         plotter.subplot(0, 0)
-        direction = default_camera_direction(up_axis) if camera_direction is None else camera_direction
+        direction = front_direction(mesh, up_vector(up_axis)) if camera_direction is None else camera_direction
         plotter.camera_position = camera_position(poly.center, poly.length, direction, tuple(up_vector(up_axis)))
         plotter.enable_parallel_projection()
         plotter.reset_camera()
@@ -137,8 +136,8 @@ def figure_image(
     scale : {"log", "linear"}
         The false colour's scale.
     camera_direction : sequence of 3 float, optional
-        From the centre toward the camera, scan coordinates (default: in front and a little above,
-        :func:`~translucency.app.render.default_camera_direction` of the result's up axis).
+        From the centre toward the camera, scan coordinates (default: the scan's front, a little above,
+        :func:`~translucency.app.framing.front_direction`).
     panel : int
         Side of each rendered view, pixels.
     """

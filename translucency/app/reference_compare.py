@@ -369,7 +369,8 @@ def reference_errors_image(setup, results, models, exposure, camera_direction, u
     from matplotlib.figure import Figure
 
     from .display import display_colors
-    from .render import LIGHT_GLYPH_COLOR, add_colored_mesh, camera_position, light_glyph, new_plotter
+    from .framing import camera_position
+    from .render import LIGHT_GLYPH_COLOR, add_colored_mesh, light_glyph, new_plotter
 
     ref = setup.reference
     mesh = setup.mesh

@@ -37,48 +37,6 @@ def offscreen_check() -> tuple[bool, str]:
     return True, f"{window}, {image.shape[1]}x{image.shape[0]} image"
 
 
-#: Default camera: looking at the mesh's centre from this direction of the display frame (right, up,
-#: front; :func:`translucency.io.upright.display_frame`): from the front, a little from the right and
-#: above. For a scan whose up is +y (the default bunny) it is the direction in the scan's coordinates.
-DEFAULT_CAMERA_DIRECTION = (0.6, 0.35, 1.0)
-#: View-up vector of the camera for a scan whose up is +y.
-DEFAULT_UP = (0.0, 1.0, 0.0)
-#: Camera distance from the centre, in bounding-box diagonals.
-CAMERA_DISTANCE = 1.7
-
-
-def default_camera_direction(up: str = "+y") -> np.ndarray:
-    """:data:`DEFAULT_CAMERA_DIRECTION` in the scan's coordinates for an up axis ``"+x"`` ... ``"-z"``."""
-    from ..io.upright import to_scan_frame
-
-    return to_scan_frame(DEFAULT_CAMERA_DIRECTION, up)
-
-
-def camera_position(center, diagonal, direction=DEFAULT_CAMERA_DIRECTION, up=DEFAULT_UP) -> list:
-    """PyVista camera position looking at ``center`` from ``direction``.
-
-    Parameters
-    ----------
-    center : sequence of 3 float
-        Focal point, mm.
-    diagonal : float
-        Size of the object (bounding-box diagonal), mm; the eye is :data:`CAMERA_DISTANCE` of it away.
-    direction : sequence of 3 float
-        From the focal point toward the eye (any non-zero length).
-    up : sequence of 3 float
-        View-up vector.
-
-    Returns
-    -------
-    list
-        ``[eye, focal point, view up]``, as ``plotter.camera_position`` takes it.
-    """
-    center = np.asarray(center, dtype=float)
-    direction = np.asarray(direction, dtype=float)
-    direction = direction / np.linalg.norm(direction)
-    return [tuple(center + direction * CAMERA_DISTANCE * float(diagonal)), tuple(center), tuple(float(u) for u in up)]
-
-
 def new_plotter(window_size, *, off_screen=True, **layout):
     """A PyVista plotter with the package's rendering set-up (black background, EGL without a display).
 
@@ -121,7 +79,7 @@ def render_colors(
         Image width and height, pixels.
     camera_direction : sequence of 3 float, optional
         From the mesh's centre toward the eye in the scan's coordinates (used when ``camera`` is None;
-        default: :func:`default_camera_direction` of ``up``).
+        default: the scan's front); the whole scan is framed (:func:`translucency.app.framing.scan_camera`).
     camera : list, optional
         An explicit PyVista camera position ``[eye, focal point, view up]`` (mm).
     up : str
@@ -136,11 +94,12 @@ def render_colors(
     from ..io.upright import resolve_up, up_vector
 
     plotter = new_plotter(window_size)
-    poly = add_colored_mesh(plotter, mesh, colors_rgb8)
+    add_colored_mesh(plotter, mesh, colors_rgb8)
     if camera is None:
+        from .framing import scan_camera
+
         up = resolve_up(up, mesh.points, mesh.triangles)
-        direction = default_camera_direction(up) if camera_direction is None else camera_direction
-        camera = camera_position(poly.center, poly.length, direction, tuple(up_vector(up)))
+        camera = scan_camera(mesh, tuple(up_vector(up)), window_size[0] / window_size[1], camera_direction)
     plotter.camera_position = camera
     image = plotter.screenshot(return_img=True)
     plotter.close()

@@ -99,18 +99,14 @@ class ShadeResult:
 
     def camera_position(self) -> list:
         """The default view of the result as PyVista takes it (``plotter.camera_position`` or
-        ``mesh.plot(cpos=...)``): ``[eye, focal point, view up]`` in mm, in front of the scan and a little
-        above, its up axis (``metadata["up"]``) up -- the view of the tool's own pictures, where PyVista's
-        default camera would take +z as up."""
+        ``mesh.plot(cpos=...)``): ``[eye, focal point, view up]`` in mm, from the scan's front and a little
+        above, its up axis (``metadata["up"]``) up, the whole scan in a square picture -- the view of the tool's
+        own pictures (:func:`~translucency.app.framing.scan_camera`), where PyVista's default camera would take
+        +z as up."""
         from ...io.upright import up_vector
-        from ..render import camera_position, default_camera_direction
+        from ..framing import scan_camera
 
-        up = self.metadata.get("up", "+y")
-        points = np.asarray(self.mesh.points)
-        low, high = points.min(axis=0), points.max(axis=0)
-        return camera_position(
-            0.5 * (low + high), float(np.linalg.norm(high - low)), default_camera_direction(up), tuple(up_vector(up))
-        )
+        return scan_camera(self.mesh, tuple(up_vector(self.metadata.get("up", "+y"))))
 
 
 @dataclass

@@ -56,7 +56,7 @@ from ..display import (
     false_colour_range,
     false_colour_values,
 )
-from ..render import DEFAULT_UP
+from ..framing import DEFAULT_UP, frame_axes, front_direction, turned_to_front
 from ..shading.resolution import coarsest_proxy_edge, proxy_edge_length
 from ..shading.result import write_result
 from ..shading.scan import mesh_for_shading
@@ -88,16 +88,6 @@ def interactive_edge_length(mesh, medium, vertices: int = INTERACTIVE_VERTICES) 
     return min(max(budget, proxy_edge_length(medium)), coarsest_proxy_edge(mesh.surface_area))
 
 
-def _frame(up):
-    """Unit ``up`` and two unit axes ``e1, e2`` perpendicular to it (``e1``: +z made orthogonal, or +x)."""
-    up = np.asarray(up, dtype=np.float64)
-    up = up / np.linalg.norm(up)
-    seed = np.array([0.0, 0.0, 1.0]) if abs(up[2]) < 0.9 else np.array([1.0, 0.0, 0.0])
-    e1 = seed - (seed @ up) * up
-    e1 /= np.linalg.norm(e1)
-    return up, e1, np.cross(up, e1)
-
-
 def light_direction(azimuth, elevation, up=DEFAULT_UP) -> np.ndarray:
     """Unit direction toward a light at ``azimuth``, ``elevation`` (degrees) around ``up``.
 
@@ -105,14 +95,14 @@ def light_direction(azimuth, elevation, up=DEFAULT_UP) -> np.ndarray:
     perpendicular to ``up``; azimuth 0 is the world +z made perpendicular to ``up`` (+x when ``up`` is
     along z) and 90 is ``up x`` that (+x for ``up`` = +y).
     """
-    up, e1, e2 = _frame(up)
+    up, e1, e2 = frame_axes(up)
     a, e = math.radians(azimuth), math.radians(elevation)
     return math.cos(e) * (math.cos(a) * e1 + math.sin(a) * e2) + math.sin(e) * up
 
 
 def light_angles(direction, up=DEFAULT_UP) -> tuple[float, float]:
     """``(azimuth, elevation)`` in degrees of a direction (inverse of :func:`light_direction`)."""
-    up, e1, e2 = _frame(up)
+    up, e1, e2 = frame_axes(up)
     d = np.asarray(direction, dtype=np.float64)
     d = d / np.linalg.norm(d)
     elevation = math.degrees(math.asin(float(np.clip(d @ up, -1.0, 1.0))))
@@ -144,7 +134,8 @@ class ViewerState:
     lights : light or sequence of lights, optional
         Directions in the scan's own coordinates. Default: one white directional light of 1 W/m²
         above and in front of the scan (:func:`~translucency.app.shading.settings.default_light_direction` of
-        ``up``). :meth:`set_light` steers the first directional light.
+        ``up``, turned about ``up`` with the camera to the scan's front, :mod:`translucency.app.framing`).
+        :meth:`set_light` steers the first directional light.
     settings : ShadeSettings, optional
         The starting settings (default :func:`viewer_settings`: the viewer's method and tolerance), passed to
         :meth:`Scene.shade_with <translucency.app.shading.scene.Scene.shade_with>`; ``exposure`` is the display
@@ -217,9 +208,12 @@ class ViewerState:
         self.scene = scene_for(mesh, settings)
         self.up_axis = self.scene.up
         self.up = tuple(float(u) for u in up_vector(self.up_axis))
-        self.lights = as_light_list(
-            lights if lights is not None else DirectionalLight(default_light_direction(self.up_axis), 1.0)
+        #: Toward the camera that sees the scan's front (:func:`~translucency.app.framing.front_direction`).
+        self.front = front_direction(mesh, self.up)
+        default_light = DirectionalLight(
+            turned_to_front(default_light_direction(self.up_axis), self.up, self.front), 1.0
         )
+        self.lights = as_light_list(lights if lights is not None else default_light)
         #: Index in :attr:`lights` of the directional light :meth:`set_light` steers, or None.
         self.key_light = next((i for i, light in enumerate(self.lights) if isinstance(light, DirectionalLight)), None)
         self.azimuth, self.elevation = (
@@ -238,6 +232,9 @@ class ViewerState:
         self.status = ""
         #: Called with no argument when :attr:`status` changes during a solve (a window redraws it).
         self.notify = None
+        #: Called with ``(stage, fraction)`` as a solve progresses (a window's progress bar; it may raise to stop
+        #: the solve, which then leaves the state as it was before the change).
+        self.on_progress = None
         self._highlight_inputs = None
         if solve:
             self.solve()
@@ -263,12 +260,26 @@ class ViewerState:
             )
         if (azimuth, elevation) == (self.azimuth, self.elevation):
             return False
-        self.azimuth, self.elevation = azimuth, elevation
         lights = list(self.lights)
         old = lights[self.key_light]
         lights[self.key_light] = DirectionalLight(light_direction(azimuth, elevation, self.up), old.irradiance_rgb)
-        self.lights = tuple(lights)
-        self.solve()
+        self._solve_with(azimuth=azimuth, elevation=elevation, lights=tuple(lights))
+        return True
+
+    def set_lights(self, lights) -> bool:
+        """Replace every light (a light or a sequence; directions in the scan's coordinates) and solve.
+
+        The first directional light becomes the one :meth:`set_light` steers (none: the angles are None).
+        Returns False when the lights are the current ones.
+        """
+        from ...scatter.lights import DirectionalLight, as_light_list
+
+        lights = as_light_list(lights)
+        if [light.to_dict() for light in lights] == [light.to_dict() for light in self.lights]:
+            return False
+        key = next((i for i, light in enumerate(lights) if isinstance(light, DirectionalLight)), None)
+        angles = light_angles(lights[key].direction, self.up) if key is not None else (None, None)
+        self._solve_with(lights=lights, key_light=key, azimuth=angles[0], elevation=angles[1])
         return True
 
     def set_material(self, material) -> bool:
@@ -276,8 +287,7 @@ class ViewerState:
         medium = resolve_medium(material)
         if medium.describe() == self.medium.describe():
             return False
-        self.medium = medium
-        self.solve()
+        self._solve_with(medium=medium)
         return True
 
     def set_model(self, model: str) -> bool:
@@ -287,8 +297,29 @@ class ViewerState:
         check_model(model)
         if model == self.model:
             return False
-        self.model = model
-        self.solve()
+        self._solve_with(model=model)
+        return True
+
+    def set_tol(self, tol) -> bool:
+        """Change the solver's tolerance (relative error per vertex, docs/physics.md §8.4) and solve; False if
+        the same. With ``relight`` a new tolerance prepares new operators."""
+        from ...scatter.names import check_tol
+
+        tol = check_tol(tol)
+        if tol == self.tol:
+            return False
+        self._solve_with(tol=tol)
+        return True
+
+    def set_bounces(self, bounces) -> bool:
+        """Change how many times light re-enters the surface (0: none, docs/physics.md §9) and solve; False if
+        the same."""
+        from ...scatter.names import check_bounces
+
+        bounces = check_bounces(bounces)
+        if bounces == self.bounces:
+            return False
+        self._solve_with(bounces=bounces)
         return True
 
     def set_scale(self, mm_per_unit) -> bool:
@@ -304,9 +335,7 @@ class ViewerState:
             return False
         factor = mm_per_unit / float(self.base_mesh.mm_per_unit)
         mesh = self.base_mesh.replace(points=self.base_mesh.points * factor, mm_per_unit=mm_per_unit)
-        self.mm_per_unit = mm_per_unit
-        self.scene = Scene(mesh, shadows=self.shadows, up=self.up_axis)
-        self.solve()
+        self._solve_with(mm_per_unit=mm_per_unit, scene=Scene(mesh, shadows=self.shadows, up=self.up_axis))
         return True
 
     def set_exposure(self, exposure) -> bool:
@@ -366,6 +395,18 @@ class ViewerState:
         self.eye = eye
         return moved and (self.view_dependent or self.specular)
 
+    def solve_preview(self) -> None:
+        """A quick first picture: ``tree`` on the interactive proxy (:func:`interactive_edge_length`, about
+        :data:`INTERACTIVE_VERTICES` vertices), shown while the state's own method prepares (a window calls it
+        before :meth:`solve` on a new scan)."""
+        kept = self.method
+        self.method = "tree"
+        try:
+            self.solve(interactive_edge_length(self.scene.mesh, self.medium))
+        finally:
+            self.method = kept
+            self.update_status()
+
     def solve_full(self) -> None:
         """Solve the current state on every vertex of the mesh (slow; see the module docstring): with
         ``relight``, by ``tree`` at the default tolerance."""
@@ -379,6 +420,20 @@ class ViewerState:
         finally:
             self.method, self.tol = "relight", kept
             self.update_status()
+
+    def _solve_with(self, **changes) -> None:
+        """Set the attributes ``changes`` and solve; if the solve raises (an error, or a window's cancel through
+        :attr:`on_progress`), the attributes are put back as they were."""
+        before = {name: getattr(self, name) for name in changes}
+        for name, value in changes.items():
+            setattr(self, name, value)
+        try:
+            self.solve()
+        except BaseException:
+            for name, value in before.items():
+                setattr(self, name, value)
+            self.update_status()
+            raise
 
     def solve(self, resolution=None) -> None:
         """Solve the current settings on :attr:`scene`, at ``resolution`` (default: the state's own).
@@ -464,7 +519,10 @@ class ViewerState:
         return false_colour_label(self.false_colour_quantity, self.false_colour_scale)
 
     def _progress(self, stage: str, fraction: float) -> None:
-        """A solve's progress: a note while the relighting operators are prepared (:attr:`notify` shows it)."""
+        """A solve's progress: a note while the relighting operators are prepared (:attr:`notify` shows it), and
+        :attr:`on_progress`."""
+        if self.on_progress is not None:
+            self.on_progress(stage, fraction)
         if stage == "relight operators" and fraction == 0.0:
             self.add_note(
                 f"preparing the relighting operators for {self.medium.name} on {self.scene.mesh.n_points:,} vertices "

@@ -36,15 +36,13 @@ from pathlib import Path
 
 import numpy as np
 
+from ..framing import scan_camera
 from ..render import (
     LIGHT_GLYPH_COLOR,
-    add_colored_mesh,
-    add_false_colour_mesh,
-    camera_position,
-    default_camera_direction,
     light_glyph,
     new_plotter,
 )
+from .layers import ScanLayers
 from .state import ViewerState, diffusive_materials
 
 #: Range of the scale slider, as factors of the mesh's own mm per unit.
@@ -107,8 +105,9 @@ class Viewer:
     roughness : float
         GGX ``alpha`` of the highlight.
     camera_direction : sequence of 3 float, optional
-        From the mesh's centre toward the camera at the start, in the scan's coordinates (default:
-        :func:`~translucency.app.render.default_camera_direction` of ``up``).
+        From the mesh's centre toward the camera at the start, in the scan's coordinates (default: the scan's
+        front, :func:`~translucency.app.framing.front_direction`); the whole scan is framed
+        (:func:`~translucency.app.framing.scan_camera`).
     window_size : (int, int)
         Window size, pixels.
     off_screen : bool
@@ -216,16 +215,9 @@ class Viewer:
         self._status_actor = None
         self.state.notify = self._notify
         self.state.solve()
-        self.poly = add_colored_mesh(self.plotter, self.base_mesh, self.state.colors(), name="scan")
-        self._rgb_actor = self.renderer.actors["scan"]
-        low, high = self.state.false_colour_range()
-        self.false_colour_poly, self._false_actor, self._scalar_bar = add_false_colour_mesh(
+        self.layers = ScanLayers(
             self.plotter,
             self.base_mesh,
-            self.state.false_colour_values(),
-            (low, high),
-            self.state.false_colour_scale,
-            title=self.state.false_colour_title,
             scalar_bar={
                 "color": "white",
                 "position_x": 0.15,
@@ -237,10 +229,15 @@ class Viewer:
                 "label_font_size": 11,
             },
         )
-        self._scalar_bar.SetTextPositionToPrecedeScalarBar()  # tick labels under the bar, apart from the title
-        if camera_direction is None:
-            camera_direction = default_camera_direction(self.up_axis)
-        self.renderer.camera_position = camera_position(self.poly.center, self.poly.length, camera_direction, self.up)
+        #: The display-colour and false-colour layers' meshes (their arrays are what is shown).
+        self.poly, self.false_colour_poly = self.layers.poly, self.layers.false_colour_poly
+        width, height = self.renderer.GetSize() if self.renderer.GetSize()[1] else self.plotter.window_size
+        self.renderer.camera_position = scan_camera(
+            self.base_mesh,
+            self.up,
+            width / max(height, 1),
+            self.state.front if camera_direction is None else camera_direction,
+        )
         self._compass = self.compass_arrow = None
         if widgets:
             self._add_widgets()
@@ -383,21 +380,8 @@ class Viewer:
         self.plotter.render()
 
     def _recolour(self) -> None:
-        """New colours, or new false-colour values, range, scale and title, from the state (no render)."""
-        false_colour = self.state.false_colour
-        self._rgb_actor.SetVisibility(not false_colour)
-        self._false_actor.SetVisibility(false_colour)
-        self._scalar_bar.SetVisibility(false_colour)
-        if not false_colour:
-            self.poly.point_data["colors"][:] = self.state.colors()
-            return
-        low, high = self.state.false_colour_range()
-        self.false_colour_poly.point_data["false colour"][:] = np.maximum(self.state.false_colour_values(), low)
-        table = self._false_actor.mapper.lookup_table
-        table.log_scale = self.state.false_colour_scale == "log"
-        self._false_actor.mapper.scalar_range = (low, high)
-        table.scalar_range = (low, high)
-        self._scalar_bar.SetTitle(self.state.false_colour_title)
+        """New colours or false colour from the state (no render)."""
+        self.layers.recolour(self.state)
 
     def _notify(self) -> None:
         """The state's status changed during a solve: show it now (a window that exists already)."""

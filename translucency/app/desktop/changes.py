@@ -1,0 +1,66 @@
+"""What each control of the desktop viewer's panel changes: a solve off the window's thread, or at once a
+change of what is shown (exposure, false colour, the view-dependent layers), which needs no solve."""
+
+from __future__ import annotations
+
+from ...errors import TranslucencyError
+
+
+def connect_panel(window) -> None:
+    """Connect ``window.panel``'s signals (:class:`~translucency.app.desktop.panel.SidePanel`) and the camera to
+    the changes they make on ``window`` (:class:`~translucency.app.desktop.window.MainWindow`)."""
+    from ...io.units import UNITS
+    from ...scatter.names import check_tol
+
+    panel = window.panel
+
+    def solve(kind, label, change):
+        window.request(kind, label, change)
+
+    def tol(value):
+        try:
+            check_tol(value)
+        except TranslucencyError as exc:
+            return window.say(str(exc))
+        solve("solver", f"solving at tolerance {value:g}", lambda state: state.set_tol(value))
+
+    def unit(name):
+        window.unit_name = name
+        solve("scale", f"rescaling to {name}", lambda state: state.set_scale(UNITS[name]))
+
+    panel.material_chosen.connect(
+        lambda choice: solve("material", "preparing the new material", lambda state: state.set_material(choice))
+    )
+    panel.model_chosen.connect(
+        lambda model: solve("solver", f"solving with the {model} dipole", lambda state: state.set_model(model))
+    )
+    panel.tol_chosen.connect(tol)
+    panel.bounces_chosen.connect(
+        lambda n: solve("solver", f"solving with {n} bounces", lambda state: state.set_bounces(n))
+    )
+    panel.unit_chosen.connect(unit)
+    panel.light_chosen.connect(window.set_light)
+    panel.exposure_chosen.connect(lambda v: display(window, lambda state: state.set_exposure(v)))
+    panel.false_colour_chosen.connect(
+        lambda on, quantity, scale: display(
+            window, lambda state: (state.set_false_colour(on, quantity), state.set_false_colour_scale(scale))
+        )
+    )
+    panel.view_dependent_chosen.connect(lambda on: display(window, lambda state: state.set_view_dependent(on)))
+    panel.specular_chosen.connect(lambda on: display(window, lambda state: state.set_specular(on)))
+    window.view.camera.AddObserver("ModifiedEvent", lambda camera, _event: camera_moved(window, camera))
+
+
+def display(window, change) -> None:
+    """A change of what is shown (no solve): made on the window's thread and drawn at once."""
+    if window.state is None or window.state.result is None:
+        return
+    window.guarded(lambda: change(window.state))
+    window.redraw(keep_message=True)
+
+
+def camera_moved(window, camera) -> None:
+    """The camera moved: the view-dependent layers follow it (no solve)."""
+    state = window.state
+    if state is not None and state.result is not None and state.set_eye(camera.GetPosition()):
+        window.layers.recolour(state)
