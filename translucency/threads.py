@@ -54,7 +54,7 @@ def for_ranges(kernel, n: int, *args, pieces_per_thread: int = PIECES_PER_THREAD
     pieces_per_thread : int
         Ranges per thread (taken in turn by whichever thread is free).
     progress : callable, optional
-        ``progress(fraction)`` after each range the calling thread does (the ranges are then
+        ``progress(fraction)`` after each range, on the thread that did it (the ranges are then
         :data:`PROGRESS_PIECES_PER_THREAD` per thread). If it raises, no further range is started and the
         exception is raised once the ranges running have ended.
     """
@@ -70,6 +70,8 @@ def for_ranges(kernel, n: int, *args, pieces_per_thread: int = PIECES_PER_THREAD
     turn = itertools.count()  # next() on a count is atomic under the GIL
     stopped = threading.Event()
 
+    finished = itertools.count(1)
+
     def run(worker):
         while not stopped.is_set():
             i = next(turn)
@@ -77,16 +79,17 @@ def for_ranges(kernel, n: int, *args, pieces_per_thread: int = PIECES_PER_THREAD
                 return
             if bounds[i] < bounds[i + 1]:
                 kernel(worker, bounds[i], bounds[i + 1], *args)
-            if worker == 0 and progress is not None:
-                progress(min(i + 1, pieces) / pieces)
+            if progress is not None:
+                try:
+                    progress(min(next(finished), pieces) / pieces)
+                except BaseException:
+                    stopped.set()
+                    raise
 
     pool = _executor(threads - 1)
     helpers = [pool.submit(run, worker) for worker in range(1, threads)]
     try:
         run(0)
-    except BaseException:
-        stopped.set()
-        raise
     finally:
         for helper in helpers:
             helper.result()

@@ -254,3 +254,48 @@ def test_false_colour_shows_the_luminance_without_a_solve(state, monkeypatch):
     with pytest.raises(InvalidParameterError, match="luminance"):
         state.set_false_colour(True, "hue")
     assert calls == []
+
+
+def test_tolerance_bounces_and_lights_solve_again(state, monkeypatch):
+    from translucency.scatter.lights import DirectionalLight, PointLight
+
+    calls = count_solves(state, monkeypatch)
+    assert state.set_tol(0.05) is True and state.tol == 0.05
+    assert state.set_bounces(0) is True and state.bounces == 0
+    assert state.set_tol(0.05) is False and state.set_bounces(0) is False and len(calls) == 2
+    lamp = PointLight((0.0, 80.0, 0.0), 6.4e-3)  # 1 W/m² at the centre, 80 mm away
+    assert state.set_lights(lamp) is True and len(calls) == 3
+    assert state.key_light is None and state.azimuth is None  # nothing left for set_light to steer
+    top = state.result.radiance[:, 1][state.base_mesh.points[:, 1] > 15].mean()
+    bottom = state.result.radiance[:, 1][state.base_mesh.points[:, 1] < -15].mean()
+    assert top > 10 * bottom  # lit from above
+    assert state.set_lights([DirectionalLight((1.0, 0.0, 0.0))]) is True
+    assert state.key_light == 0 and state.azimuth == pytest.approx(90.0) and state.elevation == pytest.approx(0.0)
+    with pytest.raises(InvalidParameterError, match="relative error in"):
+        state.set_tol(2.0)
+
+
+class _Stop(BaseException):
+    pass
+
+
+def test_a_solve_stopped_by_its_progress_leaves_the_settings_and_picture_as_they_were(state):
+    colours = state.colors().copy()
+    medium, model = state.medium.name, state.model
+
+    def stop(stage, fraction):
+        raise _Stop
+
+    state.on_progress = stop
+    for change in (lambda: state.set_material("ketchup"), lambda: state.set_model("standard")):
+        with pytest.raises(_Stop):
+            change()
+    assert (state.medium.name, state.model) == (medium, model)
+    np.testing.assert_array_equal(state.colors(), colours)
+
+
+def test_the_preview_is_a_coarse_tree_solve_and_the_method_stays(sphere):
+    state = ViewerState(sphere, "marble", solve=False, method="relight", tol=0.1)
+    state.solve_preview()
+    assert state.result.metadata["method"] == "tree"  # no operators prepared for the first picture
+    assert state.method == "relight" and state.result.stats["solver_vertices"] <= sphere.n_points

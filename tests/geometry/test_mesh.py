@@ -65,3 +65,17 @@ def test_point_data_must_match_vertices():
 def test_bad_unit_factor():
     with pytest.raises(MeshError, match="mm_per_unit"):
         TriangleMesh(np.eye(3), [[0, 1, 2]], mm_per_unit=0)
+
+
+def test_a_mesh_pickles_with_its_point_data():
+    import pickle
+
+    from translucency.geometry.synthetic import icosphere
+
+    points, triangles = icosphere(1, 5.0)
+    colours = np.arange(len(points) * 3, dtype=np.uint8).reshape(-1, 3)
+    mesh = TriangleMesh(points, triangles, {"colors": colours}, source="scan.ply", mm_per_unit=10.0, unit_inferred=True)
+    back = pickle.loads(pickle.dumps(mesh))
+    np.testing.assert_array_equal(back.points, mesh.points)
+    np.testing.assert_array_equal(back.point_data["colors"], colours)
+    assert (back.source.name, back.mm_per_unit, back.unit_inferred) == ("scan.ply", 10.0, True)
