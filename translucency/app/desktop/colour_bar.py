@@ -10,7 +10,7 @@ from matplotlib.backends.backend_qtagg import FigureCanvasQTAgg
 from matplotlib.figure import Figure
 
 #: Height of the bar's widget, pixels.
-BAR_HEIGHT = 74
+BAR_HEIGHT = 84
 
 
 class ColourBar(FigureCanvasQTAgg):
@@ -21,7 +21,7 @@ class ColourBar(FigureCanvasQTAgg):
         super().__init__(figure)
         self.setParent(parent)
         self.setFixedHeight(BAR_HEIGHT)
-        self.axes = figure.add_axes((0.08, 0.55, 0.84, 0.25))
+        self.axes = figure.add_axes((0.08, 0.42, 0.84, 0.2))
         self.shown = None
 
     def show_range(self, clim, scale: str, title: str) -> None:
