@@ -299,3 +299,12 @@ def test_the_preview_is_a_coarse_tree_solve_and_the_method_stays(sphere):
     state.solve_preview()
     assert state.result.metadata["method"] == "tree"  # no operators prepared for the first picture
     assert state.method == "relight" and state.result.stats["solver_vertices"] <= sphere.n_points
+
+
+def test_the_status_names_the_method_that_solved_what_is_shown(sphere):
+    state = ViewerState(sphere, "marble", method="relight", tol=0.1)
+    assert "relight, tolerance 0.1" in state.status
+    state.solve_full()  # by tree at the default tolerance, whatever the state's own method
+    assert state.method == "relight" and "tree, tolerance 0.01" in state.status
+    state.solve_preview()
+    assert "tree, tolerance 0.1" in state.status

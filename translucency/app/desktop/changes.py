@@ -29,7 +29,7 @@ def connect_panel(window) -> None:
         solve("scale", f"rescaling to {name}", lambda state: state.set_scale(UNITS[name]))
 
     panel.material_chosen.connect(
-        lambda choice: solve("material", "preparing the new material", lambda state: state.set_material(choice))
+        lambda choice: solve("material", f"preparing {_named(choice)}", lambda state: state.set_material(choice))
     )
     panel.model_chosen.connect(
         lambda model: solve("solver", f"solving with the {model} dipole", lambda state: state.set_model(model))
@@ -49,6 +49,15 @@ def connect_panel(window) -> None:
     panel.view_dependent_chosen.connect(lambda on: display(window, lambda state: state.set_view_dependent(on)))
     panel.specular_chosen.connect(lambda on: display(window, lambda state: state.set_specular(on)))
     window.view.camera.AddObserver("ModifiedEvent", lambda camera, _event: camera_moved(window, camera))
+
+
+def _named(choice) -> str:
+    """How the status line names a chosen material: its key, its file's name, or its definition's name."""
+    from pathlib import Path
+
+    if isinstance(choice, dict):
+        return str(choice.get("name", "the material"))
+    return Path(str(choice)).stem if str(choice).endswith((".toml", ".json")) else str(choice)
 
 
 def display(window, change) -> None:

@@ -542,9 +542,11 @@ class ViewerState:
             if self.azimuth is None
             else f"light azimuth {self.azimuth:.0f} deg, elevation {self.elevation:.0f} deg; "
         )
-        tolerance = "exact sum" if self.method == "exact" else f"tolerance {self.tol:.3g}"
+        # what the last solve used (solve_full and the preview solve by tree, whatever the state's method is)
+        method, tol = result.metadata.get("method", self.method), result.metadata.get("tolerance", self.tol)
+        tolerance = "exact sum" if method == "exact" else f"tolerance {tol:.3g}"
         prepared = result.timings.get("solve_prepare", 0.0)
-        if self.method == "relight" and prepared:
+        if method == "relight" and prepared:
             tolerance += f" (operators prepared in {prepared:.0f} s, once)"
         self.status = (
             f"{self.medium.name}, {self.model} dipole, {size:.3g} mm ({self.mm_per_unit:.4g} mm per unit), "
@@ -553,7 +555,7 @@ class ViewerState:
             + (f"; false colour: {self.false_colour_quantity}, {self.false_colour_scale}" if self.false_colour else "")
             + "\n"
             f"solved in {self.solve_seconds:.2f} s (wall time) on {result.stats['solver_vertices']} of "
-            f"{result.stats['vertices']} vertices: {self.method}, {tolerance}"
+            f"{result.stats['vertices']} vertices: {method}, {tolerance}"
         )
 
     def add_note(self, line: str) -> None:
