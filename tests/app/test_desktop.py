@@ -192,6 +192,17 @@ def test_key_s_saves_the_picture_and_the_bake(qtbot, window, tmp_path):
     assert len(read_baked_ply(saved[0]).points) == 642
 
 
+def test_key_q_closes_the_window_not_only_the_view(qtbot, window):
+    from PySide6 import QtCore
+
+    window.activateWindow()
+    window.view.interactor.setFocus()
+    qtbot.waitUntil(lambda: window.view.interactor.hasFocus(), timeout=5000)
+    qtbot.keyClick(window.view.interactor, QtCore.Qt.Key_Q)
+    qtbot.waitUntil(lambda: not window.isVisible(), timeout=5000)
+    assert not window.jobs._thread.is_alive()  # closed as a whole: the worker ended with it
+
+
 def test_help_lists_the_keys_and_the_mouse():
     from translucency.app.desktop.menus import help_text
 

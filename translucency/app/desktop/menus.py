@@ -22,6 +22,7 @@ KEYS = (
     ("l", "log or linear false colour"),
     ("s", "save a screenshot and the bake into the output folder"),
     ("Esc", "cancel the running solve"),
+    ("q", "quit (as in PyVista's windows)"),
     ("h, ?, F1", "this help"),
     ("Ctrl+O / Ctrl+S / Ctrl+Q", "open a scan / save the bake / quit"),
 )
@@ -149,6 +150,7 @@ class Menus:
             "Enter": window.solve_full,
             "s": self.save_numbered,
             "r": window.reset_camera,
+            "q": window.close,  # PyVista's own q would end the view and leave the window
             "y": lambda: panel.false_colour.toggle(),
             "l": lambda: panel.scale.setCurrentText("linear" if panel.scale.currentText() == "log" else "log"),
         }

@@ -17,7 +17,7 @@ class StatusLine(QtWidgets.QStatusBar):
         #: The one line of text.
         self.message = QtWidgets.QLabel("")
         self.progress_bar = QtWidgets.QProgressBar()
-        self.progress_bar.setMaximumWidth(300)
+        self.progress_bar.setMinimumWidth(260)
         self.progress_bar.setRange(0, PROGRESS_STEPS)
         self.cancel_button = QtWidgets.QPushButton("Cancel")
         self.cancel_button.setToolTip("stop the running solve (Esc); the picture stays as it was")
