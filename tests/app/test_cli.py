@@ -179,10 +179,11 @@ def test_main_job_bakes_the_embedded_default(tmp_path):
     assert ply.exists() and png.exists()
     baked = read_baked_ply(ply)
     assert baked.metadata["material"] == "marble" and baked.metadata["method"] == "tree"
-    # the embedded default keeps its size (given, not inferred) and stands +y up under the unchanged light
+    # the embedded default keeps its size (given, not inferred) and stands +y up; its light comes from behind
+    # (-z for the bunny, which faces +z), to the left and above, to show the glow through the ears
     assert baked.metadata["up"] == "+y" and baked.metadata["source_unit_inferred"] is False
     assert baked.metadata["lights"][0]["direction"] == pytest.approx(
-        np.array([0.35, 1.0, 0.45]) / np.linalg.norm([0.35, 1.0, 0.45])
+        np.array([-0.5, 0.45, -0.8]) / np.linalg.norm([-0.5, 0.45, -0.8])
     )
     radiance = baked.radiance
     assert np.all(np.isfinite(radiance)) and np.all(radiance >= 0)

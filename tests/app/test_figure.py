@@ -47,9 +47,8 @@ def test_the_views_measure_the_scan_in_mm(sphere_result):
     )
     assert image.shape == (panel, 2 * panel, 3)
     for view in (image[:, :panel], image[:, panel:]):
-        arrow = blue(view)
-        assert arrow.sum() > 30  # the light's arrow is drawn in both views
-        scan = (view.max(axis=2) > 0) & ~arrow
+        assert blue(view).sum() == 0  # nothing is drawn over the scan: the light is shown beside the views
+        scan = view.max(axis=2) > 0
         rows = np.flatnonzero(scan.any(axis=1))
         # the sphere is 40 mm across (icosphere vertices on r = 20 mm; the facets come in by < 1 %)
         height_mm = (rows[-1] - rows[0] + 1) * mm_per_pixel
@@ -118,3 +117,23 @@ def test_the_title_says_when_the_colours_were_solved_on_a_proxy(sphere_result):
     estimate = scene.shade("marble", time_limit=None).stats["solver"]["budget"]["seconds"]
     coarse = scene.shade("marble", time_limit=0.3 * estimate, warn=lambda line: None)
     assert "solved on a proxy of" in figure_title(scene.mesh, coarse.metadata)
+
+
+def test_the_light_compass_draws_each_light_as_the_camera_sees_it():
+    from matplotlib.figure import Figure
+    from matplotlib.patches import FancyArrowPatch
+
+    from translucency.app.figure import light_compass
+
+    ax = Figure().add_subplot()
+    lights = [
+        {"type": "directional", "direction": [1.0, 0.0, 0.0]},  # from the picture's right, beside the object
+        {"type": "directional", "direction": [0.0, 0.6, -0.8]},  # from above and behind
+        {"type": "point", "position_mm": [0.0, 0.0, 50.0]},  # not drawn
+    ]
+    light_compass(ax, lights, camera_direction=(0.0, 0.0, 1.0), up=(0.0, 1.0, 0.0))
+    arrows = [patch for patch in ax.patches if isinstance(patch, FancyArrowPatch)]
+    assert len(arrows) == 2
+    starts = [arrow._posA_posB[0] for arrow in arrows]
+    assert starts[0] == pytest.approx((1.0, 0.0)) and starts[1] == pytest.approx((0.0, 0.6))
+    assert arrows[0].get_linestyle() == "-" and arrows[1].get_linestyle() == "--"

@@ -7,8 +7,8 @@ and lays the two views out with matplotlib:
 * right, the same radiance in physical units: the luminance ``Y`` (or one channel) through a colour map,
   log or linear (:func:`translucency.app.display.false_colour_values`), with a colour bar in
   W/(m² sr) per W/m² of irradiance whose top is what the left view shows as white;
-* in both, every directional light as an arrow from the light toward the object
-  (:func:`~translucency.app.render.light_glyph`) and a scale bar in mm;
+* in both a scale bar in mm, and under them every directional light as the views see it, an arrow
+  travelling toward the object (:func:`light_compass`; beside the scan, never over it);
 * above, the scan (name, vertices, size), the material, the model, the method and its tolerance, and
   the lights.
 
@@ -25,7 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["figure_image", "figure_title", "write_figure", "render_views", "nice_length"]
+__all__ = ["figure_image", "figure_title", "write_figure", "render_views", "light_compass", "nice_length"]
 
 #: Narrowest picture, inches at 100 dpi: the title and the colour bar's label fit in it.
 FIGURE_MIN_WIDTH = 11.6
@@ -50,29 +50,21 @@ def _light_words(light: dict) -> str:
 
 
 def render_views(mesh, result, values, clim, scale, camera_direction, up_axis, panel):
-    """The two views as one (panel, 2 panel, 3) image with one parallel camera; returns (image, mm per pixel)."""
+    """The two views as one (panel, 2 panel, 3) image with one parallel camera framing the scan; returns (image,
+    mm per pixel). Nothing but the scan is drawn (the light is shown beside the views, :func:`light_compass`)."""
     from ..io.upright import up_vector
     from .framing import camera_position, front_direction
-    from .render import (
-        LIGHT_GLYPH_COLOR,
-        add_colored_mesh,
-        add_false_colour_mesh,
-        light_glyph,
-        new_plotter,
-    )
+    from .render import add_colored_mesh, add_false_colour_mesh, new_plotter
 
     plotter = new_plotter((2 * panel, panel), shape=(1, 2), border=False)
     plotter.link_views()  # before the meshes: the outline of the false colour follows the camera it is made with
     try:
-        directions = [light["direction"] for light in result.metadata.get("lights", ()) if "direction" in light]
         for column in (0, 1):
             plotter.subplot(0, column)
             if column == 0:
                 poly = add_colored_mesh(plotter, mesh, result.colors)
             else:
                 poly, _, _ = add_false_colour_mesh(plotter, mesh, values, clim, scale, outline=True)
-            for direction in directions:
-                plotter.add_mesh(light_glyph(poly.center, 0.5 * poly.length, direction), color=LIGHT_GLYPH_COLOR)
         plotter.subplot(0, 0)
         direction = front_direction(mesh, up_vector(up_axis)) if camera_direction is None else camera_direction
         plotter.camera_position = camera_position(poly.center, poly.length, direction, tuple(up_vector(up_axis)))
@@ -83,6 +75,49 @@ def render_views(mesh, result, values, clim, scale, camera_direction, up_axis, p
     finally:
         plotter.close()
     return image, mm_per_pixel
+
+
+def light_compass(ax, lights, camera_direction, up) -> None:
+    """Draw each directional light in ``ax`` as the camera sees it: a disc, and an arrow from its rim toward
+    its centre along the light's travel projected on the picture (solid: the light comes from the camera's
+    side of the object; dashed: from behind it). Point and environment lights are not drawn.
+
+    ``lights`` are a result's light records (``metadata["lights"]``); ``camera_direction`` points from the
+    object toward the camera and ``up`` is the view-up, both in the scan's coordinates.
+    """
+    from matplotlib.patches import Circle, FancyArrowPatch
+
+    from .render import LIGHT_GLYPH_COLOR
+
+    toward_camera = np.asarray(camera_direction, dtype=float)
+    toward_camera /= np.linalg.norm(toward_camera)
+    view_up = np.asarray(up, dtype=float) - (np.asarray(up, dtype=float) @ toward_camera) * toward_camera
+    view_up /= np.linalg.norm(view_up)
+    right = np.cross(view_up, toward_camera)  # the picture's x: right-handed (right, up, toward the camera)
+    ax.set_xlim(-1.3, 1.3)
+    ax.set_ylim(-1.3, 1.3)
+    ax.set_aspect("equal")
+    ax.set_axis_off()
+    ax.add_patch(Circle((0.0, 0.0), 1.0, fill=False, color="grey", linewidth=0.8))
+    ax.plot([0.0], [0.0], marker="o", markersize=2, color="grey")
+    for light in lights:
+        if "direction" not in light:
+            continue
+        d = np.asarray(light["direction"], dtype=float)
+        d /= np.linalg.norm(d)
+        x, y = float(d @ right), float(d @ view_up)
+        behind = float(d @ toward_camera) < 0.0
+        ax.add_patch(
+            FancyArrowPatch(
+                (x, y),
+                (0.0, 0.0),
+                arrowstyle="-|>",
+                mutation_scale=10,
+                color=LIGHT_GLYPH_COLOR,
+                linewidth=1.6,
+                linestyle="--" if behind else "-",
+            )
+        )
 
 
 def figure_title(mesh, metadata: dict, name: str | None = None) -> str:
@@ -153,6 +188,12 @@ def figure_image(
     metadata = result.metadata
     values = false_colour_values(result.radiance, quantity)
     clim = false_colour_range(values, scale, result.exposure)
+    from ..io.upright import up_vector
+    from .framing import front_direction
+
+    up = up_vector(metadata.get("up", "+y"))
+    if camera_direction is None:
+        camera_direction = front_direction(mesh, up)
     image, mm_per_pixel = render_views(
         mesh, result, values, clim, scale, camera_direction, metadata.get("up", "+y"), int(panel)
     )
@@ -160,9 +201,9 @@ def figure_image(
 
     dpi = 100
     width = max(2 * panel / dpi + 0.4, FIGURE_MIN_WIDTH)  # the labels need this much, whatever the panels
-    figure = Figure(figsize=(width, (width - 0.4) / 2 + 1.9), dpi=dpi, layout="constrained")
+    figure = Figure(figsize=(width, (width - 0.4) / 2 + 2.4), dpi=dpi, layout="constrained")
     FigureCanvasAgg(figure)
-    grid = figure.add_gridspec(2, 2, height_ratios=[panel, 28])
+    grid = figure.add_gridspec(2, 2, height_ratios=[panel, 80])
     figure.suptitle(figure_title(mesh, metadata, name), fontsize=10)
     bar_mm = nice_length(0.25 * panel * mm_per_pixel)
     for column, (view, title) in enumerate(
@@ -202,10 +243,13 @@ def figure_image(
     bar.ax.tick_params(labelsize=8)
     note = figure.add_subplot(grid[1, 0])
     note.set_axis_off()
+    compass = note.inset_axes((0.0, 0.0, 0.16, 1.0))
+    light_compass(compass, metadata.get("lights", ()), camera_direction, up)
     note.text(
-        0.0,
+        0.18,
         0.5,
-        "parallel projection: the scale bar holds at every depth; blue arrow: the light, travelling toward the object",
+        "blue arrow: the light as the views see it, travelling toward the object\n(dashed: from behind the "
+        "object); parallel projection: the scale bar holds at every depth",
         fontsize=8,
         va="center",
     )
