@@ -297,3 +297,20 @@ def test_the_table_keeps_its_columns_whatever_the_noise():
     body = [line for line in lines if line.startswith("  ") and "region" not in line]
     assert body and all(">999/>999/>999 %" in line for line in body)
     assert len({len(line) for line in body}) == 1  # aligned
+
+
+def test_the_profile_carries_the_reference_along_the_same_cut(doubled):
+    result, _, folder = doubled
+    position, radiance, stderr = result.reference_profile
+    model_position, model = result.profiles[result.materials[0], "standard"]
+    np.testing.assert_array_equal(position, model_position)
+    traced = np.all(np.isfinite(radiance), axis=1)
+    assert traced.mean() > 0.5  # every tenth vertex is untraced: the cut passes some of their triangles
+    # the reference is twice the model wherever the cut crosses only traced vertices' triangles
+    np.testing.assert_allclose(radiance[traced], 2.0 * model[traced], rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(stderr[traced], 0.01 * radiance[traced], rtol=1e-9, atol=1e-12)
+    from translucency.app.compare_figures import profile_figure
+
+    labels = [line.get_label() for line in profile_figure(result).axes[0].get_lines()]
+    assert any(label.startswith("reference (path traced") for label in labels)
+    assert (folder / "profile.png").exists()

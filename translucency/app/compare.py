@@ -135,6 +135,9 @@ class Comparison:
     regions : ndarray or None
         With ``reference=``: the region of every vertex, (n,) int, an index into
         :data:`~translucency.app.reference_compare.REGIONS`; None without.
+    reference_profile : tuple or None
+        With ``reference=``: ``(position (k,), radiance (k, 3), stderr (k, 3))`` of the path-traced reference
+        along the same cut as :attr:`profiles` (NaN where it was not traced); None without.
     """
 
     materials: list
@@ -150,6 +153,7 @@ class Comparison:
     reference: object = None
     reference_rows: list = field(default_factory=list)
     regions: np.ndarray | None = None
+    reference_profile: tuple | None = None
 
     def ratio(self, model: str, region: str = "lit") -> np.ndarray:
         """Mean model / mean reference per channel (R, G, B) over a region (``compare(..., reference=...)``);
@@ -482,10 +486,14 @@ def compare(
     relative, differences = _differences(results, materials, models, lit)
     key_light = next((light for light in lights if isinstance(light, DirectionalLight)), None)
     light_direction = key_light.direction if key_light is not None else np.asarray(up, dtype=np.float64)
-    profiles, plane = _profiles(mesh, results, lit[materials[0]], light_direction, up, camera_direction)
+    traced = None if setup is None else setup.reference
+    profiles, plane, reference_profile = _profiles(
+        mesh, results, lit[materials[0]], light_direction, up, camera_direction, traced
+    )
     comparison = Comparison(
         materials, models, float(exposure), results, times, statistics, differences, profiles, plane
     )
+    comparison.reference_profile = reference_profile
     if setup is not None:
         _measure_against_reference(comparison, setup, mesh, lit[materials[0]])
     if output is not None:
@@ -609,16 +617,20 @@ def _differences(results, materials, models, lit):
     return relative, differences
 
 
-def _profiles(mesh, results, lit, light_direction, up, camera_direction):
-    """``(profiles by cell, plane)``: every cell's radiance along the cut through the light and the up axis, and
-    where the light's boundary crosses it (mm)."""
+def _profiles(mesh, results, lit, light_direction, up, camera_direction, reference=None):
+    """``(profiles by cell, plane, reference profile)``: every cell's radiance along the cut through the light and
+    the up axis, where the light's boundary crosses it (mm), and the path-traced ``reference``'s radiance and its
+    standard error along the same cut (None without a reference)."""
     names = {key: f"{key[0]}/{key[1]}" for key in results}
     values = {names[key]: result.radiance for key, result in results.items()}
     values["lit"] = lit.astype(np.float64)
+    if reference is not None:
+        values["reference"], values["reference stderr"] = reference.radiance, reference.radiance_stderr
     position, samples, plane = profile_cut(mesh, values, light_direction, up, camera_direction)
     inside = samples["lit"] >= 0.5
     plane["light_boundaries_mm"] = (0.5 * (position[1:] + position[:-1]))[inside[1:] != inside[:-1]].tolist()
-    return {key: (position, samples[names[key]]) for key in results}, plane
+    traced = None if reference is None else (position, samples["reference"], samples["reference stderr"])
+    return {key: (position, samples[names[key]]) for key in results}, plane, traced
 
 
 def _measure_against_reference(comparison, setup, mesh, lit) -> None:

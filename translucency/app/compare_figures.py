@@ -121,6 +121,17 @@ def profile_figure(comparison):
                 lw=1.0,
                 label=f"{material}, {model}",
             )
+        if comparison.reference_profile is not None:  # the path-traced reference, with two standard errors
+            position, radiance, stderr = comparison.reference_profile
+            low = np.maximum(radiance[:, c] - 2.0 * stderr[:, c], PROFILE_RANGE * top)
+            ax.fill_between(position, low, radiance[:, c] + 2.0 * stderr[:, c], color="0.75", lw=0)
+            ax.plot(
+                position,
+                np.maximum(radiance[:, c], PROFILE_RANGE * top),
+                color="black",
+                lw=1.4,
+                label="reference (path traced; band: 2 standard errors)",
+            )
         for x in plane["light_boundaries_mm"]:
             ax.axvline(x, color="0.6", lw=0.6, ls=":")
         ax.set_yscale("log")
