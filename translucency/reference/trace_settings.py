@@ -28,10 +28,10 @@ def check_seed(seed) -> int:
     return int(seed)
 
 
-def check_time(time_limit: float, elapsed: float, finished: int, n_paths: int, spp: int) -> None:
-    """Refuse the tracing when its ``n_paths`` would take longer than ``time_limit`` at the rate so far
-    (``finished`` paths in ``elapsed`` seconds), naming the ``spp`` that would fit."""
-    projected = elapsed * n_paths / max(finished, 1)
+def check_time(time_limit: float, elapsed: float, done: float, spp: int) -> None:
+    """Refuse the tracing when it would take longer than ``time_limit`` at the rate so far (the share ``done`` of
+    its work in ``elapsed`` seconds), naming the ``spp`` that would fit."""
+    projected = elapsed / max(done, 1e-9)
     if projected <= time_limit:
         return
     fits = int(spp * time_limit / projected)
