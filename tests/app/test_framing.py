@@ -60,3 +60,16 @@ def test_every_point_of_a_tall_scan_is_in_the_frame(aspect):
         np.max(np.abs(offsets @ vertical) / depth) / half, np.max(np.abs(offsets @ across) / depth) / (half * aspect)
     )
     assert fill > 0.75
+
+
+def test_room_below_keeps_the_bottom_of_the_picture_free():
+    rng = np.random.default_rng(4)
+    points = rng.normal(size=(2000, 3)) * (30.0, 20.0, 25.0)
+    up = np.array([0.0, 1.0, 0.0])
+    eye, focus, _ = (np.asarray(v, dtype=float) for v in framed_camera(points, (0.3, 0.2, 1.0), up, 4 / 3, 0.2))
+    forward = (focus - eye) / np.linalg.norm(focus - eye)
+    vertical = up - (up @ forward) * forward
+    vertical /= np.linalg.norm(vertical)
+    offsets = points - eye
+    height = (offsets @ vertical) / (offsets @ forward) / math.tan(math.radians(VIEW_ANGLE / 2))  # -1 .. 1
+    assert height.min() >= -1.0 + 2 * 0.2 - 1e-9 and height.max() <= 1.0

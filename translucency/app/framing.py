@@ -79,6 +79,10 @@ FRONT_TIE = 0.97
 VIEW_ANGLE = 30.0
 #: The projected scan is framed with this much room around it (a factor on its half extents).
 FRAME_MARGIN = 1.06
+#: PyVista's own window (``plot()``'s default), width over height, and the share of its height its default
+#: colour bar and labels take at the bottom: what :meth:`ShadeResult.camera_position
+#: <translucency.app.shading.result.ShadeResult.camera_position>` frames for.
+PYVISTA_ASPECT, PYVISTA_BAR_ROOM = 1024 / 768, 0.2
 
 
 def frame_axes(up):
@@ -169,7 +173,7 @@ def _default_in_frame(up) -> np.ndarray:
     return d[2] * e1 + d[0] * e2 + d[1] * up
 
 
-def framed_camera(points, direction, up, aspect: float = 1.0) -> list:
+def framed_camera(points, direction, up, aspect: float = 1.0, room_below: float = 0.0) -> list:
     """PyVista camera position ``[eye, focal point, view up]`` that shows every point from ``direction``.
 
     Parameters
@@ -182,6 +186,8 @@ def framed_camera(points, direction, up, aspect: float = 1.0) -> list:
         View-up (the camera makes it perpendicular to ``direction``).
     aspect : float
         The picture's width over its height.
+    room_below : float
+        Share of the picture's height left empty under the scan (for a colour bar there), 0 to 0.5.
     """
     points = np.asarray(points, dtype=np.float64)
     d = np.asarray(direction, dtype=np.float64)
@@ -195,17 +201,21 @@ def framed_camera(points, direction, up, aspect: float = 1.0) -> list:
     centre = 0.5 * (low + high)
     offsets = points - centre
     u, v, w = offsets @ right, offsets @ view_up, offsets @ d
-    # focal point at the middle of the projection, so the scan sits in the middle of the picture
-    centre = centre + 0.5 * (u.max() + u.min()) * right + 0.5 * (v.max() + v.min()) * view_up
+    room_below = min(max(float(room_below), 0.0), 0.5)
     half_width = FRAME_MARGIN * 0.5 * float(u.max() - u.min())
-    half_height = FRAME_MARGIN * 0.5 * float(v.max() - v.min())
+    half_height = FRAME_MARGIN * 0.5 * float(v.max() - v.min()) / (1.0 - room_below)
+    # focal point at the middle of the projection across, and below its middle by the room left under it, so the
+    # scan sits in the middle of the picture (or above the room)
+    vertical = 0.5 * (v.max() + v.min()) - room_below * half_height
+    centre = centre + 0.5 * (u.max() + u.min()) * right + vertical * view_up
     tangent = math.tan(math.radians(0.5 * VIEW_ANGLE))
     distance = max(half_height / tangent, half_width / (tangent * max(aspect, 1e-3)), 1e-6) + float(w.max())
     return [tuple(centre + distance * d), tuple(centre), tuple(float(u) for u in up)]
 
 
-def scan_camera(mesh, up, aspect: float = 1.0, direction=None) -> list:
-    """The camera position of every picture of a scan: from its front (or ``direction``), the whole scan framed."""
+def scan_camera(mesh, up, aspect: float = 1.0, direction=None, room_below: float = 0.0) -> list:
+    """The camera position of every picture of a scan: from its front (or ``direction``), the whole scan framed
+    (:func:`framed_camera`)."""
     if direction is None:
         direction = front_direction(mesh, up)
-    return framed_camera(mesh.points, direction, up, aspect)
+    return framed_camera(mesh.points, direction, up, aspect, room_below)

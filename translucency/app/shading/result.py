@@ -100,13 +100,14 @@ class ShadeResult:
     def camera_position(self) -> list:
         """The default view of the result as PyVista takes it (``plotter.camera_position`` or
         ``mesh.plot(cpos=...)``): ``[eye, focal point, view up]`` in mm, from the scan's front and a little
-        above, its up axis (``metadata["up"]``) up, the whole scan in a square picture -- the view of the tool's
-        own pictures (:func:`~translucency.app.framing.scan_camera`), where PyVista's default camera would take
-        +z as up."""
+        above, its up axis (``metadata["up"]``) up, the whole scan in PyVista's default window above the room
+        its colour bar takes -- the view of the tool's own pictures (:func:`~translucency.app.framing.scan_camera`),
+        where PyVista's default camera would take +z as up."""
         from ...io.upright import up_vector
-        from ..framing import scan_camera
+        from ..framing import PYVISTA_ASPECT, PYVISTA_BAR_ROOM, scan_camera
 
-        return scan_camera(self.mesh, tuple(up_vector(self.metadata.get("up", "+y"))))
+        up = tuple(up_vector(self.metadata.get("up", "+y")))
+        return scan_camera(self.mesh, up, PYVISTA_ASPECT, room_below=PYVISTA_BAR_ROOM)
 
 
 @dataclass
