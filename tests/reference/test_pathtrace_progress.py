@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from translucency.reference.pathtrace import expected_flights
+from translucency.reference.trace_settings import expected_flights
 
 
 def _observe(lengths, starts, now):

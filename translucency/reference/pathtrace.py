@@ -74,7 +74,7 @@ from ..scatter.kernels import orthonormal_frame
 from ..scatter.medium import Medium
 from ..scatter.montecarlo import fresnel_reflectance_scalar, sample_hg_cosine
 from ..scatter.visibility import Occluder
-from .trace_settings import check_seed, check_spp, check_time
+from .trace_settings import WorkTally, check_seed, check_spp, check_time, progress_line
 
 __all__ = ["ReferenceRadiance", "trace_radiance", "NEE_MAX_OPTICAL_DEPTH"]
 
@@ -495,44 +495,6 @@ def _next_event(boundary: _Boundary, light: _Light, z, d, sigma_t, g, rng, stats
     return out
 
 
-def expected_flights(ended, ages) -> float:
-    """Mean flights of a path, from the paths finished so far and those still walking (Kaplan-Meier).
-
-    ``ended[a]`` paths finished after ``a`` flights; ``ages`` are the flights of the paths still walking (they
-    will make at least one more). The hazard at ``a`` is ``ended[a]`` over the paths that reached ``a``
-    flights; the survival ``S(a)`` is the product of one minus the hazards up to ``a``, and the mean is
-    ``sum_a S(a)``, continued past the longest walk so far as if the hazard of its last tenth held on
-    (geometric). Short paths (out again near where they entered) finish first and long ones are still walking:
-    the mean of the finished lengths alone would be far too short, and a share of paths finished far ahead of
-    the time.
-    """
-    ages = np.asarray(ages, dtype=np.int64)
-    top = max(int(np.flatnonzero(ended).max(initial=0)), int(ages.max(initial=0)))
-    if top == 0:
-        return 1.0
-    ended = np.asarray(ended[: top + 1], dtype=np.float64)
-    walking = np.bincount(ages, minlength=top + 1)[: top + 1].astype(np.float64)
-    # reached[a]: paths that made at least a flights (finished at a or later, or walking at age a or more)
-    reached = np.cumsum((ended + walking)[::-1])[::-1]
-    hazard = np.divide(ended, reached, out=np.zeros_like(ended), where=reached > 0)
-    survival = np.cumprod(1.0 - hazard[1:])  # S(a) for a = 1 .. top; S(0) = 1
-    tail = hazard[max(1, int(0.9 * top)) :]
-    tail_hazard = float(tail[tail > 0].mean()) if np.any(tail > 0) else 0.0
-    beyond = survival[-1] * (1.0 / tail_hazard - 1.0) if tail_hazard > 0 else 0.0
-    return float(1.0 + survival[:-1].sum() + survival[-1] + beyond)
-
-
-def _progress_line(done, elapsed, samples, sums):
-    """``"37 % of the work, 12 s; median error 3.1 % after 24 paths per point"`` for the progress callback (the
-    work: the flights expected in all, :func:`expected_flights`)."""
-    line = f"{100 * done:.0f} % of the work, {elapsed:.0f} s"
-    if samples >= 2:
-        median = _median_relative_error(*_mean_and_stderr(sums, samples))
-        if math.isfinite(median):
-            line += f"; median error {100 * median:.1f} % after {samples} paths per point"
-    return line
-
-
 class _Paths:
     """The paths in flight: position, direction, ray skip, weight, side, re-entered flag, estimates."""
 
@@ -603,8 +565,7 @@ def _walk(boundary, light, start_points, start_normals, n_paths, coefficients, e
     paths = _Paths()
     started = 0
     finished = 0
-    flights = 0  # flights simulated so far (one per path in flight per step): the work done
-    ended = np.zeros(64, dtype=np.int64)  # ended[a]: paths that finished after a flights
+    work = WorkTally()
     flat = sums.reshape(3, -1)
     slots = sums.shape[1] * n_channels
     while started < n_paths or len(paths.sensor):
@@ -616,7 +577,7 @@ def _walk(boundary, light, start_points, start_normals, n_paths, coefficients, e
             started += len(take)
         p = paths
         p.age += 1
-        flights += len(p.sensor)
+        work.flights += len(p.sensor)
         xi = rng.random((2, len(p.sensor)))
         # a ray only where the flight may reach the boundary: deep inside, the flight is shorter than the
         # distance to any facet (docs/physics.md §9.5)
@@ -662,12 +623,9 @@ def _walk(boundary, light, start_points, start_normals, n_paths, coefficients, e
             flat[1] += np.bincount(slot, weights=p.estimate[rows] ** 2, minlength=flat.shape[1])
             flat[2] += np.bincount(slot, weights=p.estimate_reentered[rows], minlength=flat.shape[1])
             finished += rows.size
-            lengths = p.age[rows]
-            if lengths.max() >= ended.size:
-                ended = np.concatenate([ended, np.zeros(2 * int(lengths.max()) - ended.size + 1, dtype=np.int64)])
-            ended += np.bincount(lengths, minlength=ended.size)
+            work.add(p.age[rows])
             paths.keep(np.flatnonzero(~done))
-            report(finished, flights, ended, paths.age)
+            report(finished, work, paths.age)
     stats["paths"] += n_paths
     stats["rays"] = boundary.occluder.rays_cast
 
@@ -811,18 +769,19 @@ def trace_radiance(
     rng = np.random.default_rng(seed)
     last = [time.perf_counter()]
 
-    def report(finished, flights, ended, ages):
+    def report(finished, work, ages):
         now = time.perf_counter()
         calibrated = time_limit is not None and CALIBRATION_SECONDS <= now - started and finished < n_paths
-        if not calibrated and (progress is None or (now - last[0] < PROGRESS_SECONDS and finished < n_paths)):
-            return
-        done = 1.0 if finished >= n_paths else min(flights / (n_paths * expected_flights(ended, ages)), 0.99)
+        shown = progress is not None and (now - last[0] >= PROGRESS_SECONDS or finished >= n_paths)
+        done = work.share(finished, n_paths, ages) if calibrated or shown else 0.0
         if calibrated:
             check_time(time_limit, now - started, done, spp)
-        if progress is None or (now - last[0] < PROGRESS_SECONDS and finished < n_paths):
+        if not shown:
             return
         last[0] = now
-        progress(done, _progress_line(done, now - started, finished // (k * n_distinct), results))
+        samples = finished // (k * n_distinct)
+        error = _median_relative_error(*_mean_and_stderr(results, samples)) if samples >= 2 else math.inf
+        progress(done, progress_line(done, now - started, samples, error))
 
     _walk(boundary, light, sensor_points, sensor_normals, n_paths, coefficients, eta, rng, results, stats, report)
     mean, stderr = _mean_and_stderr(results, spp)
