@@ -221,3 +221,30 @@ def test_a_missing_system_library_is_a_sentence(monkeypatch):
     monkeypatch.setattr(ctypes.util, "find_library", lambda name: None if name == "xcb-cursor" else "found")
     with pytest.raises(TranslucencyError, match="apt-get install libxcb-cursor0"):
         check_can_start()
+
+
+@pytest.mark.parametrize("name, fragment", [("missing.ply", "does not exist"), (".", "is a directory")])
+def test_view_of_a_mesh_that_is_not_there_says_so_before_a_window_opens(name, fragment, tmp_path, monkeypatch, capsys):
+    from translucency.app import cli
+
+    monkeypatch.chdir(tmp_path)
+    assert cli.main(["view", name]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("translucency: error:") and fragment in err[0]
+
+
+def test_a_scan_that_cannot_be_read_is_one_sentence_in_the_window(qtbot, tmp_path):
+    from translucency.app.desktop import MainWindow
+
+    bad = tmp_path / "bad.ply"
+    bad.write_bytes(b"ply\nformat nonsense\n")
+    main = MainWindow(bad)
+    qtbot.addWidget(main)
+    main.show()
+    try:
+        qtbot.waitUntil(lambda: "PLY" in main.status_line.message.text(), timeout=60000)
+        message = main.status_line.message.text()
+        assert "bad.ply" in message and "PLY header" in message  # the loader's own sentence
+        assert "Traceback" not in message and "\n" not in message and main.state is None
+    finally:
+        main.close()

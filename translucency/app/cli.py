@@ -310,8 +310,12 @@ def cmd_view(args) -> int:
     settings = solver_settings(args, resolution="full") if interactive else solver_settings(args)
     lights = lights_from_args(args)
     if not one_picture:
+        from ..errors import MeshError
+        from ..io.readable import regular_file
         from .desktop import check_can_start, run
 
+        if args.mesh is not None:  # said here, in the terminal, before a window opens
+            regular_file(args.mesh, MeshError, kind="mesh file")
         check_can_start()
         return run(
             args.mesh,
