@@ -248,3 +248,14 @@ def test_a_scan_that_cannot_be_read_is_one_sentence_in_the_window(qtbot, tmp_pat
         assert "Traceback" not in message and "\n" not in message and main.state is None
     finally:
         main.close()
+
+
+def test_a_new_material_shows_a_quick_first_picture_then_relights_every_vertex(qtbot, window):
+    methods = []
+    window.jobs.finished.connect(lambda kind, value: methods.append(window.state.result.metadata["method"]))
+    solves = window.state.n_solves
+    window.panel.materials.material_chosen.emit("whole_milk")
+    qtbot.waitUntil(lambda: window.state.n_solves >= solves + 2 and not window.jobs.busy, timeout=SOLVE_WAIT_S * 1000)
+    qtbot.wait(50)
+    assert methods[-2:] == ["tree", "relight"]  # the coarse preview first, then the prepared operators
+    assert window.state.medium.name == "whole_milk" and "relight" in window.panel.status.text()

@@ -17,22 +17,35 @@ def connect_panel(window) -> None:
     def solve(kind, label, change):
         window.request(kind, label, change)
 
+    def prepare(kind, label, change):
+        """A change that prepares new relighting operators (tens of seconds): a quick first picture on a coarse
+        copy, then every vertex (the state's own solve); other methods solve once."""
+        if window.state is not None and window.state.method == "relight":
+            solve(kind, f"{label}: a first picture", lambda state: change(state, True))
+            solve("solve", f"{label}: preparing the relighting", lambda state: state.solve())
+        else:
+            solve(kind, label, lambda state: change(state, False))
+
     def tol(value):
         try:
             check_tol(value)
         except TranslucencyError as exc:
             return window.say(str(exc))
-        solve("solver", f"solving at tolerance {value:g}", lambda state: state.set_tol(value))
+        prepare("solver", f"tolerance {value:g}", lambda state, quick: state.set_tol(value, preview=quick))
 
     def unit(name):
         window.unit_name = name
-        solve("scale", f"rescaling to {name}", lambda state: state.set_scale(UNITS[name]))
+        prepare("scale", f"rescaling to {name}", lambda state, quick: state.set_scale(UNITS[name], preview=quick))
 
     panel.material_chosen.connect(
-        lambda choice: solve("material", f"preparing {_named(choice)}", lambda state: state.set_material(choice))
+        lambda choice: prepare(
+            "material", f"{_named(choice)}", lambda state, quick: state.set_material(choice, preview=quick)
+        )
     )
     panel.model_chosen.connect(
-        lambda model: solve("solver", f"solving with the {model} dipole", lambda state: state.set_model(model))
+        lambda model: prepare(
+            "solver", f"the {model} dipole", lambda state, quick: state.set_model(model, preview=quick)
+        )
     )
     panel.tol_chosen.connect(tol)
     panel.bounces_chosen.connect(

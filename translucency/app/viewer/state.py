@@ -263,7 +263,7 @@ class ViewerState:
         lights = list(self.lights)
         old = lights[self.key_light]
         lights[self.key_light] = DirectionalLight(light_direction(azimuth, elevation, self.up), old.irradiance_rgb)
-        self._solve_with(azimuth=azimuth, elevation=elevation, lights=tuple(lights))
+        self._solve_with(False, azimuth=azimuth, elevation=elevation, lights=tuple(lights))
         return True
 
     def set_lights(self, lights) -> bool:
@@ -279,36 +279,38 @@ class ViewerState:
             return False
         key = next((i for i, light in enumerate(lights) if isinstance(light, DirectionalLight)), None)
         angles = light_angles(lights[key].direction, self.up) if key is not None else (None, None)
-        self._solve_with(lights=lights, key_light=key, azimuth=angles[0], elevation=angles[1])
+        self._solve_with(False, lights=lights, key_light=key, azimuth=angles[0], elevation=angles[1])
         return True
 
-    def set_material(self, material) -> bool:
-        """Change the material (catalogue name, entry or Medium, 1/mm) and solve; False if it is the same."""
+    def set_material(self, material, *, preview: bool = False) -> bool:
+        """Change the material (catalogue name, entry or Medium, 1/mm) and solve (with ``preview``: the quick
+        first picture of :meth:`solve_preview`); False if it is the same."""
         medium = resolve_medium(material)
         if medium.describe() == self.medium.describe():
             return False
-        self._solve_with(medium=medium)
+        self._solve_with(preview, medium=medium)
         return True
 
-    def set_model(self, model: str) -> bool:
-        """Change the scattering model (``directional``, ``standard``, ``better``) and solve; False if the same."""
+    def set_model(self, model: str, *, preview: bool = False) -> bool:
+        """Change the scattering model (``directional``, ``standard``, ``better``) and solve (``preview`` as in
+        :meth:`set_material`); False if the same."""
         from ...scatter.names import check_model
 
         check_model(model)
         if model == self.model:
             return False
-        self._solve_with(model=model)
+        self._solve_with(preview, model=model)
         return True
 
-    def set_tol(self, tol) -> bool:
+    def set_tol(self, tol, *, preview: bool = False) -> bool:
         """Change the solver's tolerance (relative error per vertex, docs/physics.md §8.4) and solve; False if
-        the same. With ``relight`` a new tolerance prepares new operators."""
+        the same. With ``relight`` a new tolerance prepares new operators (``preview`` as in :meth:`set_material`)."""
         from ...scatter.names import check_tol
 
         tol = check_tol(tol)
         if tol == self.tol:
             return False
-        self._solve_with(tol=tol)
+        self._solve_with(preview, tol=tol)
         return True
 
     def set_bounces(self, bounces) -> bool:
@@ -319,10 +321,10 @@ class ViewerState:
         bounces = check_bounces(bounces)
         if bounces == self.bounces:
             return False
-        self._solve_with(bounces=bounces)
+        self._solve_with(False, bounces=bounces)
         return True
 
-    def set_scale(self, mm_per_unit) -> bool:
+    def set_scale(self, mm_per_unit, *, preview: bool = False) -> bool:
         """Size of one unit of the mesh's file in mm: scale the mesh, make a new Scene and solve.
 
         The points become ``p * mm_per_unit / m0`` with ``m0`` the mesh's own mm per unit; False if the
@@ -335,7 +337,7 @@ class ViewerState:
             return False
         factor = mm_per_unit / float(self.base_mesh.mm_per_unit)
         mesh = self.base_mesh.replace(points=self.base_mesh.points * factor, mm_per_unit=mm_per_unit)
-        self._solve_with(mm_per_unit=mm_per_unit, scene=Scene(mesh, shadows=self.shadows, up=self.up_axis))
+        self._solve_with(preview, mm_per_unit=mm_per_unit, scene=Scene(mesh, shadows=self.shadows, up=self.up_axis))
         return True
 
     def set_exposure(self, exposure) -> bool:
@@ -421,14 +423,14 @@ class ViewerState:
             self.method, self.tol = "relight", kept
             self.update_status()
 
-    def _solve_with(self, **changes) -> None:
-        """Set the attributes ``changes`` and solve; if the solve raises (an error, or a window's cancel through
-        :attr:`on_progress`), the attributes are put back as they were."""
+    def _solve_with(self, preview: bool, **changes) -> None:
+        """Set the attributes ``changes`` and solve (:meth:`solve_preview` with ``preview``); if the solve raises (an
+        error, or a window's cancel through :attr:`on_progress`), the attributes are put back as they were."""
         before = {name: getattr(self, name) for name in changes}
         for name, value in changes.items():
             setattr(self, name, value)
         try:
-            self.solve()
+            self.solve_preview() if preview else self.solve()
         except BaseException:
             for name, value in before.items():
                 setattr(self, name, value)
