@@ -130,6 +130,9 @@ def test_dragging_the_ball_moves_the_light(qtbot, window):
     assert np.degrees(np.arccos(np.clip(before @ after, -1, 1))) > 5.0  # the light moved with the ball
     assert window.panel.azimuth.value() == pytest.approx(window.state.azimuth, abs=0.01)
     assert "ms" in window.panel.status.text()
+    # the frames while it moved left the bounce out; the one when it was let go has it
+    assert window.state.result.metadata["bounces"] == window.state.bounces == 1
+    assert "no bounce" not in window.panel.status.text()
 
 
 def test_point_and_environment_lights_from_the_panel(qtbot, window):

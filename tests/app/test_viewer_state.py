@@ -308,3 +308,17 @@ def test_the_status_names_the_method_that_solved_what_is_shown(sphere):
     assert state.method == "relight" and "tree, tolerance 0.01" in state.status
     state.solve_preview()
     assert "tree, tolerance 0.1" in state.status
+
+
+def test_a_frame_while_the_light_moves_leaves_the_bounce_out_and_the_next_solves_it_whole(sphere):
+    from translucency.scatter.lights import DirectionalLight
+
+    state = ViewerState(sphere, "marble", method="exact", bounces=1)
+    light = DirectionalLight((0.0, 1.0, 1.0))
+    assert state.set_lights(light, moving=True) is True
+    assert state.result.metadata["bounces"] == 0 and state.bounces == 1
+    assert "no bounce while the light moves" in state.status
+    assert state.set_lights(light, moving=True) is False  # the same frame again: nothing to do
+    assert state.set_lights(light) is True  # let go: the same light, whole
+    assert state.result.metadata["bounces"] == 1 and "no bounce" not in state.status
+    assert state.set_lights(light) is False

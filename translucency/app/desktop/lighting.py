@@ -103,12 +103,12 @@ class LightHandle:
         widget.On()
 
     @classmethod
-    def in_view(cls, view, centre, up, on_move) -> LightHandle:
+    def in_view(cls, view, centre, up, on_move, on_release) -> LightHandle:
         """A handle in a PyVista plotter ``view`` (a pyvistaqt ``QtInteractor``), on the sphere of
-        :func:`handle_radius` for its current camera; ``on_move`` is called as it moves and when it is let go."""
+        :func:`handle_radius` for its current camera."""
         size = view.interactor.size()
         radius = handle_radius(view.camera, centre, size.width() / max(size.height(), 1))
-        return cls(view.iren.interactor, view.renderer, centre, radius, up, on_move, on_move)
+        return cls(view.iren.interactor, view.renderer, centre, radius, up, on_move, on_release)
 
     def angles(self) -> tuple[float, float]:
         """The ball's azimuth and elevation, degrees around ``up``."""

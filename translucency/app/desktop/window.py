@@ -188,8 +188,9 @@ class MainWindow(QtWidgets.QMainWindow):
         state = self.state
         self.jobs.submit(kind, label, lambda: (time.perf_counter(), change(state)))
 
-    def set_light(self, kind: str, azimuth: float, elevation: float, distance: float) -> None:
-        """The light the panel or the handle chose (:func:`~translucency.app.desktop.lighting.panel_lights`)."""
+    def set_light(self, kind: str, azimuth: float, elevation: float, distance: float, moving: bool = False) -> None:
+        """The light the panel or the handle chose (:func:`~translucency.app.desktop.lighting.panel_lights`);
+        ``moving``: a frame while the ball is dragged (``ViewerState.set_lights``: no bounce)."""
         if self.state is None:
             return
         self.light_kind, self.light_distance = kind, distance
@@ -198,7 +199,7 @@ class MainWindow(QtWidgets.QMainWindow):
             if kind != "environment":
                 self.handle.place(azimuth, elevation)
         lights = panel_lights(kind, azimuth, elevation, distance, self.state.up, self._centre, self._radius)
-        self.request("light", f"relighting ({kind})", lambda state: state.set_lights(lights))
+        self.request("light", f"relighting ({kind})", lambda state: state.set_lights(lights, moving=moving))
 
     def cancel(self) -> None:
         """Stop the running solve (Cancel, Esc); what is shown stays."""
@@ -262,7 +263,8 @@ class MainWindow(QtWidgets.QMainWindow):
         self.unit_name = _unit_name(state.mm_per_unit)
         self.light_kind = "directional" if state.key_light is not None else "point"
         self.reset_camera()
-        self.handle = LightHandle.in_view(self.view, self._centre, state.up, self._handle_moved)
+        moved, let_go = (lambda a, e: self._handle_moved(a, e, True)), self._handle_moved
+        self.handle = LightHandle.in_view(self.view, self._centre, state.up, moved, let_go)
         if state.azimuth is not None:
             self.handle.place(state.azimuth, state.elevation)
         self.handle.set_visible(state.key_light is not None)
@@ -277,9 +279,9 @@ class MainWindow(QtWidgets.QMainWindow):
         self.request("preview", "a first picture on a coarser copy of the scan", lambda s: s.solve_preview())
         self.request("solve", f"solving {state.medium.name} on {state.base_mesh.n_points:,} vertices", _solve)
 
-    def _handle_moved(self, azimuth: float, elevation: float) -> None:
+    def _handle_moved(self, azimuth: float, elevation: float, moving: bool = False) -> None:
         self.panel.set_angles(azimuth, elevation)
-        self.set_light(self.light_kind, azimuth, elevation, self.light_distance)
+        self.set_light(self.light_kind, azimuth, elevation, self.light_distance, moving)
 
     def _show_title(self) -> None:
         scan = Path(self.scan_path).name if self.scan_path is not None else "default scan"

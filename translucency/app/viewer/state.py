@@ -232,6 +232,8 @@ class ViewerState:
         self.status = ""
         #: Called with no argument when :attr:`status` changes during a solve (a window redraws it).
         self.notify = None
+        #: The next solve is a frame while the light moves (:meth:`set_lights`), and whether what is shown is one.
+        self.moving, self.moving_frame = False, False
         #: Called with ``(stage, fraction)`` as a solve progresses (a window's progress bar; it may raise to stop
         #: the solve, which then leaves the state as it was before the change).
         self.on_progress = None
@@ -266,20 +268,23 @@ class ViewerState:
         self._solve_with(False, azimuth=azimuth, elevation=elevation, lights=tuple(lights))
         return True
 
-    def set_lights(self, lights) -> bool:
+    def set_lights(self, lights, *, moving: bool = False) -> bool:
         """Replace every light (a light or a sequence; directions in the scan's coordinates) and solve.
 
         The first directional light becomes the one :meth:`set_light` steers (none: the angles are None).
-        Returns False when the lights are the current ones.
+        ``moving``: a frame while a window's light is dragged, solved without the light that re-enters the
+        surface (no bounce; the status says so); the next call without it solves the same lights whole.
+        Returns False when the lights are the current ones and already solved so.
         """
         from ...scatter.lights import DirectionalLight, as_light_list
 
         lights = as_light_list(lights)
-        if [light.to_dict() for light in lights] == [light.to_dict() for light in self.lights]:
+        same = [light.to_dict() for light in lights] == [light.to_dict() for light in self.lights]
+        if same and (moving or not self.moving_frame):
             return False
         key = next((i for i, light in enumerate(lights) if isinstance(light, DirectionalLight)), None)
         angles = light_angles(lights[key].direction, self.up) if key is not None else (None, None)
-        self._solve_with(False, lights=lights, key_light=key, azimuth=angles[0], elevation=angles[1])
+        self._solve_with(False, lights=lights, key_light=key, azimuth=angles[0], elevation=angles[1], moving=moving)
         return True
 
     def set_material(self, material, *, preview: bool = False) -> bool:
@@ -459,13 +464,15 @@ class ViewerState:
             resolution=resolution,
             exposure=self.exposure,
             per_direction=self.per_direction,
-            bounces=self.bounces,
+            bounces=0 if self.moving else self.bounces,
             albedo=self.albedo,
             progress=self._progress,
             **self.limits,
         )
         self.solve_seconds = time.perf_counter() - start
         self.n_solves += 1
+        # a frame while the light moves is shown until the next solve; that one is whole again
+        self.moving_frame, self.moving = self.moving, False
         if self.exposure is None:
             self.exposure = self.result.exposure
         self._highlight_inputs = None
@@ -548,6 +555,8 @@ class ViewerState:
         method, tol = result.metadata.get("method", self.method), result.metadata.get("tolerance", self.tol)
         tolerance = "exact sum" if method == "exact" else f"tolerance {tol:.3g}"
         prepared = result.timings.get("solve_prepare", 0.0)
+        if self.moving_frame and self.bounces:
+            tolerance += "; no bounce while the light moves"
         if method == "relight" and prepared:
             tolerance += f" (operators prepared in {prepared:.0f} s, once)"
         self.status = (
