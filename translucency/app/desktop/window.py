@@ -196,7 +196,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.light_kind, self.light_distance = kind, distance
         if self.handle is not None:
             self.handle.set_visible(kind != "environment")
-            if kind != "environment":
+            if kind != "environment" and not moving:  # while it is dragged the ball is where the user holds it
                 self.handle.place(azimuth, elevation)
         lights = panel_lights(kind, azimuth, elevation, distance, self.state.up, self._centre, self._radius)
         self.request("light", f"relighting ({kind})", lambda state: state.set_lights(lights, moving=moving))
@@ -248,8 +248,6 @@ class MainWindow(QtWidgets.QMainWindow):
 
     def _install(self, state, notes, path) -> None:
         """A loaded scan: draw it in grey, frame it, put the handle on, then solve it."""
-        from ...io.polydata import to_pyvista
-
         if self.handle is not None:
             self.handle.close()
         self.view.clear()
@@ -257,9 +255,8 @@ class MainWindow(QtWidgets.QMainWindow):
         state.on_progress = self.jobs.report
         self.scan_path = path
         self.layers = ScanLayers(self.view, state.base_mesh)
-        poly = to_pyvista(state.base_mesh)
-        self._centre = np.asarray(poly.center, dtype=np.float64)
-        self._radius = 0.5 * float(poly.length)
+        self._centre = np.asarray(self.layers.poly.center, dtype=np.float64)
+        self._radius = 0.5 * float(self.layers.poly.length)
         self.unit_name = _unit_name(state.mm_per_unit)
         self.light_kind = "directional" if state.key_light is not None else "point"
         self.reset_camera()
@@ -277,7 +274,8 @@ class MainWindow(QtWidgets.QMainWindow):
         #: Lines said while loading and solving (the unit inferred, warnings), shown under the status.
         self.notes = [_in_panel_words(note) for note in notes]
         self.request("preview", "a first picture on a coarser copy of the scan", lambda s: s.solve_preview())
-        self.request("solve", f"solving {state.medium.name} on {state.base_mesh.n_points:,} vertices", _solve)
+        label = f"solving {state.medium.name} on {state.base_mesh.n_points:,} vertices"
+        self.request("solve", label, lambda s: s.solve())
 
     def _handle_moved(self, azimuth: float, elevation: float, moving: bool = False) -> None:
         self.panel.set_angles(azimuth, elevation)
@@ -347,15 +345,13 @@ def _in_panel_words(note: str) -> str:
     )
 
 
-def _solve(state) -> None:
-    state.solve()
-
-
 def _unit_name(mm_per_unit: float) -> str:
-    """The unit whose size is ``mm_per_unit`` (the panel's unit combo), or ``mm`` for another scale."""
-    from ...io.units import UNITS
+    """The panel's unit for ``mm_per_unit`` (:func:`~translucency.io.units.unit_label`), or ``mm`` for a scale of
+    its own."""
+    from ...io.units import UNITS, unit_label
 
-    return next((name for name, mm in UNITS.items() if abs(mm - mm_per_unit) < 1e-9 * mm), "mm")
+    label = unit_label(mm_per_unit)
+    return label if label in UNITS else "mm"
 
 
 def run(path=None, **options) -> int:

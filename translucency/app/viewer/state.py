@@ -232,8 +232,6 @@ class ViewerState:
         self.status = ""
         #: Called with no argument when :attr:`status` changes during a solve (a window redraws it).
         self.notify = None
-        #: The next solve is a frame while the light moves (:meth:`set_lights`), and whether what is shown is one.
-        self.moving, self.moving_frame = False, False
         #: Called with ``(stage, fraction)`` as a solve progresses (a window's progress bar; it may raise to stop
         #: the solve, which then leaves the state as it was before the change).
         self.on_progress = None
@@ -265,7 +263,7 @@ class ViewerState:
         lights = list(self.lights)
         old = lights[self.key_light]
         lights[self.key_light] = DirectionalLight(light_direction(azimuth, elevation, self.up), old.irradiance_rgb)
-        self._solve_with(False, azimuth=azimuth, elevation=elevation, lights=tuple(lights))
+        self._solve_with(self.solve, azimuth=azimuth, elevation=elevation, lights=tuple(lights))
         return True
 
     def set_lights(self, lights, *, moving: bool = False) -> bool:
@@ -280,12 +278,18 @@ class ViewerState:
 
         lights = as_light_list(lights)
         same = [light.to_dict() for light in lights] == [light.to_dict() for light in self.lights]
-        if same and (moving or not self.moving_frame):
+        if same and (moving or not self.shows_moving_frame):
             return False
         key = next((i for i, light in enumerate(lights) if isinstance(light, DirectionalLight)), None)
         angles = light_angles(lights[key].direction, self.up) if key is not None else (None, None)
-        self._solve_with(False, lights=lights, key_light=key, azimuth=angles[0], elevation=angles[1], moving=moving)
+        solve = (lambda: self.solve(bounces=0)) if moving else self.solve
+        self._solve_with(solve, lights=lights, key_light=key, azimuth=angles[0], elevation=angles[1])
         return True
+
+    @property
+    def shows_moving_frame(self) -> bool:
+        """Whether what is shown is a frame while the light moved (solved with fewer bounces than the state's)."""
+        return self.result is not None and self.result.metadata.get("bounces", self.bounces) != self.bounces
 
     def set_material(self, material, *, preview: bool = False) -> bool:
         """Change the material (catalogue name, entry or Medium, 1/mm) and solve (with ``preview``: the quick
@@ -293,7 +297,7 @@ class ViewerState:
         medium = resolve_medium(material)
         if medium.describe() == self.medium.describe():
             return False
-        self._solve_with(preview, medium=medium)
+        self._solve_with(self._solver(preview), medium=medium)
         return True
 
     def set_model(self, model: str, *, preview: bool = False) -> bool:
@@ -304,7 +308,7 @@ class ViewerState:
         check_model(model)
         if model == self.model:
             return False
-        self._solve_with(preview, model=model)
+        self._solve_with(self._solver(preview), model=model)
         return True
 
     def set_tol(self, tol, *, preview: bool = False) -> bool:
@@ -315,7 +319,7 @@ class ViewerState:
         tol = check_tol(tol)
         if tol == self.tol:
             return False
-        self._solve_with(preview, tol=tol)
+        self._solve_with(self._solver(preview), tol=tol)
         return True
 
     def set_bounces(self, bounces) -> bool:
@@ -326,7 +330,7 @@ class ViewerState:
         bounces = check_bounces(bounces)
         if bounces == self.bounces:
             return False
-        self._solve_with(False, bounces=bounces)
+        self._solve_with(self.solve, bounces=bounces)
         return True
 
     def set_scale(self, mm_per_unit, *, preview: bool = False) -> bool:
@@ -342,7 +346,9 @@ class ViewerState:
             return False
         factor = mm_per_unit / float(self.base_mesh.mm_per_unit)
         mesh = self.base_mesh.replace(points=self.base_mesh.points * factor, mm_per_unit=mm_per_unit)
-        self._solve_with(preview, mm_per_unit=mm_per_unit, scene=Scene(mesh, shadows=self.shadows, up=self.up_axis))
+        self._solve_with(
+            self._solver(preview), mm_per_unit=mm_per_unit, scene=Scene(mesh, shadows=self.shadows, up=self.up_axis)
+        )
         return True
 
     def set_exposure(self, exposure) -> bool:
@@ -406,44 +412,38 @@ class ViewerState:
         """A quick first picture: ``tree`` on the interactive proxy (:func:`interactive_edge_length`, about
         :data:`INTERACTIVE_VERTICES` vertices), shown while the state's own method prepares (a window calls it
         before :meth:`solve` on a new scan)."""
-        kept = self.method
-        self.method = "tree"
-        try:
-            self.solve(interactive_edge_length(self.scene.mesh, self.medium))
-        finally:
-            self.method = kept
-            self.update_status()
+        self.solve(interactive_edge_length(self.scene.mesh, self.medium), method="tree")
 
     def solve_full(self) -> None:
         """Solve the current state on every vertex of the mesh (slow; see the module docstring): with
         ``relight``, by ``tree`` at the default tolerance."""
-        if self.method != "relight":
+        if self.method == "relight":
+            self.solve("full", method="tree", tol=DEFAULT_TOL)
+        else:
             self.solve("full")
-            return
-        kept = self.tol
-        self.method, self.tol = "tree", DEFAULT_TOL
-        try:
-            self.solve("full")
-        finally:
-            self.method, self.tol = "relight", kept
-            self.update_status()
 
-    def _solve_with(self, preview: bool, **changes) -> None:
-        """Set the attributes ``changes`` and solve (:meth:`solve_preview` with ``preview``); if the solve raises (an
-        error, or a window's cancel through :attr:`on_progress`), the attributes are put back as they were."""
+    def _solver(self, preview: bool):
+        """:meth:`solve_preview` or :meth:`solve`."""
+        return self.solve_preview if preview else self.solve
+
+    def _solve_with(self, solve, **changes) -> None:
+        """Set the attributes ``changes`` and call ``solve()``; if it raises (an error, or a window's cancel through
+        :attr:`on_progress`), the attributes are put back as they were."""
         before = {name: getattr(self, name) for name in changes}
         for name, value in changes.items():
             setattr(self, name, value)
         try:
-            self.solve_preview() if preview else self.solve()
+            solve()
         except BaseException:
             for name, value in before.items():
                 setattr(self, name, value)
             self.update_status()
             raise
 
-    def solve(self, resolution=None) -> None:
-        """Solve the current settings on :attr:`scene`, at ``resolution`` (default: the state's own).
+    def solve(self, resolution=None, *, method=None, tol=None, bounces=None) -> None:
+        """Solve the current settings on :attr:`scene`, at ``resolution`` (default: the state's own); ``method``,
+        ``tol`` and ``bounces`` replace the state's for this solve only (what was used is in the result's metadata,
+        which the status reads).
 
         Sets :attr:`result`, :attr:`solve_seconds` (wall time) and :attr:`status`, counts
         :attr:`n_solves`, and fixes the exposure from the first solve when none was given.
@@ -459,20 +459,18 @@ class ViewerState:
             self.medium,
             self.lights,
             model=self.model,
-            method=self.method,
-            tol=self.tol,
+            method=self.method if method is None else method,
+            tol=self.tol if tol is None else tol,
             resolution=resolution,
             exposure=self.exposure,
             per_direction=self.per_direction,
-            bounces=0 if self.moving else self.bounces,
+            bounces=self.bounces if bounces is None else bounces,
             albedo=self.albedo,
             progress=self._progress,
             **self.limits,
         )
         self.solve_seconds = time.perf_counter() - start
         self.n_solves += 1
-        # a frame while the light moves is shown until the next solve; that one is whole again
-        self.moving_frame, self.moving = self.moving, False
         if self.exposure is None:
             self.exposure = self.result.exposure
         self._highlight_inputs = None
@@ -555,7 +553,7 @@ class ViewerState:
         method, tol = result.metadata.get("method", self.method), result.metadata.get("tolerance", self.tol)
         tolerance = "exact sum" if method == "exact" else f"tolerance {tol:.3g}"
         prepared = result.timings.get("solve_prepare", 0.0)
-        if self.moving_frame and self.bounces:
+        if self.shows_moving_frame:
             tolerance += "; no bounce while the light moves"
         if method == "relight" and prepared:
             tolerance += f" (operators prepared in {prepared:.0f} s, once)"
