@@ -38,7 +38,7 @@ _LAZY = {
     "PointLight": "translucency.scatter.lights",
     "EnvironmentLight": "translucency.scatter.lights",
     "incident_flux": "translucency.scatter.irradiance",
-    "SurfaceGeometry": "translucency.scatter.solve",
+    "SurfaceGeometry": "translucency.scatter.surface",
     "solve": "translucency.scatter.solve",
     # the whole chain on one mesh
     "shade": "translucency.app.shading",

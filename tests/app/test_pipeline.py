@@ -202,7 +202,7 @@ def test_the_scene_sums_its_scans_vertex_areas_once(monkeypatch):
     """The full mesh's vertex areas are summed once per Scene: the solver at full resolution and the light traced at
     every vertex take the same (read-only) array."""
     from translucency.geometry import measure
-    from translucency.scatter import solve
+    from translucency.scatter import surface
 
     summed = []
     real = measure.barycentric_vertex_areas
@@ -211,7 +211,7 @@ def test_the_scene_sums_its_scans_vertex_areas_once(monkeypatch):
         summed.append(1)
         return real(*args)
 
-    monkeypatch.setattr(solve, "barycentric_vertex_areas", counting)
+    monkeypatch.setattr(surface, "barycentric_vertex_areas", counting)
     monkeypatch.setattr(measure, "barycentric_vertex_areas", counting)
     mesh = sphere()
     scene = Scene(mesh)
@@ -225,15 +225,16 @@ def test_the_scene_sums_its_scans_vertex_areas_once(monkeypatch):
 def test_the_scene_measures_its_scans_edges_once(monkeypatch):
     """The mean edge the Scene measures to choose a resolution is the solver's too (7 s at 10M vertices each)."""
     from translucency.geometry.measure import mean_edge_length
-    from translucency.scatter import solve
+    from translucency.scatter import solve, surface
+    from translucency.scatter.surface import spatial_order
 
     measured = []
-    monkeypatch.setattr(solve, "mean_edge_length", lambda *args: measured.append(1) or mean_edge_length(*args))
+    monkeypatch.setattr(surface, "mean_edge_length", lambda *args: measured.append(1) or mean_edge_length(*args))
     mesh = sphere()
     result = Scene(mesh).shade("marble", method="tree", bounces=0)
     assert measured == [] and result.stats["solver_vertices"] == mesh.n_points
     given = solve.SurfaceGeometry(mesh.points, mesh.triangles, mesh.vertex_normals(), 1.25)
-    assert given.mean_edge_length == 1.25 and given.spatial_order()[0].mean_edge_length == 1.25
+    assert given.mean_edge_length == 1.25 and spatial_order(given)[0].mean_edge_length == 1.25
     assert solve.SurfaceGeometry(mesh.points, mesh.triangles, mesh.vertex_normals()).mean_edge_length == pytest.approx(
         mean_edge_length(mesh.points, mesh.triangles), rel=1e-15
     )

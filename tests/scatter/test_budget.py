@@ -9,7 +9,9 @@ from translucency.errors import BudgetError, InvalidParameterError
 from translucency.geometry.measure import vertex_normals
 from translucency.geometry.synthetic import icosphere
 from translucency.scatter import budget, fresnel, solve
+from translucency.scatter.hierarchy import tree_of
 from translucency.scatter.materials import material
+from translucency.scatter.surface import ordered_bytes, spatial_order
 
 
 def _scene(level, radius, name="marble"):
@@ -61,11 +63,13 @@ def test_a_plan_makes_no_near_grid_of_the_whole_surface(monkeypatch):
     """A solve refused by its plan has made no near-field grid of the whole surface (at scan size: GBs), only
     of the triangles around the sampled receivers; and its plan counts the near field."""
     geometry, phi, w12, medium = _scene(7, 20.0)
-    grids, near_grid = [], solve.SurfaceGeometry.near_grid
+    from translucency.scatter import nearfield
+
+    grids, near_grid = [], nearfield.near_grid
     monkeypatch.setattr(
-        solve.SurfaceGeometry,
+        nearfield,
         "near_grid",
-        lambda self, radius: grids.append(len(self.triangles)) or near_grid(self, radius),
+        lambda points, triangles, radius: grids.append(len(triangles)) or near_grid(points, triangles, radius),
     )
     with pytest.raises(BudgetError, match="time_limit=") as info:
         solve.solve(geometry, phi, w12, medium, method="tree", tol=1e-2, time_limit=1e-3)
@@ -218,10 +222,10 @@ def test_a_solve_after_its_plan_has_the_budget_of_the_first(monkeypatch):
     the solve's plan counts them again: the budget is measured as if they were not held, the same as the first."""
     geometry, phi, w12, medium = _scene(4, 20.0)
     # the operating system's view: what the geometry's ordered copy and tree hold is resident, no longer available
-    monkeypatch.setattr(memory, "available_memory", lambda: 8e9 - geometry.ordered_bytes())
-    monkeypatch.setattr(memory, "resident_memory", lambda: 1e9 + geometry.ordered_bytes())
+    monkeypatch.setattr(memory, "available_memory", lambda: 8e9 - ordered_bytes(geometry))
+    monkeypatch.setattr(memory, "resident_memory", lambda: 1e9 + ordered_bytes(geometry))
     first = solve.plan(geometry, phi, w12, medium, method="tree", tol=0.01, memory_limit=4.0)
-    assert geometry.ordered_bytes() > 1e5  # its ordered copy and tree are held now
+    assert ordered_bytes(geometry) > 1e5  # its ordered copy and tree are held now
     after = solve.solve(geometry, phi, w12, medium, method="tree", tol=0.01, memory_limit=4.0).stats["budget"]
     assert after["budget_bytes"] == first.budget_bytes == budget.memory_budget(4.0, 8e9, 1e9)
 
@@ -256,11 +260,11 @@ def test_plan_is_the_plan_the_solve_makes_and_what_it_makes_the_solve_reuses(met
     solving; the ordered surface and the source tree it made are the ones the solve then uses."""
     geometry, phi, w12, medium = _scene(4, 20.0)
     planned = solve.plan(geometry, phi, w12, medium, method=method, tol=1e-2, time_limit=1e6).as_dict()
-    ordered = geometry.spatial_order()[0]
-    tree = ordered.source_tree() if method == "tree" else None
+    ordered = spatial_order(geometry)[0]
+    tree = tree_of(ordered) if method == "tree" else None
     solved = solve.solve(geometry, phi, w12, medium, method=method, tol=1e-2, time_limit=1e6).stats["budget"]
     for key in ("base_bytes", "far_bytes", "receiver_bytes", "own_points", "seconds", "keep_lists", "fits"):
         assert solved[key] == pytest.approx(planned[key], rel=1e-12), key
-    assert geometry.spatial_order()[0] is ordered and (tree is None or ordered.source_tree() is tree)
+    assert spatial_order(geometry)[0] is ordered and (tree is None or tree_of(ordered) is tree)
     with pytest.raises(InvalidParameterError, match="relight"):
         solve.plan(geometry, phi, w12, medium, method="relight")

@@ -10,6 +10,7 @@ from translucency.geometry.synthetic import disc, grid, icosphere, subdivide
 from translucency.scatter import dipoles, fresnel, solve
 from translucency.scatter.materials import material
 from translucency.scatter.medium import Medium
+from translucency.scatter.surface import spatial_order
 
 
 def _lit(points, triangles, medium, light):
@@ -225,7 +226,7 @@ def test_vertex_areas_given_are_the_ones_used_and_checked():
     doubled = 2.0 * summed.vertex_areas
     given = solve.SurfaceGeometry(points, triangles, normals, vertex_areas_mm2=doubled)
     assert np.array_equal(given.vertex_areas, doubled)
-    ordered, order, _ = given.spatial_order()
+    ordered, order, _ = spatial_order(given)
     assert np.array_equal(ordered.vertex_areas, doubled[order])
     B = solve.solve(summed, phi, w12, medium, method="exact").B
     same = solve.SurfaceGeometry(points, triangles, normals, vertex_areas_mm2=summed.vertex_areas.copy())

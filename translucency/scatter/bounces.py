@@ -43,6 +43,7 @@ import numpy as np
 from .fresnel import fresnel_reflectance, fresnel_transmittance, refract
 from .lights import GOLDEN_RATIO, PointLight, as_light_list, point_light_irradiance
 from .names import check_bounces
+from .surface import PerSurface
 from .visibility import Occluder
 
 __all__ = [
@@ -484,6 +485,10 @@ def reentering_light(
     return ReenteringLight(phi, w12, stats)
 
 
+#: The gather's rays of relighting's bounces, kept per (surface, eta, rays, seed): every later light bounces too.
+_GATHERS = PerSurface("bounce gather rays")
+
+
 def solve_bounces(
     geometry,
     occluder: Occluder,
@@ -553,8 +558,9 @@ def solve_bounces(
         paths = None
         if method == "relight":  # relighting: every later light bounces too, so the rays are kept
             t = time.perf_counter()
-            paths = geometry.kept(
-                ("gather", float(medium.eta), rays, SEED + k),
+            paths = _GATHERS.get(
+                geometry,
+                (float(medium.eta), rays, SEED + k),
                 lambda seed=SEED + k: gather_paths(
                     occluder, geometry.points, geometry.normals, geometry.triangles, medium.eta, rays=rays, seed=seed
                 ),

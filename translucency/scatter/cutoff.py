@@ -42,6 +42,7 @@ from .kernels import (
     table_rows,
 )
 from .medium import Medium
+from .surface import PerSurface
 
 
 def _directional_bound(r, D, sigma_tr_, C_phi, C_E, norm):
@@ -215,6 +216,16 @@ class SourceGrid:
         self.origin = lo.astype(np.float64)
         self.cell = float(cell)
         self.dims = dims
+
+
+_GRIDS = PerSurface("cutoff source grids")
+
+
+def grid_of(surface, sources: np.ndarray, cell: float) -> SourceGrid:
+    """The uniform grid over the given source vertices of ``surface`` with cells of ``cell`` mm, kept per (sources,
+    cell) while the surface lives."""
+    key = (sources.tobytes(), round(cell, 12))
+    return _GRIDS.get(surface, key, lambda: SourceGrid(surface.points[sources], cell))
 
 
 def cutoff_sum(

@@ -31,6 +31,7 @@ import numpy as np
 
 from ..geometry.topology import kernel_array
 from ..threads import for_ranges
+from .surface import PerSurface
 
 LEAF_SIZE = 8
 #: Receivers that share one walk of the tree (consecutive along the solver's space-filling curve).
@@ -79,6 +80,15 @@ class SourceTree:
     def n_nodes(self) -> int:
         """Number of nodes."""
         return int(self.start.size)
+
+
+_TREES = PerSurface("source tree")
+
+
+def tree_of(surface, leaf_size: int = LEAF_SIZE) -> SourceTree:
+    """The kd-tree over every vertex of ``surface`` (a :class:`~translucency.scatter.surface.SurfaceGeometry`) with
+    leaves of ``leaf_size``: geometry only, kept while the surface lives and reused across lights and materials."""
+    return _TREES.get(surface, int(leaf_size), lambda: SourceTree(surface.points, leaf_size))
 
 
 @numba.njit(cache=True)

@@ -47,6 +47,7 @@ from ..geometry.measure import edge_lengths, triangle_centroids
 from ..geometry.topology import unique_edges
 from ..threads import for_ranges, thread_count
 from .kernels import FIT_WORK_COLUMNS, QUADRATIC_TERMS, channel_lanes, fitted_pairs, indexed_sum
+from .surface import PerSurface
 
 # Dunavant (1985) 7-point rule, exact for polynomials of degree 5: barycentric points and weights
 # (weights sum to 1; multiply by the area).
@@ -395,6 +396,29 @@ def triangle_tables(points, triangles) -> TriangleTables:
         edges,
         np.ascontiguousarray(edge_of_corner),
     )
+
+
+_KEPT = PerSurface("near field tables, grids and lists")
+
+
+def tables_of(surface) -> TriangleTables:
+    """:func:`triangle_tables` of ``surface`` (a :class:`~translucency.scatter.surface.SurfaceGeometry`), kept while
+    it lives (geometry only)."""
+    return _KEPT.get(surface, "tables", lambda: triangle_tables(surface.points, surface.triangles))
+
+
+def grid_of(surface, radius: float) -> NearGrid:
+    """:func:`near_grid` of ``surface`` for ``radius`` (mm), kept per radius: blocks of receivers list their near
+    triangles without rebuilding it."""
+    return _KEPT.get(surface, ("grid", round(radius, 12)), lambda: near_grid(surface.points, surface.triangles, radius))
+
+
+def lists_of(surface, receivers: np.ndarray, radius: float):
+    """Near triangles of each receiver of ``surface`` within ``radius`` (mm; CSR ``(offsets, ids)``), kept per
+    (receivers, radius)."""
+    every = receivers.size >= surface.n_vertices
+    key = ("lists", "all" if every else receivers.tobytes(), round(radius, 12))
+    return _KEPT.get(surface, key, lambda: grid_of(surface, radius).lists(receivers))
 
 
 def source_point_table(

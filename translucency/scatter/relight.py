@@ -48,8 +48,17 @@ from ..threads import for_ranges
 from . import cutoff, hierarchy, kernels, lowrank, nearfield
 from .hierarchy import SourceTree
 from .kernels import AFFINE_TERMS, QUADRATIC_TERMS
+from .surface import PerSurface
 
-__all__ = ["RELIGHT_KERNELS", "RelightOperator", "prepare", "operator_bytes"]
+__all__ = [
+    "RELIGHT_KERNELS",
+    "RelightOperator",
+    "prepare",
+    "operator_bytes",
+    "kept_operator",
+    "keep_operator",
+    "release_operator",
+]
 
 #: Bytes per near-field entry per channel (ten float32) plus its column index (int32); a far-field float (float32).
 NEAR_ENTRY_BYTES = 4 * QUADRATIC_TERMS
@@ -153,6 +162,26 @@ def operator_key(medium, model: str, tol: float) -> tuple:
     )
 
 
+_OPERATORS = PerSurface("relighting operators", counted=False)
+
+
+def kept_operator(surface) -> RelightOperator | None:
+    """The operators kept for ``surface`` (the solver's spatially ordered surface), or None: relighting keeps one
+    set per surface (:func:`translucency.scatter.solve.relight_operator` makes them)."""
+    return _OPERATORS.peek(surface, "operator")
+
+
+def keep_operator(surface, operator: RelightOperator) -> None:
+    """Keep ``operator`` for ``surface`` (instead of any set kept before)."""
+    _OPERATORS.drop(surface)
+    _OPERATORS.get(surface, "operator", lambda: operator)
+
+
+def release_operator(surface) -> None:
+    """Forget the operators kept for ``surface`` (their memory is freed when nothing else holds them)."""
+    _OPERATORS.drop(surface)
+
+
 def far_eps(tol: float) -> float:
     """The far field's relative error per receiver's row for the tolerance ``tol`` (:data:`EPS_PER_TOL`)."""
     return float(tol) / EPS_PER_TOL
@@ -161,7 +190,7 @@ def far_eps(tol: float) -> float:
 def _block_tree(geometry) -> SourceTree:
     """The far field's block tree over the surface's vertices (leaves of :data:`lowrank.LEAF_SIZE`), kept with the
     surface."""
-    return geometry.kept(("relight tree", lowrank.LEAF_SIZE), lambda: SourceTree(geometry.points, lowrank.LEAF_SIZE))
+    return hierarchy.tree_of(geometry, lowrank.LEAF_SIZE)
 
 
 def _gap(medium) -> float:
@@ -193,7 +222,7 @@ def operator_bytes(geometry, medium, tol: float, near_radius: float) -> tuple[fl
         )
     )
     fits = dense_pairs_count * n_c + float(n_c * np.sum(ranks * (rows + cols)))
-    offsets, ids = geometry.near_lists(np.arange(n), near_radius)
+    offsets, ids = nearfield.lists_of(geometry, np.arange(n), near_radius)
     near_entries = int(nearfield.near_vertex_counts(geometry.triangles, np.arange(n), offsets, ids).sum())
     size = (
         (far_floats + dense_pairs_count * AFFINE_TERMS * n_c) * FAR_FLOAT_BYTES
@@ -221,7 +250,7 @@ def prepare(
     model_code = kernels.MODELS[model]
     report("relight operators", 0.0)
     receivers = np.arange(n)
-    offsets, ids = geometry.near_lists(receivers, near_radius)
+    offsets, ids = nearfield.lists_of(geometry, receivers, near_radius)
     near_starts, near_columns, near_coefs = nearfield.near_field_operator(
         model_code,
         geometry.points,
@@ -236,7 +265,7 @@ def prepare(
         beta,
         float(np.min(medium.D)),
         kernels.fit_directions(medium.eta, QUADRATIC_TERMS),
-        tables=geometry.triangle_tables(),
+        tables=nearfield.tables_of(geometry),
         progress=lambda fraction: report("relight operators", 0.5 * fraction),
     )
     near_seconds = time.perf_counter() - start

@@ -23,7 +23,7 @@ Methods for the far field (each with a tolerance where it has one):
 ``relight``
     the ``tree``'s sums and the near field written once as linear operators on the incident flux
     (:mod:`translucency.scatter.relight`, docs/physics.md §8.7), kept on the surface
-    (:meth:`SurfaceGeometry.relight_operator`) and applied to every later light: slow to prepare, then
+    (:func:`relight_operator`) and applied to every later light: slow to prepare, then
     a sparse product per light.
 
 ``tol`` bounds the relative error of ``B`` per receiver against ``exact`` at the 99th percentile over the
@@ -49,17 +49,16 @@ import dataclasses
 import math
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
 from .. import memory
 from ..errors import BudgetError, InvalidParameterError, option, warn_user
-from ..geometry.measure import barycentric_vertex_areas, edge_lengths, mean_edge_length, row_lengths, triangle_areas
-from ..geometry.morton import by_lowest_vertex, morton_order
 from . import budget, cutoff, hierarchy, kernels, nearfield
 from .medium import CHANNELS, Medium
 from .names import DEFAULT_MODEL, METHODS, MODELS, check_method, check_model, check_tol
+from .surface import SurfaceGeometry, checked_array, ordered_bytes, spatial_order
 
 __all__ = ["SurfaceGeometry", "Solution", "solve", "local_reach_floor", "METHODS", "MODELS"]
 
@@ -88,194 +87,6 @@ NEAR_DEGREE3_DECAY = 0.5
 
 
 @dataclass
-class SurfaceGeometry:
-    """A triangle mesh as the solver needs it, with the work that depends on geometry only cached.
-
-    Parameters
-    ----------
-    points : (n, 3) float64
-        Vertex positions, mm.
-    triangles : (m, 3) int64
-        Vertex indices of each triangle.
-    normals : (n, 3) float64
-        Outward unit vertex normals.
-    mean_edge_mm : float, optional
-        The mean edge length (mm) when the caller has measured it already (:attr:`mean_edge_length` then takes it
-        instead of measuring the edges again, a pass over every edge).
-    vertex_areas_mm2 : (n,) float64, optional
-        The barycentric vertex areas (mm²) when the caller holds them already (:attr:`vertex_areas` then takes them
-        instead of summing the triangles again).
-    """
-
-    points: np.ndarray
-    triangles: np.ndarray
-    normals: np.ndarray
-    mean_edge_mm: float | None = None
-    vertex_areas_mm2: np.ndarray | None = field(default=None, repr=False)
-    _cache: dict = field(default_factory=dict, repr=False)
-
-    def __post_init__(self):
-        self.points = _as_array(self.points, np.float64, (None, 3), "points")
-        self.triangles = _as_array(self.triangles, np.int64, (None, 3), "triangles")
-        self.normals = _as_array(self.normals, np.float64, (self.points.shape[0], 3), "normals")
-        if not np.all(np.isfinite(self.points)):
-            raise InvalidParameterError("points contain NaN or infinite coordinates; clean the mesh first.")
-        if self.triangles.size and (self.triangles.min() < 0 or self.triangles.max() >= self.points.shape[0]):
-            raise InvalidParameterError(
-                f"triangles refer to vertices outside 0..{self.points.shape[0] - 1}; the mesh is corrupt."
-            )
-        lengths = row_lengths(self.normals)
-        if not np.all(np.isfinite(lengths)):
-            raise InvalidParameterError("normals contain NaN or infinite values.")
-        bad = np.abs(lengths - 1.0) > 1e-6
-        if np.any(bad & (lengths > 0)):
-            self.normals = self.normals / np.where(lengths > 0, lengths, 1.0)[:, None]
-        if self.mean_edge_mm is not None:
-            self._cache["mean_edge"] = float(self.mean_edge_mm)
-        if self.vertex_areas_mm2 is not None:
-            self._cache["vertex_areas"] = _as_array(
-                self.vertex_areas_mm2, np.float64, (self.points.shape[0],), "vertex_areas_mm2"
-            )
-            self.vertex_areas_mm2 = None  # held once, in the cache (which the spatial order permutes)
-
-    @property
-    def n_vertices(self) -> int:
-        """Number of vertices."""
-        return int(self.points.shape[0])
-
-    @property
-    def triangle_areas(self) -> np.ndarray:
-        """Area of each triangle, mm^2."""
-        if "triangle_areas" not in self._cache:
-            self._cache["triangle_areas"] = triangle_areas(self.points, self.triangles)
-        return self._cache["triangle_areas"]
-
-    @property
-    def vertex_areas(self) -> np.ndarray:
-        """Barycentric vertex areas (one third of each adjacent triangle), mm^2.
-
-        The solver always uses these: they make the vertex sum the three-vertex rule that the near
-        field correction subtracts.
-        """
-        if "vertex_areas" not in self._cache:
-            self._cache["vertex_areas"] = barycentric_vertex_areas(self.triangles, self.triangle_areas, self.n_vertices)
-        return self._cache["vertex_areas"]
-
-    @property
-    def mean_edge_length(self) -> float:
-        """Mean edge length, mm."""
-        if "mean_edge" not in self._cache:
-            self._cache["mean_edge"] = float(mean_edge_length(self.points, self.triangles))
-        return self._cache["mean_edge"]
-
-    @property
-    def longest_edge(self) -> float:
-        """Longest edge length, mm (0 for a mesh with no triangles)."""
-        if "longest_edge" not in self._cache:
-            self._cache["longest_edge"] = float(edge_lengths(self.points, self.triangles).max(initial=0.0))
-        return self._cache["longest_edge"]
-
-    def source_tree(self) -> hierarchy.SourceTree:
-        """The kd-tree over all vertices (geometry only; reused across lights and materials)."""
-        if "tree" not in self._cache:
-            self._cache["tree"] = hierarchy.SourceTree(self.points)
-        return self._cache["tree"]
-
-    def source_grid(self, sources: np.ndarray, cell: float) -> cutoff.SourceGrid:
-        """Uniform grid over the given source vertices, cached per (sources, cell)."""
-        key = ("grid", sources.tobytes(), round(cell, 12))
-        if key not in self._cache:
-            self._cache[key] = cutoff.SourceGrid(self.points[sources], cell)
-        return self._cache[key]
-
-    def triangle_tables(self) -> nearfield.TriangleTables:
-        """Triangle diameters, centroids and edges for the near field (geometry only)."""
-        if "triangle_tables" not in self._cache:
-            self._cache["triangle_tables"] = nearfield.triangle_tables(self.points, self.triangles)
-        return self._cache["triangle_tables"]
-
-    def spatial_order(self) -> tuple[SurfaceGeometry, np.ndarray, np.ndarray]:
-        """``(ordered, order, rank)``: the same surface with its vertices along a Morton curve
-        (:func:`translucency.geometry.morton.morton_order`) and its triangles by first vertex, so that
-        neighbours sit close in memory whatever order the mesh came in (subdivided or merged meshes
-        append vertices far from their neighbours); ``ordered.points == points[order]``,
-        ``rank[order] == arange(n)``. The solver works on it; cached, with its own caches."""
-        if self._cache.get("is_ordered"):  # already ordered (no reference to itself: no cycle to collect)
-            identity = np.arange(self.n_vertices)
-            return self, identity, identity
-        if "ordered" not in self._cache:
-            order = morton_order(self.points)
-            rank = np.empty_like(order)
-            rank[order] = np.arange(order.size)
-            triangles = by_lowest_vertex(rank[self.triangles], order.size)
-            ordered = SurfaceGeometry(self.points[order], triangles, self.normals[order])
-            for name, permuted in (("vertex_areas", lambda a: a[order]), ("mean_edge", lambda a: a)):
-                if name in self._cache:  # already computed here: the same surface, relabelled
-                    ordered._cache[name] = permuted(self._cache[name])
-            ordered._cache["is_ordered"] = True
-            self._cache["ordered"] = (ordered, order, rank)
-        return self._cache["ordered"]
-
-    def ordered_bytes(self) -> int:
-        """Bytes held by the spatially ordered copy and what is cached on it (the source tree, triangle tables, near
-        grids and lists; not relighting operators, which no solve's plan counts) when they are made already (by
-        :func:`plan` or an earlier solve), else 0: what a solve's plan counts as still to be made
-        (:func:`_memory_at_start`)."""
-        held = self._cache.get("ordered")
-        if held is None:
-            return 0
-        ordered = held[0]
-        cached = [value for key, value in ordered._cache.items() if key != "relight"]
-        return _array_bytes([ordered.points, ordered.triangles, ordered.normals, held[1], held[2], *cached])
-
-    def relight_operator(self, medium, model, tol, *, memory_limit=None, time_limit=None, progress=None):
-        """The relighting operators of this (spatially ordered) surface for the medium, model and ``tol``
-        (:func:`translucency.scatter.relight.prepare`): ``(operator, reused)``. One set is kept: another
-        medium, model or ``tol`` replaces it (its memory is freed before the new one is made).
-
-        Raises :class:`~translucency.errors.BudgetError` before preparing when the operators' memory
-        (counted by :func:`~translucency.scatter.relight.operator_bytes`) or time is over budget."""
-        from . import relight
-
-        key = relight.operator_key(medium, model, tol)
-        held = self._cache.get("relight")
-        if held is not None and held.key == key:
-            return held, True
-        self._cache.pop("relight", None)
-        del held
-        radius = near_radius(self, medium)
-        size, counts = relight.operator_bytes(self, medium, tol, radius)
-        plan = relight_plan(size, counts, memory_limit, time_limit)
-        if not plan.fits:
-            raise BudgetError(over_budget_sentence(plan, self.n_vertices), plan)
-        operator = relight.prepare(self, medium, model, tol, radius, NEAR_BETA, progress)
-        self._cache["relight"] = operator
-        return operator, False
-
-    def kept(self, key, make):
-        """``make()`` once per ``key``, kept with this surface's other caches (work that depends on the geometry
-        and its own settings only, such as the bounce gather's rays of :mod:`translucency.scatter.bounces`)."""
-        if key not in self._cache:
-            self._cache[key] = make()
-        return self._cache[key]
-
-    def near_grid(self, radius: float) -> nearfield.NearGrid:
-        """The grid that lists near triangles within ``radius`` (mm) of any receivers (:func:`~translucency.
-        scatter.nearfield.near_grid`), cached per radius: blocks of receivers list theirs without rebuilding it."""
-        key = ("near grid", round(radius, 12))
-        if key not in self._cache:
-            self._cache[key] = nearfield.near_grid(self.points, self.triangles, radius)
-        return self._cache[key]
-
-    def near_lists(self, receivers: np.ndarray, radius: float):
-        """Near triangles of each receiver (CSR), cached per (receivers, radius)."""
-        key = ("near", receivers.tobytes() if receivers.size < self.n_vertices else "all", round(radius, 12))
-        if key not in self._cache:
-            self._cache[key] = self.near_grid(radius).lists(receivers)
-        return self._cache[key]
-
-
-@dataclass
 class Solution:
     """What :func:`solve` returns.
 
@@ -298,18 +109,6 @@ class Solution:
     stats: dict
     timings: dict
     settings: dict
-
-
-def _as_array(value, dtype, shape, name):
-    try:
-        array = np.ascontiguousarray(value, dtype=dtype)
-    except (TypeError, ValueError):
-        raise InvalidParameterError(f"{name} must be a numeric array of shape {shape}.") from None
-    if array.ndim != len(shape) or any(s is not None and s != a for s, a in zip(shape, array.shape)):
-        raise InvalidParameterError(
-            f"{name} must have shape {tuple('n' if s is None else s for s in shape)}, got {array.shape}."
-        )
-    return array
 
 
 def _exact_far_field(model, geometry, medium, lit, w12, flux, params, channel_of, tol):
@@ -346,7 +145,7 @@ def _cutoff_far_field(model, geometry, medium, lit, w12, flux, params, channel_o
         if not r < diagonal:
             B, _ = kernels.vertex_sum(model_code, *sources, rcv_points, rcv_normals, params, channel_of)
             return B, np.full(rcv_points.shape[0], lit.size, dtype=np.int64)
-        grid = geometry.source_grid(lit, r)
+        grid = cutoff.grid_of(geometry, lit, r)
         return cutoff.cutoff_sum(
             model_code,
             grid.order,
@@ -386,7 +185,7 @@ def _tree_far_field(model, geometry, medium, lit, w12, flux, params, channel_of,
     """Method ``tree``: clusters small seen from the receiver replaced by their aggregated source (the
     aggregates are built once here, for every block of receivers)."""
     model_code = kernels.MODELS[model]
-    tree = geometry.source_tree()
+    tree = hierarchy.tree_of(geometry)
     theta, min_distance = hierarchy.opening(medium.sigma_t_reduced, tol)
     sources = hierarchy.aggregated_sources(tree, geometry.points, geometry.normals, w12, flux)
     reach = math.inf
@@ -626,7 +425,7 @@ def plan(
     """The plan :func:`solve` makes before it starts (its memory and time against the budgets, from the same
     sample), for these arguments, without solving. The spatially ordered surface and the source tree it makes
     stay cached on ``geometry``, so a solve that follows does not make them again. Not for ``method="relight"``,
-    whose operators are planned by :meth:`SurfaceGeometry.relight_operator`.
+    whose operators are planned by :func:`relight_operator`.
 
     The arguments are :func:`solve`'s: ``phi`` (n, C) W/m², ``w12`` (n, 3) unit, ``tol`` relative, ``memory_limit``
     GB (2**30 bytes) and ``time_limit`` s (None: no limit). Returns the
@@ -644,38 +443,42 @@ def plan(
     return estimate
 
 
-def _array_bytes(value, seen=None, depth: int = 4) -> int:
-    """Bytes of the numpy arrays reachable from ``value`` (arrays; lists, tuples and dicts; the attributes of objects,
-    ``depth`` levels down), each buffer counted once (a view counts its base)."""
-    seen = set() if seen is None else seen
-    if isinstance(value, np.ndarray):
-        base = value
-        while isinstance(base.base, np.ndarray):
-            base = base.base
-        if id(base) in seen:
-            return 0
-        seen.add(id(base))
-        return int(base.nbytes)
-    if depth <= 0 or isinstance(value, (str, bytes, int, float, bool, type(None))):
-        return 0
-    if isinstance(value, dict):
-        items = value.values()
-    elif isinstance(value, (list, tuple)):
-        items = value
-    else:
-        items = list(getattr(value, "__dict__", {}).values())
-        items += [getattr(value, name) for name in getattr(type(value), "__slots__", ()) if hasattr(value, name)]
-    return sum(_array_bytes(item, seen, depth - 1) for item in items)
-
-
 def _memory_at_start(geometry: SurfaceGeometry) -> tuple[float | None, float]:
     """``(available, resident)`` bytes before a solve allocates anything. The plan's base counts the ordered copy,
     the tree and the sample's grid, so the budget is measured before they are made, and where an earlier plan or
-    solve made them already (:meth:`SurfaceGeometry.ordered_bytes`), as if they were not held (they were counted
-    twice: a solve after :func:`plan`, or a viewer's next one, had a smaller budget than the first)."""
-    held = geometry.ordered_bytes()
+    solve made them already (:func:`~translucency.scatter.surface.ordered_bytes`), as if they were not held (they
+    were counted twice: a solve after :func:`plan`, or a viewer's next one, had a smaller budget than the first)."""
+    held = ordered_bytes(geometry)
     available = memory.available_memory()
     return (None if available is None else available + held), memory.resident_memory() - held
+
+
+def relight_operator(
+    geometry: SurfaceGeometry, medium, model, tol, *, memory_limit=None, time_limit=None, progress=None
+):
+    """The relighting operators of ``geometry`` (the spatially ordered surface) for the medium, model and ``tol``
+    (:func:`translucency.scatter.relight.prepare`): ``(operator, reused)``. Relighting keeps one set per surface
+    (:func:`translucency.scatter.relight.kept_operator`): another medium, model or ``tol`` replaces it (its memory
+    is freed before the new one is made).
+
+    Raises :class:`~translucency.errors.BudgetError` before preparing when the operators' memory
+    (counted by :func:`~translucency.scatter.relight.operator_bytes`) or time is over budget."""
+    from . import relight
+
+    key = relight.operator_key(medium, model, tol)
+    held = relight.kept_operator(geometry)
+    if held is not None and held.key == key:
+        return held, True
+    relight.release_operator(geometry)
+    del held
+    radius = near_radius(geometry, medium)
+    size, counts = relight.operator_bytes(geometry, medium, tol, radius)
+    plan = relight_plan(size, counts, memory_limit, time_limit)
+    if not plan.fits:
+        raise BudgetError(over_budget_sentence(plan, geometry.n_vertices), plan)
+    operator = relight.prepare(geometry, medium, model, tol, radius, NEAR_BETA, progress)
+    relight.keep_operator(geometry, operator)
+    return operator, False
 
 
 def _relit(work, receivers, tol, memory_limit, time_limit, report, stats, timings) -> Solution:
@@ -687,8 +490,8 @@ def _relit(work, receivers, tol, memory_limit, time_limit, report, stats, timing
         stats["pairs_evaluated"] = 0
         return Solution(np.zeros((work.inner.size, work.medium.n_channels)), receivers, stats, timings, settings)
     start = time.perf_counter()
-    operator, reused = work.geometry.relight_operator(
-        work.medium, work.model, tol, memory_limit=memory_limit, time_limit=time_limit, progress=report
+    operator, reused = relight_operator(
+        work.geometry, work.medium, work.model, tol, memory_limit=memory_limit, time_limit=time_limit, progress=report
     )
     timings["prepare"] = 0.0 if reused else time.perf_counter() - start
     start = time.perf_counter()
@@ -795,8 +598,8 @@ def _checked_inputs(geometry, phi, w12, medium, model, method, tol, receivers, m
     check_tol(tol)
     budget.check_limits(memory_limit, time_limit)
     n = geometry.n_vertices
-    phi = _as_array(phi, np.float64, (n, medium.n_channels), "phi")
-    w12 = _as_array(w12, np.float64, (n, 3), "w12")
+    phi = checked_array(phi, np.float64, (n, medium.n_channels), "phi")
+    w12 = checked_array(w12, np.float64, (n, 3), "w12")
     if not np.all(np.isfinite(phi)) or np.any(phi < 0):
         raise InvalidParameterError("phi (incident flux density) must be finite and >= 0.")
     if receivers is None:
@@ -880,7 +683,7 @@ def _ordered_work(geometry, phi, w12, medium, model, receivers, stats) -> _Work:
     """The inputs moved onto the spatially ordered surface, identical channels merged, sources with flux."""
     # work on the spatially ordered copy, receivers in its order; B goes back to the caller's order
     n = geometry.n_vertices
-    geometry, order, rank = geometry.spatial_order()
+    geometry, order, rank = spatial_order(geometry)
     phi, w12 = phi[order], w12[order]
     inner = rank[receivers]
     visit = np.argsort(inner, kind="stable")
@@ -1004,7 +807,7 @@ def _near_call(args, receivers, offsets, triangle_ids, own=None):
         args["channel_of"],
         NEAR_BETA,
         float(np.min(args["medium"].D)),
-        tables=g.triangle_tables(),
+        tables=nearfield.tables_of(g),
         degree3_ratio=args["degree3_ratio"],
         degree3_diameter=args["degree3_diameter"],
         refined_out=own,
@@ -1057,7 +860,7 @@ def _far_evaluations(work: _Work, far_field, rcv, method, tol) -> float:
     if method == "tree":
         theta, min_distance = hierarchy.opening(work.medium.sigma_t_reduced, tol)
         evaluations = hierarchy.evaluations_per_receiver(
-            geometry.source_tree(), work.flux, geometry.points[rcv], theta, min_distance
+            hierarchy.tree_of(geometry), work.flux, geometry.points[rcv], theta, min_distance
         )
         return float(evaluations.mean())
     _, far_stats = (far_field or work.far_field(method, tol))(geometry.points[rcv], geometry.normals[rcv])
@@ -1077,17 +880,17 @@ def _around(work: _Work, near_args, rcv, radius):
 
     geometry = work.geometry
     if rcv.size == 0:
-        return near_args, geometry.near_grid(radius), rcv
+        return near_args, nearfield.grid_of(geometry, radius), rcv
     distance, _ = cKDTree(geometry.points[rcv]).query(
         geometry.points, distance_upper_bound=radius * (1.0 + 1e-9), workers=-1
     )
     triangles = geometry.triangles[np.any(np.isfinite(distance)[geometry.triangles], axis=1)]
     if triangles.shape[0] > SAMPLE_SURFACE_SHARE * geometry.triangles.shape[0]:
-        return near_args, geometry.near_grid(radius), rcv
+        return near_args, nearfield.grid_of(geometry, radius), rcv
     vertices, local = np.unique(triangles, return_inverse=True)
     surface = SurfaceGeometry(geometry.points[vertices], local.reshape(-1, 3), geometry.normals[vertices])
     args = {**near_args, "geometry": surface, "w12": near_args["w12"][vertices], "phi": near_args["phi"][vertices]}
-    return args, surface.near_grid(radius), np.searchsorted(vertices, rcv)
+    return args, nearfield.grid_of(surface, radius), np.searchsorted(vertices, rcv)
 
 
 def _near_counts(near_args, grid, rcv) -> tuple[float, float, float]:
@@ -1135,7 +938,7 @@ def _near_field(args, inner, radius, plan, report):
     list_seconds = 0.0
     start = time.perf_counter()
     if plan.keep_lists:
-        offsets, triangle_ids = geometry.near_lists(inner, radius)
+        offsets, triangle_ids = nearfield.lists_of(geometry, inner, radius)
         list_seconds += time.perf_counter() - start
         bounds = list(range(0, n_r, plan.block_receivers)) + [n_r]
         total_triangles = int(triangle_ids.size)
@@ -1145,7 +948,7 @@ def _near_field(args, inner, radius, plan, report):
             report("near field", hi / n_r)
         return correction, total_triangles, total_points, list_seconds
     # blocks with their own lists, cut where their memory reaches what the plan gives a block
-    grid = geometry.near_grid(radius)
+    grid = nearfield.grid_of(geometry, radius)
     counts = grid.counts(inner)
     table_per_receiver, rim = budget.block_table_bytes(
         budget.SAMPLE_SAFETY * float(np.mean(counts)) if counts.size else 0.0

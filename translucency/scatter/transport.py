@@ -34,7 +34,8 @@ from ..errors import BudgetError, TranslucencyError, option, warn_user
 from .budget import format_bytes, format_seconds
 from .hierarchy import GROUP_RECEIVERS
 from .irradiance import IncidentLight, carried_light, incident_flux
-from .solve import Solution, SurfaceGeometry, solve
+from .solve import Solution, solve
+from .surface import SurfaceGeometry, spatial_order
 from .visibility import VisibilityCache
 
 __all__ = [
@@ -53,6 +54,7 @@ __all__ = [
     "incident_flux",
     "normal_transmittance",
     "solve",
+    "spatial_order",
     "transport",
 ]
 

@@ -20,7 +20,7 @@ import uuid
 
 import numpy as np
 
-from ...scatter.transport import GROUP_RECEIVERS, Solution, SurfaceGeometry, solve
+from ...scatter.transport import GROUP_RECEIVERS, Solution, SurfaceGeometry, solve, spatial_order
 
 __all__ = ["BlockSolver", "BLOCK_RECEIVERS"]
 
@@ -79,7 +79,7 @@ class BlockSolver:
         start = time.perf_counter()
         report = progress or (lambda stage, fraction: None)
         wanted = np.arange(geometry.n_vertices) if receivers is None else np.asarray(receivers, dtype=np.int64)
-        _, _, rank = geometry.spatial_order()
+        _, _, rank = spatial_order(geometry)
         positions = np.argsort(rank[wanted], kind="stable")  # the receivers along the surface's spatial order
         blocks = [positions[k : k + self.block_receivers] for k in range(0, positions.size, self.block_receivers)]
         key, arrays = self._surface_on_workers(geometry)
