@@ -4,6 +4,9 @@ import numpy as np
 import pytest
 
 from translucency.scatter.hierarchy import LEAF_SIZE, SourceTree
+from translucency.scatter.materials import material
+
+MARBLE = material("marble").medium()
 
 
 @pytest.mark.parametrize("n", [1, 5, 8, 9, 17, 1000, 20000])
@@ -32,16 +35,27 @@ def test_every_node_splits_its_points_at_the_median_of_its_longest_axis(n):
         assert lower.max() <= upper.min()
 
 
-def _walk_by_definition(tree, weight, lit, centre, spread, theta, min_distance):
+def _walk_by_definition(tree, node_flux, lit, centre, spread, rule, allow=None):
     """Sources plus clusters one group (a sphere: ``centre``, ``spread``, mm) evaluates, walked node by node
-    as the module docstring defines it."""
+    as :class:`~translucency.scatter.hierarchy.Opening` defines it (``allow`` per channel, None: no limit)."""
+    from translucency.scatter.cutoff import pair_bound
+
     count, stack = 0, [0]
     while stack:
         k = stack.pop()
-        if weight[k] <= 0:
+        if node_flux[k].sum() <= 0:
             continue
         near = np.linalg.norm(centre - tree.centre[k]) - spread
-        if near > tree.radius[k] + min_distance and tree.radius[k] < theta * near:
+        r = tree.radius[k]
+        accept = near > r + rule.min_distance and r < rule.theta * near
+        if accept and allow is not None:
+            # the bound at the table's distance at or below near - r (the table is log-spaced)
+            steps = int(np.floor((np.log(near - r) - rule.log_first) * rule.per_log))
+            at = np.exp(rule.log_first + min(max(steps, 0), rule.bound.shape[1] - 1) / rule.per_log)
+            bound = pair_bound(MARBLE, "directional", at)[:, 0]
+            error = r**2 * (1.0 / near**2 + MARBLE.sigma_tr**2) * node_flux[k] * bound
+            accept = bool(np.all(error <= allow))
+        if accept:
             count += 1
         elif tree.left[k] < 0:
             count += int(lit[tree.order[tree.start[k] : tree.end[k]]].sum())
@@ -50,43 +64,63 @@ def _walk_by_definition(tree, weight, lit, centre, spread, theta, min_distance):
     return count
 
 
-def test_the_budget_counts_what_the_tree_sum_evaluates():
-    """The walk alone (:func:`evaluations_per_receiver`, what the solve's budget samples) counts, per receiver,
-    the sources and clusters of the walk's definition, and as many as :func:`tree_sum` evaluates there."""
-    from translucency.scatter import kernels
-    from translucency.scatter.hierarchy import (
-        GROUP_RECEIVERS,
-        aggregated_sources,
-        evaluations_per_receiver,
-        node_sums,
-        tree_sum,
-    )
-    from translucency.scatter.materials import material
-
-    rng = np.random.default_rng(5)
-    points = rng.normal(size=(3000, 3))
+def _lit_sphere(n=3000, seed=5):
+    rng = np.random.default_rng(seed)
+    points = rng.normal(size=(n, 3))
     points = 20.0 * points / np.linalg.norm(points, axis=1, keepdims=True)  # a sphere of 20 mm
-    normals = points / 20.0
-    flux = np.where(points[:, 2:3] > 0, rng.uniform(0.1, 1.0, (3000, 3)), 0.0)  # the lower half unlit
-    tree = SourceTree(points)
-    theta, min_distance = 0.3, 1.0
-    receivers = points[rng.choice(3000, 401, replace=False)]
-    counted = evaluations_per_receiver(tree, flux, receivers, theta, min_distance)
+    flux = np.where(points[:, 2:3] > 0, rng.uniform(0.1, 1.0, (n, 3)), 0.0)  # the lower half unlit
+    return rng, points, points / 20.0, flux
 
-    weight = node_sums(tree, flux.sum(axis=1)[:, None])[:, 0]
+
+def test_both_walks_list_what_their_definition_lists():
+    """The first walk (opening ratio and distance) and the second (the aggregate's error within each group's
+    allowance) count, per group, the sources and clusters of the criterion's definition."""
+    from translucency.scatter.hierarchy import GROUP_RECEIVERS, node_sums, opening, walk_lists
+
+    rng, points, _, flux = _lit_sphere()
+    tree = SourceTree(points)
+    rule = opening(MARBLE, "directional", 0.01)
+    node_flux = node_sums(tree, flux)
     lit = flux.sum(axis=1) > 0
+    receivers = points[rng.choice(points.shape[0], 401, replace=False)]
+    allow = 10.0 ** rng.uniform(-9.0, -5.0, (401, 3))
+    first = walk_lists(tree, node_flux, lit, receivers, rule, count_only=True)
+    second = walk_lists(tree, node_flux, lit, receivers, rule, allow, count_only=True)
     for g in range(0, 401, GROUP_RECEIVERS):
         members = receivers[g : g + GROUP_RECEIVERS]
         centre = members.mean(axis=0)
         spread = np.linalg.norm(members - centre, axis=1).max()
-        expected = _walk_by_definition(tree, weight, lit, centre, spread, theta, min_distance)
-        assert np.all(counted[g : g + GROUP_RECEIVERS] == expected)
+        least = allow[g : g + GROUP_RECEIVERS].min(axis=0)
+        k = g // GROUP_RECEIVERS
+        assert first[1][k] + first[2][k] == _walk_by_definition(tree, node_flux, lit, centre, spread, rule)
+        assert second[1][k] + second[2][k] == _walk_by_definition(tree, node_flux, lit, centre, spread, rule, least)
+    assert second[2].sum() < first[2].sum()  # the allowance opened clusters the first walk took
 
-    medium = material("marble").medium()
-    params = kernels.channel_parameters(medium.sigma_a, medium.sigma_s, medium.g, medium.eta)
-    w12 = -normals
-    sources = aggregated_sources(tree, points, normals, w12, flux)
-    _, direct, clustered = tree_sum(
-        0, tree, sources, receivers, receivers / 20.0, params, np.arange(3), theta, min_distance=min_distance
+
+def test_the_budget_counts_what_the_tree_sum_evaluates():
+    """The budget's sample (:func:`sampled_evaluations`: the nodes' aggregates and a table of the listed columns
+    alone) counts, per receiver, as many sources and clusters as :func:`tree_sum` evaluates there, both walks."""
+    from translucency.scatter import kernels
+    from translucency.scatter.hierarchy import (
+        aggregated_sources,
+        brightest,
+        first_estimate,
+        opening,
+        sampled_evaluations,
+        tree_sum,
     )
+
+    _, points, normals, flux = _lit_sphere()
+    tree = SourceTree(points)
+    rule = opening(MARBLE, "directional", 0.01)
+    params = kernels.channel_parameters(MARBLE.sigma_a, MARBLE.sigma_s, MARBLE.g, MARBLE.eta)
+    w12 = -normals
+    rcv = np.arange(0, 3000, 7)
+    bright = brightest(flux, np.ones(3000))
+    counted = sampled_evaluations(0, tree, points, normals, w12, flux, rcv, bright, params, np.arange(3), rule, 1e-4)
+
+    sources = aggregated_sources(tree, points, normals, w12, flux)
+    estimate = first_estimate(0, tree, sources, points[bright], normals[bright], params, np.arange(3), rule)
+    floor = 1e-4 * estimate.max(axis=0)
+    _, direct, clustered = tree_sum(0, tree, sources, points[rcv], normals[rcv], params, np.arange(3), rule, floor)
     assert np.array_equal(direct + clustered, counted)

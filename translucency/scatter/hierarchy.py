@@ -6,12 +6,14 @@ bottom-up). A node seen from a receiver under a small enough angle is replaced b
 source (Jensen & Buhler 2002; docs/physics.md §8.3): total flux per channel, flux-weighted position,
 flux-weighted normal and refracted direction (both renormalised).
 
-Criterion: a node is accepted when the receiver is farther than ``min_distance`` from its bounding
-sphere and ``radius / distance(receiver, centre) < theta``; the error of one accepted node is of order
-``theta^2`` relative to its contribution, so the solver sets ``theta = THETA_PER_SQRT_TOL * sqrt(tol)``
-and ``min_distance = CLUSTER_MEAN_FREE_PATHS / min sigma_t'``.
+Criterion (:class:`Opening`, the relative opening criterion of Springel 2005 for this kernel): a node is
+accepted when the receiver is farther than ``min_distance`` from its bounding sphere, ``radius / distance <
+theta`` (at most :data:`THETA_MAX`), and the bound of its aggregate's error, ``radius^2 (1 / distance^2 +
+sigma_tr^2)`` times its flux times the pair bound of §8.4 at its nearest distance, is at most ``eps`` of the
+receiver's ``B`` as a first walk (the first two tests alone) estimates it. Clusters whose share of ``B`` is small
+are taken at a wide angle; only those that make much of ``B`` are opened far down (docs/physics.md §8.3).
 The tree is walked once per small group of neighbouring receivers, with the distance from the group's
-bounding sphere (conservative for each member, so a larger ``theta`` gives the same error).
+bounding sphere (conservative for each member).
 
 ========== ========================================================== =====
 symbol     meaning                                                    unit
@@ -39,21 +41,20 @@ LEAF_SIZE = 8
 #: of single receivers with a larger theta and in less far-field time; larger groups evaluate more clusters
 #: than the shared walk saves (bench/README.md, "Kernel throughput").
 GROUP_RECEIVERS = 4
-#: theta = THETA_PER_SQRT_TOL * sqrt(tol); calibrated so that the per-vertex error that tol bounds
-#: (99th percentile, docs/physics.md §8.5) stays below tol on the benchmark scans in every material
-#: (bench/README.md, "Kernel throughput"); a lower value costs time, as the cluster evaluations grow as
-#: theta^-2. tests/scatter/test_tolerance.py checks it on spheres.
-THETA_PER_SQRT_TOL = 0.7
+#: The largest opening ratio (radius over distance) of a cluster, and the first estimate's (docs/physics.md §8.3).
+THETA_MAX = 0.5
+#: A node's aggregate may err by EPS_PER_TOL * tol of each receiver's estimated B (its bound, which is far above
+#: the error it makes: tests/scatter/test_tolerance.py checks the per-vertex tolerance; bench/README.md, "Kernel
+#: throughput", what it costs).
+EPS_PER_TOL = 0.5
+#: The receivers whose first estimate sets the allowance's floor: those with the most incident flux.
+BRIGHTEST_RECEIVERS = 64
+#: The pair bound's table: first and last distance (mm) and the number of log-spaced distances.
+BOUND_TABLE_MM = (1e-3, 1e5, 4000)
 #: No cluster closer than CLUSTER_MEAN_FREE_PATHS / min sigma_t' to the receiver (the solver's
 #: ``min_distance``): nearer than that S_d varies with the angles between normals and refracted
 #: directions as much as with the distance, which a cluster's size-over-distance test does not see.
 CLUSTER_MEAN_FREE_PATHS = 1.0
-
-
-def opening(sigma_t_reduced, tol: float, theta_per_sqrt_tol: float = THETA_PER_SQRT_TOL) -> tuple[float, float]:
-    """The walk's opening ratio ``theta = theta_per_sqrt_tol * sqrt(tol)`` and its smallest cluster distance
-    ``CLUSTER_MEAN_FREE_PATHS / min sigma_t'`` (mm; ``sigma_t_reduced`` per channel, 1/mm; docs/physics.md §8.3)."""
-    return theta_per_sqrt_tol * math.sqrt(tol), CLUSTER_MEAN_FREE_PATHS / float(np.min(sigma_t_reduced))
 
 
 class SourceTree:
@@ -297,22 +298,22 @@ class AggregatedSources:
         unit normal, unit refracted direction.
     weights : (C, n + nodes) float64
         Flux per channel of each column.
-    node_weight : (nodes,) float64
-        Total flux over channels of each node (0: nothing to evaluate under it).
+    node_flux : (nodes, C) float64
+        Flux per channel of each node (0: nothing to evaluate under it).
     lit : (n,) bool
         Sources with any flux.
     """
 
     table: np.ndarray
     weights: np.ndarray
-    node_weight: np.ndarray
+    node_flux: np.ndarray
     lit: np.ndarray
 
 
 def aggregated_sources(tree: SourceTree, points, normals, w12, flux) -> AggregatedSources:
     """The sources (positions mm, unit normals, unit ``w12``, ``flux (n, C)``) and their aggregates at
     every node of ``tree`` (:func:`aggregate`), in the table :func:`tree_sum` walks."""
-    node_flux, node_weight, node_pos, node_nrm, node_dir = aggregate(
+    node_flux, _, node_pos, node_nrm, node_dir = aggregate(
         tree.order, tree.start, tree.end, tree.left, tree.right, points, normals, w12, flux
     )
     n = points.shape[0]
@@ -323,25 +324,98 @@ def aggregated_sources(tree: SourceTree, points, normals, w12, flux) -> Aggregat
     weights = np.empty((flux.shape[1], n + tree.n_nodes))
     weights[:, :n] = flux.T
     weights[:, n:] = node_flux.T
-    return AggregatedSources(table, weights, node_weight, flux.sum(axis=1) > 0)
+    return AggregatedSources(table, weights, np.ascontiguousarray(node_flux), flux.sum(axis=1) > 0)
 
 
-def walk_lists(
-    tree, node_weight, lit, rcv_points, theta, reach=math.inf, min_distance=0.0, group=GROUP_RECEIVERS, count_only=False
-):
-    """The tree walk of :func:`tree_sum` on its own: for every group of ``group`` consecutive receivers
-    (positions mm), the sources and clusters it evaluates.
+@dataclass(frozen=True)
+class Opening:
+    """When the walk takes a node as one aggregated source (docs/physics.md §8.3), built by :func:`opening`.
 
-    Nodes with ``node_weight <= 0`` are skipped, and only sources with ``lit`` are listed. Returns
-    ``(starts, direct, clustered, columns)``: the group's list is ``columns[starts[g] : starts[g] + direct[g]
-    + clustered[g]]``, entries ``j < n`` source ``j`` and ``n + k`` node ``k``'s cluster (``count_only``: the
-    counts only, ``columns`` empty).
+    A node is a cluster for a group of receivers when the group is farther than ``min_distance`` (mm) from the
+    node's bounding sphere, the node is small seen from it (``radius < theta * distance``), and the error its
+    aggregate may make, ``radius^2 (1 / distance^2 + sigma_tr^2) flux bound(distance - radius)`` per channel, is
+    at most the group's allowance ``eps * max(B_est, floor)`` (the relative opening criterion: the first
+    estimate ``B_est`` from a walk with the first two tests alone).
+
+    Attributes
+    ----------
+    theta : float
+        Largest opening ratio, radius over distance.
+    min_distance : float
+        No cluster nearer than this to the group, mm.
+    eps : float
+        The allowance's share of each receiver's estimated ``B``.
+    bound : (C, K) float64
+        :func:`~translucency.scatter.cutoff.pair_bound` at ``K`` log-spaced distances, 1/(mm^2 sr).
+    log_first, per_log : float
+        ``log`` of the table's first distance (mm) and table steps per unit of ``log`` distance.
+    curvature : (C,) float64
+        ``sigma_tr^2`` per channel, 1/mm^2: how fast ``S_d`` bends across a node far away.
     """
+
+    theta: float
+    min_distance: float
+    eps: float
+    bound: np.ndarray
+    log_first: float
+    per_log: float
+    curvature: np.ndarray
+
+    def kernel_arguments(self):
+        """The fields as :func:`_traverse` takes them."""
+        return self.theta, self.min_distance, self.bound, self.log_first, self.per_log, self.curvature
+
+
+def opening(medium, model: str, tol: float) -> Opening:
+    """The walk's criterion for ``tol`` (:class:`Opening`): ``theta`` = :data:`THETA_MAX`, ``eps`` =
+    :data:`EPS_PER_TOL` ``* tol``, clusters no nearer than ``CLUSTER_MEAN_FREE_PATHS / min sigma_t'`` (mm), and the
+    bound of one pair's ``S_d`` tabulated for ``medium`` (1/mm) and ``model`` (docs/physics.md §8.3, §8.4)."""
+    from .cutoff import pair_bound
+
+    first, last, steps = BOUND_TABLE_MM
+    log_first, log_last = math.log(first), math.log(last)
+    distances = np.exp(np.linspace(log_first, log_last, steps))
+    return Opening(
+        theta=THETA_MAX,
+        min_distance=CLUSTER_MEAN_FREE_PATHS / float(np.min(medium.sigma_t_reduced)),
+        eps=EPS_PER_TOL * float(tol),
+        bound=np.ascontiguousarray(pair_bound(medium, model, distances), dtype=np.float64),
+        log_first=log_first,
+        per_log=(steps - 1) / (log_last - log_first),
+        curvature=np.ascontiguousarray(np.asarray(medium.sigma_tr, dtype=np.float64) ** 2),
+    )
+
+
+def _groups(rcv_points, group):
+    """Each group's bounding sphere (centre, radius; mm) and its members' rows (the last group repeats its last
+    receiver)."""
     n_rcv = rcv_points.shape[0]
     n_groups = -(-n_rcv // group)
     members = np.minimum(np.arange(n_groups * group).reshape(n_groups, group), n_rcv - 1)
     centre = rcv_points[members].mean(axis=1)
     spread = np.linalg.norm(rcv_points[members] - centre[:, None, :], axis=2).max(axis=1)
+    return centre, spread, members
+
+
+def walk_lists(
+    tree, node_flux, lit, rcv_points, rule: Opening, allow=None, reach=math.inf, group=GROUP_RECEIVERS, count_only=False
+):
+    """The tree walk of :func:`tree_sum` on its own: for every group of ``group`` consecutive receivers
+    (positions mm), the sources and clusters it evaluates under ``rule`` (:class:`Opening`), each node's
+    aggregate error held to the group's ``allow`` (``(n_rcv, C)``, the least of its members; None: no limit,
+    the first estimate's walk).
+
+    Nodes without flux (``node_flux (nodes, C)``) are skipped, and only sources with ``lit`` are listed. Returns
+    ``(starts, direct, clustered, columns)``: the group's list is ``columns[starts[g] : starts[g] + direct[g]
+    + clustered[g]]``, entries ``j < n`` source ``j`` and ``n + k`` node ``k``'s cluster (``count_only``: the
+    counts only, ``columns`` empty).
+    """
+    centre, spread, members = _groups(rcv_points, group)
+    n_groups = centre.shape[0]
+    if allow is None:
+        limit = np.full((n_groups, node_flux.shape[1]), np.inf)
+    else:
+        limit = np.ascontiguousarray(np.asarray(allow, dtype=np.float64)[members].min(axis=1))
     g_direct = np.zeros(n_groups, dtype=np.int64)
     g_clustered = np.zeros(n_groups, dtype=np.int64)
     walk = (
@@ -352,13 +426,13 @@ def walk_lists(
         tree.right,
         tree.centre,
         tree.radius,
-        node_weight,
+        node_flux,
         lit,
         centre,
         spread,
-        theta,
+        limit,
         reach,
-        min_distance,
+        *rule.kernel_arguments(),
     )
     for_ranges(
         _traverse, n_groups, *walk, np.empty(0, dtype=np.int64), np.zeros(1, dtype=np.int64), g_direct, g_clustered
@@ -373,16 +447,29 @@ def walk_lists(
     return g_starts, g_direct, g_clustered, columns
 
 
-def evaluations_per_receiver(tree, flux, rcv_points, theta, min_distance=0.0, group=GROUP_RECEIVERS) -> np.ndarray:
-    """Sources and clusters :func:`tree_sum` evaluates at each receiver (positions mm) for the sources' ``flux
-    (n, C)``, from the walk alone: nothing aggregated, listed or evaluated (the budget's sample)."""
-    flux = np.asarray(flux, dtype=np.float64)
-    total = flux.sum(axis=1)
-    node_weight = node_sums(tree, total[:, None])[:, 0]
-    _, direct, clustered, _ = walk_lists(
-        tree, node_weight, total > 0, rcv_points, theta, math.inf, min_distance, group, count_only=True
+def allowance(B_est, floor, eps) -> np.ndarray:
+    """Each receiver's allowance for one node's error: ``eps * max(B_est, floor)`` per channel (``B_est (n, C)``
+    and ``floor (C,)``, W/(m^2 sr))."""
+    return eps * np.maximum(np.asarray(B_est, dtype=np.float64), np.asarray(floor, dtype=np.float64)[None, :])
+
+
+def _sum_of_lists(model, rcv_points, rcv_normals, sources, lists, group, lanes):
+    """:func:`~translucency.scatter.kernels.grouped_sum` of the walk's ``lists`` (:func:`walk_lists`)."""
+    from .kernels import grouped_sum
+
+    g_starts, g_direct, g_clustered, columns = lists
+    return grouped_sum(
+        model,
+        rcv_points,
+        rcv_normals,
+        sources.table,
+        sources.weights,
+        g_starts,
+        g_direct + g_clustered,
+        group,
+        columns,
+        lanes,
     )
-    return np.repeat(direct + clustered, group)[: rcv_points.shape[0]]
 
 
 def tree_sum(
@@ -393,35 +480,36 @@ def tree_sum(
     rcv_normals,
     params,
     channel_of,
-    theta,
+    rule: Opening,
+    floor,
     block=4096,
     reach=math.inf,
     group=GROUP_RECEIVERS,
-    min_distance=0.0,
 ):
     """Far-field sum with the hierarchy: ``B[o, c]``, sources summed one by one and clusters used, per receiver.
 
-    A node small seen from the receiver (radius < ``theta`` x distance, receiver outside it) is one
-    aggregated source (``sources``, from :func:`aggregated_sources`); otherwise its children are opened,
-    down to the leaves' sources; a node is never a cluster for a receiver nearer than ``min_distance``
-    (mm) to its bounding sphere. A node wholly farther than ``reach`` (mm) is skipped (the solver passes
-    infinity: a skip sized on the total reflectance drops most of a dark receiver's ``B``). The tree is
-    walked once per group of ``group`` consecutive receivers (the solver orders them along a
-    space-filling curve) with the tests made for the group's bounding sphere -- for every receiver of
-    the group they hold with at least the same margin -- and the group's list of sources and clusters
-    is evaluated at each of its receivers with :func:`~translucency.scatter.kernels.grouped_sum` (the list
-    gathered once per group), ``block`` receivers at a time.
+    Two walks per block of ``block`` receivers (docs/physics.md §8.3). The first takes a node as one aggregated
+    source (``sources``, from :func:`aggregated_sources`) where it is small seen from the receivers
+    (``rule.theta``) and farther than ``rule.min_distance``; its sum is the first estimate ``B_est``. The second
+    takes a node only where its aggregate's error is also within :func:`allowance` of ``B_est`` (``floor (C,)``:
+    the least ``B`` the allowance assumes, W/(m^2 sr)); otherwise its children are opened, down to the leaves'
+    sources. A node wholly farther than ``reach`` (mm) is skipped (the solver passes infinity). The tree is
+    walked once per group of ``group`` consecutive receivers (the solver orders them along a space-filling
+    curve) with the tests made for the group's bounding sphere, which hold for every receiver of the group, and
+    the group's list is evaluated at each of its receivers with
+    :func:`~translucency.scatter.kernels.grouped_sum`.
 
     Returns
     -------
     B : (n_rcv, C) float64
     direct, clustered : (n_rcv,) int64
-        Source pairs evaluated one by one (lit sources only) and cluster evaluations, per receiver.
+        Source pairs evaluated one by one (lit sources only) and cluster evaluations, per receiver, both walks.
     """
-    from .kernels import channel_lanes, grouped_sum
+    from .kernels import channel_lanes
 
     n_channels = sources.weights.shape[0]
     lanes = channel_lanes(params, channel_of, n_channels)
+    node_flux = sources.node_flux
     n_rcv = rcv_points.shape[0]
     B = np.zeros((n_rcv, n_channels))
     direct = np.zeros(n_rcv, dtype=np.int64)
@@ -431,14 +519,75 @@ def tree_sum(
     for first in range(0, n_rcv, block):
         part = slice(first, min(n_rcv, first + block))
         p, nrm = rcv_points[part], rcv_normals[part]
-        g_starts, g_direct, g_clustered, columns = walk_lists(
-            tree, sources.node_weight, sources.lit, p, theta, reach, min_distance, group
-        )
-        g_counts = g_direct + g_clustered
         of = np.arange(p.shape[0]) // group  # each receiver's group
-        direct[part], clustered[part] = g_direct[of], g_clustered[of]
-        B[part] = grouped_sum(model, p, nrm, sources.table, sources.weights, g_starts, g_counts, group, columns, lanes)
+        first_walk = walk_lists(tree, node_flux, sources.lit, p, rule, None, reach, group)
+        B_est = _sum_of_lists(model, p, nrm, sources, first_walk, group, lanes)
+        second = walk_lists(tree, node_flux, sources.lit, p, rule, allowance(B_est, floor, rule.eps), reach, group)
+        B[part] = _sum_of_lists(model, p, nrm, sources, second, group, lanes)
+        direct[part] = first_walk[1][of] + second[1][of]
+        clustered[part] = first_walk[2][of] + second[2][of]
     return B, direct, clustered
+
+
+def first_estimate(model, tree, sources: AggregatedSources, rcv_points, rcv_normals, params, channel_of, rule):
+    """The first walk's sum alone at receivers taken one by one (``(n_rcv, C)``; see :func:`tree_sum`)."""
+    from .kernels import channel_lanes
+
+    lanes = channel_lanes(params, channel_of, sources.weights.shape[0])
+    lists = walk_lists(tree, sources.node_flux, sources.lit, rcv_points, rule, None, math.inf, 1)
+    return _sum_of_lists(model, rcv_points, rcv_normals, sources, lists, 1, lanes)
+
+
+def brightest(flux, areas, count: int = BRIGHTEST_RECEIVERS) -> np.ndarray:
+    """The ``count`` vertices with the most incident flux density (``flux (n, C)`` over their ``areas`` (n,), mm^2,
+    summed over the channels), sorted: where the largest ``B`` is sought for the allowance's floor."""
+    total = np.asarray(flux, dtype=np.float64).sum(axis=1)
+    areas = np.asarray(areas, dtype=np.float64)
+    density = np.divide(total, areas, out=np.zeros_like(total), where=areas > 0)
+    if density.size <= count:
+        return np.arange(density.size)
+    return np.sort(np.argpartition(-density, count)[:count])
+
+
+def sampled_evaluations(model, tree, points, normals, w12, flux, rcv, bright, params, channel_of, rule, floor_share):
+    """Sources and clusters :func:`tree_sum` evaluates at each receiver ``rcv`` (vertex indices), for the
+    sources' ``flux (n, C)``, counted without the whole table of aggregated sources (the budget's sample): the
+    nodes' aggregates, and the first estimate at ``rcv`` and at ``bright`` (the floor: ``floor_share`` of their
+    largest) from a table of the columns the walks list."""
+    from .kernels import channel_lanes
+
+    node_flux, _, node_pos, node_nrm, node_dir = aggregate(
+        tree.order, tree.start, tree.end, tree.left, tree.right, points, normals, w12, flux
+    )
+    lit = flux.sum(axis=1) > 0
+    lanes = channel_lanes(params, channel_of, flux.shape[1])
+    n = points.shape[0]
+
+    def estimate(indices, group):
+        starts, direct, clustered, columns = walk_lists(
+            tree, node_flux, lit, points[indices], rule, None, math.inf, group
+        )
+        used, position = np.unique(columns, return_inverse=True)
+        table = np.empty((9, used.size))
+        weights = np.empty((flux.shape[1], used.size))
+        own, node = used < n, used[used >= n] - n
+        for k, (source, aggregated) in enumerate(((points, node_pos), (normals, node_nrm), (w12, node_dir))):
+            table[3 * k : 3 * k + 3, own] = source[used[own]].T
+            table[3 * k : 3 * k + 3, ~own] = aggregated[node].T
+        weights[:, own] = flux[used[own]].T
+        weights[:, ~own] = node_flux[node].T
+        compact = AggregatedSources(table, weights, node_flux, lit)
+        lists = (starts, direct, clustered, position.astype(np.int64).ravel())
+        B = _sum_of_lists(model, points[indices], normals[indices], compact, lists, group, lanes)
+        return B, direct + clustered
+
+    bright_B, _ = estimate(bright, 1)
+    floor = floor_share * bright_B.max(axis=0)
+    B_est, first = estimate(rcv, GROUP_RECEIVERS)
+    _, direct, clustered, _ = walk_lists(
+        tree, node_flux, lit, points[rcv], rule, allowance(B_est, floor, rule.eps), math.inf, GROUP_RECEIVERS, True
+    )
+    return np.repeat(first + direct + clustered, GROUP_RECEIVERS)[: rcv.size]
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
@@ -453,13 +602,18 @@ def _traverse(
     right,
     centre,
     radius,
-    node_weight,
+    node_flux,
     lit,
     rcv_points,
     rcv_spread,
-    theta,
+    allow,
     reach,
+    theta,
     min_distance,
+    bound,
+    log_first,
+    per_log,
+    curvature,
     columns,
     starts,
     direct,
@@ -468,9 +622,13 @@ def _traverse(
     """Walk the tree for every group of receivers (a sphere: ``rcv_points`` centres, ``rcv_spread``
     radii, mm): count the lit sources and clusters it evaluates (``columns`` empty), or write their
     columns (source ``j`` or ``n + node``) from ``starts[o]`` on. A node is a cluster when the sphere is
-    outside the node's and ``radius < theta * (distance - spread)``: then ``radius < theta * distance``
-    for every point of the sphere. Groups ``lo .. hi - 1`` (:func:`~translucency.threads.for_ranges`)."""
+    outside the node's and ``radius < theta * (distance - spread)`` (then ``radius < theta * distance``
+    for every point of the sphere), and its aggregate's error bound (:class:`Opening`) at the sphere's
+    nearest point is within ``allow[o]`` in every channel. Groups ``lo .. hi - 1``
+    (:func:`~translucency.threads.for_ranges`)."""
     n_src = lit.shape[0]
+    n_c = node_flux.shape[1]
+    n_bound = bound.shape[1]
     write = columns.shape[0] > 0
     theta2 = theta * theta
     for o in range(lo, hi):
@@ -486,17 +644,28 @@ def _traverse(
         while top > 0:
             top -= 1
             k = stack[top]
-            if node_weight[k] <= 0.0:
+            weight = 0.0
+            for c in range(n_c):
+                weight += node_flux[k, c]
+            if weight <= 0.0:
                 continue
             dx = px - centre[k, 0]
             dy = py - centre[k, 1]
             dz = pz - centre[k, 2]
-            dist2 = dx * dx + dy * dy + dz * dz
             rk = radius[k]
-            near = math.sqrt(dist2) - rcv_spread[o]  # the group's closest possible distance to the centre
+            near = math.sqrt(dx * dx + dy * dy + dz * dz) - rcv_spread[o]  # the group's closest distance to the centre
             if near > reach + rk:  # wholly beyond the cutoff radius
                 continue
-            if near > rk + min_distance and rk * rk < theta2 * near * near:
+            accept = near > rk + min_distance and rk * rk < theta2 * near * near
+            if accept:
+                at_bound = int((math.log(near - rk) - log_first) * per_log)  # the table's nearer distance
+                at_bound = min(max(at_bound, 0), n_bound - 1)
+                spread2 = rk * rk / (near * near)
+                for c in range(n_c):
+                    if (spread2 + rk * rk * curvature[c]) * node_flux[k, c] * bound[c, at_bound] > allow[o, c]:
+                        accept = False
+                        break
+            if accept:
                 if write:
                     columns[at] = n_src + k
                     at += 1

@@ -182,39 +182,46 @@ def _cutoff_far_field(model, geometry, medium, lit, w12, flux, params, channel_o
 
 
 def _tree_far_field(model, geometry, medium, lit, w12, flux, params, channel_of, tol):
-    """Method ``tree``: clusters small seen from the receiver replaced by their aggregated source (the
-    aggregates are built once here, for every block of receivers)."""
+    """Method ``tree``: clusters whose aggregate errs little next to the receiver's ``B`` replaced by their
+    aggregated source (docs/physics.md §8.3). The aggregates and the allowance's floor (:data:`TOL_FLOOR` of the
+    largest first estimate at the most brightly lit vertices) are made once here, for every block of receivers."""
     model_code = kernels.MODELS[model]
     tree = hierarchy.tree_of(geometry)
-    theta, min_distance = hierarchy.opening(medium.sigma_t_reduced, tol)
+    rule = hierarchy.opening(medium, model, tol)
     sources = hierarchy.aggregated_sources(tree, geometry.points, geometry.normals, w12, flux)
-    reach = math.inf
+    floor = _allowance_floor(
+        geometry,
+        flux,
+        lambda bright: hierarchy.first_estimate(
+            model_code, tree, sources, geometry.points[bright], geometry.normals[bright], params, channel_of, rule
+        ),
+    )
 
     def evaluate(rcv_points, rcv_normals):
         B, direct, clustered = hierarchy.tree_sum(
-            model_code,
-            tree,
-            sources,
-            rcv_points,
-            rcv_normals,
-            params,
-            channel_of,
-            theta,
-            reach=reach,
-            min_distance=min_distance,
+            model_code, tree, sources, rcv_points, rcv_normals, params, channel_of, rule, floor
         )
         pairs = int(lit.size) * int(rcv_points.shape[0])
         return B, {
-            "theta": theta,
-            "cluster_min_distance_mm": min_distance,
+            "theta": rule.theta,
+            "eps": rule.eps,
+            "cluster_min_distance_mm": rule.min_distance,
             "tree_nodes": tree.n_nodes,
             "pairs_evaluated": int(direct.sum() + clustered.sum()),
             "pairs_direct": int(direct.sum()),
             "cluster_evaluations": int(clustered.sum()),
-            "pairs_skipped": pairs - int(direct.sum()),
+            "pairs_skipped": max(pairs - int(direct.sum()), 0),
         }
 
     return evaluate
+
+
+def _allowance_floor(geometry, flux, estimate) -> np.ndarray:
+    """The least ``B`` (per channel, W/(m^2 sr)) the tree's allowance assumes: :data:`TOL_FLOOR` of the largest
+    first estimate (``estimate(vertices)``) at the vertices with the most incident flux density, which do not
+    depend on the receivers asked for, so a block of receivers solved alone gets the same ``B``."""
+    bright = hierarchy.brightest(flux, geometry.vertex_areas)
+    return TOL_FLOOR * np.max(estimate(bright), axis=0)
 
 
 #: Each method prepares once per solve what does not depend on the receivers and returns a function
@@ -707,10 +714,11 @@ def _plan(work: _Work, method, tol, memory_limit, time_limit, stats, memory_at_s
     ``stats["budget"]``. ``memory_at_start``: ``(available, resident)`` bytes before the solve allocated
     anything (measured now when not given).
 
-    Nothing of the whole surface's size is made for the plan but the source tree: the far field's sample is
-    the tree's walk alone (nothing aggregated) and the near field's is taken on the triangles around the
-    sampled receivers (:func:`_around`), so that a solve the plan refuses has not already held the surface's
-    near grid, triangle tables and the tree's aggregates, which grow with the scan."""
+    Nothing of the whole surface's size is made for the plan but the source tree and, for a moment, its nodes'
+    aggregates: the far field's sample evaluates a table of the columns its walks list, and the near field's is
+    taken on the triangles around the sampled receivers (:func:`_around`), so that a solve the plan refuses has
+    not already held the surface's near grid, triangle tables and the tree's table of every source and node,
+    which grow with the scan."""
     geometry = work.geometry
     radius = near_radius(geometry, work.medium)
     near_args = dict(
@@ -851,16 +859,28 @@ def sample_counts(work: _Work, far_field, near_args, radius, method, tol) -> bud
 
 def _far_evaluations(work: _Work, far_field, rcv, method, tol) -> float:
     """Far-field evaluations per receiver of the sample ``rcv``: ``exact`` every lit source, ``cutoff`` by its
-    prepared ``far_field``, ``tree`` by its walk alone (nothing aggregated)."""
+    prepared ``far_field``, ``tree`` by its walks with the nodes' aggregates and a table of the columns they list
+    alone (:func:`~translucency.scatter.hierarchy.sampled_evaluations`)."""
     geometry, lit = work.geometry, work.lit
     if lit.size == 0 or rcv.size == 0:
         return 0.0
     if method == "exact":
         return float(lit.size)
     if method == "tree":
-        theta, min_distance = hierarchy.opening(work.medium.sigma_t_reduced, tol)
-        evaluations = hierarchy.evaluations_per_receiver(
-            hierarchy.tree_of(geometry), work.flux, geometry.points[rcv], theta, min_distance
+        rule = hierarchy.opening(work.medium, work.model, tol)
+        evaluations = hierarchy.sampled_evaluations(
+            kernels.MODELS[work.model],
+            hierarchy.tree_of(geometry),
+            geometry.points,
+            geometry.normals,
+            work.w12,
+            work.flux,
+            rcv,
+            hierarchy.brightest(work.flux, geometry.vertex_areas),
+            work.params,
+            work.channel_of,
+            rule,
+            TOL_FLOOR,
         )
         return float(evaluations.mean())
     _, far_stats = (far_field or work.far_field(method, tol))(geometry.points[rcv], geometry.normals[rcv])
