@@ -14,6 +14,14 @@ def file_stem(name: str, material: str, model: str) -> str:
     return f"{Path(name).stem}_{material}_{model}"
 
 
+def numbered_paths(folder, stem: str, suffixes=(".png", ".ply")) -> list[Path]:
+    """``<folder>/<stem>_<n><suffix>`` for each suffix, with the first ``n`` (three digits) none of them is taken."""
+    folder, index = Path(folder), 0
+    while any((folder / f"{stem}_{index:03d}{suffix}").exists() for suffix in suffixes):
+        index += 1
+    return [folder / f"{stem}_{index:03d}{suffix}" for suffix in suffixes]
+
+
 def write_bake(result, exposure: float, path) -> Path:
     """Write ``result`` as a baked PLY with colours at the display ``exposure`` (linear factor); returns the path.
 
