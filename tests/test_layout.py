@@ -270,12 +270,6 @@ OVERSIZED = {
     "translucency/scatter/kernels.py": "the pair kernels; replaced with the new far field's",
     "translucency/scatter/kernels.py:fitted_pairs": "relighting's fitted pairs; replaced with the new far field",
     "translucency/scatter/bounces.py:solve_bounces": "calls the solve per bounce; reshaped with the new far field",
-    # the viewer's widgets: rewritten as a Qt application by the desktop-viewer issue
-    "translucency/app/viewer/widgets.py:Viewer": "the PyVista window without Qt (tl.Viewer, view --screenshot), "
-    "kept as it was when the Qt application (app/desktop) replaced it on the command line",
-    "translucency/app/viewer/widgets.py:_add_widgets": "that window's VTK controls, placed one by one",
-    "translucency/app/viewer/state.py:ViewerState": "every change the viewers offer, each a short checked method "
-    "that solves again when it must; both windows draw from it",
     # validation code: one compiled random walk each, whose loop is one piece
     "translucency/scatter/montecarlo.py": "the half-space random walk and its tallies (validation)",
     "translucency/scatter/montecarlo.py:_random_walk_batches": "one compiled walk over a batch: numba inlines nothing",

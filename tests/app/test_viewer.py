@@ -94,7 +94,7 @@ def test_light_slider_solves_again_and_updates_colours_and_status(viewer, sphere
 @needs_display
 def test_material_and_model_sliders(viewer):
     marble = colors(viewer)
-    names = viewer._materials
+    names = viewer.controls.materials
     drag(viewer.widgets["material"], names.index("ketchup"))
     assert viewer.medium.name == "ketchup" and viewer.status.startswith("ketchup")
     ketchup = colors(viewer)

@@ -7,15 +7,21 @@ hands out the per-vertex display colours ``sRGB(exposure L)`` and a status text.
 PyVista or VTK: a window (:mod:`translucency.app.viewer.widgets`) or a test drives it the same way,
 passing the camera position as a plain array when a view-dependent layer needs it.
 
+Parts. The state is one object over its parts, each in a module of its own: the scan at the scale chosen
+(:class:`~translucency.app.viewer.scaled_scan.ScaledScan`, ``state.scan``), the solve's settings
+(:class:`~translucency.app.viewer.solve_settings.SolveSettings`, ``state.solver``), the lights
+(:class:`~translucency.app.viewer.light_rig.LightRig`, ``state.rig``) and the display settings with the camera
+(:class:`~translucency.app.viewer.appearance.Appearance`, ``state.appearance``). Their attributes are the state's
+too (``state.model`` is ``state.solver.model``). A change that solves replaces a part and puts the old one back
+when the solve fails; a display change changes the appearance and needs no solve. The view-dependent layers, the
+status text and the bake are :mod:`~translucency.app.viewer.view_layers`, :mod:`~translucency.app.viewer.status`
+and :mod:`~translucency.app.viewer.saving`.
+
 By default ``L`` is the radiance toward the normal, ``T21(eta, 1) B`` (docs/physics.md §5.3), exactly
 what a bake stores. Two optional layers depend on the view (recomputed when the camera moves; no new
-solve):
-
-* **view-dependent transmission** -- ``L = T21(eta, n . w_o) B`` with ``w_o`` toward the camera
-  (darker at grazing angles, :func:`translucency.scatter.outgoing.subsurface_radiance`, §5.3);
-* **specular highlight** -- the boundary's reflection of every directional light and environment
-  sample (GGX, roughness ``alpha``; :func:`translucency.scatter.outgoing.specular_radiance`, §5.5), with
-  the same Embree shadows as the solve. Point lights give no highlight.
+solve; :mod:`translucency.app.viewer.view_layers`): the transmission toward the camera,
+``T21(eta, n . w_o) B``, darker at grazing angles, and the specular highlight of every directional light and
+environment sample (GGX, roughness ``alpha``, with the solve's shadows; point lights give none).
 
 Interactive resolution. By default (:data:`VIEWER_METHOD`, :data:`VIEWER_TOL`) every change relights every
 vertex with the operators the ``Scene``'s surface keeps (prepared on the first solve and after a change of
@@ -30,7 +36,8 @@ too bright). The measurements behind the default are in bench/README.md ("Intera
 default tolerance, the accurate answer).
 
 False colour. Instead of ``sRGB(exposure L)`` the viewer can show one number per vertex in physical
-units, W/(m² sr) per W/m² of irradiance: the luminance ``Y`` of what is shown (or one channel), on a
+units, W/(m² sr) per W/m² of irradiance (:class:`~translucency.app.viewer.appearance.Appearance`, which
+holds the display settings): the luminance ``Y`` of what is shown (or one channel), on a
 log or a linear scale whose top is the radiance the sRGB view shows as white, ``1 / exposure``
 (:func:`translucency.app.display.false_colour_range`). :meth:`ViewerState.set_false_colour` and
 :meth:`ViewerState.set_false_colour_scale` choose it; :meth:`ViewerState.false_colour_values` and
@@ -39,75 +46,31 @@ log or a linear scale whose top is the radiance the sRGB view shows as white, ``
 
 from __future__ import annotations
 
-import dataclasses
-import math
 import time
 from pathlib import Path
 
 import numpy as np
 
-from ...errors import InvalidParameterError
 from ...scatter.names import DEFAULT_TOL
-from ..display import (
-    FALSE_COLOUR_QUANTITIES,
-    FALSE_COLOUR_SCALES,
-    display_colors,
-    false_colour_label,
-    false_colour_range,
-    false_colour_values,
-)
-from ..framing import DEFAULT_UP, frame_axes, front_direction, turned_to_front
-from ..shading.resolution import coarsest_proxy_edge, proxy_edge_length
-from ..shading.result import write_result
-from ..shading.scan import mesh_for_shading
-from ..shading.scene import Scene, scene_for
-from ..shading.settings import (
-    ShadeSettings,
-    default_light_direction,
-    resolve_medium,
-    settings_with,
-    viewer_settings,
-)
+from ..shading.settings import ShadeSettings, settings_with, viewer_settings
+from .appearance import Appearance
+from .forwarding import attribute_of, method_of
+from .light_rig import LightRig, light_angles, light_direction
+from .rollback import put_back_on_failure
+from .saving import file_stem, write_bake
+from .scaled_scan import ScaledScan
+from .solve_settings import INTERACTIVE_VERTICES, SolveSettings, interactive_edge_length
+from .status import preparing_note, status_text
+from .view_layers import Highlights, radiance_toward
 
-#: Vertices of the interactive proxy (the measurements behind it: bench/README.md, "Interactive proxy").
-INTERACTIVE_VERTICES = 7500
-
-
-def interactive_edge_length(mesh, medium, vertices: int = INTERACTIVE_VERTICES) -> float:
-    """Proxy edge length (mm) that answers interactively: a proxy of about ``vertices`` vertices.
-
-    A closed mesh has about two triangles per vertex; the edge is that of equilateral triangles covering
-    the surface, ``l = sqrt(4 A / (sqrt(3) 2 N))`` for area ``A`` (mm²) and ``N`` vertices. It is never
-    finer than :func:`~translucency.app.shading.resolution.proxy_edge_length` of the medium (the detail the light
-    can show after diffusing, docs/physics.md §8.6), and never coarser than
-    :func:`~translucency.app.shading.resolution.coarsest_proxy_edge` (an object only a few diffusion lengths
-    across still gets a proxy of some triangles).
-    """
-    triangle_area = mesh.surface_area / (2.0 * vertices)
-    budget = math.sqrt(triangle_area / (math.sqrt(3.0) / 4.0))  # area of an equilateral triangle: sqrt(3)/4 l²
-    return min(max(budget, proxy_edge_length(medium)), coarsest_proxy_edge(mesh.surface_area))
-
-
-def light_direction(azimuth, elevation, up=DEFAULT_UP) -> np.ndarray:
-    """Unit direction toward a light at ``azimuth``, ``elevation`` (degrees) around ``up``.
-
-    ``d = cos(e) (cos(a) e1 + sin(a) e2) + sin(e) up``: elevation is the angle above the plane
-    perpendicular to ``up``; azimuth 0 is the world +z made perpendicular to ``up`` (+x when ``up`` is
-    along z) and 90 is ``up x`` that (+x for ``up`` = +y).
-    """
-    up, e1, e2 = frame_axes(up)
-    a, e = math.radians(azimuth), math.radians(elevation)
-    return math.cos(e) * (math.cos(a) * e1 + math.sin(a) * e2) + math.sin(e) * up
-
-
-def light_angles(direction, up=DEFAULT_UP) -> tuple[float, float]:
-    """``(azimuth, elevation)`` in degrees of a direction (inverse of :func:`light_direction`)."""
-    up, e1, e2 = frame_axes(up)
-    d = np.asarray(direction, dtype=np.float64)
-    d = d / np.linalg.norm(d)
-    elevation = math.degrees(math.asin(float(np.clip(d @ up, -1.0, 1.0))))
-    azimuth = math.degrees(math.atan2(float(d @ e2), float(d @ e1)))
-    return azimuth, elevation
+__all__ = [
+    "ViewerState",
+    "INTERACTIVE_VERTICES",
+    "interactive_edge_length",
+    "diffusive_materials",
+    "light_direction",
+    "light_angles",
+]
 
 
 def diffusive_materials() -> list[str]:
@@ -162,6 +125,49 @@ class ViewerState:
         A PolyData's length unit (None: its ``field_data["length_unit"]``, else inferred from its size).
     """
 
+    # the appearance: display settings and camera
+    exposure = attribute_of("appearance", "exposure")
+    view_dependent = attribute_of("appearance", "view_dependent")
+    specular = attribute_of("appearance", "specular")
+    roughness = attribute_of("appearance", "roughness")
+    false_colour = attribute_of("appearance", "false_colour")
+    false_colour_quantity = attribute_of("appearance", "false_colour_quantity")
+    false_colour_scale = attribute_of("appearance", "false_colour_scale")
+    false_colour_title = attribute_of("appearance", "false_colour_title", Appearance.false_colour_title.__doc__)
+    false_colour_range = method_of("appearance", Appearance.false_colour_range)
+    # display changes: the appearance's, then the status again; no solve
+    set_exposure = method_of("appearance", Appearance.set_exposure, then="update_status")
+    set_view_dependent = method_of("appearance", Appearance.set_view_dependent, then="update_status")
+    set_specular = method_of("appearance", Appearance.set_specular, then="update_status")
+    set_false_colour = method_of("appearance", Appearance.set_false_colour, then="update_status")
+    set_false_colour_scale = method_of("appearance", Appearance.set_false_colour_scale, then="update_status")
+    set_eye = method_of("appearance", Appearance.set_eye)
+    eye = attribute_of("appearance", "eye")
+    # the solve's settings
+    medium = attribute_of("solver", "medium")
+    model = attribute_of("solver", "model")
+    method = attribute_of("solver", "method")
+    tol = attribute_of("solver", "tol")
+    resolution = attribute_of("solver", "resolution")
+    per_direction = attribute_of("solver", "per_direction")
+    bounces = attribute_of("solver", "bounces")
+    albedo = attribute_of("solver", "albedo")
+    limits = attribute_of("solver", "limits")
+    shadows = attribute_of("solver", "shadows")
+    # the scan
+    base_mesh = attribute_of("scan", "base_mesh")
+    name = attribute_of("scan", "name")
+    up_axis = attribute_of("scan", "up_axis")
+    up = attribute_of("scan", "up")
+    front = attribute_of("scan", "front")
+    mm_per_unit = attribute_of("scan", "mm_per_unit")
+    scene = attribute_of("scan", "scene")
+    # the lights
+    lights = attribute_of("rig", "lights")
+    key_light = attribute_of("rig", "key", "The rig's ``key``: the index of the light :meth:`set_light` steers.")
+    azimuth = attribute_of("rig", "azimuth")
+    elevation = attribute_of("rig", "elevation")
+
     def __init__(
         self,
         mesh=None,
@@ -178,64 +184,27 @@ class ViewerState:
         unit=None,
         **changes,
     ):
-        from ...io.upright import up_vector
-        from ...scatter.lights import DirectionalLight, as_light_list
-        from ..shading.scan import load_scan
-
         # every setting checked once, before the scan is loaded ("interactive" is the viewer's own resolution)
         if material is not None:
             changes["material"] = material
         if resolution != "interactive":
             changes["resolution"] = resolution
         settings = settings_with(viewer_settings() if settings is None else settings, **changes)
-        model, method, tol = settings.model, settings.method, settings.tol
-        per_direction, shadows, exposure = settings.per_direction, settings.shadows, settings.exposure
-        if mesh is None:
-            mesh, _, default_name = load_scan(None)
-            name = name or default_name
-        else:
-            mesh = mesh_for_shading(mesh, unit, entry="Viewer")
-        self.base_mesh = mesh
-        self.name = name or (Path(mesh.source).stem if mesh.source is not None else "scan")
-        self.medium = settings.material
-        self.model, self.method, self.tol = model, method, float(tol)
-        self.resolution = resolution
-        self.per_direction = bool(per_direction)
-        self.bounces = settings.bounces
-        self.albedo = settings.albedo
-        self.limits = {"memory_limit": settings.memory_limit, "time_limit": settings.time_limit}
-        self.shadows = bool(shadows)
-        self.scene = scene_for(mesh, settings)
-        self.up_axis = self.scene.up
-        self.up = tuple(float(u) for u in up_vector(self.up_axis))
-        #: Toward the camera that sees the scan's front (:func:`~translucency.app.framing.front_direction`).
-        self.front = front_direction(mesh, self.up)
-        default_light = DirectionalLight(
-            turned_to_front(default_light_direction(self.up_axis), self.up, self.front), 1.0
-        )
-        self.lights = as_light_list(lights if lights is not None else default_light)
-        #: Index in :attr:`lights` of the directional light :meth:`set_light` steers, or None.
-        self.key_light = next((i for i, light in enumerate(self.lights) if isinstance(light, DirectionalLight)), None)
-        self.azimuth, self.elevation = (
-            light_angles(self.lights[self.key_light].direction, self.up) if self.key_light is not None else (None, None)
-        )
-        self.mm_per_unit = float(mesh.mm_per_unit)
-        self.exposure = exposure
-        self.view_dependent, self.specular, self.roughness = bool(view_dependent), bool(specular), float(roughness)
-        #: False colour instead of sRGB (:meth:`set_false_colour`), its quantity and scale.
-        self.false_colour, self.false_colour_quantity, self.false_colour_scale = False, "luminance", "log"
-        #: Camera position (mm, scan coordinates) the view-dependent layers use; None: not known yet.
-        self.eye = None
-        self.result = None
-        self.solve_seconds = 0.0
-        self.n_solves = 0
-        self.status = ""
+        #: The mesh, its name and up, and the Scene at the scale chosen.
+        self.scan = ScaledScan.load(mesh, settings, unit=unit, name=name)
+        #: What the solves use besides the scan and the lights (material, model, method, tolerance, ...).
+        self.solver = SolveSettings.of(settings, resolution)
+        #: The lights and the key light :meth:`set_light` steers, with its angles (degrees around :attr:`up`).
+        self.rig = LightRig.of(lights if lights is not None else self.scan.front_light(), self.up)
+        #: The display settings (exposure, view-dependent layers, false colour); their attributes are the state's.
+        self.appearance = Appearance(settings.exposure, view_dependent, specular, roughness)
+        self.result, self.solve_seconds, self.n_solves, self.status = None, 0.0, 0, ""
         #: Called with no argument when :attr:`status` changes during a solve (a window redraws it).
         self.notify = None
         #: Called with ``(stage, fraction)`` as a solve progresses (a window's progress bar; it may raise to stop
         #: the solve, which then leaves the state as it was before the change).
         self.on_progress = None
-        self._highlight_inputs = None
+        self._highlights = Highlights()
         if solve:
             self.solve()
 
@@ -248,23 +217,7 @@ class ViewerState:
         The new direction is :func:`light_direction` of the angles; its irradiance stays. Returns False
         (and does nothing) when the angles are the current ones.
         """
-        from ...scatter.lights import DirectionalLight
-
-        if self.key_light is None:
-            raise InvalidParameterError("the lights hold no directional light to steer; add one (--light-dir X,Y,Z).")
-        azimuth, elevation = float(azimuth), float(elevation)
-        if not (np.isfinite(azimuth) and np.isfinite(elevation) and -90.0 <= elevation <= 90.0):
-            raise InvalidParameterError(
-                f"light angles must be finite with elevation in [-90, 90] degrees, "
-                f"got azimuth {azimuth!r}, elevation {elevation!r}."
-            )
-        if (azimuth, elevation) == (self.azimuth, self.elevation):
-            return False
-        lights = list(self.lights)
-        old = lights[self.key_light]
-        lights[self.key_light] = DirectionalLight(light_direction(azimuth, elevation, self.up), old.irradiance_rgb)
-        self._solve_with(self.solve, azimuth=azimuth, elevation=elevation, lights=tuple(lights))
-        return True
+        return self._solve_with(self.solve, rig=self.rig.steered(azimuth, elevation, self.up))
 
     def set_lights(self, lights, *, moving: bool = False) -> bool:
         """Replace every light (a light or a sequence; directions in the scan's coordinates) and solve.
@@ -274,17 +227,10 @@ class ViewerState:
         surface (no bounce; the status says so); the next call without it solves the same lights whole.
         Returns False when the lights are the current ones and already solved so.
         """
-        from ...scatter.lights import DirectionalLight, as_light_list
-
-        lights = as_light_list(lights)
-        same = [light.to_dict() for light in lights] == [light.to_dict() for light in self.lights]
-        if same and (moving or not self.shows_moving_frame):
+        rig = LightRig.of(lights, self.up)
+        if self.rig.holds(rig.lights) and (moving or not self.shows_moving_frame):
             return False
-        key = next((i for i, light in enumerate(lights) if isinstance(light, DirectionalLight)), None)
-        angles = light_angles(lights[key].direction, self.up) if key is not None else (None, None)
-        solve = (lambda: self.solve(bounces=0)) if moving else self.solve
-        self._solve_with(solve, lights=lights, key_light=key, azimuth=angles[0], elevation=angles[1])
-        return True
+        return self._solve_with((lambda: self.solve(bounces=0)) if moving else self.solve, rig=rig)
 
     @property
     def shows_moving_frame(self) -> bool:
@@ -294,44 +240,22 @@ class ViewerState:
     def set_material(self, material, *, preview: bool = False) -> bool:
         """Change the material (catalogue name, entry or Medium, 1/mm) and solve (with ``preview``: the quick
         first picture of :meth:`solve_preview`); False if it is the same."""
-        medium = resolve_medium(material)
-        if medium.describe() == self.medium.describe():
-            return False
-        self._solve_with(self._solver(preview), medium=medium)
-        return True
+        return self._solve_with(self._solver(preview), solver=self.solver.with_material(material))
 
     def set_model(self, model: str, *, preview: bool = False) -> bool:
         """Change the scattering model (``directional``, ``standard``, ``better``) and solve (``preview`` as in
         :meth:`set_material`); False if the same."""
-        from ...scatter.names import check_model
-
-        check_model(model)
-        if model == self.model:
-            return False
-        self._solve_with(self._solver(preview), model=model)
-        return True
+        return self._solve_with(self._solver(preview), solver=self.solver.with_model(model))
 
     def set_tol(self, tol, *, preview: bool = False) -> bool:
         """Change the solver's tolerance (relative error per vertex, docs/physics.md §8.4) and solve; False if
         the same. With ``relight`` a new tolerance prepares new operators (``preview`` as in :meth:`set_material`)."""
-        from ...scatter.names import check_tol
-
-        tol = check_tol(tol)
-        if tol == self.tol:
-            return False
-        self._solve_with(self._solver(preview), tol=tol)
-        return True
+        return self._solve_with(self._solver(preview), solver=self.solver.with_tol(tol))
 
     def set_bounces(self, bounces) -> bool:
         """Change how many times light re-enters the surface (0: none, docs/physics.md §9) and solve; False if
         the same."""
-        from ...scatter.names import check_bounces
-
-        bounces = check_bounces(bounces)
-        if bounces == self.bounces:
-            return False
-        self._solve_with(self.solve, bounces=bounces)
-        return True
+        return self._solve_with(self.solve, solver=self.solver.with_bounces(bounces))
 
     def set_scale(self, mm_per_unit, *, preview: bool = False) -> bool:
         """Size of one unit of the mesh's file in mm: scale the mesh, make a new Scene and solve.
@@ -339,74 +263,10 @@ class ViewerState:
         The points become ``p * mm_per_unit / m0`` with ``m0`` the mesh's own mm per unit; False if the
         scale is the current one.
         """
-        mm_per_unit = float(mm_per_unit)
-        if not (np.isfinite(mm_per_unit) and mm_per_unit > 0):
-            raise InvalidParameterError(f"the scale must be a positive number of mm per unit, got {mm_per_unit!r}.")
-        if mm_per_unit == self.mm_per_unit:
-            return False
-        factor = mm_per_unit / float(self.base_mesh.mm_per_unit)
-        mesh = self.base_mesh.replace(points=self.base_mesh.points * factor, mm_per_unit=mm_per_unit)
-        self._solve_with(
-            self._solver(preview), mm_per_unit=mm_per_unit, scene=Scene(mesh, shadows=self.shadows, up=self.up_axis)
-        )
-        return True
+        return self._solve_with(self._solver(preview), scan=self.scan.scaled(mm_per_unit, shadows=self.shadows))
 
-    def set_exposure(self, exposure) -> bool:
-        """Display exposure (linear factor on ``L`` before sRGB): new colours from the same solution, no solve."""
-        exposure = float(exposure)
-        if not (np.isfinite(exposure) and exposure > 0):
-            raise InvalidParameterError(f"exposure must be a positive number, got {exposure!r}.")
-        changed = exposure != self.exposure
-        self.exposure = exposure
-        self.update_status()
-        return changed
-
-    def set_view_dependent(self, on: bool) -> bool:
-        """Show ``T21(eta, n . w_o) B`` (on) or ``T21(eta, 1) B`` (off; docs/physics.md §5.3); no solve."""
-        changed = bool(on) != self.view_dependent
-        self.view_dependent = bool(on)
-        self.update_status()
-        return changed
-
-    def set_specular(self, on: bool) -> bool:
-        """Add (on) or remove the specular highlight (docs/physics.md §5.5); no solve."""
-        changed = bool(on) != self.specular
-        self.specular = bool(on)
-        self.update_status()
-        return changed
-
-    def set_false_colour(self, on: bool, quantity: str | None = None) -> bool:
-        """Show false colour (on) or sRGB (off); ``quantity`` is ``luminance`` (kept when None) or a channel
-        name (``red``, ``green``, ``blue``). No solve."""
-        quantity = self.false_colour_quantity if quantity is None else quantity
-        if quantity not in FALSE_COLOUR_QUANTITIES:
-            raise InvalidParameterError(
-                f"the false colour shows one of {', '.join(FALSE_COLOUR_QUANTITIES)}, got {quantity!r}."
-            )
-        changed = (bool(on), quantity) != (self.false_colour, self.false_colour_quantity)
-        self.false_colour, self.false_colour_quantity = bool(on), quantity
-        self.update_status()
-        return changed
-
-    def set_false_colour_scale(self, scale: str) -> bool:
-        """Scale of the false colour: ``log`` (:data:`~translucency.app.display.LOG_DECADES` decades) or
-        ``linear``; no solve. Returns whether the picture changed (only when false colour is on)."""
-        if scale not in FALSE_COLOUR_SCALES:
-            raise InvalidParameterError(f"the false colour's scale is one of log, linear; got {scale!r}.")
-        changed = scale != self.false_colour_scale
-        self.false_colour_scale = scale
-        self.update_status()
-        return changed and self.false_colour
-
-    def set_eye(self, eye) -> bool:
-        """Camera position (3 floats, mm, scan coordinates) for the view-dependent layers; no solve.
-
-        Returns True when a view-dependent layer is on and the position moved (the colours change).
-        """
-        eye = tuple(float(v) for v in eye)
-        moved = eye != self.eye
-        self.eye = eye
-        return moved and (self.view_dependent or self.specular)
+    # ------------------------------------------------------------------------------------------------
+    # solving
 
     def solve_preview(self) -> None:
         """A quick first picture: ``tree`` on the interactive proxy (:func:`interactive_edge_length`, about
@@ -426,19 +286,15 @@ class ViewerState:
         """:meth:`solve_preview` or :meth:`solve`."""
         return self.solve_preview if preview else self.solve
 
-    def _solve_with(self, solve, **changes) -> None:
-        """Set the attributes ``changes`` and call ``solve()``; if it raises (an error, or a window's cancel through
-        :attr:`on_progress`), the attributes are put back as they were."""
-        before = {name: getattr(self, name) for name in changes}
-        for name, value in changes.items():
-            setattr(self, name, value)
-        try:
+    def _solve_with(self, solve, **changes) -> bool:
+        """Set the attributes ``changes`` and call ``solve()``; False (and nothing done) when a change is None (the
+        value is the current one). If the solve raises (an error, or a window's cancel through :attr:`on_progress`),
+        the attributes are put back as they were."""
+        if any(value is None for value in changes.values()):
+            return False
+        with put_back_on_failure(self, changes, after_undo=self.update_status):
             solve()
-        except BaseException:
-            for name, value in before.items():
-                setattr(self, name, value)
-            self.update_status()
-            raise
+        return True
 
     def solve(self, resolution=None, *, method=None, tol=None, bounces=None) -> None:
         """Solve the current settings on :attr:`scene`, at ``resolution`` (default: the state's own); ``method``,
@@ -449,32 +305,26 @@ class ViewerState:
         :attr:`n_solves`, and fixes the exposure from the first solve when none was given.
         """
         if resolution is None:
-            resolution = self.resolution
-            if resolution == "interactive":
-                resolution = (
-                    "full" if self.method == "relight" else interactive_edge_length(self.scene.mesh, self.medium)
-                )
+            resolution = self.solver.resolution_on(self.scene.mesh)
         start = time.perf_counter()
-        self.result = self.scene.shade(
-            self.medium,
-            self.lights,
-            model=self.model,
-            method=self.method if method is None else method,
-            tol=self.tol if tol is None else tol,
-            resolution=resolution,
-            exposure=self.exposure,
-            per_direction=self.per_direction,
-            bounces=self.bounces if bounces is None else bounces,
-            albedo=self.albedo,
-            progress=self._progress,
-            **self.limits,
+        self.result = self.solver.shade(
+            self.scene, self.lights, resolution, self.exposure, self._progress, method=method, tol=tol, bounces=bounces
         )
         self.solve_seconds = time.perf_counter() - start
         self.n_solves += 1
         if self.exposure is None:
             self.exposure = self.result.exposure
-        self._highlight_inputs = None
         self.update_status()
+
+    def _progress(self, stage: str, fraction: float) -> None:
+        """A solve's progress: a note while the relighting operators are prepared (:attr:`notify` shows it), and
+        :attr:`on_progress`."""
+        if self.on_progress is not None:
+            self.on_progress(stage, fraction)
+        if stage == "relight operators" and fraction == 0.0:
+            self.add_note(preparing_note(self))
+            if self.notify is not None:
+                self.notify()
 
     # ------------------------------------------------------------------------------------------------
     # what is shown
@@ -483,89 +333,31 @@ class ViewerState:
         """Linear radiance per vertex as displayed, W/(m² sr), (n, 3): ``T21 B`` plus the layers that are on.
 
         ``T21(eta, 1) B`` (the bake's), or ``T21(eta, n . w_o) B`` with the view-dependent layer, plus
-        the GGX highlight with the specular one (docs/physics.md §5.3, §5.5). ``eye`` (camera position,
-        mm) is kept as :meth:`set_eye` does; with no camera position known yet the layers are left out.
+        the GGX highlight with the specular one (docs/physics.md §5.3, §5.5;
+        :mod:`~translucency.app.viewer.view_layers`). ``eye`` (camera position, mm) is kept as :meth:`set_eye`
+        does; with no camera position known yet the layers are left out.
         """
-        from ...scatter.outgoing import specular_radiance, subsurface_radiance, view_directions
-
         if eye is not None:
             self.set_eye(eye)
-        result = self.result
-        if not (self.view_dependent or self.specular) or self.eye is None:
-            return result.radiance
-        w_o = view_directions(self.base_mesh.points, np.asarray(self.eye, dtype=np.float64))
-        radiance = (
-            subsurface_radiance(result.B, result.normals, w_o, self.medium.eta)
-            if self.view_dependent
-            else result.radiance.copy()
-        )
-        if self.specular:
-            for vertices, direction, irradiance in self._highlights():
-                radiance[vertices] += specular_radiance(
-                    result.normals[vertices], w_o[vertices], direction, irradiance, self.medium.eta, self.roughness
-                )
-        return radiance
+        if not self.appearance.sees_the_camera:
+            return self.result.radiance
+        highlights = self._highlights.of(self.scene, self.medium, self.lights, self.result) if self.specular else ()
+        return radiance_toward(self.result, self.base_mesh.points, self.medium.eta, self.appearance, highlights)
 
     def colors(self, eye=None) -> np.ndarray:
         """Display colours per vertex, (n, 3) uint8: ``sRGB(exposure L)`` of :meth:`radiance_shown`."""
-        colors, _ = display_colors(self.radiance_shown(eye), self.exposure)
-        return colors
+        return self.appearance.colors(self.radiance_shown(eye))
 
     def false_colour_values(self, eye=None) -> np.ndarray:
         """The false colour's number per vertex, (n,), in W/(m² sr) per W/m²: the luminance (or the
         channel) of :meth:`radiance_shown`, whether or not false colour is on."""
-        return false_colour_values(self.radiance_shown(eye), self.false_colour_quantity)
-
-    def false_colour_range(self) -> tuple[float, float]:
-        """``(low, high)`` of the false colour, W/(m² sr) per W/m²: ``high = 1 / exposure`` (white in sRGB)."""
-        return false_colour_range(np.zeros(0), self.false_colour_scale, self.exposure)
-
-    @property
-    def false_colour_title(self) -> str:
-        """Title of the false colour's colour bar: quantity, unit and scale."""
-        return false_colour_label(self.false_colour_quantity, self.false_colour_scale)
-
-    def _progress(self, stage: str, fraction: float) -> None:
-        """A solve's progress: a note while the relighting operators are prepared (:attr:`notify` shows it), and
-        :attr:`on_progress`."""
-        if self.on_progress is not None:
-            self.on_progress(stage, fraction)
-        if stage == "relight operators" and fraction == 0.0:
-            self.add_note(
-                f"preparing the relighting operators for {self.medium.name} on {self.scene.mesh.n_points:,} vertices "
-                "(once per material and model; the time grows with the vertices)..."
-            )
-            if self.notify is not None:
-                self.notify()
+        return self.appearance.false_colour_values(self.radiance_shown(eye))
 
     def update_status(self) -> None:
-        """Write :attr:`status` from the current state (three lines: material and size, light, last solve)."""
-        result = self.result
-        if result is None:  # nothing solved yet
-            return
-        size = float(self.scene.mesh.extent)
-        light = (
-            ""
-            if self.azimuth is None
-            else f"light azimuth {self.azimuth:.0f} deg, elevation {self.elevation:.0f} deg; "
-        )
-        # what the last solve used (solve_full and the preview solve by tree, whatever the state's method is)
-        method, tol = result.metadata.get("method", self.method), result.metadata.get("tolerance", self.tol)
-        tolerance = "exact sum" if method == "exact" else f"tolerance {tol:.3g}"
-        prepared = result.timings.get("solve_prepare", 0.0)
-        if self.shows_moving_frame:
-            tolerance += "; no bounce while the light moves"
-        if method == "relight" and prepared:
-            tolerance += f" (operators prepared in {prepared:.0f} s, once)"
-        self.status = (
-            f"{self.medium.name}, {self.model} dipole, {size:.3g} mm ({self.mm_per_unit:.4g} mm per unit), "
-            f"up {self.up_axis}\n"
-            f"{light}display exposure {self.exposure:.3g}"
-            + (f"; false colour: {self.false_colour_quantity}, {self.false_colour_scale}" if self.false_colour else "")
-            + "\n"
-            f"solved in {self.solve_seconds:.2f} s (wall time) on {result.stats['solver_vertices']} of "
-            f"{result.stats['vertices']} vertices: {method}, {tolerance}"
-        )
+        """Write :attr:`status` from the current state (three lines: material and size, light, last solve;
+        :func:`~translucency.app.viewer.status.status_text`); nothing before the first solve."""
+        if self.result is not None:
+            self.status = status_text(self)
 
     def add_note(self, line: str) -> None:
         """Append one line to :attr:`status` (it replaces an earlier note and lasts until the next change)."""
@@ -578,7 +370,7 @@ class ViewerState:
     @property
     def file_stem(self) -> str:
         """Stem of saved files: ``<name>_<material>_<model>``."""
-        return f"{Path(self.name).stem}_{self.medium.name}_{self.model}"
+        return file_stem(self.name, self.medium.name, self.model)
 
     def write_bake(self, path) -> Path:
         """Write the current result as a baked PLY with colours at the current exposure; returns the path.
@@ -586,34 +378,4 @@ class ViewerState:
         A bake holds the radiance toward the normal, ``T21(eta, 1) B`` (docs/physics.md §5.3): it does
         not depend on the view.
         """
-        result = self.result
-        colors, _ = display_colors(result.radiance, self.exposure)
-        return write_result(
-            dataclasses.replace(
-                result, colors=colors, exposure=self.exposure, metadata=dict(result.metadata, exposure=self.exposure)
-            ),
-            path,
-        )
-
-    def _highlights(self) -> list:
-        """Per directional sample: (vertices it reaches, direction, irradiance on the surface E cos V)."""
-        from ...scatter.fresnel import fresnel_transmittance
-
-        if self._highlight_inputs is None:
-            incident, _ = self.scene.light_cache.incident_on_mesh(self.medium, self.lights, per_direction=True)
-            normals = self.result.normals
-            inputs = []
-            for part in incident.contributions:
-                if part.direction is None:  # a point light: no highlight
-                    continue
-                cos_i = normals[part.vertices] @ part.direction
-                # phi = T12 E cos V (irradiance.py), so E cos V = phi / T12
-                inputs.append(
-                    (
-                        part.vertices,
-                        part.direction,
-                        part.phi_rgb / fresnel_transmittance(cos_i, self.medium.eta)[:, None],
-                    )
-                )
-            self._highlight_inputs = inputs
-        return self._highlight_inputs
+        return write_bake(self.result, self.exposure, path)

@@ -8,9 +8,10 @@ view-dependent layers the picture equals :func:`~translucency.app.render.render_
 colours.
 
 Layout: the scan has the window's left part to itself; the controls live in a strip on the right
-(:data:`CONTROL_STRIP` of the width): at the top a light compass (a small copy of the scan turned with
-the camera, and the light's arrow, :func:`~translucency.app.render.light_glyph`, following the light
-sliders), then the status, the check boxes and the sliders. No control covers the scan.
+(:data:`~translucency.app.viewer.controls.CONTROL_STRIP` of the width; :mod:`translucency.app.viewer.controls`):
+at the top a light compass (a small copy of the scan turned with the camera, and the light's arrow,
+:func:`~translucency.app.render.light_glyph`, following the light sliders; :mod:`translucency.app.viewer.compass`),
+then the status, the check boxes and the sliders. No control covers the scan.
 
 False colour: check box (or key ``y``) swaps the sRGB view for the luminance in W/(m² sr) per W/m²
 through a colour map, with its colour bar under the scan; a second check box (or key ``l``) chooses a
@@ -31,42 +32,44 @@ saves that.
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
 
 import numpy as np
 
 from ..framing import scan_camera
-from ..render import (
-    LIGHT_GLYPH_COLOR,
-    light_glyph,
-    new_plotter,
-)
+from ..render import new_plotter
+from .controls import ControlStrip, strip_plotter
+from .forwarding import attribute_of
 from .layers import ScanLayers
-from .state import ViewerState, diffusive_materials
+from .saving import numbered_paths
+from .state import ViewerState
 
-#: Range of the scale slider, as factors of the mesh's own mm per unit.
-SCALE_RANGE = (0.25, 4.0)
-#: Half-range of the exposure slider, in stops (log2) around the first exposure.
-EXPOSURE_STOPS = 8.0
-#: Fraction of the window's width the control strip takes (right); the scan has the rest.
-CONTROL_STRIP = 0.3
-#: Fraction of the window's height the light compass takes (top of the strip).
-COMPASS_HEIGHT = 0.22
-#: Background of the control strip.
-STRIP_BACKGROUND = "#202020"
+#: The false colour's bar, under the scan (keywords of PyVista's ``add_scalar_bar``).
+SCALAR_BAR = {
+    "color": "white",
+    "position_x": 0.15,
+    "position_y": 0.01,
+    "width": 0.7,
+    "height": 0.09,
+    "fmt": "%.3g",
+    "title_font_size": 12,
+    "label_font_size": 11,
+}
+
+
+def renderer_pixels(image, renderer) -> np.ndarray:
+    """The pixels of ``renderer``'s viewport in an image of its whole window, (h, w, 3) (rows from the top, VTK's
+    origin at the bottom)."""
+    x0, x1, y0, y1 = (float(v) for v in np.asarray(renderer.GetViewport())[[0, 2, 1, 3]])
+    height, width = image.shape[:2]
+    left, right = round(x0 * width), round(x1 * width)
+    bottom, top = round(y0 * height), round(y1 * height)
+    return np.ascontiguousarray(image[height - top : height - bottom, left:right])
 
 
 def _state_attribute(name: str):
     """A viewer attribute that is its state's: read from and written to ``viewer.state``."""
-
-    def get(viewer):
-        return getattr(viewer.state, name)
-
-    def put(viewer, value):
-        setattr(viewer.state, name, value)
-
-    return property(get, put, doc=f"The state's ``{name}`` (:class:`~translucency.app.viewer.state.ViewerState`).")
+    return attribute_of("state", name, f"The state's ``{name}`` (:class:`~translucency.app.viewer.state.ViewerState`).")
 
 
 class Viewer:
@@ -97,8 +100,8 @@ class Viewer:
         Any field of the settings by name (``tol=0.05``, ``up="z"``, ...), replacing the one of ``settings``.
     resolution : "interactive", "full", "auto" or float
         Where ``B`` is computed while controls change: ``"interactive"`` (default) is a proxy of about
-        :data:`~translucency.app.viewer.state.INTERACTIVE_VERTICES` vertices
-        (:func:`~translucency.app.viewer.state.interactive_edge_length`); the others are the
+        :data:`~translucency.app.viewer.solve_settings.INTERACTIVE_VERTICES` vertices
+        (:func:`~translucency.app.viewer.solve_settings.interactive_edge_length`); the others are the
         shading policy's (a number is a proxy edge length in mm).
     view_dependent, specular : bool
         Show ``T21(eta, n . w_o) B`` instead of ``T21(eta, 1) B``; add the specular highlight.
@@ -191,44 +194,22 @@ class Viewer:
             **changes,
         )
         self.output = Path(output)
-        self.widgets = {}
         self._window_shown = False  # set by show() and by screenshot(); a window never shown has no picture yet
         self._own_plotter = plotter is None
         widgets = bool(widgets) and self._own_plotter
         if plotter is not None:
             self.plotter = plotter
         elif widgets:  # the scan on the left (both rows), the compass and the controls in a strip on the right
-            self.plotter = new_plotter(
-                window_size,
-                off_screen=off_screen,
-                shape=(2, 2),
-                col_weights=[1.0 - CONTROL_STRIP, CONTROL_STRIP],
-                row_weights=[COMPASS_HEIGHT, 1.0 - COMPASS_HEIGHT],
-                groups=[(np.s_[:], 0)],
-                border=False,
-            )
-            self.plotter.subplot(0, 0)
+            self.plotter = strip_plotter(window_size, off_screen=off_screen)
         else:
             self.plotter = new_plotter(window_size, off_screen=off_screen)
         #: The renderer that draws the scan (screenshots are its part of the window).
         self.renderer = self.plotter.renderer
-        self._status_actor = None
+        #: The control strip (compass, status, check boxes, sliders); None without one.
+        self.controls = None
         self.state.notify = self._notify
         self.state.solve()
-        self.layers = ScanLayers(
-            self.plotter,
-            self.base_mesh,
-            scalar_bar={
-                "color": "white",
-                "position_x": 0.15,
-                "position_y": 0.01,
-                "width": 0.7,
-                "height": 0.09,
-                "fmt": "%.3g",
-                "title_font_size": 12,
-                "label_font_size": 11,
-            },
-        )
+        self.layers = ScanLayers(self.plotter, self.base_mesh, scalar_bar=SCALAR_BAR)
         #: The display-colour and false-colour layers' meshes (their arrays are what is shown).
         self.poly, self.false_colour_poly = self.layers.poly, self.layers.false_colour_poly
         width, height = self.renderer.GetSize() if self.renderer.GetSize()[1] else self.plotter.window_size
@@ -238,10 +219,12 @@ class Viewer:
             width / max(height, 1),
             self.state.front if camera_direction is None else camera_direction,
         )
-        self._compass = self.compass_arrow = None
         if widgets:
-            self._add_widgets()
-            self.plotter.subplot(0, 0)
+            self.controls = ControlStrip(self)
+        #: The VTK widgets of the control strip by name (:class:`~translucency.app.viewer.controls.ControlStrip`).
+        self.widgets = self.controls.widgets if self.controls is not None else {}
+        #: The compass's arrow (PolyData): from the key light toward the object; None without a compass.
+        self.compass_arrow = self.controls.compass_arrow if self.controls is not None else None
         self.renderer.camera.AddObserver("ModifiedEvent", self._on_camera)
         if self._own_plotter:
             self.plotter.add_key_event("s", self.save)
@@ -323,18 +306,10 @@ class Viewer:
         self.plotter.render()
         image = np.asarray(self.plotter.screenshot(return_img=True))
         if not widgets:
-            image = self._crop_to_scan(image)
+            image = renderer_pixels(image, self.renderer)
         if path is not None:
             write_png(path, image)
         return image
-
-    def _crop_to_scan(self, image) -> np.ndarray:
-        """The scan renderer's pixels of a window image (rows from the top, VTK's origin at the bottom)."""
-        x0, x1, y0, y1 = (float(v) for v in np.asarray(self.renderer.GetViewport())[[0, 2, 1, 3]])
-        height, width = image.shape[:2]
-        left, right = round(x0 * width), round(x1 * width)
-        bottom, top = round(y0 * height), round(y1 * height)
-        return np.ascontiguousarray(image[height - top : height - bottom, left:right])
 
     def save(self, folder=None) -> tuple[Path, Path]:
         """Save a screenshot (PNG, the scan's part of the window, :meth:`screenshot`) and the current bake
@@ -346,15 +321,12 @@ class Viewer:
         """
         folder = Path(folder) if folder is not None else self.output
         folder.mkdir(parents=True, exist_ok=True)
-        stem = self.state.file_stem
-        index = 0
-        while (folder / f"{stem}_{index:03d}.png").exists() or (folder / f"{stem}_{index:03d}.ply").exists():
-            index += 1
-        png, ply = folder / f"{stem}_{index:03d}.png", folder / f"{stem}_{index:03d}.ply"
+        png, ply = numbered_paths(folder, self.state.file_stem, (".png", ".ply"))
         self.screenshot(png)
         self.state.write_bake(ply)
         self.state.add_note(f"saved {png.name} and {ply.name}")
-        self._show_status()
+        if self.controls is not None:
+            self.controls.show_status(self.status)
         return png, ply
 
     def show(self, **kwargs) -> None:
@@ -374,9 +346,8 @@ class Viewer:
         """Draw what the state computes: colours or false colour from the current camera, status, widgets."""
         self.state.set_eye(self.renderer.camera.position)
         self._recolour()
-        self._show_status()
-        self._sync_widgets()
-        self._point_compass()
+        if self.controls is not None:
+            self.controls.follow(self.state)
         self.plotter.render()
 
     def _recolour(self) -> None:
@@ -385,202 +356,13 @@ class Viewer:
 
     def _notify(self) -> None:
         """The state's status changed during a solve: show it now (a window that exists already)."""
-        if self._status_actor is not None:
-            self._show_status()
+        if self.controls is not None:
+            self.controls.show_status(self.status)
             self.plotter.render()
-
-    def _show_status(self) -> None:
-        """The status, wrapped to the strip's width."""
-        if self._status_actor is None:
-            return
-        import textwrap
-
-        width = max(20, int(self.plotter.window_size[0] * CONTROL_STRIP / 7.5))
-        lines = [textwrap.fill(line, width, subsequent_indent="  ") for line in self.status.split("\n")]
-        self._status_actor.SetInput("\n".join(lines))
 
     def _on_camera(self, camera, _event) -> None:
         """Camera moved: recompute the view-dependent layers (no solve, no render here), turn the compass."""
         if self.state.set_eye(camera.GetPosition()):
             self._recolour()
-        self._turn_compass()
-
-    def _point_compass(self) -> None:
-        """The compass's arrow along the current key light."""
-        if self._compass is None or self.state.key_light is None:
-            return
-        arrow, radius = self._compass
-        arrow.copy_from(light_glyph((0.0, 0.0, 0.0), radius, self.lights[self.state.key_light].direction))
-
-    def _turn_compass(self) -> None:
-        """The compass's camera looks from where the scan's camera looks (same direction and view-up)."""
-        if self._compass is None:
-            return
-        camera, compass = self.renderer.camera, self._compass_renderer.camera
-        offset = np.asarray(camera.GetPosition()) - np.asarray(camera.GetFocalPoint())
-        offset = offset / np.linalg.norm(offset)
-        compass.SetFocalPoint(0.0, 0.0, 0.0)
-        compass.SetPosition(*(offset * 6.0 * self._compass[1]))
-        compass.SetViewUp(*camera.GetViewUp())
-        compass.SetParallelProjection(True)
-        compass.SetParallelScale(1.7 * self._compass[1])
-        self._compass_renderer.ResetCameraClippingRange()
-        self._compass_renderer.camera_set = True  # PyVista must not reset it on the first render
-
-    def _add_widgets(self) -> None:
-        """The control strip: compass (top), status, check boxes and sliders, none over the scan."""
-        from ...scatter.names import MODELS
-
-        plotter = self.plotter
-        width, height = plotter.window_size
-        strip_x0 = 1.0 - CONTROL_STRIP
-        strip_px = int(round(strip_x0 * width))
-
-        # the light compass: the scan, scaled to a unit radius, and the light's arrow, turned with the camera
-        plotter.subplot(0, 1)
-        plotter.renderer.set_background(STRIP_BACKGROUND)
-        self._compass_renderer = plotter.renderer
-        if self.state.key_light is not None:
-            points = self.base_mesh.points - 0.5 * (
-                self.base_mesh.points.min(axis=0) + self.base_mesh.points.max(axis=0)
-            )
-            radius = 1.0
-            small = self.base_mesh.replace(points=points / (0.5 * float(self.base_mesh.extent)))
-            from ...io.polydata import to_pyvista
-
-            plotter.add_mesh(to_pyvista(small), color="lightgrey", name="compass_scan")
-            arrow = light_glyph((0.0, 0.0, 0.0), radius, self.lights[self.state.key_light].direction)
-            plotter.add_mesh(arrow, color=LIGHT_GLYPH_COLOR, name="compass_arrow")
-            plotter.add_text("light", position="upper_left", font_size=8, color="white", name="compass_label")
-            self._compass = (arrow, radius)
-            #: The compass's arrow (PolyData): from the key light toward the object.
-            self.compass_arrow = arrow
-            self._turn_compass()
-
-        # the status, the check boxes and the sliders
-        plotter.subplot(1, 1)
-        plotter.renderer.set_background(STRIP_BACKGROUND)
-        self._status_actor = plotter.add_text(" ", position=(8, 0), font_size=6, color="white", name="status")
-        self._status_actor.GetTextProperty().SetVerticalJustificationToTop()
-        strip_height = int(round((1.0 - COMPASS_HEIGHT) * height))
-        self._status_actor.SetPosition(8, strip_height - 6)
-        self._show_status()
-        toggles = (
-            ("false_colour", "false colour (key y)", self.set_false_colour, self.state.false_colour),
-            (
-                "log_scale",
-                "log scale (key l)",
-                lambda on: self.set_false_colour_scale("log" if on else "linear"),
-                self.state.false_colour_scale == "log",
-            ),
-            ("view_dependent", "T21 toward the camera", self.set_view_dependent, self.view_dependent),
-            ("specular", "specular highlight", self.set_specular, self.specular),
-        )
-        box = max(14, min(22, height // 35))
-        step = box + 8
-        first = int(strip_height * 0.66 + 2 * step)  # from the bottom of the window (the strip starts there)
-        for k, (key, label, callback, value) in enumerate(toggles):
-            y = first - k * step
-            self.widgets[key] = plotter.add_checkbox_button_widget(
-                callback, value=value, position=(strip_px + 8, y), size=box, border_size=2, color_off="grey"
-            )
-            plotter.add_text(label, position=(box + 16, y + box // 4), font_size=6, color="white", name=f"{key}_label")
-
-        style = {"style": "modern", "interaction_event": "end"}
-        titled = {**style, "title_height": 0.018}
-        # PyVista places sliders in the current renderer's normalised viewport: the strip, below the compass
-        rows = [0.06 + k * 0.098 for k in range(6)]  # bottom to top
-        x0, x1 = 0.06, 0.94
-
-        def at(row):
-            return {"pointa": (x0, rows[row]), "pointb": (x1, rows[row])}
-
-        choices = {key: key for key in diffusive_materials()}
-        if self.medium.name not in choices:  # a medium of its own: offer it first
-            choices = {self.medium.name: self.medium, **choices}
-        self._materials = list(choices)
-        self.widgets["material"] = plotter.add_text_slider_widget(
-            lambda name: self.set_material(choices[name]),
-            self._materials,
-            value=self._materials.index(self.medium.name),
-            **at(5),
-            **style,
-        )
-        self.widgets["model"] = plotter.add_text_slider_widget(
-            self.set_model, list(MODELS), value=list(MODELS).index(self.model), **at(4), **style
-        )
-        for key in ("material", "model"):  # the title names the choice; the index is no use
-            self.widgets[key].GetRepresentation().SetTitleHeight(titled["title_height"])
-            self.widgets[key].GetRepresentation().ShowSliderLabelOff()
-        # relighting answers while the slider moves; a full solve when it is let go
-        light_style = {**titled, "interaction_event": "always" if self.state.method == "relight" else "end"}
-        if self.state.key_light is not None:
-            self.widgets["azimuth"] = plotter.add_slider_widget(
-                lambda a: self.set_light(a, self.elevation),
-                [-180.0, 180.0],
-                value=self.azimuth,
-                title="light azimuth (deg)",
-                fmt="%.0f",
-                **at(3),
-                **light_style,
-            )
-            self.widgets["elevation"] = plotter.add_slider_widget(
-                lambda e: self.set_light(self.azimuth, e),
-                [-90.0, 90.0],
-                value=self.elevation,
-                title="light elevation (deg)",
-                fmt="%.0f",
-                **at(2),
-                **light_style,
-            )
-        stops = math.log2(self.exposure)
-        self.widgets["exposure"] = plotter.add_slider_widget(
-            lambda v: self.set_exposure(2.0**v),
-            [stops - EXPOSURE_STOPS, stops + EXPOSURE_STOPS],
-            value=stops,
-            title="exposure (log2)",
-            fmt="%.1f",
-            **at(1),
-            **titled,
-        )
-        base = float(self.base_mesh.mm_per_unit)
-        self.widgets["scale"] = plotter.add_slider_widget(
-            self.set_scale,
-            [base * SCALE_RANGE[0], base * SCALE_RANGE[1]],
-            value=self.mm_per_unit,
-            title="scale (mm per unit)",
-            fmt="%.3g",
-            **at(0),
-            **titled,
-        )
-
-    def _sync_widgets(self) -> None:
-        """Put the widgets where the state is (after a change made from code)."""
-        from ...scatter.names import MODELS
-
-        values = {
-            "scale": self.mm_per_unit,
-            "exposure": math.log2(self.exposure),
-            "azimuth": self.azimuth,
-            "elevation": self.elevation,
-        }
-        if self.medium.name in getattr(self, "_materials", ()):
-            values["material"] = self._materials.index(self.medium.name)
-        values["model"] = list(MODELS).index(self.model)
-        for key, value in values.items():
-            widget = self.widgets.get(key)
-            if widget is not None and value is not None:
-                widget.GetRepresentation().SetValue(value)
-        if "material" in values and "material" in self.widgets:
-            self.widgets["material"].GetRepresentation().SetTitleText(self.medium.name)
-        if "model" in self.widgets:
-            self.widgets["model"].GetRepresentation().SetTitleText(self.model)
-        states = {
-            "view_dependent": self.view_dependent,
-            "specular": self.specular,
-            "false_colour": self.state.false_colour,
-            "log_scale": self.state.false_colour_scale == "log",
-        }
-        for key, on in states.items():
-            if key in self.widgets:
-                self.widgets[key].GetRepresentation().SetState(int(on))
+        if self.controls is not None:
+            self.controls.turn_compass(self.renderer.camera)
