@@ -11,6 +11,8 @@ from pathlib import Path
 
 from PySide6 import QtCore, QtGui, QtWidgets
 
+from ..viewer.saving import numbered_paths
+
 #: The keys and the mouse, as the Help menu and the ``h`` / ``?`` keys show them.
 KEYS = (
     ("left drag", "turn the camera (on the yellow ball: move the light)"),
@@ -111,11 +113,9 @@ class Menus:
         def write():
             folder = window.output
             folder.mkdir(parents=True, exist_ok=True)
-            stem, index = window.state.file_stem, 0
-            while any((folder / f"{stem}_{index:03d}{suffix}").exists() for suffix in (".png", ".ply")):
-                index += 1
-            png = window.screenshot(folder / f"{stem}_{index:03d}.png")
-            ply = window.state.write_bake(folder / f"{stem}_{index:03d}.ply")
+            png_path, ply_path = numbered_paths(folder, window.state.file_stem, (".png", ".ply"))
+            png = window.screenshot(png_path)
+            ply = window.state.write_bake(ply_path)
             window.say(f"saved {png} and {ply.name}")
 
         window.guarded(write)
