@@ -17,9 +17,10 @@ Methods for the far field (each with a tolerance where it has one):
     allows it (docs/physics.md §8.4).
 ``tree``
     a hierarchy over the sources (:mod:`translucency.scatter.hierarchy`): a cluster that is small
-    seen from the receiver, and farther than a reduced mean free path, is replaced by one aggregated
-    source (Jensen & Buhler 2002, docs/physics.md §8.3). Nothing is skipped by distance: far clusters are
-    cheap, and the far side of an object gets all its ``B`` from them.
+    seen from the receiver, farther than a reduced mean free path, and whose aggregate's error bound is
+    small next to the receiver's own ``B`` (as a first, coarser walk estimates it), is replaced by one
+    aggregated source (Jensen & Buhler 2002; the relative opening criterion, docs/physics.md §8.3). Nothing
+    is skipped by distance: far clusters are cheap, and the far side of an object gets all its ``B`` from them.
 ``relight``
     the ``tree``'s sums and the near field written once as linear operators on the incident flux
     (:mod:`translucency.scatter.relight`, docs/physics.md §8.7), kept on the surface
