@@ -434,16 +434,18 @@ def walk_lists(
         reach,
         *rule.kernel_arguments(),
     )
-    for_ranges(
-        _traverse, n_groups, *walk, np.empty(0, dtype=np.int64), np.zeros(1, dtype=np.int64), g_direct, g_clustered
-    )
+    pieces = {}  # each range's list, by its first group (one pass: each range grows its own list)
+
+    def walk_range(worker, lo, hi):
+        pieces[lo] = _traverse(lo, hi, *walk, g_direct, g_clustered)
+
+    for_ranges(walk_range, n_groups)
     g_counts = g_direct + g_clustered
     g_starts = np.zeros(n_groups, dtype=np.int64)
     np.cumsum(g_counts[:-1], out=g_starts[1:])
-    if count_only:
+    if count_only or not pieces:
         return g_starts, g_direct, g_clustered, np.empty(0, dtype=np.int64)
-    columns = np.empty(int(g_counts.sum()), dtype=np.int64)
-    for_ranges(_traverse, n_groups, *walk, columns, g_starts, g_direct, g_clustered)
+    columns = np.concatenate([pieces[lo] for lo in sorted(pieces)])
     return g_starts, g_direct, g_clustered, columns
 
 
@@ -592,7 +594,6 @@ def sampled_evaluations(model, tree, points, normals, w12, flux, rcv, bright, pa
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
 def _traverse(
-    worker,
     lo,
     hi,
     order,
@@ -614,25 +615,23 @@ def _traverse(
     log_first,
     per_log,
     curvature,
-    columns,
-    starts,
     direct,
     clustered,
 ):
-    """Walk the tree for every group of receivers (a sphere: ``rcv_points`` centres, ``rcv_spread``
-    radii, mm): count the lit sources and clusters it evaluates (``columns`` empty), or write their
-    columns (source ``j`` or ``n + node``) from ``starts[o]`` on. A node is a cluster when the sphere is
-    outside the node's and ``radius < theta * (distance - spread)`` (then ``radius < theta * distance``
-    for every point of the sphere), and its aggregate's error bound (:class:`Opening`) at the sphere's
-    nearest point is within ``allow[o]`` in every channel. Groups ``lo .. hi - 1``
-    (:func:`~translucency.threads.for_ranges`)."""
+    """Walk the tree for groups ``lo .. hi - 1`` of receivers (a sphere: ``rcv_points`` centres, ``rcv_spread``
+    radii, mm): count the lit sources and clusters each evaluates into ``direct`` and ``clustered``, and return
+    their columns (source ``j`` or ``n + node``), group after group, in one array that grows as it fills. A
+    node is a cluster when the sphere is outside the node's and ``radius < theta * (distance - spread)`` (then
+    ``radius < theta * distance`` for every point of the sphere), and its aggregate's error bound
+    (:class:`Opening`) at the sphere's nearest point is within ``allow[o]`` in every channel."""
     n_src = lit.shape[0]
     n_c = node_flux.shape[1]
     n_bound = bound.shape[1]
-    write = columns.shape[0] > 0
     theta2 = theta * theta
+    columns = np.empty(max(1024, 256 * (hi - lo)), dtype=np.int64)
+    at = 0
+    stack = np.empty(128, dtype=np.int64)
     for o in range(lo, hi):
-        stack = np.empty(128, dtype=np.int64)
         top = 1
         stack[0] = 0
         px = rcv_points[o, 0]
@@ -640,7 +639,6 @@ def _traverse(
         pz = rcv_points[o, 2]
         n_direct = 0
         n_cluster = 0
-        at = starts[o] if write else 0
         while top > 0:
             top -= 1
             k = stack[top]
@@ -665,18 +663,20 @@ def _traverse(
                     if (spread2 + rk * rk * curvature[c]) * node_flux[k, c] * bound[c, at_bound] > allow[o, c]:
                         accept = False
                         break
+            if at + (end[k] - start[k]) + 1 > columns.shape[0]:  # room for this node's entries
+                grown = np.empty(2 * columns.shape[0] + (end[k] - start[k]), dtype=np.int64)
+                grown[:at] = columns[:at]
+                columns = grown
             if accept:
-                if write:
-                    columns[at] = n_src + k
-                    at += 1
+                columns[at] = n_src + k
+                at += 1
                 n_cluster += 1
             elif left[k] < 0:
                 for i in range(start[k], end[k]):
                     j = order[i]
                     if lit[j]:
-                        if write:
-                            columns[at] = j
-                            at += 1
+                        columns[at] = j
+                        at += 1
                         n_direct += 1
             else:
                 stack[top] = left[k]
@@ -684,6 +684,7 @@ def _traverse(
                 top += 2
         direct[o] = n_direct
         clustered[o] = n_cluster
+    return columns[:at]
 
 
 #: The compiled kernels of the source tree's build and traversal: numba compiles each on first use; the set-up compiles
