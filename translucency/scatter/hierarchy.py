@@ -49,8 +49,10 @@ THETA_MAX = 0.5
 EPS_PER_TOL = 0.5
 #: The receivers whose first estimate sets the allowance's floor: those with the most incident flux.
 BRIGHTEST_RECEIVERS = 64
-#: The pair bound's table: first and last distance (mm) and the number of log-spaced distances.
-BOUND_TABLE_MM = (1e-3, 1e5, 4000)
+#: The pair bound's table: first and last distance (mm) and the number of log-spaced distances. A node nearer than
+#: the first distance would take the table's first value, below its own bound: no cluster is that near unless
+#: 1 / sigma_t' is. Beyond the last, the bound is 0 in double precision.
+BOUND_TABLE_MM = (1e-6, 1e5, 4000)
 #: No cluster closer than CLUSTER_MEAN_FREE_PATHS / min sigma_t' to the receiver (the solver's
 #: ``min_distance``): nearer than that S_d varies with the angles between normals and refracted
 #: directions as much as with the distance, which a cluster's size-over-distance test does not see.
