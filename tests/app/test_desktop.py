@@ -72,6 +72,8 @@ def test_the_window_appears_before_the_scan_is_solved(qtbot, sphere_file):
     qtbot.waitExposed(main)
     try:
         assert main.state is None or main.state.result is None  # shown first, solved later
+        free = main.screen().availableGeometry()  # the default size fits the screen, the side panel on it
+        assert main.width() <= free.width() and main.height() <= free.height()
         qtbot.waitUntil(lambda: _settled(main), timeout=SOLVE_WAIT_S * 1000)
     finally:
         main.close()

@@ -58,7 +58,7 @@ def test_an_spp_over_the_time_limit_is_refused_after_the_first_seconds(small_sph
     err = capsys.readouterr().err
     assert code != 0 and time.perf_counter() - start < 60
     assert re.fullmatch(
-        r"translucency: error: --spp 100000000 would take about .* over the time limit of 60 s; lower --spp to \d+, "
+        r"translucency: error: --spp 100000000 would take at least .* over the time limit of 60 s; lower --spp to \d+, "
         r"or raise --time-limit\.",
         one_sentence(err),
     )

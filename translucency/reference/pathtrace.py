@@ -773,9 +773,9 @@ def trace_radiance(
         now = time.perf_counter()
         calibrated = time_limit is not None and CALIBRATION_SECONDS <= now - started and finished < n_paths
         shown = progress is not None and (now - last[0] >= PROGRESS_SECONDS or finished >= n_paths)
-        done = work.share(finished, n_paths, ages) if calibrated or shown else 0.0
         if calibrated:
-            check_time(time_limit, now - started, done, spp)
+            check_time(time_limit, now - started, work.share(finished, n_paths, ages, largest=True), spp)
+        done = work.share(finished, n_paths, ages) if shown else 0.0
         if not shown:
             return
         last[0] = now

@@ -33,42 +33,48 @@ def check_seed(seed) -> int:
 
 def check_time(time_limit: float, elapsed: float, done: float, spp: int) -> None:
     """Refuse the tracing when it would take longer than ``time_limit`` at the rate so far (the share ``done`` of
-    its work in ``elapsed`` seconds), naming the ``spp`` that would fit."""
+    its work in ``elapsed`` seconds), naming the ``spp`` that would fit. ``done`` should be the largest share the
+    paths so far allow (:meth:`WorkTally.share` with ``largest=True``): a tracing is refused only when even that
+    says it would not fit."""
     projected = elapsed / max(done, 1e-9)
     if projected <= time_limit:
         return
     fits = int(spp * time_limit / projected)
-    advice = f"lower --spp to {fits}" if fits >= 2 else "trace a smaller mesh or a proxy of it"
+    advice = f"lower --spp to {fits}" if fits >= 2 else "trace a mesh with fewer vertices"
     raise BudgetError(
-        f"--spp {spp} would take about {format_seconds(projected)} at the rate of the first paths, over the time "
+        f"--spp {spp} would take at least {format_seconds(projected)} at the rate of the paths so far, over the time "
         f"limit of {format_seconds(time_limit)}; {advice}, or raise --time-limit."
     )
 
 
-def expected_flights(ended, ages) -> float:
+def expected_flights(ended, ages, tail: bool = True) -> float:
     """Mean flights of a path, from the paths finished so far and those still walking (Kaplan-Meier).
 
     ``ended[a]`` paths finished after ``a`` flights; ``ages`` are the flights of the paths still walking (they
     will make at least one more). The hazard at ``a`` is ``ended[a]`` over the paths that reached ``a``
     flights; the survival ``S(a)`` is the product of one minus the hazards up to ``a``, and the mean is
     ``sum_a S(a)``, continued past the longest walk so far as if the hazard of its last tenth held on
-    (geometric). Short paths (out again near where they entered) finish first and long ones are still walking:
-    the mean of the finished lengths alone would be far too short, and a share of paths finished far ahead of
-    the time.
+    (geometric; ``tail=False``: not continued, the least mean the paths so far allow). Short paths (out again
+    near where they entered) finish first and long ones are still walking: the mean of the finished lengths
+    alone would be far too short, and a share of paths finished far ahead of the time. Early on, the few paths
+    finished late make the continued tail uncertain by orders of magnitude.
     """
     ages = np.asarray(ages, dtype=np.int64)
     top = max(int(np.flatnonzero(ended).max(initial=0)), int(ages.max(initial=0)))
     if top == 0:
         return 1.0
-    ended = np.asarray(ended[: top + 1], dtype=np.float64)
+    counted = np.zeros(top + 1)  # walking paths may be older than any finished one: ended is shorter then
+    counted[: min(len(ended), top + 1)] = np.asarray(ended[: top + 1], dtype=np.float64)
     walking = np.bincount(ages, minlength=top + 1)[: top + 1].astype(np.float64)
     # reached[a]: paths that made at least a flights (finished at a or later, or walking at age a or more)
-    reached = np.cumsum((ended + walking)[::-1])[::-1]
-    hazard = np.divide(ended, reached, out=np.zeros_like(ended), where=reached > 0)
+    reached = np.cumsum((counted + walking)[::-1])[::-1]
+    hazard = np.divide(counted, reached, out=np.zeros_like(counted), where=reached > 0)
     survival = np.cumprod(1.0 - hazard[1:])  # S(a) for a = 1 .. top; S(0) = 1
-    tail = hazard[max(1, int(0.9 * top)) :]
-    tail_hazard = float(tail[tail > 0].mean()) if np.any(tail > 0) else 0.0
-    beyond = survival[-1] * (1.0 / tail_hazard - 1.0) if tail_hazard > 0 else 0.0
+    beyond = 0.0
+    if tail:
+        last = hazard[max(1, int(0.9 * top)) :]
+        tail_hazard = float(last[last > 0].mean()) if np.any(last > 0) else 0.0
+        beyond = survival[-1] * (1.0 / tail_hazard - 1.0) if tail_hazard > 0 else 0.0
     return float(1.0 + survival[:-1].sum() + survival[-1] + beyond)
 
 
@@ -89,13 +95,15 @@ class WorkTally:
             self.ended = grown
         self.ended += np.bincount(lengths, minlength=self.ended.size)
 
-    def share(self, finished: int, n_paths: int, ages) -> float:
+    def share(self, finished: int, n_paths: int, ages, largest: bool = False) -> float:
         """The share of the work done: the flights so far over ``n_paths`` times the mean flights of a path
         (:func:`expected_flights`, from the paths finished and those walking, of ``ages`` flights so far); 1 only
-        when every path has finished."""
+        when every path has finished. ``largest``: the largest share the paths so far allow (the mean not
+        continued past the longest walk), what a refusal is judged on."""
         if finished >= n_paths:
             return 1.0
-        return min(self.flights / (n_paths * expected_flights(self.ended, ages)), 0.99)
+        mean = expected_flights(self.ended, ages, tail=not largest)
+        return min(self.flights / (n_paths * mean), 0.99)
 
 
 def progress_line(done: float, elapsed: float, samples: int, median_error: float) -> str:

@@ -20,7 +20,7 @@ import time
 from pathlib import Path
 
 import numpy as np
-from PySide6 import QtCore, QtWidgets
+from PySide6 import QtCore, QtGui, QtWidgets
 
 from ...errors import TranslucencyError
 from ..viewer.layers import ScanLayers
@@ -36,6 +36,20 @@ from .status_line import StatusLine
 NOTES_SHOWN = 3
 #: Time between showing the window and starting to load its scan, ms (the window paints first).
 OPEN_DELAY_MS = 150
+
+
+#: The share of the screen's free area a window takes at most.
+SCREEN_SHARE = 0.95
+
+
+def fitted_size(size) -> tuple[int, int]:
+    """``size`` (pixels) shrunk to :data:`SCREEN_SHARE` of the primary screen's free area where it is larger: the
+    side panel and the status bar stay on the screen."""
+    screen = QtGui.QGuiApplication.primaryScreen()
+    if screen is None:
+        return int(size[0]), int(size[1])
+    free = screen.availableGeometry()
+    return min(int(size[0]), int(SCREEN_SHARE * free.width())), min(int(size[1]), int(SCREEN_SHARE * free.height()))
 
 
 class MainWindow(QtWidgets.QMainWindow):
@@ -90,7 +104,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self._frame_time = None
         self.notes = []
         self.setWindowTitle("translucency")
-        self.resize(*window_size)
+        self.resize(*fitted_size(window_size))
         self.setAcceptDrops(True)
 
         central = QtWidgets.QWidget()
