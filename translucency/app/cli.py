@@ -306,6 +306,8 @@ def cmd_view(args) -> int:
         args.method = DEFAULT_METHOD if one_picture else VIEWER_METHOD
     if args.tol is None:
         args.tol = DEFAULT_TOL if one_picture else VIEWER_TOL
+    if one_picture and args.resolution == "interactive":
+        args.resolution = "full"  # one picture: every vertex (no later frame for a proxy to be quick for)
     interactive = args.resolution == "interactive"
     settings = solver_settings(args, resolution="full") if interactive else solver_settings(args)
     lights = lights_from_args(args)
