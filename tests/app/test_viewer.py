@@ -336,6 +336,7 @@ def test_false_colour_shows_the_luminance_with_a_colour_bar_and_no_solve(sphere)
     from matplotlib import colormaps
 
     from translucency.app.display import luminance
+    from translucency.app.viewer.layers import LOWER_EDGE
 
     view = Viewer(sphere, "marble", window_size=(480, 360), off_screen=True)
     try:
@@ -356,7 +357,7 @@ def test_false_colour_shows_the_luminance_with_a_colour_bar_and_no_solve(sphere)
             return (np.abs(pixels[:, None, :] - lut[None]).sum(axis=2).min(axis=1) <= 6).mean()
 
         assert on_map(picture) > 0.9 and on_map(srgb) < 0.5
-        assert view.state.false_colour_title in [bar.GetTitle() for bar in view.plotter.scalar_bars.values()]
+        assert view.layers.bar_title.GetText(LOWER_EDGE) == view.state.false_colour_title  # under the bar's labels
         view.set_false_colour_scale("linear")
         assert not (view.screenshot() == picture).all()
         view.set_false_colour(False)

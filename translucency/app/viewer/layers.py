@@ -16,6 +16,10 @@ from .state import ViewerState
 UNSHADED_COLOUR = "#b8b8b8"
 
 
+#: Where a corner annotation (PyVista's ``add_text`` at ``"lower_edge"``) keeps the text of the lower edge.
+LOWER_EDGE = 4
+
+
 class ScanLayers:
     """The scan drawn in ``plotter``'s current renderer as sRGB display colours or as false colour.
 
@@ -48,11 +52,23 @@ class ScanLayers:
             np.ones(n),
             (0.1, 1.0),
             "log",
-            title=" " if scalar_bar is not None else None,
+            title="" if scalar_bar is not None else None,
             scalar_bar=scalar_bar,
         )
+        #: The bar's title, a text of its own at the window's lower edge, under the tick labels (VTK draws a
+        #: horizontal bar's title over them); None without a bar.
+        self.bar_title = None
         if self.scalar_bar is not None:
-            self.scalar_bar.SetTextPositionToPrecedeScalarBar()  # tick labels under the bar, apart from the title
+            self.scalar_bar.SetTextPositionToPrecedeScalarBar()  # tick labels under the bar
+            self.bar_title = plotter.add_text(
+                " ",
+                position="lower_edge",
+                font_size=scalar_bar.get("title_font_size", 12) * 0.75,
+                color=scalar_bar.get("color", "white"),
+                name="false colour title",
+            )
+            self.bar_title.SetMaximumFontSize(int(scalar_bar.get("title_font_size", 12)) + 2)
+            self.bar_title.SetVisibility(False)
         self.unshaded_actor = plotter.add_mesh(
             self.poly.copy(deep=False), color=UNSHADED_COLOUR, smooth_shading=True, name="scan unshaded"
         )
@@ -65,6 +81,7 @@ class ScanLayers:
         self.false_actor.SetVisibility(False)
         if self.scalar_bar is not None:
             self.scalar_bar.SetVisibility(False)
+            self.bar_title.SetVisibility(False)
 
     def recolour(self, state: ViewerState) -> None:
         """New colours, or new false-colour values, range, scale and title, from ``state`` (no render).
@@ -78,6 +95,7 @@ class ScanLayers:
         self.false_actor.SetVisibility(false_colour)
         if self.scalar_bar is not None:
             self.scalar_bar.SetVisibility(false_colour)
+            self.bar_title.SetVisibility(false_colour)
         if not false_colour:
             self.poly.point_data["colors"][:] = state.colors()
             return
@@ -88,4 +106,4 @@ class ScanLayers:
         self.false_actor.mapper.scalar_range = (low, high)
         table.scalar_range = (low, high)
         if self.scalar_bar is not None:
-            self.scalar_bar.SetTitle(state.false_colour_title)
+            self.bar_title.SetText(LOWER_EDGE, state.false_colour_title)

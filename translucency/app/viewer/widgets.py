@@ -36,7 +36,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..framing import scan_camera
+from ..framing import PYVISTA_BAR_ROOM, scan_camera
 from ..render import new_plotter
 from .controls import ControlStrip, strip_plotter
 from .forwarding import attribute_of
@@ -48,13 +48,33 @@ from .state import ViewerState
 SCALAR_BAR = {
     "color": "white",
     "position_x": 0.15,
-    "position_y": 0.01,
+    "position_y": 0.05,
     "width": 0.7,
-    "height": 0.09,
+    "height": 0.1,
     "fmt": "%.3g",
     "title_font_size": 12,
     "label_font_size": 11,
 }
+
+
+def framings(mesh, up, renderer, window_size, direction) -> tuple[list, list]:
+    """The scan framed whole from ``direction`` (:func:`~translucency.app.framing.scan_camera`), without and with
+    room under it for the false colour's bar (PyVista camera positions)."""
+    width, height = renderer.GetSize() if renderer.GetSize()[1] else window_size
+    aspect = width / max(height, 1)
+    return scan_camera(mesh, up, aspect, direction), scan_camera(mesh, up, aspect, direction, PYVISTA_BAR_ROOM)
+
+
+def reframe_for_bar(renderer, framed, bar_shown: bool) -> None:
+    """Frame the scan with room for the false colour's bar under it (``bar_shown``) or without, when the camera is
+    at the other of the two ``framed`` positions (:func:`framings`); a camera the user has moved stays."""
+    before, after = (framed[0], framed[1]) if bar_shown else (framed[1], framed[0])
+
+    def flat(position):
+        return np.concatenate([np.ravel(np.asarray(part, dtype=float)) for part in position])
+
+    if np.allclose(flat(renderer.camera_position), flat(before)):
+        renderer.camera_position = after
 
 
 def renderer_pixels(image, renderer) -> np.ndarray:
@@ -212,13 +232,9 @@ class Viewer:
         self.layers = ScanLayers(self.plotter, self.base_mesh, scalar_bar=SCALAR_BAR)
         #: The display-colour and false-colour layers' meshes (their arrays are what is shown).
         self.poly, self.false_colour_poly = self.layers.poly, self.layers.false_colour_poly
-        width, height = self.renderer.GetSize() if self.renderer.GetSize()[1] else self.plotter.window_size
-        self.renderer.camera_position = scan_camera(
-            self.base_mesh,
-            self.up,
-            width / max(height, 1),
-            self.state.front if camera_direction is None else camera_direction,
-        )
+        direction = self.state.front if camera_direction is None else camera_direction
+        self._framings = framings(self.base_mesh, self.up, self.renderer, self.plotter.window_size, direction)
+        self.renderer.camera_position = self._framings[0]
         if widgets:
             self.controls = ControlStrip(self)
         #: The VTK widgets of the control strip by name (:class:`~translucency.app.viewer.controls.ControlStrip`).
@@ -276,6 +292,7 @@ class Viewer:
     def set_false_colour(self, on: bool, quantity: str | None = None) -> None:
         """Show the false colour (on: luminance, or ``quantity``, in physical units) or the sRGB view; no solve."""
         if self.state.set_false_colour(on, quantity):
+            reframe_for_bar(self.renderer, self._framings, self.state.false_colour)
             self._redisplay()
 
     def set_false_colour_scale(self, scale: str) -> None:
