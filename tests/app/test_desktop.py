@@ -65,6 +65,7 @@ def test_the_window_shows_the_scan_solved_and_says_how(window):
 
 def test_the_window_appears_before_the_scan_is_solved(qtbot, sphere_file):
     from translucency.app.desktop import MainWindow
+    from translucency.app.shading.settings import viewer_settings
 
     main = MainWindow(sphere_file, unit="mm")
     qtbot.addWidget(main)
@@ -74,6 +75,9 @@ def test_the_window_appears_before_the_scan_is_solved(qtbot, sphere_file):
         assert main.state is None or main.state.result is None  # shown first, solved later
         free = main.screen().availableGeometry()  # the default size fits the screen, the side panel on it
         assert main.width() <= free.width() and main.height() <= free.height()
+        settings = viewer_settings()  # the panel shows the starting settings from the first moment
+        assert main.panel.tol.currentText() == f"{settings.tol:g}" and main.panel.bounces.value() == settings.bounces
+        assert main.panel.unit.currentText() == "mm"
         qtbot.waitUntil(lambda: _settled(main), timeout=SOLVE_WAIT_S * 1000)
     finally:
         main.close()

@@ -275,6 +275,22 @@ class SidePanel(QtWidgets.QWidget):
     # ------------------------------------------------------------------------------------------------
     # the state shown, without a signal
 
+    def show_settings(self, settings, unit: str | None) -> None:
+        """The solver's controls where the starting ``settings`` (a ShadeSettings) and file ``unit`` (None: left
+        as it is, inferred when the scan loads) put them, before a scan is loaded; no signal is sent."""
+        widgets = (self.model, self.tol, self.bounces, self.unit)
+        for widget in widgets:
+            widget.blockSignals(True)
+        try:
+            self.model.setCurrentText(settings.model)
+            self.tol.setEditText(f"{settings.tol:g}")
+            self.bounces.setValue(int(settings.bounces))
+            if unit is not None and self.unit.findText(str(unit)) >= 0:
+                self.unit.setCurrentText(str(unit))
+        finally:
+            for widget in widgets:
+                widget.blockSignals(False)
+
     def show_state(self, state: ViewerState, light_kind: str, distance: float, unit: str) -> None:
         """Every control where ``state`` (and the window's light kind, point distance and unit) are."""
         widgets = (

@@ -23,6 +23,7 @@ import numpy as np
 from PySide6 import QtCore, QtGui, QtWidgets
 
 from ...errors import TranslucencyError
+from ..shading.settings import viewer_settings
 from ..viewer.layers import ScanLayers
 from .changes import connect_panel
 from .colour_bar import ColourBar
@@ -125,6 +126,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.setCentralWidget(central)
 
         self.panel = SidePanel()
+        self.panel.show_settings(settings or viewer_settings(), unit)  # before the scan loads, not the widgets' own
         dock = QtWidgets.QDockWidget("Controls", self)
         dock.setObjectName("controls")
         dock.setWidget(self.panel)
