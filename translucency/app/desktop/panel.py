@@ -7,6 +7,7 @@ puts the controls where the state is without emitting anything.
 
 from __future__ import annotations
 
+import contextlib
 import math
 
 from PySide6 import QtCore, QtWidgets
@@ -121,6 +122,18 @@ class MaterialChooser(QtWidgets.QGroupBox):
         # the definition is checked where it is made, with a sentence on a bad one (translucency.scatter.definition)
         reflectance = values[0] if len(values) == 1 else values if values else text
         self.material_chosen.emit({"reflectance": reflectance, "mfp": self.mfp.value(), "name": "own material"})
+
+
+@contextlib.contextmanager
+def quiet(widgets):
+    """Within the block, ``widgets`` send no signal (the panel shows a state it did not choose)."""
+    for widget in widgets:
+        widget.blockSignals(True)
+    try:
+        yield
+    finally:
+        for widget in widgets:
+            widget.blockSignals(False)
 
 
 class SidePanel(QtWidgets.QWidget):
@@ -278,18 +291,15 @@ class SidePanel(QtWidgets.QWidget):
     def show_settings(self, settings, unit: str | None) -> None:
         """The solver's controls where the starting ``settings`` (a ShadeSettings) and file ``unit`` (None: left
         as it is, inferred when the scan loads) put them, before a scan is loaded; no signal is sent."""
-        widgets = (self.model, self.tol, self.bounces, self.unit)
-        for widget in widgets:
-            widget.blockSignals(True)
-        try:
-            self.model.setCurrentText(settings.model)
-            self.tol.setEditText(f"{settings.tol:g}")
-            self.bounces.setValue(int(settings.bounces))
-            if unit is not None and self.unit.findText(str(unit)) >= 0:
-                self.unit.setCurrentText(str(unit))
-        finally:
-            for widget in widgets:
-                widget.blockSignals(False)
+        with quiet((self.model, self.tol, self.bounces, self.unit)):
+            self._show_solver(settings.model, settings.tol, settings.bounces, unit)
+
+    def _show_solver(self, model: str, tol: float, bounces: int, unit: str | None) -> None:
+        self.model.setCurrentText(model)
+        self.tol.setEditText(f"{tol:g}")
+        self.bounces.setValue(int(bounces))
+        if unit is not None and self.unit.findText(str(unit)) >= 0:
+            self.unit.setCurrentText(str(unit))
 
     def show_state(self, state: ViewerState, light_kind: str, distance: float, unit: str) -> None:
         """Every control where ``state`` (and the window's light kind, point distance and unit) are."""
@@ -309,13 +319,8 @@ class SidePanel(QtWidgets.QWidget):
             self.view_dependent,
             self.specular,
         )
-        for widget in widgets:
-            widget.blockSignals(True)
-        try:
-            self.model.setCurrentText(state.model)
-            self.tol.setEditText(f"{state.tol:g}")
-            self.bounces.setValue(int(state.bounces))
-            self.unit.setCurrentText(unit)
+        with quiet(widgets):
+            self._show_solver(state.model, state.tol, state.bounces, unit)
             self.light_kind.setCurrentText(light_kind)
             if state.azimuth is not None:
                 self.azimuth.setValue(state.azimuth)
@@ -335,9 +340,6 @@ class SidePanel(QtWidgets.QWidget):
             self.view_dependent.setChecked(state.view_dependent)
             self.specular.setChecked(state.specular)
             self.materials.select(state.medium.name)
-        finally:
-            for widget in widgets:
-                widget.blockSignals(False)
 
     def set_angles(self, azimuth: float, elevation: float) -> None:
         """Show the light's angles (degrees) as the handle in the view is dragged, without a signal."""
