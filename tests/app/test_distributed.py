@@ -69,3 +69,15 @@ def test_bake_of_one_scan_with_a_scheduler_solves_it_on_the_workers(cluster, tmp
     there = read_baked_ply(tmp_path / "there" / "torus_marble.ply")
     np.testing.assert_allclose(there.radiance, here.radiance, rtol=1e-12, atol=1e-15)
     assert "blocks on the cluster" in capsys.readouterr().err
+
+
+def test_a_batch_on_the_cluster_says_its_sentences_as_the_command_line_does(cluster, tmp_path, capsys):
+    """Scans baked by the workers tell, in the terminal, the flags of the command line (``--unit``), not the
+    Python keywords of the library they run (``unit=``)."""
+    paths = []
+    for name in ("a", "b"):
+        paths.append(tmp_path / f"{name}.ply")
+        to_pyvista(TriangleMesh(*torus(20.0, 8.0, 24, 12))).save(str(paths[-1]))
+    code = cli.main(["bake", *map(str, paths), "-o", str(tmp_path / "out"), "--scheduler", cluster.scheduler_address])
+    err = capsys.readouterr().err
+    assert code == 0 and "no --unit given" in err and "unit=" not in err

@@ -490,7 +490,12 @@ def bake_files(
                 done(0, bake_file(sources[0], outputs[0], settings, stage, said, solver=BlockSolver(client)))
             elif client is not None:  # the workers may run elsewhere: absolute paths
                 jobs = [
-                    (None if source is None else os.path.abspath(source), os.path.abspath(target), settings)
+                    (
+                        command_line_active(),
+                        None if source is None else os.path.abspath(source),
+                        os.path.abspath(target),
+                        settings,
+                    )
                     for source, target in zip(sources, outputs)
                 ]
                 _run_on_dask(client, jobs, done)
@@ -626,12 +631,14 @@ def _dask_client(scheduler):
         ) from None
 
 
-def _dask_task(path, output, settings):
-    """:func:`bake_file` on a Dask worker, with numba limited to ``cores // nthreads`` of the worker."""
+def _dask_task(command_line: bool, path, output, settings):
+    """:func:`bake_file` on a Dask worker, with numba limited to ``cores // nthreads`` of the worker and its
+    sentences spelling settings as the parent does."""
     from distributed import get_worker
 
     _use_threads(max(1, available_cores() // max(1, get_worker().state.nthreads)))
-    return bake_file(path, output, settings)
+    with command_line_spelling(command_line):
+        return bake_file(path, output, settings)
 
 
 def _run_on_dask(client, jobs, done) -> None:
