@@ -318,15 +318,24 @@ def aggregated_sources(tree: SourceTree, points, normals, w12, flux) -> Aggregat
     node_flux, _, node_pos, node_nrm, node_dir = aggregate(
         tree.order, tree.start, tree.end, tree.left, tree.right, points, normals, w12, flux
     )
-    n = points.shape[0]
-    table = np.empty((9, n + tree.n_nodes))  # filled in place: no stacked copies of the sources
-    for k, (source, node) in enumerate(((points, node_pos), (normals, node_nrm), (w12, node_dir))):
-        table[3 * k : 3 * k + 3, :n] = source.T
-        table[3 * k : 3 * k + 3, n:] = node.T
-    weights = np.empty((flux.shape[1], n + tree.n_nodes))
-    weights[:, :n] = flux.T
-    weights[:, n:] = node_flux.T
+    table, weights = _source_table((points, normals, w12, flux), (node_pos, node_nrm, node_dir, node_flux))
     return AggregatedSources(table, weights, np.ascontiguousarray(node_flux), flux.sum(axis=1) > 0)
+
+
+def _source_table(sources, nodes) -> tuple[np.ndarray, np.ndarray]:
+    """The ``(table (9, s + k), weights (C, s + k))`` of :class:`AggregatedSources`: first the ``sources``
+    ``(positions, normals, w12, flux)``, then the ``nodes``' aggregates in the same order, filled in place (no
+    stacked copies)."""
+    n = sources[0].shape[0]
+    total = n + nodes[0].shape[0]
+    table = np.empty((9, total))
+    for k in range(3):
+        table[3 * k : 3 * k + 3, :n] = sources[k].T
+        table[3 * k : 3 * k + 3, n:] = nodes[k].T
+    weights = np.empty((sources[3].shape[1], total))
+    weights[:, :n] = sources[3].T
+    weights[:, n:] = nodes[3].T
+    return table, weights
 
 
 @dataclass(frozen=True)
@@ -571,15 +580,12 @@ def sampled_evaluations(model, tree, points, normals, w12, flux, rcv, bright, pa
         starts, direct, clustered, columns = walk_lists(
             tree, node_flux, lit, points[indices], rule, None, math.inf, group
         )
-        used, position = np.unique(columns, return_inverse=True)
-        table = np.empty((9, used.size))
-        weights = np.empty((flux.shape[1], used.size))
-        own, node = used < n, used[used >= n] - n
-        for k, (source, aggregated) in enumerate(((points, node_pos), (normals, node_nrm), (w12, node_dir))):
-            table[3 * k : 3 * k + 3, own] = source[used[own]].T
-            table[3 * k : 3 * k + 3, ~own] = aggregated[node].T
-        weights[:, own] = flux[used[own]].T
-        weights[:, ~own] = node_flux[node].T
+        used, position = np.unique(columns, return_inverse=True)  # sorted: the sources, then the nodes
+        own, node = used[used < n], used[used >= n] - n
+        table, weights = _source_table(
+            (points[own], normals[own], w12[own], flux[own]),
+            (node_pos[node], node_nrm[node], node_dir[node], node_flux[node]),
+        )
         compact = AggregatedSources(table, weights, node_flux, lit)
         lists = (starts, direct, clustered, position.astype(np.int64).ravel())
         B = _sum_of_lists(model, points[indices], normals[indices], compact, lists, group, lanes)
@@ -665,8 +671,9 @@ def _traverse(
                     if (spread2 + rk * rk * curvature[c]) * node_flux[k, c] * bound[c, at_bound] > allow[o, c]:
                         accept = False
                         break
-            if at + (end[k] - start[k]) + 1 > columns.shape[0]:  # room for this node's entries
-                grown = np.empty(2 * columns.shape[0] + (end[k] - start[k]), dtype=np.int64)
+            listed = 1 if accept else (end[k] - start[k] if left[k] < 0 else 0)  # entries this node may write
+            if at + listed > columns.shape[0]:
+                grown = np.empty(2 * columns.shape[0] + listed, dtype=np.int64)
                 grown[:at] = columns[:at]
                 columns = grown
             if accept:
