@@ -103,11 +103,16 @@ class FarMatrix:
         n = self.order.size
         # per channel, the sources' four terms one after another: a block's columns are one contiguous run
         sorted_values = np.ascontiguousarray(np.asarray(values, dtype=np.float64)[self.order].transpose(1, 0, 2))
+        # blocks whose sources take in no light are skipped: a light in shadow on half the surface reads half the blocks
+        lit_before = np.zeros(n + 1, dtype=np.int64)
+        np.cumsum(np.any(sorted_values[:, :, 0] != 0.0, axis=0), out=lit_before[1:])
         sorted_values = sorted_values.reshape(self.n_channels, n * AFFINE_TERMS)
         workers = thread_count()
         out = np.zeros((workers, n, self.n_channels))
-        for_ranges(_apply_low_rank, self.low_rank.shape[0], self.low_rank, self.U, self.V, sorted_values, out)
-        for_ranges(_apply_dense, self.dense.shape[0], self.dense, self.D, sorted_values, out)
+        for_ranges(
+            _apply_low_rank, self.low_rank.shape[0], self.low_rank, self.U, self.V, sorted_values, lit_before, out
+        )
+        for_ranges(_apply_dense, self.dense.shape[0], self.dense, self.D, sorted_values, lit_before, out)
         B = np.empty((n, self.n_channels))
         B[self.order] = out.sum(axis=0)
         return B
@@ -343,28 +348,32 @@ def _low_rank_block(blocks, k):
 
 
 @numba.njit(cache=True, nogil=True, fastmath=True, error_model="numpy")
-def _apply_low_rank(worker, lo, hi, blocks, U, V, values, out):
+def _apply_low_rank(worker, lo, hi, blocks, U, V, values, lit_before, out):
     """``out[worker, rows, c] += U (V values[c, columns])`` for the low-rank blocks ``lo .. hi - 1`` (``values``
-    per channel, four terms per source)."""
+    per channel, four terms per source), skipping those without a lit source (``lit_before[j]``: how many of the
+    sources before ``j`` are lit)."""
     target = out[worker]
     inner = np.zeros(128)
     for k in range(lo, hi):
         r0, r1, c0, c1, c, rank, u_at, v_at = _low_rank_block(blocks, k)
+        if lit_before[c1] == lit_before[c0]:
+            continue
         n = (c1 - c0) * AFFINE_TERMS
         if inner.shape[0] < rank:
             inner = np.zeros(2 * rank)
         source = values[c, c0 * AFFINE_TERMS : c1 * AFFINE_TERMS]
+        # rows taken as slices: indexed from 0 by the loop's own counter, the products vectorise
         for q in range(rank):
-            row = v_at + q * n
+            row = V[v_at + q * n : v_at + (q + 1) * n]
             s = 0.0
             for j in range(n):
-                s += V[row + j] * source[j]
+                s += row[j] * source[j]
             inner[q] = s * V_STEP
         for a in range(r1 - r0):
-            row = u_at + a * rank
+            row = U[u_at + a * rank : u_at + (a + 1) * rank]
             s = 0.0
             for q in range(rank):
-                s += U[row + q] * inner[q]
+                s += row[q] * inner[q]
             target[r0 + a, c] += s
 
 
@@ -388,21 +397,24 @@ def _entries_of(worker, lo, hi, blocks, U, V, starts, columns, out):
 
 
 @numba.njit(cache=True, nogil=True, fastmath=True, error_model="numpy")
-def _apply_dense(worker, lo, hi, blocks, D, values, out):
+def _apply_dense(worker, lo, hi, blocks, D, values, lit_before, out):
     """``out[worker, rows, c] += D values[c, columns]`` for the dense blocks ``lo .. hi - 1`` and their
-    channels (``values`` per channel, four terms per source)."""
+    channels (``values`` per channel, four terms per source), skipping those without a lit source (``lit_before``
+    as in :func:`_apply_low_rank`)."""
     target = out[worker]
     for k in range(lo, hi):
         r0, r1, c0, c1, first, last, at = _dense_block(blocks, k)
+        if lit_before[c1] == lit_before[c0]:
+            continue
         m = r1 - r0
         n = (c1 - c0) * AFFINE_TERMS
         for c in range(first, last):
             source = values[c, c0 * AFFINE_TERMS : c1 * AFFINE_TERMS]
             for a in range(m):
-                row = at + ((c - first) * m + a) * n
+                row = D[at + ((c - first) * m + a) * n : at + ((c - first) * m + a + 1) * n]
                 s = 0.0
                 for j in range(n):
-                    s += D[row + j] * source[j]
+                    s += row[j] * source[j]
                 target[r0 + a, c] += s
 
 

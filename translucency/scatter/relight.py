@@ -145,6 +145,7 @@ class RelightOperator:
             self.near_starts[:-1],
             self.near_coefs,
             np.ascontiguousarray(near_values.reshape(n, -1)),
+            np.any(flux != 0.0, axis=1),
             B,
         )
         return np.maximum(B, 0.0)
@@ -304,27 +305,30 @@ def prepare(
 
 
 @numba.njit(cache=True, nogil=True, fastmath=True, error_model="numpy")
-def _apply_rows(worker, lo, hi, starts, counts, columns, offsets, coefs, values, out):
+def _apply_rows(worker, lo, hi, starts, counts, columns, offsets, coefs, values, lit, out):
     """``out[r, c] += sum_k coefs[offsets[r] + k, c] . values[columns[starts[r] + k], c]`` over ``k <
-    counts[r]`` for receivers ``lo .. hi - 1`` (each channel's terms contiguous: ``a Phi + b . Psi (+ Q : Xi)``)."""
+    counts[r]`` for receivers ``lo .. hi - 1`` (each channel's terms contiguous: ``a Phi + b . Psi (+ Q : Xi)``),
+    the columns without light (``lit`` false) skipped."""
     n_c = out.shape[1]
     width = coefs.shape[1] // n_c
-    total = np.zeros(n_c)
+    terms = np.zeros(coefs.shape[1])  # every channel's terms summed apart, over the row's entries: one vector loop
     for r in range(lo, hi):
-        total[:] = 0.0
+        terms[:] = 0.0
         at = offsets[r]
         first = starts[r]
         for k in range(counts[r]):
+            column = columns[first + k]
+            if not lit[column]:
+                continue
             row = coefs[at + k]
-            value = values[columns[first + k]]
-            for c in range(n_c):
-                base = c * width
-                s = 0.0
-                for t in range(width):
-                    s += row[base + t] * value[base + t]
-                total[c] += s
+            value = values[column]
+            for t in range(terms.shape[0]):
+                terms[t] += row[t] * value[t]
         for c in range(n_c):
-            out[r, c] += total[c]
+            s = 0.0
+            for t in range(c * width, (c + 1) * width):
+                s += terms[t]
+            out[r, c] += s
 
 
 #: The compiled kernels of the relighting operators' fill and products: numba compiles each on first use; the set-up
