@@ -4,7 +4,7 @@ whether its expansions may drop the modified tangent plane.
 Four measurements on the default bunny in marble (docs/physics.md §4, §8.3, §8.7):
 
 * **ranks**: blocks of the relighting kernel (the affine fit ``S_d = a + b . w12`` of
-  :func:`translucency.scatter.kernels.fitted_pairs`, four columns per source) between two clusters of ``m``
+  :func:`translucency.scatter.fits.fitted_pairs`, four columns per source) between two clusters of ``m``
   nearest vertices each, at ratios of cluster radius to centre distance of about 0.35, 0.25 and 0.18; the
   number of singular values needed for a relative Frobenius error of 1e-3 and 1e-4 per channel;
 * **hierarchical matrix**: the whole far field of that kernel as an H-matrix (the kd-tree of
@@ -50,8 +50,9 @@ from translucency.app.shading.scan import load_default_scan  # noqa: E402
 from translucency.app.shading.scene import Scene  # noqa: E402
 from translucency.app.shading.settings import resolve_medium  # noqa: E402
 from translucency.scatter import kernels  # noqa: E402
+from translucency.scatter.fits import AFFINE_TERMS, FIT_WORK_COLUMNS, fit_directions, fitted_pairs  # noqa: E402
 from translucency.scatter.hierarchy import SourceTree  # noqa: E402
-from translucency.scatter.kernels import AFFINE_TERMS, FIT_WORK_COLUMNS, fitted_pairs, pair_three  # noqa: E402
+from translucency.scatter.kernels import pair_three  # noqa: E402
 from translucency.scatter.lights import DirectionalLight  # noqa: E402
 from translucency.scatter.solve import TOL_FLOOR  # noqa: E402
 
@@ -541,7 +542,7 @@ def main():
     mesh = load_default_scan()
     medium = resolve_medium("marble")
     params = kernels.channel_parameters(medium.sigma_a, medium.sigma_s, medium.g, medium.eta, "directional")
-    dirs, pinv = kernels.fit_directions(medium.eta, AFFINE_TERMS)
+    dirs, pinv = fit_directions(medium.eta, AFFINE_TERMS)
     points = np.ascontiguousarray(mesh.points)
     normals = np.ascontiguousarray(mesh.vertex_normals())
     payload = {"info": {**machine_info(), "load_average_start": load_average(), "vertices": len(points)}}

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from translucency.geometry.synthetic import icosphere, torus
-from translucency.scatter import cutoff, kernels, lowrank
+from translucency.scatter import cutoff, fits, kernels, lowrank
 from translucency.scatter.hierarchy import SourceTree
 from translucency.scatter.materials import material
 
@@ -16,19 +16,19 @@ MARBLE = material("marble").medium()
 @numba.njit(cache=True)
 def _every_pair(model, P, N, params, dirs, pinv, values):
     """``sum_j (a + b . w)_oj`` over every source ``j``, per receiver and channel (the fits of
-    :func:`~translucency.scatter.kernels.fitted_pairs` one pair at a time)."""
+    :func:`~translucency.scatter.fits.fitted_pairs` one pair at a time)."""
     n, n_c = P.shape[0], params.shape[0]
     out = np.zeros((n, n_c))
-    work = np.empty((max(dirs.shape[0], 9), kernels.FIT_WORK_COLUMNS))
-    fit = np.empty((n_c, kernels.AFFINE_TERMS))
+    work = np.empty((max(dirs.shape[0], 9), fits.FIT_WORK_COLUMNS))
+    fit = np.empty((n_c, fits.AFFINE_TERMS))
     for o in range(n):
         for j in range(n):
-            kernels.fitted_pairs(
+            fits.fitted_pairs(
                 model, P[o, 0] - P[j, 0], P[o, 1] - P[j, 1], P[o, 2] - P[j, 2], N[j, 0], N[j, 1], N[j, 2],
                 N[o, 0], N[o, 1], N[o, 2], params, dirs, pinv, work, fit,
             )  # fmt: skip
             for c in range(n_c):
-                for t in range(kernels.AFFINE_TERMS):
+                for t in range(fits.AFFINE_TERMS):
                     out[o, c] += fit[c, t] * values[j, c, t]
     return out
 
@@ -63,7 +63,7 @@ def _light(points, normals, rng):
 
 def _build(points, normals, eps, model="directional", held=None, medium=MARBLE):
     params = kernels.channel_parameters(medium.sigma_a, medium.sigma_s, medium.g, medium.eta, model)
-    fit = kernels.fit_directions(medium.eta, kernels.AFFINE_TERMS)
+    fit = fits.fit_directions(medium.eta, fits.AFFINE_TERMS)
     n = len(points)
     held = held or (np.zeros(n + 1, dtype=np.int64), np.zeros(0, dtype=np.int64))
     gap = 1.0 / float(np.min(medium.sigma_t_reduced))

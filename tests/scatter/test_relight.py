@@ -7,7 +7,7 @@ import pytest
 from tests.scatter import pairs
 from translucency.errors import BudgetError
 from translucency.geometry.synthetic import icosphere, torus
-from translucency.scatter import kernels
+from translucency.scatter import fits, kernels
 from translucency.scatter.fresnel import refract
 from translucency.scatter.irradiance import incident_flux
 from translucency.scatter.lights import DirectionalLight, EnvironmentLight, PointLight
@@ -23,10 +23,8 @@ MARBLE = material("marble").medium()
 @numba.njit(cache=True)
 def _fits(model, x, ni, no, params, dirs, pinv, terms):
     out = np.zeros((params.shape[0], terms))
-    work = np.empty((max(dirs.shape[0], 9), kernels.FIT_WORK_COLUMNS))
-    kernels.fitted_pairs(
-        model, x[0], x[1], x[2], ni[0], ni[1], ni[2], no[0], no[1], no[2], params, dirs, pinv, work, out
-    )
+    work = np.empty((max(dirs.shape[0], 9), fits.FIT_WORK_COLUMNS))
+    fits.fitted_pairs(model, x[0], x[1], x[2], ni[0], ni[1], ni[2], no[0], no[1], no[2], params, dirs, pinv, work, out)
     return out
 
 
@@ -53,16 +51,16 @@ def _random_pairs(rng, distance, count=200):
 @pytest.mark.parametrize(
     "terms, distance, bound",
     [
-        (kernels.AFFINE_TERMS, 2.0, 0.01),
-        (kernels.AFFINE_TERMS, 20.0, 0.004),
-        (kernels.QUADRATIC_TERMS, 1.0, 0.01),
-        (kernels.QUADRATIC_TERMS, 5.0, 0.002),
+        (fits.AFFINE_TERMS, 2.0, 0.01),
+        (fits.AFFINE_TERMS, 20.0, 0.004),
+        (fits.QUADRATIC_TERMS, 1.0, 0.01),
+        (fits.QUADRATIC_TERMS, 5.0, 0.002),
     ],
 )
 def test_fitted_coefficients_follow_the_pair_kernel_over_refracted_directions(terms, distance, bound):
     # measured (docs/physics.md §8.7): affine p99 0.45 % at 2 mm, 0.15 % at 20 mm; quadratic 0.49 % at 1 mm
     params = kernels.channel_parameters(MARBLE.sigma_a, MARBLE.sigma_s, MARBLE.g, MARBLE.eta, "directional")
-    dirs, pinv = kernels.fit_directions(MARBLE.eta, terms)
+    dirs, pinv = fits.fit_directions(MARBLE.eta, terms)
     errors = []
     for x, ni, no, w in _random_pairs(np.random.default_rng(7), distance):
         exact = pairs.model_pairs(0, np.zeros((1, 3)), ni[None], w[None], x[None], no[None], params)[0]
@@ -76,13 +74,38 @@ def test_fitted_coefficients_follow_the_pair_kernel_over_refracted_directions(te
 @pytest.mark.parametrize("model", ["standard", "better"])
 def test_radial_models_fit_exactly_with_no_direction_terms(model):
     params = kernels.channel_parameters(MARBLE.sigma_a, MARBLE.sigma_s, MARBLE.g, MARBLE.eta, model)
-    dirs, pinv = kernels.fit_directions(MARBLE.eta, kernels.QUADRATIC_TERMS)
+    dirs, pinv = fits.fit_directions(MARBLE.eta, fits.QUADRATIC_TERMS)
     x, ni, no = np.array([1.5, -0.4, 0.1]), np.array([0.0, 0.0, 1.0]), np.array([0.0, 0.1, 0.995])
     code = kernels.MODELS[model]
-    fitted = _fits(code, x, ni, no, params, dirs, pinv, kernels.QUADRATIC_TERMS)
+    fitted = _fits(code, x, ni, no, params, dirs, pinv, fits.QUADRATIC_TERMS)
     exact = pairs.model_pairs(code, np.zeros((1, 3)), ni[None], -ni[None], x[None], no[None], params)[0]
     np.testing.assert_allclose(fitted[:, 0], exact, rtol=1e-12)
     assert np.all(fitted[:, 1:] == 0.0)
+
+
+@pytest.mark.parametrize("model", ["directional", "standard"])
+@pytest.mark.parametrize("sources_vary", [True, False])
+def test_a_run_of_fits_equals_the_fits_of_its_pairs(model, sources_vary):
+    # receivers from 0.05 mm to 40 mm away: the near ones' distances spread too far to interpolate, and are
+    # fitted one by one inside the run; the rest take the run's vectorised steps
+    rng = np.random.default_rng(3)
+    n = 300
+    points = rng.normal(size=(n, 3)) * np.geomspace(0.05, 40.0, n)[:, None]
+    normals = rng.normal(size=(n, 3))
+    normals /= np.linalg.norm(normals, axis=1)[:, None]
+    params = kernels.channel_parameters(MARBLE.sigma_a, MARBLE.sigma_s, MARBLE.g, MARBLE.eta, model)
+    dirs, pinv = fits.fit_directions(MARBLE.eta, fits.AFFINE_TERMS)
+    code = kernels.MODELS[model]
+    work, one = np.empty((9, fits.FIT_WORK_COLUMNS)), np.empty((1, fits.AFFINE_TERMS))
+    out = np.empty((n - 1, 3, fits.AFFINE_TERMS))
+    fits.fitted_run(
+        code, points, normals, 0, 1, n, sources_vary, params, dirs, pinv, fits.run_scratch(7, n), work, one, out
+    )
+    for q in range(n - 1):
+        o, i = (0, q + 1) if sources_vary else (q + 1, 0)
+        expected = _fits(code, points[o] - points[i], normals[i], normals[o], params, dirs, pinv, fits.AFFINE_TERMS)
+        scale = np.abs(expected).max(axis=1, keepdims=True)
+        assert np.all(np.abs(out[q] - expected) <= 1e-10 * scale), (q, out[q], expected)
 
 
 def _surface(points, triangles):

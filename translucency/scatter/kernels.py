@@ -243,7 +243,7 @@ def pair_geometry(x0, x1, x2, ni0, ni1, ni2, w0, w1, w2, nx, ny, nz):
 
 
 @numba.njit(cache=True, inline="always", fastmath=True)
-def _radial(model, r2, p):
+def radial_dipole(model, r2, p):
     """``S_d`` of the standard (``model`` 1) or better (2) dipole at squared distance ``r2`` (mm^2) for one
     channel (``p``: its parameters, :func:`lane`)."""
     z_r = p[R_Z_R]
@@ -269,7 +269,7 @@ def _lane(model, p, r2, perp2, mu0, xw, xn, xv, sv, sn, vn, xs):
     :func:`pair_geometry`. Every kernel evaluates every model through it."""
     if model == MODEL_DIRECTIONAL:
         return _channel(p, r2, perp2, mu0, xw, xn, xv, sv, sn, vn, xs)
-    return _radial(model, r2, p)
+    return radial_dipole(model, r2, p)
 
 
 @numba.njit(cache=True, inline="always")
@@ -788,186 +788,6 @@ def _grouped_rows(
                     0,
                 )
                 store_three(out, r, c0, n_out, a0, a1, a2)
-
-
-#: Coefficients per channel of a far-field relighting entry: ``a`` and ``b`` (3), ``S_d ~ a + b . w12``.
-AFFINE_TERMS = 4
-#: ... of a near-field entry: also the quadratic terms ``w_x^2, w_y^2, w_z^2, w_x w_y, w_x w_z, w_y w_z`` (6).
-QUADRATIC_TERMS = 10
-#: Relative spread of the corrected distances over the fit's directions below which the real source is
-#: interpolated in the distance from three evaluations instead of evaluated at each direction.
-FIT_INTERPOLATED_SPREAD = 0.02
-
-
-def fit_directions(eta: float, terms: int):
-    """Sample directions and least-squares matrix of :func:`fitted_pairs`: ``(dirs (K, 3), pinv)``.
-
-    The directions are refracted directions ``w12`` in the frame of the source normal (``z`` = outward
-    normal, so ``w_z < 0``): straight in, and six azimuths at the critical angle ``asin(1 / eta)`` (every
-    refracted direction of light from outside lies in that cone), and for the quadratic fit six more at half
-    of it (K = 7 or 13). ``pinv`` maps
-    ``S_d`` at them to the coefficients of ``1, w_x, w_y, w_z`` (``terms`` = :data:`AFFINE_TERMS`), and of
-    ``w_x^2, w_y^2, w_x w_y, w_x w_z, w_y w_z`` too (:data:`QUADRATIC_TERMS`; ``w_z^2 = 1 - w_x^2 - w_y^2``
-    on the sphere), in that frame."""
-    critical = math.asin(min(1.0, 1.0 / float(eta)))
-    dirs = [(0.0, 0.0, -1.0)]
-    rings = ((0.5 * critical, math.pi / 6.0), (critical, 0.0)) if terms == QUADRATIC_TERMS else ((critical, 0.0),)
-    for polar, turn in rings:
-        for k in range(6):
-            azimuth = k * math.pi / 3.0 + turn
-            dirs.append((math.sin(polar) * math.cos(azimuth), math.sin(polar) * math.sin(azimuth), -math.cos(polar)))
-    dirs = np.array(dirs)
-    x, y, z = dirs.T
-    columns = [np.ones_like(x), x, y, z]
-    if terms == QUADRATIC_TERMS:
-        columns += [x * x, y * y, x * y, x * z, y * z]
-    return dirs, np.ascontiguousarray(np.linalg.pinv(np.stack(columns, axis=1)))
-
-
-@numba.njit(cache=True, inline="always", fastmath=True)
-def _affine_source(x0, x1, x2, x_dot_n, n0, n1, n2, d, p):
-    """``S'_d`` of one ray source of distance ``d`` (mm) as ``a + b . w`` (docs/physics.md §4.4 rearranged,
-    §8.7): returns ``(a, b0, b1, b2)`` for the offset ``x`` to the exit point and the receiver normal ``n``."""
-    D = p[P_D]
-    s = p[P_SIGMA_TR] * d
-    one_plus_s = 1.0 + s
-    inv_d = 1.0 / d
-    k = p[P_NORM] / FOUR_PI_SQUARED * math.exp(-s) * inv_d * inv_d * inv_d
-    C_phi = p[P_C_PHI]
-    C_E = p[P_C_E]
-    a = k * (C_phi * d * d / D + C_E * one_plus_s * x_dot_n)
-    along_x = k * (3.0 * C_phi * one_plus_s + 3.0 * C_E * D * (3.0 * one_plus_s + s * s) * x_dot_n * inv_d * inv_d)
-    along_n = -k * 3.0 * C_E * D * one_plus_s
-    return a, along_x * x0 + along_n * n0, along_x * x1 + along_n * n1, along_x * x2 + along_n * n2
-
-
-#: Columns of :func:`fitted_pairs`' scratch space (per direction: w, mu0, x.w, distance, value, fit).
-FIT_WORK_COLUMNS = 8
-
-
-@numba.njit(cache=True, fastmath=True)
-def fitted_pairs(model, x0, x1, x2, ni0, ni1, ni2, no0, no1, no2, params, dirs, pinv, work, out):
-    """Coefficients of ``S_d(x_i, w; x_o)`` as a function of the refracted direction ``w`` (unclamped;
-    docs/physics.md §8.7) for every channel (rows of ``params``) and the offset ``x = x_o - x_i`` (mm):
-    ``a + b . w`` (``pinv`` of :data:`AFFINE_TERMS`) or ``a + b . w + w^T Q w`` (:data:`QUADRATIC_TERMS`),
-    the least-squares fit over the directions of :func:`fit_directions` turned into the frame of ``n_i``.
-
-    The virtual source is affine in ``w`` and goes in exactly; the real source depends on ``w`` also through
-    its corrected distance ``d_r(w)`` (§4.3), evaluated at each direction (interpolated in ``d_r`` from three
-    evaluations where the distances differ by less than :data:`FIT_INTERPOLATED_SPREAD`; one evaluation at a
-    middle distance is not enough even far away, where the real and the virtual source nearly cancel and a
-    small error in the real source is a large one in their difference). The geometry is
-    shared by the channels. ``work`` is scratch space, ``(max(len(dirs), 9), FIT_WORK_COLUMNS)`` float64 (no
-    allocation here: this runs once per operator entry). Written to ``out[c]``: ``a, b0, b1, b2`` then ``Q00,
-    Q11, Q22, 2 Q01, 2 Q02, 2 Q12`` (the coefficients of ``1, w_x, w_y, w_z, w_x^2, w_y^2, w_z^2, w_x w_y, w_x
-    w_z, w_y w_z``), 1/(mm^2 sr). The radial models: ``a = S_d(r)``, the rest 0."""
-    n_terms = pinv.shape[0]
-    n_c = params.shape[0]
-    r2, s0, s1, s2 = modified_normal(x0, x1, x2, ni0, ni1, ni2)
-    for c in range(n_c):
-        for k in range(out.shape[1]):
-            out[c, k] = 0.0
-    if model != MODEL_DIRECTIONAL:
-        for c in range(n_c):
-            out[c, 0] = _radial(model, r2, params[c])
-        return
-    x_dot_n = x0 * no0 + x1 * no1 + x2 * no2
-    x_dot_s = x0 * s0 + x1 * s1 + x2 * s2
-    s_dot_n = s0 * no0 + s1 * no1 + s2 * no2
-    # a frame (e, f, n_i) about the source normal, and each direction's cosines
-    e0, e1, e2, f0, f1, f2 = orthonormal_frame(ni0, ni1, ni2)
-    n_dirs = dirs.shape[0]
-    for k in range(n_dirs):
-        w0 = dirs[k, 0] * e0 + dirs[k, 1] * f0 + dirs[k, 2] * ni0
-        w1 = dirs[k, 0] * e1 + dirs[k, 1] * f1 + dirs[k, 2] * ni1
-        w2 = dirs[k, 0] * e2 + dirs[k, 1] * f2 + dirs[k, 2] * ni2
-        work[k, 0] = w0
-        work[k, 1] = w1
-        work[k, 2] = w2
-        work[k, 3] = -(no0 * w0 + no1 * w1 + no2 * w2)  # mu0
-        xw = x0 * w0 + x1 * w1 + x2 * w2
-        work[k, 4] = max(r2 - xw * xw, 0.0)  # squared distance from the ray's line
-    axes = ((e0, e1, e2), (f0, f1, f2), (ni0, ni1, ni2))
-    for c in range(n_c):
-        p = params[c]
-        D = p[P_D]
-        d_e = p[P_D_E]
-        backlit = p[P_BACKLIT]
-        floor = D_R_FLOOR * D
-        # the virtual source: offset x - c n*, direction w mirrored in the plane of n* (section 4.2)
-        height = p[P_VIRTUAL]
-        d_v = max(math.sqrt(max(r2 - 2.0 * height * x_dot_s + height * height, 0.0)), floor)
-        a_v, bv0, bv1, bv2 = _affine_source(
-            x0 - height * s0, x1 - height * s1, x2 - height * s2, x_dot_n - height * s_dot_n, no0, no1, no2, d_v, p
-        )
-        mirror = 2.0 * (bv0 * s0 + bv1 * s1 + bv2 * s2)  # M b_v = b_v - 2 (n* . b_v) n*
-        # the real source's distance at each direction (section 4.3)
-        low = math.inf
-        high = 0.0
-        for k in range(n_dirs):
-            mu0 = work[k, 3]
-            if mu0 > 0.0:
-                cos_beta = -math.sqrt(work[k, 4] / (r2 + d_e * d_e))
-                d_r2 = r2 + D * mu0 * (D * mu0 - 2.0 * d_e * cos_beta)
-            else:
-                d_r2 = r2 + backlit * backlit
-            d = max(math.sqrt(d_r2), floor)
-            work[k, 5] = d
-            low = min(low, d)
-            high = max(high, d)
-        if high - low <= FIT_INTERPOLATED_SPREAD * low:
-            # quadratic interpolation in d_r through low, mid, high (one evaluation when they coincide)
-            mid = 0.5 * (low + high)
-            am = _affine_source(x0, x1, x2, x_dot_n, no0, no1, no2, mid, p)
-            al = am
-            ah = am
-            half = 0.5 * (high - low)
-            if half > 0.0:
-                al = _affine_source(x0, x1, x2, x_dot_n, no0, no1, no2, low, p)
-                ah = _affine_source(x0, x1, x2, x_dot_n, no0, no1, no2, high, p)
-            for k in range(n_dirs):
-                t = (work[k, 5] - mid) / half if half > 0.0 else 0.0
-                lw, mw, hw = 0.5 * t * (t - 1.0), 1.0 - t * t, 0.5 * t * (t + 1.0)
-                work[k, 6] = (
-                    lw * al[0]
-                    + mw * am[0]
-                    + hw * ah[0]
-                    + (lw * al[1] + mw * am[1] + hw * ah[1]) * work[k, 0]
-                    + (lw * al[2] + mw * am[2] + hw * ah[2]) * work[k, 1]
-                    + (lw * al[3] + mw * am[3] + hw * ah[3]) * work[k, 2]
-                )
-        else:
-            for k in range(n_dirs):
-                a = _affine_source(x0, x1, x2, x_dot_n, no0, no1, no2, work[k, 5], p)
-                work[k, 6] = a[0] + a[1] * work[k, 0] + a[2] * work[k, 1] + a[3] * work[k, 2]
-        for j in range(n_terms):
-            total = 0.0
-            for k in range(n_dirs):
-                total += pinv[j, k] * work[k, 6]
-            work[j, 7] = total
-        # from the frame's monomials to global ones, less the virtual source
-        out[c, 0] = work[0, 7] - a_v
-        out[c, 1] = e0 * work[1, 7] + f0 * work[2, 7] + ni0 * work[3, 7] - (bv0 - mirror * s0)
-        out[c, 2] = e1 * work[1, 7] + f1 * work[2, 7] + ni1 * work[3, 7] - (bv1 - mirror * s1)
-        out[c, 3] = e2 * work[1, 7] + f2 * work[2, 7] + ni2 * work[3, 7] - (bv2 - mirror * s2)
-        if n_terms == AFFINE_TERMS:
-            continue
-        # Q = R Ql R^T with R's columns (e, f, n_i), Ql the local quadratic form (no z^2 term)
-        q_xx, q_yy, q_xy, q_xz, q_yz = work[4, 7], work[5, 7], 0.5 * work[6, 7], 0.5 * work[7, 7], 0.5 * work[8, 7]
-        ql = ((q_xx, q_xy, q_xz), (q_xy, q_yy, q_yz), (q_xz, q_yz, 0.0))
-        for at, i, j, factor in (
-            (4, 0, 0, 1.0),
-            (5, 1, 1, 1.0),
-            (6, 2, 2, 1.0),
-            (7, 0, 1, 2.0),
-            (8, 0, 2, 2.0),
-            (9, 1, 2, 2.0),
-        ):
-            total = 0.0
-            for k in range(3):
-                for m in range(3):
-                    total += axes[k][i] * ql[k][m] * axes[m][j]
-            out[c, at] = factor * total
 
 
 #: The compiled kernels of the directional dipole's far-field rows (a ``tree`` solve's): numba compiles each on first

@@ -2,7 +2,7 @@
 
 The relighting operator's far field (docs/physics.md §8.7, §8.9) maps the light that enters at every vertex,
 per channel ``Phi`` and ``Psi = Phi w12`` (four numbers), to ``B`` at every vertex. Its entries are the affine
-fits ``a + b . w12`` of :func:`~translucency.scatter.kernels.fitted_pairs`. The vertices are ordered by a
+fits ``a + b . w12`` of :func:`~translucency.scatter.fits.fitted_pairs`. The vertices are ordered by a
 kd-tree (:class:`~translucency.scatter.hierarchy.SourceTree`, leaves of :data:`LEAF_SIZE`); a pair of nodes
 is a block of the matrix, and
 
@@ -39,8 +39,8 @@ import numba
 import numpy as np
 
 from ..threads import for_ranges, thread_count
+from .fits import AFFINE_TERMS, FIT_WORK_COLUMNS, fitted_run, run_scratch
 from .hierarchy import SourceTree
-from .kernels import AFFINE_TERMS, FIT_WORK_COLUMNS, fitted_pairs
 
 __all__ = ["ETA", "LEAF_SIZE", "FarMatrix", "build", "partition"]
 
@@ -175,21 +175,12 @@ def _partition(left, right, centre, radius, gap, eta):
     return far[:n_far].copy(), dense[:n_dense].copy()
 
 
-@numba.njit(cache=True, inline="always")
-def _fit(model, P, N, o, i, params, dirs, pinv, work, out):
-    """The affine fit ``out (C, 4)`` of source ``i`` at receiver ``o`` (rows of ``P``, ``N``)."""
-    fitted_pairs(
-        model, P[o, 0] - P[i, 0], P[o, 1] - P[i, 1], P[o, 2] - P[i, 2], N[i, 0], N[i, 1], N[i, 2],
-        N[o, 0], N[o, 1], N[o, 2], params, dirs, pinv, work, out,
-    )  # fmt: skip
-
-
 #: A cross approximation also stops when this many rows in a row (the next pivot, then rows drawn at random) are
 #: each held to ``eps`` of their own norm by the crosses so far.
 CHECK_ROWS = 3
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy")
+@numba.njit(cache=True, nogil=True, fastmath=True, error_model="numpy")
 def _cross(model, P, N, r0, r1, c0, c1, params, dirs, pinv, row_scale, eps, kmax, U, V):
     """Adaptive cross approximation with partial pivoting of one channel (``params`` of one row): rows ``r0:r1``
     x sources ``c0:c1`` (columns ``4 (j - c0) + t``), each row scaled by ``row_scale[row]``: the crosses in
@@ -202,9 +193,12 @@ def _cross(model, P, N, r0, r1, c0, c1, params, dirs, pinv, row_scale, eps, kmax
     m = r1 - r0
     n = (c1 - c0) * AFFINE_TERMS
     work = np.empty((max(dirs.shape[0], 9), FIT_WORK_COLUMNS))
-    fit = np.empty((1, AFFINE_TERMS))
+    one = np.empty((1, AFFINE_TERMS))
+    scratch = run_scratch(dirs.shape[0], max(m, c1 - c0))
+    fits = np.empty((max(m, c1 - c0), 1, AFFINE_TERMS))
     used = np.zeros(m, dtype=np.bool_)
     column_cache = np.empty((m, AFFINE_TERMS))
+    pivot_column = np.empty(kmax + 1)
     cached = -1
     row = np.empty(n)
     seed = (r0 * 7919 + c0 * 104729 + 1) & 0x7FFFFFFF
@@ -217,10 +211,10 @@ def _cross(model, P, N, r0, r1, c0, c1, params, dirs, pinv, row_scale, eps, kmax
         used[i] = True
         visited += 1
         full2 = 0.0
+        fitted_run(model, P, N, r0 + i, c0, c1, True, params, dirs, pinv, scratch, work, one, fits)
         for b in range(c1 - c0):
-            _fit(model, P, N, r0 + i, c0 + b, params, dirs, pinv, work, fit)
             for t in range(AFFINE_TERMS):
-                value = fit[0, t] * row_scale[i]
+                value = fits[b, 0, t] * row_scale[i]
                 row[b * AFFINE_TERMS + t] = value
                 full2 += value * value
         for q in range(k):
@@ -251,19 +245,21 @@ def _cross(model, P, N, r0, r1, c0, c1, params, dirs, pinv, row_scale, eps, kmax
             return -1
         source = j // AFFINE_TERMS
         if source != cached:
+            fitted_run(model, P, N, c0 + source, r0, r1, False, params, dirs, pinv, scratch, work, one, fits)
             for a in range(m):
-                _fit(model, P, N, r0 + a, c0 + source, params, dirs, pinv, work, fit)
                 for t in range(AFFINE_TERMS):
-                    column_cache[a, t] = fit[0, t] * row_scale[a]
+                    column_cache[a, t] = fits[a, 0, t] * row_scale[a]
             cached = source
         term = j % AFFINE_TERMS
         pivot = row[j]
         best = -1.0
         following = -1
+        for q in range(k):
+            pivot_column[q] = V[q, j]  # read once: down a column of V, each entry on a cache line of its own
         for a in range(m):
             value = column_cache[a, term]
             for q in range(k):
-                value -= U[a, q] * V[q, j]
+                value -= U[a, q] * pivot_column[q]
             U[a, k] = value
             if not used[a] and abs(value) > best:
                 best = abs(value)
@@ -273,17 +269,19 @@ def _cross(model, P, N, r0, r1, c0, c1, params, dirs, pinv, row_scale, eps, kmax
             V[k, q] = row[q] / pivot
             v2 += V[k, q] * V[k, q]
         u2 = 0.0
+        for q in range(k):
+            pivot_column[q] = 0.0  # now the products of the new cross's U with the earlier ones, row by row
         for a in range(m):
-            u2 += U[a, k] * U[a, k]
+            u = U[a, k]
+            u2 += u * u
+            for q in range(k):
+                pivot_column[q] += u * U[a, q]
         cross = 0.0
         for q in range(k):
-            uu = 0.0
-            for a in range(m):
-                uu += U[a, k] * U[a, q]
             vv = 0.0
             for p in range(n):
                 vv += V[k, p] * V[q, p]
-            cross += uu * vv
+            cross += pivot_column[q] * vv
         norm2 += u2 * v2 + 2.0 * cross
         k += 1
         if following < 0:
@@ -306,7 +304,12 @@ def _fill_dense(worker, lo, hi, model, P, N, dense, params, dirs, pinv, held_sta
     order)."""
     n_c = params.shape[0]
     work = np.empty((max(dirs.shape[0], 9), FIT_WORK_COLUMNS))
-    fit = np.empty((n_c, AFFINE_TERMS))
+    one = np.empty((1, AFFINE_TERMS))
+    length = 0
+    for k in range(lo, hi):
+        length = max(length, dense[k, 3] - dense[k, 2])
+    scratch = run_scratch(dirs.shape[0], length)
+    fits = np.empty((length, n_c, AFFINE_TERMS))
     mark = stamps[worker]
     for k in range(lo, hi):
         r0, r1, c0, c1, first, last, at = _dense_block(dense, k)
@@ -316,14 +319,13 @@ def _fill_dense(worker, lo, hi, model, P, N, dense, params, dirs, pinv, held_sta
             o = r0 + a
             for h in range(held_starts[o], held_starts[o + 1]):
                 mark[held_columns[h]] = o
+            fitted_run(model, P, N, o, c0, c1, True, params, dirs, pinv, scratch, work, one, fits)
             for b in range(c1 - c0):
                 held = mark[c0 + b] == o
-                if not held:
-                    _fit(model, P, N, o, c0 + b, params, dirs, pinv, work, fit)
                 for c in range(first, last):
                     at_b = at + ((c - first) * m + a) * n + b * AFFINE_TERMS
                     for t in range(AFFINE_TERMS):
-                        D[at_b + t] = 0.0 if held else fit[c, t]
+                        D[at_b + t] = 0.0 if held else fits[b, c, t]
 
 
 @numba.njit(cache=True, inline="always")
@@ -449,7 +451,7 @@ def build(
     """The far field of the surface ``points`` (mm), ``normals`` for the kernel ``model`` (code) and channel
     parameters ``params``: far blocks by cross approximation to ``eps`` per channel, the rest dense.
 
-    ``fit`` is :func:`~translucency.scatter.kernels.fit_directions`'s ``(dirs, pinv)`` for the affine terms;
+    ``fit`` is :func:`~translucency.scatter.fits.fit_directions`'s ``(dirs, pinv)`` for the affine terms;
     ``gap`` (mm) the smallest distance of a far block's spheres (at least the near field's reach);
     ``channel_bound(r)`` the §8.4 bound per channel at distances ``r`` (mm), ``(C, len(r))``, by which every
     receiver's row is scaled; ``held = (starts, columns)`` the pairs the near field holds (CSR by receiver,

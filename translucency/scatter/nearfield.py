@@ -46,7 +46,8 @@ import numpy as np
 from ..geometry.measure import edge_lengths, triangle_centroids
 from ..geometry.topology import unique_edges
 from ..threads import for_ranges, thread_count
-from .kernels import FIT_WORK_COLUMNS, QUADRATIC_TERMS, channel_lanes, fitted_pairs, indexed_sum
+from .fits import FIT_WORK_COLUMNS, QUADRATIC_TERMS, fitted_pairs
+from .kernels import channel_lanes, indexed_sum
 from .surface import PerSurface
 
 # Dunavant (1985) 7-point rule, exact for polynomials of degree 5: barycentric points and weights
@@ -1185,7 +1186,7 @@ def near_field_operator(
     The same quadrature (fan rule on the receiver's own triangles, subdivided pieces of the close ones,
     Dunavant's rule on the others; no degree-3 substitution) with every vertex treated as lit, ``Phi``,
     ``Psi = Phi w12`` and ``Xi = Phi w12 w12^T`` interpolated linearly, and ``S_d`` as the quadratic fit of
-    :func:`~translucency.scatter.kernels.fitted_pairs` (docs/physics.md §8.7). The coefficient of a point is
+    :func:`~translucency.scatter.fits.fitted_pairs` (docs/physics.md §8.7). The coefficient of a point is
     shared among the triangle's corners by their barycentric weights and divided by the corner's vertex
     area (per unit flux ``Phi = phi A``). Each near vertex's own pair of the vertex sum is included, with the
     quadratic fit, so that its row is the whole of what the vertex gives the receiver (the vertex rule of the
@@ -1197,7 +1198,7 @@ def near_field_operator(
     params : (C, N_PARAMS) float64
         Kernel parameters of every output channel.
     fit : tuple
-        ``(dirs, pinv)`` of :func:`~translucency.scatter.kernels.fit_directions` for the quadratic fit.
+        ``(dirs, pinv)`` of :func:`~translucency.scatter.fits.fit_directions` for the quadratic fit.
     vertex_areas : (n,) float64
         Barycentric vertex areas, mm^2 (a vertex of area 0 gets no coefficient).
     progress : callable, optional
@@ -1280,7 +1281,7 @@ def _operator_counts(worker, lo, hi, triangles, receivers, offsets, triangle_ids
 def _add_point(
     model, points, normals, vertex_areas, tri, b0, b1, b2, weight, xo, no, params, dirs, pinv, work, slot, scratch, out
 ):
-    """Add the coefficients (:func:`~translucency.scatter.kernels.fitted_pairs` with ``dirs, pinv``) of the
+    """Add the coefficients (:func:`~translucency.scatter.fits.fitted_pairs` with ``dirs, pinv``) of the
     point with barycentric ``b`` of ``tri``, times ``weight`` (mm^2), to its corners' rows of ``out``
     (``slot``: each vertex's row), shared by ``b_k / A_k``."""
     i0, i1, i2 = tri[0], tri[1], tri[2]

@@ -19,7 +19,7 @@ solver's own sums written once with those coefficients instead of per light:
   be summed before they are rounded.
 
 The real source's corrected distance ``d_r`` depends on ``w12`` too; the coefficients are least-squares
-fits over the cone of refracted directions (:func:`~translucency.scatter.kernels.fitted_pairs`): affine in
+fits over the cone of refracted directions (:func:`~translucency.scatter.fits.fitted_pairs`): affine in
 the far field, quadratic near the receiver, where per vertex ``Xi = Phi w12 w12^T`` joins the inputs.
 Per light: the inputs per vertex, one pass over the far field's blocks and one sparse product
 (:meth:`RelightOperator.apply`), whose cost is the operators' size. The clamp of ``S_d`` at 0 (§4.5) is
@@ -46,8 +46,8 @@ import numpy as np
 
 from ..threads import for_ranges
 from . import cutoff, hierarchy, kernels, lowrank, nearfield
+from .fits import AFFINE_TERMS, QUADRATIC_TERMS, fit_directions
 from .hierarchy import SourceTree
-from .kernels import AFFINE_TERMS, QUADRATIC_TERMS
 from .surface import PerSurface
 
 __all__ = [
@@ -72,7 +72,7 @@ EPS_PER_TOL = 6.0
 #: Crosses per block and channel the memory estimate counts per decade of ``1 / eps`` (the rank of a block
 #: grows with the digits asked; :func:`operator_bytes`).
 RANK_PER_DECADE = 4.5
-#: Seconds of one fit on one thread (:func:`~translucency.scatter.kernels.fitted_pairs`, one channel), and per
+#: Seconds of one fit on one thread (:func:`~translucency.scatter.fits.fitted_pairs`, one channel), and per
 #: near-field entry: the rates of the time estimate the budget compares against ``time_limit``, calibrated on
 #: timed preparations (bench/README.md, "Relighting").
 FIT_SECONDS = 5e-7
@@ -265,7 +265,7 @@ def prepare(
         params,
         beta,
         float(np.min(medium.D)),
-        kernels.fit_directions(medium.eta, QUADRATIC_TERMS),
+        fit_directions(medium.eta, QUADRATIC_TERMS),
         tables=nearfield.tables_of(geometry),
         progress=lambda fraction: report("relight operators", 0.5 * fraction),
     )
@@ -277,7 +277,7 @@ def prepare(
         geometry.points,
         geometry.normals,
         params,
-        kernels.fit_directions(medium.eta, AFFINE_TERMS),
+        fit_directions(medium.eta, AFFINE_TERMS),
         far_eps(tol),
         _gap(medium),
         lambda r: cutoff.pair_bound(medium, model, r),

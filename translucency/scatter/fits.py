@@ -1,0 +1,426 @@
+"""Fits of the diffusive BSSRDF in the refracted direction, for relighting (docs/physics.md §8.7).
+
+``S_d(x_i, w12; x_o)`` depends on the direction ``w12`` the light takes into the medium through a few linear
+terms and through the real source's corrected distance ``d_r(w12)`` (§4.3). Relighting stores, per pair,
+the least-squares fit of ``S_d`` over the directions light from outside can take inside: affine, ``a + b .
+w12`` (:data:`AFFINE_TERMS` per channel; the far field), or with the quadratic terms too
+(:data:`QUADRATIC_TERMS`; the near field). :func:`fitted_pairs` fits one pair for every channel;
+:func:`fitted_run` fits a run of pairs that share one end (a row or a column of the far field's matrix)
+a step at a time, so that each step vectorises.
+
+=========== ==================================================================== ==============
+symbol      meaning                                                              unit
+=========== ==================================================================== ==============
+a           ``S_d`` at ``w12 = 0`` of the fit, per channel                        1/(mm^2 sr)
+b           its gradient in ``w12``                                               1/(mm^2 sr)
+Q           the quadratic form of the near field's fit                            1/(mm^2 sr)
+=========== ==================================================================== ==============
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+from .dipoles import D_R_FLOOR
+from .kernels import (
+    FOUR_PI_SQUARED,
+    MODEL_DIRECTIONAL,
+    P_BACKLIT,
+    P_C_E,
+    P_C_PHI,
+    P_D,
+    P_D_E,
+    P_NORM,
+    P_SIGMA_TR,
+    P_VIRTUAL,
+    exp_nonpositive,
+    modified_normal,
+    orthonormal_frame,
+    radial_dipole,
+)
+
+__all__ = [
+    "AFFINE_TERMS",
+    "QUADRATIC_TERMS",
+    "FIT_WORK_COLUMNS",
+    "fit_directions",
+    "fitted_pairs",
+    "fitted_run",
+    "run_scratch",
+]
+
+
+#: Coefficients per channel of a far-field relighting entry: ``a`` and ``b`` (3), ``S_d ~ a + b . w12``.
+AFFINE_TERMS = 4
+#: ... of a near-field entry: also the quadratic terms ``w_x^2, w_y^2, w_z^2, w_x w_y, w_x w_z, w_y w_z`` (6).
+QUADRATIC_TERMS = 10
+#: Relative spread of the corrected distances over the fit's directions below which the real source is
+#: interpolated in the distance from three evaluations instead of evaluated at each direction.
+FIT_INTERPOLATED_SPREAD = 0.02
+
+
+def fit_directions(eta: float, terms: int):
+    """Sample directions and least-squares matrix of :func:`fitted_pairs`: ``(dirs (K, 3), pinv)``.
+
+    The directions are refracted directions ``w12`` in the frame of the source normal (``z`` = outward
+    normal, so ``w_z < 0``): straight in, and six azimuths at the critical angle ``asin(1 / eta)`` (every
+    refracted direction of light from outside lies in that cone), and for the quadratic fit six more at half
+    of it (K = 7 or 13). ``pinv`` maps
+    ``S_d`` at them to the coefficients of ``1, w_x, w_y, w_z`` (``terms`` = :data:`AFFINE_TERMS`), and of
+    ``w_x^2, w_y^2, w_x w_y, w_x w_z, w_y w_z`` too (:data:`QUADRATIC_TERMS`; ``w_z^2 = 1 - w_x^2 - w_y^2``
+    on the sphere), in that frame."""
+    critical = math.asin(min(1.0, 1.0 / float(eta)))
+    dirs = [(0.0, 0.0, -1.0)]
+    rings = ((0.5 * critical, math.pi / 6.0), (critical, 0.0)) if terms == QUADRATIC_TERMS else ((critical, 0.0),)
+    for polar, turn in rings:
+        for k in range(6):
+            azimuth = k * math.pi / 3.0 + turn
+            dirs.append((math.sin(polar) * math.cos(azimuth), math.sin(polar) * math.sin(azimuth), -math.cos(polar)))
+    dirs = np.array(dirs)
+    x, y, z = dirs.T
+    columns = [np.ones_like(x), x, y, z]
+    if terms == QUADRATIC_TERMS:
+        columns += [x * x, y * y, x * y, x * z, y * z]
+    return dirs, np.ascontiguousarray(np.linalg.pinv(np.stack(columns, axis=1)))
+
+
+@numba.njit(cache=True, inline="always", fastmath=True)
+def _affine_source(x0, x1, x2, x_dot_n, n0, n1, n2, d, p):
+    """``S'_d`` of one ray source of distance ``d`` (mm) as ``a + b . w`` (docs/physics.md §4.4 rearranged,
+    §8.7): returns ``(a, b0, b1, b2)`` for the offset ``x`` to the exit point and the receiver normal ``n``,
+    the channel's parameters the row ``p``."""
+    return _affine_terms(
+        x0, x1, x2, x_dot_n, n0, n1, n2, d, p[P_D], p[P_SIGMA_TR], p[P_NORM] / FOUR_PI_SQUARED, p[P_C_PHI], p[P_C_E]
+    )
+
+
+@numba.njit(cache=True, inline="always", fastmath=True)
+def _affine_terms(x0, x1, x2, x_dot_n, n0, n1, n2, d, D, sigma_tr_, scale, C_phi, C_E):
+    """:func:`_affine_source` with the channel's parameters as numbers (``scale = norm / (4 pi^2)``): a loop over
+    pairs that reads them before it starts vectorises, one that reads them from an array in every pass did not."""
+    s = sigma_tr_ * d
+    one_plus_s = 1.0 + s
+    inv_d = 1.0 / d
+    k = scale * exp_nonpositive(-s) * inv_d * inv_d * inv_d
+    a = k * (C_phi * d * d / D + C_E * one_plus_s * x_dot_n)
+    along_x = k * (3.0 * C_phi * one_plus_s + 3.0 * C_E * D * (3.0 * one_plus_s + s * s) * x_dot_n * inv_d * inv_d)
+    along_n = -k * 3.0 * C_E * D * one_plus_s
+    return a, along_x * x0 + along_n * n0, along_x * x1 + along_n * n1, along_x * x2 + along_n * n2
+
+
+#: Columns of :func:`fitted_pairs`' scratch space (per direction: w, mu0, x.w, distance, value, fit).
+FIT_WORK_COLUMNS = 8
+
+
+@numba.njit(cache=True, fastmath=True)
+def fitted_pairs(model, x0, x1, x2, ni0, ni1, ni2, no0, no1, no2, params, dirs, pinv, work, out):
+    """Coefficients of ``S_d(x_i, w; x_o)`` as a function of the refracted direction ``w`` (unclamped;
+    docs/physics.md §8.7) for every channel (rows of ``params``) and the offset ``x = x_o - x_i`` (mm):
+    ``a + b . w`` (``pinv`` of :data:`AFFINE_TERMS`) or ``a + b . w + w^T Q w`` (:data:`QUADRATIC_TERMS`),
+    the least-squares fit over the directions of :func:`fit_directions` turned into the frame of ``n_i``.
+
+    The virtual source is affine in ``w`` and goes in exactly; the real source depends on ``w`` also through
+    its corrected distance ``d_r(w)`` (§4.3), evaluated at each direction (interpolated in ``d_r`` from three
+    evaluations where the distances differ by less than :data:`FIT_INTERPOLATED_SPREAD`; one evaluation at a
+    middle distance is not enough even far away, where the real and the virtual source nearly cancel and a
+    small error in the real source is a large one in their difference). The geometry is
+    shared by the channels. ``work`` is scratch space, ``(max(len(dirs), 9), FIT_WORK_COLUMNS)`` float64 (no
+    allocation here: this runs once per operator entry). Written to ``out[c]``: ``a, b0, b1, b2`` then ``Q00,
+    Q11, Q22, 2 Q01, 2 Q02, 2 Q12`` (the coefficients of ``1, w_x, w_y, w_z, w_x^2, w_y^2, w_z^2, w_x w_y, w_x
+    w_z, w_y w_z``), 1/(mm^2 sr). The radial models: ``a = S_d(r)``, the rest 0."""
+    n_terms = pinv.shape[0]
+    n_c = params.shape[0]
+    r2, s0, s1, s2 = modified_normal(x0, x1, x2, ni0, ni1, ni2)
+    for c in range(n_c):
+        for k in range(out.shape[1]):
+            out[c, k] = 0.0
+    if model != MODEL_DIRECTIONAL:
+        for c in range(n_c):
+            out[c, 0] = radial_dipole(model, r2, params[c])
+        return
+    x_dot_n = x0 * no0 + x1 * no1 + x2 * no2
+    x_dot_s = x0 * s0 + x1 * s1 + x2 * s2
+    s_dot_n = s0 * no0 + s1 * no1 + s2 * no2
+    # a frame (e, f, n_i) about the source normal, and each direction's cosines
+    e0, e1, e2, f0, f1, f2 = orthonormal_frame(ni0, ni1, ni2)
+    n_dirs = dirs.shape[0]
+    for k in range(n_dirs):
+        w0 = dirs[k, 0] * e0 + dirs[k, 1] * f0 + dirs[k, 2] * ni0
+        w1 = dirs[k, 0] * e1 + dirs[k, 1] * f1 + dirs[k, 2] * ni1
+        w2 = dirs[k, 0] * e2 + dirs[k, 1] * f2 + dirs[k, 2] * ni2
+        work[k, 0] = w0
+        work[k, 1] = w1
+        work[k, 2] = w2
+        work[k, 3] = -(no0 * w0 + no1 * w1 + no2 * w2)  # mu0
+        xw = x0 * w0 + x1 * w1 + x2 * w2
+        work[k, 4] = max(r2 - xw * xw, 0.0)  # squared distance from the ray's line
+    axes = ((e0, e1, e2), (f0, f1, f2), (ni0, ni1, ni2))
+    for c in range(n_c):
+        p = params[c]
+        D = p[P_D]
+        d_e = p[P_D_E]
+        backlit = p[P_BACKLIT]
+        floor = D_R_FLOOR * D
+        # the virtual source: offset x - c n*, direction w mirrored in the plane of n* (section 4.2)
+        height = p[P_VIRTUAL]
+        d_v = max(math.sqrt(max(r2 - 2.0 * height * x_dot_s + height * height, 0.0)), floor)
+        a_v, bv0, bv1, bv2 = _affine_source(
+            x0 - height * s0, x1 - height * s1, x2 - height * s2, x_dot_n - height * s_dot_n, no0, no1, no2, d_v, p
+        )
+        mirror = 2.0 * (bv0 * s0 + bv1 * s1 + bv2 * s2)  # M b_v = b_v - 2 (n* . b_v) n*
+        # the real source's distance at each direction (section 4.3)
+        low = math.inf
+        high = 0.0
+        for k in range(n_dirs):
+            mu0 = work[k, 3]
+            if mu0 > 0.0:
+                cos_beta = -math.sqrt(work[k, 4] / (r2 + d_e * d_e))
+                d_r2 = r2 + D * mu0 * (D * mu0 - 2.0 * d_e * cos_beta)
+            else:
+                d_r2 = r2 + backlit * backlit
+            d = max(math.sqrt(d_r2), floor)
+            work[k, 5] = d
+            low = min(low, d)
+            high = max(high, d)
+        if high - low <= FIT_INTERPOLATED_SPREAD * low:
+            # quadratic interpolation in d_r through low, mid, high (one evaluation when they coincide)
+            mid = 0.5 * (low + high)
+            am = _affine_source(x0, x1, x2, x_dot_n, no0, no1, no2, mid, p)
+            al = am
+            ah = am
+            half = 0.5 * (high - low)
+            if half > 0.0:
+                al = _affine_source(x0, x1, x2, x_dot_n, no0, no1, no2, low, p)
+                ah = _affine_source(x0, x1, x2, x_dot_n, no0, no1, no2, high, p)
+            for k in range(n_dirs):
+                t = (work[k, 5] - mid) / half if half > 0.0 else 0.0
+                lw, mw, hw = 0.5 * t * (t - 1.0), 1.0 - t * t, 0.5 * t * (t + 1.0)
+                work[k, 6] = (
+                    lw * al[0]
+                    + mw * am[0]
+                    + hw * ah[0]
+                    + (lw * al[1] + mw * am[1] + hw * ah[1]) * work[k, 0]
+                    + (lw * al[2] + mw * am[2] + hw * ah[2]) * work[k, 1]
+                    + (lw * al[3] + mw * am[3] + hw * ah[3]) * work[k, 2]
+                )
+        else:
+            for k in range(n_dirs):
+                a = _affine_source(x0, x1, x2, x_dot_n, no0, no1, no2, work[k, 5], p)
+                work[k, 6] = a[0] + a[1] * work[k, 0] + a[2] * work[k, 1] + a[3] * work[k, 2]
+        for j in range(n_terms):
+            total = 0.0
+            for k in range(n_dirs):
+                total += pinv[j, k] * work[k, 6]
+            work[j, 7] = total
+        # from the frame's monomials to global ones, less the virtual source
+        out[c, 0] = work[0, 7] - a_v
+        out[c, 1] = e0 * work[1, 7] + f0 * work[2, 7] + ni0 * work[3, 7] - (bv0 - mirror * s0)
+        out[c, 2] = e1 * work[1, 7] + f1 * work[2, 7] + ni1 * work[3, 7] - (bv1 - mirror * s1)
+        out[c, 3] = e2 * work[1, 7] + f2 * work[2, 7] + ni2 * work[3, 7] - (bv2 - mirror * s2)
+        if n_terms == AFFINE_TERMS:
+            continue
+        # Q = R Ql R^T with R's columns (e, f, n_i), Ql the local quadratic form (no z^2 term)
+        q_xx, q_yy, q_xy, q_xz, q_yz = work[4, 7], work[5, 7], 0.5 * work[6, 7], 0.5 * work[7, 7], 0.5 * work[8, 7]
+        ql = ((q_xx, q_xy, q_xz), (q_xy, q_yy, q_yz), (q_xz, q_yz, 0.0))
+        for at, i, j, factor in (
+            (4, 0, 0, 1.0),
+            (5, 1, 1, 1.0),
+            (6, 2, 2, 1.0),
+            (7, 0, 1, 2.0),
+            (8, 0, 2, 2.0),
+            (9, 1, 2, 2.0),
+        ):
+            total = 0.0
+            for k in range(3):
+                for m in range(3):
+                    total += axes[k][i] * ql[k][m] * axes[m][j]
+            out[c, at] = factor * total
+
+
+# rows of :func:`fitted_run`'s scratch arrays (one array per step's output: a loop that writes one array and
+# reads others vectorises, one that writes rows of an array it also reads may not)
+_X0, _X1, _X2, _NI0, _NI1, _NI2, _NO0, _NO1, _NO2 = range(9)  # the pairs
+_R2, _S0, _S1, _S2, _XN, _XS, _SN, _E0, _E1, _E2, _F0, _F1, _F2 = range(13)  # their geometry
+_VA, _VB0, _VB1, _VB2 = range(4)  # the virtual source's a, b
+_AL, _AM, _AH = 0, 4, 8  # the real source's a, b0, b1, b2 at the least, middle and largest distance
+
+
+@numba.njit(cache=True)
+def run_scratch(directions, length):
+    """Scratch space of :func:`fitted_run` for ``directions`` fit directions and runs of up to ``length`` pairs: a
+    tuple of arrays, their rows a little longer than the run and an odd number of cache lines long (rows a power
+    of two apart in memory compete for the same cache sets, which made runs of 512 three times slower)."""
+    width = (length // 8 + 1) // 2 * 16 + 8
+    return (
+        np.empty((9, width)),
+        np.empty((13, width)),
+        np.empty((4, width)),
+        np.empty((directions, width)),
+        np.empty((2, width)),
+        np.empty((12, width)),
+        np.empty((AFFINE_TERMS, width)),
+    )
+
+
+@numba.njit(cache=True, fastmath=True, nogil=True, error_model="numpy")
+def _gathered(P, N, fixed, lo, length, sources_vary, pair):
+    """:func:`fitted_run`'s pairs into the rows of ``pair``: offsets ``x_o - x_i`` (mm) and both normals."""
+    for q in range(length):
+        o = fixed if sources_vary else lo + q
+        i = lo + q if sources_vary else fixed
+        for t in range(3):
+            pair[_X0 + t, q] = P[o, t] - P[i, t]
+            pair[_NI0 + t, q] = N[i, t]
+            pair[_NO0 + t, q] = N[o, t]
+
+
+@numba.njit(cache=True, fastmath=True, nogil=True, error_model="numpy")
+def _run_geometry(length, pair, geo):
+    """:func:`fitted_run`'s channel-independent geometry into the rows of ``geo``: ``r^2``, ``n_i*`` (§4.1), the
+    dot products, and the frame ``(e, f, n_i)`` the fit's directions are given in."""
+    for q in range(length):
+        x0, x1, x2 = pair[_X0, q], pair[_X1, q], pair[_X2, q]
+        n0, n1, n2 = pair[_NO0, q], pair[_NO1, q], pair[_NO2, q]
+        r2, s0, s1, s2 = modified_normal(x0, x1, x2, pair[_NI0, q], pair[_NI1, q], pair[_NI2, q])
+        e0, e1, e2, f0, f1, f2 = orthonormal_frame(pair[_NI0, q], pair[_NI1, q], pair[_NI2, q])
+        geo[_R2, q] = r2
+        geo[_S0, q] = s0
+        geo[_S1, q] = s1
+        geo[_S2, q] = s2
+        geo[_XN, q] = x0 * n0 + x1 * n1 + x2 * n2
+        geo[_XS, q] = x0 * s0 + x1 * s1 + x2 * s2
+        geo[_SN, q] = s0 * n0 + s1 * n1 + s2 * n2
+        geo[_E0, q] = e0
+        geo[_E1, q] = e1
+        geo[_E2, q] = e2
+        geo[_F0, q] = f0
+        geo[_F1, q] = f1
+        geo[_F2, q] = f2
+
+
+@numba.njit(cache=True, fastmath=True, nogil=True, error_model="numpy")
+def _run_channel(p, dirs, pinv, length, scratch, out):
+    """:func:`fitted_run`'s fits of one channel (parameters ``p``) into ``out (length, AFFINE_TERMS)``, each step
+    one loop over the run: the virtual source, the corrected distances, their span, the real source at three of
+    them, the fit interpolated in the distance, and its terms in global coordinates."""
+    pair, geo, virtual, dist, span, real, coef = scratch
+    n_dirs = dirs.shape[0]
+    D = p[P_D]
+    d_e = p[P_D_E]
+    backlit2 = p[P_BACKLIT] * p[P_BACKLIT]
+    floor = D_R_FLOOR * D
+    height = p[P_VIRTUAL]
+    sigma_tr_, scale, C_phi, C_E = p[P_SIGMA_TR], p[P_NORM] / FOUR_PI_SQUARED, p[P_C_PHI], p[P_C_E]
+    for q in range(length):  # the virtual source, exactly affine in w (section 4.2)
+        s0, s1, s2 = geo[_S0, q], geo[_S1, q], geo[_S2, q]
+        d_v = max(math.sqrt(max(geo[_R2, q] - 2.0 * height * geo[_XS, q] + height * height, 0.0)), floor)
+        a_v, bv0, bv1, bv2 = _affine_terms(
+            pair[_X0, q] - height * s0, pair[_X1, q] - height * s1, pair[_X2, q] - height * s2,
+            geo[_XN, q] - height * geo[_SN, q], pair[_NO0, q], pair[_NO1, q], pair[_NO2, q], d_v,
+            D, sigma_tr_, scale, C_phi, C_E,
+        )  # fmt: skip
+        mirror = 2.0 * (bv0 * s0 + bv1 * s1 + bv2 * s2)
+        virtual[_VA, q] = a_v
+        virtual[_VB0, q] = bv0 - mirror * s0
+        virtual[_VB1, q] = bv1 - mirror * s1
+        virtual[_VB2, q] = bv2 - mirror * s2
+    for k in range(n_dirs):  # the real source's corrected distance at each direction (section 4.3)
+        u0, u1, u2 = dirs[k, 0], dirs[k, 1], dirs[k, 2]
+        for q in range(length):
+            w0 = u0 * geo[_E0, q] + u1 * geo[_F0, q] + u2 * pair[_NI0, q]
+            w1 = u0 * geo[_E1, q] + u1 * geo[_F1, q] + u2 * pair[_NI1, q]
+            w2 = u0 * geo[_E2, q] + u1 * geo[_F2, q] + u2 * pair[_NI2, q]
+            r2 = geo[_R2, q]
+            mu0 = -(pair[_NO0, q] * w0 + pair[_NO1, q] * w1 + pair[_NO2, q] * w2)
+            xw = pair[_X0, q] * w0 + pair[_X1, q] * w1 + pair[_X2, q] * w2
+            cos_beta = -math.sqrt(max(r2 - xw * xw, 0.0) / (r2 + d_e * d_e))
+            front = r2 + D * mu0 * (D * mu0 - 2.0 * d_e * cos_beta)
+            dist[k, q] = max(math.sqrt(front if mu0 > 0.0 else r2 + backlit2), floor)
+    for q in range(length):
+        span[0, q] = dist[0, q]
+        span[1, q] = dist[0, q]
+    for k in range(1, n_dirs):
+        for q in range(length):
+            span[0, q] = min(span[0, q], dist[k, q])
+            span[1, q] = max(span[1, q], dist[k, q])
+    for q in range(length):  # the real source at the least, middle and largest distance
+        x0, x1, x2, xn = pair[_X0, q], pair[_X1, q], pair[_X2, q], geo[_XN, q]
+        n0, n1, n2 = pair[_NO0, q], pair[_NO1, q], pair[_NO2, q]
+        low, high = span[0, q], span[1, q]
+        al = _affine_terms(x0, x1, x2, xn, n0, n1, n2, low, D, sigma_tr_, scale, C_phi, C_E)
+        am = _affine_terms(x0, x1, x2, xn, n0, n1, n2, 0.5 * (low + high), D, sigma_tr_, scale, C_phi, C_E)
+        ah = _affine_terms(x0, x1, x2, xn, n0, n1, n2, high, D, sigma_tr_, scale, C_phi, C_E)
+        for t in range(AFFINE_TERMS):
+            real[_AL + t, q] = al[t]
+            real[_AM + t, q] = am[t]
+            real[_AH + t, q] = ah[t]
+    for t in range(AFFINE_TERMS):
+        for q in range(length):
+            coef[t, q] = 0.0
+    for k in range(n_dirs):  # interpolated in the distance, fitted over the directions
+        u0, u1, u2 = dirs[k, 0], dirs[k, 1], dirs[k, 2]
+        g0, g1, g2, g3 = pinv[0, k], pinv[1, k], pinv[2, k], pinv[3, k]
+        for q in range(length):
+            w0 = u0 * geo[_E0, q] + u1 * geo[_F0, q] + u2 * pair[_NI0, q]
+            w1 = u0 * geo[_E1, q] + u1 * geo[_F1, q] + u2 * pair[_NI1, q]
+            w2 = u0 * geo[_E2, q] + u1 * geo[_F2, q] + u2 * pair[_NI2, q]
+            low, high = span[0, q], span[1, q]
+            half = 0.5 * (high - low)
+            t = (dist[k, q] - 0.5 * (low + high)) / half if half > 0.0 else 0.0
+            lw, mw, hw = 0.5 * t * (t - 1.0), 1.0 - t * t, 0.5 * t * (t + 1.0)
+            value = (
+                lw * (real[_AL, q] + real[_AL + 1, q] * w0 + real[_AL + 2, q] * w1 + real[_AL + 3, q] * w2)
+                + mw * (real[_AM, q] + real[_AM + 1, q] * w0 + real[_AM + 2, q] * w1 + real[_AM + 3, q] * w2)
+                + hw * (real[_AH, q] + real[_AH + 1, q] * w0 + real[_AH + 2, q] * w1 + real[_AH + 3, q] * w2)
+            )
+            coef[0, q] += g0 * value
+            coef[1, q] += g1 * value
+            coef[2, q] += g2 * value
+            coef[3, q] += g3 * value
+    for q in range(length):  # from the source's frame to global coordinates, less the virtual source
+        c1, c2, c3 = coef[1, q], coef[2, q], coef[3, q]
+        out[q, 0] = coef[0, q] - virtual[_VA, q]
+        out[q, 1] = geo[_E0, q] * c1 + geo[_F0, q] * c2 + pair[_NI0, q] * c3 - virtual[_VB0, q]
+        out[q, 2] = geo[_E1, q] * c1 + geo[_F1, q] * c2 + pair[_NI1, q] * c3 - virtual[_VB1, q]
+        out[q, 3] = geo[_E2, q] * c1 + geo[_F2, q] * c2 + pair[_NI2, q] * c3 - virtual[_VB2, q]
+
+
+@numba.njit(cache=True, fastmath=True, nogil=True, error_model="numpy")
+def fitted_run(model, P, N, fixed, lo, hi, sources_vary, params, dirs, pinv, scratch, work, one, out):
+    """:func:`fitted_pairs`' affine fits (:data:`AFFINE_TERMS`) for a run of pairs that share one end, written to
+    ``out[q, c, :]`` for every channel ``c`` (rows of ``params``): receiver ``fixed`` and sources ``lo + q``
+    (``sources_vary``; a row of the far field's matrix), or source ``fixed`` and receivers ``lo + q`` (a column);
+    ``P``, ``N`` the points (mm) and unit normals.
+
+    The same fits as :func:`fitted_pairs` (to rounding), computed a step at a time over the whole run so that each
+    step is one loop the compiler vectorises: the geometry, the virtual source, the corrected distance at every
+    direction, and the real source at the least, middle and largest of them, interpolated in the distance. The
+    pairs whose distances spread by more than :data:`FIT_INTERPOLATED_SPREAD` are fitted again one by one by
+    :func:`fitted_pairs` (``work``, ``one (1, AFFINE_TERMS)`` its scratch). ``scratch`` is
+    :func:`run_scratch`'s."""
+    pair, geo, virtual, dist, span, real, coef = scratch
+    length = hi - lo
+    _gathered(P, N, fixed, lo, length, sources_vary, pair)
+    if model != MODEL_DIRECTIONAL:
+        for c in range(params.shape[0]):
+            for q in range(length):
+                r2 = pair[_X0, q] * pair[_X0, q] + pair[_X1, q] * pair[_X1, q] + pair[_X2, q] * pair[_X2, q]
+                out[q, c, 0] = radial_dipole(model, r2, params[c])
+                out[q, c, 1] = 0.0
+                out[q, c, 2] = 0.0
+                out[q, c, 3] = 0.0
+        return
+    _run_geometry(length, pair, geo)
+    for c in range(params.shape[0]):
+        _run_channel(params[c], dirs, pinv, length, scratch, out[:, c, :])
+        for q in range(length):  # distances too far apart to interpolate: each direction evaluated
+            if span[1, q] - span[0, q] > FIT_INTERPOLATED_SPREAD * span[0, q]:
+                fitted_pairs(
+                    model, pair[_X0, q], pair[_X1, q], pair[_X2, q], pair[_NI0, q], pair[_NI1, q], pair[_NI2, q],
+                    pair[_NO0, q], pair[_NO1, q], pair[_NO2, q], params[c : c + 1], dirs, pinv, work, one,
+                )  # fmt: skip
+                for t in range(AFFINE_TERMS):
+                    out[q, c, t] = one[0, t]
