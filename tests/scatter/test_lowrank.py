@@ -145,3 +145,20 @@ def test_held_pairs_are_zero_in_dense_blocks_and_given_where_a_low_rank_block_ho
             np.testing.assert_allclose(B, np.sum(held[k] * values[j], axis=1), rtol=1e-5, atol=1e-30)
         assert np.all(held[starts[o]] == 0.0)  # the nearest is in a dense block, left out there
     assert np.mean([np.any(held[starts[o] + 1] != 0.0) for o in receivers]) >= 0.75
+
+
+def test_the_crosses_store_grows_past_what_it_reserved_and_keeps_every_block():
+    store = lowrank._CrossStore(5, 7)  # room for less than one block
+    rng = np.random.default_rng(0)
+    blocks = [
+        (rng.normal(size=(m, k)), rng.uniform(-1.0, 1.0, size=(k, 4 * n)))
+        for m, k, n in [(3, 2, 4), (8, 5, 2), (1, 1, 1)]
+    ]
+    places = [store.put(U, V) for U, V in blocks]
+    U_all, V_all = store.arrays()
+    assert U_all.size == sum(U.size for U, _ in blocks) and V_all.size == sum(V.size for _, V in blocks)
+    for (U, V), (u_at, v_at) in zip(blocks, places):
+        np.testing.assert_allclose(U_all[u_at : u_at + U.size].reshape(U.shape), U, rtol=1e-6)
+        np.testing.assert_allclose(
+            V_all[v_at : v_at + V.size].reshape(V.shape) * lowrank.V_STEP, V, atol=lowrank.V_STEP
+        )

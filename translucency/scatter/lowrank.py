@@ -33,6 +33,7 @@ gap         smallest distance between the bounding spheres of a far block    mm
 from __future__ import annotations
 
 import math
+import threading
 from dataclasses import dataclass, field
 
 import numba
@@ -420,9 +421,63 @@ def _apply_dense(worker, lo, hi, blocks, D, values, lit_before, out):
                 target[r0 + a, c] += s
 
 
-def _fixed_point(V: np.ndarray) -> np.ndarray:
-    """``V`` (entries in [-1, 1]) as int16 multiples of :data:`V_STEP`."""
-    return np.clip(np.rint(V / V_STEP), -32767, 32767).astype(np.int16)
+def _fixed_point(V: np.ndarray, out: np.ndarray) -> np.ndarray:
+    """``V`` (entries in [-1, 1]) as int16 multiples of :data:`V_STEP`, written to ``out`` (returned)."""
+    out[...] = np.clip(np.rint(V / V_STEP), -32767, 32767)
+    return out
+
+
+class _CrossStore:
+    """The crosses of every block, written once into two arrays (``U`` float32, ``V`` int16) as they are found.
+
+    Each array is reserved larger than it is likely to need and cut to what was used at the end; memory is given
+    to a page only when it is first written, so what is reserved and never written costs nothing, and nothing is
+    copied. (Blocks kept apart and then copied into the far field's arrays spent seconds on pages filled twice.)
+    Threads write under a lock; a store that runs out of room grows by half again (copied)."""
+
+    def __init__(self, u_size: int, v_size: int):
+        self.U = np.empty(max(int(u_size), 1), dtype=np.float32)
+        self.V = np.empty(max(int(v_size), 1), dtype=np.int16)
+        self.u_at = 0
+        self.v_at = 0
+        self.lock = threading.Lock()
+
+    def put(self, U: np.ndarray, V: np.ndarray) -> tuple[int, int]:
+        """Store one block's crosses ``U (m, k)`` and ``V (k, columns)`` (float64, ``V`` in [-1, 1]): where they
+        start in :attr:`U` and :attr:`V`."""
+        with self.lock:
+            u_at, v_at = self.u_at, self.v_at
+            self.U = _room(self.U, u_at + U.size)
+            self.V = _room(self.V, v_at + V.size)
+            self.U[u_at : u_at + U.size].reshape(U.shape)[...] = U
+            _fixed_point(V, self.V[v_at : v_at + V.size].reshape(V.shape))
+            self.u_at += U.size
+            self.v_at += V.size
+        return u_at, v_at
+
+    def arrays(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(U, V)`` cut to what was stored (in place: the memory past it is given back, nothing is copied)."""
+        for name, used in (("U", self.u_at), ("V", self.v_at)):
+            array = getattr(self, name)
+            array.resize(max(used, 1), refcheck=False)
+            setattr(self, name, array[:used])
+        return self.U, self.V
+
+
+def _room(array: np.ndarray, size: int) -> np.ndarray:
+    """``array`` if it holds ``size`` elements, else a copy with half as much again as needed."""
+    if size <= array.size:
+        return array
+    grown = np.empty(int(1.5 * size), dtype=array.dtype)
+    grown[: array.size] = array
+    return grown
+
+
+#: Crosses per block and channel per decade of ``1 / eps`` (the rank of a block grows with the digits asked): what
+#: the budget counts (:func:`~translucency.scatter.relight.operator_bytes`); the crosses' store reserves
+#: :data:`RESERVED_SHARE` times as much (:class:`_CrossStore`), never more than a block may take.
+RANK_PER_DECADE = 4.5
+RESERVED_SHARE = 1.5
 
 
 def _scratch(held: list, rows: int, ranks: int, columns: int) -> tuple[np.ndarray, np.ndarray]:
@@ -467,7 +522,7 @@ def build(
     held_starts, held_columns, _ = _held_in_order(order, *held)
     far_pairs, dense_pairs = partition(tree, gap)
     report = progress or (lambda fraction: None)
-    found, dense_extra = _crosses(model, tree, P, N, params, dirs, pinv, eps, channel_bound, far_pairs, report)
+    found, dense_extra, store = _crosses(model, tree, P, N, params, dirs, pinv, eps, channel_bound, far_pairs, report)
     dense_pairs = np.concatenate(
         [
             np.column_stack([dense_pairs, np.zeros(len(dense_pairs), np.int64), np.full(len(dense_pairs), n_c)]),
@@ -476,17 +531,15 @@ def build(
     )
     start, end = tree.start, tree.end
 
-    low_rank = np.zeros((len(found), 8), dtype=np.int64)
-    U_all = np.empty(sum(entry[3].size for entry in found), dtype=np.float32)
-    V_all = np.empty(sum(entry[4].size for entry in found), dtype=np.int16)
-    u_at = v_at = 0
-    for k, (a, b, c, U, V) in enumerate(found):
-        low_rank[k] = (start[a], end[a], start[b], end[b], c, U.shape[1], u_at, v_at)
-        U_all[u_at : u_at + U.size] = U.ravel()
-        V_all[v_at : v_at + V.size] = V.ravel()
-        u_at += U.size
-        v_at += V.size
-        found[k] = None  # each block's own arrays go as they are copied: the crosses are not held twice
+    found.sort(key=lambda entry: entry[4])  # in the order they are stored: a product reads them one after another
+    a, b, c, k, u_at, v_at = (
+        (np.array(column, dtype=np.int64).reshape(-1) for column in zip(*found))
+        if found
+        else (np.zeros(0, dtype=np.int64) for _ in range(6))
+    )
+    low_rank = np.column_stack([start[a], end[a], start[b], end[b], c, k, u_at, v_at]).astype(np.int64).reshape(-1, 8)
+    U_all, V_all = store.arrays()
+    del store
 
     dense = np.zeros((len(dense_pairs), 7), dtype=np.int64)
     rows, cols = dense_pairs[:, 0], dense_pairs[:, 1]
@@ -556,15 +609,20 @@ def _row_scales(tree, P, items, channel_bound):
 
 
 def _crosses(model, tree, P, N, params, dirs, pinv, eps, channel_bound, far_pairs, report):
-    """Cross approximations of every far block and channel: ``(found, dense)``, ``found`` a list of ``(row
-    node, column node, channel, U float32 (m, k), V int16 (k, 4 n))``; a block that needs more crosses than
-    :func:`rank_limit` is split into its children's blocks, and a pair of leaves that does is added to
-    ``dense`` as ``(row node, column node, channel)``."""
+    """Cross approximations of every far block and channel: ``(found, dense, store)``, ``found`` a list of ``(row
+    node, column node, channel, k, where U starts, where V starts)`` in ``store`` (:class:`_CrossStore`); a block
+    that needs more crosses than :func:`rank_limit` is split into its children's blocks, and a pair of leaves that
+    does is added to ``dense`` as ``(row node, column node, channel)``."""
     n_c = params.shape[0]
     start, end = tree.start, tree.end
     channels = [np.ascontiguousarray(params[c : c + 1]) for c in range(n_c)]
     kept_by = [[] for _ in range(thread_count())]
     buffers = [[np.empty((0, 0)), np.empty((0, 0))] for _ in range(thread_count())]
+    rows = end[far_pairs[:, 0]] - start[far_pairs[:, 0]]
+    cols = (end[far_pairs[:, 1]] - start[far_pairs[:, 1]]) * AFFINE_TERMS
+    reserved = RESERVED_SHARE * RANK_PER_DECADE * math.log10(1.0 / eps)
+    ranks = np.minimum(reserved, [rank_limit(int(m), int(c)) for m, c in zip(rows, cols)]).astype(np.int64)
+    store = _CrossStore(n_c * np.sum(ranks * rows), n_c * np.sum(ranks * cols))
 
     def run(worker, lo, hi, items):
         kept = kept_by[worker]
@@ -578,10 +636,7 @@ def _crosses(model, tree, P, N, params, dirs, pinv, eps, channel_bound, far_pair
                 row_scale = row_scales[offsets[p] : offsets[p + 1]]
                 k = _cross(model, P, N, start[a], end[a], start[b], end[b], channels[c], dirs, pinv, row_scale, eps,
                            kmax, U, V)  # fmt: skip
-                if k < 0:
-                    kept.append((a, b, c, None, None))
-                else:
-                    kept.append((a, b, c, U[:m, :k].astype(np.float32), _fixed_point(V[:k, :cols])))
+                kept.append((a, b, c, k, *(store.put(U[:m, :k], V[:k, :cols]) if k >= 0 else (-1, -1))))
 
     found, dense = [], set()
     items = np.array([(a, b, c) for a, b in far_pairs for c in range(n_c)], dtype=np.int64).reshape(-1, 3)
@@ -591,9 +646,9 @@ def _crosses(model, tree, P, N, params, dirs, pinv, eps, channel_bound, far_pair
         for_ranges(run, len(items), items, progress=lambda f, at=at, share=share: report(0.9 * (at + f * share)))
         following = []
         for kept in kept_by:
-            for a, b, c, U, V in kept:
-                if U is not None:
-                    found.append((a, b, c, U, V))
+            for a, b, c, k, u_at, v_at in kept:
+                if k >= 0:
+                    found.append((a, b, c, k, u_at, v_at))
                 elif tree.left[a] < 0 and tree.left[b] < 0:
                     dense.add((int(a), int(b), int(c)))
                 else:
@@ -604,7 +659,7 @@ def _crosses(model, tree, P, N, params, dirs, pinv, eps, channel_bound, far_pair
         done += len(items)
         report(min(0.9, 0.9 * done / total))
         items = np.array(following, dtype=np.int64).reshape(-1, 3)
-    return found, dense
+    return found, dense, store
 
 
 #: The compiled kernels of the far field's cross approximations and products: numba compiles each on first use;

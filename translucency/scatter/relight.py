@@ -69,9 +69,6 @@ FAR_FLOAT_BYTES = 4
 #: the estimate that stops a cross approximation is not a bound (docs/physics.md §8.9; bench/README.md,
 #: "Relighting").
 EPS_PER_TOL = 6.0
-#: Crosses per block and channel the memory estimate counts per decade of ``1 / eps`` (the rank of a block
-#: grows with the digits asked; :func:`operator_bytes`).
-RANK_PER_DECADE = 4.5
 #: Seconds of one fit on one thread (:func:`~translucency.scatter.fits.fitted_pairs`, one channel), and per
 #: near-field entry: the rates of the time estimate the budget compares against ``time_limit``, calibrated on
 #: timed preparations (bench/README.md, "Relighting").
@@ -202,8 +199,9 @@ def _gap(medium) -> float:
 
 def operator_bytes(geometry, medium, tol: float, near_radius: float) -> tuple[float, dict]:
     """Memory (bytes) the operators of ``geometry`` (the spatially ordered surface) would take, counted
-    before anything is made: the far field's dense blocks exactly and its crosses at :data:`RANK_PER_DECADE`
-    per decade of ``1 / eps`` (:func:`~translucency.scatter.lowrank.rank_limit` at most), the near field's
+    before anything is made: the far field's dense blocks exactly and its crosses at
+    :data:`~translucency.scatter.lowrank.RANK_PER_DECADE` per decade of ``1 / eps``
+    (:func:`~translucency.scatter.lowrank.rank_limit` at most), the near field's
     lists by the near triangles' corners; ``(bytes, counts)``, the counts with the fits the far field would
     evaluate."""
     n = geometry.n_vertices
@@ -212,7 +210,7 @@ def operator_bytes(geometry, medium, tol: float, near_radius: float) -> tuple[fl
     far_pairs, dense_pairs = lowrank.partition(tree, _gap(medium))
     rows = tree.end[far_pairs[:, 0]] - tree.start[far_pairs[:, 0]]
     cols = tree.end[far_pairs[:, 1]] - tree.start[far_pairs[:, 1]]
-    rank = RANK_PER_DECADE * math.log10(1.0 / far_eps(tol))
+    rank = lowrank.RANK_PER_DECADE * math.log10(1.0 / far_eps(tol))
     limit = np.array([lowrank.rank_limit(int(m), int(c) * AFFINE_TERMS) for m, c in zip(rows, cols)])
     ranks = np.minimum(rank, limit)
     far_floats = float(n_c * np.sum(ranks * (rows + AFFINE_TERMS * cols)))
