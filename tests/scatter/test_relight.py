@@ -108,6 +108,31 @@ def test_a_run_of_fits_equals_the_fits_of_its_pairs(model, sources_vary):
         assert np.all(np.abs(out[q] - expected) <= 1e-10 * scale), (q, out[q], expected)
 
 
+@pytest.mark.parametrize("model", ["directional", "better"])
+def test_quadratic_fits_of_a_batch_of_points_equal_the_fits_of_its_pairs(model):
+    # near-field pairs, 0.02-3 mm: where fitted_pairs evaluates every direction (the distances spread by more than
+    # FIT_INTERPOLATED_SPREAD) the batch is the same to rounding; where it interpolates, to that interpolation
+    rng = np.random.default_rng(5)
+    n = 400
+    x = rng.normal(size=(n, 3)) * np.geomspace(0.02, 3.0, n)[:, None]
+    ni = rng.normal(size=(n, 3)) * 0.3 + (0.0, 0.0, 1.0)
+    no = rng.normal(size=(n, 3)) * 0.3 + (0.0, 0.0, 1.0)
+    ni, no = ni / np.linalg.norm(ni, axis=1)[:, None], no / np.linalg.norm(no, axis=1)[:, None]
+    params = kernels.channel_parameters(MARBLE.sigma_a, MARBLE.sigma_s, MARBLE.g, MARBLE.eta, model)
+    dirs, pinv = fits.fit_directions(MARBLE.eta, fits.QUADRATIC_TERMS)
+    code = kernels.MODELS[model]
+    scratch = fits.run_scratch(dirs.shape[0], n)
+    scratch[0][0:3, :n], scratch[0][3:6, :n], scratch[0][6:9, :n] = x.T, ni.T, no.T
+    out = np.empty((n, 3, fits.QUADRATIC_TERMS))
+    fits.fitted_points(code, n, params, dirs, pinv, False, scratch, out)
+    errors = []
+    for q in range(n):
+        expected = _fits(code, x[q], ni[q], no[q], params, dirs, pinv, fits.QUADRATIC_TERMS)
+        errors.append(np.max(np.abs(out[q] - expected) / np.abs(expected).max(axis=1, keepdims=True)))
+    assert np.max(errors) < 1e-3
+    assert np.mean(np.array(errors) < 1e-10) > 0.5
+
+
 def _surface(points, triangles):
     from translucency.geometry.mesh import TriangleMesh
 

@@ -49,6 +49,7 @@ __all__ = [
     "fit_directions",
     "fitted_pairs",
     "fitted_run",
+    "fitted_points",
     "run_scratch",
 ]
 
@@ -240,19 +241,24 @@ def fitted_pairs(model, x0, x1, x2, ni0, ni1, ni2, no0, no1, no2, params, dirs, 
             out[c, at] = factor * total
 
 
-# rows of :func:`fitted_run`'s scratch arrays (one array per step's output: a loop that writes one array and
-# reads others vectorises, one that writes rows of an array it also reads may not)
+# rows of the run's scratch arrays (one array per step's output: a loop that writes one array and reads others
+# vectorises, one that writes rows of an array it also reads may not)
 _X0, _X1, _X2, _NI0, _NI1, _NI2, _NO0, _NO1, _NO2 = range(9)  # the pairs
 _R2, _S0, _S1, _S2, _XN, _XS, _SN, _E0, _E1, _E2, _F0, _F1, _F2 = range(13)  # their geometry
 _VA, _VB0, _VB1, _VB2 = range(4)  # the virtual source's a, b
 _AL, _AM, _AH = 0, 4, 8  # the real source's a, b0, b1, b2 at the least, middle and largest distance
+#: Coefficients of the quadratic fit in the source's frame: ``1, w_x, w_y, w_z, w_x^2, w_y^2, w_x w_y, w_x w_z,
+#: w_y w_z`` (:func:`fit_directions`).
+LOCAL_QUADRATIC_TERMS = 9
 
 
 @numba.njit(cache=True)
 def run_scratch(directions, length):
-    """Scratch space of :func:`fitted_run` for ``directions`` fit directions and runs of up to ``length`` pairs: a
-    tuple of arrays, their rows a little longer than the run and an odd number of cache lines long (rows a power
-    of two apart in memory compete for the same cache sets, which made runs of 512 three times slower)."""
+    """Scratch space of :func:`fitted_run` and :func:`fitted_points` for ``directions`` fit directions and up to
+    ``length`` pairs: a tuple of arrays (the pairs' offsets and normals are the rows of the first, see
+    :func:`fitted_points`), their rows a little longer than the run and an odd number of cache lines long (rows
+    a power of two apart in memory compete for the same cache sets, which made runs of 512 three times
+    slower)."""
     width = (length // 8 + 1) // 2 * 16 + 8
     return (
         np.empty((9, width)),
@@ -261,7 +267,7 @@ def run_scratch(directions, length):
         np.empty((directions, width)),
         np.empty((2, width)),
         np.empty((12, width)),
-        np.empty((AFFINE_TERMS, width)),
+        np.empty((LOCAL_QUADRATIC_TERMS, width)),
     )
 
 
@@ -279,7 +285,7 @@ def _gathered(P, N, fixed, lo, length, sources_vary, pair):
 
 @numba.njit(cache=True, fastmath=True, nogil=True, error_model="numpy")
 def _run_geometry(length, pair, geo):
-    """:func:`fitted_run`'s channel-independent geometry into the rows of ``geo``: ``r^2``, ``n_i*`` (§4.1), the
+    """The channel-independent geometry of a run's pairs into the rows of ``geo``: ``r^2``, ``n_i*`` (§4.1), the
     dot products, and the frame ``(e, f, n_i)`` the fit's directions are given in."""
     for q in range(length):
         x0, x1, x2 = pair[_X0, q], pair[_X1, q], pair[_X2, q]
@@ -302,10 +308,12 @@ def _run_geometry(length, pair, geo):
 
 
 @numba.njit(cache=True, fastmath=True, nogil=True, error_model="numpy")
-def _run_channel(p, dirs, pinv, length, scratch, out):
-    """:func:`fitted_run`'s fits of one channel (parameters ``p``) into ``out (length, AFFINE_TERMS)``, each step
-    one loop over the run: the virtual source, the corrected distances, their span, the real source at three of
-    them, the fit interpolated in the distance, and its terms in global coordinates."""
+def _run_channel(p, dirs, pinv, interpolate, length, scratch, out):
+    """The fits of one channel (parameters ``p``) of a run's pairs into ``out (length, terms)``, each step one loop
+    over the run: the virtual source, the corrected distances, ``S_d`` at each direction (the real source
+    interpolated in the distance from its least, middle and largest value where ``interpolate``, or evaluated at
+    each), the least-squares fit, and its terms in global coordinates (:data:`AFFINE_TERMS`, or :data:`QUADRATIC_TERMS`
+    when ``pinv`` has :data:`LOCAL_QUADRATIC_TERMS` rows)."""
     pair, geo, virtual, dist, span, real, coef = scratch
     n_dirs = dirs.shape[0]
     D = p[P_D]
@@ -339,6 +347,51 @@ def _run_channel(p, dirs, pinv, length, scratch, out):
             cos_beta = -math.sqrt(max(r2 - xw * xw, 0.0) / (r2 + d_e * d_e))
             front = r2 + D * mu0 * (D * mu0 - 2.0 * d_e * cos_beta)
             dist[k, q] = max(math.sqrt(front if mu0 > 0.0 else r2 + backlit2), floor)
+    if interpolate:
+        _span_and_three_sources(length, n_dirs, pair, geo, dist, span, real, D, sigma_tr_, scale, C_phi, C_E)
+    for k in range(n_dirs):  # S_d's real source at each direction, in place of its distance
+        u0, u1, u2 = dirs[k, 0], dirs[k, 1], dirs[k, 2]
+        for q in range(length):
+            w0 = u0 * geo[_E0, q] + u1 * geo[_F0, q] + u2 * pair[_NI0, q]
+            w1 = u0 * geo[_E1, q] + u1 * geo[_F1, q] + u2 * pair[_NI1, q]
+            w2 = u0 * geo[_E2, q] + u1 * geo[_F2, q] + u2 * pair[_NI2, q]
+            if interpolate:
+                low, high = span[0, q], span[1, q]
+                half = 0.5 * (high - low)
+                t = (dist[k, q] - 0.5 * (low + high)) / half if half > 0.0 else 0.0
+                lw, mw, hw = 0.5 * t * (t - 1.0), 1.0 - t * t, 0.5 * t * (t + 1.0)
+                dist[k, q] = (
+                    lw * (real[_AL, q] + real[_AL + 1, q] * w0 + real[_AL + 2, q] * w1 + real[_AL + 3, q] * w2)
+                    + mw * (real[_AM, q] + real[_AM + 1, q] * w0 + real[_AM + 2, q] * w1 + real[_AM + 3, q] * w2)
+                    + hw * (real[_AH, q] + real[_AH + 1, q] * w0 + real[_AH + 2, q] * w1 + real[_AH + 3, q] * w2)
+                )
+            else:
+                a0, a1, a2, a3 = _affine_terms(
+                    pair[_X0, q], pair[_X1, q], pair[_X2, q], geo[_XN, q], pair[_NO0, q], pair[_NO1, q],
+                    pair[_NO2, q], dist[k, q], D, sigma_tr_, scale, C_phi, C_E,
+                )  # fmt: skip
+                dist[k, q] = a0 + a1 * w0 + a2 * w1 + a3 * w2
+    for j in range(pinv.shape[0]):  # the least-squares fit over the directions
+        for q in range(length):
+            coef[j, q] = 0.0
+        for k in range(n_dirs):
+            g = pinv[j, k]
+            for q in range(length):
+                coef[j, q] += g * dist[k, q]
+    for q in range(length):  # from the source's frame to global coordinates, less the virtual source
+        c1, c2, c3 = coef[1, q], coef[2, q], coef[3, q]
+        out[q, 0] = coef[0, q] - virtual[_VA, q]
+        out[q, 1] = geo[_E0, q] * c1 + geo[_F0, q] * c2 + pair[_NI0, q] * c3 - virtual[_VB0, q]
+        out[q, 2] = geo[_E1, q] * c1 + geo[_F1, q] * c2 + pair[_NI1, q] * c3 - virtual[_VB1, q]
+        out[q, 3] = geo[_E2, q] * c1 + geo[_F2, q] * c2 + pair[_NI2, q] * c3 - virtual[_VB2, q]
+    if pinv.shape[0] == LOCAL_QUADRATIC_TERMS:
+        _global_quadratic(length, pair, geo, coef, out)
+
+
+@numba.njit(cache=True, fastmath=True, nogil=True, error_model="numpy", inline="always")
+def _span_and_three_sources(length, n_dirs, pair, geo, dist, span, real, D, sigma_tr_, scale, C_phi, C_E):
+    """The least and largest corrected distance of each pair into ``span``, and the real source at them and at
+    their middle into ``real`` (the run's interpolation in the distance)."""
     for q in range(length):
         span[0, q] = dist[0, q]
         span[1, q] = dist[0, q]
@@ -346,7 +399,7 @@ def _run_channel(p, dirs, pinv, length, scratch, out):
         for q in range(length):
             span[0, q] = min(span[0, q], dist[k, q])
             span[1, q] = max(span[1, q], dist[k, q])
-    for q in range(length):  # the real source at the least, middle and largest distance
+    for q in range(length):
         x0, x1, x2, xn = pair[_X0, q], pair[_X1, q], pair[_X2, q], geo[_XN, q]
         n0, n1, n2 = pair[_NO0, q], pair[_NO1, q], pair[_NO2, q]
         low, high = span[0, q], span[1, q]
@@ -357,35 +410,28 @@ def _run_channel(p, dirs, pinv, length, scratch, out):
             real[_AL + t, q] = al[t]
             real[_AM + t, q] = am[t]
             real[_AH + t, q] = ah[t]
-    for t in range(AFFINE_TERMS):
-        for q in range(length):
-            coef[t, q] = 0.0
-    for k in range(n_dirs):  # interpolated in the distance, fitted over the directions
-        u0, u1, u2 = dirs[k, 0], dirs[k, 1], dirs[k, 2]
-        g0, g1, g2, g3 = pinv[0, k], pinv[1, k], pinv[2, k], pinv[3, k]
-        for q in range(length):
-            w0 = u0 * geo[_E0, q] + u1 * geo[_F0, q] + u2 * pair[_NI0, q]
-            w1 = u0 * geo[_E1, q] + u1 * geo[_F1, q] + u2 * pair[_NI1, q]
-            w2 = u0 * geo[_E2, q] + u1 * geo[_F2, q] + u2 * pair[_NI2, q]
-            low, high = span[0, q], span[1, q]
-            half = 0.5 * (high - low)
-            t = (dist[k, q] - 0.5 * (low + high)) / half if half > 0.0 else 0.0
-            lw, mw, hw = 0.5 * t * (t - 1.0), 1.0 - t * t, 0.5 * t * (t + 1.0)
-            value = (
-                lw * (real[_AL, q] + real[_AL + 1, q] * w0 + real[_AL + 2, q] * w1 + real[_AL + 3, q] * w2)
-                + mw * (real[_AM, q] + real[_AM + 1, q] * w0 + real[_AM + 2, q] * w1 + real[_AM + 3, q] * w2)
-                + hw * (real[_AH, q] + real[_AH + 1, q] * w0 + real[_AH + 2, q] * w1 + real[_AH + 3, q] * w2)
-            )
-            coef[0, q] += g0 * value
-            coef[1, q] += g1 * value
-            coef[2, q] += g2 * value
-            coef[3, q] += g3 * value
-    for q in range(length):  # from the source's frame to global coordinates, less the virtual source
-        c1, c2, c3 = coef[1, q], coef[2, q], coef[3, q]
-        out[q, 0] = coef[0, q] - virtual[_VA, q]
-        out[q, 1] = geo[_E0, q] * c1 + geo[_F0, q] * c2 + pair[_NI0, q] * c3 - virtual[_VB0, q]
-        out[q, 2] = geo[_E1, q] * c1 + geo[_F1, q] * c2 + pair[_NI1, q] * c3 - virtual[_VB1, q]
-        out[q, 3] = geo[_E2, q] * c1 + geo[_F2, q] * c2 + pair[_NI2, q] * c3 - virtual[_VB2, q]
+
+
+@numba.njit(cache=True, fastmath=True, nogil=True, error_model="numpy")
+def _global_quadratic(length, pair, geo, coef, out):
+    """The quadratic terms of each pair's fit in global coordinates: ``Q = R Q_l R^T`` with ``R``'s columns the
+    frame ``(e, f, n_i)`` and ``Q_l`` the local form (no ``w_z^2`` term, ``w_z^2 = 1 - w_x^2 - w_y^2``), written
+    as ``Q00, Q11, Q22, 2 Q01, 2 Q02, 2 Q12`` (the order of :func:`fitted_pairs`)."""
+    for q in range(length):
+        xx, yy, xy, xz, yz = coef[4, q], coef[5, q], 0.5 * coef[6, q], 0.5 * coef[7, q], 0.5 * coef[8, q]
+        # rows of R (global axis i): (e_i, f_i, n_i); Q_ij = r_i . Q_l r_j
+        e0, e1, e2 = geo[_E0, q], geo[_E1, q], geo[_E2, q]
+        f0, f1, f2 = geo[_F0, q], geo[_F1, q], geo[_F2, q]
+        n0, n1, n2 = pair[_NI0, q], pair[_NI1, q], pair[_NI2, q]
+        m00, m01, m02 = xx * e0 + xy * f0 + xz * n0, xy * e0 + yy * f0 + yz * n0, xz * e0 + yz * f0  # Q_l r_0
+        m10, m11, m12 = xx * e1 + xy * f1 + xz * n1, xy * e1 + yy * f1 + yz * n1, xz * e1 + yz * f1  # Q_l r_1
+        m20, m21, m22 = xx * e2 + xy * f2 + xz * n2, xy * e2 + yy * f2 + yz * n2, xz * e2 + yz * f2  # Q_l r_2
+        out[q, 4] = e0 * m00 + f0 * m01 + n0 * m02
+        out[q, 5] = e1 * m10 + f1 * m11 + n1 * m12
+        out[q, 6] = e2 * m20 + f2 * m21 + n2 * m22
+        out[q, 7] = 2.0 * (e0 * m10 + f0 * m11 + n0 * m12)
+        out[q, 8] = 2.0 * (e0 * m20 + f0 * m21 + n0 * m22)
+        out[q, 9] = 2.0 * (e1 * m20 + f1 * m21 + n1 * m22)
 
 
 @numba.njit(cache=True, fastmath=True, nogil=True, error_model="numpy")
@@ -401,21 +447,13 @@ def fitted_run(model, P, N, fixed, lo, hi, sources_vary, params, dirs, pinv, scr
     pairs whose distances spread by more than :data:`FIT_INTERPOLATED_SPREAD` are fitted again one by one by
     :func:`fitted_pairs` (``work``, ``one (1, AFFINE_TERMS)`` its scratch). ``scratch`` is
     :func:`run_scratch`'s."""
-    pair, geo, virtual, dist, span, real, coef = scratch
+    pair, span = scratch[0], scratch[4]
     length = hi - lo
     _gathered(P, N, fixed, lo, length, sources_vary, pair)
-    if model != MODEL_DIRECTIONAL:
-        for c in range(params.shape[0]):
-            for q in range(length):
-                r2 = pair[_X0, q] * pair[_X0, q] + pair[_X1, q] * pair[_X1, q] + pair[_X2, q] * pair[_X2, q]
-                out[q, c, 0] = radial_dipole(model, r2, params[c])
-                out[q, c, 1] = 0.0
-                out[q, c, 2] = 0.0
-                out[q, c, 3] = 0.0
+    if not _directional_run(model, length, params, scratch, out):
         return
-    _run_geometry(length, pair, geo)
     for c in range(params.shape[0]):
-        _run_channel(params[c], dirs, pinv, length, scratch, out[:, c, :])
+        _run_channel(params[c], dirs, pinv, True, length, scratch, out[:, c, :])
         for q in range(length):  # distances too far apart to interpolate: each direction evaluated
             if span[1, q] - span[0, q] > FIT_INTERPOLATED_SPREAD * span[0, q]:
                 fitted_pairs(
@@ -424,3 +462,39 @@ def fitted_run(model, P, N, fixed, lo, hi, sources_vary, params, dirs, pinv, scr
                 )  # fmt: skip
                 for t in range(AFFINE_TERMS):
                     out[q, c, t] = one[0, t]
+
+
+@numba.njit(cache=True, fastmath=True, nogil=True, error_model="numpy")
+def fitted_points(model, length, params, dirs, pinv, interpolate, scratch, out):
+    """The fits (affine or quadratic, by ``pinv`` of :func:`fit_directions`) of ``length`` pairs already written
+    into the first array of ``scratch`` (:func:`run_scratch`): row ``t`` of it the offsets ``x_o - x_i`` (mm, rows
+    0-2), the source normals (3-5) and the receiver normals (6-8), column ``q`` the pair; written to ``out[q, c,
+    :]`` for every channel (rows of ``params``), a step at a time over the pairs. The real source is evaluated at
+    each direction's corrected distance (the near field's pairs: :func:`fitted_pairs` gives the same fits to the
+    error of its interpolation in the distance), or, where ``interpolate``, interpolated in it from its least,
+    middle and largest value."""
+    if _directional_run(model, length, params, scratch, out):
+        for c in range(params.shape[0]):
+            _run_channel(params[c], dirs, pinv, interpolate, length, scratch, out[:, c, :])
+
+
+@numba.njit(cache=True, fastmath=True, nogil=True, error_model="numpy")
+def _directional_run(model, length, params, scratch, out) -> bool:
+    """The start of a run's fits: for the directional dipole the geometry (:func:`_run_geometry`, True: the
+    channels are to come), for the radial models the whole of them (False)."""
+    if model != MODEL_DIRECTIONAL:
+        _radial_run(model, length, params, scratch[0], out)
+        return False
+    _run_geometry(length, scratch[0], scratch[1])
+    return True
+
+
+@numba.njit(cache=True, fastmath=True, nogil=True, error_model="numpy")
+def _radial_run(model, length, params, pair, out):
+    """The radial models' fits of a run's pairs: ``a = S_d(r)``, every other term 0."""
+    for c in range(params.shape[0]):
+        for q in range(length):
+            r2 = pair[_X0, q] * pair[_X0, q] + pair[_X1, q] * pair[_X1, q] + pair[_X2, q] * pair[_X2, q]
+            out[q, c, 0] = radial_dipole(model, r2, params[c])
+            for t in range(1, out.shape[2]):
+                out[q, c, t] = 0.0

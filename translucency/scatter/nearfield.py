@@ -46,7 +46,7 @@ import numpy as np
 from ..geometry.measure import edge_lengths, triangle_centroids
 from ..geometry.topology import unique_edges
 from ..threads import for_ranges, thread_count
-from .fits import FIT_WORK_COLUMNS, QUADRATIC_TERMS, fitted_pairs
+from .fits import QUADRATIC_TERMS, fitted_points, run_scratch
 from .kernels import channel_lanes, indexed_sum
 from .surface import PerSurface
 
@@ -1185,8 +1185,9 @@ def near_field_operator(
 
     The same quadrature (fan rule on the receiver's own triangles, subdivided pieces of the close ones,
     Dunavant's rule on the others; no degree-3 substitution) with every vertex treated as lit, ``Phi``,
-    ``Psi = Phi w12`` and ``Xi = Phi w12 w12^T`` interpolated linearly, and ``S_d`` as the quadratic fit of
-    :func:`~translucency.scatter.fits.fitted_pairs` (docs/physics.md §8.7). The coefficient of a point is
+    ``Psi = Phi w12`` and ``Xi = Phi w12 w12^T`` interpolated linearly, and ``S_d`` as the quadratic fit
+    (docs/physics.md §8.7), the points of a receiver fitted :data:`POINT_BATCH` at a time by
+    :func:`~translucency.scatter.fits.fitted_points`. The coefficient of a point is
     shared among the triangle's corners by their barycentric weights and divided by the corner's vertex
     area (per unit flux ``Phi = phi A``). Each near vertex's own pair of the vertex sum is included, with the
     quadratic fit, so that its row is the whole of what the vertex gives the receiver (the vertex rule of the
@@ -1277,37 +1278,56 @@ def _operator_counts(worker, lo, hi, triangles, receivers, offsets, triangle_ids
         counts[r] = listed
 
 
+#: Quadrature points of a receiver's operator row fitted together (:func:`~translucency.scatter.fits.fitted_points`).
+POINT_BATCH = 256
+
+
 @numba.njit(cache=True, inline="always", fastmath=True)
-def _add_point(
-    model, points, normals, vertex_areas, tri, b0, b1, b2, weight, xo, no, params, dirs, pinv, work, slot, scratch, out
-):
-    """Add the coefficients (:func:`~translucency.scatter.fits.fitted_pairs` with ``dirs, pinv``) of the
-    point with barycentric ``b`` of ``tri``, times ``weight`` (mm^2), to its corners' rows of ``out``
-    (``slot``: each vertex's row), shared by ``b_k / A_k``."""
+def _queue_point(points, normals, tri, b0, b1, b2, weight, xo, no, batch, queued):
+    """Queue the point with barycentric ``b`` of ``tri``, weight ``weight`` (mm^2), for the receiver at ``xo``
+    with normal ``no`` in place ``queued`` of ``batch`` (the fit's scratch, its output, corners, shares): its
+    offset and normals into the rows :func:`~translucency.scatter.fits.fitted_points` reads, its corners and their
+    shares ``b_k weight``; returns ``queued + 1``."""
+    pairs, corners, shares = batch[0][0], batch[2], batch[3]
     i0, i1, i2 = tri[0], tri[1], tri[2]
-    x0 = b0 * points[i0, 0] + b1 * points[i1, 0] + b2 * points[i2, 0]
-    x1 = b0 * points[i0, 1] + b1 * points[i1, 1] + b2 * points[i2, 1]
-    x2 = b0 * points[i0, 2] + b1 * points[i1, 2] + b2 * points[i2, 2]
     m0 = b0 * normals[i0, 0] + b1 * normals[i1, 0] + b2 * normals[i2, 0]
     m1 = b0 * normals[i0, 1] + b1 * normals[i1, 1] + b2 * normals[i2, 1]
     m2 = b0 * normals[i0, 2] + b1 * normals[i1, 2] + b2 * normals[i2, 2]
     mn = math.sqrt(m0 * m0 + m1 * m1 + m2 * m2)
     if mn <= 0.0:
         m0, m1, m2, mn = 0.0, 0.0, 1.0, 1.0
-    m0, m1, m2 = m0 / mn, m1 / mn, m2 / mn
-    fitted_pairs(
-        model, xo[0] - x0, xo[1] - x1, xo[2] - x2, m0, m1, m2, no[0], no[1], no[2], params, dirs, pinv, work, scratch
-    )
-    for corner in range(3):
-        v = tri[corner]
-        share = (b0 if corner == 0 else (b1 if corner == 1 else b2)) * weight
-        if share == 0.0 or vertex_areas[v] <= 0.0:
-            continue
-        share /= vertex_areas[v]
-        row = slot[v]
-        for c in range(params.shape[0]):
-            for t in range(QUADRATIC_TERMS):
-                out[row, c * QUADRATIC_TERMS + t] += share * scratch[c, t]
+    for t in range(3):
+        pairs[t, queued] = xo[t] - (b0 * points[i0, t] + b1 * points[i1, t] + b2 * points[i2, t])
+        pairs[6 + t, queued] = no[t]
+    pairs[3, queued] = m0 / mn
+    pairs[4, queued] = m1 / mn
+    pairs[5, queued] = m2 / mn
+    corners[queued, 0], corners[queued, 1], corners[queued, 2] = i0, i1, i2
+    shares[queued, 0], shares[queued, 1], shares[queued, 2] = b0 * weight, b1 * weight, b2 * weight
+    return queued + 1
+
+
+@numba.njit(cache=True, inline="always", fastmath=True)
+def _flush_points(model, queued, params, dirs, pinv, batch, vertex_areas, slot, out):
+    """Fit the ``queued`` points of ``batch`` (:func:`_queue_point`; :func:`~translucency.scatter.fits.fitted_points`)
+    and add each point's coefficients to its corners' rows of ``out`` (``slot``: each vertex's row), shared by
+    ``b_k / A_k`` (per unit flux of the corner); returns 0, the queue's new length."""
+    if queued == 0:
+        return 0
+    scratch, fitted, corners, shares = batch
+    fitted_points(model, queued, params, dirs, pinv, False, scratch, fitted)
+    for q in range(queued):
+        for corner in range(3):
+            v = corners[q, corner]
+            share = shares[q, corner]
+            if share == 0.0 or vertex_areas[v] <= 0.0:
+                continue
+            share /= vertex_areas[v]
+            row = out[slot[v]]
+            for c in range(params.shape[0]):
+                for t in range(QUADRATIC_TERMS):
+                    row[c * QUADRATIC_TERMS + t] += share * fitted[q, c, t]
+    return 0
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
@@ -1355,8 +1375,13 @@ def _operator_rows(
     cx = np.empty((3, 3))
     found = np.empty((4**6, 7))
     own = np.empty((4 * ang_x.shape[0] * rad_x.shape[0], 4))
-    scratch = np.empty((n_c, QUADRATIC_TERMS))
-    work = np.empty((max(dirs_q.shape[0], 9), FIT_WORK_COLUMNS))
+    batch = (  # the points waiting to be fitted (_queue_point): the fit's scratch, its output, corners, shares
+        run_scratch(dirs_q.shape[0], POINT_BATCH),
+        np.empty((POINT_BATCH, n_c, QUADRATIC_TERMS)),
+        np.empty((POINT_BATCH, 3), dtype=np.int64),
+        np.empty((POINT_BATCH, 3)),
+    )
+    queued = 0
     acc = np.zeros((64, width))
     rule = np.zeros(64)  # per listed vertex: its share of the near triangles' vertex rule, mm^2
     one = np.empty(3, dtype=np.int64)  # a vertex as a degenerate triangle (its own point)
@@ -1388,26 +1413,9 @@ def _operator_rows(
         for i in range(listed):
             v = columns[starts[r] + i]
             one[:] = v
-            _add_point(
-                model,
-                points,
-                normals,
-                vertex_areas,
-                one,
-                1.0,
-                0.0,
-                0.0,
-                vertex_areas[v] - rule[i],
-                xo,
-                no,
-                params,
-                dirs_q,
-                pinv_q,
-                work,
-                slot,
-                scratch,
-                acc,
-            )
+            queued = _queue_point(points, normals, one, 1.0, 0.0, 0.0, vertex_areas[v] - rule[i], xo, no, batch, queued)
+            if queued == POINT_BATCH:
+                queued = _flush_points(model, queued, params, dirs_q, pinv_q, batch, vertex_areas, slot, acc)
         for k in range(offsets[r], offsets[r + 1]):
             t = triangle_ids[k]
             tri = triangles[t]
@@ -1415,11 +1423,9 @@ def _operator_rows(
             corner = _corner_of(tri, v_o)
             if corner < 0 and _whole(diameters[t], centroids[t], xo, beta, scale_min):
                 for q in range(n_rule):
-                    _add_point(
-                        model,
+                    queued = _queue_point(
                         points,
                         normals,
-                        vertex_areas,
                         tri,
                         rule_points[q, 0],
                         rule_points[q, 1],
@@ -1427,14 +1433,11 @@ def _operator_rows(
                         area * rule_weights[q],
                         xo,
                         no,
-                        params,
-                        dirs_q,
-                        pinv_q,
-                        work,
-                        slot,
-                        scratch,
-                        acc,
+                        batch,
+                        queued,
                     )
+                    if queued == POINT_BATCH:
+                        queued = _flush_points(model, queued, params, dirs_q, pinv_q, batch, vertex_areas, slot, acc)
                 continue
             n, own, found = _own_points(
                 points,
@@ -1456,26 +1459,12 @@ def _operator_rows(
                 own,
             )
             for j in range(n):
-                _add_point(
-                    model,
-                    points,
-                    normals,
-                    vertex_areas,
-                    tri,
-                    own[j, 0],
-                    own[j, 1],
-                    own[j, 2],
-                    own[j, 3],
-                    xo,
-                    no,
-                    params,
-                    dirs_q,
-                    pinv_q,
-                    work,
-                    slot,
-                    scratch,
-                    acc,
+                queued = _queue_point(
+                    points, normals, tri, own[j, 0], own[j, 1], own[j, 2], own[j, 3], xo, no, batch, queued
                 )
+                if queued == POINT_BATCH:
+                    queued = _flush_points(model, queued, params, dirs_q, pinv_q, batch, vertex_areas, slot, acc)
+        queued = _flush_points(model, queued, params, dirs_q, pinv_q, batch, vertex_areas, slot, acc)
         for i in range(size):
             for j in range(width):
                 coefs[starts[r] + i, j] = acc[i, j]
