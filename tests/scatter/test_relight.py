@@ -96,11 +96,8 @@ def test_a_run_of_fits_equals_the_fits_of_its_pairs(model, sources_vary):
     params = kernels.channel_parameters(MARBLE.sigma_a, MARBLE.sigma_s, MARBLE.g, MARBLE.eta, model)
     dirs, pinv = fits.fit_directions(MARBLE.eta, fits.AFFINE_TERMS)
     code = kernels.MODELS[model]
-    work, one = np.empty((9, fits.FIT_WORK_COLUMNS)), np.empty((1, fits.AFFINE_TERMS))
     out = np.empty((n - 1, 3, fits.AFFINE_TERMS))
-    fits.fitted_run(
-        code, points, normals, 0, 1, n, sources_vary, params, dirs, pinv, fits.run_scratch(7, n), work, one, out
-    )
+    fits.fitted_run(code, points, normals, 0, 1, n, sources_vary, params, dirs, pinv, fits.run_space(7, n), out)
     for q in range(n - 1):
         o, i = (0, q + 1) if sources_vary else (q + 1, 0)
         expected = _fits(code, points[o] - points[i], normals[i], normals[o], params, dirs, pinv, fits.AFFINE_TERMS)

@@ -51,6 +51,7 @@ __all__ = [
     "fitted_run",
     "fitted_points",
     "run_scratch",
+    "run_space",
 ]
 
 
@@ -98,7 +99,7 @@ def _affine_source(x0, x1, x2, x_dot_n, n0, n1, n2, d, p):
     )
 
 
-@numba.njit(cache=True, inline="always", fastmath=True)
+@numba.njit(cache=True, fastmath=True)
 def _affine_terms(x0, x1, x2, x_dot_n, n0, n1, n2, d, D, sigma_tr_, scale, C_phi, C_E):
     """:func:`_affine_source` with the channel's parameters as numbers (``scale = norm / (4 pi^2)``): a loop over
     pairs that reads them before it starts vectorises, one that reads them from an array in every pass did not."""
@@ -388,7 +389,7 @@ def _run_channel(p, dirs, pinv, interpolate, length, scratch, out):
         _global_quadratic(length, pair, geo, coef, out)
 
 
-@numba.njit(cache=True, fastmath=True, nogil=True, error_model="numpy", inline="always")
+@numba.njit(cache=True, fastmath=True, nogil=True, error_model="numpy")
 def _span_and_three_sources(length, n_dirs, pair, geo, dist, span, real, D, sigma_tr_, scale, C_phi, C_E):
     """The least and largest corrected distance of each pair into ``span``, and the real source at them and at
     their middle into ``real`` (the run's interpolation in the distance)."""
@@ -434,19 +435,31 @@ def _global_quadratic(length, pair, geo, coef, out):
         out[q, 9] = 2.0 * (e1 * m20 + f1 * m21 + n1 * m22)
 
 
+@numba.njit(cache=True)
+def run_space(directions, length):
+    """What :func:`fitted_run` works in, for ``directions`` fit directions and runs of up to ``length`` pairs: its
+    scratch (:func:`run_scratch`), and a second one with an output and indices for the pairs it fits again."""
+    return (
+        run_scratch(directions, length),
+        run_scratch(directions, length),
+        np.empty((length, 1, AFFINE_TERMS)),  # taken as [:, 0, :], the layout _run_channel is compiled for
+        np.empty(length, dtype=np.int64),
+    )
+
+
 @numba.njit(cache=True, fastmath=True, nogil=True, error_model="numpy")
-def fitted_run(model, P, N, fixed, lo, hi, sources_vary, params, dirs, pinv, scratch, work, one, out):
+def fitted_run(model, P, N, fixed, lo, hi, sources_vary, params, dirs, pinv, space, out):
     """:func:`fitted_pairs`' affine fits (:data:`AFFINE_TERMS`) for a run of pairs that share one end, written to
     ``out[q, c, :]`` for every channel ``c`` (rows of ``params``): receiver ``fixed`` and sources ``lo + q``
     (``sources_vary``; a row of the far field's matrix), or source ``fixed`` and receivers ``lo + q`` (a column);
-    ``P``, ``N`` the points (mm) and unit normals.
+    ``P``, ``N`` the points (mm) and unit normals; ``space`` is :func:`run_space`'s.
 
     The same fits as :func:`fitted_pairs` (to rounding), computed a step at a time over the whole run so that each
     step is one loop the compiler vectorises: the geometry, the virtual source, the corrected distance at every
     direction, and the real source at the least, middle and largest of them, interpolated in the distance. The
-    pairs whose distances spread by more than :data:`FIT_INTERPOLATED_SPREAD` are fitted again one by one by
-    :func:`fitted_pairs` (``work``, ``one (1, AFFINE_TERMS)`` its scratch). ``scratch`` is
-    :func:`run_scratch`'s."""
+    pairs whose distances spread by more than :data:`FIT_INTERPOLATED_SPREAD` are fitted again, together, with
+    the real source evaluated at each direction (:func:`fitted_points`' way)."""
+    scratch, again, again_out, again_at = space
     pair, span = scratch[0], scratch[4]
     length = hi - lo
     _gathered(P, N, fixed, lo, length, sources_vary, pair)
@@ -454,14 +467,19 @@ def fitted_run(model, P, N, fixed, lo, hi, sources_vary, params, dirs, pinv, scr
         return
     for c in range(params.shape[0]):
         _run_channel(params[c], dirs, pinv, True, length, scratch, out[:, c, :])
+        count = 0
         for q in range(length):  # distances too far apart to interpolate: each direction evaluated
             if span[1, q] - span[0, q] > FIT_INTERPOLATED_SPREAD * span[0, q]:
-                fitted_pairs(
-                    model, pair[_X0, q], pair[_X1, q], pair[_X2, q], pair[_NI0, q], pair[_NI1, q], pair[_NI2, q],
-                    pair[_NO0, q], pair[_NO1, q], pair[_NO2, q], params[c : c + 1], dirs, pinv, work, one,
-                )  # fmt: skip
+                again_at[count] = q
+                for t in range(9):
+                    again[0][t, count] = pair[t, q]
+                count += 1
+        if count > 0:
+            _run_geometry(count, again[0], again[1])
+            _run_channel(params[c], dirs, pinv, False, count, again, again_out[:, 0, :])
+            for k in range(count):
                 for t in range(AFFINE_TERMS):
-                    out[q, c, t] = one[0, t]
+                    out[again_at[k], c, t] = again_out[k, 0, t]
 
 
 @numba.njit(cache=True, fastmath=True, nogil=True, error_model="numpy")

@@ -40,7 +40,7 @@ import numba
 import numpy as np
 
 from ..threads import for_ranges, thread_count
-from .fits import AFFINE_TERMS, FIT_WORK_COLUMNS, fitted_run, run_scratch
+from .fits import AFFINE_TERMS, fitted_run, run_space
 from .hierarchy import SourceTree
 
 __all__ = ["ETA", "LEAF_SIZE", "FarMatrix", "build", "partition"]
@@ -193,9 +193,7 @@ def _cross(model, P, N, r0, r1, c0, c1, params, dirs, pinv, row_scale, eps, kmax
     :data:`CHECK_ROWS` - 1 rows drawn at random are each held to ``eps`` of their own norm."""
     m = r1 - r0
     n = (c1 - c0) * AFFINE_TERMS
-    work = np.empty((max(dirs.shape[0], 9), FIT_WORK_COLUMNS))
-    one = np.empty((1, AFFINE_TERMS))
-    scratch = run_scratch(dirs.shape[0], max(m, c1 - c0))
+    space = run_space(dirs.shape[0], max(m, c1 - c0))
     fits = np.empty((max(m, c1 - c0), 1, AFFINE_TERMS))
     used = np.zeros(m, dtype=np.bool_)
     column_cache = np.empty((m, AFFINE_TERMS))
@@ -212,7 +210,7 @@ def _cross(model, P, N, r0, r1, c0, c1, params, dirs, pinv, row_scale, eps, kmax
         used[i] = True
         visited += 1
         full2 = 0.0
-        fitted_run(model, P, N, r0 + i, c0, c1, True, params, dirs, pinv, scratch, work, one, fits)
+        fitted_run(model, P, N, r0 + i, c0, c1, True, params, dirs, pinv, space, fits)
         for b in range(c1 - c0):
             for t in range(AFFINE_TERMS):
                 value = fits[b, 0, t] * row_scale[i]
@@ -246,7 +244,7 @@ def _cross(model, P, N, r0, r1, c0, c1, params, dirs, pinv, row_scale, eps, kmax
             return -1
         source = j // AFFINE_TERMS
         if source != cached:
-            fitted_run(model, P, N, c0 + source, r0, r1, False, params, dirs, pinv, scratch, work, one, fits)
+            fitted_run(model, P, N, c0 + source, r0, r1, False, params, dirs, pinv, space, fits)
             for a in range(m):
                 for t in range(AFFINE_TERMS):
                     column_cache[a, t] = fits[a, 0, t] * row_scale[a]
@@ -304,12 +302,10 @@ def _fill_dense(worker, lo, hi, model, P, N, dense, params, dirs, pinv, held_sta
     pair (source ``j`` listed for receiver ``o`` in ``held_columns[held_starts[o] : held_starts[o + 1]]``, tree
     order)."""
     n_c = params.shape[0]
-    work = np.empty((max(dirs.shape[0], 9), FIT_WORK_COLUMNS))
-    one = np.empty((1, AFFINE_TERMS))
     length = 0
     for k in range(lo, hi):
         length = max(length, dense[k, 3] - dense[k, 2])
-    scratch = run_scratch(dirs.shape[0], length)
+    space = run_space(dirs.shape[0], length)
     fits = np.empty((length, n_c, AFFINE_TERMS))
     mark = stamps[worker]
     for k in range(lo, hi):
@@ -320,7 +316,7 @@ def _fill_dense(worker, lo, hi, model, P, N, dense, params, dirs, pinv, held_sta
             o = r0 + a
             for h in range(held_starts[o], held_starts[o + 1]):
                 mark[held_columns[h]] = o
-            fitted_run(model, P, N, o, c0, c1, True, params, dirs, pinv, scratch, work, one, fits)
+            fitted_run(model, P, N, o, c0, c1, True, params, dirs, pinv, space, fits)
             for b in range(c1 - c0):
                 held = mark[c0 + b] == o
                 for c in range(first, last):

@@ -1282,7 +1282,7 @@ def _operator_counts(worker, lo, hi, triangles, receivers, offsets, triangle_ids
 POINT_BATCH = 256
 
 
-@numba.njit(cache=True, inline="always", fastmath=True)
+@numba.njit(cache=True, fastmath=True, nogil=True)
 def _queue_point(points, normals, tri, b0, b1, b2, weight, xo, no, batch, queued):
     """Queue the point with barycentric ``b`` of ``tri``, weight ``weight`` (mm^2), for the receiver at ``xo``
     with normal ``no`` in place ``queued`` of ``batch`` (the fit's scratch, its output, corners, shares): its
@@ -1307,7 +1307,7 @@ def _queue_point(points, normals, tri, b0, b1, b2, weight, xo, no, batch, queued
     return queued + 1
 
 
-@numba.njit(cache=True, inline="always", fastmath=True)
+@numba.njit(cache=True, fastmath=True, nogil=True)
 def _flush_points(model, queued, params, dirs, pinv, batch, vertex_areas, slot, out):
     """Fit the ``queued`` points of ``batch`` (:func:`_queue_point`; :func:`~translucency.scatter.fits.fitted_points`)
     and add each point's coefficients to its corners' rows of ``out`` (``slot``: each vertex's row), shared by

@@ -69,11 +69,12 @@ FAR_FLOAT_BYTES = 4
 #: the estimate that stops a cross approximation is not a bound (docs/physics.md §8.9; bench/README.md,
 #: "Relighting").
 EPS_PER_TOL = 6.0
-#: Seconds of one fit on one thread (:func:`~translucency.scatter.fits.fitted_pairs`, one channel), and per
+#: Seconds of one fit the far field counts on one thread (the cross approximations' rows and columns,
+#: :func:`~translucency.scatter.fits.fitted_run`, one channel, with their share of the crosses' own work), and per
 #: near-field entry: the rates of the time estimate the budget compares against ``time_limit``, calibrated on
-#: timed preparations (bench/README.md, "Relighting").
-FIT_SECONDS = 5e-7
-NEAR_ENTRY_SECONDS = 3e-5
+#: timed preparations of the default bunny (bench/README.md, "Relighting"; the largest of three materials).
+FIT_SECONDS = 4e-7
+NEAR_ENTRY_SECONDS = 5.5e-6
 
 
 @dataclass
