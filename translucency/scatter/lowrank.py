@@ -110,9 +110,10 @@ class FarMatrix:
         sorted_values = sorted_values.reshape(self.n_channels, n * AFFINE_TERMS)
         workers = thread_count()
         out = np.zeros((workers, n, self.n_channels))
-        for_ranges(
-            _apply_low_rank, self.low_rank.shape[0], self.low_rank, self.U, self.V, sorted_values, lit_before, out
-        )
+        # the crosses' products in float32, as their factors are held (B changed by 5e-7 of itself at most on the
+        # default bunny; 16 lanes a step instead of 8)
+        values32 = sorted_values.astype(np.float32)
+        for_ranges(_apply_low_rank, self.low_rank.shape[0], self.low_rank, self.U, self.V, values32, lit_before, out)
         for_ranges(_apply_dense, self.dense.shape[0], self.dense, self.D, sorted_values, lit_before, out)
         B = np.empty((n, self.n_channels))
         B[self.order] = out.sum(axis=0)
@@ -349,28 +350,29 @@ def _low_rank_block(blocks, k):
 @numba.njit(cache=True, nogil=True, fastmath=True, error_model="numpy")
 def _apply_low_rank(worker, lo, hi, blocks, U, V, values, lit_before, out):
     """``out[worker, rows, c] += U (V values[c, columns])`` for the low-rank blocks ``lo .. hi - 1`` (``values``
-    per channel, four terms per source), skipping those without a lit source (``lit_before[j]``: how many of the
-    sources before ``j`` are lit)."""
+    float32, per channel, four terms per source; the products in float32, each block's sum added in float64),
+    skipping those without a lit source (``lit_before[j]``: how many of the sources before ``j`` are lit)."""
     target = out[worker]
-    inner = np.zeros(128)
+    inner = np.zeros(128, dtype=np.float32)
+    step = np.float32(V_STEP)
     for k in range(lo, hi):
         r0, r1, c0, c1, c, rank, u_at, v_at = _low_rank_block(blocks, k)
         if lit_before[c1] == lit_before[c0]:
             continue
         n = (c1 - c0) * AFFINE_TERMS
         if inner.shape[0] < rank:
-            inner = np.zeros(2 * rank)
+            inner = np.zeros(2 * rank, dtype=np.float32)
         source = values[c, c0 * AFFINE_TERMS : c1 * AFFINE_TERMS]
         # rows taken as slices: indexed from 0 by the loop's own counter, the products vectorise
         for q in range(rank):
             row = V[v_at + q * n : v_at + (q + 1) * n]
-            s = 0.0
+            s = np.float32(0.0)
             for j in range(n):
-                s += row[j] * source[j]
-            inner[q] = s * V_STEP
+                s += np.float32(row[j]) * source[j]
+            inner[q] = s * step
         for a in range(r1 - r0):
             row = U[u_at + a * rank : u_at + (a + 1) * rank]
-            s = 0.0
+            s = np.float32(0.0)
             for q in range(rank):
                 s += row[q] * inner[q]
             target[r0 + a, c] += s
