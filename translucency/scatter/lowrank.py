@@ -183,7 +183,7 @@ CHECK_ROWS = 3
 
 
 @numba.njit(cache=True, nogil=True, fastmath=True, error_model="numpy")
-def _cross(model, P, N, r0, r1, c0, c1, params, dirs, pinv, row_scale, eps, kmax, U, V):
+def _cross(model, P, N, r0, r1, c0, c1, params, dirs, pinv, row_scale, eps, kmax, U, V, space):
     """Adaptive cross approximation with partial pivoting of one channel (``params`` of one row): rows ``r0:r1``
     x sources ``c0:c1`` (columns ``4 (j - c0) + t``), each row scaled by ``row_scale[row]``: the crosses in
     ``U[:m, :k]`` and ``V[:k, :4 n]`` (``U V`` unscaled on return); ``k``, or -1 when ``kmax`` crosses were not
@@ -191,10 +191,10 @@ def _cross(model, P, N, r0, r1, c0, c1, params, dirs, pinv, row_scale, eps, kmax
 
     It stops when the last cross is below ``eps`` of the block's Frobenius norm (Bebendorf's estimate, on the
     scaled entries: each row relative to its own receiver's scale), or when the next pivot row and
-    :data:`CHECK_ROWS` - 1 rows drawn at random are each held to ``eps`` of their own norm."""
+    :data:`CHECK_ROWS` - 1 rows drawn at random are each held to ``eps`` of their own norm. ``space`` is
+    :func:`~translucency.scatter.fits.run_space`'s for runs at least as long as the block's sides."""
     m = r1 - r0
     n = (c1 - c0) * AFFINE_TERMS
-    space = run_space(dirs.shape[0], max(m, c1 - c0))
     fits = np.empty((max(m, c1 - c0), 1, AFFINE_TERMS))
     used = np.zeros(m, dtype=np.bool_)
     column_cache = np.empty((m, AFFINE_TERMS))
@@ -616,6 +616,10 @@ def _crosses(model, tree, P, N, params, dirs, pinv, eps, channel_bound, far_pair
     channels = [np.ascontiguousarray(params[c : c + 1]) for c in range(n_c)]
     kept_by = [[] for _ in range(thread_count())]
     buffers = [[np.empty((0, 0)), np.empty((0, 0))] for _ in range(thread_count())]
+    # each thread's fits work in one space made for the longest run there is (made per block, the large ones
+    # were fresh memory every time, which this machine fills at 0.5-2 GB/s)
+    longest = int(np.max(np.maximum(end - start, 1)[far_pairs].max(initial=1)))
+    spaces = [run_space(dirs.shape[0], longest) for _ in range(thread_count())]
     rows = end[far_pairs[:, 0]] - start[far_pairs[:, 0]]
     cols = (end[far_pairs[:, 1]] - start[far_pairs[:, 1]]) * AFFINE_TERMS
     reserved = RESERVED_SHARE * RANK_PER_DECADE * math.log10(1.0 / eps)
@@ -633,7 +637,7 @@ def _crosses(model, tree, P, N, params, dirs, pinv, eps, channel_bound, far_pair
                 U, V = _scratch(buffers[worker], m, kmax, cols)
                 row_scale = row_scales[offsets[p] : offsets[p + 1]]
                 k = _cross(model, P, N, start[a], end[a], start[b], end[b], channels[c], dirs, pinv, row_scale, eps,
-                           kmax, U, V)  # fmt: skip
+                           kmax, U, V, spaces[worker])  # fmt: skip
                 kept.append((a, b, c, k, *(store.put(U[:m, :k], V[:k, :cols]) if k >= 0 else (-1, -1))))
 
     found, dense = [], set()

@@ -1282,7 +1282,7 @@ def _operator_counts(worker, lo, hi, triangles, receivers, offsets, triangle_ids
 POINT_BATCH = 256
 
 
-@numba.njit(cache=True, fastmath=True, nogil=True)
+@numba.njit(cache=True, inline="always", fastmath=True)
 def _queue_point(points, normals, tri, b0, b1, b2, weight, xo, no, batch, queued):
     """Queue the point with barycentric ``b`` of ``tri``, weight ``weight`` (mm^2), for the receiver at ``xo``
     with normal ``no`` in place ``queued`` of ``batch`` (the fit's scratch, its output, corners, shares): its
