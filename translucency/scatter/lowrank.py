@@ -529,13 +529,9 @@ def build(
     )
     start, end = tree.start, tree.end
 
-    found.sort(key=lambda entry: entry[4])  # in the order they are stored: a product reads them one after another
-    a, b, c, k, u_at, v_at = (
-        (np.array(column, dtype=np.int64).reshape(-1) for column in zip(*found))
-        if found
-        else (np.zeros(0, dtype=np.int64) for _ in range(6))
-    )
-    low_rank = np.column_stack([start[a], end[a], start[b], end[b], c, k, u_at, v_at]).astype(np.int64).reshape(-1, 8)
+    kept = np.array(found, dtype=np.int64).reshape(-1, 6)
+    a, b, c, k, u_at, v_at = kept[np.argsort(kept[:, 4], kind="stable")].T  # in the order the store holds them
+    low_rank = np.column_stack([start[a], end[a], start[b], end[b], c, k, u_at, v_at])
     U_all, V_all = store.arrays()
     del store
 
