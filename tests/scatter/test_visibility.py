@@ -5,7 +5,7 @@ import pytest
 import trimesh
 
 from translucency.errors import InvalidParameterError, MeshError
-from translucency.scatter.visibility import RELATIVE_OFFSET, Occluder, VisibilityCache
+from translucency.scatter.visibility import RELATIVE_OFFSET, Occluder, VisibilityCache, array_digest
 
 BOX_CENTRE = np.array([1.0, -2.0, 30.0])
 BOX_EXTENTS = np.array([12.0, 9.0, 4.0])
@@ -143,6 +143,22 @@ def test_cache_keeps_the_most_recent_scenes_and_visibility():
 def test_occluder_rejects_bad_meshes_with_a_sentence(points, triangles, words):
     with pytest.raises(MeshError, match=words):
         Occluder(points, triangles)
+
+
+def test_digests_follow_the_bytes_whether_remembered_or_not():
+    rng = np.random.default_rng(3)
+    frozen = rng.normal(size=(50, 3))
+    frozen.setflags(write=False)
+    fresh = frozen.copy()  # writeable: hashed every time
+    assert array_digest(frozen) == array_digest(frozen) == array_digest(fresh)
+    assert array_digest(frozen, fresh) != array_digest(fresh, fresh[::-1].copy())
+    fresh[7, 1] += 1e-9  # changed in place: a new digest
+    assert array_digest(fresh) != array_digest(frozen)
+    assert array_digest(frozen.astype(np.float32)) != array_digest(frozen)  # the dtype counts
+    del frozen  # its remembered digest goes with it: a new array at the same address is hashed anew
+    again = np.zeros((50, 3))
+    again.setflags(write=False)
+    assert array_digest(again) == array_digest(np.zeros((50, 3)))
 
 
 def test_occluder_rejects_bad_options():

@@ -168,6 +168,8 @@ class IncidentLight:
 
 
 def _validated_arrays(points, normals, areas):
+    """``(points, unit normals, areas, degenerate normals, normals as given)`` as float64 arrays, checked; the normals
+    as given key the visibility cache (a Scene's are read-only and hashed once, :func:`~.visibility.array_digest`)."""
     try:
         points = np.asarray(points, dtype=np.float64)
         normals = np.asarray(normals, dtype=np.float64)
@@ -192,9 +194,10 @@ def _validated_arrays(points, normals, areas):
         )
     length = row_lengths(normals)
     degenerate = ~(length > 1e-12)
+    given = normals
     normals = normals / np.where(degenerate, 1.0, length)[:, None]
     normals[degenerate] = 0.0
-    return points, normals, areas, degenerate
+    return points, normals, areas, degenerate, given
 
 
 def _validated_eta(eta) -> float:
@@ -366,7 +369,7 @@ def incident_flux(
     IncidentLight
     """
     t_start = time.perf_counter()
-    points, normals, areas, degenerate = _validated_arrays(points, normals, areas)
+    points, normals, areas, degenerate, given_normals = _validated_arrays(points, normals, areas)
     eta = _validated_eta(eta)
     lights = as_light_list(lights)
     warn_near_point_lights(lights, points, areas)
@@ -386,7 +389,7 @@ def incident_flux(
             occluder = Occluder(points, triangles)
             stats.scene = "built"
     stats.seconds["scene"] = time.perf_counter() - t
-    origins_key = array_digest(points, normals) if (cache is not None and occluder is not None) else None
+    origins_key = array_digest(points, given_normals) if (cache is not None and occluder is not None) else None
 
     phi = np.zeros((n, 3))
     weighted_w12 = np.zeros((n, 3))

@@ -115,35 +115,23 @@ class RelightOperator:
     def apply(self, areas: np.ndarray, phi: np.ndarray, w12: np.ndarray) -> np.ndarray:
         """``B (n, C)`` for the flux density ``phi (n, C)`` (W/m^2) entering along the unit refracted
         directions ``w12 (n, 3)``, on the vertices (vertex areas ``areas``, mm^2) the operators were made on."""
-        n, n_c = phi.shape
-        flux = phi * areas[:, None]
-        quadratic = np.stack(
-            [
-                w12[:, 0] ** 2,
-                w12[:, 1] ** 2,
-                w12[:, 2] ** 2,
-                w12[:, 0] * w12[:, 1],
-                w12[:, 0] * w12[:, 2],
-                w12[:, 1] * w12[:, 2],
-            ],
-            axis=1,
+        n = phi.shape[0]
+        values, lit = _inputs(
+            np.ascontiguousarray(areas, dtype=np.float64),
+            np.ascontiguousarray(phi, dtype=np.float64),
+            np.ascontiguousarray(w12, dtype=np.float64),
         )
-        near_values = np.empty((n, n_c, QUADRATIC_TERMS))
-        near_values[:, :, 0] = flux
-        near_values[:, :, 1:4] = flux[:, :, None] * w12[:, None, :]
-        near_values[:, :, 4:] = flux[:, :, None] * quadratic[:, None, :]
-        B = self.far.apply(near_values[:, :, :AFFINE_TERMS])
-        near_counts = np.diff(self.near_starts)
+        B = self.far.apply(values.reshape(n, phi.shape[1], QUADRATIC_TERMS))
         for_ranges(
             _apply_rows,
             n,
             self.near_starts[:-1],
-            near_counts,
+            np.diff(self.near_starts),
             self.near_columns,
             self.near_starts[:-1],
             self.near_coefs,
-            np.ascontiguousarray(near_values.reshape(n, -1)),
-            np.any(flux != 0.0, axis=1),
+            values,
+            lit,
             B,
         )
         return np.maximum(B, 0.0)
@@ -303,6 +291,25 @@ def prepare(
     return operator
 
 
+@numba.njit(cache=True, error_model="numpy")
+def _inputs(areas, phi, w12):
+    """Per vertex and channel the ten inputs of the near field's quadratic fit, ``Phi, Psi (3), Xi (6)``
+    (``Phi = phi A``, ``Psi = Phi w12``, ``Xi = Phi (w_x^2, w_y^2, w_z^2, w_x w_y, w_x w_z, w_y w_z)``; the far
+    field reads the first four), ``(n, C x 10)``, and whether any channel's flux enters at the vertex."""
+    n, n_c = phi.shape
+    values = np.empty((n, n_c * QUADRATIC_TERMS))
+    lit = np.zeros(n, dtype=np.bool_)
+    for i in range(n):
+        x, y, z = w12[i, 0], w12[i, 1], w12[i, 2]
+        terms = (1.0, x, y, z, x * x, y * y, z * z, x * y, x * z, y * z)
+        for c in range(n_c):
+            flux = phi[i, c] * areas[i]
+            lit[i] = lit[i] or flux != 0.0
+            for t in range(QUADRATIC_TERMS):
+                values[i, c * QUADRATIC_TERMS + t] = flux * terms[t]
+    return values, lit
+
+
 @numba.njit(cache=True, nogil=True, fastmath=True, error_model="numpy")
 def _apply_rows(worker, lo, hi, starts, counts, columns, offsets, coefs, values, lit, out):
     """``out[r, c] += sum_k coefs[offsets[r] + k, c] . values[columns[starts[r] + k], c]`` over ``k <
@@ -333,4 +340,4 @@ def _apply_rows(worker, lo, hi, starts, counts, columns, offsets, coefs, values,
 #: The compiled kernels of the relighting operators' fill and products: numba compiles each on first use; the set-up
 #: compiles them ahead
 #: (:mod:`translucency.app.warmup`).
-RELIGHT_KERNELS = (_apply_rows, *lowrank.LOW_RANK_KERNELS)
+RELIGHT_KERNELS = (_inputs, _apply_rows, *lowrank.LOW_RANK_KERNELS)

@@ -129,7 +129,7 @@ def _cutoff_far_field(model, geometry, medium, lit, w12, flux, params, channel_o
     """Method ``cutoff``: pairs within the radius of :func:`translucency.scatter.cutoff.cutoff_radius`, or
     within ``reach`` (mm) when it is given (the local part of ``B``: no receiver's radius widened)."""
     radius = cutoff.cutoff_radius(medium, tol, model) if reach is None else float(reach)
-    diagonal = float(np.linalg.norm(np.ptp(geometry.points, axis=0)))
+    diagonal = geometry.diagonal
     if not radius < diagonal:  # the radius covers the object: every pair
         every_pair = _exact_far_field(model, geometry, medium, lit, w12, flux, params, channel_of, tol)
 
@@ -380,7 +380,7 @@ def solve(
     )
     _check_reach(reach_mm, method, geometry, medium)
     warn_low_albedo(medium)
-    warn_transparent(medium, float(np.linalg.norm(np.ptp(geometry.points, axis=0))))
+    warn_transparent(medium, geometry.diagonal)
 
     start = time.perf_counter()
     memory_at_start = _memory_at_start(geometry)

@@ -118,6 +118,11 @@ class SurfaceGeometry:
         return float(mean_edge_length(self.points, self.triangles))
 
     @cached_property
+    def diagonal(self) -> float:
+        """Length of the bounding box's diagonal, mm (measured once: every solve asks for it)."""
+        return float(np.linalg.norm(np.ptp(self.points, axis=0))) if self.n_vertices else 0.0
+
+    @cached_property
     def longest_edge(self) -> float:
         """Longest edge length, mm (0 for a mesh with no triangles)."""
         return float(edge_lengths(self.points, self.triangles).max(initial=0.0))

@@ -131,6 +131,7 @@ class Scene:
         """The full mesh's unit vertex normals, computed once (the solver's at full resolution and the result's)."""
         if self._normals is None:
             self._normals = self.mesh.vertex_normals()
+            self._normals.flags.writeable = False  # shared with the full-resolution surface and the light's cache key
         return self._normals
 
     def full_areas(self):
