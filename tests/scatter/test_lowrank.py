@@ -148,17 +148,22 @@ def test_held_pairs_are_zero_in_dense_blocks_and_given_where_a_low_rank_block_ho
 
 
 def test_the_crosses_store_grows_past_what_it_reserved_and_keeps_every_block():
-    store = lowrank._CrossStore(5, 7)  # room for less than one block
+    store = lowrank._CrossStore(5, 7, 2)  # room for less than one block
     rng = np.random.default_rng(0)
     blocks = [
-        (rng.normal(size=(m, k)), rng.uniform(-1.0, 1.0, size=(k, 4 * n)))
+        (rng.normal(size=(m, k)) * np.logspace(0, -30, m)[:, None], rng.uniform(-1.0, 1.0, size=(k, 4 * n)))
         for m, k, n in [(3, 2, 4), (8, 5, 2), (1, 1, 1)]
     ]
+    blocks[1][0][4] = 0.0  # a row of zeros stays zero
     places = [store.put(U, V) for U, V in blocks]
-    U_all, V_all = store.arrays()
+    U_all, V_all, scales = store.arrays()
     assert U_all.size == sum(U.size for U, _ in blocks) and V_all.size == sum(V.size for _, V in blocks)
-    for (U, V), (u_at, v_at) in zip(blocks, places):
-        np.testing.assert_allclose(U_all[u_at : u_at + U.size].reshape(U.shape), U, rtol=1e-6)
+    assert scales.size == sum(U.shape[0] for U, _ in blocks)
+    for (U, V), (u_at, v_at, s_at) in zip(blocks, places):
+        held = U_all[u_at : u_at + U.size].reshape(U.shape) * scales[s_at : s_at + U.shape[0], None]
+        # each row to half a step of its own largest entry, however small the row
+        largest = np.abs(U).max(axis=1, keepdims=True)
+        assert np.all(np.abs(held - U) <= 0.5001 * largest / lowrank.FIXED_STEPS)
         np.testing.assert_allclose(
             V_all[v_at : v_at + V.size].reshape(V.shape) * lowrank.V_STEP, V, atol=lowrank.V_STEP
         )

@@ -19,8 +19,8 @@ is a block of the matrix, and
 The error is set by ``eps`` (the rank), not by the opening ratio: ``ETA`` stays at 0.5 for every ``tol``.
 Each receiver's row is divided by the channel's bound of §8.4 at its own distance before the approximation,
 so that the stopping rule holds the rows of distant (dark) receivers too, not only the block's brightest.
-``U`` is stored in float32, ``V`` in 16-bit fixed point, dense blocks in float32; a light reads every block
-once.
+``U`` and ``V`` are stored in 16-bit fixed point (``U`` with one float32 scale per row), dense blocks in float32; a
+light reads every block once.
 
 =========== ================================================================ ==============
 symbol      meaning                                                          unit
@@ -51,9 +51,12 @@ LEAF_SIZE = 32
 #: of their centres.
 ETA = 0.5
 
+#: Steps of the 16-bit fixed point the blocks are held in: a row's largest entry is this many steps.
+FIXED_STEPS = 32767
 #: ``V`` is stored as int16: a cross's ``V`` is its pivot row over the pivot, the row's largest, so every entry is
-#: in [-1, 1] and is kept to 2**-15 of it (far below ``eps``).
-V_STEP = 1.0 / 32767.0
+#: in [-1, 1] and is kept to 2**-15 of it (far below ``eps``). ``U`` is int16 too, each row in steps of its own
+#: float32 scale, its largest entry :data:`FIXED_STEPS` steps (docs/physics.md §8.9).
+V_STEP = 1.0 / FIXED_STEPS
 
 
 def rank_limit(rows: int, columns: int) -> int:
@@ -71,12 +74,14 @@ class FarMatrix:
     order : (n,) int64
         The tree's order: row and column ``k`` of every block is vertex ``order[k]``.
     n_channels : int
-    low_rank : (L, 8) int64
+    low_rank : (L, 9) int64
         Per block and channel: first and last row, first and last column (tree order), the channel, rank
-        ``k``, and where its ``U (rows, k)`` and ``V (k, columns x 4)`` start in ``U`` and ``V``.
-    U : float32
-    V : int16
-        The crosses, row-major (``V`` in steps of :data:`V_STEP`); ``V``'s columns are (source, term).
+        ``k``, and where its ``U (rows, k)``, ``V (k, columns x 4)`` and its rows' scales start in ``U``, ``V``
+        and ``U_scale``.
+    U, V : int16
+        The crosses, row-major: ``U`` in steps of ``U_scale`` per row, ``V`` in steps of :data:`V_STEP`;
+        ``V``'s columns are (source, term).
+    U_scale : float32
     dense : (M, 7) int64
         Per dense block: first and last row, first and last column, first and last channel, and where its
         ``(channels, rows, columns x 4)`` entries start in ``D``.
@@ -88,6 +93,7 @@ class FarMatrix:
     n_channels: int
     low_rank: np.ndarray
     U: np.ndarray
+    U_scale: np.ndarray
     V: np.ndarray
     dense: np.ndarray
     D: np.ndarray
@@ -96,7 +102,8 @@ class FarMatrix:
     @property
     def nbytes(self) -> int:
         """Memory the blocks hold, bytes."""
-        return int(sum(a.nbytes for a in (self.order, self.low_rank, self.U, self.V, self.dense, self.D)))
+        held = (self.order, self.low_rank, self.U, self.U_scale, self.V, self.dense, self.D)
+        return int(sum(a.nbytes for a in held))
 
     def apply(self, values: np.ndarray) -> np.ndarray:
         """``B (n, C)`` for ``values (n, C, 4)``: per vertex and channel ``Phi, Psi_x, Psi_y, Psi_z`` (vertex
@@ -110,7 +117,8 @@ class FarMatrix:
         out = np.zeros((workers, n, self.n_channels))
         # the crosses' products in float32, as their factors are held (B changed by 5e-7 of itself at most on the
         # default bunny; 16 lanes a step instead of 8)
-        for_ranges(_apply_low_rank, self.low_rank.shape[0], self.low_rank, self.U, self.V, narrow, lit_before, out)
+        blocks = self.low_rank
+        for_ranges(_apply_low_rank, blocks.shape[0], blocks, self.U, self.U_scale, self.V, narrow, lit_before, out)
         for_ranges(_apply_dense, self.dense.shape[0], self.dense, self.D, wide, lit_before, out)
         B = np.empty((n, self.n_channels))
         B[self.order] = out.sum(axis=0)
@@ -121,8 +129,9 @@ class FarMatrix:
         ``columns[starts[o] : starts[o + 1]]``), vertex indices; 0 for pairs in dense blocks."""
         held_starts, held_columns, rows = _held_in_order(self.order, starts, columns)
         values = np.zeros((held_columns.size, self.n_channels, AFFINE_TERMS))
+        blocks = self.low_rank
         for_ranges(
-            _entries_of, self.low_rank.shape[0], self.low_rank, self.U, self.V, held_starts, held_columns, values
+            _entries_of, blocks.shape[0], blocks, self.U, self.U_scale, self.V, held_starts, held_columns, values
         )
         out = np.empty_like(values)
         out[rows] = values
@@ -331,7 +340,8 @@ def _dense_block(blocks, k):
 
 @numba.njit(cache=True, inline="always")
 def _low_rank_block(blocks, k):
-    """Row ``k`` of :attr:`FarMatrix.low_rank`: rows, columns, channel, rank and where ``U`` and ``V`` start."""
+    """Row ``k`` of :attr:`FarMatrix.low_rank`: rows, columns, channel, rank and where ``U``, ``V`` and ``U``'s
+    row scales start."""
     return (
         blocks[k, 0],
         blocks[k, 1],
@@ -341,19 +351,20 @@ def _low_rank_block(blocks, k):
         blocks[k, 5],
         blocks[k, 6],
         blocks[k, 7],
+        blocks[k, 8],
     )
 
 
 @numba.njit(cache=True, nogil=True, fastmath=True, error_model="numpy")
-def _apply_low_rank(worker, lo, hi, blocks, U, V, values, lit_before, out):
+def _apply_low_rank(worker, lo, hi, blocks, U, U_scale, V, values, lit_before, out):
     """``out[worker, rows, c] += U (V values[c, columns])`` for the low-rank blocks ``lo .. hi - 1`` (``values``
-    float32, per channel, four terms per source; the products in float32, each block's sum added in float64),
+    float32, per channel, four terms per source; the products in float32, each row's sum added in float64),
     skipping those without a lit source (``lit_before[j]``: how many of the sources before ``j`` are lit)."""
     target = out[worker]
     inner = np.zeros(128, dtype=np.float32)
     step = np.float32(V_STEP)
     for k in range(lo, hi):
-        r0, r1, c0, c1, c, rank, u_at, v_at = _low_rank_block(blocks, k)
+        r0, r1, c0, c1, c, rank, u_at, v_at, s_at = _low_rank_block(blocks, k)
         if lit_before[c1] == lit_before[c0]:
             continue
         n = (c1 - c0) * AFFINE_TERMS
@@ -371,8 +382,8 @@ def _apply_low_rank(worker, lo, hi, blocks, U, V, values, lit_before, out):
             row = U[u_at + a * rank : u_at + (a + 1) * rank]
             s = np.float32(0.0)
             for q in range(rank):
-                s += row[q] * inner[q]
-            target[r0 + a, c] += s
+                s += np.float32(row[q]) * inner[q]
+            target[r0 + a, c] += s * U_scale[s_at + a]
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -398,11 +409,11 @@ def _tree_ordered(values, order):
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
-def _entries_of(worker, lo, hi, blocks, U, V, starts, columns, out):
+def _entries_of(worker, lo, hi, blocks, U, U_scale, V, starts, columns, out):
     """``out[h, c] = (U V)[o, j]`` for every pair ``h`` (receiver ``o``, source ``j = columns[h]``, ``h`` in
     ``starts[o] : starts[o + 1]``, tree order) in the low-rank blocks ``lo .. hi - 1``."""
     for k in range(lo, hi):
-        r0, r1, c0, c1, c, rank, u_at, v_at = _low_rank_block(blocks, k)
+        r0, r1, c0, c1, c, rank, u_at, v_at, s_at = _low_rank_block(blocks, k)
         n = (c1 - c0) * AFFINE_TERMS
         for o in range(r0, r1):
             for h in range(starts[o], starts[o + 1]):
@@ -412,8 +423,8 @@ def _entries_of(worker, lo, hi, blocks, U, V, starts, columns, out):
                 for t in range(AFFINE_TERMS):
                     s = 0.0
                     for q in range(rank):
-                        s += U[u_at + (o - r0) * rank + q] * V[v_at + q * n + (j - c0) * AFFINE_TERMS + t]
-                    out[h, c, t] = s * V_STEP
+                        s += float(U[u_at + (o - r0) * rank + q]) * V[v_at + q * n + (j - c0) * AFFINE_TERMS + t]
+                    out[h, c, t] = s * V_STEP * U_scale[s_at + o - r0]
 
 
 @numba.njit(cache=True, nogil=True, fastmath=True, error_model="numpy")
@@ -440,45 +451,58 @@ def _apply_dense(worker, lo, hi, blocks, D, values, lit_before, out):
 
 def _fixed_point(V: np.ndarray, out: np.ndarray) -> np.ndarray:
     """``V`` (entries in [-1, 1]) as int16 multiples of :data:`V_STEP`, written to ``out`` (returned)."""
-    out[...] = np.clip(np.rint(V / V_STEP), -32767, 32767)
+    out[...] = np.clip(np.rint(V / V_STEP), -FIXED_STEPS, FIXED_STEPS)
     return out
 
 
+def _rows_fixed_point(A: np.ndarray, out: np.ndarray, scales: np.ndarray) -> None:
+    """``A (rows, columns)`` as int16 steps of one float32 scale per row, its largest entry :data:`FIXED_STEPS`
+    steps: the steps written to ``out``, the scales to ``scales``."""
+    scale = (np.abs(A).max(axis=1, initial=0.0) / FIXED_STEPS).astype(np.float32)
+    scales[...] = scale
+    out[...] = np.clip(np.rint(A / np.where(scale > 0.0, scale, 1.0)[:, None]), -FIXED_STEPS, FIXED_STEPS)
+
+
 class _CrossStore:
-    """The crosses of every block, written once into two arrays (``U`` float32, ``V`` int16) as they are found.
+    """The crosses of every block, written once into three arrays as they are found: ``U`` and ``V`` int16, ``U``'s
+    row scales float32 (:func:`_rows_fixed_point`).
 
     Each array is reserved larger than it is likely to need and cut to what was used at the end; memory is given
     to a page only when it is first written, so what is reserved and never written costs nothing, and nothing is
     copied. (Blocks kept apart and then copied into the far field's arrays spent seconds on pages filled twice.)
     Threads write under a lock; a store that runs out of room grows by half again (copied)."""
 
-    def __init__(self, u_size: int, v_size: int):
-        self.U = np.empty(max(int(u_size), 1), dtype=np.float32)
+    def __init__(self, u_size: int, v_size: int, rows: int):
+        self.U = np.empty(max(int(u_size), 1), dtype=np.int16)
         self.V = np.empty(max(int(v_size), 1), dtype=np.int16)
+        self.S = np.empty(max(int(rows), 1), dtype=np.float32)
         self.u_at = 0
         self.v_at = 0
+        self.s_at = 0
         self.lock = threading.Lock()
 
-    def put(self, U: np.ndarray, V: np.ndarray) -> tuple[int, int]:
+    def put(self, U: np.ndarray, V: np.ndarray) -> tuple[int, int, int]:
         """Store one block's crosses ``U (m, k)`` and ``V (k, columns)`` (float64, ``V`` in [-1, 1]): where they
-        start in :attr:`U` and :attr:`V`."""
+        start in :attr:`U` and :attr:`V`, and where ``U``'s row scales start in :attr:`S`."""
         with self.lock:
-            u_at, v_at = self.u_at, self.v_at
+            u_at, v_at, s_at = self.u_at, self.v_at, self.s_at
             self.U = _room(self.U, u_at + U.size)
             self.V = _room(self.V, v_at + V.size)
-            self.U[u_at : u_at + U.size].reshape(U.shape)[...] = U
+            self.S = _room(self.S, s_at + U.shape[0])
+            _rows_fixed_point(U, self.U[u_at : u_at + U.size].reshape(U.shape), self.S[s_at : s_at + U.shape[0]])
             _fixed_point(V, self.V[v_at : v_at + V.size].reshape(V.shape))
             self.u_at += U.size
             self.v_at += V.size
-        return u_at, v_at
+            self.s_at += U.shape[0]
+        return u_at, v_at, s_at
 
-    def arrays(self) -> tuple[np.ndarray, np.ndarray]:
-        """``(U, V)`` cut to what was stored (in place: the memory past it is given back, nothing is copied)."""
-        for name, used in (("U", self.u_at), ("V", self.v_at)):
+    def arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(U, V, S)`` cut to what was stored (in place: the memory past it is given back, nothing is copied)."""
+        for name, used in (("U", self.u_at), ("V", self.v_at), ("S", self.s_at)):
             array = getattr(self, name)
             array.resize(max(used, 1), refcheck=False)
             setattr(self, name, array[:used])
-        return self.U, self.V
+        return self.U, self.V, self.S
 
 
 def _room(array: np.ndarray, size: int) -> np.ndarray:
@@ -490,11 +514,20 @@ def _room(array: np.ndarray, size: int) -> np.ndarray:
     return grown
 
 
-#: Crosses per block and channel per decade of ``1 / eps`` (the rank of a block grows with the digits asked): what
-#: the budget counts (:func:`~translucency.scatter.relight.operator_bytes`); the crosses' store reserves
-#: :data:`RESERVED_SHARE` times as much (:class:`_CrossStore`), never more than a block may take.
-RANK_PER_DECADE = 4.5
+#: Crosses per block and channel: ``RANK_PER_SQUARED_DECADE log10(1 / eps)^2`` (:func:`expected_rank`; the ranks grow
+#: faster than the digits asked, and more blocks run out of crosses and are split). Of a block expected to need more
+#: than it may take, :data:`SPLIT_DENSE_SHARE` ends up in dense blocks. Both measured on the default bunny in marble
+#: at ``tol`` 0.1, 0.03 and 0.01 (bench/README.md, "Relighting"): what the budget counts
+#: (:func:`~translucency.scatter.relight.operator_bytes`). The crosses' store reserves :data:`RESERVED_SHARE` times
+#: the expected rank (:class:`_CrossStore`), never more than a block may take.
+RANK_PER_SQUARED_DECADE = 2.5
+SPLIT_DENSE_SHARE = 0.5
 RESERVED_SHARE = 1.5
+
+
+def expected_rank(eps: float) -> float:
+    """The crosses a far block is expected to take per channel at ``eps`` (:data:`RANK_PER_SQUARED_DECADE`)."""
+    return RANK_PER_SQUARED_DECADE * math.log10(1.0 / eps) ** 2
 
 
 def _scratch(held: list, rows: int, ranks: int, columns: int) -> tuple[np.ndarray, np.ndarray]:
@@ -548,10 +581,10 @@ def build(
     )
     start, end = tree.start, tree.end
 
-    kept = np.array(found, dtype=np.int64).reshape(-1, 6)
-    a, b, c, k, u_at, v_at = kept[np.argsort(kept[:, 4], kind="stable")].T  # in the order the store holds them
-    low_rank = np.column_stack([start[a], end[a], start[b], end[b], c, k, u_at, v_at])
-    U_all, V_all = store.arrays()
+    kept = np.array(found, dtype=np.int64).reshape(-1, 7)
+    a, b, c, k, u_at, v_at, s_at = kept[np.argsort(kept[:, 4], kind="stable")].T  # in the order the store holds them
+    low_rank = np.column_stack([start[a], end[a], start[b], end[b], c, k, u_at, v_at, s_at])
+    U_all, V_all, U_scale = store.arrays()
     del store
 
     dense = np.zeros((len(dense_pairs), 7), dtype=np.int64)
@@ -573,7 +606,7 @@ def build(
     )
     report(1.0)
     ranks = low_rank[:, 5]
-    matrix = FarMatrix(order, n_c, low_rank, U_all, V_all, dense, D)
+    matrix = FarMatrix(order, n_c, low_rank, U_all, U_scale, V_all, dense, D)
     matrix.stats = {
         "eps": eps,
         "eta": ETA,
@@ -623,7 +656,7 @@ def _row_scales(tree, P, items, channel_bound):
 
 def _crosses(model, tree, P, N, params, dirs, pinv, eps, channel_bound, far_pairs, report):
     """Cross approximations of every far block and channel: ``(found, dense, store)``, ``found`` a list of ``(row
-    node, column node, channel, k, where U starts, where V starts)`` in ``store`` (:class:`_CrossStore`); a block
+    node, column node, channel, k, where U, V and U's row scales start)`` in ``store`` (:class:`_CrossStore`); a block
     that needs more crosses than :func:`rank_limit` is split into its children's blocks, and a pair of leaves that
     does is added to ``dense`` as ``(row node, column node, channel)``."""
     n_c = params.shape[0]
@@ -637,9 +670,9 @@ def _crosses(model, tree, P, N, params, dirs, pinv, eps, channel_bound, far_pair
     spaces = [run_space(dirs.shape[0], longest) for _ in range(thread_count())]
     rows = end[far_pairs[:, 0]] - start[far_pairs[:, 0]]
     cols = (end[far_pairs[:, 1]] - start[far_pairs[:, 1]]) * AFFINE_TERMS
-    reserved = RESERVED_SHARE * RANK_PER_DECADE * math.log10(1.0 / eps)
+    reserved = RESERVED_SHARE * expected_rank(eps)
     ranks = np.minimum(reserved, [rank_limit(int(m), int(c)) for m, c in zip(rows, cols)]).astype(np.int64)
-    store = _CrossStore(n_c * np.sum(ranks * rows), n_c * np.sum(ranks * cols))
+    store = _CrossStore(n_c * np.sum(ranks * rows), n_c * np.sum(ranks * cols), n_c * np.sum(rows))
 
     def run(worker, lo, hi, items):
         kept = kept_by[worker]
@@ -653,7 +686,7 @@ def _crosses(model, tree, P, N, params, dirs, pinv, eps, channel_bound, far_pair
                 row_scale = row_scales[offsets[p] : offsets[p + 1]]
                 k = _cross(model, P, N, start[a], end[a], start[b], end[b], channels[c], dirs, pinv, row_scale, eps,
                            kmax, U, V, spaces[worker])  # fmt: skip
-                kept.append((a, b, c, k, *(store.put(U[:m, :k], V[:k, :cols]) if k >= 0 else (-1, -1))))
+                kept.append((a, b, c, k, *(store.put(U[:m, :k], V[:k, :cols]) if k >= 0 else (-1, -1, -1))))
 
     found, dense = [], set()
     items = np.array([(a, b, c) for a, b in far_pairs for c in range(n_c)], dtype=np.int64).reshape(-1, 3)
@@ -663,9 +696,9 @@ def _crosses(model, tree, P, N, params, dirs, pinv, eps, channel_bound, far_pair
         for_ranges(run, len(items), items, progress=lambda f, at=at, share=share: report(0.9 * (at + f * share)))
         following = []
         for kept in kept_by:
-            for a, b, c, k, u_at, v_at in kept:
+            for a, b, c, k, u_at, v_at, s_at in kept:
                 if k >= 0:
-                    found.append((a, b, c, k, u_at, v_at))
+                    found.append((a, b, c, k, u_at, v_at, s_at))
                 elif tree.left[a] < 0 and tree.left[b] < 0:
                     dense.add((int(a), int(b), int(c)))
                 else:

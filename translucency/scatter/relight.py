@@ -37,7 +37,6 @@ a, b        coefficients of ``S_d`` per unit ``Phi`` and ``Psi``             1/(
 
 from __future__ import annotations
 
-import math
 import time
 from dataclasses import dataclass, field
 
@@ -60,10 +59,14 @@ __all__ = [
     "release_operator",
 ]
 
-#: Bytes per near-field entry per channel (ten float32) plus its column index (int32); a far-field float (float32).
+#: Bytes per near-field entry per channel (ten float32) plus its column index (int32); per entry of the far field's
+#: crosses (int16, :data:`~translucency.scatter.lowrank.FIXED_STEPS`) and of its dense blocks (float32), and per
+#: scale of a row of ``U`` (float32).
 NEAR_ENTRY_BYTES = 4 * QUADRATIC_TERMS
 INDEX_BYTES = 4
-FAR_FLOAT_BYTES = 4
+CROSS_ENTRY_BYTES = 2
+DENSE_ENTRY_BYTES = 4
+ROW_SCALE_BYTES = 4
 #: The far field's cross approximations stop at ``eps = tol / EPS_PER_TOL`` of each receiver's row: the rows'
 #: errors add over a receiver's far blocks, most where the far field is most of B (long diffusion lengths), and
 #: the estimate that stops a cross approximation is not a bound (docs/physics.md §8.9; bench/README.md,
@@ -72,8 +75,9 @@ EPS_PER_TOL = 6.0
 #: Seconds of one fit the far field counts on one thread (the cross approximations' rows and columns,
 #: :func:`~translucency.scatter.fits.fitted_run`, one channel, with their share of the crosses' own work), and per
 #: near-field entry: the rates of the time estimate the budget compares against ``time_limit``, calibrated on
-#: timed preparations of the default bunny (bench/README.md, "Relighting"; the largest of three materials).
-FIT_SECONDS = 4e-7
+#: timed preparations of the default bunny in marble at tol 0.1 and 0.01 (bench/README.md, "Relighting"), with the
+#: fits counted at :func:`~translucency.scatter.lowrank.expected_rank`.
+FIT_SECONDS = 2e-7
 NEAR_ENTRY_SECONDS = 5.5e-6
 
 
@@ -188,32 +192,34 @@ def _gap(medium) -> float:
 
 def operator_bytes(geometry, medium, tol: float, near_radius: float) -> tuple[float, dict]:
     """Memory (bytes) the operators of ``geometry`` (the spatially ordered surface) would take, counted
-    before anything is made: the far field's dense blocks exactly and its crosses at
-    :data:`~translucency.scatter.lowrank.RANK_PER_DECADE` per decade of ``1 / eps``
-    (:func:`~translucency.scatter.lowrank.rank_limit` at most), the near field's
-    lists by the near triangles' corners; ``(bytes, counts)``, the counts with the fits the far field would
-    evaluate."""
+    before anything is made: the far field's dense blocks exactly, its crosses at
+    :func:`~translucency.scatter.lowrank.expected_rank` each (a block expected to need more than
+    :func:`~translucency.scatter.lowrank.rank_limit` counted at its limit, with
+    :data:`~translucency.scatter.lowrank.SPLIT_DENSE_SHARE` of it dense), the near field's lists by the near
+    triangles' corners; ``(bytes, counts)``, the counts with the fits the far field would evaluate."""
     n = geometry.n_vertices
     n_c = medium.n_channels
     tree = _block_tree(geometry)
     far_pairs, dense_pairs = lowrank.partition(tree, _gap(medium))
     rows = tree.end[far_pairs[:, 0]] - tree.start[far_pairs[:, 0]]
     cols = tree.end[far_pairs[:, 1]] - tree.start[far_pairs[:, 1]]
-    rank = lowrank.RANK_PER_DECADE * math.log10(1.0 / far_eps(tol))
+    rank = lowrank.expected_rank(far_eps(tol))
     limit = np.array([lowrank.rank_limit(int(m), int(c) * AFFINE_TERMS) for m, c in zip(rows, cols)])
     ranks = np.minimum(rank, limit)
     far_floats = float(n_c * np.sum(ranks * (rows + AFFINE_TERMS * cols)))
-    dense_pairs_count = float(
-        np.sum(
-            (tree.end[dense_pairs[:, 0]] - tree.start[dense_pairs[:, 0]])
-            * (tree.end[dense_pairs[:, 1]] - tree.start[dense_pairs[:, 1]])
-        )
+    dense_rows = tree.end[dense_pairs[:, 0]] - tree.start[dense_pairs[:, 0]]
+    split = float(np.sum((rows * cols)[rank > limit])) * lowrank.SPLIT_DENSE_SHARE
+    dense_pairs_count = split + float(
+        np.sum(dense_rows * (tree.end[dense_pairs[:, 1]] - tree.start[dense_pairs[:, 1]]))
     )
+    row_scales = float(n_c * np.sum(rows))
     fits = dense_pairs_count * n_c + float(n_c * np.sum(ranks * (rows + cols)))
     offsets, ids = nearfield.lists_of(geometry, np.arange(n), near_radius)
     near_entries = int(nearfield.near_vertex_counts(geometry.triangles, np.arange(n), offsets, ids).sum())
     size = (
-        (far_floats + dense_pairs_count * AFFINE_TERMS * n_c) * FAR_FLOAT_BYTES
+        far_floats * CROSS_ENTRY_BYTES
+        + dense_pairs_count * AFFINE_TERMS * n_c * DENSE_ENTRY_BYTES
+        + row_scales * ROW_SCALE_BYTES
         + near_entries * (n_c * NEAR_ENTRY_BYTES + INDEX_BYTES)
         + 40 * n
     )
