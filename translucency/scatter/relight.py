@@ -37,6 +37,7 @@ a, b        coefficients of ``S_d`` per unit ``Phi`` and ``Psi``             1/(
 
 from __future__ import annotations
 
+import threading
 import time
 from dataclasses import dataclass, field
 
@@ -102,6 +103,10 @@ class RelightOperator:
         The quadratic fit's ten coefficients per channel.
     stats : dict
         Entries, bytes, seconds of the preparation, eps.
+    scratch : dict
+    scratch_lock : threading.Lock
+        A light's arrays, kept between lights (:func:`~translucency.scatter.lowrank.kept_array`), and the lock a
+        light holds while it uses them (a light that finds them in use by another thread makes its own).
     """
 
     key: tuple
@@ -110,6 +115,8 @@ class RelightOperator:
     near_columns: np.ndarray
     near_coefs: np.ndarray
     stats: dict = field(default_factory=dict)
+    scratch: dict = field(default_factory=dict, repr=False)
+    scratch_lock: threading.Lock = field(default_factory=threading.Lock, repr=False)
 
     @property
     def nbytes(self) -> int:
@@ -119,13 +126,26 @@ class RelightOperator:
     def apply(self, areas: np.ndarray, phi: np.ndarray, w12: np.ndarray) -> np.ndarray:
         """``B (n, C)`` for the flux density ``phi (n, C)`` (W/m^2) entering along the unit refracted
         directions ``w12 (n, 3)``, on the vertices (vertex areas ``areas``, mm^2) the operators were made on."""
-        n = phi.shape[0]
-        values, lit = _inputs(
+        if not self.scratch_lock.acquire(blocking=False):
+            return self._applied(areas, phi, w12, {})
+        try:
+            return self._applied(areas, phi, w12, self.scratch)
+        finally:
+            self.scratch_lock.release()
+
+    def _applied(self, areas, phi, w12, scratch: dict) -> np.ndarray:
+        """:meth:`apply` with the arrays of ``scratch``."""
+        n, n_c = phi.shape
+        values = lowrank.kept_array(scratch, "values", (n, n_c * QUADRATIC_TERMS), np.float64)
+        lit = lowrank.kept_array(scratch, "lit", (n,), np.bool_)
+        _inputs(
             np.ascontiguousarray(areas, dtype=np.float64),
             np.ascontiguousarray(phi, dtype=np.float64),
             np.ascontiguousarray(w12, dtype=np.float64),
+            values,
+            lit,
         )
-        B = self.far.apply(values.reshape(n, phi.shape[1], QUADRATIC_TERMS))
+        B = self.far.apply(values.reshape(n, n_c, QUADRATIC_TERMS), scratch)
         for_ranges(
             _apply_rows,
             n,
@@ -298,22 +318,21 @@ def prepare(
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _inputs(areas, phi, w12):
+def _inputs(areas, phi, w12, values, lit):
     """Per vertex and channel the ten inputs of the near field's quadratic fit, ``Phi, Psi (3), Xi (6)``
     (``Phi = phi A``, ``Psi = Phi w12``, ``Xi = Phi (w_x^2, w_y^2, w_z^2, w_x w_y, w_x w_z, w_y w_z)``; the far
-    field reads the first four), ``(n, C x 10)``, and whether any channel's flux enters at the vertex."""
+    field reads the first four), written to ``values (n, C x 10)``, and to ``lit (n,)`` whether any channel's flux
+    enters at the vertex."""
     n, n_c = phi.shape
-    values = np.empty((n, n_c * QUADRATIC_TERMS))
-    lit = np.zeros(n, dtype=np.bool_)
     for i in range(n):
         x, y, z = w12[i, 0], w12[i, 1], w12[i, 2]
         terms = (1.0, x, y, z, x * x, y * y, z * z, x * y, x * z, y * z)
+        lit[i] = False
         for c in range(n_c):
             flux = phi[i, c] * areas[i]
             lit[i] = lit[i] or flux != 0.0
             for t in range(QUADRATIC_TERMS):
                 values[i, c * QUADRATIC_TERMS + t] = flux * terms[t]
-    return values, lit
 
 
 @numba.njit(cache=True, nogil=True, fastmath=True, error_model="numpy")
