@@ -312,8 +312,9 @@ def _cross(model, P, N, r0, r1, c0, c1, params, dirs, pinv, row_scale, eps, kmax
 def _fill_dense(worker, lo, hi, model, P, N, dense, params, dirs, pinv, held_starts, held_columns, stamps, D):
     """Dense blocks ``lo .. hi - 1``: every fit of the block for its channels, 0 where the near field holds the
     pair (source ``j`` listed for receiver ``o`` in ``held_columns[held_starts[o] : held_starts[o + 1]]``, tree
-    order)."""
+    order). A block kept for one channel (its cross approximation failed there only) fits that channel alone."""
     n_c = params.shape[0]
+    single = params.reshape(n_c, 1, params.shape[1])  # each channel's parameters as a (1, P) array of their own
     length = 0
     for k in range(lo, hi):
         length = max(length, dense[k, 3] - dense[k, 2])
@@ -328,13 +329,14 @@ def _fill_dense(worker, lo, hi, model, P, N, dense, params, dirs, pinv, held_sta
             o = r0 + a
             for h in range(held_starts[o], held_starts[o + 1]):
                 mark[held_columns[h]] = o
-            fitted_run(model, P, N, o, c0, c1, True, params, dirs, pinv, space, fits)
+            fitted_run(model, P, N, o, c0, c1, True, params if last - first == n_c else single[first], dirs, pinv,
+                       space, fits)  # fmt: skip
             for b in range(c1 - c0):
                 held = mark[c0 + b] == o
                 for c in range(first, last):
                     at_b = at + ((c - first) * m + a) * n + b * AFFINE_TERMS
                     for t in range(AFFINE_TERMS):
-                        D[at_b + t] = 0.0 if held else fits[b, c, t]
+                        D[at_b + t] = 0.0 if held else fits[b, c - first, t]
 
 
 @numba.njit(cache=True, inline="always")
