@@ -3,8 +3,8 @@ whether its expansions may drop the modified tangent plane.
 
 Four measurements on the default bunny in marble (docs/physics.md §4, §8.3, §8.7):
 
-* **ranks**: blocks of the relighting kernel (the affine fit ``S_d = a + b . w12`` of
-  :func:`translucency.scatter.fits.fitted_pairs`, four columns per source) between two clusters of ``m``
+* **ranks**: blocks of the relighting kernel (the affine fit ``S_d = a + b . w12`` of ``fitted_pairs`` in
+  ``tests/scatter/pairs.py``, one pair at a time, four columns per source) between two clusters of ``m``
   nearest vertices each, at ratios of cluster radius to centre distance of about 0.35, 0.25 and 0.18; the
   number of singular values needed for a relative Frobenius error of 1e-3 and 1e-4 per channel;
 * **hierarchical matrix**: the whole far field of that kernel as an H-matrix (the kd-tree of
@@ -45,12 +45,13 @@ import scipy.linalg  # noqa: E402
 from report import load_average, machine_info, output_dir, write_results  # noqa: E402
 from scipy.spatial import cKDTree  # noqa: E402
 
+from tests.scatter.pairs import FIT_WORK_COLUMNS, fitted_pairs  # noqa: E402  (one pair at a time)
 from translucency import __version__  # noqa: E402,F401  (first: it selects numba's threading layer)
 from translucency.app.shading.scan import load_default_scan  # noqa: E402
 from translucency.app.shading.scene import Scene  # noqa: E402
 from translucency.app.shading.settings import resolve_medium  # noqa: E402
 from translucency.scatter import kernels  # noqa: E402
-from translucency.scatter.fits import AFFINE_TERMS, FIT_WORK_COLUMNS, fit_directions, fitted_pairs  # noqa: E402
+from translucency.scatter.fits import AFFINE_TERMS, fit_directions  # noqa: E402
 from translucency.scatter.hierarchy import SourceTree  # noqa: E402
 from translucency.scatter.kernels import pair_three  # noqa: E402
 from translucency.scatter.lights import DirectionalLight  # noqa: E402

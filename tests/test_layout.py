@@ -267,7 +267,6 @@ OVERSIZED = {
     "translucency/scatter/nearfield.py": "the near field and its operator rows; replaced with the new far field",
     "translucency/scatter/nearfield.py:near_field_correction": "replaced with the new far field",
     "translucency/scatter/nearfield.py:_operator_rows": "the relighting rows; replaced with the new far field",
-    "translucency/scatter/fits.py:fitted_pairs": "relighting's fitted pairs; replaced with the new far field",
     "translucency/scatter/bounces.py:solve_bounces": "calls the solve per bounce; reshaped with the new far field",
     # validation code: one compiled random walk each, whose loop is one piece
     "translucency/scatter/montecarlo.py": "the half-space random walk and its tallies (validation)",

@@ -5,6 +5,7 @@ import numba
 import numpy as np
 import pytest
 
+from tests.scatter import pairs
 from translucency.geometry.synthetic import icosphere, torus
 from translucency.scatter import cutoff, fits, kernels, lowrank
 from translucency.scatter.hierarchy import SourceTree
@@ -16,14 +17,14 @@ MARBLE = material("marble").medium()
 @numba.njit(cache=True)
 def _every_pair(model, P, N, params, dirs, pinv, values):
     """``sum_j (a + b . w)_oj`` over every source ``j``, per receiver and channel (the fits of
-    :func:`~translucency.scatter.fits.fitted_pairs` one pair at a time)."""
+    :func:`tests.scatter.pairs.fitted_pairs` one pair at a time)."""
     n, n_c = P.shape[0], params.shape[0]
     out = np.zeros((n, n_c))
-    work = np.empty((max(dirs.shape[0], 9), fits.FIT_WORK_COLUMNS))
+    work = np.empty((max(dirs.shape[0], 9), pairs.FIT_WORK_COLUMNS))
     fit = np.empty((n_c, fits.AFFINE_TERMS))
     for o in range(n):
         for j in range(n):
-            fits.fitted_pairs(
+            pairs.fitted_pairs(
                 model, P[o, 0] - P[j, 0], P[o, 1] - P[j, 1], P[o, 2] - P[j, 2], N[j, 0], N[j, 1], N[j, 2],
                 N[o, 0], N[o, 1], N[o, 2], params, dirs, pinv, work, fit,
             )  # fmt: skip

@@ -23,8 +23,8 @@ MARBLE = material("marble").medium()
 @numba.njit(cache=True)
 def _fits(model, x, ni, no, params, dirs, pinv, terms):
     out = np.zeros((params.shape[0], terms))
-    work = np.empty((max(dirs.shape[0], 9), fits.FIT_WORK_COLUMNS))
-    fits.fitted_pairs(model, x[0], x[1], x[2], ni[0], ni[1], ni[2], no[0], no[1], no[2], params, dirs, pinv, work, out)
+    work = np.empty((max(dirs.shape[0], 9), pairs.FIT_WORK_COLUMNS))
+    pairs.fitted_pairs(model, x[0], x[1], x[2], ni[0], ni[1], ni[2], no[0], no[1], no[2], params, dirs, pinv, work, out)
     return out
 
 

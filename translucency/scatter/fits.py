@@ -4,9 +4,9 @@
 terms and through the real source's corrected distance ``d_r(w12)`` (§4.3). Relighting stores, per pair,
 the least-squares fit of ``S_d`` over the directions light from outside can take inside: affine, ``a + b .
 w12`` (:data:`AFFINE_TERMS` per channel; the far field), or with the quadratic terms too
-(:data:`QUADRATIC_TERMS`; the near field). :func:`fitted_pairs` fits one pair for every channel;
-:func:`fitted_run` fits a run of pairs that share one end (a row or a column of the far field's matrix)
-a step at a time, so that each step vectorises.
+(:data:`QUADRATIC_TERMS`; the near field). :func:`fitted_run` fits a run of pairs that share one end (a row or a
+column of the far field's matrix) and :func:`fitted_points` a batch of the near field's quadrature points, a step
+at a time, so that each step vectorises (the tests check both against the fit of one pair at a time).
 
 =========== ==================================================================== ==============
 symbol      meaning                                                              unit
@@ -45,9 +45,7 @@ from .kernels import (
 __all__ = [
     "AFFINE_TERMS",
     "QUADRATIC_TERMS",
-    "FIT_WORK_COLUMNS",
     "fit_directions",
-    "fitted_pairs",
     "fitted_run",
     "fitted_points",
     "run_scratch",
@@ -65,7 +63,7 @@ FIT_INTERPOLATED_SPREAD = 0.02
 
 
 def fit_directions(eta: float, terms: int):
-    """Sample directions and least-squares matrix of :func:`fitted_pairs`: ``(dirs (K, 3), pinv)``.
+    """Sample directions and least-squares matrix of the fits: ``(dirs (K, 3), pinv)``.
 
     The directions are refracted directions ``w12`` in the frame of the source normal (``z`` = outward
     normal, so ``w_z < 0``): straight in, and six azimuths at the critical angle ``asin(1 / eta)`` (every
@@ -89,20 +87,12 @@ def fit_directions(eta: float, terms: int):
     return dirs, np.ascontiguousarray(np.linalg.pinv(np.stack(columns, axis=1)))
 
 
-@numba.njit(cache=True, inline="always", fastmath=True)
-def _affine_source(x0, x1, x2, x_dot_n, n0, n1, n2, d, p):
-    """``S'_d`` of one ray source of distance ``d`` (mm) as ``a + b . w`` (docs/physics.md §4.4 rearranged,
-    §8.7): returns ``(a, b0, b1, b2)`` for the offset ``x`` to the exit point and the receiver normal ``n``,
-    the channel's parameters the row ``p``."""
-    return _affine_terms(
-        x0, x1, x2, x_dot_n, n0, n1, n2, d, p[P_D], p[P_SIGMA_TR], p[P_NORM] / FOUR_PI_SQUARED, p[P_C_PHI], p[P_C_E]
-    )
-
-
 @numba.njit(cache=True, fastmath=True)
 def _affine_terms(x0, x1, x2, x_dot_n, n0, n1, n2, d, D, sigma_tr_, scale, C_phi, C_E):
-    """:func:`_affine_source` with the channel's parameters as numbers (``scale = norm / (4 pi^2)``): a loop over
-    pairs that reads them before it starts vectorises, one that reads them from an array in every pass did not."""
+    """``S'_d`` of one ray source of distance ``d`` (mm) as ``a + b . w`` (docs/physics.md §4.4 rearranged,
+    §8.7): ``(a, b0, b1, b2)`` for the offset ``x`` to the exit point and the receiver normal ``n``, with the
+    channel's parameters as numbers (``scale = norm / (4 pi^2)``): a loop over pairs that reads them before it
+    starts vectorises, one that reads them from an array in every pass did not."""
     s = sigma_tr_ * d
     one_plus_s = 1.0 + s
     inv_d = 1.0 / d
@@ -111,135 +101,6 @@ def _affine_terms(x0, x1, x2, x_dot_n, n0, n1, n2, d, D, sigma_tr_, scale, C_phi
     along_x = k * (3.0 * C_phi * one_plus_s + 3.0 * C_E * D * (3.0 * one_plus_s + s * s) * x_dot_n * inv_d * inv_d)
     along_n = -k * 3.0 * C_E * D * one_plus_s
     return a, along_x * x0 + along_n * n0, along_x * x1 + along_n * n1, along_x * x2 + along_n * n2
-
-
-#: Columns of :func:`fitted_pairs`' scratch space (per direction: w, mu0, x.w, distance, value, fit).
-FIT_WORK_COLUMNS = 8
-
-
-@numba.njit(cache=True, fastmath=True)
-def fitted_pairs(model, x0, x1, x2, ni0, ni1, ni2, no0, no1, no2, params, dirs, pinv, work, out):
-    """Coefficients of ``S_d(x_i, w; x_o)`` as a function of the refracted direction ``w`` (unclamped;
-    docs/physics.md §8.7) for every channel (rows of ``params``) and the offset ``x = x_o - x_i`` (mm):
-    ``a + b . w`` (``pinv`` of :data:`AFFINE_TERMS`) or ``a + b . w + w^T Q w`` (:data:`QUADRATIC_TERMS`),
-    the least-squares fit over the directions of :func:`fit_directions` turned into the frame of ``n_i``.
-
-    The virtual source is affine in ``w`` and goes in exactly; the real source depends on ``w`` also through
-    its corrected distance ``d_r(w)`` (§4.3), evaluated at each direction (interpolated in ``d_r`` from three
-    evaluations where the distances differ by less than :data:`FIT_INTERPOLATED_SPREAD`; one evaluation at a
-    middle distance is not enough even far away, where the real and the virtual source nearly cancel and a
-    small error in the real source is a large one in their difference). The geometry is
-    shared by the channels. ``work`` is scratch space, ``(max(len(dirs), 9), FIT_WORK_COLUMNS)`` float64 (no
-    allocation here: this runs once per operator entry). Written to ``out[c]``: ``a, b0, b1, b2`` then ``Q00,
-    Q11, Q22, 2 Q01, 2 Q02, 2 Q12`` (the coefficients of ``1, w_x, w_y, w_z, w_x^2, w_y^2, w_z^2, w_x w_y, w_x
-    w_z, w_y w_z``), 1/(mm^2 sr). The radial models: ``a = S_d(r)``, the rest 0."""
-    n_terms = pinv.shape[0]
-    n_c = params.shape[0]
-    r2, s0, s1, s2 = modified_normal(x0, x1, x2, ni0, ni1, ni2)
-    for c in range(n_c):
-        for k in range(out.shape[1]):
-            out[c, k] = 0.0
-    if model != MODEL_DIRECTIONAL:
-        for c in range(n_c):
-            out[c, 0] = radial_dipole(model, r2, params[c])
-        return
-    x_dot_n = x0 * no0 + x1 * no1 + x2 * no2
-    x_dot_s = x0 * s0 + x1 * s1 + x2 * s2
-    s_dot_n = s0 * no0 + s1 * no1 + s2 * no2
-    # a frame (e, f, n_i) about the source normal, and each direction's cosines
-    e0, e1, e2, f0, f1, f2 = orthonormal_frame(ni0, ni1, ni2)
-    n_dirs = dirs.shape[0]
-    for k in range(n_dirs):
-        w0 = dirs[k, 0] * e0 + dirs[k, 1] * f0 + dirs[k, 2] * ni0
-        w1 = dirs[k, 0] * e1 + dirs[k, 1] * f1 + dirs[k, 2] * ni1
-        w2 = dirs[k, 0] * e2 + dirs[k, 1] * f2 + dirs[k, 2] * ni2
-        work[k, 0] = w0
-        work[k, 1] = w1
-        work[k, 2] = w2
-        work[k, 3] = -(no0 * w0 + no1 * w1 + no2 * w2)  # mu0
-        xw = x0 * w0 + x1 * w1 + x2 * w2
-        work[k, 4] = max(r2 - xw * xw, 0.0)  # squared distance from the ray's line
-    axes = ((e0, e1, e2), (f0, f1, f2), (ni0, ni1, ni2))
-    for c in range(n_c):
-        p = params[c]
-        D = p[P_D]
-        d_e = p[P_D_E]
-        backlit = p[P_BACKLIT]
-        floor = D_R_FLOOR * D
-        # the virtual source: offset x - c n*, direction w mirrored in the plane of n* (section 4.2)
-        height = p[P_VIRTUAL]
-        d_v = max(math.sqrt(max(r2 - 2.0 * height * x_dot_s + height * height, 0.0)), floor)
-        a_v, bv0, bv1, bv2 = _affine_source(
-            x0 - height * s0, x1 - height * s1, x2 - height * s2, x_dot_n - height * s_dot_n, no0, no1, no2, d_v, p
-        )
-        mirror = 2.0 * (bv0 * s0 + bv1 * s1 + bv2 * s2)  # M b_v = b_v - 2 (n* . b_v) n*
-        # the real source's distance at each direction (section 4.3)
-        low = math.inf
-        high = 0.0
-        for k in range(n_dirs):
-            mu0 = work[k, 3]
-            if mu0 > 0.0:
-                cos_beta = -math.sqrt(work[k, 4] / (r2 + d_e * d_e))
-                d_r2 = r2 + D * mu0 * (D * mu0 - 2.0 * d_e * cos_beta)
-            else:
-                d_r2 = r2 + backlit * backlit
-            d = max(math.sqrt(d_r2), floor)
-            work[k, 5] = d
-            low = min(low, d)
-            high = max(high, d)
-        if high - low <= FIT_INTERPOLATED_SPREAD * low:
-            # quadratic interpolation in d_r through low, mid, high (one evaluation when they coincide)
-            mid = 0.5 * (low + high)
-            am = _affine_source(x0, x1, x2, x_dot_n, no0, no1, no2, mid, p)
-            al = am
-            ah = am
-            half = 0.5 * (high - low)
-            if half > 0.0:
-                al = _affine_source(x0, x1, x2, x_dot_n, no0, no1, no2, low, p)
-                ah = _affine_source(x0, x1, x2, x_dot_n, no0, no1, no2, high, p)
-            for k in range(n_dirs):
-                t = (work[k, 5] - mid) / half if half > 0.0 else 0.0
-                lw, mw, hw = 0.5 * t * (t - 1.0), 1.0 - t * t, 0.5 * t * (t + 1.0)
-                work[k, 6] = (
-                    lw * al[0]
-                    + mw * am[0]
-                    + hw * ah[0]
-                    + (lw * al[1] + mw * am[1] + hw * ah[1]) * work[k, 0]
-                    + (lw * al[2] + mw * am[2] + hw * ah[2]) * work[k, 1]
-                    + (lw * al[3] + mw * am[3] + hw * ah[3]) * work[k, 2]
-                )
-        else:
-            for k in range(n_dirs):
-                a = _affine_source(x0, x1, x2, x_dot_n, no0, no1, no2, work[k, 5], p)
-                work[k, 6] = a[0] + a[1] * work[k, 0] + a[2] * work[k, 1] + a[3] * work[k, 2]
-        for j in range(n_terms):
-            total = 0.0
-            for k in range(n_dirs):
-                total += pinv[j, k] * work[k, 6]
-            work[j, 7] = total
-        # from the frame's monomials to global ones, less the virtual source
-        out[c, 0] = work[0, 7] - a_v
-        out[c, 1] = e0 * work[1, 7] + f0 * work[2, 7] + ni0 * work[3, 7] - (bv0 - mirror * s0)
-        out[c, 2] = e1 * work[1, 7] + f1 * work[2, 7] + ni1 * work[3, 7] - (bv1 - mirror * s1)
-        out[c, 3] = e2 * work[1, 7] + f2 * work[2, 7] + ni2 * work[3, 7] - (bv2 - mirror * s2)
-        if n_terms == AFFINE_TERMS:
-            continue
-        # Q = R Ql R^T with R's columns (e, f, n_i), Ql the local quadratic form (no z^2 term)
-        q_xx, q_yy, q_xy, q_xz, q_yz = work[4, 7], work[5, 7], 0.5 * work[6, 7], 0.5 * work[7, 7], 0.5 * work[8, 7]
-        ql = ((q_xx, q_xy, q_xz), (q_xy, q_yy, q_yz), (q_xz, q_yz, 0.0))
-        for at, i, j, factor in (
-            (4, 0, 0, 1.0),
-            (5, 1, 1, 1.0),
-            (6, 2, 2, 1.0),
-            (7, 0, 1, 2.0),
-            (8, 0, 2, 2.0),
-            (9, 1, 2, 2.0),
-        ):
-            total = 0.0
-            for k in range(3):
-                for m in range(3):
-                    total += axes[k][i] * ql[k][m] * axes[m][j]
-            out[c, at] = factor * total
 
 
 # rows of the run's scratch arrays (one array per step's output: a loop that writes one array and reads others
@@ -417,7 +278,7 @@ def _span_and_three_sources(length, n_dirs, pair, geo, dist, span, real, D, sigm
 def _global_quadratic(length, pair, geo, coef, out):
     """The quadratic terms of each pair's fit in global coordinates: ``Q = R Q_l R^T`` with ``R``'s columns the
     frame ``(e, f, n_i)`` and ``Q_l`` the local form (no ``w_z^2`` term, ``w_z^2 = 1 - w_x^2 - w_y^2``), written
-    as ``Q00, Q11, Q22, 2 Q01, 2 Q02, 2 Q12`` (the order of :func:`fitted_pairs`)."""
+    as ``Q00, Q11, Q22, 2 Q01, 2 Q02, 2 Q12`` (the order of :data:`QUADRATIC_TERMS`)."""
     for q in range(length):
         xx, yy, xy, xz, yz = coef[4, q], coef[5, q], 0.5 * coef[6, q], 0.5 * coef[7, q], 0.5 * coef[8, q]
         # rows of R (global axis i): (e_i, f_i, n_i); Q_ij = r_i . Q_l r_j
@@ -449,13 +310,14 @@ def run_space(directions, length):
 
 @numba.njit(cache=True, fastmath=True, nogil=True, error_model="numpy")
 def fitted_run(model, P, N, fixed, lo, hi, sources_vary, params, dirs, pinv, space, out):
-    """:func:`fitted_pairs`' affine fits (:data:`AFFINE_TERMS`) for a run of pairs that share one end, written to
+    """The affine fits (:data:`AFFINE_TERMS`; docs/physics.md §8.7) of a run of pairs that share one end, written to
     ``out[q, c, :]`` for every channel ``c`` (rows of ``params``): receiver ``fixed`` and sources ``lo + q``
     (``sources_vary``; a row of the far field's matrix), or source ``fixed`` and receivers ``lo + q`` (a column);
     ``P``, ``N`` the points (mm) and unit normals; ``space`` is :func:`run_space`'s.
 
-    The same fits as :func:`fitted_pairs` (to rounding), computed a step at a time over the whole run so that each
-    step is one loop the compiler vectorises: the geometry, the virtual source, the corrected distance at every
+    The fits of each pair alone (to rounding; the tests check them one pair at a time), computed a step at a time
+    over the whole run so that each step is one loop the compiler vectorises: the geometry, the virtual source, the
+    corrected distance at every
     direction, and the real source at the least, middle and largest of them, interpolated in the distance. The
     pairs whose distances spread by more than :data:`FIT_INTERPOLATED_SPREAD` are fitted again, together, with
     the real source evaluated at each direction (:func:`fitted_points`' way)."""
@@ -488,9 +350,8 @@ def fitted_points(model, length, params, dirs, pinv, interpolate, scratch, out):
     into the first array of ``scratch`` (:func:`run_scratch`): row ``t`` of it the offsets ``x_o - x_i`` (mm, rows
     0-2), the source normals (3-5) and the receiver normals (6-8), column ``q`` the pair; written to ``out[q, c,
     :]`` for every channel (rows of ``params``), a step at a time over the pairs. The real source is evaluated at
-    each direction's corrected distance (the near field's pairs: :func:`fitted_pairs` gives the same fits to the
-    error of its interpolation in the distance), or, where ``interpolate``, interpolated in it from its least,
-    middle and largest value."""
+    each direction's corrected distance (the near field's pairs), or, where ``interpolate``, interpolated in it from
+    its least, middle and largest value."""
     if _directional_run(model, length, params, scratch, out):
         for c in range(params.shape[0]):
             _run_channel(params[c], dirs, pinv, interpolate, length, scratch, out[:, c, :])

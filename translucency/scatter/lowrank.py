@@ -2,7 +2,7 @@
 
 The relighting operator's far field (docs/physics.md §8.7, §8.9) maps the light that enters at every vertex,
 per channel ``Phi`` and ``Psi = Phi w12`` (four numbers), to ``B`` at every vertex. Its entries are the affine
-fits ``a + b . w12`` of :func:`~translucency.scatter.fits.fitted_pairs`. The vertices are ordered by a
+fits ``a + b . w12`` of :func:`~translucency.scatter.fits.fitted_run`. The vertices are ordered by a
 kd-tree (:class:`~translucency.scatter.hierarchy.SourceTree`, leaves of :data:`LEAF_SIZE`); a pair of nodes
 is a block of the matrix, and
 

@@ -19,7 +19,7 @@ solver's own sums written once with those coefficients instead of per light:
   be summed before they are rounded.
 
 The real source's corrected distance ``d_r`` depends on ``w12`` too; the coefficients are least-squares
-fits over the cone of refracted directions (:func:`~translucency.scatter.fits.fitted_pairs`): affine in
+fits over the cone of refracted directions (:mod:`translucency.scatter.fits`): affine in
 the far field, quadratic near the receiver, where per vertex ``Xi = Phi w12 w12^T`` joins the inputs.
 Per light: the inputs per vertex, one pass over the far field's blocks and one sparse product
 (:meth:`RelightOperator.apply`), whose cost is the operators' size. The clamp of ``S_d`` at 0 (§4.5) is
