@@ -13,8 +13,14 @@ the largest ``B``.
 
     .venv/bin/python bench/revisions.py 9601509 HEAD                  # bunny, 3 rounds of 4 solves
     .venv/bin/python bench/revisions.py 9601509 b8df834 HEAD --scans bunny igea
+    .venv/bin/python bench/revisions.py 766c866 HEAD --relight 0.01 --rounds 2 --solves 12
 
-Results: ``results/revisions.json`` and ``results/revisions.md`` (``--quick``: into ``results/tmp``).
+With ``--relight TOL`` each driver prepares relighting's operators (``method="relight"`` at ``TOL``,
+``bounces=0``) with the default light, then times ``--solves`` new lights, each its own direction (the same
+directions in every revision) with its own shadow rays; the table gives the new lights and the preparation.
+
+Results: ``results/revisions.json`` and ``results/revisions.md``, with ``--relight`` ``results/revisions_relight.*``
+(``--quick``: into ``results/tmp``).
 """
 
 from __future__ import annotations
@@ -51,9 +57,27 @@ try:  # the shading room's Scene; before it, the pipeline's
     from translucency.app.shading import Scene
 except ImportError:
     from translucency.app.pipeline import Scene
-path, unit, solves, out = sys.argv[1], sys.argv[2], int(sys.argv[3]), sys.argv[4]
+path, unit, solves, out, relight = sys.argv[1], sys.argv[2], int(sys.argv[3]), sys.argv[4], sys.argv[5]
 mesh, _ = tl.clean_mesh(tl.load_mesh(path, unit=unit))
 scene = Scene(mesh)
+if relight:  # prepare the operators once, then time new lights
+    options = {"method": "relight", "tol": float(relight), "bounces": 0, "time_limit": None}
+    start = time.perf_counter()
+    result = scene.shade("marble", **options)
+    prepare = time.perf_counter() - start
+    rng = np.random.default_rng(5)
+    times = []
+    for _ in range(solves):
+        d = rng.normal(size=3)
+        d[1] = abs(d[1]) + 0.3  # from above, where the scans face
+        light = tl.DirectionalLight(tuple(d / np.linalg.norm(d)), 1.0)
+        start = time.perf_counter()
+        result = scene.shade("marble", light, **options)
+        times.append(time.perf_counter() - start)
+    np.save(out + ".npy", result.B)
+    with open(out + ".json", "w") as f:
+        json.dump({"seconds": times, "prepare": prepare, "vertices": int(mesh.n_points)}, f)
+    sys.exit(0)
 # one solve per call in every revision: revisions with bounces run without them
 import inspect
 parameters = inspect.signature(Scene.shade).parameters
@@ -83,12 +107,14 @@ def extract(revision: str, into: Path) -> str:
     return commit
 
 
-def run_driver(tree: Path, mesh: Path, unit: str, solves: int, out: Path) -> dict:
-    """One driver process in an extracted revision: its timings, with the load average before it ran."""
+def run_driver(tree: Path, mesh: Path, unit: str, solves: int, out: Path, relight: float | None = None) -> dict:
+    """One driver process in an extracted revision: its timings, with the load average before it ran (``relight``:
+    the tolerance of the relighting operators it prepares, then new lights)."""
     load = load_average()
     env = {**os.environ, "PYTHONPATH": str(tree)}
+    mode = "" if relight is None else repr(float(relight))
     subprocess.run(
-        [sys.executable, "-c", DRIVER, str(mesh), unit, str(solves), str(out)], cwd=tree, env=env, check=True
+        [sys.executable, "-c", DRIVER, str(mesh), unit, str(solves), str(out), mode], cwd=tree, env=env, check=True
     )
     record = json.loads(Path(str(out) + ".json").read_text())
     record["load_before"] = load
@@ -96,17 +122,21 @@ def run_driver(tree: Path, mesh: Path, unit: str, solves: int, out: Path) -> dic
 
 
 def table(rows: list[dict]) -> str:
-    """The Markdown table of the comparison."""
+    """The Markdown table of the comparison (with the preparations where the rows relight)."""
+    relit = any("prepare" in row for row in rows)
+    what = "new light" if relit else "warm solve"
     lines = [
-        "| scan | vertices | revision | warm solve, median (s) | range (s) | solves | ratio to first | "
-        "max abs B difference / max B | load (1 min) |",
-        "|---|---:|---|---:|---|---:|---:|---:|---|",
+        f"| scan | vertices | revision | {what}, median (s) | range (s) | solves | ratio to first | "
+        + ("preparation (s) | " if relit else "")
+        + "max abs B difference / max B | load (1 min) |",
+        "|---|---:|---|---:|---|---:|---:|" + ("---|" if relit else "") + "---:|---|",
     ]
     for row in rows:
+        prepare = f"{min(row['prepare']):.1f}–{max(row['prepare']):.1f} | " if relit else ""
         lines.append(
-            f"| {row['scan']} | {row['vertices']:,} | {row['revision']} | {row['median']:.2f} | "
-            f"{min(row['seconds']):.2f}–{max(row['seconds']):.2f} | {len(row['seconds'])} | {row['ratio']:.2f} | "
-            f"{row['b_difference']:.1e} | {min(row['loads']):.1f}–{max(row['loads']):.1f} |"
+            f"| {row['scan']} | {row['vertices']:,} | {row['revision']} | {row['median']:.3f} | "
+            f"{min(row['seconds']):.3f}–{max(row['seconds']):.3f} | {len(row['seconds'])} | {row['ratio']:.2f} | "
+            f"{prepare}{row['b_difference']:.1e} | {min(row['loads']):.1f}–{max(row['loads']):.1f} |"
         )
     return "\n".join(lines)
 
@@ -118,6 +148,9 @@ def main(argv=None) -> int:
     parser.add_argument("--rounds", type=int, default=3, help="turns each revision takes (default 3)")
     parser.add_argument("--solves", type=int, default=4, help="timed warm solves per turn (default 4)")
     parser.add_argument("--quick", action="store_true", help="one round of two solves, into results/tmp")
+    parser.add_argument(
+        "--relight", type=float, metavar="TOL", help="time new lights on relighting operators prepared at TOL"
+    )
     args = parser.parse_args(argv)
     rounds, solves = (1, 2) if args.quick else (args.rounds, args.solves)
     info = machine_info()
@@ -137,7 +170,7 @@ def main(argv=None) -> int:
             runs = {label: [] for label in trees}
             for turn in range(rounds):
                 for label, tree in trees.items():
-                    record = run_driver(tree, mesh, unit, solves, folder / f"{scan}-{tree.name}")
+                    record = run_driver(tree, mesh, unit, solves, folder / f"{scan}-{tree.name}", args.relight)
                     runs[label].append(record)
                     print(
                         f"{scan} round {turn + 1} {label}: "
@@ -164,12 +197,17 @@ def main(argv=None) -> int:
                         "ratio": statistics.median(seconds) / first_median,
                         "b_difference": difference,
                         "loads": [r["load_before"][0] for r in runs[label]],
-                        "stages": [r["stages"] for r in runs[label]],
+                        **(
+                            {"prepare": [r["prepare"] for r in runs[label]], "tol": args.relight}
+                            if args.relight is not None
+                            else {"stages": [r["stages"] for r in runs[label]]}
+                        ),
                     }
                 )
     text = table(rows)
     print(text)
-    write_results(output_dir(args.quick), "revisions", {"info": info, "rows": rows}, text)
+    name = "revisions" if args.relight is None else "revisions_relight"
+    write_results(output_dir(args.quick), name, {"info": info, "rows": rows}, text)
     return 0
 
 
