@@ -463,10 +463,10 @@ def _apply_dense(worker, lo, hi, blocks, D, values, lit_before, out):
                 target[r0 + a, c] += s
 
 
-def _fixed_point(V: np.ndarray, out: np.ndarray) -> np.ndarray:
-    """``V`` (entries in [-1, 1]) as int16 multiples of :data:`V_STEP`, written to ``out`` (returned)."""
-    out[...] = np.clip(np.rint(V / V_STEP), -FIXED_STEPS, FIXED_STEPS)
-    return out
+def _fixed_point(A: np.ndarray, step, out: np.ndarray) -> None:
+    """``A`` as int16 multiples of ``step`` (a number, or one per row as a column), at most :data:`FIXED_STEPS`
+    of them either way, written to ``out``."""
+    out[...] = np.clip(np.rint(A / step), -FIXED_STEPS, FIXED_STEPS)
 
 
 def _rows_fixed_point(A: np.ndarray, out: np.ndarray, scales: np.ndarray) -> None:
@@ -474,7 +474,7 @@ def _rows_fixed_point(A: np.ndarray, out: np.ndarray, scales: np.ndarray) -> Non
     steps: the steps written to ``out``, the scales to ``scales``."""
     scale = (np.abs(A).max(axis=1, initial=0.0) / FIXED_STEPS).astype(np.float32)
     scales[...] = scale
-    out[...] = np.clip(np.rint(A / np.where(scale > 0.0, scale, 1.0)[:, None]), -FIXED_STEPS, FIXED_STEPS)
+    _fixed_point(A, np.where(scale > 0.0, scale, 1.0)[:, None], out)
 
 
 class _CrossStore:
@@ -504,7 +504,7 @@ class _CrossStore:
             self.V = _room(self.V, v_at + V.size)
             self.S = _room(self.S, s_at + U.shape[0])
             _rows_fixed_point(U, self.U[u_at : u_at + U.size].reshape(U.shape), self.S[s_at : s_at + U.shape[0]])
-            _fixed_point(V, self.V[v_at : v_at + V.size].reshape(V.shape))
+            _fixed_point(V, V_STEP, self.V[v_at : v_at + V.size].reshape(V.shape))
             self.u_at += U.size
             self.v_at += V.size
             self.s_at += U.shape[0]
