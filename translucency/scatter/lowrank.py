@@ -65,6 +65,11 @@ def rank_limit(rows: int, columns: int) -> int:
     return int(max(1, min(96, rows * columns // (2 * (rows + columns)))))
 
 
+def rank_limits(rows, columns) -> np.ndarray:
+    """:func:`rank_limit` of every block of ``rows`` and ``columns`` (arrays, one entry per block), int64."""
+    return np.array([rank_limit(int(m), int(c)) for m, c in zip(rows, columns)], dtype=np.int64)
+
+
 @dataclass
 class FarMatrix:
     """The far field of one surface, medium, model and ``eps`` (:func:`build`), in the tree's vertex order.
@@ -685,7 +690,7 @@ def _crosses(model, tree, P, N, params, dirs, pinv, eps, channel_bound, far_pair
     rows = end[far_pairs[:, 0]] - start[far_pairs[:, 0]]
     cols = (end[far_pairs[:, 1]] - start[far_pairs[:, 1]]) * AFFINE_TERMS
     reserved = RESERVED_SHARE * expected_rank(eps)
-    ranks = np.minimum(reserved, [rank_limit(int(m), int(c)) for m, c in zip(rows, cols)]).astype(np.int64)
+    ranks = np.minimum(reserved, rank_limits(rows, cols)).astype(np.int64)
     store = _CrossStore(n_c * np.sum(ranks * rows), n_c * np.sum(ranks * cols), n_c * np.sum(rows))
 
     def run(worker, lo, hi, items):

@@ -224,7 +224,7 @@ def operator_bytes(geometry, medium, tol: float, near_radius: float) -> tuple[fl
     rows = tree.end[far_pairs[:, 0]] - tree.start[far_pairs[:, 0]]
     cols = tree.end[far_pairs[:, 1]] - tree.start[far_pairs[:, 1]]
     rank = lowrank.expected_rank(far_eps(tol))
-    limit = np.array([lowrank.rank_limit(int(m), int(c) * AFFINE_TERMS) for m, c in zip(rows, cols)])
+    limit = lowrank.rank_limits(rows, AFFINE_TERMS * cols)
     ranks = np.minimum(rank, limit)
     far_floats = float(n_c * np.sum(ranks * (rows + AFFINE_TERMS * cols)))
     dense_rows = tree.end[dense_pairs[:, 0]] - tree.start[dense_pairs[:, 0]]
