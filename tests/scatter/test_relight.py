@@ -170,6 +170,41 @@ def test_relit_B_matches_a_direct_solve_within_tol(light):
     assert np.percentile(_per_vertex_error(relit.B, reference), 99) < 0.01
 
 
+def _random_light(kind, rng):
+    """A light of ``kind`` drawn at random: a direction, a position 40-80 mm from the torus' centre, or a small
+    radiance map with a bright patch somewhere; colours drawn too."""
+    colour = tuple(rng.uniform(0.2, 1.0, 3))
+    if kind == "directional":
+        return DirectionalLight(tuple(rng.normal(size=3)), colour)
+    if kind == "point":
+        towards = rng.normal(size=3)
+        return PointLight(tuple(rng.uniform(40.0, 80.0) * towards / np.linalg.norm(towards)), colour)
+    radiance = rng.uniform(0.0, 0.1, (8, 16, 3))
+    row, column = rng.integers(0, 8), rng.integers(0, 16)
+    radiance[row, column] = 5.0 * np.array(colour)
+    return EnvironmentLight(radiance_map=radiance, n_directions=32, seed=int(rng.integers(1 << 30)))
+
+
+@pytest.mark.slow
+def test_one_set_of_operators_relights_random_lights_within_tol():
+    """Prepared once, the operators relight lights of every kind drawn at random (directions, positions, radiance
+    maps and colours), each within tol of ``exact`` at the 99th percentile."""
+    mesh, geometry = _surface(*torus(20.0, 8.0, 48, 24))
+    rng = np.random.default_rng(20261205)
+    cache = VisibilityCache()
+    for k, kind in enumerate(("directional", "point", "environment") * 2):
+        light = _random_light(kind, rng)
+        incident = incident_flux(
+            geometry.points, geometry.normals, geometry.vertex_areas, [light], MARBLE.eta,
+            triangles=mesh.triangles, cache=cache,
+        )  # fmt: skip
+        reference = solve(geometry, incident.phi_rgb, incident.w12, MARBLE, method="exact").B
+        relit = solve(geometry, incident.phi_rgb, incident.w12, MARBLE, method="relight", tol=0.01)
+        assert relit.stats["operators_reused"] == (k > 0)
+        error = np.percentile(_per_vertex_error(relit.B, reference), 99)
+        assert error < 0.01, f"{kind} light {light}: p99 {error:.2%}"
+
+
 def test_relit_B_on_a_coarse_mesh_matches_a_direct_solve_within_tol():
     # edges of 30 mm, far over marble's diffusion length: nearly all of B is the near field, where the vertex
     # sum's own pairs and the near triangles' vertex rule cancel to 1e-4 of themselves; held in the far
