@@ -168,3 +168,48 @@ def test_the_crosses_store_grows_past_what_it_reserved_and_keeps_every_block():
         np.testing.assert_allclose(
             V_all[v_at : v_at + V.size].reshape(V.shape) * lowrank.V_STEP, V, atol=lowrank.V_STEP
         )
+
+
+def _stored_product(matrix, tree_values):
+    """``B (n, C)`` in the tree's order for ``tree_values (C, 4 n)``, block by block in numpy from the stored
+    crosses (``U`` in steps of its row scales, ``V`` in steps of ``V_STEP``) and dense blocks."""
+    n = matrix.order.size
+    B = np.zeros((n, matrix.n_channels))
+    terms = fits.AFFINE_TERMS
+    for r0, r1, c0, c1, c, k, u_at, v_at, s_at in matrix.low_rank:
+        m, columns = r1 - r0, (c1 - c0) * terms
+        U = matrix.U[u_at : u_at + m * k].reshape(m, k) * matrix.U_scale[s_at : s_at + m, None].astype(np.float64)
+        V = matrix.V[v_at : v_at + k * columns].reshape(k, columns) * lowrank.V_STEP
+        B[r0:r1, c] += U @ (V @ tree_values[c, c0 * terms : c1 * terms])
+    for r0, r1, c0, c1, first, last, at in matrix.dense:
+        m, columns = r1 - r0, (c1 - c0) * terms
+        block = matrix.D[at : at + (last - first) * m * columns].reshape(last - first, m, columns)
+        for c in range(first, last):
+            B[r0:r1, c] += block[c - first] @ tree_values[c, c0 * terms : c1 * terms]
+    return B
+
+
+def test_a_light_on_part_of_the_surface_gives_the_stored_matrix_product():
+    """Blocks whose sources are all in shadow are skipped: the product is the stored matrix's, multiplied apart
+    block by block, for lit patches of every length with gaps between them, no light and light everywhere."""
+    points, normals = _surface("sphere")
+    matrix, _, _ = _build(points, normals, 1e-2)
+    assert matrix.stats["far_blocks"] > 100
+    rng = np.random.default_rng(3)
+    n = len(points)
+    for share in (0.0, 0.05, 0.5, 1.0):
+        lit = np.zeros(n, dtype=bool)
+        at = 0
+        while at < n:  # in the tree's order: patches of 1-30 lit sources, gaps of 1-24
+            length = rng.integers(1, 30)
+            lit[at : at + length] = rng.uniform() < share or share == 1.0
+            at += length + (0 if share == 1.0 else rng.integers(1, 25))
+        values = rng.normal(size=(n, matrix.n_channels, fits.AFFINE_TERMS))
+        values[matrix.order[~lit]] = 0.0
+        tree_values = values[matrix.order].transpose(1, 0, 2).reshape(matrix.n_channels, -1)
+        expected = np.empty((n, matrix.n_channels))
+        expected[matrix.order] = _stored_product(matrix, tree_values)
+        scale = np.abs(expected).max()
+        np.testing.assert_allclose(matrix.apply(values), expected, rtol=0, atol=1e-5 * max(scale, 1e-300))
+        if share == 0.0:
+            assert np.all(matrix.apply(values) == 0.0)
