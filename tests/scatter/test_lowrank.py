@@ -161,7 +161,7 @@ def test_the_crosses_store_grows_past_what_it_reserved_and_keeps_every_block():
     assert U_all.size == sum(U.size for U, _ in blocks) and V_all.size == sum(V.size for _, V in blocks)
     assert scales.size == sum(U.shape[0] for U, _ in blocks)
     for (U, V), (u_at, v_at, s_at) in zip(blocks, places):
-        held = U_all[u_at : u_at + U.size].reshape(U.shape) * scales[s_at : s_at + U.shape[0], None]
+        held = U_all[u_at : u_at + U.size].reshape(U.shape[1], U.shape[0]).T * scales[s_at : s_at + U.shape[0], None]
         # each row to half a step of its own largest entry, however small the row
         largest = np.abs(U).max(axis=1, keepdims=True)
         assert np.all(np.abs(held - U) <= 0.5001 * largest / lowrank.FIXED_STEPS)
@@ -172,13 +172,13 @@ def test_the_crosses_store_grows_past_what_it_reserved_and_keeps_every_block():
 
 def _stored_product(matrix, tree_values):
     """``B (n, C)`` in the tree's order for ``tree_values (C, 4 n)``, block by block in numpy from the stored
-    crosses (``U`` in steps of its row scales, ``V`` in steps of ``V_STEP``) and dense blocks."""
+    crosses (``U`` a cross at a time, in steps of its row scales; ``V`` in steps of ``V_STEP``) and dense blocks."""
     n = matrix.order.size
     B = np.zeros((n, matrix.n_channels))
     terms = fits.AFFINE_TERMS
     for r0, r1, c0, c1, c, k, u_at, v_at, s_at in matrix.low_rank:
         m, columns = r1 - r0, (c1 - c0) * terms
-        U = matrix.U[u_at : u_at + m * k].reshape(m, k) * matrix.U_scale[s_at : s_at + m, None].astype(np.float64)
+        U = matrix.U[u_at : u_at + m * k].reshape(k, m).T * matrix.U_scale[s_at : s_at + m, None].astype(np.float64)
         V = matrix.V[v_at : v_at + k * columns].reshape(k, columns) * lowrank.V_STEP
         B[r0:r1, c] += U @ (V @ tree_values[c, c0 * terms : c1 * terms])
     for r0, r1, c0, c1, first, last, at in matrix.dense:

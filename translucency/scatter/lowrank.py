@@ -19,8 +19,8 @@ is a block of the matrix, and
 The error is set by ``eps`` (the rank), not by the opening ratio: ``ETA`` stays at 0.5 for every ``tol``.
 Each receiver's row is divided by the channel's bound of §8.4 at its own distance before the approximation,
 so that the stopping rule holds the rows of distant (dark) receivers too, not only the block's brightest.
-``U`` and ``V`` are stored in 16-bit fixed point (``U`` with one float32 scale per row), dense blocks in float32; a
-light reads every block once.
+``U`` and ``V`` are stored in 16-bit fixed point (``U`` with one float32 scale per row, one cross after another),
+dense blocks in float32; a light reads every block once.
 
 =========== ================================================================ ==============
 symbol      meaning                                                          unit
@@ -84,8 +84,9 @@ class FarMatrix:
         ``k``, and where its ``U (rows, k)``, ``V (k, columns x 4)`` and its rows' scales start in ``U``, ``V``
         and ``U_scale``.
     U, V : int16
-        The crosses, row-major: ``U`` in steps of ``U_scale`` per row, ``V`` in steps of :data:`V_STEP`;
-        ``V``'s columns are (source, term).
+        The crosses: ``U`` in steps of ``U_scale`` per row, held a cross at a time (``U`` of a block is ``(k,
+        rows)``, so that a light's product runs down the rows); ``V`` row-major in steps of :data:`V_STEP`, its
+        columns (source, term).
     U_scale : float32
     dense : (M, 7) int64
         Per dense block: first and last row, first and last column, first and last channel, and where its
@@ -374,6 +375,7 @@ def _apply_low_rank(worker, lo, hi, blocks, U, U_scale, V, values, lit_before, o
     skipping those without a lit source (``lit_before[j]``: how many of the sources before ``j`` are lit)."""
     target = out[worker]
     inner = np.zeros(128, dtype=np.float32)
+    rows = np.zeros(1024, dtype=np.float32)
     step = np.float32(V_STEP)
     for k in range(lo, hi):
         r0, r1, c0, c1, c, rank, u_at, v_at, s_at = _low_rank_block(blocks, k)
@@ -390,12 +392,21 @@ def _apply_low_rank(worker, lo, hi, blocks, U, U_scale, V, values, lit_before, o
             for j in range(n):
                 s += np.float32(row[j]) * source[j]
             inner[q] = s * step
-        for a in range(r1 - r0):
-            row = U[u_at + a * rank : u_at + (a + 1) * rank]
-            s = np.float32(0.0)
-            for q in range(rank):
-                s += np.float32(row[q]) * inner[q]
-            target[r0 + a, c] += s * U_scale[s_at + a]
+        # U a cross at a time: each cross's column runs down the block's rows in one vector loop (a row of U has
+        # only k entries, too short a loop to vectorise well)
+        m = r1 - r0
+        if rows.shape[0] < m:
+            rows = np.zeros(2 * m, dtype=np.float32)
+        acc = rows[:m]
+        acc[:] = 0.0
+        for q in range(rank):
+            column = U[u_at + q * m : u_at + (q + 1) * m]
+            weight = inner[q]
+            for a in range(m):
+                acc[a] += np.float32(column[a]) * weight
+        scales = U_scale[s_at : s_at + m]
+        for a in range(m):
+            target[r0 + a, c] += acc[a] * scales[a]
 
 
 def kept_array(scratch: dict, name: str, shape: tuple, dtype) -> np.ndarray:
@@ -442,7 +453,7 @@ def _entries_of(worker, lo, hi, blocks, U, U_scale, V, starts, columns, out):
                 for t in range(AFFINE_TERMS):
                     s = 0.0
                     for q in range(rank):
-                        s += float(U[u_at + (o - r0) * rank + q]) * V[v_at + q * n + (j - c0) * AFFINE_TERMS + t]
+                        s += float(U[u_at + q * (r1 - r0) + o - r0]) * V[v_at + q * n + (j - c0) * AFFINE_TERMS + t]
                     out[h, c, t] = s * V_STEP * U_scale[s_at + o - r0]
 
 
@@ -501,14 +512,16 @@ class _CrossStore:
         self.lock = threading.Lock()
 
     def put(self, U: np.ndarray, V: np.ndarray) -> tuple[int, int, int]:
-        """Store one block's crosses ``U (m, k)`` and ``V (k, columns)`` (float64, ``V`` in [-1, 1]): where they
-        start in :attr:`U` and :attr:`V`, and where ``U``'s row scales start in :attr:`S`."""
+        """Store one block's crosses ``U (m, k)`` (held a cross at a time, as ``(k, m)``) and ``V (k, columns)``
+        (float64, ``V`` in [-1, 1]): where they start in :attr:`U` and :attr:`V`, and where ``U``'s row scales start
+        in :attr:`S`."""
         with self.lock:
             u_at, v_at, s_at = self.u_at, self.v_at, self.s_at
             self.U = _room(self.U, u_at + U.size)
             self.V = _room(self.V, v_at + V.size)
             self.S = _room(self.S, s_at + U.shape[0])
-            _rows_fixed_point(U, self.U[u_at : u_at + U.size].reshape(U.shape), self.S[s_at : s_at + U.shape[0]])
+            crosses = self.U[u_at : u_at + U.size].reshape(U.shape[1], U.shape[0])  # a cross at a time
+            _rows_fixed_point(U, crosses.T, self.S[s_at : s_at + U.shape[0]])
             _fixed_point(V, V_STEP, self.V[v_at : v_at + V.size].reshape(V.shape))
             self.u_at += U.size
             self.v_at += V.size
