@@ -507,8 +507,7 @@ def _relit(work, receivers, tol, memory_limit, time_limit, report, stats, timing
     timings["apply"] = time.perf_counter() - start
     if not reused:  # the operators' first light, checked against a tree solve of it (once per preparation)
         start = time.perf_counter()
-        operator.stats["checked_p99"], checked = _checked_against_tree(work, B, tol)
-        operator.stats.update(checked)
+        operator.stats.update(_checked_against_tree(work, B, tol))
         timings["check"] = time.perf_counter() - start
     stats.update(operator.stats)
     stats["operators_reused"] = reused
@@ -523,14 +522,15 @@ RELIGHT_CHECK_TOL_FACTOR = 4.0
 RELIGHT_OUTLIER_TOLS = 10.0
 
 
-def _checked_against_tree(work, B, tol) -> tuple[float, dict]:
-    """The per-vertex error (docs/physics.md §8.5) of relit ``B`` (rows of ``work.inner``) against ``tree`` at
-    ``tol / RELIGHT_CHECK_TOL_FACTOR`` for the same light; a warning (one sentence) when it is above ``tol``:
+def _checked_against_tree(work, B, tol) -> dict:
+    """``{"checked_p99": ..., "checked_outliers": ...}``: the per-vertex error (docs/physics.md §8.5) of relit ``B``
+    (rows of ``work.inner``) against ``tree`` at ``tol / RELIGHT_CHECK_TOL_FACTOR`` for the same light, and how
+    many vertices are more than :data:`RELIGHT_OUTLIER_TOLS` ``tol`` off; a warning (one sentence) when the error
+    is above ``tol``:
     the direction fits of §8.7 follow ``S_d`` less closely for some materials (low albedo) than ``tol``
-    asks. Where it holds, a warning too when some vertices are more than :data:`RELIGHT_OUTLIER_TOLS` ``tol``
-    off (below :data:`TOL_FLOOR` of the largest ``B``, relative to that floor): where a scan's normals turn
-    against each other within a mean free path, the fits miss a few vertices by tens of percent (their
-    number is ``operator.stats["checked_outliers"]``)."""
+    asks. Where it holds, a warning too when there are such vertices (below :data:`TOL_FLOOR` of the largest
+    ``B``, relative to that floor): where a scan's normals turn against each other within a mean free path, the
+    fits miss a few vertices by tens of percent."""
     reference = solve(
         work.geometry,
         work.phi,
@@ -544,11 +544,12 @@ def _checked_against_tree(work, B, tol) -> tuple[float, dict]:
     floor = TOL_FLOOR * reference.max(axis=0)
     keep = reference >= floor
     if not np.any(keep):
-        return 0.0, {"checked_outliers": 0}
-    error = float(np.percentile(np.abs(B - reference)[keep] / reference[keep], 99))
-    worst = (np.abs(B - reference) / np.maximum(reference, np.where(floor > 0, floor, 1.0))).max(axis=1)
+        return {"checked_p99": 0.0, "checked_outliers": 0}
+    # relative to B, and below the floor relative to the floor (the absolute error tol allows there)
+    relative = np.abs(B - reference) / np.maximum(reference, np.where(floor > 0, floor, 1.0))
+    error = float(np.percentile(relative[keep], 99))
+    worst = relative.max(axis=1)
     outliers = int(np.count_nonzero(worst > RELIGHT_OUTLIER_TOLS * tol))
-    checked = {"checked_outliers": outliers}
     if error > tol:
         warn_user(
             f"{work.medium.name}: the relighting operators are {100 * error:.2g} % off a tree solve of the first "
@@ -562,7 +563,7 @@ def _checked_against_tree(work, B, tol) -> tuple[float, dict]:
             "misses where neighbouring normals turn against each other, as on a crumpled patch of a scan, "
             "docs/physics.md §8.7); solve with method tree where that matters."
         )
-    return error, checked
+    return {"checked_p99": error, "checked_outliers": outliers}
 
 
 def relight_plan(size: float, counts: dict, memory_limit, time_limit) -> budget.SolveEstimate:
