@@ -55,7 +55,7 @@ def test_the_window_shows_the_scan_solved_and_says_how(window):
     state = window.state
     assert state.method == "relight" and state.result.stats["solver_vertices"] == 642
     status = window.panel.status.text()
-    assert "marble" in status and "relight" in status and "tolerance 0.1" in status and "last frame" in status
+    assert "marble" in status and "relight" in status and "tolerance 0.01" in status and "last frame" in status
     assert "sphere.ply" in window.windowTitle() and "marble" in window.windowTitle()
     image = window.screenshot()
     height, width = image.shape[:2]

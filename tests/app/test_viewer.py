@@ -73,7 +73,7 @@ def test_interactive_edge_gives_about_the_vertex_budget(sphere):
 @needs_display
 def test_light_slider_solves_again_and_updates_colours_and_status(viewer, sphere):
     before, status = colors(viewer), viewer.status
-    assert viewer.n_solves == 1 and "marble" in viewer.status and "relight, tolerance 0.1" in viewer.status
+    assert viewer.n_solves == 1 and "marble" in viewer.status and "relight, tolerance 0.01" in viewer.status
     assert "operators prepared in" in viewer.status
     # every vertex, relit: the operators are prepared once and every move of a slider reuses them
     assert viewer.result.stats["solver_vertices"] == viewer.result.stats["vertices"]

@@ -534,8 +534,8 @@ def _add_view_and_compare_parsers(sub) -> None:
         "show a scan as a translucent object, with controls that solve again",
         "Open the desktop viewer: the scan in a window with a side panel (material, model, tolerance, light, "
         "exposure, false colour), a light you drag in the view, File menu, and h for the keys. Here --method defaults "
-        "to relight at --tol 0.1 (operators prepared once, then every light on every vertex; tree at 0.01 "
-        "with --screenshot, one picture) and --resolution to 'interactive': every vertex with relight, a "
+        "to relight (operators prepared once, then every light on every vertex; tree with --screenshot, one "
+        "picture) and --resolution to 'interactive': every vertex with relight, a "
         "proxy of about 7,500 vertices otherwise.",
     )
     from ..scatter.names import DEFAULT_METHOD, DEFAULT_TOL
@@ -548,7 +548,9 @@ def _add_view_and_compare_parsers(sub) -> None:
     for action in p._actions:
         if action.dest in own and action.help:
             viewer, screenshot = own[action.dest]
-            action.help = action.help.rsplit(" (default", 1)[0] + f" (default {viewer}; {screenshot} with --screenshot)"
+            if viewer != screenshot:
+                default = f" (default {viewer}; {screenshot} with --screenshot)"
+                action.help = action.help.rsplit(" (default", 1)[0] + default
     p.add_argument("--screenshot", metavar="FILE.png", help="render the first picture off-screen to FILE.png and exit")
     p.add_argument("--view-dependent", action="store_true", help="show T21(eta, n.w_o) B toward the camera")
     p.add_argument("--specular", action="store_true", help="add the boundary's specular highlight (GGX)")

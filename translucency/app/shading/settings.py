@@ -63,10 +63,11 @@ DEFAULT_TIME_LIMIT_S = 300.0
 #: scan whose up is +y (the default bunny) this is the direction in the scan's own coordinates too.
 DEFAULT_LIGHT_DIRECTION = (0.35, 1.0, 0.45)
 #: The viewer's own method and tolerance: relighting operators (docs/physics.md §8.7), prepared once per material,
-#: model and tolerance on every vertex, then a new light is one pass over them; their size and speed against the
-#: tolerance are in bench/README.md, "Relighting".
+#: model and tolerance on every vertex, then a new light is one pass over them, at the default tolerance (a proxy
+#: where the operators would not fit the memory budget); their size and speed against the tolerance are in
+#: bench/README.md, "Relighting".
 VIEWER_METHOD = "relight"
-VIEWER_TOL = 0.1
+VIEWER_TOL = DEFAULT_TOL
 
 
 #: The named resolutions (besides a proxy edge length in mm).
