@@ -526,11 +526,11 @@ def _checked_against_tree(work, B, tol) -> dict:
     """``{"checked_p99": ..., "checked_outliers": ...}``: the per-vertex error (docs/physics.md §8.5) of relit ``B``
     (rows of ``work.inner``) against ``tree`` at ``tol / RELIGHT_CHECK_TOL_FACTOR`` for the same light, and how
     many vertices are more than :data:`RELIGHT_OUTLIER_TOLS` ``tol`` off; a warning (one sentence) when the error
-    is above ``tol``:
-    the direction fits of §8.7 follow ``S_d`` less closely for some materials (low albedo) than ``tol``
-    asks. Where it holds, a warning too when there are such vertices (below :data:`TOL_FLOOR` of the largest
-    ``B``, relative to that floor): where a scan's normals turn against each other within a mean free path, the
-    fits miss a few vertices by tens of percent."""
+    is above ``tol``: the direction fits of §8.7 follow ``S_d`` less closely for some materials (low albedo) than
+    ``tol`` asks, and on large scans the far field's large blocks miss the darkest vertices (§8.9). Where it holds,
+    a warning too when there are such vertices (below :data:`TOL_FLOOR` of the largest ``B``, relative to that
+    floor): where a scan's normals turn against each other within a mean free path, the fits miss a few vertices by
+    tens of percent."""
     reference = solve(
         work.geometry,
         work.phi,
@@ -554,7 +554,8 @@ def _checked_against_tree(work, B, tol) -> dict:
         warn_user(
             f"{work.medium.name}: the relighting operators are {100 * error:.2g} % off a tree solve of the first "
             f"light at the 99th percentile, over the tolerance of {100 * tol:.2g} % (their fit to the refracted "
-            "direction, docs/physics.md §8.7); solve with method tree where that matters."
+            "direction, docs/physics.md §8.7, or their far field at dark vertices, §8.9); solve with method tree "
+            "where that matters."
         )
     elif outliers:
         warn_user(
