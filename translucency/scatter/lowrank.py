@@ -479,23 +479,35 @@ def _apply_dense(worker, lo, hi, blocks, D, values, lit_before, out):
                 target[r0 + a, c] += s
 
 
-def _fixed_point(A: np.ndarray, step, out: np.ndarray) -> None:
-    """``A`` as int16 multiples of ``step`` (a number, or one per row as a column), at most :data:`FIXED_STEPS`
-    of them either way, written to ``out``."""
-    out[...] = np.clip(np.rint(A / step), -FIXED_STEPS, FIXED_STEPS)
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _steps(x):
+    """``x`` rounded to the nearest whole step (halves to even), at most :data:`FIXED_STEPS` either way, as int16."""
+    return np.int16(min(max(np.rint(x), -FIXED_STEPS), FIXED_STEPS))
 
 
-def _rows_fixed_point(A: np.ndarray, out: np.ndarray, scales: np.ndarray) -> None:
-    """``A (rows, columns)`` as int16 steps of one float32 scale per row, its largest entry :data:`FIXED_STEPS`
-    steps: the steps written to ``out``, the scales to ``scales``."""
-    scale = (np.abs(A).max(axis=1, initial=0.0) / FIXED_STEPS).astype(np.float32)
-    scales[...] = scale
-    _fixed_point(A, np.where(scale > 0.0, scale, 1.0)[:, None], out)
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _fixed_point(U, V, crosses, scales, V_out):
+    """One block's crosses in 16-bit fixed point: ``U (rows, k)`` as steps of one float32 scale per row (its largest
+    entry :data:`FIXED_STEPS` steps) written a cross at a time to ``crosses (k, rows)``, the scales to ``scales``;
+    ``V (k, columns)`` (in [-1, 1]) as steps of :data:`V_STEP` to ``V_out (k, columns)``."""
+    m, k = U.shape
+    for a in range(m):
+        largest = 0.0
+        for q in range(k):
+            largest = max(largest, abs(U[a, q]))
+        scale = np.float32(largest / FIXED_STEPS)
+        scales[a] = scale
+        step = np.float64(scale) if scale > 0.0 else 1.0
+        for q in range(k):
+            crosses[q, a] = _steps(U[a, q] / step)
+    for q in range(k):
+        for j in range(V.shape[1]):
+            V_out[q, j] = _steps(V[q, j] / V_STEP)
 
 
 class _CrossStore:
     """The crosses of every block, written once into three arrays as they are found: ``U`` and ``V`` int16, ``U``'s
-    row scales float32 (:func:`_rows_fixed_point`).
+    row scales float32 (:func:`_fixed_point`).
 
     Each array is reserved larger than it is likely to need and cut to what was used at the end; memory is given
     to a page only when it is first written, so what is reserved and never written costs nothing, and nothing is
@@ -521,8 +533,7 @@ class _CrossStore:
             self.V = _room(self.V, v_at + V.size)
             self.S = _room(self.S, s_at + U.shape[0])
             crosses = self.U[u_at : u_at + U.size].reshape(U.shape[1], U.shape[0])  # a cross at a time
-            _rows_fixed_point(U, crosses.T, self.S[s_at : s_at + U.shape[0]])
-            _fixed_point(V, V_STEP, self.V[v_at : v_at + V.size].reshape(V.shape))
+            _fixed_point(U, V, crosses, self.S[s_at : s_at + U.shape[0]], self.V[v_at : v_at + V.size].reshape(V.shape))
             self.u_at += U.size
             self.v_at += V.size
             self.s_at += U.shape[0]
@@ -749,6 +760,7 @@ def _crosses(model, tree, P, N, params, dirs, pinv, eps, channel_bound, far_pair
 LOW_RANK_KERNELS = (
     _partition,
     _cross,
+    _fixed_point,
     _fill_dense,
     _tree_ordered,
     _entries_of,
