@@ -310,6 +310,22 @@ def test_the_status_names_the_method_that_solved_what_is_shown(sphere):
     assert "tree, tolerance 0.1" in state.status
 
 
+def test_the_status_says_when_relighting_gave_way_to_tree(sphere):
+    """An index of refraction of 1, where the operators' fits to the refracted direction fail: every light is
+    solved by tree, and the status says so (the warning says why)."""
+    from translucency.errors import TranslucencyWarning
+    from translucency.scatter.materials import material
+    from translucency.scatter.medium import Medium
+
+    marble = material("marble").medium()
+    matched = Medium(marble.sigma_a, marble.sigma_s, marble.g, 1.0, "index-matched marble")
+    with pytest.warns(TranslucencyWarning, match="solved by tree instead"):
+        state = ViewerState(sphere, matched, bounces=0)
+    assert "relight, tolerance 0.01" in state.status and "by tree: the operators missed it" in state.status
+    state.set_light(-40.0, 20.0)
+    assert "by tree: the operators missed it" in state.status
+
+
 def test_a_frame_while_the_light_moves_leaves_the_bounce_out_and_the_next_solves_it_whole(sphere):
     from translucency.scatter.lights import DirectionalLight
 

@@ -257,6 +257,50 @@ def test_fresh_operators_check_their_first_light_and_say_when_the_direction_fit_
         solve(*_lit(mesh, geometry, ketchup), ketchup, method="relight", tol=0.01)
 
 
+def _index_matched_sphere():
+    """A 20 mm marble sphere of 642 vertices with an index of refraction of 1 (the refracted directions fill the
+    hemisphere, where the fits of S_d to them fail, docs/physics.md §8.7): geometry and medium."""
+    from translucency.scatter.medium import Medium
+
+    marble = material("marble").medium()
+    medium = Medium(marble.sigma_a, marble.sigma_s, marble.g, 1.0, "index-matched marble")
+    points, triangles = icosphere(3, 10.0)
+    return SurfaceGeometry(points, triangles, vertex_normals(points, triangles)), medium
+
+
+def _lit_without_shadows(geometry, medium, light):
+    """``phi, w12`` of a unit directional ``light`` on ``geometry`` without shadows."""
+    light = np.asarray(light, dtype=float) / np.linalg.norm(light)
+    cos = geometry.normals @ light
+    phi = np.where(cos > 0.0, fresnel_transmittance(np.clip(cos, 0.0, 1.0), medium.eta) * cos, 0.0)
+    w12 = refract(np.broadcast_to(light, geometry.normals.shape), geometry.normals, medium.eta)
+    return np.repeat(phi[:, None], 3, axis=1), w12
+
+
+def test_operators_far_off_their_first_light_give_way_to_tree_and_say_so():
+    """Operators whose first light is ten times tol or more off tree are not kept: that light's answer is the
+    check's tree solve, every later light is solved by tree (within tol of exact), and one sentence says so."""
+    from translucency.errors import TranslucencyWarning
+
+    geometry, medium = _index_matched_sphere()
+    for k, light in enumerate([(0.0, 0.0, 1.0), (0.6, 0.0, 0.8)]):
+        phi, w12 = _lit_without_shadows(geometry, medium, light)
+        if k == 0:
+            with pytest.warns(TranslucencyWarning, match=r"off a tree solve .* every light of this surface and mat"):
+                relit = solve(geometry, phi, w12, medium, method="relight", tol=0.01)
+            assert relit.stats["checked_p99"] >= 0.1 and not relit.stats["operators_reused"]
+            held = kept_operator(spatial_order(geometry)[0])
+            assert type(held).__name__ == "TreeInstead" and held.nbytes == 0
+        else:  # a later light: tree's answer, nothing prepared again
+            relit = solve(geometry, phi, w12, medium, method="relight", tol=0.01)
+            assert relit.stats["operators_reused"]
+            tree = solve(geometry, phi, w12, medium, method="tree", tol=0.01).B
+            np.testing.assert_allclose(relit.B, tree, rtol=1e-12, atol=0.0)
+        assert relit.stats["relight_fallback"] == "tree"
+        exact = solve(geometry, phi, w12, medium, method="exact").B
+        assert np.percentile(_per_vertex_error(relit.B, exact), 99) <= 0.01
+
+
 def _crumpled_sphere(crumpled):
     """A 20 mm sphere of 10,242 vertices (edges of about 0.75 mm) lit from above: with ``crumpled``, half of the
     vertices of a patch at its top (drawn at random) have their normals turned by 120 degrees, as on a crumpled

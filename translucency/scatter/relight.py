@@ -53,6 +53,7 @@ from .surface import PerSurface
 __all__ = [
     "RELIGHT_KERNELS",
     "RelightOperator",
+    "TreeInstead",
     "prepare",
     "operator_bytes",
     "kept_operator",
@@ -161,6 +162,33 @@ class RelightOperator:
         return np.maximum(B, 0.0)
 
 
+@dataclass
+class TreeInstead:
+    """What a surface keeps in place of operators whose first light was :data:`FALLBACK_TOLS` ``tol`` or more off a
+    ``tree`` solve of it (where the fits to the refracted direction of docs/physics.md §8.7 fail: an index of
+    refraction of 1, a surface far smaller than a mean free path): the key they were made for and their statistics.
+    Every light of that key is then solved by ``tree``; the operators' memory is given back.
+
+    Attributes
+    ----------
+    key : tuple
+        What the operators were made for (:func:`operator_key`).
+    stats : dict
+        Their statistics, with the first light's check (``checked_p99``, ...) and ``bytes`` 0.
+    nbytes : int
+        Memory held, bytes: none.
+    """
+
+    key: tuple
+    stats: dict
+    nbytes: int = 0
+
+
+#: Operators whose first light is this many ``tol`` or more off ``tree`` at the 99th percentile are not kept: a
+#: relit light is then solved by ``tree`` (:class:`TreeInstead`).
+FALLBACK_TOLS = 10.0
+
+
 def operator_key(medium, model: str, tol: float) -> tuple:
     """What an operator depends on besides the surface: the medium's coefficients, the model, the tolerance."""
     return (
@@ -176,13 +204,13 @@ def operator_key(medium, model: str, tol: float) -> tuple:
 _OPERATORS = PerSurface("relighting operators", counted=False)
 
 
-def kept_operator(surface) -> RelightOperator | None:
+def kept_operator(surface) -> RelightOperator | TreeInstead | None:
     """The operators kept for ``surface`` (the solver's spatially ordered surface), or None: relighting keeps one
     set per surface (:func:`translucency.scatter.solve.relight_operator` makes them)."""
     return _OPERATORS.peek(surface, "operator")
 
 
-def keep_operator(surface, operator: RelightOperator) -> None:
+def keep_operator(surface, operator: RelightOperator | TreeInstead) -> None:
     """Keep ``operator`` for ``surface`` (instead of any set kept before)."""
     _OPERATORS.drop(surface)
     _OPERATORS.get(surface, "operator", lambda: operator)

@@ -491,7 +491,11 @@ def relight_operator(
 
 def _relit(work, receivers, tol, memory_limit, time_limit, report, stats, timings) -> Solution:
     """Method ``relight``: the surface's prepared operators (made on first use, kept for later calls with the
-    same medium, model and ``tol``) applied to this light; nothing is prepared when no light enters."""
+    same medium, model and ``tol``) applied to this light; nothing is prepared when no light enters. Operators whose
+    first light is far off ``tree`` are not kept, and that light and every later one are solved by ``tree``
+    (:class:`~translucency.scatter.relight.TreeInstead`)."""
+    from . import relight
+
     settings = {"model": work.model, "method": "relight", "tol": tol, "medium": work.medium.describe()}
     stats["pairs_skipped"] = 0
     if work.lit.size == 0:
@@ -503,17 +507,45 @@ def _relit(work, receivers, tol, memory_limit, time_limit, report, stats, timing
     )
     timings["prepare"] = 0.0 if reused else time.perf_counter() - start
     start = time.perf_counter()
-    B = operator.apply(work.geometry.vertex_areas, work.phi, work.w12)[work.inner]
+    if isinstance(operator, relight.TreeInstead):
+        solved = _tree_of(work, tol, memory_limit, time_limit, report)
+        B = solved.B
+        stats.update({"relight_fallback": "tree", "pairs_evaluated": solved.stats["pairs_evaluated"]})
+    else:
+        B = operator.apply(work.geometry.vertex_areas, work.phi, work.w12)[work.inner]
+        stats["pairs_evaluated"] = operator.stats["far_entries"] + operator.stats["near_entries"]
     timings["apply"] = time.perf_counter() - start
     if not reused:  # the operators' first light, checked against a tree solve of it (once per preparation)
         start = time.perf_counter()
-        operator.stats.update(_checked_against_tree(work, B, tol))
+        reference = _tree_of(work, tol / RELIGHT_CHECK_TOL_FACTOR, None, None, None).B
+        operator.stats.update(_relight_error(B, reference, tol))
         timings["check"] = time.perf_counter() - start
+        if operator.stats["checked_p99"] >= relight.FALLBACK_TOLS * tol:
+            relight.keep_operator(work.geometry, relight.TreeInstead(operator.key, {**operator.stats, "bytes": 0}))
+            B = reference
+            stats["relight_fallback"] = "tree"
+        _warn_relight_check(work.medium.name, operator.stats, tol, work.inner.size)
     stats.update(operator.stats)
     stats["operators_reused"] = reused
-    stats["pairs_evaluated"] = operator.stats["far_entries"] + operator.stats["near_entries"]
     B = _assembled(B, np.zeros_like(B), work.visit, stats)
     return Solution(B=B, receivers=receivers, stats=stats, timings=timings, settings=settings)
+
+
+def _tree_of(work, tol, memory_limit, time_limit, progress) -> Solution:
+    """``tree`` at ``tol`` for the light and receivers of ``work`` (rows in ``work.inner``'s order)."""
+    return solve(
+        work.geometry,
+        work.phi,
+        work.w12,
+        work.medium,
+        model=work.model,
+        method="tree",
+        tol=tol,
+        receivers=work.inner,
+        progress=progress,
+        memory_limit=memory_limit,
+        time_limit=time_limit,
+    )
 
 
 #: The check of freshly prepared relighting operators solves their first light by ``tree`` at ``tol`` over this.
@@ -522,49 +554,57 @@ RELIGHT_CHECK_TOL_FACTOR = 4.0
 RELIGHT_OUTLIER_TOLS = 10.0
 
 
-def _checked_against_tree(work, B, tol) -> dict:
+def _relight_error(B, reference, tol) -> dict:
     """``{"checked_p99": ..., "checked_outliers": ...}``: the per-vertex error (docs/physics.md §8.5) of relit ``B``
-    (rows of ``work.inner``) against ``tree`` at ``tol / RELIGHT_CHECK_TOL_FACTOR`` for the same light, and how
-    many vertices are more than :data:`RELIGHT_OUTLIER_TOLS` ``tol`` off; a warning (one sentence) when the error
-    is above ``tol``: the direction fits of §8.7 follow ``S_d`` less closely for some materials (low albedo) than
-    ``tol`` asks, and on large scans the far field's large blocks miss the darkest vertices (§8.9). Where it holds,
-    a warning too when there are such vertices (below :data:`TOL_FLOOR` of the largest ``B``, relative to that
-    floor): where a scan's normals turn against each other within a mean free path, the fits miss a few vertices by
-    tens of percent."""
-    reference = solve(
-        work.geometry,
-        work.phi,
-        work.w12,
-        work.medium,
-        model=work.model,
-        method="tree",
-        tol=tol / RELIGHT_CHECK_TOL_FACTOR,
-        receivers=work.inner,
-    ).B
+    against ``reference`` (``tree`` at ``tol / RELIGHT_CHECK_TOL_FACTOR`` for the same light and receivers), and how
+    many vertices are more than :data:`RELIGHT_OUTLIER_TOLS` ``tol`` off it (below :data:`TOL_FLOOR` of the largest
+    ``B``, relative to that floor)."""
     floor = TOL_FLOOR * reference.max(axis=0)
     keep = reference >= floor
     if not np.any(keep):
-        return {"checked_p99": 0.0, "checked_outliers": 0}
+        return {"checked_p99": 0.0, "checked_outliers": 0, "checked_worst": 0.0}
     # relative to B, and below the floor relative to the floor (the absolute error tol allows there)
     relative = np.abs(B - reference) / np.maximum(reference, np.where(floor > 0, floor, 1.0))
-    error = float(np.percentile(relative[keep], 99))
     worst = relative.max(axis=1)
-    outliers = int(np.count_nonzero(worst > RELIGHT_OUTLIER_TOLS * tol))
-    if error > tol:
+    return {
+        "checked_p99": float(np.percentile(relative[keep], 99)),
+        "checked_outliers": int(np.count_nonzero(worst > RELIGHT_OUTLIER_TOLS * tol)),
+        "checked_worst": float(worst.max()),
+    }
+
+
+def _warn_relight_check(name: str, checked: dict, tol: float, vertices: int) -> None:
+    """One sentence on the first light's check (:func:`_relight_error`) where it found what ``tol`` does not hold:
+    the operators given up for ``tree`` (:data:`~translucency.scatter.relight.FALLBACK_TOLS` ``tol`` off or more),
+    off at the 99th percentile (the direction fits of §8.7 follow ``S_d`` less closely for some materials, low
+    albedo, than ``tol`` asks, and on large scans the far field's large blocks miss the darkest vertices, §8.9), or
+    a few vertices far off while the percentile holds (where a scan's normals turn against each other within a mean
+    free path)."""
+    from .relight import FALLBACK_TOLS
+
+    error = checked["checked_p99"]
+    if error >= FALLBACK_TOLS * tol:
+        percent = f"{100 * error:,.0f}" if error >= 0.1 else f"{100 * error:.2g}"
         warn_user(
-            f"{work.medium.name}: the relighting operators are {100 * error:.2g} % off a tree solve of the first "
-            f"light at the 99th percentile, over the tolerance of {100 * tol:.2g} % (their fit to the refracted "
-            "direction, docs/physics.md §8.7, or their far field at dark vertices, §8.9); solve with method tree "
-            "where that matters."
+            f"{name}: the relighting operators are {percent} % off a tree solve of the first light at the "
+            f"99th percentile, {FALLBACK_TOLS:g} times the tolerance of {100 * tol:.2g} % or more (their fit to the "
+            "refracted direction, docs/physics.md §8.7, fails here: an index of refraction near 1, or a surface "
+            "smaller than a mean free path); every light of this surface and material is solved by tree instead."
         )
-    elif outliers:
+    elif error > tol:
         warn_user(
-            f"{work.medium.name}: the relighting operators are up to {100 * float(worst.max()):.0f} % off a tree "
-            f"solve of the first light at {outliers} of {worst.size} vertices (their fit to the refracted direction "
-            "misses where neighbouring normals turn against each other, as on a crumpled patch of a scan, "
+            f"{name}: the relighting operators are {100 * error:.2g} % off a tree solve of the first light at the "
+            f"99th percentile, over the tolerance of {100 * tol:.2g} % (their fit to the refracted direction, "
+            "docs/physics.md §8.7, or their far field at dark vertices, §8.9); solve with method tree where that "
+            "matters."
+        )
+    elif checked["checked_outliers"]:
+        warn_user(
+            f"{name}: the relighting operators are up to {100 * checked['checked_worst']:.0f} % off a tree solve of "
+            f"the first light at {checked['checked_outliers']} of {vertices} vertices (their fit to the refracted "
+            "direction misses where neighbouring normals turn against each other, as on a crumpled patch of a scan, "
             "docs/physics.md §8.7); solve with method tree where that matters."
         )
-    return {"checked_p99": error, "checked_outliers": outliers}
 
 
 def relight_plan(size: float, counts: dict, memory_limit, time_limit) -> budget.SolveEstimate:
