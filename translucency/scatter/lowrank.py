@@ -494,7 +494,9 @@ def _fixed_point(U, V, crosses, scales, V_out):
     for a in range(m):
         largest = 0.0
         for q in range(k):
-            largest = max(largest, abs(U[a, q]))
+            size = abs(U[a, q])
+            if size > largest or size != size:  # a NaN stays, as it would in numpy's max: B shows it
+                largest = size
         scale = np.float32(largest / FIXED_STEPS)
         scales[a] = scale
         step = np.float64(scale) if scale > 0.0 else 1.0

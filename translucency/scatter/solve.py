@@ -465,7 +465,9 @@ def relight_operator(
     geometry: SurfaceGeometry, medium, model, tol, *, memory_limit=None, time_limit=None, progress=None
 ):
     """The relighting operators of ``geometry`` (the spatially ordered surface) for the medium, model and ``tol``
-    (:func:`translucency.scatter.relight.prepare`): ``(operator, reused)``. Relighting keeps one set per surface
+    (:func:`translucency.scatter.relight.prepare`): ``(operator, reused)``, the operator a
+    :class:`~translucency.scatter.relight.TreeInstead` where a first light found them far off. Relighting keeps one
+    set per surface
     (:func:`translucency.scatter.relight.kept_operator`): another medium, model or ``tol`` replaces it (its memory
     is freed before the new one is made).
 
@@ -500,6 +502,9 @@ def _relit(work, receivers, tol, memory_limit, time_limit, report, stats, timing
     stats["pairs_skipped"] = 0
     if work.lit.size == 0:
         stats["pairs_evaluated"] = 0
+        held = relight.kept_operator(work.geometry)
+        if isinstance(held, relight.TreeInstead) and held.key == relight.operator_key(work.medium, work.model, tol):
+            stats["relight_fallback"] = "tree"
         return Solution(np.zeros((work.inner.size, work.medium.n_channels)), receivers, stats, timings, settings)
     start = time.perf_counter()
     operator, reused = relight_operator(
@@ -510,22 +515,24 @@ def _relit(work, receivers, tol, memory_limit, time_limit, report, stats, timing
     if isinstance(operator, relight.TreeInstead):
         solved = _tree_of(work, tol, memory_limit, time_limit, report)
         B = solved.B
-        stats.update({"relight_fallback": "tree", "pairs_evaluated": solved.stats["pairs_evaluated"]})
+        pairs = {"relight_fallback": "tree", "pairs_evaluated": solved.stats["pairs_evaluated"]}
     else:
         B = operator.apply(work.geometry.vertex_areas, work.phi, work.w12)[work.inner]
-        stats["pairs_evaluated"] = operator.stats["far_entries"] + operator.stats["near_entries"]
+        pairs = {"pairs_evaluated": operator.stats["far_entries"] + operator.stats["near_entries"]}
     timings["apply"] = time.perf_counter() - start
     if not reused:  # the operators' first light, checked against a tree solve of it (once per preparation)
         start = time.perf_counter()
-        reference = _tree_of(work, tol / RELIGHT_CHECK_TOL_FACTOR, None, None, None).B
-        operator.stats.update(_relight_error(B, reference, tol))
+        checked = _tree_of(work, tol / RELIGHT_CHECK_TOL_FACTOR, None, None, None)
+        operator.stats.update(_relight_error(B, checked.B, tol))
         timings["check"] = time.perf_counter() - start
-        if operator.stats["checked_p99"] >= relight.FALLBACK_TOLS * tol:
-            relight.keep_operator(work.geometry, relight.TreeInstead(operator.key, {**operator.stats, "bytes": 0}))
-            B = reference
-            stats["relight_fallback"] = "tree"
+        if operator.stats["checked_p99"] >= relight.FALLBACK_TOLS * tol:  # the check's answer; nothing is kept
+            operator.stats["bytes"] = 0
+            relight.keep_operator(work.geometry, relight.TreeInstead(operator.key, dict(operator.stats)))
+            B = checked.B
+            pairs = {"relight_fallback": "tree", "pairs_evaluated": checked.stats["pairs_evaluated"]}
         _warn_relight_check(work.medium.name, operator.stats, tol, work.inner.size)
     stats.update(operator.stats)
+    stats.update(pairs)
     stats["operators_reused"] = reused
     B = _assembled(B, np.zeros_like(B), work.visit, stats)
     return Solution(B=B, receivers=receivers, stats=stats, timings=timings, settings=settings)
@@ -555,10 +562,10 @@ RELIGHT_OUTLIER_TOLS = 10.0
 
 
 def _relight_error(B, reference, tol) -> dict:
-    """``{"checked_p99": ..., "checked_outliers": ...}``: the per-vertex error (docs/physics.md §8.5) of relit ``B``
-    against ``reference`` (``tree`` at ``tol / RELIGHT_CHECK_TOL_FACTOR`` for the same light and receivers), and how
-    many vertices are more than :data:`RELIGHT_OUTLIER_TOLS` ``tol`` off it (below :data:`TOL_FLOOR` of the largest
-    ``B``, relative to that floor)."""
+    """``{"checked_p99", "checked_outliers", "checked_worst"}``: the per-vertex error (docs/physics.md §8.5) of relit
+    ``B`` against ``reference`` (``tree`` at ``tol / RELIGHT_CHECK_TOL_FACTOR`` for the same light and receivers) at the
+    99th percentile, how many vertices are more than :data:`RELIGHT_OUTLIER_TOLS` ``tol`` off it, and the largest
+    error (below :data:`TOL_FLOOR` of the largest ``B``, relative to that floor)."""
     floor = TOL_FLOOR * reference.max(axis=0)
     keep = reference >= floor
     if not np.any(keep):

@@ -26,7 +26,8 @@ environment sample (GGX, roughness ``alpha``, with the solve's shadows; point li
 Interactive resolution. By default (:data:`VIEWER_METHOD`, :data:`VIEWER_TOL`) every change relights every
 vertex with the operators the ``Scene``'s surface keeps (prepared on the first solve and after a change of
 material or model, with a note in the status while that runs; a proxy only where they would not fit the
-memory budget). With another method, every change re-solves on the one ``Scene`` (geometry, Embree scene and
+memory budget; by ``tree`` on every vertex where their first light was far off, as the status says). With
+another method, every change re-solves on the one ``Scene`` (geometry, Embree scene and
 visibility are reused) on a proxy of about :data:`INTERACTIVE_VERTICES` vertices
 (:func:`interactive_edge_length`), interpolated back to every vertex: small enough to answer in a
 fraction of a second, fine enough that the error stays at a few percent away from the shadow
