@@ -26,6 +26,7 @@ its name from the file.
 from __future__ import annotations
 
 import dataclasses
+import functools
 from collections.abc import Mapping
 from pathlib import Path
 from types import MappingProxyType
@@ -192,9 +193,9 @@ class TriangleMesh:
         low, high = self.bounds
         return float(np.max(high - low))
 
-    @property
+    @functools.cached_property
     def surface_area(self) -> float:
-        """Total area of the triangles, in mm²."""
+        """Total area of the triangles, in mm² (computed once: the mesh is immutable)."""
         return float(triangle_areas(self.points, self.triangles).sum())
 
     # --- per-vertex geometry -------------------------------------------------------------------------

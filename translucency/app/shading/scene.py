@@ -14,6 +14,8 @@ from __future__ import annotations
 import dataclasses
 import time
 
+import numpy as np
+
 from ...errors import BudgetError, InvalidParameterError
 from ...geometry.measure import mean_edge_length
 from ...scatter import transport
@@ -130,7 +132,8 @@ class Scene:
     def full_normals(self):
         """The full mesh's unit vertex normals, computed once (the solver's at full resolution and the result's)."""
         if self._normals is None:
-            self._normals = self.mesh.vertex_normals()
+            # an array of its own (numba's own memory is not), read-only: the light's cache key hashes it once
+            self._normals = np.array(self.mesh.vertex_normals())
             self._normals.flags.writeable = False  # shared with the full-resolution surface and the light's cache key
         return self._normals
 
