@@ -314,6 +314,7 @@ def test_the_status_says_when_relighting_gave_way_to_tree(sphere):
     """An index of refraction of 1, where the operators' fits to the refracted direction fail: every light is
     solved by tree, and the status says so (the warning says why)."""
     from translucency.errors import TranslucencyWarning
+    from translucency.scatter.lights import DirectionalLight
     from translucency.scatter.materials import material
     from translucency.scatter.medium import Medium
 
@@ -324,6 +325,11 @@ def test_the_status_says_when_relighting_gave_way_to_tree(sphere):
     assert "relight, tolerance 0.01" in state.status and "by tree: the operators missed it" in state.status
     state.set_light(-40.0, 20.0)
     assert "by tree: the operators missed it" in state.status
+    # two lights summed apart (per direction): several solves, and the status still says so
+    lights = [DirectionalLight((0.0, 1.0, 0.2), 1.0), DirectionalLight((1.0, 0.0, 0.5), 1.0)]
+    with pytest.warns(TranslucencyWarning, match="solved by tree instead"):
+        many = ViewerState(sphere, matched, lights=lights, bounces=0, per_direction=True)
+    assert many.result.stats["solver"]["solves"] == 2 and "by tree: the operators missed it" in many.status
 
 
 def test_a_frame_while_the_light_moves_leaves_the_bounce_out_and_the_next_solves_it_whole(sphere):

@@ -126,11 +126,14 @@ class Transport:
 
     @property
     def solver_stats(self) -> dict:
-        """The first solve's statistics; for several solves their count and summed pairs and points."""
+        """The first solve's statistics; for several solves their count, summed pairs and points, and whether
+        relighting gave way to ``tree`` in any (``relight_fallback``)."""
         if len(self.solutions) == 1:
             return self.solutions[0].stats
         summed = ("pairs_evaluated", "pairs_skipped", "near_points")
-        return {"solves": len(self.solutions), **{k: sum(s.stats.get(k, 0) for s in self.solutions) for k in summed}}
+        stats = {"solves": len(self.solutions), **{k: sum(s.stats.get(k, 0) for s in self.solutions) for k in summed}}
+        fallback = next((s.stats["relight_fallback"] for s in self.solutions if "relight_fallback" in s.stats), None)
+        return stats if fallback is None else {**stats, "relight_fallback": fallback}
 
     @property
     def operators_reused(self) -> bool:
