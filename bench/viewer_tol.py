@@ -36,10 +36,9 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from relight import MESHES, SCANS, load  # noqa: E402  (the relighting benchmark's scans, loaded its way)
 from report import load_average, machine_info, output_dir, write_results  # noqa: E402
 
-MESHES = ROOT.parent / "shared" / "meshes"
-SCANS = {"bunny (default)": None, "horse": "cyberware_horse.ply", "igea": "cyberware_igea.ply"}
 TOLS = (0.1, 0.01)
 #: Azimuths of the frames (degrees around the scan's up), at an elevation of 30 degrees.
 AZIMUTHS = tuple(range(0, 360, 30))
@@ -47,14 +46,10 @@ AZIMUTHS = tuple(range(0, 360, 30))
 
 def row(scan: str, tol: float) -> dict:
     """One (scan, tol): the viewer's waits, measured in this process."""
-    from translucency import __version__  # noqa: F401  (first: it selects numba's threading layer)
-    from translucency.app.shading.scan import load_default_scan
     from translucency.app.viewer.state import ViewerState
     from translucency.errors import TranslucencyWarning
-    from translucency.io.clean import clean_mesh
-    from translucency.io.load import load_mesh
 
-    mesh = load_default_scan() if SCANS[scan] is None else clean_mesh(load_mesh(MESHES / SCANS[scan], unit="m"))[0]
+    mesh = load(scan)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", TranslucencyWarning)
         start = time.perf_counter()

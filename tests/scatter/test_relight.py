@@ -319,11 +319,8 @@ def _crumpled_sphere(crumpled):
         angle = np.radians(120.0)
         turn = np.array([[1.0, 0.0, 0.0], [0.0, np.cos(angle), -np.sin(angle)], [0.0, np.sin(angle), np.cos(angle)]])
         normals[turned] = normals[turned] @ turn.T
-    light = np.array([0.3, 0.2, 1.0]) / np.linalg.norm([0.3, 0.2, 1.0])
-    cos = normals @ light
-    phi = np.where(cos > 0.0, fresnel_transmittance(np.clip(cos, 0.0, 1.0), MARBLE.eta) * cos, 0.0)
-    w12 = refract(np.broadcast_to(light, normals.shape), normals, MARBLE.eta)
-    return SurfaceGeometry(points, triangles, normals), np.repeat(phi[:, None], 3, axis=1), w12
+    geometry = SurfaceGeometry(points, triangles, normals)
+    return geometry, *_lit_without_shadows(geometry, MARBLE, (0.3, 0.2, 1.0))
 
 
 @pytest.mark.slow

@@ -204,10 +204,12 @@ def operator_key(medium, model: str, tol: float) -> tuple:
 _OPERATORS = PerSurface("relighting operators", counted=False)
 
 
-def kept_operator(surface) -> RelightOperator | TreeInstead | None:
-    """The operators kept for ``surface`` (the solver's spatially ordered surface), or None: relighting keeps one
-    set per surface (:func:`translucency.scatter.solve.relight_operator` makes them)."""
-    return _OPERATORS.peek(surface, "operator")
+def kept_operator(surface, key: tuple | None = None) -> RelightOperator | TreeInstead | None:
+    """The operators kept for ``surface`` (the solver's spatially ordered surface), or None (also where ``key``, of
+    :func:`operator_key`, is given and they were made for another): relighting keeps one set per surface
+    (:func:`translucency.scatter.solve.relight_operator` makes them)."""
+    held = _OPERATORS.peek(surface, "operator")
+    return None if held is None or (key is not None and held.key != key) else held
 
 
 def keep_operator(surface, operator: RelightOperator | TreeInstead) -> None:

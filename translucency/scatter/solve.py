@@ -467,20 +467,17 @@ def relight_operator(
     """The relighting operators of ``geometry`` (the spatially ordered surface) for the medium, model and ``tol``
     (:func:`translucency.scatter.relight.prepare`): ``(operator, reused)``, the operator a
     :class:`~translucency.scatter.relight.TreeInstead` where a first light found them far off. Relighting keeps one
-    set per surface
-    (:func:`translucency.scatter.relight.kept_operator`): another medium, model or ``tol`` replaces it (its memory
-    is freed before the new one is made).
+    set per surface (:func:`translucency.scatter.relight.kept_operator`): another medium, model or ``tol`` replaces
+    it (its memory is freed before the new one is made).
 
     Raises :class:`~translucency.errors.BudgetError` before preparing when the operators' memory
     (counted by :func:`~translucency.scatter.relight.operator_bytes`) or time is over budget."""
     from . import relight
 
-    key = relight.operator_key(medium, model, tol)
-    held = relight.kept_operator(geometry)
-    if held is not None and held.key == key:
+    held = relight.kept_operator(geometry, relight.operator_key(medium, model, tol))
+    if held is not None:
         return held, True
     relight.release_operator(geometry)
-    del held
     radius = near_radius(geometry, medium)
     size, counts = relight.operator_bytes(geometry, medium, tol, radius)
     plan = relight_plan(size, counts, memory_limit, time_limit)
@@ -502,8 +499,8 @@ def _relit(work, receivers, tol, memory_limit, time_limit, report, stats, timing
     stats["pairs_skipped"] = 0
     if work.lit.size == 0:
         stats["pairs_evaluated"] = 0
-        held = relight.kept_operator(work.geometry)
-        if isinstance(held, relight.TreeInstead) and held.key == relight.operator_key(work.medium, work.model, tol):
+        held = relight.kept_operator(work.geometry, relight.operator_key(work.medium, work.model, tol))
+        if isinstance(held, relight.TreeInstead):
             stats["relight_fallback"] = "tree"
         return Solution(np.zeros((work.inner.size, work.medium.n_channels)), receivers, stats, timings, settings)
     start = time.perf_counter()
@@ -525,12 +522,13 @@ def _relit(work, receivers, tol, memory_limit, time_limit, report, stats, timing
         checked = _tree_of(work, tol / RELIGHT_CHECK_TOL_FACTOR, None, None, None)
         operator.stats.update(_relight_error(B, checked.B, tol))
         timings["check"] = time.perf_counter() - start
-        if operator.stats["checked_p99"] >= relight.FALLBACK_TOLS * tol:  # the check's answer; nothing is kept
+        gave_way = operator.stats["checked_p99"] >= relight.FALLBACK_TOLS * tol
+        if gave_way:  # the check's answer; nothing is kept
             operator.stats["bytes"] = 0
             relight.keep_operator(work.geometry, relight.TreeInstead(operator.key, dict(operator.stats)))
             B = checked.B
             pairs = {"relight_fallback": "tree", "pairs_evaluated": checked.stats["pairs_evaluated"]}
-        _warn_relight_check(work.medium.name, operator.stats, tol, work.inner.size)
+        _warn_relight_check(work.medium.name, operator.stats, tol, work.inner.size, gave_way)
     stats.update(operator.stats)
     stats.update(pairs)
     stats["operators_reused"] = reused
@@ -580,9 +578,10 @@ def _relight_error(B, reference, tol) -> dict:
     }
 
 
-def _warn_relight_check(name: str, checked: dict, tol: float, vertices: int) -> None:
+def _warn_relight_check(name: str, checked: dict, tol: float, vertices: int, gave_way: bool) -> None:
     """One sentence on the first light's check (:func:`_relight_error`) where it found what ``tol`` does not hold:
-    the operators given up for ``tree`` (:data:`~translucency.scatter.relight.FALLBACK_TOLS` ``tol`` off or more),
+    the operators given up for ``tree`` (``gave_way``: :data:`~translucency.scatter.relight.FALLBACK_TOLS` ``tol`` off
+    or more),
     off at the 99th percentile (the direction fits of §8.7 follow ``S_d`` less closely for some materials, low
     albedo, than ``tol`` asks, and on large scans the far field's large blocks miss the darkest vertices, §8.9), or
     a few vertices far off while the percentile holds (where a scan's normals turn against each other within a mean
@@ -590,7 +589,7 @@ def _warn_relight_check(name: str, checked: dict, tol: float, vertices: int) -> 
     from .relight import FALLBACK_TOLS
 
     error = checked["checked_p99"]
-    if error >= FALLBACK_TOLS * tol:
+    if gave_way:
         percent = f"{100 * error:,.0f}" if error >= 0.1 else f"{100 * error:.2g}"
         warn_user(
             f"{name}: the relighting operators are {percent} % off a tree solve of the first light at the "
