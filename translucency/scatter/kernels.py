@@ -336,6 +336,16 @@ def channel_lanes(params, channel_of, n_out):
     return np.ascontiguousarray(params[channel_of[np.minimum(np.arange(lanes), int(n_out) - 1)]], dtype=np.float64)
 
 
+def clamp_counted(channel_of, n_lanes):
+    """Per lane, 1 where its clamps are counted: at a row of ``params``' first output channel, so that output
+    channels sharing a row count its clamps once (and never the padding lanes); ``(n_lanes,)`` int64."""
+    channel_of = np.asarray(channel_of, dtype=np.int64)
+    counted = np.zeros(int(n_lanes), dtype=np.int64)
+    for c in range(channel_of.size):
+        counted[c] = int(channel_of[c] not in channel_of[:c])
+    return counted
+
+
 def source_columns(points, normals, w12, flux):
     """Sources as the kernels read them: ``table (9, n)`` (position mm, unit normal, unit refracted
     direction) and ``weights (C, n)`` (flux per output channel); the input's dtype is kept."""
@@ -374,10 +384,7 @@ def vertex_sum(model, src_points, src_normals, src_w12, src_flux, rcv_points, rc
     table, weights = source_columns(src_points, src_normals, src_w12, src_flux)
     n_out = weights.shape[0]
     lanes = channel_lanes(params, channel_of, n_out)
-    counted = np.zeros(lanes.shape[0], dtype=np.int64)  # a row's clamps counted at its first output channel
-    channel_of = np.asarray(channel_of, dtype=np.int64)
-    for c in range(n_out):
-        counted[c] = int(channel_of[c] not in channel_of[:c])
+    counted = clamp_counted(channel_of, lanes.shape[0])
     n_rcv = rcv_points.shape[0]
     B = np.zeros((n_rcv, n_out))
     clamped = np.zeros(n_rcv, dtype=np.int64)
@@ -416,66 +423,62 @@ def _vertex_rows(worker, lo, hi, model, table, weights, rcv_points, rcv_normals,
     """Receivers ``lo .. hi - 1`` of :func:`vertex_sum`."""
     n_src = table.shape[1]
     n_out = weights.shape[0]
-    X0, X1, X2, N0, N1, N2, W0, W1, W2 = table_rows(table)
+    rows = table_rows(table)
     for o in range(lo, hi):
-        px, py, pz = rcv_points[o, 0], rcv_points[o, 1], rcv_points[o, 2]
-        nx, ny, nz = rcv_normals[o, 0], rcv_normals[o, 1], rcv_normals[o, 2]
+        x_o = (rcv_points[o, 0], rcv_points[o, 1], rcv_points[o, 2])
+        n_o = (rcv_normals[o, 0], rcv_normals[o, 1], rcv_normals[o, 2])
         count = 0
         for group in range(lanes.shape[0] // 3):
             c0 = 3 * group
             F0, F1, F2, p0, p1, p2 = group_inputs(weights, lanes, c0)
-            k0, k1, k2 = counted[c0], counted[c0 + 1], counted[c0 + 2]
-            a0, a1, a2, n = _vertex_sources(
-                model,
-                n_src,
-                X0,
-                X1,
-                X2,
-                N0,
-                N1,
-                N2,
-                W0,
-                W1,
-                W2,
-                px,
-                py,
-                pz,
-                nx,
-                ny,
-                nz,
-                p0,
-                p1,
-                p2,
-                F0,
-                F1,
-                F2,
-                k0,
-                k1,
-                k2,
-            )
+            k = (counted[c0], counted[c0 + 1], counted[c0 + 2])
+            a0, a1, a2, n = vertex_sources(model, n_src, rows, x_o, n_o, (p0, p1, p2), (F0, F1, F2), k)
             count += n
             store_three(B, o, c0, n_out, a0, a1, a2)
         clamped[o] = count
 
 
 @numba.njit(cache=True, inline="always", fastmath=True)
-def _vertex_sources(
-    model, n_src, X0, X1, X2, N0, N1, N2, W0, W1, W2, px, py, pz, nx, ny, nz, p0, p1, p2, F0, F1, F2, k0, k1, k2
-):
-    """Sum over every source of three channels' clamped ``S_d`` times flux at one receiver, and the clamps."""
+def vertex_sources(model, n_src, rows, x_o, n_o, p, flux, counted):
+    """Sum over every source of three channels' clamped ``S_d`` times flux at one receiver, and the clamps. Tuples:
+    the sources' nine rows (:func:`table_rows`), the receiver's position (mm) and normal, three lanes' parameters,
+    their flux rows and whether their clamps count (:func:`weighted_pair`)."""
+    X0, X1, X2, N0, N1, N2, W0, W1, W2 = rows
+    F0, F1, F2 = flux
+    px, py, pz = x_o
     a0 = 0.0
     a1 = 0.0
     a2 = 0.0
     count = 0
     for j in range(n_src):
-        e0, e1, e2 = pair_three(
-            model, px - X0[j], py - X1[j], pz - X2[j], N0[j], N1[j], N2[j], W0[j], W1[j], W2[j], nx, ny, nz, p0, p1, p2
+        e0, e1, e2, n = weighted_pair(
+            model,
+            (px - X0[j], py - X1[j], pz - X2[j]),
+            (N0[j], N1[j], N2[j], W0[j], W1[j], W2[j]),
+            n_o,
+            p,
+            (F0[j], F1[j], F2[j]),
+            counted,
         )
-        count += (e0 < 0.0) * k0 + (e1 < 0.0) * k1 + (e2 < 0.0) * k2
-        a0 += max(e0, 0.0) * F0[j]
-        a1 += max(e1, 0.0) * F1[j]
-        a2 += max(e2, 0.0) * F2[j]
+        count += n
+        a0 += e0
+        a1 += e1
+        a2 += e2
     return a0, a1, a2, count
+
+
+@numba.njit(cache=True, inline="always", fastmath=True)
+def weighted_pair(model, x, source, n_o, p, flux, counted):
+    """One pair's three channels of ``S_d`` clamped at 0 (docs/physics.md §4.6) times the source's flux, and the
+    clamps counted: the body of every pair loop, on the CPU and on the GPU (:mod:`translucency.scatter.gpu.pairs`).
+    Tuples: the offset ``x = x_o - x_i`` (mm), the source's ``(n_i, w12)`` (six floats), the receiver's normal, three
+    lanes' parameters (:func:`lane`), their flux and whether their clamps count (1 or 0, :func:`clamp_counted`)."""
+    ni0, ni1, ni2, w0, w1, w2 = source
+    e0, e1, e2 = pair_three(
+        model, x[0], x[1], x[2], ni0, ni1, ni2, w0, w1, w2, n_o[0], n_o[1], n_o[2], p[0], p[1], p[2]
+    )
+    count = (e0 < 0.0) * counted[0] + (e1 < 0.0) * counted[1] + (e2 < 0.0) * counted[2]
+    return max(e0, 0.0) * flux[0], max(e1, 0.0) * flux[1], max(e2, 0.0) * flux[2], count
 
 
 def rows_kernel(model, directional, radial):
@@ -752,41 +755,14 @@ def _grouped_rows(
                 buffer[row, k] = table[row, i]
             for c in range(n_out):
                 buffer[9 + c, k] = weights[c, i]
-        X0, X1, X2, N0, N1, N2, W0, W1, W2 = table_rows(buffer)
+        rows = table_rows(buffer)
         for r in range(g * group, min(n_rcv, (g + 1) * group)):
-            px, py, pz = points[r, 0], points[r, 1], points[r, 2]
-            nx, ny, nz = normals[r, 0], normals[r, 1], normals[r, 2]
+            x_o = (points[r, 0], points[r, 1], points[r, 2])
+            n_o = (normals[r, 0], normals[r, 1], normals[r, 2])
             for channel_group in range(lanes.shape[0] // 3):
                 c0 = 3 * channel_group
                 F0, F1, F2, p0, p1, p2 = group_inputs(buffer[9:], lanes, c0)
-                a0, a1, a2, _ = _vertex_sources(
-                    model,
-                    n,
-                    X0,
-                    X1,
-                    X2,
-                    N0,
-                    N1,
-                    N2,
-                    W0,
-                    W1,
-                    W2,
-                    px,
-                    py,
-                    pz,
-                    nx,
-                    ny,
-                    nz,
-                    p0,
-                    p1,
-                    p2,
-                    F0,
-                    F1,
-                    F2,
-                    0,
-                    0,
-                    0,
-                )
+                a0, a1, a2, _ = vertex_sources(model, n, rows, x_o, n_o, (p0, p1, p2), (F0, F1, F2), (0, 0, 0))
                 store_three(out, r, c0, n_out, a0, a1, a2)
 
 
