@@ -26,6 +26,8 @@ README = ROOT / "README.md"
 NOT_RUN_HERE = {
     "./run.sh": "the set-up and the main job: what a clean clone runs first (tests/app/test_cli.py: the main job)",
     "./test.sh": "this test suite itself",
+    '.venv/bin/python -m pip install -e ".[gpu]"': "installs the GPU extra (about 0.5 GB): its kernel is tested in "
+    "numba's CUDA simulator, which needs none of it (tests/scatter/test_gpu.py)",
 }
 #: Placeholders of the README for another machine, and what they become here.
 PLACEHOLDERS = {"tcp://host:8786": "tcp://127.0.0.1:{port}", "/shared/baked/": "shared/baked/"}

@@ -61,6 +61,14 @@ def test_the_parser_offers_exactly_the_solvers_choices():
     assert options.MODELS == solve.MODELS == tuple(kernels.MODELS) and options.METHODS == solve.METHODS
 
 
+def test_the_device_is_a_setting_and_the_parser_offers_its_choices():
+    from translucency.scatter.names import DEVICES
+
+    assert options.DEVICES == DEVICES
+    assert options.solver_settings(parse("--device", "cpu")).device == "cpu"
+    assert options.solver_settings(parse()).device == "auto"
+
+
 @pytest.mark.parametrize("value, axis", [("-z", "-z"), ("x", "x"), ("auto", "auto")])
 def test_up_takes_negative_axes_as_written(value, axis):
     from translucency.app import cli

@@ -81,8 +81,8 @@ class BakeSettings(ShadeSettings):
 
     Parameters
     ----------
-    material, model, method, tol, resolution, shadows, per_direction, exposure, memory_limit, time_limit, up, bounces,
-    albedo
+    material, model, method, device, tol, resolution, shadows, per_direction, exposure, memory_limit, time_limit, up,
+    bounces, albedo
         As in :class:`~translucency.app.shading.settings.ShadeSettings` (``up`` places the default light and is
         recorded; the memory limit in GB, the time limit in seconds).
     lights : light or sequence of lights, optional

@@ -34,7 +34,7 @@ import numpy as np
 
 from ..errors import InvalidParameterError
 from ..scatter.medium import DEFAULT_ETA
-from ..scatter.names import METHODS, MODELS
+from ..scatter.names import DEVICES, METHODS, MODELS
 
 #: Help of ``--unit`` (``inspect`` has it too).
 UNIT_HELP = (
@@ -259,6 +259,12 @@ def add_solver_options(parser: argparse.ArgumentParser) -> None:
         help=f"{HELP['method']} (default {default['method'].default})",
     )
     group.add_argument(
+        "--device",
+        default=default["device"].default,
+        choices=DEVICES,
+        help=f"{HELP['device']} (default {default['device'].default})",
+    )
+    group.add_argument(
         "--tol", type=float, default=default["tol"].default, help=f"{HELP['tol']} (default {default['tol'].default:g})"
     )
     group.add_argument(
@@ -379,6 +385,7 @@ def solver_settings(args, **changes):
     fields = {
         "model": args.model,
         "method": args.method,
+        "device": args.device,
         "tol": args.tol,
         "resolution": args.resolution,
         "shadows": not args.no_shadows,

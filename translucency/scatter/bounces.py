@@ -42,7 +42,7 @@ import numpy as np
 
 from .fresnel import fresnel_reflectance, fresnel_transmittance, refract
 from .lights import GOLDEN_RATIO, PointLight, as_light_list, point_light_irradiance
-from .names import check_bounces
+from .names import DEFAULT_DEVICE, check_bounces
 from .surface import PerSurface
 from .visibility import Occluder
 
@@ -500,6 +500,7 @@ def solve_bounces(
     model: str,
     method: str,
     tol: float,
+    device: str = DEFAULT_DEVICE,
     shadows: bool = True,
     rays: int = GATHER_RAYS,
     progress=None,
@@ -524,7 +525,7 @@ def solve_bounces(
         The first solve's diffuse radiance factor, W/(m² sr).
     lights : light or sequence of lights
         The first solve's lights (for their mirror reflection).
-    medium, model, method, tol, memory_limit, time_limit
+    medium, model, method, tol, device, memory_limit, time_limit
         As in :func:`~translucency.scatter.solve.solve`.
     bounces : int
         How many times (0 to :data:`~translucency.scatter.names.MAX_BOUNCES`).
@@ -595,6 +596,7 @@ def solve_bounces(
             model=model,
             method=method,
             tol=bounce_tol,
+            device=device,
             memory_limit=memory_limit,
             time_limit=time_limit,
         )

@@ -96,6 +96,9 @@ SAMPLE_SAFETY = 1.5
 #: (ordering, tables, tree). Calibrations on timed solves with other work sharing the machine, so the
 #: estimate is pessimistic on a quiet one (``bench/budget.py``; bench/README.md, "Memory and time budget").
 FAR_RATE = {"exact": 40e6, "cutoff": 15e6, "tree": 12e6}
+#: Pairs per second of ``exact`` on a GPU, the whole device: an estimate from published all-pairs kernels and the
+#: pair's cost in simple interactions, not a calibration (bench/README.md, "GPU").
+GPU_PAIR_RATE = 2e10
 NEAR_RATE = 3e6
 LIST_RATE = 60e6
 SETUP_SECONDS_PER_VERTEX = 2e-6
@@ -113,6 +116,8 @@ class SolveCounts:
         numba threads.
     method : str
         Far-field method (``exact``, ``cutoff``, ``tree``).
+    device : str
+        Where the far field's pairs are summed: ``cpu`` or ``gpu`` (``exact`` only).
     near_triangles, near_points, own_points, far_evaluations : float
         Per receiver, the sample's means: near triangles, near-field quadrature points evaluated,
         of those the receiver's own, and far-field evaluations.
@@ -129,6 +134,7 @@ class SolveCounts:
     near_points: float
     own_points: float
     far_evaluations: float
+    device: str = "cpu"
 
 
 @dataclass(frozen=True)
@@ -197,10 +203,11 @@ def solve_seconds(counts: SolveCounts) -> float:
     """Estimated wall time (s) of a solve from its counts and the calibrated rates (:data:`FAR_RATE`, ...)."""
     threads = max(1, counts.threads)
     n_r = counts.n_receivers
-    far = n_r * counts.far_evaluations / FAR_RATE.get(counts.method, FAR_RATE["exact"])
+    far_rate = GPU_PAIR_RATE if counts.device == "gpu" else FAR_RATE.get(counts.method, FAR_RATE["exact"]) * threads
+    far = n_r * counts.far_evaluations / far_rate
     lists = 2 * n_r * counts.near_triangles / LIST_RATE
     near = n_r * counts.near_points / NEAR_RATE
-    return (far + lists + near) / threads + SETUP_SECONDS_PER_VERTEX * counts.n_vertices
+    return far + (lists + near) / threads + SETUP_SECONDS_PER_VERTEX * counts.n_vertices
 
 
 def estimate(

@@ -1,4 +1,4 @@
-"""The solver's choices by name: scattering models and far-field methods, their defaults and their checks.
+"""The solver's choices by name: scattering models, far-field methods and devices, their defaults and their checks.
 
 Plain data with no numba behind it, so that the command line and the settings can offer and check the
 choices without compiling or importing the kernels; :mod:`translucency.scatter.kernels` maps each model
@@ -26,6 +26,9 @@ __all__ = [
     "DEFAULT_BOUNCES",
     "MAX_BOUNCES",
     "check_bounces",
+    "DEVICES",
+    "DEFAULT_DEVICE",
+    "check_device",
 ]
 
 #: Scattering models (the BSSRDF): FHK14's directional dipole, Jensen 2001's standard dipole,
@@ -35,7 +38,12 @@ MODELS = ("directional", "standard", "better")
 #: and the tree's sums prepared once as operators that any light reuses (docs/physics.md §8.7).
 METHODS = ("exact", "cutoff", "tree", "relight")
 
+#: Where the pairs of ``exact`` are summed: the CPU, an NVIDIA GPU (the optional extra,
+#: :mod:`translucency.scatter.gpu`), or a GPU when one works and the CPU otherwise.
+DEVICES = ("cpu", "gpu", "auto")
+
 DEFAULT_MODEL = "directional"
+DEFAULT_DEVICE = "auto"
 DEFAULT_METHOD = "tree"
 #: Relative error per vertex allowed to ``cutoff`` and ``tree`` (ignored by ``exact``).
 DEFAULT_TOL = 1e-2
@@ -58,6 +66,13 @@ def check_method(method) -> str:
     if method not in METHODS:
         raise InvalidParameterError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}.")
     return method
+
+
+def check_device(device) -> str:
+    """The device name, checked to be one of :data:`DEVICES`; else an ``InvalidParameterError`` sentence."""
+    if device not in DEVICES:
+        raise InvalidParameterError(f"{setting_name('device')} must be one of {', '.join(DEVICES)}, got {device!r}.")
+    return device
 
 
 def check_tol(tol):

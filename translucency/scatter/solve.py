@@ -57,8 +57,9 @@ import numpy as np
 from .. import memory
 from ..errors import BudgetError, InvalidParameterError, option, warn_user
 from . import budget, cutoff, hierarchy, kernels, nearfield
+from .gpu.probe import pair_device
 from .medium import CHANNELS, Medium
-from .names import DEFAULT_MODEL, METHODS, MODELS, check_method, check_model, check_tol
+from .names import DEFAULT_DEVICE, DEFAULT_MODEL, METHODS, MODELS, check_device, check_method, check_model, check_tol
 from .surface import SurfaceGeometry, checked_array, ordered_bytes, spatial_order
 
 __all__ = ["SurfaceGeometry", "Solution", "solve", "local_reach_floor", "METHODS", "MODELS"]
@@ -119,6 +120,23 @@ def _exact_far_field(model, geometry, medium, lit, w12, flux, params, channel_of
 
     def evaluate(rcv_points, rcv_normals):
         B, clamped = kernels.vertex_sum(model_code, *sources, rcv_points, rcv_normals, params, channel_of)
+        pairs = int(lit.size) * int(rcv_points.shape[0])
+        return B, {"pairs_evaluated": pairs, "pairs_skipped": 0, "clamped_values": int(clamped.sum())}
+
+    return evaluate
+
+
+def _gpu_far_field(model, geometry, medium, lit, w12, flux, params, channel_of, tol):
+    """Method ``exact`` on the GPU (:mod:`translucency.scatter.gpu.pairs`): the lit sources copied to the device
+    once, every pair summed there."""
+    from .gpu.pairs import PairSums
+
+    sums = PairSums(
+        kernels.MODELS[model], geometry.points[lit], geometry.normals[lit], w12[lit], flux[lit], params, channel_of
+    )
+
+    def evaluate(rcv_points, rcv_normals):
+        B, clamped = sums(rcv_points, rcv_normals)
         pairs = int(lit.size) * int(rcv_points.shape[0])
         return B, {"pairs_evaluated": pairs, "pairs_skipped": 0, "clamped_values": int(clamped.sum())}
 
@@ -311,6 +329,7 @@ def solve(
     tol: float = 1e-3,
     receivers: np.ndarray | None = None,
     reach_mm: float | None = None,
+    device: str = DEFAULT_DEVICE,
     progress: Callable[[str, float], None] | None = None,
     memory_limit: float | None = None,
     time_limit: float | None = None,
@@ -352,6 +371,8 @@ def solve(
         of each receiver, with no receiver's radius widened (docs/physics.md §8.8; what a proxy solve
         corrects at full resolution). At least :func:`local_reach_floor` (the near-field radius plus the
         longest edge, so that every vertex the near field weighs is in the sum).
+    device : {"auto", "cpu", "gpu"}
+        Where ``exact`` sums its pairs (:func:`translucency.scatter.gpu.probe.pair_device`); ``stats["device"]``.
     progress : callable, optional
         Called as ``progress(stage, fraction)`` while the solver runs: stages ``far field`` and
         ``near field``, each from 0 to 1, many times per stage (after every block of receivers).
@@ -381,11 +402,12 @@ def solve(
     _check_reach(reach_mm, method, geometry, medium)
     warn_low_albedo(medium)
     warn_transparent(medium, geometry.diagonal)
+    used_device, stats["device"] = pair_device(check_device(device), "cutoff" if reach_mm is not None else method)
 
     start = time.perf_counter()
     memory_at_start = _memory_at_start(geometry)
     work = _ordered_work(geometry, phi, w12, medium, model, receivers, stats)
-    work.reach = reach_mm
+    work.reach, work.device = reach_mm, used_device
     timings["setup"] = time.perf_counter() - start
     if method == "relight":
         return _relit(work, receivers, tol, memory_limit, time_limit, report, stats, timings)
@@ -427,6 +449,7 @@ def plan(
     model: str = DEFAULT_MODEL,
     method: str = "exact",
     tol: float = 1e-3,
+    device: str = DEFAULT_DEVICE,
     memory_limit: float | None = None,
     time_limit: float | None = None,
 ) -> budget.SolveEstimate:
@@ -435,8 +458,8 @@ def plan(
     stay cached on ``geometry``, so a solve that follows does not make them again. Not for ``method="relight"``,
     whose operators are planned by :func:`relight_operator`.
 
-    The arguments are :func:`solve`'s: ``phi`` (n, C) W/m², ``w12`` (n, 3) unit, ``tol`` relative, ``memory_limit``
-    GB (2**30 bytes) and ``time_limit`` s (None: no limit). Returns the
+    The arguments are :func:`solve`'s: ``phi`` (n, C) W/m², ``w12`` (n, 3) unit, ``tol`` relative, ``device``,
+    ``memory_limit`` GB (2**30 bytes) and ``time_limit`` s (None: no limit). Returns the
     :class:`~translucency.scatter.budget.SolveEstimate` (``fits``, ``seconds``, ``peak_bytes``, ...)."""
     if method == "relight":
         raise InvalidParameterError(
@@ -447,6 +470,7 @@ def plan(
     )
     memory_at_start = _memory_at_start(geometry)
     work = _ordered_work(geometry, phi, w12, medium, model, receivers, {})
+    work.device, _ = pair_device(check_device(device), method)
     estimate, *_ = _plan(work, method, tol, memory_limit, time_limit, {}, memory_at_start)
     return estimate
 
@@ -732,10 +756,11 @@ class _Work:
     params: np.ndarray
     channel_of: np.ndarray
     reach: float | None = None
+    device: str = "cpu"
 
     def far_field(self, method: str, tol: float):
         """The far-field ``method`` prepared for these sources (see :data:`_FAR_FIELD`; ``cutoff`` within
-        :attr:`reach` when it is set)."""
+        :attr:`reach` when it is set; ``exact`` on the GPU where :attr:`device` is ``gpu``)."""
         args = (
             self.model,
             self.geometry,
@@ -749,6 +774,8 @@ class _Work:
         )
         if self.reach is not None:
             return _cutoff_far_field(*args, reach=self.reach)
+        if self.device == "gpu":
+            return _gpu_far_field(*args)
         return _FAR_FIELD[method](*args)
 
 
@@ -923,6 +950,7 @@ def sample_counts(work: _Work, far_field, near_args, radius, method, tol) -> bud
         points,
         own,
         _far_evaluations(work, far_field, rcv, method, tol),
+        device=work.device,
     )
 
 

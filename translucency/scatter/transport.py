@@ -34,6 +34,7 @@ from ..errors import BudgetError, TranslucencyError, option, warn_user
 from .budget import format_bytes, format_seconds
 from .hierarchy import GROUP_RECEIVERS
 from .irradiance import IncidentLight, carried_light, incident_flux
+from .names import DEFAULT_DEVICE
 from .solve import Solution, solve
 from .surface import SurfaceGeometry, spatial_order
 from .visibility import VisibilityCache
@@ -69,6 +70,8 @@ class TransportOptions:
         Names of :mod:`translucency.scatter.names`.
     tol : float
         The relative error allowed per vertex, 1.
+    device : str
+        Where ``exact`` sums its pairs: ``cpu``, ``gpu`` or ``auto`` (:data:`~translucency.scatter.names.DEVICES`).
     per_direction : bool
         One solve per light sample.
     bounces : int
@@ -82,6 +85,7 @@ class TransportOptions:
     model: str
     method: str
     tol: float
+    device: str = DEFAULT_DEVICE
     per_direction: bool = False
     bounces: int = 0
     shadows: bool = True
@@ -95,9 +99,9 @@ class TransportOptions:
 
     @property
     def solve_keywords(self) -> dict:
-        """``model``, ``method``, ``tol`` and the limits as the keywords of
+        """``model``, ``method``, ``tol``, ``device`` and the limits as the keywords of
         :func:`~translucency.scatter.solve.solve`."""
-        return {"model": self.model, "method": self.method, "tol": self.tol, **self.limits}
+        return {"model": self.model, "method": self.method, "tol": self.tol, "device": self.device, **self.limits}
 
 
 @dataclass
@@ -126,12 +130,14 @@ class Transport:
 
     @property
     def solver_stats(self) -> dict:
-        """The first solve's statistics; for several solves their count, summed pairs and points, and whether
-        relighting gave way to ``tree`` in any (``relight_fallback``)."""
+        """The first solve's statistics; for several solves their count, summed pairs and points, the first's
+        ``device``, and whether relighting gave way to ``tree`` in any (``relight_fallback``)."""
         if len(self.solutions) == 1:
             return self.solutions[0].stats
         summed = ("pairs_evaluated", "pairs_skipped", "near_points")
         stats = {"solves": len(self.solutions), **{k: sum(s.stats.get(k, 0) for s in self.solutions) for k in summed}}
+        if "device" in self.solutions[0].stats:
+            stats["device"] = self.solutions[0].stats["device"]
         fallback = next((s.stats["relight_fallback"] for s in self.solutions if "relight_fallback" in s.stats), None)
         return stats if fallback is None else {**stats, "relight_fallback": fallback}
 
@@ -255,6 +261,7 @@ def transport(
             model=options.model,
             method=options.method,
             tol=options.tol,
+            device=options.device,
             shadows=options.shadows,
             progress=progress,
             solver=solve_one,

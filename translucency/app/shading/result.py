@@ -173,6 +173,8 @@ def shade_result(scene, settings, lights, solved: Solved) -> ShadeResult:
     resolution = "full" if decimation is None else f"proxy, {proxy.n_points} vertices, edge {solved.edge:.3g} mm"
     metadata = {
         **settings.metadata(lights, resolution),
+        # what summed the pairs ("cpu" or "gpu (its name)"), where the setting may have been auto
+        "device": solved.transport.solver_stats.get("device", settings.device),
         "shadows": scene.shadows,
         "exposure": exposure,
         **unit_metadata(mesh.mm_per_unit, mesh.unit_inferred),

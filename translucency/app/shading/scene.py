@@ -273,6 +273,7 @@ class Scene:
         options = transport.TransportOptions(
             model=settings.model,
             method=settings.method,
+            device=settings.device,
             tol=solve_tol,
             per_direction=settings.per_direction,
             bounces=settings.bounces,

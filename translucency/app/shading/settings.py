@@ -27,11 +27,13 @@ import numpy as np
 from ...errors import InvalidParameterError, setting_name
 from ...scatter.names import (
     DEFAULT_BOUNCES,
+    DEFAULT_DEVICE,
     DEFAULT_METHOD,
     DEFAULT_MODEL,
     DEFAULT_TOL,
     MAX_BOUNCES,
     check_bounces,
+    check_device,
     check_method,
     check_model,
     check_tol,
@@ -141,6 +143,12 @@ class ShadeSettings:
         "far-field method: exact (every pair), cutoff, tree, or relight (operators prepared on first use that "
         "later lights on the same Scene reuse)",
     )
+    device: str = _setting(
+        DEFAULT_DEVICE,
+        "--",
+        'where exact sums its pairs: cpu, gpu (an NVIDIA GPU, with pip install "translucency[gpu]"), or auto (a '
+        "GPU where one works, else the CPU); every other method and the near field run on the CPU",
+    )
     tol: float = _setting(
         DEFAULT_TOL,
         "1",
@@ -202,6 +210,7 @@ class ShadeSettings:
         object.__setattr__(self, "material", resolve_medium(self.material))
         check_model(self.model)
         check_method(self.method)
+        check_device(self.device)
         check_tol(self.tol)
         object.__setattr__(self, "bounces", check_bounces(self.bounces))
         object.__setattr__(self, "resolution", parse_resolution(self.resolution))
@@ -242,6 +251,7 @@ class ShadeSettings:
             "lights": [light.to_dict() for light in lights],
             "model": self.model,
             "method": self.method,
+            "device": self.device,
             "tolerance": self.tol,
             "resolution": resolution,
             "shadows": self.shadows,

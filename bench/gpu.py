@@ -1,0 +1,223 @@
+"""GPU: the pair sums of ``exact`` on an NVIDIA GPU against the CPU's, time next to error (bench/README.md, "GPU").
+
+Run it on a machine with an NVIDIA GPU and the gpu extra (numba-cuda); it needs numpy, SciPy and numba-cuda only
+(no VTK, PyVista, pymeshlab or Embree), and builds its meshes in place: tori of the default bunny's, the Igea's,
+1M and 10M vertices (80 mm across), lit by one directional light without shadows, marble, the directional
+dipole. A scan can come as an ``.npz`` file of ``points`` (mm) and ``triangles`` (``--mesh``).
+
+Per mesh:
+
+* the far field of one light on the GPU, every pair at every vertex (:class:`translucency.scatter.gpu.pairs.PairSums`,
+  sources copied to the device and ``B`` back included), warm, the best of ``--repeats``; where the pairs would take
+  more than ``--full-seconds`` by the rate already measured, only at the sampled receivers, and the whole light
+  estimated from that rate;
+* the CPU's ``exact`` (:func:`translucency.scatter.kernels.vertex_sum`, every thread) at ``--receivers`` random
+  vertices, and the per-vertex relative error of the GPU's there (p99 and largest);
+* pairs per second, and against the device's FP32 peak where the device is in :data:`FP32_PEAK`;
+* on the smallest mesh, a whole ``solve(method="exact")`` with ``device="gpu"`` and ``device="cpu"``, the near field
+  on the CPU in both.
+
+Writes ``bench/results/gpu.json`` and ``gpu.md`` (``bench/results/tmp`` with ``--quick``: a small torus, in numba's
+CUDA simulator where no GPU is present, to check the script itself)::
+
+    .venv/bin/python bench/gpu.py                 # on a GPU machine, a few minutes
+    .venv/bin/python bench/gpu.py --quick         # anywhere: the simulator when no GPU works
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from bench.report import machine_info, output_dir, write_results  # noqa: E402
+
+#: FP32 peak (FLOP/s, without tensor cores) by device name: the vendors' data sheets (SXM boards).
+FP32_PEAK = {"H100": 67e12, "H200": 67e12, "A100": 19.5e12}
+#: Tori: (label, vertices around the ring, around the tube), about the vertices of the scans they stand for.
+TORI = (
+    ("bunny-sized (28k)", 336, 84),
+    ("Igea-sized (134k)", 672, 200),
+    ("1M", 2000, 500),
+    ("10M", 6400, 1600),
+)
+QUICK_TORI = (("quick (240)", 24, 10),)
+
+
+def torus_mesh(n_major: int, n_minor: int):
+    """A torus 80 mm across (ring radius 28 mm, tube 12 mm): points (mm), triangles."""
+    from translucency.geometry.synthetic import torus
+
+    return torus(28.0, 12.0, n_major, n_minor)
+
+
+def lit_surface(points, triangles, medium):
+    """The surface record and one directional light without shadows: ``phi = T12 cos`` and ``w12`` per vertex."""
+    from translucency.geometry.measure import vertex_normals
+    from translucency.scatter import fresnel
+    from translucency.scatter.solve import SurfaceGeometry
+
+    normals = vertex_normals(points, triangles)
+    light = np.array([0.35, 1.0, 0.45]) / np.linalg.norm([0.35, 1.0, 0.45])
+    cos = normals @ light
+    phi = np.where(cos > 0, fresnel.fresnel_transmittance(np.clip(cos, 0, 1), medium.eta) * cos, 0.0)
+    w12 = fresnel.refract(np.broadcast_to(light, normals.shape), normals, medium.eta)
+    return SurfaceGeometry(points, triangles, normals), np.repeat(phi[:, None], 3, axis=1), w12
+
+
+def sources_of(geometry, phi, w12):
+    """The lit vertices as the pair sums take them: positions, normals, ``w12``, flux ``phi A``."""
+    lit = np.flatnonzero(phi.max(axis=1) > 0)
+    flux = phi[lit] * geometry.vertex_areas[lit, None]
+    return (geometry.points[lit], geometry.normals[lit], w12[lit], flux), lit.size
+
+
+def measure(label, points, triangles, args, rate_so_far):
+    """One mesh's row (see the module docstring)."""
+    from translucency.scatter import kernels
+    from translucency.scatter.gpu.pairs import PairSums
+    from translucency.scatter.materials import material
+
+    medium = material("marble").medium()
+    geometry, phi, w12 = lit_surface(points, triangles, medium)
+    params = kernels.channel_parameters(medium.sigma_a, medium.sigma_s, medium.g, medium.eta)
+    channel_of = np.arange(3)
+    sources, n_lit = sources_of(geometry, phi, w12)
+    n = geometry.n_vertices
+    rng = np.random.default_rng(7)
+    sample = np.sort(rng.choice(n, size=min(args.receivers, n), replace=False))
+    row = {"mesh": label, "vertices": n, "lit": n_lit, "pairs": n * n_lit, "sampled_receivers": int(sample.size)}
+
+    def light(receivers):
+        start = time.perf_counter()
+        B, _ = PairSums(0, *sources, params, channel_of)(geometry.points[receivers], geometry.normals[receivers])
+        return B, time.perf_counter() - start
+
+    light(sample[:64])  # compiles the kernel
+    at_sample, seconds = min((light(sample) for _ in range(args.repeats)), key=lambda r: r[1])
+    row["gpu_sample_seconds"] = seconds
+    rate = sample.size * n_lit / seconds
+    full = rate_so_far is None or n * n_lit / rate_so_far <= args.full_seconds
+    if full:
+        every = np.arange(n)
+        B, seconds = min((light(every) for _ in range(args.repeats)), key=lambda r: r[1])
+        row["gpu_light_seconds"], row["light_measured"] = seconds, True
+        rate = n * n_lit / seconds
+        at_sample = B[sample]
+    else:
+        row["gpu_light_seconds"], row["light_measured"] = n * n_lit / rate, False
+    row["pairs_per_second"] = rate
+    start = time.perf_counter()
+    cpu, _ = kernels.vertex_sum(0, *sources, geometry.points[sample], geometry.normals[sample], params, channel_of)
+    row["cpu_sample_seconds"] = time.perf_counter() - start
+    row["cpu_pairs_per_second"] = sample.size * n_lit / row["cpu_sample_seconds"]
+    counted = cpu >= 1e-4 * cpu.max(axis=0)  # the receivers tol is held over (docs/physics.md §8.5)
+    error = np.abs(at_sample - cpu)[counted] / cpu[counted]
+    row["error_p99"], row["error_max"] = float(np.percentile(error, 99)), float(error.max())
+    return row, geometry, phi, w12, medium, rate
+
+
+def whole_solves(geometry, phi, w12, medium):
+    """``solve(method="exact")`` on the GPU and on the CPU, seconds per stage and the largest relative difference."""
+    from translucency.scatter.solve import solve
+
+    out = {}
+    for device in ("gpu", "cpu"):
+        start = time.perf_counter()
+        solution = solve(geometry, phi, w12, medium, method="exact", device=device)
+        out[device] = {"seconds": time.perf_counter() - start, "timings": solution.timings, "B": solution.B}
+    top = out["cpu"]["B"].max(axis=0)
+    counted = out["cpu"]["B"] >= 1e-4 * top
+    difference = np.abs(out["gpu"]["B"] - out["cpu"]["B"])[counted] / out["cpu"]["B"][counted]
+    return {
+        device: {"seconds": out[device]["seconds"], "timings": out[device]["timings"]} for device in ("gpu", "cpu")
+    } | {"largest_relative_difference": float(difference.max())}
+
+
+def peak_of(name: str) -> float | None:
+    """The FP32 peak of a device named ``name`` (:data:`FP32_PEAK`), or None."""
+    return next((peak for key, peak in FP32_PEAK.items() if key in name), None)
+
+
+def markdown(payload) -> str:
+    """The results as bench/README.md's table."""
+    device = payload["device"]
+    lines = [
+        f"Device: {device}; CPU: {payload['machine']['cpu']} ({payload['machine']['threads']} threads).",
+        "",
+        "| mesh | vertices | pairs | a light's far field on the GPU | GPU pairs/s | CPU pairs/s (every thread) "
+        "| GPU/CPU | error p99 (max) vs CPU exact |",
+        "|---|---:|---:|---:|---:|---:|---:|---:|",
+    ]
+    for row in payload["rows"]:
+        light = f"{1e3 * row['gpu_light_seconds']:.1f} ms" + ("" if row["light_measured"] else " (from the rate)")
+        lines.append(
+            f"| {row['mesh']} | {row['vertices']:,} | {row['pairs']:.2e} | {light} | {row['pairs_per_second']:.2e} "
+            f"| {row['cpu_pairs_per_second']:.2e} | {row['pairs_per_second'] / row['cpu_pairs_per_second']:.0f}× "
+            f"| {row['error_p99']:.1e} ({row['error_max']:.1e}) |"
+        )
+    peak = peak_of(device)
+    if peak:
+        best = max(row["pairs_per_second"] for row in payload["rows"])
+        lines += [
+            "",
+            f"Best rate {best:.2e} pairs/s against an FP32 peak of {peak:.2e} FLOP/s: {peak / best:.0f} FLOP "
+            "of peak per pair.",
+        ]
+    solves = payload.get("whole_solves")
+    if solves:
+        lines += [
+            "",
+            f"Whole exact solve of the {payload['rows'][0]['mesh']} torus: GPU {solves['gpu']['seconds']:.2f} s "
+            f"(far field {solves['gpu']['timings'].get('far_field', 0):.2f} s), CPU {solves['cpu']['seconds']:.2f} s "
+            f"(far field {solves['cpu']['timings'].get('far_field', 0):.2f} s); largest relative difference "
+            f"{solves['largest_relative_difference']:.1e}.",
+        ]
+    return "\n".join(lines) + "\n"
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="a small torus (the simulator where no GPU works)")
+    parser.add_argument("--receivers", type=int, default=2000, help="random vertices compared with the CPU")
+    parser.add_argument("--repeats", type=int, default=3, help="timed repeats of each light (the best is kept)")
+    parser.add_argument("--full-seconds", type=float, default=60.0, help="longest whole light run (estimate), s")
+    parser.add_argument("--mesh", action="append", default=[], help="an .npz of points (mm) and triangles")
+    parser.add_argument("--sizes", type=int, default=len(TORI), help="how many of the tori, smallest first")
+    args = parser.parse_args(argv)
+    from translucency.scatter.gpu.probe import gpu_status
+
+    if args.quick and not gpu_status().usable:
+        os.environ["NUMBA_ENABLE_CUDASIM"] = "1"
+        gpu_status.cache_clear()
+        args.receivers, args.repeats = min(args.receivers, 40), 1
+    status = gpu_status()
+    if not status.usable:
+        print(f"no GPU: {status.reason}", file=sys.stderr)
+        return 1
+    meshes = [(label, *torus_mesh(a, b)) for label, a, b in (QUICK_TORI if args.quick else TORI[: args.sizes])]
+    for path in args.mesh:
+        data = np.load(path)
+        meshes.insert(0, (Path(path).stem, np.asarray(data["points"], float), np.asarray(data["triangles"])))
+    payload = {"machine": machine_info(), "device": status.name, "rows": []}
+    rate = None
+    for k, (label, points, triangles) in enumerate(meshes):
+        row, geometry, phi, w12, medium, rate = measure(label, points, triangles, args, rate)
+        payload["rows"].append(row)
+        print(f"{label}: {row}", flush=True)
+        if k == 0:
+            payload["whole_solves"] = whole_solves(geometry, phi, w12, medium)
+    table = markdown(payload)
+    write_results(output_dir(args.quick), "gpu", payload, table)
+    print(table)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

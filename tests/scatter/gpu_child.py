@@ -1,0 +1,47 @@
+"""The GPU side of tests/scatter/test_gpu.py, run in a process of its own under numba's CUDA simulator
+(``NUMBA_ENABLE_CUDASIM=1`` must be set before numba.cuda is imported): ``python -m tests.scatter.gpu_child IN OUT``
+reads the cases from the ``.npz`` file IN and writes what the GPU code gave to the ``.npz`` file OUT."""
+
+import sys
+
+import numpy as np
+
+
+def vertex_sum_arguments(cases, name: str) -> tuple:
+    """The arguments of ``vertex_sum`` (the CPU's and the GPU's) for the case ``name`` of the ``.npz`` file."""
+    src, rcv = cases[f"{name}_sources"], cases[f"{name}_receivers"]
+    return (
+        int(cases[f"{name}_model"]),
+        src[:, 0:3],
+        src[:, 3:6],
+        src[:, 6:9],
+        cases[f"{name}_flux"],
+        rcv[:, 0:3],
+        rcv[:, 3:6],
+        cases[f"{name}_params"],
+        cases[f"{name}_channel_of"],
+    )
+
+
+def main(cases_path: str, out_path: str) -> None:
+    from translucency.scatter import solve
+    from translucency.scatter.gpu import pairs
+    from translucency.scatter.materials import material
+
+    cases = np.load(cases_path)
+    out = {}
+    for name in ("directional", "standard", "better"):
+        B, clamped = pairs.vertex_sum(*vertex_sum_arguments(cases, name))
+        out[f"{name}_B"], out[f"{name}_clamped"] = B, clamped
+        out[f"{name}_chunk"] = pairs.chunk_size(len(cases[f"{name}_receivers"]), len(cases[f"{name}_sources"]))
+    geometry = solve.SurfaceGeometry(cases["points"], cases["triangles"], cases["normals"])
+    medium = material("marble").medium()
+    solution = solve.solve(geometry, cases["phi"], cases["w12"], medium, method="exact", device="gpu")
+    out["solve_B"] = solution.B
+    out["solve_device"] = np.array(solution.stats["device"])
+    out["solve_clamped"] = solution.stats["clamped_values"]
+    np.savez(out_path, **out)
+
+
+if __name__ == "__main__":
+    main(*sys.argv[1:3])

@@ -1,0 +1,180 @@
+"""The GPU back end of the pair sums (translucency.scatter.gpu): its kernel against the float64 reference formulas
+and against the CPU's solve, run in numba's CUDA simulator (no GPU needed; a process of its own, as the simulator
+must be chosen before numba.cuda is imported), its PTX compiled where numba-cuda is installed, and the choice of
+device with its sentences."""
+
+import importlib.util
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from tests.scatter.gpu_child import vertex_sum_arguments
+from tests.scatter.test_kernels import _pairs
+from tests.scatter.test_solve import _lit, _unit
+from translucency.errors import InvalidParameterError, command_line_spelling
+from translucency.geometry.synthetic import icosphere
+from translucency.scatter import dipoles, fresnel, kernels, solve
+from translucency.scatter.gpu import probe
+from translucency.scatter.materials import material
+
+ROOT = Path(__file__).resolve().parents[2]
+#: Output channels per model: three rows; one row for three channels; three rows for five (two lane groups).
+CHANNEL_MAPS = {"directional": [0, 1, 2], "standard": [0, 0, 0], "better": [0, 1, 2, 2, 0]}
+#: Receivers per model (sources: 300, so the GPU splits them into chunks).
+RECEIVERS = {"directional": 24, "standard": 8, "better": 8}
+
+
+def _reference(model, x_i, n_i, w12, x_o, n_o, medium):
+    """``S_d`` (receivers, sources, channel) from translucency.scatter.dipoles (the float64 formulas)."""
+    out = []
+    for c in range(3):
+        coefficients = (medium.sigma_a[c], medium.sigma_s[c], medium.g[c], medium.eta)
+        if model == "directional":
+            S = dipoles.directional_dipole(x_i[None], n_i[None], w12[None], x_o[:, None], n_o[:, None], *coefficients)
+        else:
+            r = np.linalg.norm(x_o[:, None] - x_i[None], axis=2)
+            profile = dipoles.standard_dipole_profile if model == "standard" else dipoles.better_dipole_profile
+            scale = 1.0 / np.pi if model == "standard" else 1.0 / (np.pi * 4.0 * fresnel.C_phi(1.0 / medium.eta))
+            S = scale * profile(r, *coefficients)
+        out.append(S)
+    return np.stack(out, axis=2)
+
+
+@pytest.fixture(scope="module")
+def simulated(tmp_path_factory):
+    """The cases, the simulated GPU's answers, the mediums and the sphere's CPU solve."""
+    rng = np.random.default_rng(41)
+    medium = material("skin1").medium()
+    cases, references = {}, {}
+    for name, channel_of in CHANNEL_MAPS.items():
+        x_i, n_i, light, _, _ = _pairs(rng, 300, 2.0)
+        x_i[:2] = x_i[2]  # coincident sources: r = 0 at receiver 2
+        w12 = fresnel.refract(light, n_i, medium.eta)
+        rcv = RECEIVERS[name]
+        rows = max(channel_of) + 1
+        cases[f"{name}_sources"] = np.hstack([x_i, n_i, w12])
+        cases[f"{name}_receivers"] = np.hstack([x_i[:rcv], n_i[:rcv]])
+        cases[f"{name}_flux"] = rng.random((300, len(channel_of)))
+        cases[f"{name}_params"] = kernels.channel_parameters(
+            medium.sigma_a[:rows], medium.sigma_s[:rows], medium.g[:rows], medium.eta, name
+        )
+        cases[f"{name}_channel_of"] = np.array(channel_of, dtype=np.int64)
+        cases[f"{name}_model"] = kernels.MODELS[name]
+        references[name] = _reference(name, x_i, n_i, w12, x_i[:rcv], n_i[:rcv], medium)
+    marble = material("marble").medium()
+    points, triangles = icosphere(1, 10.0)
+    normals, phi, w12 = _lit(points, triangles, marble, _unit([0.2, 0.3, 1.0]))
+    cases.update(points=points, triangles=triangles, normals=normals, phi=phi, w12=w12)
+    cpu = solve.solve(solve.SurfaceGeometry(points, triangles, normals), phi, w12, marble, method="exact", device="cpu")
+    folder = tmp_path_factory.mktemp("gpu")
+    np.savez(folder / "cases.npz", **cases)
+    env = {**os.environ, "NUMBA_ENABLE_CUDASIM": "1", "PYTHONPATH": str(ROOT)}
+    child = subprocess.run(
+        [sys.executable, "-m", "tests.scatter.gpu_child", str(folder / "cases.npz"), str(folder / "out.npz")],
+        env=env,
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert child.returncode == 0, child.stderr[-3000:]
+    return dict(np.load(folder / "out.npz")), cases, references, cpu
+
+
+@pytest.mark.parametrize("name", list(CHANNEL_MAPS))
+def test_the_gpu_kernel_is_the_dense_sum_of_the_reference_formulas(simulated, name):
+    """Every model, one to three parameter rows mapped to three or five output channels, the sources in chunks: the
+    GPU's B is the reference S_d times the flux, summed (relative 1e-12), and it counts the CPU kernel's clamps."""
+    out, cases, references, _ = simulated
+    channel_of = cases[f"{name}_channel_of"]
+    flux = cases[f"{name}_flux"]
+    S = references[name]
+    assert out[f"{name}_chunk"] < 300  # the sources went in more than one chunk
+    for c, row in enumerate(channel_of):
+        expected = S[:, :, row] @ flux[:, c]
+        assert np.allclose(out[f"{name}_B"][:, c], expected, rtol=1e-12, atol=0)
+    _, clamped = kernels.vertex_sum(*vertex_sum_arguments(cases, name))
+    assert np.array_equal(out[f"{name}_clamped"], clamped)
+
+
+def test_exact_on_the_gpu_is_exact_on_the_cpu(simulated):
+    """A whole solve (far field on the GPU, near field on the CPU) equals the CPU's and says where it ran."""
+    out, _, _, cpu = simulated
+    assert np.allclose(out["solve_B"], cpu.B, rtol=1e-12, atol=0)
+    assert str(out["solve_device"]) == f"gpu ({probe.SIMULATOR})"
+    assert int(out["solve_clamped"]) == cpu.stats["clamped_values"]
+    assert cpu.stats["device"] == "cpu"
+
+
+@pytest.mark.skipif(importlib.util.find_spec("numba_cuda") is None, reason="numba-cuda (the gpu extra) not installed")
+def test_the_kernel_compiles_to_ptx():
+    """Where numba-cuda and CUDA's compiler libraries are installed (no GPU needed): the kernel, the CPU's pair
+    function inside it, compiles for a current GPU."""
+    code = (
+        "from numba import cuda, types as t\n"
+        "from translucency.scatter.gpu import pairs\n"
+        "f8, i8, p = t.float64, t.int64, t.UniTuple(t.float64, 8)\n"
+        "sig = (i8, f8[:, ::1], f8[::1], f8[::1], f8[::1], p, p, p, i8, i8, i8, f8[:, ::1], f8[:, ::1], i8,"
+        " f8[:, :, ::1], i8[:, ::1])\n"
+        "ptx, _ = cuda.compile_ptx(pairs._chunk_sums.py_func, sig, cc=(8, 0))\n"
+        "print('.entry' in ptx)\n"
+    )
+    env = {k: v for k, v in os.environ.items() if k != "NUMBA_ENABLE_CUDASIM"}
+    child = subprocess.run([sys.executable, "-c", code], env=env, cwd=ROOT, capture_output=True, text=True)
+    if "NvvmSupportError" in child.stderr or "DynamicLibNotFoundError" in child.stderr:
+        pytest.skip("CUDA's compiler libraries (NVVM, NVRTC) are not installed")
+    assert child.returncode == 0 and child.stdout.strip() == "True", child.stderr[-3000:]
+
+
+def _status(monkeypatch, usable, name="", reason=""):
+    monkeypatch.setattr(probe, "gpu_status", lambda: probe.GpuStatus(usable, name, reason))
+
+
+def test_auto_takes_the_gpu_for_exact_only_and_never_the_simulator(monkeypatch):
+    _status(monkeypatch, True, "NVIDIA H100 80GB HBM3")
+    assert probe.pair_device("auto", "exact") == ("gpu", "gpu (NVIDIA H100 80GB HBM3)")
+    assert probe.pair_device("auto", "tree") == ("cpu", "cpu")
+    assert probe.pair_device("cpu", "exact") == ("cpu", "cpu")
+    _status(monkeypatch, True, probe.SIMULATOR)
+    assert probe.pair_device("auto", "exact") == ("cpu", "cpu")
+    assert probe.pair_device("gpu", "exact") == ("gpu", f"gpu ({probe.SIMULATOR})")
+    _status(monkeypatch, False, reason="numba-cuda found no CUDA driver or no NVIDIA GPU")
+    assert probe.pair_device("auto", "exact") == ("cpu", "cpu")
+
+
+def test_a_gpu_that_cannot_be_had_is_a_sentence(monkeypatch):
+    _status(monkeypatch, False, reason=f"the GPU back end is not installed ({probe.INSTALL})")
+    with pytest.raises(InvalidParameterError, match=r"device='gpu' needs an NVIDIA GPU, and the GPU back end is not"):
+        probe.pair_device("gpu", "exact")
+    with command_line_spelling(), pytest.raises(InvalidParameterError, match=r"choose --device cpu or --device auto"):
+        probe.pair_device("gpu", "exact")
+    with pytest.raises(InvalidParameterError, match=r"choose method='exact', or device='auto' for method tree"):
+        probe.pair_device("gpu", "tree")
+
+
+def test_without_the_extra_the_status_says_what_to_install(monkeypatch):
+    """On a machine without numba-cuda (CI's), the probe imports nothing and names the extra."""
+    if importlib.util.find_spec("numba_cuda") is not None:
+        pytest.skip("numba-cuda is installed here")
+    monkeypatch.delenv("NUMBA_ENABLE_CUDASIM", raising=False)
+    probe.gpu_status.cache_clear()
+    try:
+        status = probe.gpu_status()
+    finally:
+        probe.gpu_status.cache_clear()
+    assert not status.usable and 'pip install "translucency[gpu]"' in status.reason
+
+
+def test_a_solve_on_the_cpu_says_so_and_a_bad_device_is_a_sentence():
+    medium = material("marble").medium()
+    points, triangles = icosphere(2, 10.0)
+    normals, phi, w12 = _lit(points, triangles, medium, _unit([0.2, 0.3, 1.0]))
+    geometry = solve.SurfaceGeometry(points, triangles, normals)
+    tree = solve.solve(geometry, phi, w12, medium, method="tree", tol=0.1, device="auto")
+    assert tree.stats["device"] == "cpu"
+    with pytest.raises(InvalidParameterError, match="device must be one of cpu, gpu, auto, got 'tpu'"):
+        solve.solve(geometry, phi, w12, medium, device="tpu")

@@ -1,0 +1,83 @@
+"""Whether an NVIDIA GPU can sum pairs here, asked once per process, and a sentence when it cannot.
+
+``NUMBA_ENABLE_CUDASIM=1`` (numba's CUDA simulator: the kernels run as Python on the CPU, for tests on
+machines without a GPU) counts as a GPU named "CUDA simulator".
+"""
+
+from __future__ import annotations
+
+import functools
+import importlib.util
+import os
+from dataclasses import dataclass
+
+from ...errors import InvalidParameterError, option
+
+__all__ = ["GpuStatus", "gpu_status", "pair_device", "SIMULATOR"]
+
+#: The name a simulated GPU reports.
+SIMULATOR = "CUDA simulator"
+#: What to install for the GPU back end.
+INSTALL = 'pip install "translucency[gpu]"'
+
+
+@dataclass(frozen=True)
+class GpuStatus:
+    """Whether a GPU can sum pairs here.
+
+    Attributes
+    ----------
+    usable : bool
+        A GPU (or the simulator) can run the kernels.
+    name : str
+        The device's name, or :data:`SIMULATOR`.
+    reason : str
+        Why not, as the end of a sentence ("" when usable).
+    """
+
+    usable: bool
+    name: str = ""
+    reason: str = ""
+
+
+@functools.cache
+def gpu_status() -> GpuStatus:
+    """The GPU this process would use: the first CUDA device numba-cuda sees, or why there is none."""
+    if os.environ.get("NUMBA_ENABLE_CUDASIM", "0") not in ("", "0"):
+        return GpuStatus(True, SIMULATOR)
+    if importlib.util.find_spec("numba_cuda") is None:
+        return GpuStatus(False, reason=f"the GPU back end is not installed ({INSTALL})")
+    try:
+        from numba import cuda
+
+        if not cuda.is_available():
+            return GpuStatus(False, reason="numba-cuda found no CUDA driver or no NVIDIA GPU")
+        name = cuda.get_current_device().name
+    except Exception as error:  # a broken driver or toolkit says so in its own words
+        return GpuStatus(False, reason=f"CUDA did not start: {str(error).strip().splitlines()[0]}")
+    return GpuStatus(True, name.decode() if isinstance(name, bytes) else str(name))
+
+
+def pair_device(device: str, method: str) -> tuple[str, str]:
+    """Where a solve by ``method`` sums its pairs for the setting ``device`` (``cpu``, ``gpu`` or ``auto``):
+    ``("cpu" or "gpu", what to report: "cpu" or "gpu (<name>)")``.
+
+    A GPU sums the pairs of ``exact``. ``auto`` takes a GPU where one works (not the simulator) and the method is
+    ``exact``, and the CPU otherwise; ``gpu`` with another method, or with no GPU that works, is a sentence that
+    says what to change."""
+    if device == "cpu" or (device == "auto" and method != "exact"):
+        return "cpu", "cpu"
+    if method != "exact":
+        raise InvalidParameterError(
+            f"{option('device', 'gpu')} sums every pair, which is method exact; choose {option('method', 'exact')}, "
+            f"or {option('device', 'auto')} for method {method}."
+        )
+    status = gpu_status()
+    if device == "auto" and (not status.usable or status.name == SIMULATOR):
+        return "cpu", "cpu"
+    if not status.usable:
+        raise InvalidParameterError(
+            f"{option('device', 'gpu')} needs an NVIDIA GPU, and {status.reason}; choose {option('device', 'cpu')} "
+            f"or {option('device', 'auto')}."
+        )
+    return "gpu", f"gpu ({status.name})"
