@@ -15,7 +15,8 @@ Per mesh:
   vertices, and the per-vertex relative error of the GPU's there (p99 and largest);
 * pairs per second, and against the device's FP32 peak where the device is in :data:`FP32_PEAK`;
 * on the smallest mesh, a whole ``solve(method="exact")`` with ``device="gpu"`` and ``device="cpu"``, the near field
-  on the CPU in both.
+  on the CPU in both; and relighting with its far field on the GPU (:func:`relit_lights`): six lights, per light
+  the product's seconds and the error against ``exact``.
 
 Writes ``bench/results/gpu.json`` and ``gpu.md`` (``bench/results/tmp`` with ``--quick``: a small torus, in numba's
 CUDA simulator where no GPU is present, to check the script itself)::
@@ -57,14 +58,15 @@ def torus_mesh(n_major: int, n_minor: int):
     return torus(28.0, 12.0, n_major, n_minor)
 
 
-def lit_surface(points, triangles, medium):
-    """The surface record and one directional light without shadows: ``phi = T12 cos`` and ``w12`` per vertex."""
+def lit_surface(points, triangles, medium, toward=(0.35, 1.0, 0.45)):
+    """The surface record and one directional light without shadows (``toward`` the light): ``phi = T12 cos`` and
+    ``w12`` per vertex."""
     from translucency.geometry.measure import vertex_normals
     from translucency.scatter import fresnel
     from translucency.scatter.solve import SurfaceGeometry
 
     normals = vertex_normals(points, triangles)
-    light = np.array([0.35, 1.0, 0.45]) / np.linalg.norm([0.35, 1.0, 0.45])
+    light = np.asarray(toward, float) / np.linalg.norm(toward)
     cos = normals @ light
     phi = np.where(cos > 0, fresnel.fresnel_transmittance(np.clip(cos, 0, 1), medium.eta) * cos, 0.0)
     w12 = fresnel.refract(np.broadcast_to(light, normals.shape), normals, medium.eta)
@@ -140,6 +142,36 @@ def whole_solves(geometry, phi, w12, medium):
     } | {"largest_relative_difference": float(difference.max())}
 
 
+def relit_lights(points, triangles, lights: int = 5):
+    """Relighting with its far field on the GPU (``solve(method="relight", device="gpu")``, tol 0.01): the
+    preparation (the near field, on the CPU), then per light the seconds of its product and its per-vertex error
+    against ``exact`` on the GPU (p99 over the vertices of docs/physics.md §8.5)."""
+    from translucency.scatter.materials import material
+    from translucency.scatter.solve import solve
+
+    medium = material("marble").medium()
+    rng = np.random.default_rng(3)
+    rows = []
+    geometry = None
+    for k in range(lights + 1):
+        toward = (0.35, 1.0, 0.45) if k == 0 else rng.normal(size=3)
+        surface, phi, w12 = lit_surface(points, triangles, medium, toward)
+        geometry = geometry or surface  # one surface: the operators are kept on it
+        relit = solve(geometry, phi, w12, medium, method="relight", tol=0.01, device="gpu")
+        exact = solve(geometry, phi, w12, medium, method="exact", device="gpu").B
+        counted = exact >= 1e-4 * exact.max(axis=0)
+        error = np.abs(relit.B - exact)[counted] / exact[counted]
+        rows.append(
+            {
+                "prepare_seconds": relit.timings.get("prepare", 0.0),
+                "apply_seconds": relit.timings["apply"],
+                "error_p99": float(np.percentile(error, 99)),
+                "reused": relit.stats["operators_reused"],
+            }
+        )
+    return rows
+
+
 def peak_of(name: str) -> float | None:
     """The FP32 peak of a device named ``name`` (:data:`FP32_PEAK`), or None."""
     return next((peak for key, peak in FP32_PEAK.items() if key in name), None)
@@ -179,6 +211,16 @@ def markdown(payload) -> str:
             f"(far field {solves['cpu']['timings'].get('far_field', 0):.2f} s); largest relative difference "
             f"{solves['largest_relative_difference']:.1e}.",
         ]
+    relit = payload.get("relit")
+    if relit:
+        later = [row for row in relit if row["reused"]]
+        lines += [
+            "",
+            f"Relighting the {payload['rows'][0]['mesh']} torus, far field on the GPU (tol 0.01): prepared in "
+            f"{relit[0]['prepare_seconds']:.1f} s; a later light {1e3 * min(r['apply_seconds'] for r in later):.1f}–"
+            f"{1e3 * max(r['apply_seconds'] for r in later):.1f} ms, p99 against exact "
+            f"{max(r['error_p99'] for r in relit):.1e} at most ({len(relit)} lights).",
+        ]
     return "\n".join(lines) + "\n"
 
 
@@ -213,6 +255,7 @@ def main(argv=None) -> int:
         print(f"{label}: {row}", flush=True)
         if k == 0:
             payload["whole_solves"] = whole_solves(geometry, phi, w12, medium)
+            payload["relit"] = relit_lights(points, triangles)
     table = markdown(payload)
     write_results(output_dir(args.quick), "gpu", payload, table)
     print(table)

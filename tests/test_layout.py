@@ -191,7 +191,18 @@ SHADING = "translucency.app.shading"
 DOOR = "translucency.scatter.transport"
 #: The solver's steps behind the door; the rest of scatter (the physics, the names, the lights, the media) is
 #: open to every room.
-SOLVER_STEPS = ("solve", "irradiance", "bounces", "varying", "nearfield", "relight", "hierarchy", "cutoff", "kernels")
+SOLVER_STEPS = (
+    "solve",
+    "irradiance",
+    "bounces",
+    "varying",
+    "nearfield",
+    "relight",
+    "hierarchy",
+    "cutoff",
+    "kernels",
+    "gpu.pairs",
+)
 #: Rooms of ``app`` outside the shading room that import a solver step, and why.
 STEP_IMPORTS = {
     "translucency.app.warmup": "names the compiled kernels it compiles ahead by import (each module's list)",

@@ -40,6 +40,15 @@ def main(cases_path: str, out_path: str) -> None:
     out["solve_B"] = solution.B
     out["solve_device"] = np.array(solution.stats["device"])
     out["solve_clamped"] = solution.stats["clamped_values"]
+    relit = solve.SurfaceGeometry(cases["relit_points"], cases["relit_triangles"], cases["relit_normals"])
+    for k in range(2):  # the first light prepares the near field, the second reuses it
+        light = solve.solve(
+            relit, cases[f"relit_phi{k}"], cases[f"relit_w12{k}"], medium, method="relight", tol=0.01, device="gpu"
+        )
+        out[f"relit_B{k}"] = light.B
+        out[f"relit_reused{k}"] = light.stats["operators_reused"]
+        out[f"relit_device{k}"] = np.array(light.stats["device"])
+        out[f"relit_fallback{k}"] = np.array(light.stats.get("relight_fallback", ""))
     np.savez(out_path, **out)
 
 

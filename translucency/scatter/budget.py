@@ -117,7 +117,7 @@ class SolveCounts:
     method : str
         Far-field method (``exact``, ``cutoff``, ``tree``).
     device : str
-        Where the far field's pairs are summed: ``cpu`` or ``gpu`` (``exact`` only).
+        Where the far field's pairs are summed: ``cpu`` or ``gpu``.
     near_triangles, near_points, own_points, far_evaluations : float
         Per receiver, the sample's means: near triangles, near-field quadrature points evaluated,
         of those the receiver's own, and far-field evaluations.

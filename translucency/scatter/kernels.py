@@ -587,76 +587,30 @@ def _indexed_rows(
 ):
     """Receivers ``lo .. hi - 1`` of :func:`indexed_sum`."""
     n_out = weights.shape[0]
-    X0, X1, X2, N0, N1, N2, W0, W1, W2 = table_rows(table)
+    rows = table_rows(table)
     for r in range(lo, hi):
-        x0, x1, x2 = rcv_points[r, 0], rcv_points[r, 1], rcv_points[r, 2]
-        n0, n1, n2 = rcv_normals[r, 0], rcv_normals[r, 1], rcv_normals[r, 2]
+        x_o = (rcv_points[r, 0], rcv_points[r, 1], rcv_points[r, 2])
+        n_o = (rcv_normals[r, 0], rcv_normals[r, 1], rcv_normals[r, 2])
         for group in range(lanes.shape[0] // 3):
             c0 = 3 * group
             F0, F1, F2, p0, p1, p2 = group_inputs(weights, lanes, c0)
             first, last = starts[r], starts[r] + counts[r]
-            a0, a1, a2 = _indexed_sources(
-                model,
-                first,
-                last,
-                columns,
-                factors,
-                X0,
-                X1,
-                X2,
-                N0,
-                N1,
-                N2,
-                W0,
-                W1,
-                W2,
-                x0,
-                x1,
-                x2,
-                n0,
-                n1,
-                n2,
-                p0,
-                p1,
-                p2,
-                F0,
-                F1,
-                F2,
+            a0, a1, a2 = indexed_sources(
+                model, first, last, columns, factors, rows, x_o, n_o, (p0, p1, p2), (F0, F1, F2)
             )
             store_three(out, r, c0, n_out, a0, a1, a2)
 
 
 @numba.njit(cache=True, inline="always", fastmath=True)
-def _indexed_sources(
-    model,
-    first,
-    last,
-    columns,
-    factors,
-    X0,
-    X1,
-    X2,
-    N0,
-    N1,
-    N2,
-    W0,
-    W1,
-    W2,
-    x0,
-    x1,
-    x2,
-    n0,
-    n1,
-    n2,
-    p0,
-    p1,
-    p2,
-    F0,
-    F1,
-    F2,
-):
+def indexed_sources(model, first, last, columns, factors, rows, x_o, n_o, p, flux):
     """Sum over the listed sources ``columns[first:last]`` of three channels' clamped ``S_d`` times flux
-    and factor at one receiver."""
+    and factor at one receiver. Tuples as :func:`vertex_sources`' (the sources' nine rows, the receiver's position
+    and normal, three lanes' parameters and flux rows)."""
+    X0, X1, X2, N0, N1, N2, W0, W1, W2 = rows
+    F0, F1, F2 = flux
+    x0, x1, x2 = x_o
+    n0, n1, n2 = n_o
+    p0, p1, p2 = p
     a0 = 0.0
     a1 = 0.0
     a2 = 0.0

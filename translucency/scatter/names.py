@@ -38,8 +38,8 @@ MODELS = ("directional", "standard", "better")
 #: and the tree's sums prepared once as operators that any light reuses (docs/physics.md §8.7).
 METHODS = ("exact", "cutoff", "tree", "relight")
 
-#: Where the pairs of ``exact`` are summed: the CPU, an NVIDIA GPU (the optional extra,
-#: :mod:`translucency.scatter.gpu`), or a GPU when one works and the CPU otherwise.
+#: Where the pairs of ``exact`` and of relighting's far field are summed: the CPU, an NVIDIA GPU (the optional
+#: extra, :mod:`translucency.scatter.gpu`), or a GPU when one works and the CPU otherwise.
 DEVICES = ("cpu", "gpu", "auto")
 
 DEFAULT_MODEL = "directional"

@@ -93,10 +93,11 @@ class RelightOperator:
     ----------
     key : tuple
         What the operators were made for: the medium's coefficients, model, tol.
-    far : FarMatrix
+    far : FarMatrix or RelitFarField
         The far field (:mod:`translucency.scatter.lowrank`): ``a, b0, b1, b2`` per channel, 1/(mm^2 sr) per
         unit flux, applied to ``Phi, Psi``. The pairs the near field holds are 0 in its dense blocks; where a
-        low-rank block holds one, the near row has that value taken off.
+        low-rank block holds one, the near row has that value taken off. On a GPU
+        (:class:`translucency.scatter.gpu.pairs.RelitFarField`): every pair but the near field's, summed per light.
     near_starts : (n + 1,) int64
     near_columns : (E_near,) int32
         Vertices of receiver ``r``'s near correction: ``near_columns[near_starts[r] : near_starts[r + 1]]``.
@@ -111,7 +112,7 @@ class RelightOperator:
     """
 
     key: tuple
-    far: lowrank.FarMatrix
+    far: object
     near_starts: np.ndarray
     near_columns: np.ndarray
     near_coefs: np.ndarray
@@ -146,7 +147,10 @@ class RelightOperator:
             values,
             lit,
         )
-        B = self.far.apply(values.reshape(n, n_c, QUADRATIC_TERMS), scratch)
+        if isinstance(self.far, lowrank.FarMatrix):
+            B = self.far.apply(values.reshape(n, n_c, QUADRATIC_TERMS), scratch)
+        else:  # the far field on a GPU: the light's own pairs
+            B = self.far.apply_light(areas, phi, w12)
         for_ranges(
             _apply_rows,
             n,
@@ -189,8 +193,9 @@ class TreeInstead:
 FALLBACK_TOLS = 10.0
 
 
-def operator_key(medium, model: str, tol: float) -> tuple:
-    """What an operator depends on besides the surface: the medium's coefficients, the model, the tolerance."""
+def operator_key(medium, model: str, tol: float, device: str = "cpu") -> tuple:
+    """What an operator depends on besides the surface: the medium's coefficients, the model, the tolerance, and
+    where its far field is summed (``cpu``: fitted and stored; ``gpu``: every pair per light)."""
     return (
         medium.sigma_a.tobytes(),
         medium.sigma_s.tobytes(),
@@ -198,6 +203,7 @@ def operator_key(medium, model: str, tol: float) -> tuple:
         float(medium.eta),
         model,
         float(tol),
+        device,
     )
 
 
@@ -240,15 +246,21 @@ def _gap(medium) -> float:
     return hierarchy.CLUSTER_MEAN_FREE_PATHS / float(np.min(medium.sigma_t_reduced))
 
 
-def operator_bytes(geometry, medium, tol: float, near_radius: float) -> tuple[float, dict]:
+def operator_bytes(geometry, medium, tol: float, near_radius: float, far_on_gpu: bool = False) -> tuple[float, dict]:
     """Memory (bytes) the operators of ``geometry`` (the spatially ordered surface) would take, counted
     before anything is made: the far field's dense blocks exactly, its crosses at
     :func:`~translucency.scatter.lowrank.expected_rank` each (a block expected to need more than
     :func:`~translucency.scatter.lowrank.rank_limit` counted at its limit, with
     :data:`~translucency.scatter.lowrank.SPLIT_DENSE_SHARE` of it dense), the near field's lists by the near
-    triangles' corners; ``(bytes, counts)``, the counts with the fits the far field would evaluate."""
+    triangles' corners; ``(bytes, counts)``, the counts with the fits the far field would evaluate (none, and no far
+    bytes, where the far field is summed on a GPU per light: ``far_on_gpu``)."""
     n = geometry.n_vertices
     n_c = medium.n_channels
+    offsets, ids = nearfield.lists_of(geometry, np.arange(n), near_radius)
+    near_entries = int(nearfield.near_vertex_counts(geometry.triangles, np.arange(n), offsets, ids).sum())
+    near_bytes = near_entries * (n_c * NEAR_ENTRY_BYTES + INDEX_BYTES) + 40 * n
+    if far_on_gpu:
+        return float(near_bytes), {"far_fits": 0.0, "near_entries": near_entries, "eps": 0.0}
     tree = _block_tree(geometry)
     far_pairs, dense_pairs = lowrank.partition(tree, _gap(medium))
     rows = tree.end[far_pairs[:, 0]] - tree.start[far_pairs[:, 0]]
@@ -264,25 +276,23 @@ def operator_bytes(geometry, medium, tol: float, near_radius: float) -> tuple[fl
     )
     row_scales = float(n_c * np.sum(rows))
     fits = dense_pairs_count * n_c + float(n_c * np.sum(ranks * (rows + cols)))
-    offsets, ids = nearfield.lists_of(geometry, np.arange(n), near_radius)
-    near_entries = int(nearfield.near_vertex_counts(geometry.triangles, np.arange(n), offsets, ids).sum())
     size = (
         far_floats * CROSS_ENTRY_BYTES
         + dense_pairs_count * AFFINE_TERMS * n_c * DENSE_ENTRY_BYTES
         + row_scales * ROW_SCALE_BYTES
-        + near_entries * (n_c * NEAR_ENTRY_BYTES + INDEX_BYTES)
-        + 40 * n
+        + near_bytes
     )
     return float(size), {"far_fits": fits, "near_entries": near_entries, "eps": far_eps(tol)}
 
 
 def prepare(
-    geometry, medium, model: str, tol: float, near_radius: float, beta: float, progress=None
+    geometry, medium, model: str, tol: float, near_radius: float, beta: float, progress=None, far_on_gpu: bool = False
 ) -> RelightOperator:
     """The operators of ``geometry`` (the solver's spatially ordered surface, mm) for the medium (1/mm),
     model and tolerance: the far field's hierarchical matrix over every vertex (fitted coefficients, cross
-    approximations to :func:`far_eps`), and the near field's operator within ``near_radius`` (mm; quadrature
-    refinement ratio ``beta``).
+    approximations to :func:`far_eps`), or with ``far_on_gpu`` every pair summed per light on the GPU
+    (:class:`~translucency.scatter.gpu.pairs.RelitFarField`), and the near field's operator within ``near_radius``
+    (mm; quadrature refinement ratio ``beta``).
 
     ``progress(stage, fraction)`` is called with the stage ``"relight operators"``.
     """
@@ -315,6 +325,10 @@ def prepare(
     near_seconds = time.perf_counter() - start
     report("relight operators", 0.5)
     start = time.perf_counter()
+    if far_on_gpu:
+        return _with_far_on_gpu(
+            geometry, medium, model, tol, params, (near_starts, near_columns, near_coefs), near_seconds
+        )
     far = lowrank.build(
         model_code,
         geometry.points,
@@ -343,6 +357,26 @@ def prepare(
         "near_entries": int(near_starts[-1]),
         "bytes": operator.nbytes,
         "seconds": {"far": time.perf_counter() - start, "near": near_seconds},
+    }
+    return operator
+
+
+def _with_far_on_gpu(geometry, medium, model, tol, params, near, near_seconds) -> RelightOperator:
+    """The operators of :func:`prepare` with the far field summed per light on the GPU: the near field's, and the
+    lists of the pairs it holds given to the GPU's far field, which leaves them out."""
+    from .gpu.pairs import RelitFarField
+
+    near_starts, near_columns, near_coefs = near
+    far = RelitFarField(kernels.MODELS[model], geometry.points, geometry.normals, params, near_starts, near_columns)
+    operator = RelightOperator(
+        operator_key(medium, model, tol, "gpu"), far, near_starts, near_columns.astype(np.int32), near_coefs
+    )
+    n = geometry.n_vertices
+    operator.stats = {
+        "far_entries": n * n,
+        "near_entries": int(near_starts[-1]),
+        "bytes": operator.nbytes,
+        "seconds": {"far": 0.0, "near": near_seconds},
     }
     return operator
 

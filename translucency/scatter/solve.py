@@ -372,7 +372,7 @@ def solve(
         corrects at full resolution). At least :func:`local_reach_floor` (the near-field radius plus the
         longest edge, so that every vertex the near field weighs is in the sum).
     device : {"auto", "cpu", "gpu"}
-        Where ``exact`` sums its pairs (:func:`translucency.scatter.gpu.probe.pair_device`); ``stats["device"]``.
+        Where ``exact`` and relighting's far field sum their pairs (``gpu.probe.pair_device``).
     progress : callable, optional
         Called as ``progress(stage, fraction)`` while the solver runs: stages ``far field`` and
         ``near field``, each from 0 to 1, many times per stage (after every block of receivers).
@@ -486,10 +486,11 @@ def _memory_at_start(geometry: SurfaceGeometry) -> tuple[float | None, float]:
 
 
 def relight_operator(
-    geometry: SurfaceGeometry, medium, model, tol, *, memory_limit=None, time_limit=None, progress=None
+    geometry: SurfaceGeometry, medium, model, tol, *, device="cpu", memory_limit=None, time_limit=None, progress=None
 ):
     """The relighting operators of ``geometry`` (the spatially ordered surface) for the medium, model and ``tol``
-    (:func:`translucency.scatter.relight.prepare`): ``(operator, reused)``, the operator a
+    (:func:`translucency.scatter.relight.prepare`; their far field summed per light on the GPU where ``device`` is
+    ``gpu``): ``(operator, reused)``, the operator a
     :class:`~translucency.scatter.relight.TreeInstead` where a first light found them far off. Relighting keeps one
     set per surface (:func:`translucency.scatter.relight.kept_operator`): another medium, model or ``tol`` replaces
     it (its memory is freed before the new one is made).
@@ -498,16 +499,16 @@ def relight_operator(
     (counted by :func:`~translucency.scatter.relight.operator_bytes`) or time is over budget."""
     from . import relight
 
-    held = relight.kept_operator(geometry, relight.operator_key(medium, model, tol))
+    held = relight.kept_operator(geometry, relight.operator_key(medium, model, tol, device))
     if held is not None:
         return held, True
     relight.release_operator(geometry)
     radius = near_radius(geometry, medium)
-    size, counts = relight.operator_bytes(geometry, medium, tol, radius)
+    size, counts = relight.operator_bytes(geometry, medium, tol, radius, far_on_gpu=device == "gpu")
     plan = relight_plan(size, counts, memory_limit, time_limit)
     if not plan.fits:
         raise BudgetError(over_budget_sentence(plan, geometry.n_vertices), plan)
-    operator = relight.prepare(geometry, medium, model, tol, radius, NEAR_BETA, progress)
+    operator = relight.prepare(geometry, medium, model, tol, radius, NEAR_BETA, progress, far_on_gpu=device == "gpu")
     relight.keep_operator(geometry, operator)
     return operator, False
 
@@ -523,13 +524,20 @@ def _relit(work, receivers, tol, memory_limit, time_limit, report, stats, timing
     stats["pairs_skipped"] = 0
     if work.lit.size == 0:
         stats["pairs_evaluated"] = 0
-        held = relight.kept_operator(work.geometry, relight.operator_key(work.medium, work.model, tol))
+        held = relight.kept_operator(work.geometry, relight.operator_key(work.medium, work.model, tol, work.device))
         if isinstance(held, relight.TreeInstead):
             stats["relight_fallback"] = "tree"
         return Solution(np.zeros((work.inner.size, work.medium.n_channels)), receivers, stats, timings, settings)
     start = time.perf_counter()
     operator, reused = relight_operator(
-        work.geometry, work.medium, work.model, tol, memory_limit=memory_limit, time_limit=time_limit, progress=report
+        work.geometry,
+        work.medium,
+        work.model,
+        tol,
+        device=work.device,
+        memory_limit=memory_limit,
+        time_limit=time_limit,
+        progress=report,
     )
     timings["prepare"] = 0.0 if reused else time.perf_counter() - start
     start = time.perf_counter()

@@ -71,7 +71,8 @@ class TransportOptions:
     tol : float
         The relative error allowed per vertex, 1.
     device : str
-        Where ``exact`` sums its pairs: ``cpu``, ``gpu`` or ``auto`` (:data:`~translucency.scatter.names.DEVICES`).
+        Where ``exact`` and relighting's far field sum their pairs: ``cpu``, ``gpu`` or ``auto``
+        (:data:`~translucency.scatter.names.DEVICES`).
     per_direction : bool
         One solve per light sample.
     bounces : int

@@ -146,8 +146,9 @@ class ShadeSettings:
     device: str = _setting(
         DEFAULT_DEVICE,
         "--",
-        'where exact sums its pairs: cpu, gpu (an NVIDIA GPU, with pip install "translucency[gpu]"), or auto (a '
-        "GPU where one works, else the CPU); every other method and the near field run on the CPU",
+        "where exact and relight's far field sum their pairs: cpu, gpu (an NVIDIA GPU, with pip install "
+        '"translucency[gpu]"), or auto (a GPU where one works, else the CPU); tree, cutoff and the near field run on '
+        "the CPU",
     )
     tol: float = _setting(
         DEFAULT_TOL,
@@ -210,7 +211,10 @@ class ShadeSettings:
         object.__setattr__(self, "material", resolve_medium(self.material))
         check_model(self.model)
         check_method(self.method)
-        check_device(self.device)
+        if check_device(self.device) == "gpu":  # a GPU that cannot be had, or a method it does not run: said now
+            from ...scatter.gpu.probe import pair_device
+
+            pair_device(self.device, self.method)
         check_tol(self.tol)
         object.__setattr__(self, "bounces", check_bounces(self.bounces))
         object.__setattr__(self, "resolution", parse_resolution(self.resolution))

@@ -10,6 +10,7 @@ from __future__ import annotations
 import dataclasses
 import math
 
+from ...scatter.gpu.probe import GPU_METHODS
 from ..shading.resolution import coarsest_proxy_edge, proxy_edge_length
 from ..shading.settings import ShadeSettings, resolve_medium
 
@@ -42,6 +43,9 @@ class SolveSettings:
         The material, 1/mm coefficients.
     model, method : str
         The scattering model and the solver's method.
+    device : str
+        Where the pairs are summed (``cpu``, ``gpu`` or ``auto``); a solve by a method the GPU does not run (the
+        preview by ``tree``) runs on the CPU.
     tol : float
         The solver's tolerance, relative error per vertex.
     resolution : "interactive", "full", "auto" or float
@@ -58,6 +62,7 @@ class SolveSettings:
     medium: object
     model: str
     method: str
+    device: str
     tol: float
     resolution: object
     per_direction: bool
@@ -73,6 +78,7 @@ class SolveSettings:
             medium=settings.material,
             model=settings.model,
             method=settings.method,
+            device=settings.device,
             tol=float(settings.tol),
             resolution=resolution,
             per_direction=bool(settings.per_direction),
@@ -120,11 +126,13 @@ class SolveSettings:
         """One solve on ``scene`` with ``lights`` at ``resolution`` (not ``"interactive"``), display ``exposure``
         (None: automatic) and ``progress``; ``method``, ``tol`` and ``bounces`` replace these settings' for this
         solve only. Returns the :class:`~translucency.app.shading.result.ShadeResult`."""
+        method = self.method if method is None else method
         return scene.shade(
             self.medium,
             lights,
             model=self.model,
-            method=self.method if method is None else method,
+            method=method,
+            device="cpu" if self.device == "gpu" and method not in GPU_METHODS else self.device,
             tol=self.tol if tol is None else tol,
             resolution=resolution,
             exposure=exposure,

@@ -21,6 +21,8 @@ def status_text(state) -> str:
         tolerance += f" (operators prepared in {prepared:.0f} s, once)"
     if method == "relight" and result.stats.get("solver", {}).get("relight_fallback"):
         tolerance += f"; by {result.stats['solver']['relight_fallback']}: the operators missed it"
+    if str(result.metadata.get("device", "cpu")).startswith("gpu"):
+        tolerance += f"; far field on {result.metadata['device']}"
     return (
         f"{state.medium.name}, {state.model} dipole, {size:.3g} mm ({state.mm_per_unit:.4g} mm per unit), "
         f"up {state.up_axis}\n"

@@ -22,11 +22,12 @@ from numba import config, cuda
 
 from .. import kernels
 
-__all__ = ["PairSums", "vertex_sum"]
+__all__ = ["PairSums", "RelitFarField", "vertex_sum"]
 
 #: The CPU's loop over the sources, as the kernel calls it: compiled for CUDA, or run as Python in numba's simulator
 #: (which cannot hand its arrays to a function compiled for the CPU).
 _every_source = kernels.vertex_sources.py_func if config.ENABLE_CUDASIM else kernels.vertex_sources
+_listed_sources = kernels.indexed_sources.py_func if config.ENABLE_CUDASIM else kernels.indexed_sources
 #: Threads per block along the receivers.
 THREADS = 128
 #: Threads a call gives the GPU at least, where the receivers times the chunks of sources allow it.
@@ -71,6 +72,31 @@ def _chunk_sums(model, table, F0, F1, F2, p0, p1, p2, k0, k1, k2, rcv_points, rc
     partial[part, o, 1] = a1
     partial[part, o, 2] = a2
     clamps[part, o] += count
+
+
+@cuda.jit
+def _listed_sums(model, table, F0, F1, F2, p0, p1, p2, starts, columns, factors, rcv_points, rcv_normals, out):
+    """Thread ``o``: receiver ``o``'s sum over the listed sources ``columns[starts[o] : starts[o + 1]]`` of three
+    lanes, by the CPU's own loop (:func:`~translucency.scatter.kernels.indexed_sources`)."""
+    o = cuda.grid(1)
+    if o >= rcv_points.shape[0]:
+        return
+    rows = (table[0], table[1], table[2], table[3], table[4], table[5], table[6], table[7], table[8])
+    a0, a1, a2 = _listed_sources(
+        model,
+        starts[o],
+        starts[o + 1],
+        columns,
+        factors,
+        rows,
+        (rcv_points[o, 0], rcv_points[o, 1], rcv_points[o, 2]),
+        (rcv_normals[o, 0], rcv_normals[o, 1], rcv_normals[o, 2]),
+        (p0, p1, p2),
+        (F0, F1, F2),
+    )
+    out[o, 0] = a0
+    out[o, 1] = a1
+    out[o, 2] = a2
 
 
 def chunk_size(n_rcv: int, n_src: int) -> int:
@@ -125,3 +151,57 @@ class PairSums:
 def vertex_sum(model, src_points, src_normals, src_w12, src_flux, rcv_points, rcv_normals, params, channel_of):
     """:func:`translucency.scatter.kernels.vertex_sum` on the GPU: same arguments, same ``(B, clamped)``."""
     return PairSums(model, src_points, src_normals, src_w12, src_flux, params, channel_of)(rcv_points, rcv_normals)
+
+
+class RelitFarField:
+    """Relighting's far field on the GPU (:mod:`translucency.scatter.relight`): for each light, every pair of its
+    lit sources at every vertex, less the pairs the near field's operator holds itself (``near_starts``,
+    ``near_columns``: vertex ``r``'s are ``near_columns[near_starts[r] : near_starts[r + 1]]``), all summed in
+    float64 with the light's own refracted directions, so nothing is fitted. Positions in mm."""
+
+    def __init__(self, model, points, normals, params, near_starts, near_columns):
+        self.model = int(model)
+        self.points = np.ascontiguousarray(points, dtype=np.float64)
+        self.normals = np.ascontiguousarray(normals, dtype=np.float64)
+        self.params = np.ascontiguousarray(params, dtype=np.float64)
+        self.channel_of = np.arange(self.params.shape[0])
+        self.n_lanes = kernels.channel_lanes(self.params, self.channel_of, self.params.shape[0]).shape[0]
+        self.starts = cuda.to_device(np.ascontiguousarray(near_starts, dtype=np.int64))
+        self.columns = cuda.to_device(np.ascontiguousarray(near_columns, dtype=np.int32))
+        self.factors = cuda.to_device(np.ones(len(near_columns), dtype=np.float32))
+        self.device_points = cuda.to_device(self.points)
+        self.device_normals = cuda.to_device(self.normals)
+        #: memory held on the host, bytes (the device holds the lists and the vertices)
+        self.nbytes = 0
+
+    def apply_light(self, areas, phi, w12) -> np.ndarray:
+        """``B (n, C)`` of the far field for the flux density ``phi (n, C)`` entering along ``w12 (n, 3)`` at the
+        vertices (areas ``areas``, mm^2)."""
+        flux = np.asarray(phi, dtype=np.float64) * np.asarray(areas, dtype=np.float64)[:, None]
+        lit = np.flatnonzero(flux.max(axis=1) > 0)
+        every = PairSums(
+            self.model, self.points[lit], self.normals[lit], w12[lit], flux[lit], self.params, self.channel_of
+        )
+        B, _ = every(self.points, self.normals)
+        return B - self._listed(w12, flux)
+
+    def _listed(self, w12, flux) -> np.ndarray:
+        """The pairs of the near lists, summed as the far field summed them."""
+        n, n_out = flux.shape
+        sources = PairSums(self.model, self.points, self.normals, w12, flux, self.params, self.channel_of)
+        out = np.empty((n, 3 * len(sources.groups)))
+        part = cuda.device_array((n, 3), dtype=np.float64)
+        for g, group in enumerate(sources.groups):
+            _listed_sums[-(-n // THREADS), THREADS](
+                self.model,
+                sources.table,
+                *group[:6],
+                self.starts,
+                self.columns,
+                self.factors,
+                self.device_points,
+                self.device_normals,
+                part,
+            )
+            out[:, 3 * g : 3 * g + 3] = part.copy_to_host()
+        return out[:, :n_out]

@@ -13,7 +13,10 @@ from dataclasses import dataclass
 
 from ...errors import InvalidParameterError, option
 
-__all__ = ["GpuStatus", "gpu_status", "pair_device", "SIMULATOR"]
+__all__ = ["GpuStatus", "gpu_status", "pair_device", "SIMULATOR", "GPU_METHODS"]
+
+#: The methods whose pairs a GPU sums: ``exact``'s, and relighting's far field (every pair, per light).
+GPU_METHODS = ("exact", "relight")
 
 #: The name a simulated GPU reports.
 SIMULATOR = "CUDA simulator"
@@ -62,15 +65,15 @@ def pair_device(device: str, method: str) -> tuple[str, str]:
     """Where a solve by ``method`` sums its pairs for the setting ``device`` (``cpu``, ``gpu`` or ``auto``):
     ``("cpu" or "gpu", what to report: "cpu" or "gpu (<name>)")``.
 
-    A GPU sums the pairs of ``exact``. ``auto`` takes a GPU where one works (not the simulator) and the method is
-    ``exact``, and the CPU otherwise; ``gpu`` with another method, or with no GPU that works, is a sentence that
-    says what to change."""
-    if device == "cpu" or (device == "auto" and method != "exact"):
+    A GPU sums the pairs of :data:`GPU_METHODS`. ``auto`` takes a GPU where one works (not the simulator) for
+    those, and the CPU otherwise; ``gpu`` with another method, or with no GPU that works, is a sentence that says
+    what to change."""
+    if device == "cpu" or (device == "auto" and method not in GPU_METHODS):
         return "cpu", "cpu"
-    if method != "exact":
+    if method not in GPU_METHODS:
         raise InvalidParameterError(
-            f"{option('device', 'gpu')} sums every pair, which is method exact; choose {option('method', 'exact')}, "
-            f"or {option('device', 'auto')} for method {method}."
+            f"{option('device', 'gpu')} sums every pair, for methods exact and relight; choose "
+            f"{option('method', 'exact')}, or {option('device', 'auto')} for method {method}."
         )
     status = gpu_status()
     if device == "auto" and (not status.usable or status.name == SIMULATOR):
