@@ -68,7 +68,15 @@ SCANS = {  # file, unit
     "igea": ("cyberware_igea.ply", "m"),
 }
 MATERIALS = ("marble", "skim_milk", "ketchup")
-SETTINGS = [("tree", 0.1), ("tree", 0.03), ("tree", 0.01), ("tree", 0.003), ("cutoff", 0.01)]
+SETTINGS = [
+    ("tree", 0.1),
+    ("tree", 0.03),
+    ("tree", 0.01),
+    ("tree", 0.003),
+    ("cutoff", 0.01),
+    ("relight", 0.1),
+    ("relight", 0.01),
+]
 #: Proxy resolutions of the pipeline (``Scene.shade(resolution=...)``): "detail" (the medium's
 #: :func:`~translucency.app.shading.resolution.proxy_edge_length`, the proxy "auto" takes at a tolerance of 0.53 and
 #: above in
@@ -261,10 +269,19 @@ def method_rows(scan, name, geometry, incident, medium, receivers, exact, settin
     """Rows of the far-field methods on every vertex: median of ``repeats`` warm solves each."""
     rows = []
     n = geometry.n_vertices
-    for method in sorted({m for m, _ in settings}):
+    for method in sorted({m for m, _ in settings} - {"relight"}):
         solve(geometry, incident.phi_rgb, incident.w12, medium, method=method, tol=0.5)  # compile, fill caches
     for method, tol in settings:
         # time the solve at every vertex (warm); measure the error at the exact's receivers
+        extra = {}
+        if method == "relight":  # the first light prepares the operators: its time apart, then a light's
+            start = time.perf_counter()
+            first = solve(geometry, incident.phi_rgb, incident.w12, medium, method=method, tol=tol)
+            extra = {
+                "prepare_seconds": first.timings["prepare"],
+                "first_light_seconds": time.perf_counter() - start,
+                "operator_bytes": first.stats["bytes"],
+            }
         full, seconds = timed(
             lambda: solve(geometry, incident.phi_rgb, incident.w12, medium, method=method, tol=tol), repeats, warm=False
         )
@@ -285,12 +302,17 @@ def method_rows(scan, name, geometry, incident, medium, receivers, exact, settin
                 full.stats,
                 full.timings,
                 p99=p99,
+                **extra,
             )
+        )
+        stages = (
+            f"prepared in {extra['prepare_seconds']:.1f} s, {extra['operator_bytes'] / 1e9:.2f} GB"
+            if extra
+            else f"far {full.timings['far_field']:.2f} s  near {full.timings['near_field']:.2f} s"
         )
         print(
             f"{scan:6s} {n:7d} {name:10s} {method:6s} tol {tol:<6g} {seconds:7.2f} s  "
-            f"rms {rms:.2e}  p99 {p99:.2e}  worst {worst:.2e}  far {full.timings['far_field']:.2f} s  "
-            f"near {full.timings['near_field']:.2f} s"
+            f"rms {rms:.2e}  p99 {p99:.2e}  worst {worst:.2e}  {stages}"
         )
     return rows
 
@@ -471,6 +493,8 @@ def markdown(rows):
     for r in rows:
         tol = "" if r["tol"] is None else f"{r['tol']:g}"
         note = "" if r["method"] != "exact" or r["receivers"] == r["vertices"] else f" ({r['receivers']} receivers)"
+        if "prepare_seconds" in r:  # relighting: a light's time; its operators' preparation and size once
+            note = f" (prepared in {r['prepare_seconds']:.0f} s, {r['operator_bytes'] / 1e9:.2f} GB)"
         lines.append(
             f"| {r['scan']} | {r['vertices']} | {r['material']} | {r['lights']} | {r['method']}{note} | {tol} | "
             f"{r['resolution']} | {r['seconds']:.2f} | {r['repeats']} | {r['error_rms']:.1e} | "

@@ -166,7 +166,7 @@ def cmd_materials(args) -> int:
 
 
 def cmd_report(args) -> int:
-    """Print the versions of the stack and check off-screen rendering."""
+    """Print the versions of the stack, the GPU the pair sums would use, and check off-screen rendering."""
     import platform
     from importlib import metadata
 
@@ -191,8 +191,11 @@ def cmd_report(args) -> int:
         except metadata.PackageNotFoundError:
             version = "NOT INSTALLED"
         print(f"  {package:<20} {version}")
+    from ..scatter.gpu.probe import gpu_status
     from .render import offscreen_check
 
+    gpu = gpu_status()
+    print(f"GPU for exact and relight (--device auto): {gpu.name if gpu.usable else 'none: ' + gpu.reason}")
     ok, detail = offscreen_check()
     print(f"off-screen rendering: {'works' if ok else 'FAILS'} ({detail})")
     return 0 if ok else 1

@@ -1,10 +1,13 @@
-"""Every (source, receiver) pair's ``S_d`` summed on an NVIDIA GPU: method ``exact`` (docs/physics.md §5.3).
+"""Every (source, receiver) pair's ``S_d`` summed on an NVIDIA GPU: method ``exact`` (docs/physics.md §5.3) and
+relighting's far field per light (§8.7).
 
 The same sum as :func:`translucency.scatter.kernels.vertex_sum`, by the same code: each GPU thread runs the
 CPU kernel's loop over sources (:func:`~translucency.scatter.kernels.vertex_sources`, compiled for CUDA) over a
 chunk of the sources for one receiver, in float64, and the chunks' sums are added in a fixed order on the host,
 so that a result does not depend on the scheduling. The sources are split into chunks only so that a small
-mesh still gives the GPU enough threads.
+mesh still gives the GPU enough threads. Relighting's far field (:class:`RelitFarField`) takes off the pairs of
+each receiver's near list, summed by the CPU's loop over a list
+(:func:`~translucency.scatter.kernels.indexed_sources`).
 
 =============== ================================================================ =====
 symbol          meaning                                                          unit
@@ -165,7 +168,6 @@ class RelitFarField:
         self.normals = np.ascontiguousarray(normals, dtype=np.float64)
         self.params = np.ascontiguousarray(params, dtype=np.float64)
         self.channel_of = np.arange(self.params.shape[0])
-        self.n_lanes = kernels.channel_lanes(self.params, self.channel_of, self.params.shape[0]).shape[0]
         self.starts = cuda.to_device(np.ascontiguousarray(near_starts, dtype=np.int64))
         self.columns = cuda.to_device(np.ascontiguousarray(near_columns, dtype=np.int32))
         self.factors = cuda.to_device(np.ones(len(near_columns), dtype=np.float32))
