@@ -13,16 +13,16 @@ Per mesh:
   estimated from that rate;
 * the CPU's ``exact`` (:func:`translucency.scatter.kernels.vertex_sum`, every thread) at ``--receivers`` random
   vertices, and the per-vertex relative error of the GPU's there (p99 and largest);
-* pairs per second, and against the device's FP32 peak where the device is in :data:`FP32_PEAK`;
+* pairs per second, and against the device's FP64 peak where the device is in :data:`FP64_PEAK`;
 * on the smallest mesh, a whole ``solve(method="exact")`` with ``device="gpu"`` and ``device="cpu"``, the near field
   on the CPU in both; and relighting with its far field on the GPU (:func:`relit_lights`): six lights, per light
   the product's seconds and the error against ``exact``.
 
-Writes ``bench/results/gpu.json`` and ``gpu.md`` (``bench/results/tmp`` with ``--quick``: a small torus, in numba's
-CUDA simulator where no GPU is present, to check the script itself)::
+Writes ``bench/results/gpu.json`` and ``gpu.md`` (``bench/results/tmp`` with ``--quick``: a small torus in numba's
+CUDA simulator, to check the script itself)::
 
     .venv/bin/python bench/gpu.py                 # on a GPU machine, a few minutes
-    .venv/bin/python bench/gpu.py --quick         # anywhere: the simulator when no GPU works
+    .venv/bin/python bench/gpu.py --quick         # anywhere: the simulator
 """
 
 from __future__ import annotations
@@ -39,8 +39,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from bench.report import machine_info, output_dir, write_results  # noqa: E402
 
-#: FP32 peak (FLOP/s, without tensor cores) by device name: the vendors' data sheets (SXM boards).
-FP32_PEAK = {"H100": 67e12, "H200": 67e12, "A100": 19.5e12}
+#: FP64 peak (FLOP/s, without tensor cores; the kernels compute in float64) by device name: the vendors' data sheets
+#: (SXM boards). Their FP32 peaks are twice these.
+FP64_PEAK = {"H100": 34e12, "H200": 34e12, "A100": 9.7e12}
 #: Tori: (label, vertices around the ring, around the tube), about the vertices of the scans they stand for.
 TORI = (
     ("bunny-sized (28k)", 336, 84),
@@ -173,8 +174,8 @@ def relit_lights(points, triangles, lights: int = 5):
 
 
 def peak_of(name: str) -> float | None:
-    """The FP32 peak of a device named ``name`` (:data:`FP32_PEAK`), or None."""
-    return next((peak for key, peak in FP32_PEAK.items() if key in name), None)
+    """The FP64 peak of a device named ``name`` (:data:`FP64_PEAK`), or None."""
+    return next((peak for key, peak in FP64_PEAK.items() if key in name), None)
 
 
 def markdown(payload) -> str:
@@ -199,8 +200,8 @@ def markdown(payload) -> str:
         best = max(row["pairs_per_second"] for row in payload["rows"])
         lines += [
             "",
-            f"Best rate {best:.2e} pairs/s against an FP32 peak of {peak:.2e} FLOP/s: {peak / best:.0f} FLOP "
-            "of peak per pair.",
+            f"Best rate {best:.2e} pairs/s against an FP64 peak of {peak:.2e} FLOP/s (FP32: twice that): "
+            f"{peak / best:.0f} FLOP of FP64 peak per pair.",
         ]
     solves = payload.get("whole_solves")
     if solves:
@@ -226,27 +227,26 @@ def markdown(payload) -> str:
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true", help="a small torus (the simulator where no GPU works)")
+    parser.add_argument("--quick", action="store_true", help="a small torus in numba's CUDA simulator")
     parser.add_argument("--receivers", type=int, default=2000, help="random vertices compared with the CPU")
     parser.add_argument("--repeats", type=int, default=3, help="timed repeats of each light (the best is kept)")
     parser.add_argument("--full-seconds", type=float, default=60.0, help="longest whole light run (estimate), s")
     parser.add_argument("--mesh", action="append", default=[], help="an .npz of points (mm) and triangles")
     parser.add_argument("--sizes", type=int, default=len(TORI), help="how many of the tori, smallest first")
     args = parser.parse_args(argv)
+    if args.quick:  # before numba.cuda is imported (on a GPU machine, --sizes 1 is the short run on the GPU)
+        os.environ["NUMBA_ENABLE_CUDASIM"] = "1"
+        args.receivers, args.repeats = min(args.receivers, 40), 1
     from translucency.scatter.gpu.probe import gpu_status
 
-    if args.quick and not gpu_status().usable:
-        os.environ["NUMBA_ENABLE_CUDASIM"] = "1"
-        gpu_status.cache_clear()
-        args.receivers, args.repeats = min(args.receivers, 40), 1
     status = gpu_status()
     if not status.usable:
         print(f"no GPU: {status.reason}", file=sys.stderr)
         return 1
     meshes = [(label, *torus_mesh(a, b)) for label, a, b in (QUICK_TORI if args.quick else TORI[: args.sizes])]
-    for path in args.mesh:
+    for path in args.mesh:  # after the tori: the whole solves and relighting run on the first torus
         data = np.load(path)
-        meshes.insert(0, (Path(path).stem, np.asarray(data["points"], float), np.asarray(data["triangles"])))
+        meshes.append((Path(path).stem, np.asarray(data["points"], float), np.asarray(data["triangles"])))
     payload = {"machine": machine_info(), "device": status.name, "rows": []}
     rate = None
     for k, (label, points, triangles) in enumerate(meshes):

@@ -1,6 +1,7 @@
-"""The GPU side of tests/scatter/test_gpu.py, run in a process of its own under numba's CUDA simulator
-(``NUMBA_ENABLE_CUDASIM=1`` must be set before numba.cuda is imported): ``python -m tests.scatter.gpu_child IN OUT``
-reads the cases from the ``.npz`` file IN and writes what the GPU code gave to the ``.npz`` file OUT."""
+"""The GPU side of tests/scatter/test_gpu.py, run in a process of its own, on the GPU where one works and otherwise
+under numba's CUDA simulator (``NUMBA_ENABLE_CUDASIM=1``, which must be set before numba.cuda is imported):
+``python -m tests.scatter.gpu_child IN OUT`` reads the cases from the ``.npz`` file IN and writes what the GPU code
+gave to the ``.npz`` file OUT."""
 
 import sys
 

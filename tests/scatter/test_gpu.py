@@ -70,7 +70,7 @@ def simulated(tmp_path_factory):
     normals, phi, w12 = _lit(points, triangles, marble, _unit([0.2, 0.3, 1.0]))
     cases.update(points=points, triangles=triangles, normals=normals, phi=phi, w12=w12)
     cpu = solve.solve(solve.SurfaceGeometry(points, triangles, normals), phi, w12, marble, method="exact", device="cpu")
-    points, triangles = icosphere(2, 10.0)
+    points, triangles = icosphere(3, 10.0)  # fine enough that the far field's fit shows on the CPU (0.15 %)
     cases.update(relit_points=points, relit_triangles=triangles)
     exact_relit = []
     for k, direction in enumerate(([0.2, 0.3, 1.0], [-1.0, 0.4, -0.2])):
@@ -80,7 +80,7 @@ def simulated(tmp_path_factory):
         exact_relit.append(solve.solve(geometry, phi, w12, marble, method="exact", device="cpu").B)
     folder = tmp_path_factory.mktemp("gpu")
     np.savez(folder / "cases.npz", **cases)
-    simulator = "0" if probe.gpu_status().usable else "1"  # a GPU that works here is tested itself
+    simulator = "0" if _real_gpu() else "1"  # a GPU that works here is tested itself
     env = {**os.environ, "NUMBA_ENABLE_CUDASIM": simulator, "PYTHONPATH": str(ROOT)}
     child = subprocess.run(
         [sys.executable, "-m", "tests.scatter.gpu_child", str(folder / "cases.npz"), str(folder / "out.npz")],
@@ -94,10 +94,15 @@ def simulated(tmp_path_factory):
     return dict(np.load(folder / "out.npz")), cases, references, cpu, exact_relit
 
 
+def _real_gpu() -> bool:
+    """Whether this machine has a GPU that works (not the simulator, which a parent process may have chosen)."""
+    status = probe.gpu_status()
+    return status.usable and status.name != probe.SIMULATOR
+
+
 def _device_name() -> str:
     """What a solve on the GPU says it ran on: the GPU of this machine, or the simulator."""
-    status = probe.gpu_status()
-    return f"gpu ({status.name if status.usable else probe.SIMULATOR})"
+    return f"gpu ({probe.gpu_status().name if _real_gpu() else probe.SIMULATOR})"
 
 
 @pytest.mark.parametrize("name", list(CHANNEL_MAPS))
@@ -125,16 +130,16 @@ def test_exact_on_the_gpu_is_exact_on_the_cpu(simulated):
     assert cpu.stats["device"] == "cpu"
 
 
-def test_relighting_with_its_far_field_on_the_gpu_holds_the_tolerance(simulated):
+def test_relighting_with_its_far_field_on_the_gpu_is_closer_to_exact_than_its_fit(simulated):
     """Relighting's near field prepared once, its far field every pair per light on the GPU: two lights, each
-    within tol of exact at the 99th percentile per vertex (docs/physics.md §8.5), the second reusing the first's
-    near field."""
+    within 0.1 % of exact at the 99th percentile per vertex (docs/physics.md §8.5; the CPU's fitted far field is
+    0.14-0.15 % off on this sphere, so the far field is not fitted), the second reusing the first's near field."""
     out, _, _, _, exact = simulated
     for k in range(2):
         B, reference = out[f"relit_B{k}"], exact[k]
         counted = reference >= 1e-4 * reference.max(axis=0)
         error = np.abs(B - reference)[counted] / reference[counted]
-        assert np.percentile(error, 99) <= 0.01, (k, np.percentile(error, 99))
+        assert np.percentile(error, 99) <= 1e-3, (k, np.percentile(error, 99))
         assert bool(out[f"relit_reused{k}"]) == (k == 1)
         assert str(out[f"relit_device{k}"]) == _device_name()
         assert str(out[f"relit_fallback{k}"]) == ""  # the operators' own answer, not tree's in their place
@@ -167,9 +172,10 @@ def _status(monkeypatch, usable, name="", reason=""):
     monkeypatch.setattr(probe, "gpu_status", lambda: probe.GpuStatus(usable, name, reason))
 
 
-def test_auto_takes_the_gpu_for_exact_only_and_never_the_simulator(monkeypatch):
+def test_auto_takes_the_gpu_for_exact_and_relight_only_and_never_the_simulator(monkeypatch):
     _status(monkeypatch, True, "NVIDIA H100 80GB HBM3")
     assert probe.pair_device("auto", "exact") == ("gpu", "gpu (NVIDIA H100 80GB HBM3)")
+    assert probe.pair_device("auto", "relight") == ("gpu", "gpu (NVIDIA H100 80GB HBM3)")
     assert probe.pair_device("auto", "tree") == ("cpu", "cpu")
     assert probe.pair_device("cpu", "exact") == ("cpu", "cpu")
     _status(monkeypatch, True, probe.SIMULATOR)
@@ -185,7 +191,9 @@ def test_a_gpu_that_cannot_be_had_is_a_sentence(monkeypatch):
         probe.pair_device("gpu", "exact")
     with command_line_spelling(), pytest.raises(InvalidParameterError, match=r"choose --device cpu or --device auto"):
         probe.pair_device("gpu", "exact")
-    with pytest.raises(InvalidParameterError, match=r"choose method='exact', or device='auto' for method tree"):
+    with pytest.raises(
+        InvalidParameterError, match=r"choose method='exact' or method='relight', or device='auto' for method tree"
+    ):
         probe.pair_device("gpu", "tree")
 
 

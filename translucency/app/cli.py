@@ -191,11 +191,12 @@ def cmd_report(args) -> int:
         except metadata.PackageNotFoundError:
             version = "NOT INSTALLED"
         print(f"  {package:<20} {version}")
-    from ..scatter.gpu.probe import gpu_status
+    from ..scatter.gpu.probe import SIMULATOR, gpu_status
     from .render import offscreen_check
 
     gpu = gpu_status()
-    print(f"GPU for exact and relight (--device auto): {gpu.name if gpu.usable else 'none: ' + gpu.reason}")
+    real = gpu.usable and gpu.name != SIMULATOR  # --device auto never takes the simulator
+    print(f"GPU for exact and relight (--device auto): {gpu.name if real else 'none: ' + (gpu.reason or gpu.name)}")
     ok, detail = offscreen_check()
     print(f"off-screen rendering: {'works' if ok else 'FAILS'} ({detail})")
     return 0 if ok else 1

@@ -470,7 +470,7 @@ def vertex_sources(model, n_src, rows, x_o, n_o, p, flux, counted):
 @numba.njit(cache=True, inline="always", fastmath=True)
 def weighted_pair(model, x, source, n_o, p, flux, counted):
     """One pair's three channels of ``S_d`` clamped at 0 (docs/physics.md §4.6) times the source's flux, and the
-    clamps counted: the body of every pair loop, on the CPU and on the GPU (:mod:`translucency.scatter.gpu.pairs`).
+    clamps counted: the body of the loop over every source (:func:`vertex_sources`), on the CPU and on the GPU.
     Tuples: the offset ``x = x_o - x_i`` (mm), the source's ``(n_i, w12)`` (six floats), the receiver's normal, three
     lanes' parameters (:func:`lane`), their flux and whether their clamps count (1 or 0, :func:`clamp_counted`)."""
     ni0, ni1, ni2, w0, w1, w2 = source

@@ -526,7 +526,7 @@ def _relit(work, receivers, tol, memory_limit, time_limit, report, stats, timing
         stats["pairs_evaluated"] = 0
         held = relight.kept_operator(work.geometry, relight.operator_key(work.medium, work.model, tol, work.device))
         if isinstance(held, relight.TreeInstead):
-            stats["relight_fallback"] = "tree"
+            stats["relight_fallback"], stats["device"] = "tree", "cpu"
         return Solution(np.zeros((work.inner.size, work.medium.n_channels)), receivers, stats, timings, settings)
     start = time.perf_counter()
     operator, reused = relight_operator(
@@ -544,7 +544,7 @@ def _relit(work, receivers, tol, memory_limit, time_limit, report, stats, timing
     if isinstance(operator, relight.TreeInstead):
         solved = _tree_of(work, tol, memory_limit, time_limit, report)
         B = solved.B
-        pairs = {"relight_fallback": "tree", "pairs_evaluated": solved.stats["pairs_evaluated"]}
+        pairs = {"relight_fallback": "tree", "pairs_evaluated": solved.stats["pairs_evaluated"], "device": "cpu"}
     else:
         B = operator.apply(work.geometry.vertex_areas, work.phi, work.w12)[work.inner]
         pairs = {"pairs_evaluated": operator.stats["far_entries"] + operator.stats["near_entries"]}
@@ -559,7 +559,7 @@ def _relit(work, receivers, tol, memory_limit, time_limit, report, stats, timing
             operator.stats["bytes"] = 0
             relight.keep_operator(work.geometry, relight.TreeInstead(operator.key, dict(operator.stats)))
             B = checked.B
-            pairs = {"relight_fallback": "tree", "pairs_evaluated": checked.stats["pairs_evaluated"]}
+            pairs = {"relight_fallback": "tree", "pairs_evaluated": checked.stats["pairs_evaluated"], "device": "cpu"}
         _warn_relight_check(work.medium.name, operator.stats, tol, work.inner.size, gave_way)
     stats.update(operator.stats)
     stats.update(pairs)

@@ -118,8 +118,8 @@ def solve_varying(geometry, phi, w12, medium: Medium, *, reflectance, solver=Non
     progress : callable, optional
         ``progress(stage, fraction)``, the levels' solves in turn.
     **options
-        ``model``, ``method``, ``tol``, ``receivers``, ``memory_limit``, ``time_limit`` of the solve;
-        ``relight`` is solved by ``tree`` (operators per level would replace each other).
+        ``model``, ``method``, ``tol``, ``device``, ``receivers``, ``memory_limit``, ``time_limit`` of the solve;
+        ``relight`` is solved by ``tree`` on the CPU (operators per level would replace each other).
     """
     from .solve import Solution, solve, warn_low_albedo
 
@@ -128,6 +128,8 @@ def solve_varying(geometry, phi, w12, medium: Medium, *, reflectance, solver=Non
     values, clamped = checked_reflectance(reflectance, n, C)
     if options.get("method") == "relight":
         options["method"] = "tree"
+        if options.get("device") == "gpu":  # tree runs on the CPU; the GPU was asked for relighting's far field
+            options["device"] = "cpu"
     receivers = options.pop("receivers", None)
     receivers = np.arange(n) if receivers is None else np.asarray(receivers, dtype=np.int64).ravel()
     levels = reflectance_levels(values)
@@ -166,6 +168,8 @@ def solve_varying(geometry, phi, w12, medium: Medium, *, reflectance, solver=Non
         stats["receiver_solves"] += int(rows.size)
         for key in ("pairs_evaluated", "pairs_skipped", "near_points"):
             stats[key] = stats.get(key, 0) + int(solution.stats.get(key, 0))
+        if "device" in solution.stats:
+            stats["device"] = solution.stats["device"]
         for key, value in solution.timings.items():
             timings[key] = timings.get(key, 0.0) + value
         settings = settings or solution.settings

@@ -103,8 +103,8 @@ def _listed_sums(model, table, F0, F1, F2, p0, p1, p2, starts, columns, factors,
 
 
 def chunk_size(n_rcv: int, n_src: int) -> int:
-    """Sources per thread: all of them when the receivers alone give :data:`TARGET_THREADS`, else fewer, never
-    under :data:`MIN_CHUNK`."""
+    """Sources per thread: all of them when the receivers alone give :data:`TARGET_THREADS`, else fewer, in as many
+    chunks as that takes but no more than one per :data:`MIN_CHUNK` sources."""
     chunks = max(1, min(-(-TARGET_THREADS // max(n_rcv, 1)), -(-n_src // MIN_CHUNK)))
     return -(-n_src // chunks)
 
@@ -181,6 +181,8 @@ class RelitFarField:
         vertices (areas ``areas``, mm^2)."""
         flux = np.asarray(phi, dtype=np.float64) * np.asarray(areas, dtype=np.float64)[:, None]
         lit = np.flatnonzero(flux.max(axis=1) > 0)
+        # w12 means nothing where no light enters (it may be anything there): the near lists' sum reads it
+        w12 = np.where((flux.max(axis=1) > 0)[:, None], w12, -self.normals)
         every = PairSums(
             self.model, self.points[lit], self.normals[lit], w12[lit], flux[lit], self.params, self.channel_of
         )

@@ -73,7 +73,8 @@ def pair_device(device: str, method: str) -> tuple[str, str]:
     if method not in GPU_METHODS:
         raise InvalidParameterError(
             f"{option('device', 'gpu')} sums every pair, for methods exact and relight; choose "
-            f"{option('method', 'exact')}, or {option('device', 'auto')} for method {method}."
+            f"{option('method', 'exact')} or {option('method', 'relight')}, or {option('device', 'auto')} for method "
+            f"{method}."
         )
     status = gpu_status()
     if device == "auto" and (not status.usable or status.name == SIMULATOR):
