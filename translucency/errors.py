@@ -99,6 +99,13 @@ class BudgetError(TranslucencyError):
         self.estimate = estimate
 
 
+class DeviceError(TranslucencyError):
+    """The GPU could not do its part of a solve (out of its memory, a fault of its driver): the sentence says so and
+    names ``--device cpu``; the command line exits with status 1 (the run started as asked)."""
+
+    exit_code = 1
+
+
 class TranslucencyWarning(UserWarning):
     """Something the user should know that did not stop the work (a coarser solve to fit a budget, say)."""
 

@@ -15,7 +15,7 @@ import pytest
 from tests.scatter.gpu_child import vertex_sum_arguments
 from tests.scatter.test_kernels import _pairs
 from tests.scatter.test_solve import _lit, _unit
-from translucency.errors import InvalidParameterError, command_line_spelling
+from translucency.errors import DeviceError, InvalidParameterError, command_line_spelling
 from translucency.geometry.synthetic import icosphere
 from translucency.scatter import dipoles, fresnel, kernels, solve
 from translucency.scatter.gpu import probe
@@ -219,3 +219,31 @@ def test_a_solve_on_the_cpu_says_so_and_a_bad_device_is_a_sentence():
     assert tree.stats["device"] == "cpu"
     with pytest.raises(InvalidParameterError, match="device must be one of cpu, gpu, auto, got 'tpu'"):
         solve.solve(geometry, phi, w12, medium, device="tpu")
+
+
+def test_a_cuda_error_is_a_sentence_that_names_the_cpu():
+    """CUDA's own exceptions (numba-cuda raises them from its driver module) become one sentence; others pass."""
+
+    class CudaAPIError(Exception):
+        pass
+
+    CudaAPIError.__module__ = "numba.cuda.cudadrv.driver"
+
+    @probe.said_plainly
+    def out_of_memory():
+        raise CudaAPIError("[2] Call to cuMemAlloc results in CUDA_ERROR_OUT_OF_MEMORY\nmore detail")
+
+    with pytest.raises(DeviceError) as info:
+        out_of_memory()
+    assert str(info.value) == (
+        "the GPU could not sum the pairs ([2] Call to cuMemAlloc results in CUDA_ERROR_OUT_OF_MEMORY); run with "
+        "device='cpu', or free the GPU's memory for it."
+    )
+    assert DeviceError.exit_code == 1
+
+    @probe.said_plainly
+    def not_cuda():
+        raise ValueError("a bug of our own")
+
+    with pytest.raises(ValueError, match="a bug of our own"):
+        not_cuda()

@@ -24,6 +24,7 @@ import numpy as np
 from numba import config, cuda
 
 from .. import kernels
+from .probe import said_plainly
 
 __all__ = ["PairSums", "RelitFarField", "vertex_sum"]
 
@@ -113,6 +114,7 @@ class PairSums:
     """:func:`translucency.scatter.kernels.vertex_sum` on the GPU for one set of sources, copied to the device
     once; call it with blocks of receivers. Arguments as ``vertex_sum``'s (float64, mm)."""
 
+    @said_plainly
     def __init__(self, model, src_points, src_normals, src_w12, src_flux, params, channel_of):
         table, weights = kernels.source_columns(src_points, src_normals, src_w12, src_flux)
         self.model = int(model)
@@ -132,6 +134,7 @@ class PairSums:
             for c0 in range(0, lanes.shape[0], 3)
         ]
 
+    @said_plainly
     def __call__(self, rcv_points, rcv_normals):
         """``(B (n_rcv, C) float64, clamped (n_rcv,) int64)`` at these receivers (mm, unit normals)."""
         n_rcv = int(rcv_points.shape[0])
@@ -162,6 +165,7 @@ class RelitFarField:
     ``near_columns``: vertex ``r``'s are ``near_columns[near_starts[r] : near_starts[r + 1]]``), all summed in
     float64 with the light's own refracted directions, so nothing is fitted. Positions in mm."""
 
+    @said_plainly
     def __init__(self, model, points, normals, params, near_starts, near_columns):
         self.model = int(model)
         self.points = np.ascontiguousarray(points, dtype=np.float64)
@@ -176,6 +180,7 @@ class RelitFarField:
         #: memory held on the host, bytes (the device holds the lists and the vertices)
         self.nbytes = 0
 
+    @said_plainly
     def apply_light(self, areas, phi, w12) -> np.ndarray:
         """``B (n, C)`` of the far field for the flux density ``phi (n, C)`` entering along ``w12 (n, 3)`` at the
         vertices (areas ``areas``, mm^2)."""

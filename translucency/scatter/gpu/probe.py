@@ -11,9 +11,9 @@ import importlib.util
 import os
 from dataclasses import dataclass
 
-from ...errors import InvalidParameterError, option
+from ...errors import DeviceError, InvalidParameterError, TranslucencyError, option
 
-__all__ = ["GpuStatus", "gpu_status", "pair_device", "SIMULATOR", "GPU_METHODS"]
+__all__ = ["GpuStatus", "gpu_status", "pair_device", "said_plainly", "SIMULATOR", "GPU_METHODS"]
 
 #: The methods whose pairs a GPU sums: ``exact``'s, and relighting's far field (every pair, per light).
 GPU_METHODS = ("exact", "relight")
@@ -85,3 +85,26 @@ def pair_device(device: str, method: str) -> tuple[str, str]:
             f"or {option('device', 'auto')}."
         )
     return "gpu", f"gpu ({status.name})"
+
+
+def said_plainly(function):
+    """``function`` (a step on the GPU) with CUDA's own errors (out of the GPU's memory, a driver's fault: numba-cuda's
+    exceptions) raised as a :class:`~translucency.errors.DeviceError` sentence that names the way around."""
+
+    @functools.wraps(function)
+    def on_the_gpu(*args, **kwargs):
+        try:
+            return function(*args, **kwargs)
+        except TranslucencyError:
+            raise
+        except Exception as error:
+            kind = type(error)
+            if "cuda" not in f"{kind.__module__}.{kind.__name__}".lower():
+                raise
+            reason = (str(error).strip().splitlines() or [kind.__name__])[0]
+            raise DeviceError(
+                f"the GPU could not sum the pairs ({reason}); run with {option('device', 'cpu')}, or free the GPU's "
+                "memory for it."
+            ) from error
+
+    return on_the_gpu
