@@ -3,7 +3,8 @@
 Run it on a machine with an NVIDIA GPU and the gpu extra (numba-cuda); it needs numpy, SciPy and numba-cuda only
 (no VTK, PyVista, pymeshlab or Embree), and builds its meshes in place: tori of the default bunny's, the Igea's,
 1M and 10M vertices (80 mm across), lit by one directional light without shadows, marble, the directional
-dipole. A scan can come as an ``.npz`` file of ``points`` (mm) and ``triangles`` (``--mesh``).
+dipole. A scan can come as an ``.npz`` file of ``points`` (mm) and ``triangles`` (``--mesh``; ``--export FOLDER``
+writes the default bunny's and the Igea's where the scans can be loaded).
 
 Per mesh:
 
@@ -173,6 +174,22 @@ def relit_lights(points, triangles, lights: int = 5):
     return rows
 
 
+def export_scans(folder: Path) -> int:
+    """Write the default bunny and the Igea (cleaned, mm; ``bench/relight.py``'s loading) as ``.npz`` files of
+    ``points`` and ``triangles`` into ``folder``, for ``--mesh`` on a machine that cannot load scans."""
+    from relight import load
+
+    folder.mkdir(parents=True, exist_ok=True)
+    for scan, stem in (("bunny (default)", "default_bunny"), ("igea", "igea")):
+        mesh = load(scan)
+        if mesh is None:
+            print(f"skipping {scan}: not in ../shared/meshes")
+            continue
+        np.savez(folder / f"{stem}.npz", points=np.asarray(mesh.points), triangles=np.asarray(mesh.triangles))
+        print(f"wrote {folder / stem}.npz ({mesh.n_points:,} vertices)")
+    return 0
+
+
 def peak_of(name: str) -> float | None:
     """The FP64 peak of a device named ``name`` (:data:`FP64_PEAK`), or None."""
     return next((peak for key, peak in FP64_PEAK.items() if key in name), None)
@@ -233,7 +250,10 @@ def main(argv=None) -> int:
     parser.add_argument("--full-seconds", type=float, default=60.0, help="longest whole light run (estimate), s")
     parser.add_argument("--mesh", action="append", default=[], help="an .npz of points (mm) and triangles")
     parser.add_argument("--sizes", type=int, default=len(TORI), help="how many of the tori, smallest first")
+    parser.add_argument("--export", metavar="FOLDER", help="write the default bunny and the Igea as .npz to carry")
     args = parser.parse_args(argv)
+    if args.export:
+        return export_scans(Path(args.export))
     if args.quick:  # before numba.cuda is imported (on a GPU machine, --sizes 1 is the short run on the GPU)
         os.environ["NUMBA_ENABLE_CUDASIM"] = "1"
         args.receivers, args.repeats = min(args.receivers, 40), 1
