@@ -3,9 +3,19 @@ under numba's CUDA simulator (``NUMBA_ENABLE_CUDASIM=1``, which must be set befo
 ``python -m tests.scatter.gpu_child IN OUT`` reads the cases from the ``.npz`` file IN and writes what the GPU code
 gave to the ``.npz`` file OUT."""
 
+import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def run_python(arguments, env) -> subprocess.CompletedProcess:
+    """``python ARGUMENTS`` (this interpreter) from the repository's root with the environment ``env``, its output
+    captured, 300 s at most: how the GPU's tests start a process whose numba.cuda is chosen afresh."""
+    return subprocess.run([sys.executable, *arguments], env=env, cwd=ROOT, capture_output=True, text=True, timeout=300)
 
 
 def vertex_sum_arguments(cases, name: str) -> tuple:

@@ -5,14 +5,12 @@ numba-cuda is installed, and the choice of device with its sentences."""
 
 import importlib.util
 import os
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from tests.scatter.gpu_child import vertex_sum_arguments
+from tests.scatter.gpu_child import run_python, vertex_sum_arguments
 from tests.scatter.test_kernels import _pairs
 from tests.scatter.test_solve import _lit, _unit
 from translucency.errors import DeviceError, InvalidParameterError, command_line_spelling
@@ -82,14 +80,7 @@ def simulated(tmp_path_factory):
     np.savez(folder / "cases.npz", **cases)
     simulator = "0" if _real_gpu() else "1"  # a GPU that works here is tested itself
     env = {**os.environ, "NUMBA_ENABLE_CUDASIM": simulator, "PYTHONPATH": str(ROOT)}
-    child = subprocess.run(
-        [sys.executable, "-m", "tests.scatter.gpu_child", str(folder / "cases.npz"), str(folder / "out.npz")],
-        env=env,
-        cwd=ROOT,
-        capture_output=True,
-        text=True,
-        timeout=300,
-    )
+    child = run_python(["-m", "tests.scatter.gpu_child", str(folder / "cases.npz"), str(folder / "out.npz")], env)
     assert child.returncode == 0, child.stderr[-3000:]
     return dict(np.load(folder / "out.npz")), cases, references, cpu, exact_relit
 
@@ -162,7 +153,7 @@ def test_the_kernel_compiles_to_ptx():
         "print('.entry' in ptx and '.entry' in ptx2)\n"
     )
     env = {k: v for k, v in os.environ.items() if k != "NUMBA_ENABLE_CUDASIM"}
-    child = subprocess.run([sys.executable, "-c", code], env=env, cwd=ROOT, capture_output=True, text=True)
+    child = run_python(["-c", code], env)
     if "NvvmSupportError" in child.stderr or "DynamicLibNotFoundError" in child.stderr:
         pytest.skip("CUDA's compiler libraries (NVVM, NVRTC) are not installed")
     assert child.returncode == 0 and child.stdout.strip() == "True", child.stderr[-3000:]

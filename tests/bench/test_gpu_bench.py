@@ -1,0 +1,21 @@
+"""bench/gpu.py, the script a GPU machine runs, in numba's CUDA simulator (``--quick``): it runs to its end and
+writes rows whose GPU sums are the CPU's, so that a GPU's scarce time is not spent finding a broken script."""
+
+import json
+import os
+
+from tests.scatter.gpu_child import ROOT, run_python
+
+
+def test_the_gpu_benchmark_runs_in_the_simulator_and_agrees_with_the_cpu():
+    env = {key: value for key, value in os.environ.items() if key != "NUMBA_ENABLE_CUDASIM"}
+    child = run_python([str(ROOT / "bench" / "gpu.py"), "--quick"], env)
+    assert child.returncode == 0, child.stderr[-3000:]
+    payload = json.loads((ROOT / "bench" / "results" / "tmp" / "gpu.json").read_text())
+    assert payload["device"] == "CUDA simulator"
+    (row,) = payload["rows"]
+    assert row["light_measured"] and row["error_max"] < 1e-12 and row["pairs"] == row["vertices"] * row["lit"]
+    assert payload["whole_solves"]["largest_relative_difference"] < 1e-10
+    relit = payload["relit"]
+    assert len(relit) == 6 and not relit[0]["reused"] and all(r["reused"] for r in relit[1:])
+    assert max(r["error_p99"] for r in relit) < 0.01  # relighting holds its tol 0.01 against exact
