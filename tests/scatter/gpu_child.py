@@ -60,6 +60,7 @@ def main(cases_path: str, out_path: str) -> None:
         out[f"relit_reused{k}"] = light.stats["operators_reused"]
         out[f"relit_device{k}"] = np.array(light.stats["device"])
         out[f"relit_fallback{k}"] = np.array(light.stats.get("relight_fallback", ""))
+        out[f"relit_near_on_gpu{k}"] = bool(light.stats.get("near_on_gpu"))
     np.savez(out_path, **out)
 
 

@@ -122,9 +122,10 @@ def test_exact_on_the_gpu_is_exact_on_the_cpu(simulated):
 
 
 def test_relighting_with_its_far_field_on_the_gpu_is_closer_to_exact_than_its_fit(simulated):
-    """Relighting's near field prepared once, its far field every pair per light on the GPU: two lights, each
-    within 0.1 % of exact at the 99th percentile per vertex (docs/physics.md §8.5; the CPU's fitted far field is
-    0.14-0.15 % off on this sphere, so the far field is not fitted), the second reusing the first's near field."""
+    """Relighting's near field prepared once (its product made on the GPU), its far field every pair per light on
+    the GPU: two lights, each within 0.1 % of exact at the 99th percentile per vertex (docs/physics.md §8.5; the
+    CPU's fitted far field is 0.14-0.15 % off on this sphere, so the far field is not fitted), the second reusing
+    the first's near field."""
     out, _, _, _, exact = simulated
     for k in range(2):
         B, reference = out[f"relit_B{k}"], exact[k]
@@ -134,6 +135,7 @@ def test_relighting_with_its_far_field_on_the_gpu_is_closer_to_exact_than_its_fi
         assert bool(out[f"relit_reused{k}"]) == (k == 1)
         assert str(out[f"relit_device{k}"]) == _device_name()
         assert str(out[f"relit_fallback{k}"]) == ""  # the operators' own answer, not tree's in their place
+        assert bool(out[f"relit_near_on_gpu{k}"])  # the near field's product on the GPU too
 
 
 @pytest.mark.skipif(importlib.util.find_spec("numba_cuda") is None, reason="numba-cuda (the gpu extra) not installed")
@@ -150,7 +152,9 @@ def test_the_kernel_compiles_to_ptx():
         "listed = (i8, f8[:, ::1], f8[::1], f8[::1], f8[::1], p, p, p, i8[::1], t.int32[::1], t.float32[::1],"
         " f8[:, ::1], f8[:, ::1], f8[:, ::1])\n"
         "ptx2, _ = cuda.compile_ptx(pairs._listed_sums.py_func, listed, cc=(8, 0))\n"
-        "print('.entry' in ptx and '.entry' in ptx2)\n"
+        "near = (i8[::1], t.int32[::1], t.float32[:, ::1], f8[:, ::1], t.boolean[::1], i8, f8[:, ::1])\n"
+        "ptx3, _ = cuda.compile_ptx(pairs._near_rows.py_func, near, cc=(8, 0))\n"
+        "print(all('.entry' in code for code in (ptx, ptx2, ptx3)))\n"
     )
     env = {k: v for k, v in os.environ.items() if k != "NUMBA_ENABLE_CUDASIM"}
     child = run_python(["-c", code], env)

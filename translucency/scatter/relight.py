@@ -149,8 +149,10 @@ class RelightOperator:
         )
         if isinstance(self.far, lowrank.FarMatrix):
             B = self.far.apply(values.reshape(n, n_c, QUADRATIC_TERMS), scratch)
-        else:  # the far field on a GPU: the light's own pairs
-            B = self.far.apply_light(areas, phi, w12)
+        else:  # the far field on a GPU: the light's own pairs, and the near field's product where it holds it
+            B = self.far.apply_light(areas, phi, w12, values, lit)
+            if self.far.holds_near:
+                return np.maximum(B, 0.0)
         for_ranges(
             _apply_rows,
             n,
@@ -367,7 +369,9 @@ def _with_far_on_gpu(geometry, medium, model, tol, params, near, near_seconds) -
     from .gpu.pairs import RelitFarField
 
     near_starts, near_columns, near_coefs = near
-    far = RelitFarField(kernels.MODELS[model], geometry.points, geometry.normals, params, near_starts, near_columns)
+    far = RelitFarField(
+        kernels.MODELS[model], geometry.points, geometry.normals, params, near_starts, near_columns, near_coefs
+    )
     operator = RelightOperator(
         operator_key(medium, model, tol, "gpu"), far, near_starts, near_columns.astype(np.int32), near_coefs
     )
@@ -375,6 +379,7 @@ def _with_far_on_gpu(geometry, medium, model, tol, params, near, near_seconds) -
     operator.stats = {
         "far_entries": n * n,
         "near_entries": int(near_starts[-1]),
+        "near_on_gpu": far.holds_near,
         "bytes": operator.nbytes,
         "seconds": {"far": 0.0, "near": near_seconds},
     }

@@ -103,6 +103,28 @@ def _listed_sums(model, table, F0, F1, F2, p0, p1, p2, starts, columns, factors,
     out[o, 2] = a2
 
 
+@cuda.jit
+def _near_rows(starts, columns, coefs, values, lit, width, out):
+    """Thread ``r``: relighting's near-field product of receiver ``r`` (as the CPU's ``relight._apply_rows``):
+    ``out[r, c] = sum_k coefs[k, c width : (c + 1) width] . values[columns[k], c width : (c + 1) width]`` over its
+    entries ``k`` from ``starts[r]`` to ``starts[r + 1]``, the columns without light (``lit`` false) skipped."""
+    r = cuda.grid(1)
+    if r >= out.shape[0]:
+        return
+    for c in range(out.shape[1]):
+        s = 0.0
+        for k in range(starts[r], starts[r + 1]):
+            column = columns[k]
+            if lit[column]:
+                for t in range(c * width, (c + 1) * width):
+                    s += coefs[k, t] * values[column, t]
+        out[r, c] = s
+
+
+#: Share of the GPU's free memory the near field's operator may take there (else its product stays on the CPU).
+NEAR_SHARE_OF_FREE = 0.5
+
+
 def chunk_size(n_rcv: int, n_src: int) -> int:
     """Sources per thread: all of them when the receivers alone give :data:`TARGET_THREADS`, else fewer, in as many
     chunks as that takes but no more than one per :data:`MIN_CHUNK` sources."""
@@ -163,10 +185,14 @@ class RelitFarField:
     """Relighting's far field on the GPU (:mod:`translucency.scatter.relight`): for each light, every pair of its
     lit sources at every vertex, less the pairs the near field's operator holds itself (``near_starts``,
     ``near_columns``: vertex ``r``'s are ``near_columns[near_starts[r] : near_starts[r + 1]]``), all summed in
-    float64 with the light's own refracted directions, so nothing is fitted. Positions in mm."""
+    float64 with the light's own refracted directions, so nothing is fitted. Positions in mm.
+
+    Where the near field's operator (``near_coefs``, float32, per entry its channels' ten coefficients) takes at most
+    :data:`NEAR_SHARE_OF_FREE` of the GPU's free memory, it is held there too and :attr:`holds_near` is True: a light's
+    near-field product is then made on the GPU with the far field (:meth:`apply_light`)."""
 
     @said_plainly
-    def __init__(self, model, points, normals, params, near_starts, near_columns):
+    def __init__(self, model, points, normals, params, near_starts, near_columns, near_coefs=None):
         self.model = int(model)
         self.points = np.ascontiguousarray(points, dtype=np.float64)
         self.normals = np.ascontiguousarray(normals, dtype=np.float64)
@@ -177,22 +203,40 @@ class RelitFarField:
         self.factors = cuda.to_device(np.ones(len(near_columns), dtype=np.float32))
         self.device_points = cuda.to_device(self.points)
         self.device_normals = cuda.to_device(self.normals)
+        self.holds_near = near_coefs is not None and near_coefs.nbytes <= NEAR_SHARE_OF_FREE * _free_bytes()
+        if self.holds_near:
+            self.coefs = cuda.to_device(np.ascontiguousarray(near_coefs, dtype=np.float32))
+            self.width = near_coefs.shape[1] // self.params.shape[0]
         #: memory held on the host, bytes (the device holds the lists and the vertices)
         self.nbytes = 0
 
     @said_plainly
-    def apply_light(self, areas, phi, w12) -> np.ndarray:
+    def apply_light(self, areas, phi, w12, values=None, lit=None) -> np.ndarray:
         """``B (n, C)`` of the far field for the flux density ``phi (n, C)`` entering along ``w12 (n, 3)`` at the
-        vertices (areas ``areas``, mm^2)."""
+        vertices (areas ``areas``, mm^2), plus the near field's product where :attr:`holds_near` (its inputs
+        ``values (n, 10 C)`` and ``lit (n,)`` as ``relight._inputs`` writes them)."""
         flux = np.asarray(phi, dtype=np.float64) * np.asarray(areas, dtype=np.float64)[:, None]
-        lit = np.flatnonzero(flux.max(axis=1) > 0)
+        sources = np.flatnonzero(flux.max(axis=1) > 0)
         # w12 means nothing where no light enters (it may be anything there): the near lists' sum reads it
         w12 = np.where((flux.max(axis=1) > 0)[:, None], w12, -self.normals)
         every = PairSums(
-            self.model, self.points[lit], self.normals[lit], w12[lit], flux[lit], self.params, self.channel_of
+            self.model,
+            self.points[sources],
+            self.normals[sources],
+            w12[sources],
+            flux[sources],
+            self.params,
+            self.channel_of,
         )
         B, _ = every(self.points, self.normals)
-        return B - self._listed(w12, flux)
+        B -= self._listed(w12, flux)
+        if self.holds_near:
+            near = cuda.device_array(B.shape, dtype=np.float64)
+            _near_rows[-(-B.shape[0] // THREADS), THREADS](
+                self.starts, self.columns, self.coefs, cuda.to_device(values), cuda.to_device(lit), self.width, near
+            )
+            B += near.copy_to_host()
+        return B
 
     def _listed(self, w12, flux) -> np.ndarray:
         """The pairs of the near lists, summed as the far field summed them."""
@@ -214,3 +258,11 @@ class RelitFarField:
             )
             out[:, 3 * g : 3 * g + 3] = part.copy_to_host()
         return out[:, :n_out]
+
+
+def _free_bytes() -> float:
+    """The GPU's free memory, bytes (unbounded in the simulator, which has none of its own)."""
+    if config.ENABLE_CUDASIM:
+        return float("inf")
+    free, _ = cuda.current_context().get_memory_info()
+    return float(free)
