@@ -169,6 +169,7 @@ def relit_lights(points, triangles, lights: int = 5):
                 "apply_seconds": relit.timings["apply"],
                 "error_p99": float(np.percentile(error, 99)),
                 "reused": relit.stats["operators_reused"],
+                "near_on_gpu": bool(relit.stats.get("near_on_gpu")),
             }
         )
     return rows

@@ -61,6 +61,13 @@ def main(cases_path: str, out_path: str) -> None:
         out[f"relit_device{k}"] = np.array(light.stats["device"])
         out[f"relit_fallback{k}"] = np.array(light.stats.get("relight_fallback", ""))
         out[f"relit_near_on_gpu{k}"] = bool(light.stats.get("near_on_gpu"))
+    pairs.NEAR_SHARE_OF_FREE = 0.0  # a GPU too small for the near field: its product on the CPU, the same B
+    again = solve.SurfaceGeometry(cases["relit_points"], cases["relit_triangles"], cases["relit_normals"])
+    light = solve.solve(
+        again, cases["relit_phi1"], cases["relit_w121"], medium, method="relight", tol=0.01, device="gpu"
+    )
+    out["relit_cpu_near_B"] = light.B
+    out["relit_cpu_near_on_gpu"] = bool(light.stats.get("near_on_gpu"))
     np.savez(out_path, **out)
 
 

@@ -136,25 +136,27 @@ def test_relighting_with_its_far_field_on_the_gpu_is_closer_to_exact_than_its_fi
         assert str(out[f"relit_device{k}"]) == _device_name()
         assert str(out[f"relit_fallback{k}"]) == ""  # the operators' own answer, not tree's in their place
         assert bool(out[f"relit_near_on_gpu{k}"])  # the near field's product on the GPU too
+    # where the near field's operator does not fit the GPU, its product is the CPU's: the same B
+    assert not bool(out["relit_cpu_near_on_gpu"])
+    assert np.allclose(out["relit_cpu_near_B"], out["relit_B1"], rtol=1e-12, atol=0)
 
 
 @pytest.mark.skipif(importlib.util.find_spec("numba_cuda") is None, reason="numba-cuda (the gpu extra) not installed")
 def test_the_kernel_compiles_to_ptx():
     """Where numba-cuda and CUDA's compiler libraries are installed (no GPU needed): the kernels, the CPU's loops
-    inside them, compile for a current GPU."""
+    inside them, compile for the A100's and the H100's architectures (sm_80, sm_90)."""
     code = (
         "from numba import cuda, types as t\n"
         "from translucency.scatter.gpu import pairs\n"
         "f8, i8, p = t.float64, t.int64, t.UniTuple(t.float64, 8)\n"
         "sig = (i8, f8[:, ::1], f8[::1], f8[::1], f8[::1], p, p, p, i8, i8, i8, f8[:, ::1], f8[:, ::1], i8,"
         " f8[:, :, ::1], i8[:, ::1])\n"
-        "ptx, _ = cuda.compile_ptx(pairs._chunk_sums.py_func, sig, cc=(8, 0))\n"
         "listed = (i8, f8[:, ::1], f8[::1], f8[::1], f8[::1], p, p, p, i8[::1], t.int32[::1], t.float32[::1],"
         " f8[:, ::1], f8[:, ::1], f8[:, ::1])\n"
-        "ptx2, _ = cuda.compile_ptx(pairs._listed_sums.py_func, listed, cc=(8, 0))\n"
         "near = (i8[::1], t.int32[::1], t.float32[:, ::1], f8[:, ::1], t.boolean[::1], i8, f8[:, ::1])\n"
-        "ptx3, _ = cuda.compile_ptx(pairs._near_rows.py_func, near, cc=(8, 0))\n"
-        "print(all('.entry' in code for code in (ptx, ptx2, ptx3)))\n"
+        "kernels = ((pairs._chunk_sums, sig), (pairs._listed_sums, listed), (pairs._near_rows, near))\n"
+        "codes = [cuda.compile_ptx(k.py_func, s, cc=cc)[0] for k, s in kernels for cc in ((8, 0), (9, 0))]\n"
+        "print(all('.entry' in code for code in codes))\n"
     )
     env = {k: v for k, v in os.environ.items() if k != "NUMBA_ENABLE_CUDASIM"}
     child = run_python(["-c", code], env)

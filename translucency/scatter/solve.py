@@ -563,6 +563,8 @@ def _relit(work, receivers, tol, memory_limit, time_limit, report, stats, timing
         _warn_relight_check(work.medium.name, operator.stats, tol, work.inner.size, gave_way)
     stats.update(operator.stats)
     stats.update(pairs)
+    if "relight_fallback" in pairs:  # tree ran on the CPU, near field and all
+        stats.pop("near_on_gpu", None)
     stats["operators_reused"] = reused
     B = _assembled(B, np.zeros_like(B), work.visit, stats)
     return Solution(B=B, receivers=receivers, stats=stats, timings=timings, settings=settings)

@@ -1,5 +1,5 @@
 """Every (source, receiver) pair's ``S_d`` summed on an NVIDIA GPU: method ``exact`` (docs/physics.md §5.3) and
-relighting's far field per light (§8.7).
+relighting's far field per light (§8.7), with relighting's near-field product where its operator fits there.
 
 The same sum as :func:`translucency.scatter.kernels.vertex_sum`, by the same code: each GPU thread runs the
 CPU kernel's loop over sources (:func:`~translucency.scatter.kernels.vertex_sources`, compiled for CUDA) over a

@@ -15,7 +15,8 @@ from ...errors import DeviceError, InvalidParameterError, TranslucencyError, opt
 
 __all__ = ["GpuStatus", "gpu_status", "pair_device", "said_plainly", "SIMULATOR", "GPU_METHODS"]
 
-#: The methods whose pairs a GPU sums: ``exact``'s, and relighting's far field (every pair, per light).
+#: The methods whose pairs a GPU sums: ``exact``'s, and relighting's far field (every pair, per light; its near
+#: field's product too where the operator fits on the GPU).
 GPU_METHODS = ("exact", "relight")
 
 #: The name a simulated GPU reports.
