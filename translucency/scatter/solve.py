@@ -113,30 +113,22 @@ class Solution:
     settings: dict
 
 
-def _exact_far_field(model, geometry, medium, lit, w12, flux, params, channel_of, tol):
-    """Method ``exact``: every (lit source, receiver) pair."""
+def _exact_far_field(model, geometry, medium, lit, w12, flux, params, channel_of, tol, device="cpu"):
+    """Method ``exact``: every (lit source, receiver) pair, on the CPU or, where ``device`` is ``gpu``, on the GPU
+    (:mod:`translucency.scatter.gpu.pairs`: the lit sources copied to the device once)."""
     model_code = kernels.MODELS[model]
     sources = (geometry.points[lit], geometry.normals[lit], w12[lit], flux[lit])
+    if device == "gpu":
+        from .gpu.pairs import PairSums
+
+        summed = PairSums(model_code, *sources, params, channel_of)
+    else:
+
+        def summed(rcv_points, rcv_normals):
+            return kernels.vertex_sum(model_code, *sources, rcv_points, rcv_normals, params, channel_of)
 
     def evaluate(rcv_points, rcv_normals):
-        B, clamped = kernels.vertex_sum(model_code, *sources, rcv_points, rcv_normals, params, channel_of)
-        pairs = int(lit.size) * int(rcv_points.shape[0])
-        return B, {"pairs_evaluated": pairs, "pairs_skipped": 0, "clamped_values": int(clamped.sum())}
-
-    return evaluate
-
-
-def _gpu_far_field(model, geometry, medium, lit, w12, flux, params, channel_of, tol):
-    """Method ``exact`` on the GPU (:mod:`translucency.scatter.gpu.pairs`): the lit sources copied to the device
-    once, every pair summed there."""
-    from .gpu.pairs import PairSums
-
-    sums = PairSums(
-        kernels.MODELS[model], geometry.points[lit], geometry.normals[lit], w12[lit], flux[lit], params, channel_of
-    )
-
-    def evaluate(rcv_points, rcv_normals):
-        B, clamped = sums(rcv_points, rcv_normals)
+        B, clamped = summed(rcv_points, rcv_normals)
         pairs = int(lit.size) * int(rcv_points.shape[0])
         return B, {"pairs_evaluated": pairs, "pairs_skipped": 0, "clamped_values": int(clamped.sum())}
 
@@ -785,7 +777,7 @@ class _Work:
         if self.reach is not None:
             return _cutoff_far_field(*args, reach=self.reach)
         if self.device == "gpu":
-            return _gpu_far_field(*args)
+            return _exact_far_field(*args, device="gpu")
         return _FAR_FIELD[method](*args)
 
 
