@@ -150,7 +150,7 @@ class RelightOperator:
         if isinstance(self.far, lowrank.FarMatrix):
             B = self.far.apply(values.reshape(n, n_c, QUADRATIC_TERMS), scratch)
         else:  # the far field on a GPU: the light's own pairs, and the near field's product where it holds it
-            B = self.far.apply_light(areas, phi, w12, values, lit)
+            B = self.far.apply_light(w12, values, lit)
             if self.far.holds_near:
                 return np.maximum(B, 0.0)
         for_ranges(

@@ -206,19 +206,19 @@ class RelitFarField:
         self.holds_near = near_coefs is not None and near_coefs.nbytes <= NEAR_SHARE_OF_FREE * _free_bytes()
         if self.holds_near:
             self.coefs = cuda.to_device(np.ascontiguousarray(near_coefs, dtype=np.float32))
-            self.width = near_coefs.shape[1] // self.params.shape[0]
         #: memory held on the host, bytes (the device holds the lists and the vertices)
         self.nbytes = 0
 
     @said_plainly
-    def apply_light(self, areas, phi, w12, values=None, lit=None) -> np.ndarray:
-        """``B (n, C)`` of the far field for the flux density ``phi (n, C)`` entering along ``w12 (n, 3)`` at the
-        vertices (areas ``areas``, mm^2), plus the near field's product where :attr:`holds_near` (its inputs
-        ``values (n, 10 C)`` and ``lit (n,)`` as ``relight._inputs`` writes them)."""
-        flux = np.asarray(phi, dtype=np.float64) * np.asarray(areas, dtype=np.float64)[:, None]
-        sources = np.flatnonzero(flux.max(axis=1) > 0)
+    def apply_light(self, w12, values, lit) -> np.ndarray:
+        """``B (n, C)`` of the far field for a light entering along ``w12 (n, 3)``, plus the near field's product
+        where :attr:`holds_near`, from the light's inputs as ``relight._inputs`` writes them: ``values (n, 10 C)``,
+        each channel's first the flux ``Phi = phi A`` entering at the vertex, and ``lit (n,)``, whether any does."""
+        width = values.shape[1] // self.params.shape[0]
+        flux = np.ascontiguousarray(values[:, ::width])
+        sources = np.flatnonzero(lit)
         # w12 means nothing where no light enters (it may be anything there): the near lists' sum reads it
-        w12 = np.where((flux.max(axis=1) > 0)[:, None], w12, -self.normals)
+        w12 = np.where(lit[:, None], w12, -self.normals)
         every = PairSums(
             self.model,
             self.points[sources],
@@ -233,7 +233,7 @@ class RelitFarField:
         if self.holds_near:
             near = cuda.device_array(B.shape, dtype=np.float64)
             _near_rows[-(-B.shape[0] // THREADS), THREADS](
-                self.starts, self.columns, self.coefs, cuda.to_device(values), cuda.to_device(lit), self.width, near
+                self.starts, self.columns, self.coefs, cuda.to_device(values), cuda.to_device(lit), width, near
             )
             B += near.copy_to_host()
         return B
