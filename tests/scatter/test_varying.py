@@ -97,3 +97,15 @@ def test_bad_reflectance_is_one_sentence(sphere):
     assert (
         clamped == 2 and values.min() == varying.REFLECTANCE_RANGE[0] and values.max() == varying.REFLECTANCE_RANGE[1]
     )
+
+
+def test_relighting_asked_on_the_gpu_is_solved_by_tree_on_the_cpu_and_says_so(sphere):
+    """Relighting with an albedo per vertex solves each level by tree, which the GPU does not run: ``device="gpu"``
+    gives way to the CPU there (no refusal, no GPU needed), the same B as tree on the CPU, and the device said."""
+    geometry, phi, w12 = sphere
+    base = medium_from_appearance([0.5, 0.5, 0.5], MFP, eta=1.3)
+    look = np.tile([0.35, 0.6, 0.8], (geometry.n_vertices, 1))
+    asked = varying.solve_varying(geometry, phi, w12, base, reflectance=look, method="relight", tol=0.1, device="gpu")
+    tree = varying.solve_varying(geometry, phi, w12, base, reflectance=look, method="tree", tol=0.1, device="cpu")
+    assert asked.stats["device"] == "cpu"
+    assert np.array_equal(asked.B, tree.B)

@@ -28,6 +28,7 @@ import numpy as np
 
 from ..errors import InvalidParameterError, TranslucencyWarning
 from .appearance import reduced_albedo
+from .gpu.probe import device_for
 from .medium import Medium
 
 __all__ = [
@@ -128,8 +129,8 @@ def solve_varying(geometry, phi, w12, medium: Medium, *, reflectance, solver=Non
     values, clamped = checked_reflectance(reflectance, n, C)
     if options.get("method") == "relight":
         options["method"] = "tree"
-        if options.get("device") == "gpu":  # tree runs on the CPU; the GPU was asked for relighting's far field
-            options["device"] = "cpu"
+        if "device" in options:  # tree runs on the CPU; the GPU was asked for relighting's far field
+            options["device"] = device_for(options["device"], "tree")
     receivers = options.pop("receivers", None)
     receivers = np.arange(n) if receivers is None else np.asarray(receivers, dtype=np.int64).ravel()
     levels = reflectance_levels(values)

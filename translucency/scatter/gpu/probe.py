@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 from ...errors import DeviceError, InvalidParameterError, TranslucencyError, option
 
-__all__ = ["GpuStatus", "gpu_status", "pair_device", "said_plainly", "SIMULATOR", "GPU_METHODS"]
+__all__ = ["GpuStatus", "gpu_status", "pair_device", "device_for", "said_plainly", "SIMULATOR", "GPU_METHODS"]
 
 #: The methods whose pairs a GPU sums: ``exact``'s, and relighting's far field (every pair, per light; its near
 #: field's product too where the operator fits on the GPU).
@@ -86,6 +86,13 @@ def pair_device(device: str, method: str) -> tuple[str, str]:
             f"or {option('device', 'auto')}."
         )
     return "gpu", f"gpu ({status.name})"
+
+
+def device_for(device: str, method: str) -> str:
+    """The device setting of a solve by ``method`` that the settings ``device`` asked for on the way to another
+    method (a viewer's first picture by ``tree``, relighting solved by ``tree`` per albedo level): ``cpu`` where
+    ``gpu`` was asked and the GPU does not run ``method`` (:data:`GPU_METHODS`), else ``device`` itself."""
+    return "cpu" if device == "gpu" and method not in GPU_METHODS else device
 
 
 def said_plainly(function):
