@@ -15,6 +15,9 @@ Per mesh:
 * the CPU's ``exact`` (:func:`translucency.scatter.kernels.vertex_sum`, every thread) at ``--receivers`` random
   vertices, and the per-vertex relative error of the GPU's there (p99 and largest);
 * pairs per second, and against the device's FP64 peak where the device is in :data:`FP64_PEAK`;
+* a whole ``solve(method="tree", tol=0.01, device="gpu")`` at every vertex (the tree's walk on the GPU, the near
+  field on the CPU): its seconds by stage, the evaluations per receiver, and its per-vertex error against ``exact``
+  at the sampled receivers (``exact`` on the GPU there, near field and all: :func:`tree_solve`);
 * on the smallest mesh, a whole ``solve(method="exact")`` with ``device="gpu"`` and ``device="cpu"``, the near field
   on the CPU in both; and relighting with its far field on the GPU (:func:`relit_lights`): six lights, per light
   the product's seconds and the error against ``exact``.
@@ -124,7 +127,29 @@ def measure(label, points, triangles, args, rate_so_far):
     counted = cpu >= 1e-4 * cpu.max(axis=0)  # the receivers tol is held over (docs/physics.md §8.5)
     error = np.abs(at_sample - cpu)[counted] / cpu[counted]
     row["error_p99"], row["error_max"] = float(np.percentile(error, 99)), float(error.max())
+    row["tree"] = tree_solve(geometry, phi, w12, medium, sample)
     return row, geometry, phi, w12, medium, rate
+
+
+def tree_solve(geometry, phi, w12, medium, sample):
+    """``solve(method="tree", tol=0.01, device="gpu")`` at every vertex, timed by stage, and its per-vertex error
+    (p99 and largest over the vertices of docs/physics.md §8.5) against ``exact`` on the GPU at ``sample``."""
+    from translucency.scatter.solve import solve
+
+    start = time.perf_counter()
+    tree = solve(geometry, phi, w12, medium, method="tree", tol=0.01, device="gpu")
+    seconds = time.perf_counter() - start
+    exact = solve(geometry, phi, w12, medium, method="exact", receivers=sample, device="gpu").B
+    counted = exact >= 1e-4 * exact.max(axis=0)
+    error = np.abs(tree.B[sample] - exact)[counted] / exact[counted]
+    return {
+        "seconds": seconds,
+        "timings": tree.timings,
+        "evaluations_per_receiver": tree.stats["pairs_evaluated"] / geometry.n_vertices,
+        "device": tree.stats["device"],
+        "error_p99": float(np.percentile(error, 99)),
+        "error_max": float(error.max()),
+    }
 
 
 def whole_solves(geometry, phi, w12, medium):
@@ -212,6 +237,21 @@ def markdown(payload) -> str:
             f"| {row['mesh']} | {row['vertices']:,} | {row['pairs']:.2e} | {light} | {row['pairs_per_second']:.2e} "
             f"| {row['cpu_pairs_per_second']:.2e} | {row['pairs_per_second'] / row['cpu_pairs_per_second']:.0f}× "
             f"| {row['error_p99']:.1e} ({row['error_max']:.1e}) |"
+        )
+    lines += [
+        "",
+        "`tree` at tol 0.01 on the GPU, every vertex (its near field on the CPU):",
+        "",
+        "| mesh | vertices | whole solve | far field (GPU) | near field (CPU) | evaluations per receiver "
+        "| p99 (max) vs exact |",
+        "|---|---:|---:|---:|---:|---:|---:|",
+    ]
+    for row in payload["rows"]:
+        tree = row["tree"]
+        lines.append(
+            f"| {row['mesh']} | {row['vertices']:,} | {tree['seconds']:.2f} s "
+            f"| {tree['timings'].get('far_field', 0.0):.2f} s | {tree['timings'].get('near_field', 0.0):.2f} s "
+            f"| {tree['evaluations_per_receiver']:.0f} | {tree['error_p99']:.1e} ({tree['error_max']:.1e}) |"
         )
     peak = peak_of(device)
     if peak:

@@ -48,7 +48,7 @@ def test_bad_light_direction_is_one_sentence(text):
         ("--resolution", "fine", "--resolution"),
         ("--exposure", "-1", "--exposure"),
         ("--material", "plutonium", "plutonium"),
-        ("--device", "gpu", "--device gpu sums every pair, for methods exact and relight; choose --method exact or"),
+        ("--device", "gpu", "--device gpu needs an NVIDIA GPU, and .*; choose --device cpu or --device auto"),
     ],
 )
 def test_bad_solver_settings_are_one_sentence(flag, value, words):

@@ -347,8 +347,8 @@ def test_a_frame_while_the_light_moves_leaves_the_bounce_out_and_the_next_solves
 
 
 def test_the_viewer_relights_with_its_far_field_on_a_gpu_and_says_so():
-    """In numba's CUDA simulator (a process of its own, no GPU needed), ``device="gpu"``: the first picture by tree
-    on the CPU, then relighting with every pair of its far field on the GPU, and the status line names the device."""
+    """In numba's CUDA simulator (a process of its own, no GPU needed), ``device="gpu"``: the first picture by tree,
+    then relighting with every pair of its far field, both on the GPU, and the status line names the device."""
     import os
     import subprocess
     import sys
@@ -359,6 +359,8 @@ def test_the_viewer_relights_with_its_far_field_on_a_gpu_and_says_so():
         "from translucency.geometry.mesh import TriangleMesh\n"
         "from translucency.geometry.synthetic import icosphere\n"
         "state = ViewerState(TriangleMesh(*icosphere(2, 20.0)), 'marble', device='gpu', bounces=0)\n"
+        "state.solve_preview()\n"
+        "print(state.result.metadata['device'], state.result.metadata['method'])\n"
         "state.set_light(-40.0, 20.0)\n"
         "print(state.result.metadata['device'])\n"
         "print(state.status.replace(chr(10), ' '))\n"
@@ -367,6 +369,6 @@ def test_the_viewer_relights_with_its_far_field_on_a_gpu_and_says_so():
     env = {**os.environ, "NUMBA_ENABLE_CUDASIM": "1", "PYTHONPATH": str(root)}
     child = subprocess.run([sys.executable, "-c", code], env=env, cwd=root, capture_output=True, text=True, timeout=300)
     assert child.returncode == 0, child.stderr[-3000:]
-    device, status = child.stdout.strip().splitlines()[-2:]
-    assert device == "gpu (CUDA simulator)"
+    preview, device, status = child.stdout.strip().splitlines()[-3:]
+    assert preview == "gpu (CUDA simulator) tree" and device == "gpu (CUDA simulator)"
     assert "relight, tolerance 0.01" in status and "far field on gpu (CUDA simulator)" in status

@@ -51,6 +51,12 @@ def main(cases_path: str, out_path: str) -> None:
     out["solve_B"] = solution.B
     out["solve_device"] = np.array(solution.stats["device"])
     out["solve_clamped"] = solution.stats["clamped_values"]
+    walked = solve.SurfaceGeometry(cases["tree_points"], cases["tree_triangles"], cases["tree_normals"])
+    tree = solve.solve(walked, cases["tree_phi"], cases["tree_w12"], medium, method="tree", tol=0.1, device="gpu")
+    out["tree_B"] = tree.B
+    out["tree_device"] = np.array(tree.stats["device"])
+    for key in ("pairs_direct", "cluster_evaluations"):
+        out[f"tree_{key}"] = tree.stats[key]
     relit = solve.SurfaceGeometry(cases["relit_points"], cases["relit_triangles"], cases["relit_normals"])
     for k in range(2):  # the first light prepares the near field, the second reuses it
         light = solve.solve(

@@ -268,3 +268,16 @@ def test_plan_is_the_plan_the_solve_makes_and_what_it_makes_the_solve_reuses(met
     assert spatial_order(geometry)[0] is ordered and (tree is None or tree_of(ordered) is tree)
     with pytest.raises(InvalidParameterError, match="relight"):
         solve.plan(geometry, phi, w12, medium, method="relight")
+
+
+@pytest.mark.parametrize("method", ["exact", "tree"])
+def test_the_far_field_on_a_gpu_is_timed_at_its_rate(method):
+    """On a GPU the far field's evaluations go at the device's rate, ``tree``'s walk as much slower than ``exact``'s
+    pairs as on the CPU (a million receivers, 1,000 evaluations each, nothing else to time)."""
+    from dataclasses import replace
+
+    cpu = budget.SolveCounts(0, 0, 1_000_000, 1_000_000, 3, 2, method, 0.0, 0.0, 0.0, 1_000.0)
+    gpu = replace(cpu, device="gpu")
+    per_pair = {"exact": 1 / 2e10, "tree": 40 / 12 / 2e10}[method]
+    assert budget.solve_seconds(gpu) == pytest.approx(1e9 * per_pair, rel=1e-12)
+    assert budget.solve_seconds(cpu) == pytest.approx(1e9 / (2 * budget.FAR_RATE[method]), rel=1e-12)

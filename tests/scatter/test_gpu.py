@@ -68,6 +68,10 @@ def simulated(tmp_path_factory):
     normals, phi, w12 = _lit(points, triangles, marble, _unit([0.2, 0.3, 1.0]))
     cases.update(points=points, triangles=triangles, normals=normals, phi=phi, w12=w12)
     cpu = solve.solve(solve.SurfaceGeometry(points, triangles, normals), phi, w12, marble, method="exact", device="cpu")
+    points, triangles = icosphere(2, 20.0)
+    normals, phi, w12 = _lit(points, triangles, marble, _unit([-0.3, 0.5, 0.8]))
+    cases.update(tree_points=points, tree_triangles=triangles, tree_normals=normals, tree_phi=phi, tree_w12=w12)
+    tree = solve.solve(solve.SurfaceGeometry(points, triangles, normals), phi, w12, marble, method="tree", tol=0.1)
     points, triangles = icosphere(3, 10.0)  # fine enough that the far field's fit shows on the CPU (0.15 %)
     cases.update(relit_points=points, relit_triangles=triangles)
     exact_relit = []
@@ -82,7 +86,7 @@ def simulated(tmp_path_factory):
     env = {**os.environ, "NUMBA_ENABLE_CUDASIM": simulator, "PYTHONPATH": str(ROOT)}
     child = run_python(["-m", "tests.scatter.gpu_child", str(folder / "cases.npz"), str(folder / "out.npz")], env)
     assert child.returncode == 0, child.stderr[-3000:]
-    return dict(np.load(folder / "out.npz")), cases, references, cpu, exact_relit
+    return dict(np.load(folder / "out.npz")), cases, references, cpu, exact_relit, tree
 
 
 def _real_gpu() -> bool:
@@ -100,7 +104,7 @@ def _device_name() -> str:
 def test_the_gpu_kernel_is_the_dense_sum_of_the_reference_formulas(simulated, name):
     """Every model, one to three parameter rows mapped to three or five output channels, the sources in chunks: the
     GPU's B is the reference S_d times the flux, summed (relative 1e-12), and it counts the CPU kernel's clamps."""
-    out, cases, references, _, _ = simulated
+    out, cases, references, _, _, _ = simulated
     channel_of = cases[f"{name}_channel_of"]
     flux = cases[f"{name}_flux"]
     S = references[name]
@@ -114,11 +118,22 @@ def test_the_gpu_kernel_is_the_dense_sum_of_the_reference_formulas(simulated, na
 
 def test_exact_on_the_gpu_is_exact_on_the_cpu(simulated):
     """A whole solve (far field on the GPU, near field on the CPU) equals the CPU's and says where it ran."""
-    out, _, _, cpu, _ = simulated
+    out, _, _, cpu, _, _ = simulated
     assert np.allclose(out["solve_B"], cpu.B, rtol=1e-12, atol=0)
     assert str(out["solve_device"]) == _device_name()
     assert int(out["solve_clamped"]) == cpu.stats["clamped_values"]
     assert cpu.stats["device"] == "cpu"
+
+
+def test_tree_on_the_gpu_is_tree_on_the_cpu(simulated):
+    """The GPU walks the tree and sums as it goes (gpu.tree); the CPU lists, then sums: the same sources and clusters
+    for every receiver (the same counts, clusters among them), the same B but for the order of the sums."""
+    out, _, _, _, _, cpu = simulated
+    assert cpu.stats["device"] == "cpu" and str(out["tree_device"]) == _device_name()
+    assert cpu.stats["cluster_evaluations"] > 0
+    for key in ("pairs_direct", "cluster_evaluations"):
+        assert int(out[f"tree_{key}"]) == cpu.stats[key], key
+    assert np.allclose(out["tree_B"], cpu.B, rtol=1e-12, atol=0)
 
 
 def test_relighting_with_its_far_field_on_the_gpu_is_closer_to_exact_than_its_fit(simulated):
@@ -126,7 +141,7 @@ def test_relighting_with_its_far_field_on_the_gpu_is_closer_to_exact_than_its_fi
     the GPU: two lights, each within 0.1 % of exact at the 99th percentile per vertex (docs/physics.md §8.5; the
     CPU's fitted far field is 0.14-0.15 % off on this sphere, so the far field is not fitted), the second reusing
     the first's near field."""
-    out, _, _, _, exact = simulated
+    out, _, _, _, exact, _ = simulated
     for k in range(2):
         B, reference = out[f"relit_B{k}"], exact[k]
         counted = reference >= 1e-4 * reference.max(axis=0)
@@ -143,18 +158,24 @@ def test_relighting_with_its_far_field_on_the_gpu_is_closer_to_exact_than_its_fi
 
 @pytest.mark.skipif(importlib.util.find_spec("numba_cuda") is None, reason="numba-cuda (the gpu extra) not installed")
 def test_the_kernel_compiles_to_ptx():
-    """Where numba-cuda and CUDA's compiler libraries are installed (no GPU needed): the kernels, the CPU's loops
-    inside them, compile for the A100's and the H100's architectures (sm_80, sm_90)."""
+    """Where numba-cuda and CUDA's compiler libraries are installed (no GPU needed): the kernels (the pair sums, the
+    tree's walk), the CPU's loops and tests inside them, compile for the A100's and the H100's architectures (sm_80,
+    sm_90)."""
     code = (
         "from numba import cuda, types as t\n"
-        "from translucency.scatter.gpu import pairs\n"
+        "from translucency.scatter.gpu import pairs, tree\n"
         "f8, i8, p = t.float64, t.int64, t.UniTuple(t.float64, 8)\n"
         "sig = (i8, f8[:, ::1], f8[::1], f8[::1], f8[::1], p, p, p, i8, i8, i8, f8[:, ::1], f8[:, ::1], i8,"
         " f8[:, :, ::1], i8[:, ::1])\n"
         "listed = (i8, f8[:, ::1], f8[::1], f8[::1], f8[::1], p, p, p, i8[::1], t.int32[::1], t.float32[::1],"
         " f8[:, ::1], f8[:, ::1], f8[:, ::1])\n"
         "near = (i8[::1], t.int32[::1], t.float32[:, ::1], f8[:, ::1], t.boolean[::1], i8, f8[:, ::1])\n"
-        "kernels = ((pairs._chunk_sums, sig), (pairs._listed_sums, listed), (pairs._near_rows, near))\n"
+        "a1, a2, b1 = f8[::1], f8[:, ::1], t.boolean[::1]\n"
+        "walk = (i8, t.Tuple((i8[::1],) * 5 + (a2, a1)), a2, b1, a2, t.UniTuple(a1, 3), t.UniTuple(p, 3),"
+        " t.UniTuple(a2, 2), t.Tuple((a2, a1)), a2, t.Tuple((i8, f8)), t.Tuple((f8, f8, a2, f8, f8, a1)), a2,"
+        " i8[:, ::1])\n"
+        "kernels = ((pairs._chunk_sums, sig), (pairs._listed_sums, listed), (pairs._near_rows, near),"
+        " (tree._walked_sums, walk))\n"
         "codes = [cuda.compile_ptx(k.py_func, s, cc=cc)[0] for k, s in kernels for cc in ((8, 0), (9, 0))]\n"
         "print(all('.entry' in code for code in codes))\n"
     )
@@ -169,11 +190,11 @@ def _status(monkeypatch, usable, name="", reason=""):
     monkeypatch.setattr(probe, "gpu_status", lambda: probe.GpuStatus(usable, name, reason))
 
 
-def test_auto_takes_the_gpu_for_exact_and_relight_only_and_never_the_simulator(monkeypatch):
+def test_auto_takes_the_gpu_for_exact_tree_and_relight_only_and_never_the_simulator(monkeypatch):
     _status(monkeypatch, True, "NVIDIA H100 80GB HBM3")
-    assert probe.pair_device("auto", "exact") == ("gpu", "gpu (NVIDIA H100 80GB HBM3)")
-    assert probe.pair_device("auto", "relight") == ("gpu", "gpu (NVIDIA H100 80GB HBM3)")
-    assert probe.pair_device("auto", "tree") == ("cpu", "cpu")
+    for method in ("exact", "tree", "relight"):
+        assert probe.pair_device("auto", method) == ("gpu", "gpu (NVIDIA H100 80GB HBM3)")
+    assert probe.pair_device("auto", "cutoff") == ("cpu", "cpu")
     assert probe.pair_device("cpu", "exact") == ("cpu", "cpu")
     _status(monkeypatch, True, probe.SIMULATOR)
     assert probe.pair_device("auto", "exact") == ("cpu", "cpu")
@@ -189,9 +210,10 @@ def test_a_gpu_that_cannot_be_had_is_a_sentence(monkeypatch):
     with command_line_spelling(), pytest.raises(InvalidParameterError, match=r"choose --device cpu or --device auto"):
         probe.pair_device("gpu", "exact")
     with pytest.raises(
-        InvalidParameterError, match=r"choose method='exact' or method='relight', or device='auto' for method tree"
+        InvalidParameterError,
+        match=r"far field of methods exact, tree and relight; choose one of them, or device='auto' for method cutoff",
     ):
-        probe.pair_device("gpu", "tree")
+        probe.pair_device("gpu", "cutoff")
 
 
 def test_without_the_extra_the_status_says_what_to_install(monkeypatch):

@@ -102,6 +102,7 @@ def test_the_budget_counts_what_the_tree_sum_evaluates():
     alone) counts, per receiver, as many sources and clusters as :func:`tree_sum` evaluates there, both walks."""
     from translucency.scatter import kernels
     from translucency.scatter.hierarchy import (
+        ListedWalk,
         aggregated_sources,
         brightest,
         first_estimate,
@@ -120,7 +121,8 @@ def test_the_budget_counts_what_the_tree_sum_evaluates():
     counted = sampled_evaluations(0, tree, points, normals, w12, flux, rcv, bright, params, np.arange(3), rule, 1e-4)
 
     sources = aggregated_sources(tree, points, normals, w12, flux)
-    estimate = first_estimate(0, tree, sources, points[bright], normals[bright], params, np.arange(3), rule)
+    walked = ListedWalk(0, tree, sources, params, np.arange(3), rule)
+    estimate = first_estimate(walked, points[bright], normals[bright])
     floor = 1e-4 * estimate.max(axis=0)
-    _, direct, clustered = tree_sum(0, tree, sources, points[rcv], normals[rcv], params, np.arange(3), rule, floor)
+    _, direct, clustered = tree_sum(walked, points[rcv], normals[rcv], rule, floor)
     assert np.array_equal(direct + clustered, counted)

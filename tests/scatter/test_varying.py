@@ -99,13 +99,19 @@ def test_bad_reflectance_is_one_sentence(sphere):
     )
 
 
-def test_relighting_asked_on_the_gpu_is_solved_by_tree_on_the_cpu_and_says_so(sphere):
-    """Relighting with an albedo per vertex solves each level by tree, which the GPU does not run: ``device="gpu"``
-    gives way to the CPU there (no refusal, no GPU needed), the same B as tree on the CPU, and the device said."""
+def test_relighting_with_an_albedo_per_vertex_is_tree_on_the_device_asked_for(sphere, monkeypatch):
+    """Relighting with an albedo per vertex solves each level by tree, on the device asked for: on the CPU the same B
+    as tree, the device said; ``device="gpu"`` where no GPU works is the probe's sentence (the setting reached the
+    levels' solves)."""
+    from translucency.scatter.gpu import probe
+
     geometry, phi, w12 = sphere
     base = medium_from_appearance([0.5, 0.5, 0.5], MFP, eta=1.3)
     look = np.tile([0.35, 0.6, 0.8], (geometry.n_vertices, 1))
-    asked = varying.solve_varying(geometry, phi, w12, base, reflectance=look, method="relight", tol=0.1, device="gpu")
+    asked = varying.solve_varying(geometry, phi, w12, base, reflectance=look, method="relight", tol=0.1, device="cpu")
     tree = varying.solve_varying(geometry, phi, w12, base, reflectance=look, method="tree", tol=0.1, device="cpu")
     assert asked.stats["device"] == "cpu"
     assert np.array_equal(asked.B, tree.B)
+    monkeypatch.setattr(probe, "gpu_status", lambda: probe.GpuStatus(False, reason="no GPU in this test"))
+    with pytest.raises(InvalidParameterError, match=r"device='gpu' needs an NVIDIA GPU, and no GPU in this test"):
+        varying.solve_varying(geometry, phi, w12, base, reflectance=look, method="relight", tol=0.1, device="gpu")

@@ -97,7 +97,8 @@ SAMPLE_SAFETY = 1.5
 #: estimate is pessimistic on a quiet one (``bench/budget.py``; bench/README.md, "Memory and time budget").
 FAR_RATE = {"exact": 40e6, "cutoff": 15e6, "tree": 12e6}
 #: Pairs per second of ``exact`` on a GPU, the whole device: an estimate from published all-pairs kernels and the
-#: pair's cost in simple interactions, not a calibration (bench/README.md, "GPU").
+#: pair's cost in simple interactions, not a calibration (bench/README.md, "GPU"). ``tree``'s walk is taken to be as
+#: much slower per evaluation there as on the CPU (:data:`FAR_RATE`).
 GPU_PAIR_RATE = 2e10
 NEAR_RATE = 3e6
 LIST_RATE = 60e6
@@ -203,7 +204,8 @@ def solve_seconds(counts: SolveCounts) -> float:
     """Estimated wall time (s) of a solve from its counts and the calibrated rates (:data:`FAR_RATE`, ...)."""
     threads = max(1, counts.threads)
     n_r = counts.n_receivers
-    far_rate = GPU_PAIR_RATE if counts.device == "gpu" else FAR_RATE.get(counts.method, FAR_RATE["exact"]) * threads
+    far_rate = FAR_RATE.get(counts.method, FAR_RATE["exact"])
+    far_rate *= GPU_PAIR_RATE / FAR_RATE["exact"] if counts.device == "gpu" else threads
     far = n_r * counts.far_evaluations / far_rate
     lists = 2 * n_r * counts.near_triangles / LIST_RATE
     near = n_r * counts.near_points / NEAR_RATE

@@ -397,7 +397,7 @@ def opening(medium, model: str, tol: float) -> Opening:
     )
 
 
-def _groups(rcv_points, group):
+def group_spheres(rcv_points, group):
     """Each group's bounding sphere (centre, radius; mm) and its members' rows (the last group repeats its last
     receiver)."""
     n_rcv = rcv_points.shape[0]
@@ -421,7 +421,7 @@ def walk_lists(
     + clustered[g]]``, entries ``j < n`` source ``j`` and ``n + k`` node ``k``'s cluster (``count_only``: the
     counts only, ``columns`` empty).
     """
-    centre, spread, members = _groups(rcv_points, group)
+    centre, spread, members = group_spheres(rcv_points, group)
     n_groups = centre.shape[0]
     if allow is None:
         limit = np.full((n_groups, node_flux.shape[1]), np.inf)
@@ -485,32 +485,42 @@ def _sum_of_lists(model, rcv_points, rcv_normals, sources, lists, group, lanes):
     )
 
 
-def tree_sum(
-    model,
-    tree,
-    sources: AggregatedSources,
-    rcv_points,
-    rcv_normals,
-    params,
-    channel_of,
-    rule: Opening,
-    floor,
-    block=4096,
-    reach=math.inf,
-    group=GROUP_RECEIVERS,
-):
+class ListedWalk:
+    """A walk of the tree and its sum on the CPU, for :func:`tree_sum`: called with ``(rcv_points mm, rcv_normals,
+    allow, group)``, it lists what each group of ``group`` receivers evaluates (:func:`walk_lists`; ``allow``: the
+    receivers' allowances ``(n_rcv, C)`` or None) and sums the lists
+    (:func:`~translucency.scatter.kernels.grouped_sum`): ``(B (n_rcv, C), direct (n_rcv,), clustered (n_rcv,))``,
+    the counts those of each receiver's group. The GPU's is :class:`translucency.scatter.gpu.tree.WalkedSums`."""
+
+    #: Receivers per call of :func:`tree_sum`: the lists of this many are held at once.
+    block = 4096
+
+    def __init__(self, model, tree, sources: AggregatedSources, params, channel_of, rule: Opening, reach=math.inf):
+        from .kernels import channel_lanes
+
+        self.model, self.tree, self.sources, self.rule, self.reach = model, tree, sources, rule, reach
+        self.lanes = channel_lanes(params, channel_of, sources.weights.shape[0])
+
+    def __call__(self, rcv_points, rcv_normals, allow, group):
+        sources = self.sources
+        lists = walk_lists(self.tree, sources.node_flux, sources.lit, rcv_points, self.rule, allow, self.reach, group)
+        B = _sum_of_lists(self.model, rcv_points, rcv_normals, sources, lists, group, self.lanes)
+        of = np.arange(rcv_points.shape[0]) // group  # each receiver's group
+        return B, lists[1][of], lists[2][of]
+
+
+def tree_sum(walked, rcv_points, rcv_normals, rule: Opening, floor, group=GROUP_RECEIVERS):
     """Far-field sum with the hierarchy: ``B[o, c]``, sources summed one by one and clusters used, per receiver.
 
-    Two walks per block of ``block`` receivers (docs/physics.md §8.3). The first takes a node as one aggregated
-    source (``sources``, from :func:`aggregated_sources`) where it is small seen from the receivers
-    (``rule.theta``) and farther than ``rule.min_distance``; its sum is the first estimate ``B_est``. The second
-    takes a node only where its aggregate's error is also within :func:`allowance` of ``B_est`` (``floor (C,)``:
-    the least ``B`` the allowance assumes, W/(m^2 sr)); otherwise its children are opened, down to the leaves'
-    sources. A node wholly farther than ``reach`` (mm) is skipped (the solver passes infinity). The tree is
-    walked once per group of ``group`` consecutive receivers (the solver orders them along a space-filling
-    curve) with the tests made for the group's bounding sphere, which hold for every receiver of the group, and
-    the group's list is evaluated at each of its receivers with
-    :func:`~translucency.scatter.kernels.grouped_sum`.
+    Two walks per block of ``walked.block`` receivers (docs/physics.md §8.3), each made and summed by ``walked``
+    (:class:`ListedWalk` on the CPU, :class:`translucency.scatter.gpu.tree.WalkedSums` on the GPU). The first takes a
+    node as one aggregated source where it is small seen from the receivers (``rule.theta``) and farther than
+    ``rule.min_distance``; its sum is the first estimate ``B_est``. The second takes a node only where its
+    aggregate's error is also within :func:`allowance` of ``B_est`` (``floor (C,)``: the least ``B`` the allowance
+    assumes, W/(m^2 sr)); otherwise its children are opened, down to the leaves' sources. The tree is walked once
+    per group of ``group`` consecutive receivers (the solver orders them along a space-filling curve) with the
+    tests made for the group's bounding sphere, which hold for every receiver of the group, and the group's
+    sources and clusters are summed at each of its receivers.
 
     Returns
     -------
@@ -518,37 +528,26 @@ def tree_sum(
     direct, clustered : (n_rcv,) int64
         Source pairs evaluated one by one (lit sources only) and cluster evaluations, per receiver, both walks.
     """
-    from .kernels import channel_lanes
-
-    n_channels = sources.weights.shape[0]
-    lanes = channel_lanes(params, channel_of, n_channels)
-    node_flux = sources.node_flux
     n_rcv = rcv_points.shape[0]
-    B = np.zeros((n_rcv, n_channels))
+    B = np.zeros((n_rcv, floor.shape[0]))
     direct = np.zeros(n_rcv, dtype=np.int64)
     clustered = np.zeros(n_rcv, dtype=np.int64)
     group = max(1, int(group))
-    block = max(group, block // group * group)
+    block = max(group, walked.block // group * group)
     for first in range(0, n_rcv, block):
         part = slice(first, min(n_rcv, first + block))
         p, nrm = rcv_points[part], rcv_normals[part]
-        of = np.arange(p.shape[0]) // group  # each receiver's group
-        first_walk = walk_lists(tree, node_flux, sources.lit, p, rule, None, reach, group)
-        B_est = _sum_of_lists(model, p, nrm, sources, first_walk, group, lanes)
-        second = walk_lists(tree, node_flux, sources.lit, p, rule, allowance(B_est, floor, rule.eps), reach, group)
-        B[part] = _sum_of_lists(model, p, nrm, sources, second, group, lanes)
-        direct[part] = first_walk[1][of] + second[1][of]
-        clustered[part] = first_walk[2][of] + second[2][of]
+        B_est, direct_first, clustered_first = walked(p, nrm, None, group)
+        B[part], direct_second, clustered_second = walked(p, nrm, allowance(B_est, floor, rule.eps), group)
+        direct[part] = direct_first + direct_second
+        clustered[part] = clustered_first + clustered_second
     return B, direct, clustered
 
 
-def first_estimate(model, tree, sources: AggregatedSources, rcv_points, rcv_normals, params, channel_of, rule):
-    """The first walk's sum alone at receivers taken one by one (``(n_rcv, C)``; see :func:`tree_sum`)."""
-    from .kernels import channel_lanes
-
-    lanes = channel_lanes(params, channel_of, sources.weights.shape[0])
-    lists = walk_lists(tree, sources.node_flux, sources.lit, rcv_points, rule, None, math.inf, 1)
-    return _sum_of_lists(model, rcv_points, rcv_normals, sources, lists, 1, lanes)
+def first_estimate(walked, rcv_points, rcv_normals):
+    """The first walk's sum alone at receivers taken one by one (``(n_rcv, C)``; see :func:`tree_sum`), by
+    ``walked`` (:class:`ListedWalk` or the GPU's)."""
+    return walked(rcv_points, rcv_normals, None, 1)[0]
 
 
 def brightest(flux, areas, count: int = BRIGHTEST_RECEIVERS) -> np.ndarray:
@@ -598,6 +597,29 @@ def sampled_evaluations(model, tree, points, normals, w12, flux, rcv, bright, pa
         tree, node_flux, lit, points[rcv], rule, allowance(B_est, floor, rule.eps), math.inf, GROUP_RECEIVERS, True
     )
     return np.repeat(first + direct + clustered, GROUP_RECEIVERS)[: rcv.size]
+
+
+@numba.njit(cache=True, inline="always", error_model="numpy")
+def small_and_far(near, radius, theta2, min_distance):
+    """Whether a node of bounding ``radius`` whose centre is ``near`` from a group of receivers (mm) may be one cluster
+    for it: farther than ``min_distance`` from the node's sphere and ``radius < theta * near`` (``theta2 = theta^2``;
+    :class:`Opening`, docs/physics.md §8.3)."""
+    return near > radius + min_distance and radius * radius < theta2 * near * near
+
+
+@numba.njit(cache=True, inline="always", error_model="numpy")
+def bound_index(distance, log_first, per_log, n_bound):
+    """The entry of :class:`Opening`'s table of the pair bound at the nearest tabulated distance below ``distance``
+    (mm), within the table."""
+    return min(max(int((math.log(distance) - log_first) * per_log), 0), n_bound - 1)
+
+
+@numba.njit(cache=True, inline="always", error_model="numpy")
+def aggregate_error(near, radius, curvature, flux, pair_bound):
+    """The bound of one channel's error of a node's aggregate (:class:`Opening`): ``radius^2 (1 / near^2 +
+    curvature) flux pair_bound``, with ``near`` its centre's distance from the receivers (mm), ``curvature`` =
+    ``sigma_tr^2`` (1/mm^2), its ``flux`` and the pair bound at its nearest point (1/(mm^2 sr))."""
+    return (radius * radius / (near * near) + radius * radius * curvature) * flux * pair_bound
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
@@ -662,13 +684,11 @@ def _traverse(
             near = math.sqrt(dx * dx + dy * dy + dz * dz) - rcv_spread[o]  # the group's closest distance to the centre
             if near > reach + rk:  # wholly beyond the cutoff radius
                 continue
-            accept = near > rk + min_distance and rk * rk < theta2 * near * near
+            accept = small_and_far(near, rk, theta2, min_distance)
             if accept:
-                at_bound = int((math.log(near - rk) - log_first) * per_log)  # the table's nearer distance
-                at_bound = min(max(at_bound, 0), n_bound - 1)
-                spread2 = rk * rk / (near * near)
+                at_bound = bound_index(near - rk, log_first, per_log, n_bound)
                 for c in range(n_c):
-                    if (spread2 + rk * rk * curvature[c]) * node_flux[k, c] * bound[c, at_bound] > allow[o, c]:
+                    if aggregate_error(near, rk, curvature[c], node_flux[k, c], bound[c, at_bound]) > allow[o, c]:
                         accept = False
                         break
             listed = 1 if accept else (end[k] - start[k] if left[k] < 0 else 0)  # entries this node may write

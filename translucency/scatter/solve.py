@@ -192,26 +192,29 @@ def _cutoff_far_field(model, geometry, medium, lit, w12, flux, params, channel_o
     return evaluate
 
 
-def _tree_far_field(model, geometry, medium, lit, w12, flux, params, channel_of, tol):
+def _tree_far_field(model, geometry, medium, lit, w12, flux, params, channel_of, tol, device="cpu"):
     """Method ``tree``: clusters whose aggregate errs little next to the receiver's ``B`` replaced by their
-    aggregated source (docs/physics.md §8.3). The aggregates and the allowance's floor (:data:`TOL_FLOOR` of the
-    largest first estimate at the most brightly lit vertices) are made once here, for every block of receivers."""
+    aggregated source (docs/physics.md §8.3), the tree walked and summed on the CPU or, where ``device`` is ``gpu``,
+    on the GPU (:mod:`translucency.scatter.gpu.tree`). The aggregates and the allowance's floor (:data:`TOL_FLOOR`
+    of the largest first estimate at the most brightly lit vertices) are made once here, for every block of
+    receivers."""
     model_code = kernels.MODELS[model]
     tree = hierarchy.tree_of(geometry)
     rule = hierarchy.opening(medium, model, tol)
     sources = hierarchy.aggregated_sources(tree, geometry.points, geometry.normals, w12, flux)
+    if device == "gpu":
+        from .gpu.tree import WalkedSums as walk
+    else:
+        walk = hierarchy.ListedWalk
+    walked = walk(model_code, tree, sources, params, channel_of, rule)
     floor = _allowance_floor(
         geometry,
         flux,
-        lambda bright: hierarchy.first_estimate(
-            model_code, tree, sources, geometry.points[bright], geometry.normals[bright], params, channel_of, rule
-        ),
+        lambda bright: hierarchy.first_estimate(walked, geometry.points[bright], geometry.normals[bright]),
     )
 
     def evaluate(rcv_points, rcv_normals):
-        B, direct, clustered = hierarchy.tree_sum(
-            model_code, tree, sources, rcv_points, rcv_normals, params, channel_of, rule, floor
-        )
+        B, direct, clustered = hierarchy.tree_sum(walked, rcv_points, rcv_normals, rule, floor)
         pairs = int(lit.size) * int(rcv_points.shape[0])
         return B, {
             "theta": rule.theta,
@@ -364,7 +367,7 @@ def solve(
         corrects at full resolution). At least :func:`local_reach_floor` (the near-field radius plus the
         longest edge, so that every vertex the near field weighs is in the sum).
     device : {"auto", "cpu", "gpu"}
-        Where ``exact`` and relighting's far field sum their pairs (``gpu.probe.pair_device``).
+        Where ``exact`` and ``tree`` sum their pairs, and relighting its far field (``gpu.probe.pair_device``).
     progress : callable, optional
         Called as ``progress(stage, fraction)`` while the solver runs: stages ``far field`` and
         ``near field``, each from 0 to 1, many times per stage (after every block of receivers).
@@ -518,7 +521,7 @@ def _relit(work, receivers, tol, memory_limit, time_limit, report, stats, timing
         stats["pairs_evaluated"] = 0
         held = relight.kept_operator(work.geometry, relight.operator_key(work.medium, work.model, tol, work.device))
         if isinstance(held, relight.TreeInstead):
-            stats["relight_fallback"], stats["device"] = "tree", "cpu"
+            stats["relight_fallback"] = "tree"
         return Solution(np.zeros((work.inner.size, work.medium.n_channels)), receivers, stats, timings, settings)
     start = time.perf_counter()
     operator, reused = relight_operator(
@@ -536,7 +539,7 @@ def _relit(work, receivers, tol, memory_limit, time_limit, report, stats, timing
     if isinstance(operator, relight.TreeInstead):
         solved = _tree_of(work, tol, memory_limit, time_limit, report)
         B = solved.B
-        pairs = {"relight_fallback": "tree", "pairs_evaluated": solved.stats["pairs_evaluated"], "device": "cpu"}
+        pairs = {"relight_fallback": "tree", **_far_stats(solved)}
     else:
         B = operator.apply(work.geometry.vertex_areas, work.phi, work.w12)[work.inner]
         pairs = {"pairs_evaluated": operator.stats["far_entries"] + operator.stats["near_entries"]}
@@ -551,11 +554,11 @@ def _relit(work, receivers, tol, memory_limit, time_limit, report, stats, timing
             operator.stats["bytes"] = 0
             relight.keep_operator(work.geometry, relight.TreeInstead(operator.key, dict(operator.stats)))
             B = checked.B
-            pairs = {"relight_fallback": "tree", "pairs_evaluated": checked.stats["pairs_evaluated"], "device": "cpu"}
+            pairs = {"relight_fallback": "tree", **_far_stats(checked)}
         _warn_relight_check(work.medium.name, operator.stats, tol, work.inner.size, gave_way)
     stats.update(operator.stats)
     stats.update(pairs)
-    if "relight_fallback" in pairs:  # tree ran on the CPU, near field and all
+    if "relight_fallback" in pairs:  # tree's near field ran on the CPU
         stats.pop("near_on_gpu", None)
     stats["operators_reused"] = reused
     B = _assembled(B, np.zeros_like(B), work.visit, stats)
@@ -563,7 +566,7 @@ def _relit(work, receivers, tol, memory_limit, time_limit, report, stats, timing
 
 
 def _tree_of(work, tol, memory_limit, time_limit, progress) -> Solution:
-    """``tree`` at ``tol`` for the light and receivers of ``work`` (rows in ``work.inner``'s order)."""
+    """``tree`` at ``tol`` for the light and receivers of ``work`` (rows in ``work.inner``'s order), on its device."""
     return solve(
         work.geometry,
         work.phi,
@@ -576,7 +579,13 @@ def _tree_of(work, tol, memory_limit, time_limit, progress) -> Solution:
         progress=progress,
         memory_limit=memory_limit,
         time_limit=time_limit,
+        device=work.device,
     )
+
+
+def _far_stats(solved: Solution) -> dict:
+    """What a ``tree`` solve in relighting's place says of its far field: the pairs it evaluated, and where."""
+    return {"pairs_evaluated": solved.stats["pairs_evaluated"], "device": solved.stats["device"]}
 
 
 #: The check of freshly prepared relighting operators solves their first light by ``tree`` at ``tol`` over this.
@@ -762,7 +771,7 @@ class _Work:
 
     def far_field(self, method: str, tol: float):
         """The far-field ``method`` prepared for these sources (see :data:`_FAR_FIELD`; ``cutoff`` within
-        :attr:`reach` when it is set; ``exact`` on the GPU where :attr:`device` is ``gpu``)."""
+        :attr:`reach` when it is set; ``exact`` and ``tree`` on the GPU where :attr:`device` is ``gpu``)."""
         args = (
             self.model,
             self.geometry,
@@ -777,7 +786,7 @@ class _Work:
         if self.reach is not None:
             return _cutoff_far_field(*args, reach=self.reach)
         if self.device == "gpu":
-            return _exact_far_field(*args, device="gpu")
+            return _FAR_FIELD[method](*args, device="gpu")
         return _FAR_FIELD[method](*args)
 
 

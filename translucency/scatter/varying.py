@@ -28,7 +28,6 @@ import numpy as np
 
 from ..errors import InvalidParameterError, TranslucencyWarning
 from .appearance import reduced_albedo
-from .gpu.probe import device_for
 from .medium import Medium
 
 __all__ = [
@@ -120,7 +119,7 @@ def solve_varying(geometry, phi, w12, medium: Medium, *, reflectance, solver=Non
         ``progress(stage, fraction)``, the levels' solves in turn.
     **options
         ``model``, ``method``, ``tol``, ``device``, ``receivers``, ``memory_limit``, ``time_limit`` of the solve;
-        ``relight`` is solved by ``tree`` on the CPU (operators per level would replace each other).
+        ``relight`` is solved by ``tree`` on the device asked for (operators per level would replace each other).
     """
     from .solve import Solution, solve, warn_low_albedo
 
@@ -129,8 +128,6 @@ def solve_varying(geometry, phi, w12, medium: Medium, *, reflectance, solver=Non
     values, clamped = checked_reflectance(reflectance, n, C)
     if options.get("method") == "relight":
         options["method"] = "tree"
-        if "device" in options:  # tree runs on the CPU; the GPU was asked for relighting's far field
-            options["device"] = device_for(options["device"], "tree")
     receivers = options.pop("receivers", None)
     receivers = np.arange(n) if receivers is None else np.asarray(receivers, dtype=np.int64).ravel()
     levels = reflectance_levels(values)

@@ -146,9 +146,9 @@ class ShadeSettings:
     device: str = _setting(
         DEFAULT_DEVICE,
         "--",
-        "where exact and relight's far field sum their pairs: cpu, gpu (an NVIDIA GPU, with pip install "
-        '"translucency[gpu]"), or auto (a GPU where one works, else the CPU); tree, cutoff and the near field run on '
-        "the CPU",
+        "where exact, tree and relight sum their far field: cpu, gpu (an NVIDIA GPU, with pip install "
+        '"translucency[gpu]"), or auto (a GPU where one works, else the CPU); cutoff and the near field run on the '
+        "CPU",
     )
     tol: float = _setting(
         DEFAULT_TOL,

@@ -10,7 +10,6 @@ from __future__ import annotations
 import dataclasses
 import math
 
-from ...scatter.gpu.probe import device_for
 from ..shading.resolution import coarsest_proxy_edge, proxy_edge_length
 from ..shading.settings import ShadeSettings, resolve_medium
 
@@ -132,7 +131,7 @@ class SolveSettings:
             lights,
             model=self.model,
             method=method,
-            device=device_for(self.device, method),
+            device=self.device,
             tol=self.tol if tol is None else tol,
             resolution=resolution,
             exposure=exposure,

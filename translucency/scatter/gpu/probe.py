@@ -13,11 +13,11 @@ from dataclasses import dataclass
 
 from ...errors import DeviceError, InvalidParameterError, TranslucencyError, option
 
-__all__ = ["GpuStatus", "gpu_status", "pair_device", "device_for", "said_plainly", "SIMULATOR", "GPU_METHODS"]
+__all__ = ["GpuStatus", "gpu_status", "pair_device", "said_plainly", "SIMULATOR", "GPU_METHODS"]
 
-#: The methods whose pairs a GPU sums: ``exact``'s, and relighting's far field (every pair, per light; its near
-#: field's product too where the operator fits on the GPU).
-GPU_METHODS = ("exact", "relight")
+#: The methods whose far field a GPU sums: ``exact``'s pairs, ``tree``'s walk, and relighting's far field (every pair,
+#: per light; its near field's product too where the operator fits on the GPU).
+GPU_METHODS = ("exact", "tree", "relight")
 
 #: The name a simulated GPU reports.
 SIMULATOR = "CUDA simulator"
@@ -73,9 +73,8 @@ def pair_device(device: str, method: str) -> tuple[str, str]:
         return "cpu", "cpu"
     if method not in GPU_METHODS:
         raise InvalidParameterError(
-            f"{option('device', 'gpu')} sums every pair, for methods exact and relight; choose "
-            f"{option('method', 'exact')} or {option('method', 'relight')}, or {option('device', 'auto')} for method "
-            f"{method}."
+            f"{option('device', 'gpu')} sums the far field of methods exact, tree and relight; choose one of them, "
+            f"or {option('device', 'auto')} for method {method}."
         )
     status = gpu_status()
     if device == "auto" and (not status.usable or status.name == SIMULATOR):
@@ -86,13 +85,6 @@ def pair_device(device: str, method: str) -> tuple[str, str]:
             f"or {option('device', 'auto')}."
         )
     return "gpu", f"gpu ({status.name})"
-
-
-def device_for(device: str, method: str) -> str:
-    """The device setting of a solve by ``method`` that the settings ``device`` asked for on the way to another
-    method (a viewer's first picture by ``tree``, relighting solved by ``tree`` per albedo level): ``cpu`` where
-    ``gpu`` was asked and the GPU does not run ``method`` (:data:`GPU_METHODS`), else ``device`` itself."""
-    return "cpu" if device == "gpu" and method not in GPU_METHODS else device
 
 
 def said_plainly(function):

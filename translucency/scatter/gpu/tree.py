@@ -1,0 +1,249 @@
+"""Method ``tree`` on an NVIDIA GPU: the walk of the source tree and its sum in one kernel (docs/physics.md §8.3).
+
+The CPU lists what each group of receivers evaluates (:func:`~translucency.scatter.hierarchy.walk_lists`) and sums
+the lists (:func:`~translucency.scatter.kernels.grouped_sum`). A GPU thread cannot grow a list, so each thread walks
+the tree for its receiver's group and sums each source or cluster at its receiver as the walk meets it. The walk's
+tests are the CPU's own (:func:`~translucency.scatter.hierarchy.small_and_far`,
+:func:`~translucency.scatter.hierarchy.bound_index`, :func:`~translucency.scatter.hierarchy.aggregate_error`) and so
+is a pair's sum (:func:`~translucency.scatter.kernels.weighted_pair`), so the GPU evaluates what the CPU evaluates,
+in float64, only in another order. The receivers of a group are neighbouring threads and walk alike, so a warp's
+threads mostly take the same branches.
+
+=========== ========================================================================= =====
+symbol      meaning                                                                   unit
+=========== ========================================================================= =====
+table       sources, then the nodes' aggregates: position, normal, refracted direction mm, 1
+allow       per group and channel, the error a node's aggregate may make              flux / (mm^2 sr)
+=========== ========================================================================= =====
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import config, cuda, int64
+
+from .. import hierarchy, kernels
+from .probe import said_plainly
+
+__all__ = ["WalkedSums"]
+
+
+def _for_the_device(function):
+    """A CPU-compiled helper as the kernel calls it: compiled for CUDA, or run as Python in numba's simulator."""
+    return function.py_func if config.ENABLE_CUDASIM else function
+
+
+_pair = _for_the_device(kernels.weighted_pair)
+_small_and_far = _for_the_device(hierarchy.small_and_far)
+_bound_index = _for_the_device(hierarchy.bound_index)
+_aggregate_error = _for_the_device(hierarchy.aggregate_error)
+#: Threads per block.
+THREADS = 128
+#: Depth of a thread's stack of nodes to visit: a walk holds at most one node per level of the tree and one more,
+#: and a tree of 2^60 leaves would need 61.
+STACK = 64
+
+
+@cuda.jit
+def _walked_sums(
+    model,
+    nodes,
+    node_flux,
+    lit,
+    table,
+    flux,
+    lanes,
+    receivers,
+    groups,
+    allow,
+    walk,
+    opening,
+    out,
+    counts,
+):
+    """Thread ``r``: receiver ``r``'s sum of three lanes over what its group's walk takes. ``nodes`` are the tree's
+    ``(order, start, end, left, right, centre, radius)``; ``flux`` the three lanes' rows of flux per column of
+    ``table``, ``lanes`` their parameters; ``receivers`` the points and normals, ``groups`` the groups' centres and
+    radii; ``walk`` is ``(group, reach mm)``; ``opening`` ``(theta^2, min_distance mm, bound, log_first, per_log,
+    curvature)`` (:class:`~translucency.scatter.hierarchy.Opening`). Writes ``out[r]`` and the sources and clusters
+    summed into ``counts[r]``."""
+    r = cuda.grid(1)
+    points, normals = receivers
+    if r >= points.shape[0]:
+        return
+    order, start, end, left, right, centre, radius = nodes
+    g_centre, g_spread = groups
+    group, reach = walk
+    theta2, min_distance, bound, log_first, per_log, curvature = opening
+    F0, F1, F2 = flux
+    X0, X1, X2, N0, N1, N2, W0, W1, W2 = (
+        table[0],
+        table[1],
+        table[2],
+        table[3],
+        table[4],
+        table[5],
+        table[6],
+        table[7],
+        table[8],
+    )
+    g = r // group
+    n_src = lit.shape[0]
+    n_c = node_flux.shape[1]
+    n_bound = bound.shape[1]
+    x0, x1, x2 = points[r, 0], points[r, 1], points[r, 2]
+    n_o = (normals[r, 0], normals[r, 1], normals[r, 2])
+    cx, cy, cz, spread = g_centre[g, 0], g_centre[g, 1], g_centre[g, 2], g_spread[g]
+    stack = cuda.local.array(STACK, int64)
+    stack[0] = 0
+    top = 1
+    a0 = 0.0
+    a1 = 0.0
+    a2 = 0.0
+    n_direct = 0
+    n_cluster = 0
+    while top > 0:
+        top -= 1
+        k = stack[top]
+        weight = 0.0
+        for c in range(n_c):
+            weight += node_flux[k, c]
+        if weight <= 0.0:
+            continue
+        dx = cx - centre[k, 0]
+        dy = cy - centre[k, 1]
+        dz = cz - centre[k, 2]
+        rk = radius[k]
+        near = math.sqrt(dx * dx + dy * dy + dz * dz) - spread
+        if near > reach + rk:
+            continue
+        accept = _small_and_far(near, rk, theta2, min_distance)
+        if accept:
+            at_bound = _bound_index(near - rk, log_first, per_log, n_bound)
+            for c in range(n_c):
+                if _aggregate_error(near, rk, curvature[c], node_flux[k, c], bound[c, at_bound]) > allow[g, c]:
+                    accept = False
+                    break
+        if accept or left[k] < 0:
+            first, last = (0, 1) if accept else (start[k], end[k])
+            for i in range(first, last):
+                j = n_src + k if accept else order[i]
+                if accept or lit[j]:
+                    e0, e1, e2, _ = _pair(
+                        model,
+                        (x0 - X0[j], x1 - X1[j], x2 - X2[j]),
+                        (N0[j], N1[j], N2[j], W0[j], W1[j], W2[j]),
+                        n_o,
+                        lanes,
+                        (F0[j], F1[j], F2[j]),
+                        (0, 0, 0),
+                    )
+                    a0 += e0
+                    a1 += e1
+                    a2 += e2
+                    if accept:
+                        n_cluster += 1
+                    else:
+                        n_direct += 1
+        else:
+            stack[top] = left[k]
+            stack[top + 1] = right[k]
+            top += 2
+    out[r, 0] = a0
+    out[r, 1] = a1
+    out[r, 2] = a2
+    counts[r, 0] = n_direct
+    counts[r, 1] = n_cluster
+
+
+class WalkedSums:
+    """:class:`translucency.scatter.hierarchy.ListedWalk` on the GPU: the tree and the sources with their nodes'
+    aggregates copied to the device once; called with ``(rcv_points mm, rcv_normals, allow, group)`` it walks and sums
+    (:func:`_walked_sums`) and returns ``(B (n_rcv, C), direct (n_rcv,), clustered (n_rcv,))``, the counts those of
+    each receiver's group, as the CPU's."""
+
+    #: Receivers per call of :func:`~translucency.scatter.hierarchy.tree_sum`: about 200 MB of the device's memory.
+    block = 1 << 22
+
+    @said_plainly
+    def __init__(self, model, tree, sources, params, channel_of, rule, reach=math.inf):
+        self.model = int(model)
+        self.rule, self.reach = rule, float(reach)
+        self.n_out = sources.weights.shape[0]
+        lanes = kernels.channel_lanes(params, channel_of, self.n_out)
+
+        def to_device(array, dtype=np.float64):
+            return cuda.to_device(np.ascontiguousarray(array, dtype=dtype))
+
+        self.nodes = (
+            to_device(tree.order, np.int64),
+            to_device(tree.start, np.int64),
+            to_device(tree.end, np.int64),
+            to_device(tree.left, np.int64),
+            to_device(tree.right, np.int64),
+            to_device(tree.centre),
+            to_device(tree.radius),
+        )
+        self.node_flux = to_device(sources.node_flux)
+        self.lit = to_device(sources.lit, np.bool_)
+        self.table = to_device(sources.table)
+        rows = [to_device(row) for row in sources.weights]
+        self.groups = [  # per group of three lanes: flux rows (the last repeated past the end), parameters
+            (
+                tuple(rows[min(c, self.n_out - 1)] for c in range(c0, c0 + 3)),
+                tuple(tuple(float(v) for v in lanes[c]) for c in range(c0, c0 + 3)),
+            )
+            for c0 in range(0, lanes.shape[0], 3)
+        ]
+        self.opening = (
+            rule.theta * rule.theta,
+            float(rule.min_distance),
+            to_device(rule.bound),
+            float(rule.log_first),
+            float(rule.per_log),
+            to_device(rule.curvature),
+        )
+
+    @said_plainly
+    def __call__(self, rcv_points, rcv_normals, allow, group):
+        n_rcv = int(rcv_points.shape[0])
+        if n_rcv == 0:
+            empty = np.zeros(0, dtype=np.int64)
+            return np.zeros((0, self.n_out)), empty, empty
+        centre, spread, members = hierarchy.group_spheres(rcv_points, group)
+        if allow is None:
+            limit = np.full((centre.shape[0], self.n_out), np.inf)
+        else:
+            limit = np.asarray(allow, dtype=np.float64)[members].min(axis=1)
+        receivers = (
+            cuda.to_device(np.ascontiguousarray(rcv_points, dtype=np.float64)),
+            cuda.to_device(np.ascontiguousarray(rcv_normals, dtype=np.float64)),
+        )
+        groups = (cuda.to_device(np.ascontiguousarray(centre)), cuda.to_device(np.ascontiguousarray(spread)))
+        limit = cuda.to_device(np.ascontiguousarray(limit))
+        B = np.empty((n_rcv, 3 * len(self.groups)))
+        counts = cuda.device_array((n_rcv, 2), dtype=np.int64)
+        blocks = -(-n_rcv // THREADS)
+        for g, (flux, lanes) in enumerate(self.groups):
+            out = cuda.device_array((n_rcv, 3), dtype=np.float64)
+            _walked_sums[blocks, THREADS](
+                self.model,
+                self.nodes,
+                self.node_flux,
+                self.lit,
+                self.table,
+                flux,
+                lanes,
+                receivers,
+                groups,
+                limit,
+                (int(group), self.reach),
+                self.opening,
+                out,
+                counts,
+            )
+            B[:, 3 * g : 3 * g + 3] = out.copy_to_host()
+        counted = counts.copy_to_host()
+        return np.ascontiguousarray(B[:, : self.n_out]), counted[:, 0], counted[:, 1]
