@@ -16,6 +16,9 @@ def test_the_gpu_benchmark_runs_in_the_simulator_and_agrees_with_the_cpu():
     (row,) = payload["rows"]
     assert row["light_measured"] and row["error_max"] < 1e-12 and row["pairs"] == row["vertices"] * row["lit"]
     assert payload["whole_solves"]["largest_relative_difference"] < 1e-10
-    relit = payload["relit"]
-    assert len(relit) == 6 and not relit[0]["reused"] and all(r["reused"] for r in relit[1:])
-    assert max(r["error_p99"] for r in relit) < 0.01  # relighting holds its tol 0.01 against exact
+    assert row["tree"]["device"] == "gpu (CUDA simulator)" and row["tree"]["error_p99"] < 0.01
+    assert [run["lights"][0]["far_on_gpu"] for run in payload["relit"]] == ["every pair", "tree"]
+    for run in payload["relit"]:
+        relit = run["lights"]
+        assert len(relit) == 6 and not relit[0]["reused"] and all(r["reused"] for r in relit[1:])
+        assert max(r["error_p99"] for r in relit) < 0.01  # relighting holds its tol 0.01 against exact

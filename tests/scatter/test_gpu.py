@@ -156,6 +156,21 @@ def test_relighting_with_its_far_field_on_the_gpu_is_closer_to_exact_than_its_fi
     assert np.allclose(out["relit_cpu_near_B"], out["relit_B1"], rtol=1e-12, atol=0)
 
 
+def test_relighting_a_large_surface_on_the_gpu_walks_the_tree_per_light_within_tol(simulated):
+    """Past ``ALL_PAIRS_UP_TO`` pairs a light's far field on the GPU is tree's walk at the operators' tol, not every
+    pair: within tol (0.01) of exact at the 99th percentile, fewer evaluations than every pair, and not every pair's
+    B (the walk was used)."""
+    out, cases, _, _, exact, _ = simulated
+    B, reference = out["relit_tree_B"], exact[1]
+    counted = reference >= 1e-4 * reference.max(axis=0)
+    error = np.abs(B - reference)[counted] / reference[counted]
+    assert str(out["relit_tree_far"]) == "tree"
+    assert np.percentile(error, 99) <= 1e-2, np.percentile(error, 99)
+    n = len(cases["relit_points"])
+    assert int(out["relit_tree_pairs"]) < n * n
+    assert not np.allclose(B, out["relit_B1"], rtol=1e-9, atol=0)
+
+
 @pytest.mark.skipif(importlib.util.find_spec("numba_cuda") is None, reason="numba-cuda (the gpu extra) not installed")
 def test_the_kernel_compiles_to_ptx():
     """Where numba-cuda and CUDA's compiler libraries are installed (no GPU needed): the kernels (the pair sums, the

@@ -151,6 +151,7 @@ class RelightOperator:
             B = self.far.apply(values.reshape(n, n_c, QUADRATIC_TERMS), scratch)
         else:  # the far field on a GPU: the light's own pairs, and the near field's product where it holds it
             B = self.far.apply_light(w12, values, lit)
+            self.stats["far_entries"] = self.far.evaluations
             if self.far.holds_near:
                 return np.maximum(B, 0.0)
         for_ranges(
@@ -288,13 +289,22 @@ def operator_bytes(geometry, medium, tol: float, near_radius: float, far_on_gpu:
 
 
 def prepare(
-    geometry, medium, model: str, tol: float, near_radius: float, beta: float, progress=None, far_on_gpu: bool = False
+    geometry,
+    medium,
+    model: str,
+    tol: float,
+    near_radius: float,
+    beta: float,
+    progress=None,
+    far_on_gpu: bool = False,
+    tree_far=None,
 ) -> RelightOperator:
     """The operators of ``geometry`` (the solver's spatially ordered surface, mm) for the medium (1/mm),
     model and tolerance: the far field's hierarchical matrix over every vertex (fitted coefficients, cross
     approximations to :func:`far_eps`), or with ``far_on_gpu`` every pair summed per light on the GPU
     (:class:`~translucency.scatter.gpu.pairs.RelitFarField`), and the near field's operator within ``near_radius``
-    (mm; quadrature refinement ratio ``beta``).
+    (mm; quadrature refinement ratio ``beta``). ``tree_far(w12, flux) -> (B, evaluations)``: a light's far field by
+    ``tree`` on the GPU, which a surface too large for every pair per light sums instead (:func:`_with_far_on_gpu`).
 
     ``progress(stage, fraction)`` is called with the stage ``"relight operators"``.
     """
@@ -329,7 +339,7 @@ def prepare(
     start = time.perf_counter()
     if far_on_gpu:
         return _with_far_on_gpu(
-            geometry, medium, model, tol, params, (near_starts, near_columns, near_coefs), near_seconds
+            geometry, medium, model, tol, params, (near_starts, near_columns, near_coefs), near_seconds, tree_far
         )
     far = lowrank.build(
         model_code,
@@ -363,21 +373,32 @@ def prepare(
     return operator
 
 
-def _with_far_on_gpu(geometry, medium, model, tol, params, near, near_seconds) -> RelightOperator:
+def _with_far_on_gpu(geometry, medium, model, tol, params, near, near_seconds, tree_far) -> RelightOperator:
     """The operators of :func:`prepare` with the far field summed per light on the GPU: the near field's, and the
-    lists of the pairs it holds given to the GPU's far field, which leaves them out."""
-    from .gpu.pairs import RelitFarField
+    lists of the pairs it holds given to the GPU's far field, which leaves them out. The far field is every pair of
+    a light up to :data:`~translucency.scatter.gpu.pairs.ALL_PAIRS_UP_TO` pairs, ``tree_far`` beyond (where
+    given)."""
+    from .gpu.pairs import ALL_PAIRS_UP_TO, RelitFarField
 
     near_starts, near_columns, near_coefs = near
+    n = geometry.n_vertices
+    walked = tree_far is not None and float(n) * n > ALL_PAIRS_UP_TO
     far = RelitFarField(
-        kernels.MODELS[model], geometry.points, geometry.normals, params, near_starts, near_columns, near_coefs
+        kernels.MODELS[model],
+        geometry.points,
+        geometry.normals,
+        params,
+        near_starts,
+        near_columns,
+        near_coefs,
+        far_sum=tree_far if walked else None,
     )
     operator = RelightOperator(
         operator_key(medium, model, tol, "gpu"), far, near_starts, near_columns.astype(np.int32), near_coefs
     )
-    n = geometry.n_vertices
     operator.stats = {
         "far_entries": n * n,
+        "far_on_gpu": "tree" if walked else "every pair",
         "near_entries": int(near_starts[-1]),
         "near_on_gpu": far.holds_near,
         "bytes": operator.nbytes,

@@ -197,7 +197,9 @@ def _tree_far_field(model, geometry, medium, lit, w12, flux, params, channel_of,
     aggregated source (docs/physics.md §8.3), the tree walked and summed on the CPU or, where ``device`` is ``gpu``,
     on the GPU (:mod:`translucency.scatter.gpu.tree`). The aggregates and the allowance's floor (:data:`TOL_FLOOR`
     of the largest first estimate at the most brightly lit vertices) are made once here, for every block of
-    receivers."""
+    receivers (relighting's far field on a GPU calls it per light: :func:`_tree_per_light`). Returns
+    ``evaluate(rcv_points mm, rcv_normals) -> (B (n_rcv, C), statistics)``; ``lit`` (the vertices with flux) counts
+    the pairs it skipped."""
     model_code = kernels.MODELS[model]
     tree = hierarchy.tree_of(geometry)
     rule = hierarchy.opening(medium, model, tol)
@@ -503,9 +505,28 @@ def relight_operator(
     plan = relight_plan(size, counts, memory_limit, time_limit)
     if not plan.fits:
         raise BudgetError(over_budget_sentence(plan, geometry.n_vertices), plan)
-    operator = relight.prepare(geometry, medium, model, tol, radius, NEAR_BETA, progress, far_on_gpu=device == "gpu")
+    tree_far = _tree_per_light(geometry, medium, model, tol) if device == "gpu" else None
+    operator = relight.prepare(
+        geometry, medium, model, tol, radius, NEAR_BETA, progress, far_on_gpu=device == "gpu", tree_far=tree_far
+    )
     relight.keep_operator(geometry, operator)
     return operator, False
+
+
+def _tree_per_light(geometry, medium, model, tol):
+    """``tree_far(w12, flux) -> (B (n, C), evaluations)``: a light's far field at every vertex of ``geometry`` by
+    ``tree`` at ``tol`` on the GPU (:func:`_tree_far_field`; ``flux = phi A (n, C)``, every channel of ``medium``),
+    which relighting sums per light where every pair would be too many (:mod:`translucency.scatter.relight`)."""
+    params = kernels.channel_parameters(medium.sigma_a, medium.sigma_s, medium.g, medium.eta, model)
+    channel_of = np.arange(medium.n_channels)
+
+    def tree_far(w12, flux):
+        lit = np.flatnonzero(flux.max(axis=1) > 0)
+        evaluate = _tree_far_field(model, geometry, medium, lit, w12, flux, params, channel_of, tol, device="gpu")
+        B, far_stats = evaluate(geometry.points, geometry.normals)
+        return B, far_stats["pairs_evaluated"]
+
+    return tree_far
 
 
 def _relit(work, receivers, tol, memory_limit, time_limit, report, stats, timings) -> Solution:

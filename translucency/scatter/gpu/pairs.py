@@ -123,6 +123,10 @@ def _near_rows(starts, columns, coefs, values, lit, width, out):
 
 #: Share of the GPU's free memory the near field's operator may take there (else its product stays on the CPU).
 NEAR_SHARE_OF_FREE = 0.5
+#: Relighting's far field on a GPU is every pair of a light where the vertices squared are at most this many (the
+#: default bunny's 7.9e8), and the tree's walk at the operators' ``tol`` beyond (the Igea's 1.8e10 pairs would take
+#: about a second at the budget's rate). An estimate, not a measurement: bench/gpu.py times both.
+ALL_PAIRS_UP_TO = 2e9
 
 
 def chunk_size(n_rcv: int, n_src: int) -> int:
@@ -189,10 +193,14 @@ class RelitFarField:
 
     Where the near field's operator (``near_coefs``, float32, per entry its channels' ten coefficients) takes at most
     :data:`NEAR_SHARE_OF_FREE` of the GPU's free memory, it is held there too and :attr:`holds_near` is True: a light's
-    near-field product is then made on the GPU with the far field (:meth:`apply_light`)."""
+    near-field product is then made on the GPU with the far field (:meth:`apply_light`).
+
+    ``far_sum(w12, flux) -> (B, evaluations)``, where given, sums the light's far field at every vertex in place of
+    every pair (the tree's walk on the GPU, :data:`ALL_PAIRS_UP_TO`); the near lists' pairs are taken off it as off
+    every pair's. :attr:`evaluations` is the last light's count of pairs and clusters the far field evaluated."""
 
     @said_plainly
-    def __init__(self, model, points, normals, params, near_starts, near_columns, near_coefs=None):
+    def __init__(self, model, points, normals, params, near_starts, near_columns, near_coefs=None, far_sum=None):
         self.model = int(model)
         self.points = np.ascontiguousarray(points, dtype=np.float64)
         self.normals = np.ascontiguousarray(normals, dtype=np.float64)
@@ -206,6 +214,8 @@ class RelitFarField:
         self.holds_near = near_coefs is not None and near_coefs.nbytes <= NEAR_SHARE_OF_FREE * _free_bytes()
         if self.holds_near:
             self.coefs = cuda.to_device(np.ascontiguousarray(near_coefs, dtype=np.float32))
+        self.far_sum = far_sum
+        self.evaluations = 0
         #: memory held on the host, bytes (the device holds the lists and the vertices)
         self.nbytes = 0
 
@@ -219,16 +229,20 @@ class RelitFarField:
         sources = np.flatnonzero(lit)
         # w12 means nothing where no light enters (it may be anything there): the near lists' sum reads it
         w12 = np.where(lit[:, None], w12, -self.normals)
-        every = PairSums(
-            self.model,
-            self.points[sources],
-            self.normals[sources],
-            w12[sources],
-            flux[sources],
-            self.params,
-            self.channel_of,
-        )
-        B, _ = every(self.points, self.normals)
+        if self.far_sum is None:
+            every = PairSums(
+                self.model,
+                self.points[sources],
+                self.normals[sources],
+                w12[sources],
+                flux[sources],
+                self.params,
+                self.channel_of,
+            )
+            B, _ = every(self.points, self.normals)
+            self.evaluations = sources.size * self.points.shape[0]
+        else:
+            B, self.evaluations = self.far_sum(w12, flux)
         B -= self._listed(w12, flux)
         if self.holds_near:
             near = cuda.device_array(B.shape, dtype=np.float64)
