@@ -17,7 +17,9 @@ Per mesh:
 * pairs per second, and against the device's FP64 peak where the device is in :data:`FP64_PEAK`;
 * a whole ``solve(method="tree", tol=0.01, device="gpu")`` at every vertex (the tree's walk on the GPU, the near
   field on the CPU): its seconds by stage, the evaluations per receiver, and its per-vertex error against ``exact``
-  at the sampled receivers (``exact`` on the GPU there, near field and all: :func:`tree_solve`);
+  at the sampled receivers (``exact`` on the GPU there, near field and all: :func:`tree_solve`); above 2M
+  vertices at 10 patches of 20,000 neighbouring vertices, its seconds scaled to every vertex (the near field on the
+  CPU would take minutes there);
 * on the smallest mesh, a whole ``solve(method="exact")`` with ``device="gpu"`` and ``device="cpu"``, the near field
   on the CPU in both; and relighting with its far field on the GPU (:func:`relit_lights`): six lights, per light
   the product's seconds and the error against ``exact``, with every pair and with the tree's walk; on the second
@@ -128,25 +130,47 @@ def measure(label, points, triangles, args, rate_so_far):
     counted = cpu >= 1e-4 * cpu.max(axis=0)  # the receivers tol is held over (docs/physics.md §8.5)
     error = np.abs(at_sample - cpu)[counted] / cpu[counted]
     row["error_p99"], row["error_max"] = float(np.percentile(error, 99)), float(error.max())
-    row["tree"] = tree_solve(geometry, phi, w12, medium, sample)
+    patches = args.tree_patches if n > args.tree_whole_up_to else None
+    row["tree"] = tree_solve(geometry, phi, w12, medium, sample, patches)
     return row, geometry, phi, w12, medium, rate
 
 
-def tree_solve(geometry, phi, w12, medium, sample):
-    """``solve(method="tree", tol=0.01, device="gpu")`` at every vertex, timed by stage, and its per-vertex error
-    (p99 and largest over the vertices of docs/physics.md §8.5) against ``exact`` on the GPU at ``sample``."""
-    from translucency.scatter.solve import solve
+#: Above this many vertices a ``tree`` solve is made at :data:`TREE_PATCHES` patches of neighbouring vertices (the
+#: near field on the CPU would take minutes at 10M), its seconds scaled to every vertex.
+TREE_WHOLE_UP_TO = 2_000_000
+TREE_PATCHES = (10, 20_000)
 
+
+def tree_solve(geometry, phi, w12, medium, sample, patches=None):
+    """``solve(method="tree", tol=0.01, device="gpu")`` at every vertex (with ``patches``, ``(count, vertices)``,
+    at that many patches of vertices neighbouring along the solver's order, with every stage's seconds scaled by the
+    vertices over the patches' and ``"patches"`` set), timed by stage, and its per-vertex error (p99
+    and largest over the vertices of docs/physics.md §8.5) against ``exact`` on the GPU at ``sample`` (or at the
+    patches' vertices)."""
+    from translucency.scatter.solve import solve
+    from translucency.scatter.surface import spatial_order
+
+    n = geometry.n_vertices
+    receivers, scale = None, 1.0
+    if patches is not None:
+        count, size = patches
+        _, order, _ = spatial_order(geometry)
+        first = np.linspace(0, n - size, count).astype(np.int64)
+        receivers = np.sort(np.concatenate([order[k : k + size] for k in first]))
+        scale = n / receivers.size
+        sample = receivers[:: max(1, receivers.size // sample.size)]
     start = time.perf_counter()
-    tree = solve(geometry, phi, w12, medium, method="tree", tol=0.01, device="gpu")
-    seconds = time.perf_counter() - start
+    tree = solve(geometry, phi, w12, medium, method="tree", tol=0.01, device="gpu", receivers=receivers)
+    seconds = (time.perf_counter() - start) * scale
+    at = np.arange(n) if receivers is None else receivers
     exact = solve(geometry, phi, w12, medium, method="exact", receivers=sample, device="gpu").B
     counted = exact >= 1e-4 * exact.max(axis=0)
-    error = np.abs(tree.B[sample] - exact)[counted] / exact[counted]
+    error = np.abs(tree.B[np.searchsorted(at, sample)] - exact)[counted] / exact[counted]
     return {
         "seconds": seconds,
-        "timings": tree.timings,
-        "evaluations_per_receiver": tree.stats["pairs_evaluated"] / geometry.n_vertices,
+        "timings": {stage: value * scale for stage, value in tree.timings.items()},
+        "patches": receivers is not None,
+        "evaluations_per_receiver": tree.stats["pairs_evaluated"] / at.size,
         "device": tree.stats["device"],
         "error_p99": float(np.percentile(error, 99)),
         "error_max": float(error.max()),
@@ -256,7 +280,8 @@ def markdown(payload) -> str:
     for row in payload["rows"]:
         tree = row["tree"]
         lines.append(
-            f"| {row['mesh']} | {row['vertices']:,} | {tree['seconds']:.2f} s "
+            f"| {row['mesh']} | {row['vertices']:,} | {tree['seconds']:.2f} s"
+            f"{' (from patches)' if tree['patches'] else ''} "
             f"| {tree['timings'].get('far_field', 0.0):.2f} s | {tree['timings'].get('near_field', 0.0):.2f} s "
             f"| {tree['evaluations_per_receiver']:.0f} | {tree['error_p99']:.1e} ({tree['error_max']:.1e}) |"
         )
@@ -300,11 +325,13 @@ def main(argv=None) -> int:
     parser.add_argument("--sizes", type=int, default=len(TORI), help="how many of the tori, smallest first")
     parser.add_argument("--export", metavar="FOLDER", help="write the default bunny and the Igea as .npz to carry")
     args = parser.parse_args(argv)
+    args.tree_whole_up_to, args.tree_patches = TREE_WHOLE_UP_TO, TREE_PATCHES
     if args.export:
         return export_scans(Path(args.export))
     if args.quick:  # before numba.cuda is imported (on a GPU machine, --sizes 1 is the short run on the GPU)
         os.environ["NUMBA_ENABLE_CUDASIM"] = "1"
         args.receivers, args.repeats = min(args.receivers, 40), 1
+        args.tree_whole_up_to, args.tree_patches = 100, (3, 20)  # the small torus's tree solve by patches, as 10M's
     from translucency.scatter.gpu.probe import gpu_status
 
     status = gpu_status()

@@ -16,7 +16,8 @@ def test_the_gpu_benchmark_runs_in_the_simulator_and_agrees_with_the_cpu():
     (row,) = payload["rows"]
     assert row["light_measured"] and row["error_max"] < 1e-12 and row["pairs"] == row["vertices"] * row["lit"]
     assert payload["whole_solves"]["largest_relative_difference"] < 1e-10
-    assert row["tree"]["device"] == "gpu (CUDA simulator)" and row["tree"]["error_p99"] < 0.01
+    tree = row["tree"]  # by patches, as the 10M torus's
+    assert tree["device"] == "gpu (CUDA simulator)" and tree["patches"] and tree["error_p99"] < 0.01
     assert [run["lights"][0]["far_on_gpu"] for run in payload["relit"]] == ["every pair", "tree"]
     for run in payload["relit"]:
         relit = run["lights"]
