@@ -19,7 +19,8 @@ Per mesh:
   field on the CPU): its seconds by stage, the evaluations per receiver, and its per-vertex error against ``exact``
   at the sampled receivers (``exact`` on the GPU there, near field and all: :func:`tree_solve`); above 2M
   vertices at 10 patches of 20,000 neighbouring vertices, its seconds scaled to every vertex (the near field on the
-  CPU would take minutes there);
+  CPU would take minutes there); on meshes up to 200,000 vertices also with 8, 16 and 32 receivers sharing a walk
+  of the tree instead of the package's 4 (:func:`tree_groups`);
 * on the smallest mesh, a whole ``solve(method="exact")`` with ``device="gpu"`` and ``device="cpu"``, the near field
   on the CPU in both; and relighting with its far field on the GPU (:func:`relit_lights`): six lights, per light
   the product's seconds and the error against ``exact``, with every pair and with the tree's walk; on the second
@@ -132,6 +133,8 @@ def measure(label, points, triangles, args, rate_so_far):
     row["error_p99"], row["error_max"] = float(np.percentile(error, 99)), float(error.max())
     patches = args.tree_patches if n > args.tree_whole_up_to else None
     row["tree"] = tree_solve(geometry, phi, w12, medium, sample, patches)
+    if n <= GROUPS_UP_TO:
+        row["tree_groups"] = tree_groups(geometry, phi, w12, medium, sample, patches)
     return row, geometry, phi, w12, medium, rate
 
 
@@ -175,6 +178,27 @@ def tree_solve(geometry, phi, w12, medium, sample, patches=None):
         "error_p99": float(np.percentile(error, 99)),
         "error_max": float(error.max()),
     }
+
+
+#: The receivers that share a walk of the tree on the GPU, tried on meshes of at most GROUPS_UP_TO vertices beside the
+#: package's (``gpu.tree.WalkedSums.group``).
+GROUPS = (8, 16, 32)
+GROUPS_UP_TO = 200_000
+
+
+def tree_groups(geometry, phi, w12, medium, sample, patches=None):
+    """:func:`tree_solve` with each of :data:`GROUPS` receivers sharing a walk on the GPU, by group."""
+    from translucency.scatter.gpu.tree import WalkedSums
+
+    package = WalkedSums.group
+    try:
+        out = {}
+        for group in GROUPS:
+            WalkedSums.group = group
+            out[group] = tree_solve(geometry, phi, w12, medium, sample, patches)
+        return out
+    finally:
+        WalkedSums.group = package
 
 
 def whole_solves(geometry, phi, w12, medium):
@@ -279,6 +303,12 @@ def markdown(payload) -> str:
     ]
     for row in payload["rows"]:
         tree = row["tree"]
+        for group, other in row.get("tree_groups", {}).items():
+            lines.append(
+                f"| {row['mesh']}, {group} receivers a walk | | {other['seconds']:.2f} s "
+                f"| {other['timings'].get('far_field', 0.0):.2f} s | | {other['evaluations_per_receiver']:.0f} "
+                f"| {other['error_p99']:.1e} ({other['error_max']:.1e}) |"
+            )
         lines.append(
             f"| {row['mesh']} | {row['vertices']:,} | {tree['seconds']:.2f} s"
             f"{' (from patches)' if tree['patches'] else ''} "

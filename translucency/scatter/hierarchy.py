@@ -494,6 +494,8 @@ class ListedWalk:
 
     #: Receivers per call of :func:`tree_sum`: the lists of this many are held at once.
     block = 4096
+    #: Receivers that share a walk (:data:`GROUP_RECEIVERS`).
+    group = GROUP_RECEIVERS
 
     def __init__(self, model, tree, sources: AggregatedSources, params, channel_of, rule: Opening, reach=math.inf):
         from .kernels import channel_lanes
@@ -509,7 +511,7 @@ class ListedWalk:
         return B, lists[1][of], lists[2][of]
 
 
-def tree_sum(walked, rcv_points, rcv_normals, rule: Opening, floor, group=GROUP_RECEIVERS):
+def tree_sum(walked, rcv_points, rcv_normals, rule: Opening, floor):
     """Far-field sum with the hierarchy: ``B[o, c]``, sources summed one by one and clusters used, per receiver.
 
     Two walks per block of ``walked.block`` receivers (docs/physics.md §8.3), each made and summed by ``walked``
@@ -518,7 +520,7 @@ def tree_sum(walked, rcv_points, rcv_normals, rule: Opening, floor, group=GROUP_
     ``rule.min_distance``; its sum is the first estimate ``B_est``. The second takes a node only where its
     aggregate's error is also within :func:`allowance` of ``B_est`` (``floor (C,)``: the least ``B`` the allowance
     assumes, W/(m^2 sr)); otherwise its children are opened, down to the leaves' sources. The tree is walked once
-    per group of ``group`` consecutive receivers (the solver orders them along a space-filling curve) with the
+    per group of ``walked.group`` consecutive receivers (the solver orders them along a space-filling curve) with the
     tests made for the group's bounding sphere, which hold for every receiver of the group, and the group's
     sources and clusters are summed at each of its receivers.
 
@@ -532,7 +534,7 @@ def tree_sum(walked, rcv_points, rcv_normals, rule: Opening, floor, group=GROUP_
     B = np.zeros((n_rcv, floor.shape[0]))
     direct = np.zeros(n_rcv, dtype=np.int64)
     clustered = np.zeros(n_rcv, dtype=np.int64)
-    group = max(1, int(group))
+    group = max(1, int(walked.group))
     block = max(group, walked.block // group * group)
     for first in range(0, n_rcv, block):
         part = slice(first, min(n_rcv, first + block))

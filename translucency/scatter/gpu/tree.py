@@ -166,6 +166,9 @@ class WalkedSums:
 
     #: Receivers per call of :func:`~translucency.scatter.hierarchy.tree_sum`: about 200 MB of the device's memory.
     block = 1 << 22
+    #: Receivers that share a walk: the CPU's (:data:`~translucency.scatter.hierarchy.GROUP_RECEIVERS`). A warp's 32
+    #: threads walk 32 / ``group`` trees; larger groups walk alike but evaluate more (bench/gpu.py tries 4 to 32).
+    group = hierarchy.GROUP_RECEIVERS
 
     @said_plainly
     def __init__(self, model, tree, sources, params, channel_of, rule, reach=math.inf):
