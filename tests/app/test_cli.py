@@ -168,7 +168,7 @@ def test_a_size_no_unit_makes_plausible_is_refused_and_a_given_unit_only_warns(t
 def test_report_prints_versions_and_offscreen_status():
     code, out, _ = run_cli("report")
     assert "numpy" in out and "pymeshlab" in out and "off-screen rendering" in out
-    assert "GPU for exact, tree and relight (--device auto): " in out
+    assert "GPU for exact and relight (--device auto): " in out
     assert code in (0, 1)
 
 

@@ -81,7 +81,9 @@ def main(cases_path: str, out_path: str) -> None:
     )
     out["relit_tree_B"] = light.B
     out["relit_tree_far"] = np.array(light.stats["far_on_gpu"])
-    out["relit_tree_pairs"] = light.stats["pairs_evaluated"]
+    out["relit_tree_far_entries"] = light.stats["far_entries"]
+    out["relit_tree_skipped"] = light.stats["pairs_skipped"]
+    out["relit_tree_fallback"] = np.array(light.stats.get("relight_fallback", ""))
     np.savez(out_path, **out)
 
 

@@ -158,16 +158,17 @@ def test_relighting_with_its_far_field_on_the_gpu_is_closer_to_exact_than_its_fi
 
 def test_relighting_a_large_surface_on_the_gpu_walks_the_tree_per_light_within_tol(simulated):
     """Past ``ALL_PAIRS_UP_TO`` pairs a light's far field on the GPU is tree's walk at the operators' tol, not every
-    pair: within tol (0.01) of exact at the 99th percentile, fewer evaluations than every pair, and not every pair's
-    B (the walk was used)."""
+    pair: within tol (0.01) of exact at the 99th percentile, the operators' own answer (no fallback to tree), fewer
+    far-field evaluations than lit sources times vertices (the rest counted as skipped), and not every pair's B."""
     out, cases, _, _, exact, _ = simulated
     B, reference = out["relit_tree_B"], exact[1]
     counted = reference >= 1e-4 * reference.max(axis=0)
     error = np.abs(B - reference)[counted] / reference[counted]
-    assert str(out["relit_tree_far"]) == "tree"
+    assert str(out["relit_tree_far"]) == "tree" and str(out["relit_tree_fallback"]) == ""
     assert np.percentile(error, 99) <= 1e-2, np.percentile(error, 99)
-    n = len(cases["relit_points"])
-    assert int(out["relit_tree_pairs"]) < n * n
+    every_pair = int(np.count_nonzero(cases["relit_phi1"].max(axis=1) > 0)) * len(cases["relit_points"])
+    evaluated, skipped = int(out["relit_tree_far_entries"]), int(out["relit_tree_skipped"])
+    assert 0 < evaluated < every_pair and evaluated + skipped == every_pair
     assert not np.allclose(B, out["relit_B1"], rtol=1e-9, atol=0)
 
 
@@ -205,10 +206,14 @@ def _status(monkeypatch, usable, name="", reason=""):
     monkeypatch.setattr(probe, "gpu_status", lambda: probe.GpuStatus(usable, name, reason))
 
 
-def test_auto_takes_the_gpu_for_exact_tree_and_relight_only_and_never_the_simulator(monkeypatch):
+def test_auto_takes_the_gpu_for_exact_and_relight_only_and_never_the_simulator(monkeypatch):
+    """``auto``: exact and relighting on a GPU, tree (not measured on one yet) and cutoff on the CPU; ``gpu``: tree
+    too."""
     _status(monkeypatch, True, "NVIDIA H100 80GB HBM3")
-    for method in ("exact", "tree", "relight"):
+    for method in ("exact", "relight"):
         assert probe.pair_device("auto", method) == ("gpu", "gpu (NVIDIA H100 80GB HBM3)")
+    assert probe.pair_device("auto", "tree") == ("cpu", "cpu")
+    assert probe.pair_device("gpu", "tree") == ("gpu", "gpu (NVIDIA H100 80GB HBM3)")
     assert probe.pair_device("auto", "cutoff") == ("cpu", "cpu")
     assert probe.pair_device("cpu", "exact") == ("cpu", "cpu")
     _status(monkeypatch, True, probe.SIMULATOR)

@@ -196,9 +196,7 @@ def cmd_report(args) -> int:
 
     gpu = gpu_status()
     real = gpu.usable and gpu.name != SIMULATOR  # --device auto never takes the simulator
-    print(
-        f"GPU for exact, tree and relight (--device auto): {gpu.name if real else 'none: ' + (gpu.reason or gpu.name)}"
-    )
+    print(f"GPU for exact and relight (--device auto): {gpu.name if real else 'none: ' + (gpu.reason or gpu.name)}")
     ok, detail = offscreen_check()
     print(f"off-screen rendering: {'works' if ok else 'FAILS'} ({detail})")
     return 0 if ok else 1

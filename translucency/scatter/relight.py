@@ -125,17 +125,20 @@ class RelightOperator:
         """Memory the operators hold, bytes."""
         return int(self.far.nbytes + sum(a.nbytes for a in (self.near_starts, self.near_columns, self.near_coefs)))
 
-    def apply(self, areas: np.ndarray, phi: np.ndarray, w12: np.ndarray) -> np.ndarray:
+    def apply(self, areas: np.ndarray, phi: np.ndarray, w12: np.ndarray, light: dict | None = None) -> np.ndarray:
         """``B (n, C)`` for the flux density ``phi (n, C)`` (W/m^2) entering along the unit refracted
-        directions ``w12 (n, 3)``, on the vertices (vertex areas ``areas``, mm^2) the operators were made on."""
+        directions ``w12 (n, 3)``, on the vertices (vertex areas ``areas``, mm^2) the operators were made on.
+        ``light``, where given, receives this light's ``far_entries`` (the far field's entries it read, or on a GPU
+        the pairs and clusters it evaluated) and ``pairs_skipped`` (lit sources times vertices, less those)."""
+        light = {} if light is None else light
         if not self.scratch_lock.acquire(blocking=False):
-            return self._applied(areas, phi, w12, {})
+            return self._applied(areas, phi, w12, {}, light)
         try:
-            return self._applied(areas, phi, w12, self.scratch)
+            return self._applied(areas, phi, w12, self.scratch, light)
         finally:
             self.scratch_lock.release()
 
-    def _applied(self, areas, phi, w12, scratch: dict) -> np.ndarray:
+    def _applied(self, areas, phi, w12, scratch: dict, light: dict) -> np.ndarray:
         """:meth:`apply` with the arrays of ``scratch``."""
         n, n_c = phi.shape
         values = lowrank.kept_array(scratch, "values", (n, n_c * QUADRATIC_TERMS), np.float64)
@@ -149,9 +152,10 @@ class RelightOperator:
         )
         if isinstance(self.far, lowrank.FarMatrix):
             B = self.far.apply(values.reshape(n, n_c, QUADRATIC_TERMS), scratch)
+            light.update(far_entries=self.stats["far_entries"], pairs_skipped=0)  # every pair, as fitted
         else:  # the far field on a GPU: the light's own pairs, and the near field's product where it holds it
-            B = self.far.apply_light(w12, values, lit)
-            self.stats["far_entries"] = self.far.evaluations
+            B, evaluations = self.far.apply_light(w12, values, lit)
+            light.update(far_entries=evaluations, pairs_skipped=max(0, int(lit.sum()) * n - evaluations))
             if self.far.holds_near:
                 return np.maximum(B, 0.0)
         for_ranges(
@@ -397,7 +401,7 @@ def _with_far_on_gpu(geometry, medium, model, tol, params, near, near_seconds, t
         operator_key(medium, model, tol, "gpu"), far, near_starts, near_columns.astype(np.int32), near_coefs
     )
     operator.stats = {
-        "far_entries": n * n,
+        "far_entries": 0,  # per light (RelightOperator.apply)
         "far_on_gpu": "tree" if walked else "every pair",
         "near_entries": int(near_starts[-1]),
         "near_on_gpu": far.holds_near,

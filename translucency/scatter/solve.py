@@ -562,8 +562,9 @@ def _relit(work, receivers, tol, memory_limit, time_limit, report, stats, timing
         B = solved.B
         pairs = {"relight_fallback": "tree", **_far_stats(solved)}
     else:
-        B = operator.apply(work.geometry.vertex_areas, work.phi, work.w12)[work.inner]
-        pairs = {"pairs_evaluated": operator.stats["far_entries"] + operator.stats["near_entries"]}
+        light = {}
+        B = operator.apply(work.geometry.vertex_areas, work.phi, work.w12, light)[work.inner]
+        pairs = {"pairs_evaluated": light["far_entries"] + operator.stats["near_entries"], **light}
     timings["apply"] = time.perf_counter() - start
     if not reused:  # the operators' first light, checked against a tree solve of it (once per preparation)
         start = time.perf_counter()
@@ -579,8 +580,9 @@ def _relit(work, receivers, tol, memory_limit, time_limit, report, stats, timing
         _warn_relight_check(work.medium.name, operator.stats, tol, work.inner.size, gave_way)
     stats.update(operator.stats)
     stats.update(pairs)
-    if "relight_fallback" in pairs:  # tree's near field ran on the CPU
+    if "relight_fallback" in pairs:  # tree's near field ran on the CPU, its far field was tree's
         stats.pop("near_on_gpu", None)
+        stats.pop("far_on_gpu", None)
     stats["operators_reused"] = reused
     B = _assembled(B, np.zeros_like(B), work.visit, stats)
     return Solution(B=B, receivers=receivers, stats=stats, timings=timings, settings=settings)
@@ -605,8 +607,9 @@ def _tree_of(work, tol, memory_limit, time_limit, progress) -> Solution:
 
 
 def _far_stats(solved: Solution) -> dict:
-    """What a ``tree`` solve in relighting's place says of its far field: the pairs it evaluated, and where."""
-    return {"pairs_evaluated": solved.stats["pairs_evaluated"], "device": solved.stats["device"]}
+    """What a ``tree`` solve in relighting's place says of its far field: the pairs it evaluated and skipped, and
+    where."""
+    return {key: solved.stats[key] for key in ("pairs_evaluated", "pairs_skipped", "device")}
 
 
 #: The check of freshly prepared relighting operators solves their first light by ``tree`` at ``tol`` over this.
@@ -881,6 +884,8 @@ def _far_field(work: _Work, far_field, method, tol, report):
     rcv_normals = work.geometry.normals[inner]
     B, far_stats = np.zeros((inner.size, n_channels)), {}
     step = FAR_CHUNK * max(1, -(-inner.size // (budget.PROGRESS_STEPS * FAR_CHUNK)))
+    if work.device == "gpu":
+        step = max(step, GPU_FAR_CHUNK)
     for first in range(0, inner.size, step):
         part = slice(first, min(inner.size, first + step))
         B[part], part_stats = far_field(rcv_points[part], rcv_normals[part])
@@ -903,6 +908,9 @@ def _assembled(far, correction, visit, stats):
 #: Receivers per far-field call are a multiple of this (the tree's block: its groups, and so ``B``,
 #: are the same as in one call).
 FAR_CHUNK = 4096
+#: ... and on a GPU at least this many (a multiple of FAR_CHUNK): a call gives the device a thread per receiver, and
+#: a sixteenth of a scan's receivers would leave most of a data-centre GPU idle.
+GPU_FAR_CHUNK = 1 << 20
 #: Receivers sampled for the budget's counts: groups of 4 neighbours (the tree's groups).
 SAMPLE_GROUPS = 64
 #: Most near-triangle entries the near-field sample may list (bounds its memory: ~170 bytes each).

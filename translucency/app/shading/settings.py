@@ -147,8 +147,8 @@ class ShadeSettings:
         DEFAULT_DEVICE,
         "--",
         "where exact, tree and relight sum their far field: cpu, gpu (an NVIDIA GPU, with pip install "
-        '"translucency[gpu]"), or auto (a GPU where one works, else the CPU); cutoff and the near field run on the '
-        "CPU",
+        '"translucency[gpu]"), or auto (a GPU where one works, for exact and relight, else '
+        "the CPU); cutoff and the near field run on the CPU",
     )
     tol: float = _setting(
         DEFAULT_TOL,

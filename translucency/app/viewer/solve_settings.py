@@ -43,8 +43,8 @@ class SolveSettings:
     model, method : str
         The scattering model and the solver's method.
     device : str
-        Where the pairs are summed (``cpu``, ``gpu`` or ``auto``); a solve by a method the GPU does not run (the
-        preview by ``tree``) runs on the CPU.
+        Where the far field is summed (``cpu``, ``gpu`` or ``auto``:
+        :func:`translucency.scatter.gpu.probe.pair_device`), the preview by ``tree`` too.
     tol : float
         The solver's tolerance, relative error per vertex.
     resolution : "interactive", "full", "auto" or float

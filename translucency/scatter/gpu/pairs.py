@@ -197,7 +197,7 @@ class RelitFarField:
 
     ``far_sum(w12, flux) -> (B, evaluations)``, where given, sums the light's far field at every vertex in place of
     every pair (the tree's walk on the GPU, :data:`ALL_PAIRS_UP_TO`); the near lists' pairs are taken off it as off
-    every pair's. :attr:`evaluations` is the last light's count of pairs and clusters the far field evaluated."""
+    every pair's."""
 
     @said_plainly
     def __init__(self, model, points, normals, params, near_starts, near_columns, near_coefs=None, far_sum=None):
@@ -215,15 +215,15 @@ class RelitFarField:
         if self.holds_near:
             self.coefs = cuda.to_device(np.ascontiguousarray(near_coefs, dtype=np.float32))
         self.far_sum = far_sum
-        self.evaluations = 0
         #: memory held on the host, bytes (the device holds the lists and the vertices)
         self.nbytes = 0
 
     @said_plainly
-    def apply_light(self, w12, values, lit) -> np.ndarray:
-        """``B (n, C)`` of the far field for a light entering along ``w12 (n, 3)``, plus the near field's product
-        where :attr:`holds_near`, from the light's inputs as ``relight._inputs`` writes them: ``values (n, 10 C)``,
-        each channel's first the flux ``Phi = phi A`` entering at the vertex, and ``lit (n,)``, whether any does."""
+    def apply_light(self, w12, values, lit) -> tuple[np.ndarray, int]:
+        """``(B (n, C), evaluations)``: the far field for a light entering along ``w12 (n, 3)``, plus the near field's
+        product where :attr:`holds_near`, from the light's inputs as ``relight._inputs`` writes them: ``values (n, 10
+        C)``, each channel's first the flux ``Phi = phi A`` entering at the vertex, and ``lit (n,)``, whether any
+        does; and the pairs and clusters its far field evaluated."""
         width = values.shape[1] // self.params.shape[0]
         flux = np.ascontiguousarray(values[:, ::width])
         sources = np.flatnonzero(lit)
@@ -240,9 +240,9 @@ class RelitFarField:
                 self.channel_of,
             )
             B, _ = every(self.points, self.normals)
-            self.evaluations = sources.size * self.points.shape[0]
+            evaluations = sources.size * self.points.shape[0]
         else:
-            B, self.evaluations = self.far_sum(w12, flux)
+            B, evaluations = self.far_sum(w12, flux)
         B -= self._listed(w12, flux)
         if self.holds_near:
             near = cuda.device_array(B.shape, dtype=np.float64)
@@ -250,7 +250,7 @@ class RelitFarField:
                 self.starts, self.columns, self.coefs, cuda.to_device(values), cuda.to_device(lit), width, near
             )
             B += near.copy_to_host()
-        return B
+        return B, evaluations
 
     def _listed(self, w12, flux) -> np.ndarray:
         """The pairs of the near lists, summed as the far field summed them."""

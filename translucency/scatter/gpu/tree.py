@@ -164,7 +164,8 @@ class WalkedSums:
     (:func:`_walked_sums`) and returns ``(B (n_rcv, C), direct (n_rcv,), clustered (n_rcv,))``, the counts those of
     each receiver's group, as the CPU's."""
 
-    #: Receivers per call of :func:`~translucency.scatter.hierarchy.tree_sum`: about 200 MB of the device's memory.
+    #: Receivers per call of :func:`~translucency.scatter.hierarchy.tree_sum`: about 100 bytes each on the device
+    #: (points, normals, the group's sphere and allowance, ``B`` of three lanes, the counts), 400 MB.
     block = 1 << 22
     #: Receivers that share a walk: the CPU's (:data:`~translucency.scatter.hierarchy.GROUP_RECEIVERS`). A warp's 32
     #: threads walk 32 / ``group`` trees; larger groups walk alike but evaluate more (bench/gpu.py tries 4 to 32).
