@@ -15,12 +15,13 @@ Per mesh:
 * the CPU's ``exact`` (:func:`translucency.scatter.kernels.vertex_sum`, every thread) at ``--receivers`` random
   vertices, and the per-vertex relative error of the GPU's there (p99 and largest);
 * pairs per second, and against the device's FP64 peak where the device is in :data:`FP64_PEAK`;
-* a whole ``solve(method="tree", tol=0.01, device="gpu")`` at every vertex (the tree's walk on the GPU, the near
-  field on the CPU): its seconds by stage, the evaluations per receiver, and its per-vertex error against ``exact``
-  at the sampled receivers (``exact`` on the GPU there, near field and all: :func:`tree_solve`); above 2M
-  vertices at 10 patches of 20,000 neighbouring vertices, its seconds scaled to every vertex (the near field on the
-  CPU would take minutes there); on meshes up to 200,000 vertices also with 8, 16 and 32 receivers sharing a walk
-  of the tree instead of the package's 4 (:func:`tree_groups`);
+* a whole ``solve(method="tree", tol=0.01, device="gpu")`` at every vertex (the tree's walk and the near field's
+  quadrature on the GPU, the near lists on the CPU): its seconds by stage, the evaluations per receiver, and its
+  per-vertex error against ``exact`` at the sampled receivers (``exact`` on the GPU there, near field and all:
+  :func:`tree_solve`); above 2M vertices (``--tree-whole-up-to``) at 10 patches of 20,000 neighbouring vertices,
+  its seconds scaled to every vertex (a whole solve of 10M vertices might not fit a GPU machine's lease); on meshes
+  up to 200,000 vertices also with 8, 16 and 32 receivers sharing a walk of the tree instead of the package's 4
+  (:func:`tree_groups`);
 * on the smallest mesh, a whole ``solve(method="exact")`` with ``device="gpu"`` and ``device="cpu"``, the near field
   on the CPU in both; and relighting with its far field on the GPU (:func:`relit_lights`): six lights, per light
   the product's seconds and the error against ``exact``, with every pair and with the tree's walk; on the second
@@ -132,24 +133,24 @@ def measure(label, points, triangles, args, rate_so_far):
     error = np.abs(at_sample - cpu)[counted] / cpu[counted]
     row["error_p99"], row["error_max"] = float(np.percentile(error, 99)), float(error.max())
     patches = args.tree_patches if n > args.tree_whole_up_to else None
-    row["tree"] = tree_solve(geometry, phi, w12, medium, sample, patches)
+    row["tree"] = tree_solve(geometry, phi, w12, medium, sample, patches, args.reference)
     if n <= GROUPS_UP_TO:
-        row["tree_groups"] = tree_groups(geometry, phi, w12, medium, sample, patches)
+        row["tree_groups"] = tree_groups(geometry, phi, w12, medium, sample, patches, args.groups, args.reference)
     return row, geometry, phi, w12, medium, rate
 
 
-#: Above this many vertices a ``tree`` solve is made at :data:`TREE_PATCHES` patches of neighbouring vertices (the
-#: near field on the CPU would take minutes at 10M), its seconds scaled to every vertex.
+#: Above this many vertices a ``tree`` solve is made at :data:`TREE_PATCHES` patches of neighbouring vertices, its
+#: seconds scaled to every vertex (``--tree-whole-up-to``).
 TREE_WHOLE_UP_TO = 2_000_000
 TREE_PATCHES = (10, 20_000)
 
 
-def tree_solve(geometry, phi, w12, medium, sample, patches=None):
+def tree_solve(geometry, phi, w12, medium, sample, patches=None, reference="gpu"):
     """``solve(method="tree", tol=0.01, device="gpu")`` at every vertex (with ``patches``, ``(count, vertices)``,
     at that many patches of vertices neighbouring along the solver's order, with every stage's seconds scaled by the
-    vertices over the patches' and ``"patches"`` set), timed by stage, and its per-vertex error (p99
-    and largest over the vertices of docs/physics.md §8.5) against ``exact`` on the GPU at ``sample`` (or at the
-    patches' vertices)."""
+    vertices over the patches' and ``"patches"`` set), timed by stage, and its per-vertex error (p99 and largest
+    over the vertices of docs/physics.md §8.5) against ``exact`` on the device ``reference`` at ``sample`` (or at
+    the patches' vertices)."""
     from translucency.scatter.solve import solve
     from translucency.scatter.surface import spatial_order
 
@@ -166,7 +167,7 @@ def tree_solve(geometry, phi, w12, medium, sample, patches=None):
     tree = solve(geometry, phi, w12, medium, method="tree", tol=0.01, device="gpu", receivers=receivers)
     seconds = (time.perf_counter() - start) * scale
     at = np.arange(n) if receivers is None else receivers
-    exact = solve(geometry, phi, w12, medium, method="exact", receivers=sample, device="gpu").B
+    exact = solve(geometry, phi, w12, medium, method="exact", receivers=sample, device=reference).B
     counted = exact >= 1e-4 * exact.max(axis=0)
     error = np.abs(tree.B[np.searchsorted(at, sample)] - exact)[counted] / exact[counted]
     return {
@@ -186,16 +187,16 @@ GROUPS = (8, 16, 32)
 GROUPS_UP_TO = 200_000
 
 
-def tree_groups(geometry, phi, w12, medium, sample, patches=None):
-    """:func:`tree_solve` with each of :data:`GROUPS` receivers sharing a walk on the GPU, by group."""
+def tree_groups(geometry, phi, w12, medium, sample, patches=None, groups=GROUPS, reference="gpu"):
+    """:func:`tree_solve` with each of ``groups`` receivers sharing a walk on the GPU, by group."""
     from translucency.scatter.gpu.tree import WalkedSums
 
     package = WalkedSums.group
     try:
         out = {}
-        for group in GROUPS:
+        for group in groups:
             WalkedSums.group = group
-            out[group] = tree_solve(geometry, phi, w12, medium, sample, patches)
+            out[group] = tree_solve(geometry, phi, w12, medium, sample, patches, reference)
         return out
     finally:
         WalkedSums.group = package
@@ -218,11 +219,12 @@ def whole_solves(geometry, phi, w12, medium):
     } | {"largest_relative_difference": float(difference.max())}
 
 
-def relit_lights(points, triangles, lights: int = 5, all_pairs_up_to: float | None = None):
+def relit_lights(points, triangles, lights: int = 5, all_pairs_up_to: float | None = None, reference="gpu"):
     """Relighting with its far field on the GPU (``solve(method="relight", device="gpu")``, tol 0.01): the
     preparation (the near field, on the CPU), then per light the seconds of its product and its per-vertex error
-    against ``exact`` on the GPU (p99 over the vertices of docs/physics.md §8.5). ``all_pairs_up_to`` replaces
-    ``gpu.pairs.ALL_PAIRS_UP_TO`` (every pair per light, or the tree's walk) for this run."""
+    against ``exact`` on the device ``reference`` (p99 over the vertices of docs/physics.md §8.5).
+    ``all_pairs_up_to`` replaces ``gpu.pairs.ALL_PAIRS_UP_TO`` (every pair per light, or the tree's walk) for this
+    run."""
     from translucency.scatter.gpu import pairs
     from translucency.scatter.materials import material
     from translucency.scatter.solve import solve
@@ -239,7 +241,7 @@ def relit_lights(points, triangles, lights: int = 5, all_pairs_up_to: float | No
         surface, phi, w12 = lit_surface(points, triangles, medium, toward)
         geometry = geometry or surface  # one surface: the operators are kept on it
         relit = solve(geometry, phi, w12, medium, method="relight", tol=0.01, device="gpu")
-        exact = solve(geometry, phi, w12, medium, method="exact", device="gpu").B
+        exact = solve(geometry, phi, w12, medium, method="exact", device=reference).B
         counted = exact >= 1e-4 * exact.max(axis=0)
         error = np.abs(relit.B - exact)[counted] / exact[counted]
         rows.append(
@@ -295,10 +297,9 @@ def markdown(payload) -> str:
         )
     lines += [
         "",
-        "`tree` at tol 0.01 on the GPU, every vertex (its near field on the CPU):",
+        "`tree` at tol 0.01 on the GPU, every vertex (its near lists on the CPU):",
         "",
-        "| mesh | vertices | whole solve | far field (GPU) | near field (CPU) | evaluations per receiver "
-        "| p99 (max) vs exact |",
+        "| mesh | vertices | whole solve | far field | near field | evaluations per receiver | p99 (max) vs exact |",
         "|---|---:|---:|---:|---:|---:|---:|",
     ]
     for row in payload["rows"]:
@@ -354,14 +355,19 @@ def main(argv=None) -> int:
     parser.add_argument("--mesh", action="append", default=[], help="an .npz of points (mm) and triangles")
     parser.add_argument("--sizes", type=int, default=len(TORI), help="how many of the tori, smallest first")
     parser.add_argument("--export", metavar="FOLDER", help="write the default bunny and the Igea as .npz to carry")
+    parser.add_argument(
+        "--tree-whole-up-to", type=int, default=TREE_WHOLE_UP_TO, help="largest mesh tree solves whole (else patches)"
+    )
     args = parser.parse_args(argv)
-    args.tree_whole_up_to, args.tree_patches = TREE_WHOLE_UP_TO, TREE_PATCHES
+    args.tree_patches, args.groups, args.lights, args.reference = TREE_PATCHES, GROUPS, 5, "gpu"
     if args.export:
         return export_scans(Path(args.export))
     if args.quick:  # before numba.cuda is imported (on a GPU machine, --sizes 1 is the short run on the GPU)
         os.environ["NUMBA_ENABLE_CUDASIM"] = "1"
         args.receivers, args.repeats = min(args.receivers, 40), 1
         args.tree_whole_up_to, args.tree_patches = 100, (3, 20)  # the small torus's tree solve by patches, as 10M's
+        # the simulator makes every point in Python: each path once, exact's references on the CPU
+        args.groups, args.lights, args.reference = GROUPS[-1:], 1, "cpu"
     from translucency.scatter.gpu.probe import gpu_status
 
     status = gpu_status()
@@ -382,7 +388,7 @@ def main(argv=None) -> int:
             payload["whole_solves"] = whole_solves(geometry, phi, w12, medium)
         if k < 2:  # the bunny-sized torus both ways, the Igea-sized by the tree's walk
             for limit in (float("inf"), 0.0) if k == 0 else (0.0,):
-                lights = relit_lights(points, triangles, all_pairs_up_to=limit)
+                lights = relit_lights(points, triangles, args.lights, limit, args.reference)
                 payload.setdefault("relit", []).append({"mesh": label, "lights": lights})
     table = markdown(payload)
     write_results(output_dir(args.quick), "gpu", payload, table)

@@ -18,11 +18,10 @@ def test_the_gpu_benchmark_runs_in_the_simulator_and_agrees_with_the_cpu():
     assert payload["whole_solves"]["largest_relative_difference"] < 1e-10
     tree = row["tree"]  # by patches, as the 10M torus's
     assert tree["device"] == "gpu (CUDA simulator)" and tree["patches"] and tree["error_p99"] < 0.01
-    assert sorted(row["tree_groups"]) == ["16", "32", "8"]  # more receivers sharing a walk: more evaluations each
-    evaluations = [row["tree_groups"][g]["evaluations_per_receiver"] for g in ("8", "16", "32")]
-    assert tree["evaluations_per_receiver"] <= evaluations[0] <= evaluations[1] <= evaluations[2]
+    assert list(row["tree_groups"]) == ["32"]  # 32 receivers sharing a walk: more evaluations each than 4
+    assert tree["evaluations_per_receiver"] < row["tree_groups"]["32"]["evaluations_per_receiver"]
     assert [run["lights"][0]["far_on_gpu"] for run in payload["relit"]] == ["every pair", "tree"]
     for run in payload["relit"]:
         relit = run["lights"]
-        assert len(relit) == 6 and not relit[0]["reused"] and all(r["reused"] for r in relit[1:])
+        assert len(relit) == 2 and not relit[0]["reused"] and relit[1]["reused"]  # --quick: two lights
         assert max(r["error_p99"] for r in relit) < 0.01  # relighting holds its tol 0.01 against exact

@@ -34,29 +34,70 @@ def vertex_sum_arguments(cases, name: str) -> tuple:
     )
 
 
-def main(cases_path: str, out_path: str) -> None:
-    from translucency.scatter import solve
-    from translucency.scatter.gpu import pairs
+def near_field_cases(out, geometry, phi, w12, medium) -> None:
+    """The near field's correction on the GPU at every vertex of ``geometry``, as it is and with the scratch space of
+    a thread too small for any fan or subdivision (those receivers corrected on the CPU, counted)."""
+    from translucency.scatter import kernels, nearfield, solve
+    from translucency.scatter.gpu import nearfield as on_the_gpu
+
+    receivers = np.arange(geometry.n_vertices)
+    offsets, ids = nearfield.lists_of(geometry, receivers, solve.near_radius(geometry, medium))
+    params = kernels.channel_parameters(medium.sigma_a, medium.sigma_s, medium.g, medium.eta)
+    arguments = (0, geometry.points, geometry.triangles, geometry.triangle_areas, geometry.normals, w12, phi)
+    arguments += (receivers, offsets, ids, params, np.arange(3), solve.NEAR_BETA, float(np.min(medium.D)))
+    out["near_B"], out["near_points"] = on_the_gpu.near_field_correction(*arguments, nearfield.tables_of(geometry))
+    cpu, calls = nearfield.near_field_correction, []
+    nearfield.near_field_correction = lambda *a, **k: calls.append(len(a[7])) or cpu(*a, **k)
+    on_the_gpu.FAN_ROWS = on_the_gpu.PIECES = 1  # the simulator reads them as it runs
+    try:
+        out["near_small_B"], _ = on_the_gpu.near_field_correction(*arguments, nearfield.tables_of(geometry))
+    finally:
+        nearfield.near_field_correction, on_the_gpu.FAN_ROWS, on_the_gpu.PIECES = cpu, 256, 256
+    out["near_small_on_cpu"] = sum(calls)
+
+
+def main(cases_path: str, out_path: str, part: str = "sums") -> None:
+    """Run the ``part`` of the cases (``sums``: the pair sums, exact, tree, the near field; ``relight``: relighting)
+    and write what the GPU gave."""
     from translucency.scatter.materials import material
 
     cases = np.load(cases_path)
+    medium = material("marble").medium()
+    out = sums(cases, medium) if part == "sums" else relit(cases, medium)
+    np.savez(out_path, **out)
+
+
+def sums(cases, medium) -> dict:
+    """The pair sums of every model, a whole exact solve, a tree solve and the near field, on the GPU."""
+    from translucency.scatter import solve
+    from translucency.scatter.gpu import pairs
+
     out = {}
     for name in ("directional", "standard", "better"):
         B, clamped = pairs.vertex_sum(*vertex_sum_arguments(cases, name))
         out[f"{name}_B"], out[f"{name}_clamped"] = B, clamped
         out[f"{name}_chunk"] = pairs.chunk_size(len(cases[f"{name}_receivers"]), len(cases[f"{name}_sources"]))
     geometry = solve.SurfaceGeometry(cases["points"], cases["triangles"], cases["normals"])
-    medium = material("marble").medium()
     solution = solve.solve(geometry, cases["phi"], cases["w12"], medium, method="exact", device="gpu")
     out["solve_B"] = solution.B
     out["solve_device"] = np.array(solution.stats["device"])
     out["solve_clamped"] = solution.stats["clamped_values"]
     walked = solve.SurfaceGeometry(cases["tree_points"], cases["tree_triangles"], cases["tree_normals"])
+    near_field_cases(out, walked, cases["tree_phi"], cases["tree_w12"], medium)
     tree = solve.solve(walked, cases["tree_phi"], cases["tree_w12"], medium, method="tree", tol=0.1, device="gpu")
     out["tree_B"] = tree.B
     out["tree_device"] = np.array(tree.stats["device"])
     for key in ("pairs_direct", "cluster_evaluations"):
         out[f"tree_{key}"] = tree.stats[key]
+    return out
+
+
+def relit(cases, medium) -> dict:
+    """Relighting with its far field on the GPU: two lights, the near field's product on the CPU, the tree's walk."""
+    from translucency.scatter import solve
+    from translucency.scatter.gpu import pairs
+
+    out = {}
     relit = solve.SurfaceGeometry(cases["relit_points"], cases["relit_triangles"], cases["relit_normals"])
     for k in range(2):  # the first light prepares the near field, the second reuses it
         light = solve.solve(
@@ -84,8 +125,8 @@ def main(cases_path: str, out_path: str) -> None:
     out["relit_tree_far_entries"] = light.stats["far_entries"]
     out["relit_tree_skipped"] = light.stats["pairs_skipped"]
     out["relit_tree_fallback"] = np.array(light.stats.get("relight_fallback", ""))
-    np.savez(out_path, **out)
+    return out
 
 
 if __name__ == "__main__":
-    main(*sys.argv[1:3])
+    main(*sys.argv[1:4])

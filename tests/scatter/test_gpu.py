@@ -71,7 +71,11 @@ def simulated(tmp_path_factory):
     points, triangles = icosphere(2, 20.0)
     normals, phi, w12 = _lit(points, triangles, marble, _unit([-0.3, 0.5, 0.8]))
     cases.update(tree_points=points, tree_triangles=triangles, tree_normals=normals, tree_phi=phi, tree_w12=w12)
-    tree = solve.solve(solve.SurfaceGeometry(points, triangles, normals), phi, w12, marble, method="tree", tol=0.1)
+    degree3, solve.NEAR_DEGREE3_RATIO = solve.NEAR_DEGREE3_RATIO, 0.0  # the GPU's near field: exact's rules
+    try:
+        tree = solve.solve(solve.SurfaceGeometry(points, triangles, normals), phi, w12, marble, method="tree", tol=0.1)
+    finally:
+        solve.NEAR_DEGREE3_RATIO = degree3
     points, triangles = icosphere(3, 10.0)  # fine enough that the far field's fit shows on the CPU (0.15 %)
     cases.update(relit_points=points, relit_triangles=triangles)
     exact_relit = []
@@ -82,11 +86,25 @@ def simulated(tmp_path_factory):
         exact_relit.append(solve.solve(geometry, phi, w12, marble, method="exact", device="cpu").B)
     folder = tmp_path_factory.mktemp("gpu")
     np.savez(folder / "cases.npz", **cases)
-    simulator = "0" if _real_gpu() else "1"  # a GPU that works here is tested itself
+    return _on_the_gpu(folder, "sums"), cases, references, cpu, exact_relit, tree, folder
+
+
+def _on_the_gpu(folder, part: str) -> dict:
+    """The GPU's answers to ``part`` of the cases in ``folder`` (tests/scatter/gpu_child.py), in a process of its own:
+    on the GPU where one works here, else in numba's simulator."""
+    simulator = "0" if _real_gpu() else "1"
     env = {**os.environ, "NUMBA_ENABLE_CUDASIM": simulator, "PYTHONPATH": str(ROOT)}
-    child = run_python(["-m", "tests.scatter.gpu_child", str(folder / "cases.npz"), str(folder / "out.npz")], env)
+    out = folder / f"{part}.npz"
+    child = run_python(["-m", "tests.scatter.gpu_child", str(folder / "cases.npz"), str(out), part], env)
     assert child.returncode == 0, child.stderr[-3000:]
-    return dict(np.load(folder / "out.npz")), cases, references, cpu, exact_relit, tree
+    return dict(np.load(out))
+
+
+@pytest.fixture(scope="module")
+def relit(simulated):
+    """The GPU's answers for relighting (about 30 s in the simulator), the cases and exact's B of each light."""
+    _, cases, _, _, exact_relit, _, folder = simulated
+    return _on_the_gpu(folder, "relight"), cases, exact_relit
 
 
 def _real_gpu() -> bool:
@@ -100,25 +118,26 @@ def _device_name() -> str:
     return f"gpu ({probe.gpu_status().name if _real_gpu() else probe.SIMULATOR})"
 
 
-@pytest.mark.parametrize("name", list(CHANNEL_MAPS))
-def test_the_gpu_kernel_is_the_dense_sum_of_the_reference_formulas(simulated, name):
+def test_the_gpu_kernel_is_the_dense_sum_of_the_reference_formulas(simulated):
     """Every model, one to three parameter rows mapped to three or five output channels, the sources in chunks: the
-    GPU's B is the reference S_d times the flux, summed (relative 1e-12), and it counts the CPU kernel's clamps."""
-    out, cases, references, _, _, _ = simulated
-    channel_of = cases[f"{name}_channel_of"]
-    flux = cases[f"{name}_flux"]
-    S = references[name]
-    assert out[f"{name}_chunk"] < 300  # the sources went in more than one chunk
-    for c, row in enumerate(channel_of):
-        expected = S[:, :, row] @ flux[:, c]
-        assert np.allclose(out[f"{name}_B"][:, c], expected, rtol=1e-12, atol=0)
-    _, clamped = kernels.vertex_sum(*vertex_sum_arguments(cases, name))
-    assert np.array_equal(out[f"{name}_clamped"], clamped)
+    GPU's B is the reference S_d times the flux, summed (relative 1e-12), and it counts the CPU kernel's clamps.
+    """
+    out, cases, references, *_ = simulated
+    for name in CHANNEL_MAPS:
+        channel_of = cases[f"{name}_channel_of"]
+        flux = cases[f"{name}_flux"]
+        S = references[name]
+        assert out[f"{name}_chunk"] < 300, name  # the sources went in more than one chunk
+        for c, row in enumerate(channel_of):
+            expected = S[:, :, row] @ flux[:, c]
+            assert np.allclose(out[f"{name}_B"][:, c], expected, rtol=1e-12, atol=0), (name, c)
+        _, clamped = kernels.vertex_sum(*vertex_sum_arguments(cases, name))
+        assert np.array_equal(out[f"{name}_clamped"], clamped), name
 
 
 def test_exact_on_the_gpu_is_exact_on_the_cpu(simulated):
     """A whole solve (far field on the GPU, near field on the CPU) equals the CPU's and says where it ran."""
-    out, _, _, cpu, _, _ = simulated
+    out, _, _, cpu, *_ = simulated
     assert np.allclose(out["solve_B"], cpu.B, rtol=1e-12, atol=0)
     assert str(out["solve_device"]) == _device_name()
     assert int(out["solve_clamped"]) == cpu.stats["clamped_values"]
@@ -127,8 +146,9 @@ def test_exact_on_the_gpu_is_exact_on_the_cpu(simulated):
 
 def test_tree_on_the_gpu_is_tree_on_the_cpu(simulated):
     """The GPU walks the tree and sums as it goes (gpu.tree); the CPU lists, then sums: the same sources and clusters
-    for every receiver (the same counts, clusters among them), the same B but for the order of the sums."""
-    out, _, _, _, _, cpu = simulated
+    for every receiver (the same counts, clusters among them), the same B but for the order of the sums (the near
+    field with exact's rules on both: the GPU's has no degree-3 rule)."""
+    out, _, _, _, _, cpu, _ = simulated
     assert cpu.stats["device"] == "cpu" and str(out["tree_device"]) == _device_name()
     assert cpu.stats["cluster_evaluations"] > 0
     for key in ("pairs_direct", "cluster_evaluations"):
@@ -136,12 +156,39 @@ def test_tree_on_the_gpu_is_tree_on_the_cpu(simulated):
     assert np.allclose(out["tree_B"], cpu.B, rtol=1e-12, atol=0)
 
 
-def test_relighting_with_its_far_field_on_the_gpu_is_closer_to_exact_than_its_fit(simulated):
+def test_the_near_field_on_the_gpu_is_the_cpus_with_exacts_rules(simulated):
+    """Each receiver's quadrature made and summed by one GPU thread (gpu.nearfield): the CPU's near field with
+    exact's rules (fan, subdivision, Dunavant) to 1e-12 of its largest; with a thread's scratch space too small for
+    any fan or subdivision, those receivers are the CPU's, the same answer."""
+    out, cases, *_ = simulated
+    from translucency.scatter import kernels, nearfield, solve
+
+    medium = material("marble").medium()
+    geometry = solve.SurfaceGeometry(cases["tree_points"], cases["tree_triangles"], cases["tree_normals"])
+    receivers = np.arange(geometry.n_vertices)
+    offsets, ids = nearfield.lists_of(geometry, receivers, solve.near_radius(geometry, medium))
+    params = kernels.channel_parameters(medium.sigma_a, medium.sigma_s, medium.g, medium.eta)
+    cpu, points = nearfield.near_field_correction(
+        0, geometry.points, geometry.triangles, geometry.triangle_areas, geometry.normals, cases["tree_w12"],
+        cases["tree_phi"], receivers, offsets, ids, params, np.arange(3), solve.NEAR_BETA, float(np.min(medium.D)),
+    )  # fmt: skip
+    scale = np.abs(cpu).max(axis=0)
+    assert np.all(np.abs(out["near_B"] - cpu) <= 1e-12 * scale)
+    assert np.all(np.abs(out["near_small_B"] - cpu) <= 1e-12 * scale)
+    # every receiver with light on its own triangles needs a fan: those went to the CPU
+    lit_own = np.zeros(geometry.n_vertices, dtype=bool)
+    lit_own[geometry.triangles[(cases["tree_phi"].sum(axis=1) > 0)[geometry.triangles].any(axis=1)].ravel()] = True
+    assert int(out["near_small_on_cpu"]) == np.count_nonzero(lit_own) > 0
+    assert out["near_points"].sum() > points.sum()  # a GPU thread evaluates every corner of every triangle
+
+
+@pytest.mark.slow
+def test_relighting_with_its_far_field_on_the_gpu_is_closer_to_exact_than_its_fit(relit):
     """Relighting's near field prepared once (its product made on the GPU), its far field every pair per light on
     the GPU: two lights, each within 0.1 % of exact at the 99th percentile per vertex (docs/physics.md §8.5; the
     CPU's fitted far field is 0.14-0.15 % off on this sphere, so the far field is not fitted), the second reusing
     the first's near field."""
-    out, _, _, _, exact, _ = simulated
+    out, _, exact = relit
     for k in range(2):
         B, reference = out[f"relit_B{k}"], exact[k]
         counted = reference >= 1e-4 * reference.max(axis=0)
@@ -156,11 +203,12 @@ def test_relighting_with_its_far_field_on_the_gpu_is_closer_to_exact_than_its_fi
     assert np.allclose(out["relit_cpu_near_B"], out["relit_B1"], rtol=1e-12, atol=0)
 
 
-def test_relighting_a_large_surface_on_the_gpu_walks_the_tree_per_light_within_tol(simulated):
+@pytest.mark.slow
+def test_relighting_a_large_surface_on_the_gpu_walks_the_tree_per_light_within_tol(relit):
     """Past ``ALL_PAIRS_UP_TO`` pairs a light's far field on the GPU is tree's walk at the operators' tol, not every
     pair: within tol (0.01) of exact at the 99th percentile, the operators' own answer (no fallback to tree), fewer
     far-field evaluations than lit sources times vertices (the rest counted as skipped), and not every pair's B."""
-    out, cases, _, _, exact, _ = simulated
+    out, cases, exact = relit
     B, reference = out["relit_tree_B"], exact[1]
     counted = reference >= 1e-4 * reference.max(axis=0)
     error = np.abs(B - reference)[counted] / reference[counted]
@@ -175,11 +223,11 @@ def test_relighting_a_large_surface_on_the_gpu_walks_the_tree_per_light_within_t
 @pytest.mark.skipif(importlib.util.find_spec("numba_cuda") is None, reason="numba-cuda (the gpu extra) not installed")
 def test_the_kernel_compiles_to_ptx():
     """Where numba-cuda and CUDA's compiler libraries are installed (no GPU needed): the kernels (the pair sums, the
-    tree's walk), the CPU's loops and tests inside them, compile for the A100's and the H100's architectures (sm_80,
-    sm_90)."""
+    tree's walk, the near field) with the CPU's loops, tests and device functions inside them compile for the A100's
+    and the H100's architectures (sm_80, sm_90)."""
     code = (
         "from numba import cuda, types as t\n"
-        "from translucency.scatter.gpu import pairs, tree\n"
+        "from translucency.scatter.gpu import nearfield, pairs, tree\n"
         "f8, i8, p = t.float64, t.int64, t.UniTuple(t.float64, 8)\n"
         "sig = (i8, f8[:, ::1], f8[::1], f8[::1], f8[::1], p, p, p, i8, i8, i8, f8[:, ::1], f8[:, ::1], i8,"
         " f8[:, :, ::1], i8[:, ::1])\n"
@@ -192,7 +240,15 @@ def test_the_kernel_compiles_to_ptx():
         " i8[:, ::1])\n"
         "kernels = ((pairs._chunk_sums, sig), (pairs._listed_sums, listed), (pairs._near_rows, near),"
         " (tree._walked_sums, walk))\n"
-        "codes = [cuda.compile_ptx(k.py_func, s, cc=cc)[0] for k, s in kernels for cc in ((8, 0), (9, 0))]\n"
+        "a2i, i1 = t.int64[:, ::1], t.int64[::1]\n"
+        "near = (i8, t.Tuple((a2, a2, a2i, a1)), t.UniTuple(a2, 2), t.Tuple((a1, a2)), i1, t.UniTuple(i1, 2),"
+        " t.Tuple((a2, a1, a1, a1, a1, a1)), t.UniTuple(f8, 2), t.UniTuple(p, 3), t.UniTuple(i8, 3), a2, i1, i1)\n"
+        "kernels += ((nearfield._near_sums, near),)\n"
+        "import numba.cuda.dispatcher as d, types\n"
+        "codes = []\n"
+        "for cc in ((8, 0), (9, 0)):\n"
+        "    d.get_current_device = lambda: types.SimpleNamespace(compute_capability=cc)  # no driver here\n"
+        "    codes += [cuda.compile_ptx(k.py_func, s, cc=cc)[0] for k, s in kernels]\n"
         "print(all('.entry' in code for code in codes))\n"
     )
     env = {k: v for k, v in os.environ.items() if k != "NUMBA_ENABLE_CUDASIM"}

@@ -9,11 +9,11 @@ from translucency.scatter.materials import material
 
 
 def _fan_points(triangle, corner, scale_min, nodes=(nearfield.FAN_ANGULAR, nearfield.FAN_RADIAL), beta=1.5):
-    ang = nearfield._gauss_legendre_unit(nodes[0])
-    rad = nearfield._gauss_legendre_unit(nodes[1])
+    ang = nearfield.gauss_legendre_unit(nodes[0])
+    rad = nearfield.gauss_legendre_unit(nodes[1])
     tri = np.array([0, 1, 2])
-    out = np.empty((nearfield._fan_count(triangle, tri, corner, beta * scale_min, *nodes), 4))
-    nearfield._fan(triangle, tri, corner, beta, scale_min, *ang, *rad, out)
+    out = np.empty((nearfield.fan_count(triangle, tri, corner, beta * scale_min, *nodes), 4))
+    nearfield.fan_rule(triangle, tri, corner, beta, scale_min, *ang, *rad, out)
     points = out[:, :3] @ triangle
     area = 0.5 * np.linalg.norm(np.cross(triangle[1] - triangle[0], triangle[2] - triangle[0]))
     return points, out[:, 3] * area
@@ -85,7 +85,7 @@ def test_fan_rule_integrates_the_peak_at_the_receiver(material_name, name, corne
 def test_fan_rule_of_a_degenerate_triangle_weighs_nothing():
     triangle = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0]])
     tri = np.array([0, 1, 2])
-    assert nearfield._fan_count(triangle, tri, 0, 0.15, 3, 5) == 0
+    assert nearfield.fan_count(triangle, tri, 0, 0.15, 3, 5) == 0
 
 
 def test_degree3_rule_is_exact_for_cubics():

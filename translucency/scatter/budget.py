@@ -100,6 +100,9 @@ FAR_RATE = {"exact": 40e6, "cutoff": 15e6, "tree": 12e6}
 #: pair's cost in simple interactions, not a calibration (bench/README.md, "GPU"). ``tree``'s walk is taken to be as
 #: much slower per evaluation there as on the CPU (:data:`FAR_RATE`).
 GPU_PAIR_RATE = 2e10
+#: Near-field quadrature points per second on a GPU (a solve whose device is ``gpu``): each a pair and an interpolation,
+#: made by a thread that branches as ``tree``'s walk does, so taken at that walk's rate. An estimate, as above.
+GPU_NEAR_RATE = GPU_PAIR_RATE * FAR_RATE["tree"] / FAR_RATE["exact"]
 NEAR_RATE = 3e6
 LIST_RATE = 60e6
 SETUP_SECONDS_PER_VERTEX = 2e-6
@@ -208,8 +211,10 @@ def solve_seconds(counts: SolveCounts) -> float:
     far_rate *= GPU_PAIR_RATE / FAR_RATE["exact"] if counts.device == "gpu" else threads
     far = n_r * counts.far_evaluations / far_rate
     lists = 2 * n_r * counts.near_triangles / LIST_RATE
-    near = n_r * counts.near_points / NEAR_RATE
-    return far + (lists + near) / threads + SETUP_SECONDS_PER_VERTEX * counts.n_vertices
+    setup = SETUP_SECONDS_PER_VERTEX * counts.n_vertices
+    if counts.device == "gpu":  # the near field's quadrature on the GPU, its lists on the CPU
+        return far + lists / threads + n_r * counts.near_points / GPU_NEAR_RATE + setup
+    return far + (lists + n_r * counts.near_points / NEAR_RATE) / threads + setup
 
 
 def estimate(

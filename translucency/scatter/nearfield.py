@@ -13,7 +13,7 @@ area. So, for every receiver, the triangles within a near radius get a correctio
 where ``Q_T`` is a quadrature over the triangle chosen by its distance to ``x_o``:
 
 * the receiver's own triangles (``x_o`` at a corner, where ``S_d`` peaks on the scale ``D``): the
-  fan rule of :func:`_fan`, Gauss-Legendre in the polar angle about ``x_o`` and in ``log(1 + r / c)``
+  fan rule of :func:`fan_rule`, Gauss-Legendre in the polar angle about ``x_o`` and in ``log(1 + r / c)``
   along each ray;
 * triangles too close to be integrated whole (diameter ``h > beta * max(dist, D_min)``, ``dist`` from
   ``x_o`` to the centroid): midpoint subdivision into four until every piece passes that test, then
@@ -71,14 +71,14 @@ RULE_WEIGHTS = np.array([0.225, _W1, _W1, _W1, _W2, _W2, _W2])
 MAX_DEPTH = 14  # pieces as small as 4^-14 of the triangle's area
 
 
-def _gauss_legendre_unit(n):
+def gauss_legendre_unit(n):
     """``n`` Gauss-Legendre nodes and weights on [0, 1]."""
     x, w = np.polynomial.legendre.leggauss(n)
     return 0.5 * (x + 1.0), 0.5 * w
 
 
 #: Fan rule over the receiver's own triangles: Gauss-Legendre nodes across the fan (angular, per sector)
-#: and along each ray (radial, per stretch); see :func:`_fan`.
+#: and along each ray (radial, per stretch); see :func:`fan_rule`.
 FAN_ANGULAR = 3
 FAN_RADIAL = 5
 
@@ -278,7 +278,7 @@ def _near_pass(
 
 
 @numba.njit(cache=True, fastmath=True)
-def _gather(points, normals, w12, phi, tri, b0, b1, b2, weight, buf, weights, column):
+def gather_point(points, normals, w12, phi, tri, b0, b1, b2, weight, buf, weights, column):
     """Write the point with barycentric ``b`` of triangle ``tri`` to column ``column`` of the buffer.
 
     ``buf[:, column]`` = position (3), normal (3, renormalised), refracted direction (3, flux-weighted
@@ -434,7 +434,7 @@ def source_point_table(
     rule_weights=RULE_WEIGHTS,
     within=None,
 ) -> SourcePoints:
-    """Quadrature points every receiver shares (made as :func:`_gather` makes them).
+    """Quadrature points every receiver shares (made as :func:`gather_point` makes them).
 
     Columns ``0..n-1`` are the vertices, then ``len(rule_points)`` Dunavant points per triangle with
     light at a corner (the first is the centroid), then the midpoints of the edges of those triangles.
@@ -515,7 +515,7 @@ def _fill_shared_points(
             t = lit_triangles[k]
             column = start_rule + k * n_rule
             for q in range(n_rule):
-                _gather(
+                gather_point(
                     points,
                     normals,
                     w12,
@@ -530,7 +530,7 @@ def _fill_shared_points(
                     column + q,
                 )
         else:
-            _gather(
+            gather_point(
                 points,
                 normals,
                 w12,
@@ -547,9 +547,9 @@ def _fill_shared_points(
 
 
 @numba.njit(cache=True, inline="always")
-def _whole(diameter, centroid, xo, beta, scale_min):
+def integrated_whole(diameter, centroid, xo, beta, scale_min):
     """Whether a triangle is far enough from ``x_o`` to be integrated whole with the rule (the
-    refinement test of :func:`_pieces` applied to the triangle itself)."""
+    refinement test of :func:`subdivided_pieces` applied to the triangle itself)."""
     d2 = 0.0
     for i in range(3):
         d2 += (centroid[i] - xo[i]) ** 2
@@ -557,7 +557,7 @@ def _whole(diameter, centroid, xo, beta, scale_min):
 
 
 @numba.njit(cache=True, fastmath=True)
-def _pieces(points, tri, xo, beta, scale_min, stack, cx, out):
+def subdivided_pieces(points, tri, xo, beta, scale_min, stack, cx, out):
     """Adaptive midpoint subdivision of a triangle that is too close to be integrated whole.
 
     A piece is accepted when its diameter is at most ``beta * max(distance to x_o, scale_min)`` (or at
@@ -641,14 +641,14 @@ FAN_SPAN = 3.0
 
 
 @numba.njit(cache=True)
-def _corner_frame(points, tri, corner, scale):
+def corner_frame(points, tri, corner, scale):
     """The triangle seen from its corner ``corner``: first edge length ``a``, second edge in the frame
     (``bu`` along the first edge, ``bv`` across), twice the area, the corner's angle (rad), the number
     of fan sectors (``ceil(angle / FAN_SECTOR)``; 0 for a degenerate triangle) and of radial stretches
     (``ceil(log(1 + longest edge / scale) / FAN_SPAN)``).
 
-    Compiled once, without ``fastmath`` and not inlined: :func:`_fan_count` (which sizes the buffers)
-    and :func:`_fan` (which fills them, with ``fastmath``) must get the same counts to the bit."""
+    Compiled once, without ``fastmath`` and not inlined: :func:`fan_count` (which sizes the buffers)
+    and :func:`fan_rule` (which fills them, with ``fastmath``) must get the same counts to the bit."""
     i0 = tri[corner]
     i1 = tri[(corner + 1) % 3]
     i2 = tri[(corner + 2) % 3]
@@ -674,14 +674,14 @@ def _corner_frame(points, tri, corner, scale):
 
 
 @numba.njit(cache=True)
-def _fan_count(points, tri, corner, scale, n_ang, n_rad):
-    """Number of points :func:`_fan` writes for this triangle, corner and radial scale ``c`` (mm)."""
-    frame = _corner_frame(points, tri, corner, scale)
+def fan_count(points, tri, corner, scale, n_ang, n_rad):
+    """Number of points :func:`fan_rule` writes for this triangle, corner and radial scale ``c`` (mm)."""
+    frame = corner_frame(points, tri, corner, scale)
     return frame[5] * frame[6] * n_ang * n_rad
 
 
 @numba.njit(cache=True, fastmath=True)
-def _fan(points, tri, corner, beta, scale_min, ang_x, ang_w, rad_x, rad_w, out):
+def fan_rule(points, tri, corner, beta, scale_min, ang_x, ang_w, rad_x, rad_w, out):
     """Polar ("fan") rule over a triangle around its corner ``corner``, where the receiver sits.
 
     In polar coordinates about the corner, ``dA = r dr dtheta``: the integral is
@@ -695,11 +695,11 @@ def _fan(points, tri, corner, beta, scale_min, ang_x, ang_w, rad_x, rad_w, out):
     sector, give the adaptive subdivision's answer with far fewer points (tests/scatter/test_nearfield.py
     checks it against an adaptive integral; bench/README.md, "Kernel throughput").
 
-    Writes :func:`_fan_count` rows ``(b_0, b_1, b_2, weight / area)`` in the triangle's corner order to
+    Writes :func:`fan_count` rows ``(b_0, b_1, b_2, weight / area)`` in the triangle's corner order to
     ``out`` (none for a degenerate triangle).
     """
     scale = beta * scale_min  # c
-    a, bu, bv, area2, alpha, sectors, stretches = _corner_frame(points, tri, corner, scale)
+    a, bu, bv, area2, alpha, sectors, stretches = corner_frame(points, tri, corner, scale)
     n = 0
     for sector in range(sectors):
         for j in range(ang_x.shape[0]):
@@ -721,7 +721,7 @@ def _fan(points, tri, corner, beta, scale_min, ang_x, ang_w, rad_x, rad_w, out):
 
 
 @numba.njit(cache=True, inline="always")
-def _corner_of(tri, vertex):
+def corner_of(tri, vertex):
     """Which corner of ``tri`` is ``vertex`` (0, 1, 2), or -1."""
     for corner in range(3):
         if tri[corner] == vertex:
@@ -757,7 +757,7 @@ def near_field_correction(
     Receivers are done in blocks of :data:`BLOCK_RECEIVERS`: (1) list each receiver's quadrature
     points -- the vertex rule of its near triangles (each vertex once, weighted by the sum of the near
     triangles' thirds), the shared rule points of the triangles far enough to be integrated whole, and a
-    count of its own points: the fan rule (:func:`_fan`) on the triangles around it and the refined
+    count of its own points: the fan rule (:func:`fan_rule`) on the triangles around it and the refined
     pieces of the other close ones; (2) make its own points; (3) evaluate every receiver's points with
     :func:`~translucency.scatter.kernels.indexed_sum` (where the time goes).
 
@@ -796,7 +796,7 @@ def near_field_correction(
     )
     diameters, centroids = tables.diameters, tables.centroids
     lanes = channel_lanes(params, channel_of, phi.shape[1])
-    fan = (*_gauss_legendre_unit(fan_nodes[0]), *_gauss_legendre_unit(fan_nodes[1]))
+    fan = (*gauss_legendre_unit(fan_nodes[0]), *gauss_legendre_unit(fan_nodes[1]))
     n_r = receivers.shape[0]
     n_c = phi.shape[1]
     correction = np.zeros((n_r, n_c))
@@ -987,13 +987,13 @@ def _list_points(
                     factors[base + listed] = 0.0
                     listed += 1
                 factors[base + slot[v]] -= third
-            corner = _corner_of(triangles[t], receivers[r])
+            corner = corner_of(triangles[t], receivers[r])
             if corner >= 0:  # the receiver's own triangle: the fan rule
-                refined += _fan_count(points, triangles[t], corner, beta * scale_min, fan_angular, fan_radial)
+                refined += fan_count(points, triangles[t], corner, beta * scale_min, fan_angular, fan_radial)
             elif (
                 diameters[t] <= degree3_diameter
-                and _whole(diameters[t], centroids[t], xo, degree3_ratio, 0.0)
-                and _whole(scale_min, centroids[t], xo, 1.0, 0.0)
+                and integrated_whole(diameters[t], centroids[t], xo, degree3_ratio, 0.0)
+                and integrated_whole(scale_min, centroids[t], xo, 1.0, 0.0)
             ):  # degree 3 (shared points), only beyond D_min: nearer, S_d varies with the angles too
                 area = triangle_areas[t]
                 for corner in range(3):
@@ -1011,13 +1011,13 @@ def _list_points(
                 columns[base + listed] = first_rule[t]  # Dunavant's first point: the centroid
                 factors[base + listed] = centroid_factor
                 listed += 1
-            elif _whole(diameters[t], centroids[t], xo, beta, scale_min):  # Dunavant: shared rule points
+            elif integrated_whole(diameters[t], centroids[t], xo, beta, scale_min):  # Dunavant: shared rule points
                 for q in range(n_rule):
                     columns[base + listed] = first_rule[t] + q
                     factors[base + listed] = 1.0
                     listed += 1
             else:
-                refined += n_rule * _pieces(points, triangles[t], xo, beta, scale_min, stack, cx, none)
+                refined += n_rule * subdivided_pieces(points, triangles[t], xo, beta, scale_min, stack, cx, none)
         n_columns[r] = listed
         n_refined[r] = refined
 
@@ -1065,8 +1065,8 @@ def _refined_points(
             if first_rule[t] < 0:
                 continue
             tri = triangles[t]
-            corner = _corner_of(tri, receivers[r])
-            if corner < 0 and _whole(diameters[t], centroids[t], xo, beta, scale_min):
+            corner = corner_of(tri, receivers[r])
+            if corner < 0 and integrated_whole(diameters[t], centroids[t], xo, beta, scale_min):
                 continue  # a whole triangle: its points are the shared ones
             n, own, found = _own_points(
                 points,
@@ -1088,7 +1088,7 @@ def _refined_points(
                 own,
             )
             for j in range(n):
-                _gather(
+                gather_point(
                     points,
                     normals,
                     w12,
@@ -1130,35 +1130,43 @@ def _own_points(
     Rows ``(b0, b1, b2, weight mm^2)`` of ``out``; returns ``(count, out, found)`` (the scratch arrays, grown
     where they were too small)."""
     if corner >= 0:
-        n = _fan_count(points, tri, corner, beta * scale_min, ang_x.shape[0], rad_x.shape[0])
+        n = fan_count(points, tri, corner, beta * scale_min, ang_x.shape[0], rad_x.shape[0])
         if n > out.shape[0]:
             out = np.empty((n, 4))
-        _fan(points, tri, corner, beta, scale_min, ang_x, ang_w, rad_x, rad_w, out)
+        fan_rule(points, tri, corner, beta, scale_min, ang_x, ang_w, rad_x, rad_w, out)
         for j in range(n):
             out[j, 3] *= area
         return n, out, found
-    n = _pieces(points, tri, xo, beta, scale_min, stack, cx, found)
+    n = subdivided_pieces(points, tri, xo, beta, scale_min, stack, cx, found)
     if n > found.shape[0]:  # deeper than the scratch space: grow it and subdivide again
         found = np.empty((n, 7))
-        n = _pieces(points, tri, xo, beta, scale_min, stack, cx, found)
+        n = subdivided_pieces(points, tri, xo, beta, scale_min, stack, cx, found)
     n_rule = rule_points.shape[0]
     if n * n_rule > out.shape[0]:
         out = np.empty((n * n_rule, 4))
     m = 0
     for j in range(n):
-        p0, q0, p1, q1, p2, q2 = found[j, 0], found[j, 1], found[j, 2], found[j, 3], found[j, 4], found[j, 5]
-        r0 = 1.0 - p0 - q0
-        r1 = 1.0 - p1 - q1
-        r2 = 1.0 - p2 - q2
+        corners = (found[j, 0], found[j, 1], found[j, 2], found[j, 3], found[j, 4], found[j, 5])
         piece_area = area * 0.25 ** found[j, 6]
         for qp in range(n_rule):
-            l0, l1, l2 = rule_points[qp, 0], rule_points[qp, 1], rule_points[qp, 2]
-            out[m, 0] = l0 * p0 + l1 * p1 + l2 * p2
-            out[m, 1] = l0 * q0 + l1 * q1 + l2 * q2
-            out[m, 2] = l0 * r0 + l1 * r1 + l2 * r2
+            out[m, 0], out[m, 1], out[m, 2] = piece_point(
+                corners, rule_points[qp, 0], rule_points[qp, 1], rule_points[qp, 2]
+            )
             out[m, 3] = piece_area * rule_weights[qp]
             m += 1
     return m, out, found
+
+
+@numba.njit(cache=True, inline="always")
+def piece_point(corners, l0, l1, l2):
+    """The barycentric coordinates in its triangle of the point ``(l0, l1, l2)`` of a piece of
+    :func:`subdivided_pieces`, whose ``corners`` are ``(p0, q0, p1, q1, p2, q2)`` (corner ``k`` at ``(p_k, q_k, 1 -
+    p_k - q_k)``)."""
+    p0, q0, p1, q1, p2, q2 = corners
+    r0 = 1.0 - p0 - q0
+    r1 = 1.0 - p1 - q1
+    r2 = 1.0 - p2 - q2
+    return l0 * p0 + l1 * p1 + l2 * p2, l0 * q0 + l1 * q1 + l2 * q2, l0 * r0 + l1 * r1 + l2 * r2
 
 
 def near_field_operator(
@@ -1219,7 +1227,7 @@ def near_field_operator(
     n_r = receivers.shape[0]
     counts = near_vertex_counts(triangles, receivers, offsets, triangle_ids)
     stamps = np.full((thread_count(), 2 * points.shape[0]), -1, dtype=np.int64)
-    fan = (*_gauss_legendre_unit(fan_nodes[0]), *_gauss_legendre_unit(fan_nodes[1]))
+    fan = (*gauss_legendre_unit(fan_nodes[0]), *gauss_legendre_unit(fan_nodes[1]))
     starts = np.zeros(n_r + 1, dtype=np.int64)
     np.cumsum(counts, out=starts[1:])
     columns = np.empty(int(starts[-1]), dtype=np.int64)
@@ -1420,8 +1428,8 @@ def _operator_rows(
             t = triangle_ids[k]
             tri = triangles[t]
             area = triangle_areas[t]
-            corner = _corner_of(tri, v_o)
-            if corner < 0 and _whole(diameters[t], centroids[t], xo, beta, scale_min):
+            corner = corner_of(tri, v_o)
+            if corner < 0 and integrated_whole(diameters[t], centroids[t], xo, beta, scale_min):
                 for q in range(n_rule):
                     queued = _queue_point(
                         points,

@@ -862,6 +862,7 @@ def _plan(work: _Work, method, tol, memory_limit, time_limit, stats, memory_at_s
         medium=work.medium,
         degree3_ratio=0.0 if method == "exact" else NEAR_DEGREE3_RATIO,
         degree3_diameter=NEAR_DEGREE3_DECAY / max(float(np.max(work.medium.sigma_tr)), 1e-300),
+        device=work.device,
     )
     available, resident = memory_at_start or (memory.available_memory(), memory.resident_memory())
     budget_bytes = budget.memory_budget(memory_limit, available, resident)
@@ -934,9 +935,11 @@ def _merge_stats(total: dict, part: dict) -> dict:
 
 
 def _near_call(args, receivers, offsets, triangle_ids, own=None):
-    """:func:`translucency.scatter.nearfield.near_field_correction` on some receivers with their lists."""
+    """:func:`translucency.scatter.nearfield.near_field_correction` on some receivers with their lists; on the GPU
+    where the solve's device is (:mod:`translucency.scatter.gpu.nearfield`, ``exact``'s rules), except for the
+    budget's sample, which counts each receiver's own points (``own``)."""
     g = args["geometry"]
-    return nearfield.near_field_correction(
+    common = (
         args["model_code"],
         g.points,
         g.triangles,
@@ -951,6 +954,13 @@ def _near_call(args, receivers, offsets, triangle_ids, own=None):
         args["channel_of"],
         NEAR_BETA,
         float(np.min(args["medium"].D)),
+    )
+    if args.get("device") == "gpu" and own is None:
+        from .gpu import nearfield as on_the_gpu
+
+        return on_the_gpu.near_field_correction(*common, nearfield.tables_of(g))
+    return nearfield.near_field_correction(
+        *common,
         tables=nearfield.tables_of(g),
         degree3_ratio=args["degree3_ratio"],
         degree3_diameter=args["degree3_diameter"],

@@ -24,14 +24,15 @@ import numpy as np
 from numba import config, cuda
 
 from .. import kernels
+from .compiled import for_the_device
 from .probe import said_plainly
 
 __all__ = ["PairSums", "RelitFarField", "vertex_sum"]
 
 #: The CPU's loop over the sources, as the kernel calls it: compiled for CUDA, or run as Python in numba's simulator
 #: (which cannot hand its arrays to a function compiled for the CPU).
-_every_source = kernels.vertex_sources.py_func if config.ENABLE_CUDASIM else kernels.vertex_sources
-_listed_sources = kernels.indexed_sources.py_func if config.ENABLE_CUDASIM else kernels.indexed_sources
+_every_source = for_the_device(kernels.vertex_sources)
+_listed_sources = for_the_device(kernels.indexed_sources)
 #: Threads per block along the receivers.
 THREADS = 128
 #: Threads a call gives the GPU at least, where the receivers times the chunks of sources allow it.

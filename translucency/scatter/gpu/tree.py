@@ -22,23 +22,19 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import config, cuda, int64
+from numba import cuda, int64
 
 from .. import hierarchy, kernels
+from .compiled import for_the_device
 from .probe import said_plainly
 
 __all__ = ["WalkedSums"]
 
 
-def _for_the_device(function):
-    """A CPU-compiled helper as the kernel calls it: compiled for CUDA, or run as Python in numba's simulator."""
-    return function.py_func if config.ENABLE_CUDASIM else function
-
-
-_pair = _for_the_device(kernels.weighted_pair)
-_small_and_far = _for_the_device(hierarchy.small_and_far)
-_bound_index = _for_the_device(hierarchy.bound_index)
-_aggregate_error = _for_the_device(hierarchy.aggregate_error)
+_pair = for_the_device(kernels.weighted_pair)
+_small_and_far = for_the_device(hierarchy.small_and_far)
+_bound_index = for_the_device(hierarchy.bound_index)
+_aggregate_error = for_the_device(hierarchy.aggregate_error)
 #: Threads per block.
 THREADS = 128
 #: Depth of a thread's stack of nodes to visit: a walk holds at most one node per level of the tree and one more,
