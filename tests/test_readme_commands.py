@@ -28,6 +28,8 @@ NOT_RUN_HERE = {
     "./test.sh": "this test suite itself",
     '.venv/bin/python -m pip install -e ".[gpu]"': "installs the GPU extra (about 0.5 GB): its kernel is tested in "
     "numba's CUDA simulator, which needs none of it (tests/scatter/test_gpu.py)",
+    "translucency bake scan.ply --device gpu": "needs an NVIDIA GPU (here it is the sentence saying so): the same "
+    "solve runs in numba's CUDA simulator (tests/scatter/test_gpu.py, tree on the GPU against the CPU)",
 }
 #: Placeholders of the README for another machine, and what they become here.
 PLACEHOLDERS = {"tcp://host:8786": "tcp://127.0.0.1:{port}", "/shared/baked/": "shared/baked/"}
