@@ -86,6 +86,9 @@ def sums(cases, medium) -> dict:
     near_field_cases(out, walked, cases["tree_phi"], cases["tree_w12"], medium)
     tree = solve.solve(walked, cases["tree_phi"], cases["tree_w12"], medium, method="tree", tol=0.1, device="gpu")
     out["tree_B"] = tree.B
+    from translucency.scatter.gpu import nearfield as on_the_gpu
+
+    out["near_held_after_solve"] = bool(on_the_gpu._HELD)  # the mesh's and the light's copies given back
     out["tree_device"] = np.array(tree.stats["device"])
     for key in ("pairs_direct", "cluster_evaluations"):
         out[f"tree_{key}"] = tree.stats[key]

@@ -154,6 +154,7 @@ def test_tree_on_the_gpu_is_tree_on_the_cpu(simulated):
     for key in ("pairs_direct", "cluster_evaluations"):
         assert int(out[f"tree_{key}"]) == cpu.stats[key], key
     assert np.allclose(out["tree_B"], cpu.B, rtol=1e-12, atol=0)
+    assert not bool(out["near_held_after_solve"])  # the near field's copies on the device given back
 
 
 def test_the_near_field_on_the_gpu_is_the_cpus_with_exacts_rules(simulated):

@@ -1097,7 +1097,20 @@ def over_budget_sentence(plan: budget.SolveEstimate, n_vertices: int) -> str:
 
 def _near_field(args, inner, radius, plan, report):
     """Near-field correction of every receiver, in blocks of the plan: ``(correction, near triangles,
-    near points, seconds spent listing)``; the same result whatever the blocks."""
+    near points, seconds spent listing)``; the same result whatever the blocks. On a GPU the mesh and the light are
+    copied there once for the blocks, and given back after them."""
+    if args.get("device") != "gpu":
+        return _near_blocks(args, inner, radius, plan, report)
+    from .gpu import nearfield as on_the_gpu
+
+    try:
+        return _near_blocks(args, inner, radius, plan, report)
+    finally:
+        on_the_gpu.release()
+
+
+def _near_blocks(args, inner, radius, plan, report):
+    """:func:`_near_field`'s blocks."""
     geometry = args["geometry"]
     n_r = inner.size
     correction = np.zeros((n_r, args["phi"].shape[1]))

@@ -31,7 +31,7 @@ from .. import kernels, nearfield
 from .compiled import for_the_device
 from .probe import said_plainly
 
-__all__ = ["near_field_correction"]
+__all__ = ["near_field_correction", "release"]
 
 
 _pair = for_the_device(kernels.weighted_pair)
@@ -157,6 +157,36 @@ def _near_sums(
     counts[r] = evaluated
 
 
+#: The mesh and the light on the device while a solve corrects its blocks of receivers one after another
+#: (:func:`release` when it is done): ``{"host": the arrays they were copied from, "device": the copies}``.
+_HELD: dict = {}
+
+
+def _held(host: tuple) -> tuple:
+    """``(surface, light, sizes)`` on the device for ``host`` = ``(points, normals, triangles, triangle_areas, w12,
+    phi, tables)``: copied once for a solve's blocks (the same arrays, by identity), again for other arrays."""
+    kept = _HELD.get("host")
+    if kept is None or len(kept) != len(host) or any(a is not b for a, b in zip(kept, host)):
+        points, normals, triangles, triangle_areas, w12, phi, tables = host
+        _HELD["device"] = (
+            (_to_device(points), _to_device(normals), _to_device(triangles, np.int64), _to_device(triangle_areas)),
+            (_to_device(w12), _to_device(phi)),
+            (_to_device(tables.diameters), _to_device(tables.centroids)),
+        )
+        _HELD["host"] = host
+    return _HELD["device"]
+
+
+def release() -> None:
+    """Give back the device's copies of the last solve's mesh and light (:func:`near_field_correction` keeps them
+    between the blocks of one solve)."""
+    _HELD.clear()
+
+
+def _to_device(array, dtype=np.float64):
+    return cuda.to_device(np.ascontiguousarray(array, dtype=dtype))
+
+
 @said_plainly
 def near_field_correction(
     model,
@@ -187,17 +217,12 @@ def near_field_correction(
             *cpu_args, receivers, offsets, triangle_ids, params, channel_of, beta, scale_min, tables=tables
         )
 
-    def to_device(array, dtype=np.float64):
-        return cuda.to_device(np.ascontiguousarray(array, dtype=dtype))
-
-    surface = (to_device(points), to_device(normals), to_device(triangles, np.int64), to_device(triangle_areas))
-    light = (to_device(w12), to_device(phi))
-    sizes = (to_device(tables.diameters), to_device(tables.centroids))
-    lists = (to_device(offsets - offsets[0], np.int64), to_device(triangle_ids[offsets[0] : offsets[-1]], np.int64))
+    surface, light, sizes = _held((points, normals, triangles, triangle_areas, w12, phi, tables))
+    lists = (_to_device(offsets - offsets[0], np.int64), _to_device(triangle_ids[offsets[0] : offsets[-1]], np.int64))
     fan = (*nearfield.gauss_legendre_unit(nearfield.FAN_ANGULAR), *nearfield.gauss_legendre_unit(nearfield.FAN_RADIAL))
-    rules = tuple(to_device(a) for a in (nearfield.RULE_POINTS, nearfield.RULE_WEIGHTS, *fan))
+    rules = tuple(_to_device(a) for a in (nearfield.RULE_POINTS, nearfield.RULE_WEIGHTS, *fan))
     lanes = kernels.channel_lanes(params, channel_of, n_out)
-    device_receivers = to_device(receivers, np.int64)
+    device_receivers = _to_device(receivers, np.int64)
     part = cuda.device_array((n_r, 3), dtype=np.float64)
     counts = cuda.device_array(n_r, dtype=np.int64)
     overflow = cuda.to_device(np.zeros(n_r, dtype=np.int64))
