@@ -112,6 +112,9 @@ def test_relighting_with_an_albedo_per_vertex_is_tree_on_the_device_asked_for(sp
     tree = varying.solve_varying(geometry, phi, w12, base, reflectance=look, method="tree", tol=0.1, device="cpu")
     assert asked.stats["device"] == "cpu"
     assert np.array_equal(asked.B, tree.B)
+    # tree's counts added up over the levels: its evaluations are its sources one by one and its clusters
+    assert tree.stats["solves"] > 1 and tree.stats["cluster_evaluations"] > 0
+    assert tree.stats["pairs_direct"] + tree.stats["cluster_evaluations"] == tree.stats["pairs_evaluated"]
     monkeypatch.setattr(probe, "gpu_status", lambda: probe.GpuStatus(False, reason="no GPU in this test"))
     with pytest.raises(InvalidParameterError, match=r"device='gpu' needs an NVIDIA GPU, and no GPU in this test"):
         varying.solve_varying(geometry, phi, w12, base, reflectance=look, method="relight", tol=0.1, device="gpu")

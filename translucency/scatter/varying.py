@@ -166,6 +166,9 @@ def solve_varying(geometry, phi, w12, medium: Medium, *, reflectance, solver=Non
         stats["receiver_solves"] += int(rows.size)
         for key in ("pairs_evaluated", "pairs_skipped", "near_points"):
             stats[key] = stats.get(key, 0) + int(solution.stats.get(key, 0))
+        for key in ("pairs_direct", "cluster_evaluations"):  # tree's, where the levels were solved by tree
+            if key in solution.stats:
+                stats[key] = stats.get(key, 0) + int(solution.stats[key])
         if "device" in solution.stats:
             stats["device"] = solution.stats["device"]
         for key, value in solution.timings.items():
