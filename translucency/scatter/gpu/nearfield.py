@@ -28,7 +28,7 @@ import numpy as np
 from numba import cuda, float64
 
 from .. import kernels, nearfield
-from .compiled import for_the_device
+from .compiled import for_the_device, lane_groups, to_device
 from .probe import said_plainly
 
 __all__ = ["near_field_correction", "release"]
@@ -169,9 +169,9 @@ def _held(host: tuple) -> tuple:
     if kept is None or len(kept) != len(host) or any(a is not b for a, b in zip(kept, host)):
         points, normals, triangles, triangle_areas, w12, phi, tables = host
         _HELD["device"] = (
-            (_to_device(points), _to_device(normals), _to_device(triangles, np.int64), _to_device(triangle_areas)),
-            (_to_device(w12), _to_device(phi)),
-            (_to_device(tables.diameters), _to_device(tables.centroids)),
+            (to_device(points), to_device(normals), to_device(triangles, np.int64), to_device(triangle_areas)),
+            (to_device(w12), to_device(phi)),
+            (to_device(tables.diameters), to_device(tables.centroids)),
         )
         _HELD["host"] = host
     return _HELD["device"]
@@ -181,10 +181,6 @@ def release() -> None:
     """Give back the device's copies of the last solve's mesh and light (:func:`near_field_correction` keeps them
     between the blocks of one solve)."""
     _HELD.clear()
-
-
-def _to_device(array, dtype=np.float64):
-    return cuda.to_device(np.ascontiguousarray(array, dtype=dtype))
 
 
 @said_plainly
@@ -218,16 +214,16 @@ def near_field_correction(
         )
 
     surface, light, sizes = _held((points, normals, triangles, triangle_areas, w12, phi, tables))
-    lists = (_to_device(offsets - offsets[0], np.int64), _to_device(triangle_ids[offsets[0] : offsets[-1]], np.int64))
+    lists = (to_device(offsets - offsets[0], np.int64), to_device(triangle_ids[offsets[0] : offsets[-1]], np.int64))
     fan = (*nearfield.gauss_legendre_unit(nearfield.FAN_ANGULAR), *nearfield.gauss_legendre_unit(nearfield.FAN_RADIAL))
-    rules = tuple(_to_device(a) for a in (nearfield.RULE_POINTS, nearfield.RULE_WEIGHTS, *fan))
+    rules = tuple(to_device(a) for a in (nearfield.RULE_POINTS, nearfield.RULE_WEIGHTS, *fan))
     lanes = kernels.channel_lanes(params, channel_of, n_out)
-    device_receivers = _to_device(receivers, np.int64)
+    device_receivers = to_device(receivers, np.int64)
     part = cuda.device_array((n_r, 3), dtype=np.float64)
     counts = cuda.device_array(n_r, dtype=np.int64)
     overflow = cuda.to_device(np.zeros(n_r, dtype=np.int64))
     correction = np.empty((n_r, lanes.shape[0]))
-    for c0 in range(0, lanes.shape[0], 3):
+    for launch, channels, lane_params in lane_groups(lanes, n_out):
         _near_sums[-(-n_r // THREADS), THREADS](
             int(model),
             surface,
@@ -237,13 +233,13 @@ def near_field_correction(
             lists,
             rules,
             (float(beta), float(scale_min)),
-            tuple(tuple(float(v) for v in lanes[c]) for c in range(c0, c0 + 3)),
-            tuple(min(c, n_out - 1) for c in range(c0, c0 + 3)),
+            lane_params,
+            channels,
             part,
             counts,
             overflow,
         )
-        correction[:, c0 : c0 + 3] = part.copy_to_host()
+        correction[:, launch.start : launch.stop] = part.copy_to_host()
     correction = np.ascontiguousarray(correction[:, :n_out])
     evaluated = counts.copy_to_host()
     left = np.flatnonzero(overflow.copy_to_host())

@@ -24,7 +24,7 @@ import numpy as np
 from numba import config, cuda
 
 from .. import kernels
-from .compiled import for_the_device
+from .compiled import for_the_device, lane_groups, to_device
 from .probe import said_plainly
 
 __all__ = ["PairSums", "RelitFarField", "vertex_sum"]
@@ -33,6 +33,7 @@ __all__ = ["PairSums", "RelitFarField", "vertex_sum"]
 #: (which cannot hand its arrays to a function compiled for the CPU).
 _every_source = for_the_device(kernels.vertex_sources)
 _listed_sources = for_the_device(kernels.indexed_sources)
+_table_rows = for_the_device(kernels.table_rows)
 #: Threads per block along the receivers.
 THREADS = 128
 #: Threads a call gives the GPU at least, where the receivers times the chunks of sources allow it.
@@ -86,7 +87,7 @@ def _listed_sums(model, table, F0, F1, F2, p0, p1, p2, starts, columns, factors,
     o = cuda.grid(1)
     if o >= rcv_points.shape[0]:
         return
-    rows = (table[0], table[1], table[2], table[3], table[4], table[5], table[6], table[7], table[8])
+    rows = _table_rows(table)
     a0, a1, a2 = _listed_sources(
         model,
         starts[o],
@@ -149,16 +150,12 @@ class PairSums:
         self.n_out = weights.shape[0]
         lanes = kernels.channel_lanes(params, channel_of, self.n_out)
         counted = kernels.clamp_counted(channel_of, lanes.shape[0])
-        self.table = cuda.to_device(np.ascontiguousarray(table, dtype=np.float64))
-        rows = [cuda.to_device(np.ascontiguousarray(row, dtype=np.float64)) for row in weights]
-        # per group of three lanes: flux rows (the last repeated past the end), parameters, clamp counting
+        self.table = to_device(table)
+        rows = [to_device(row) for row in weights]
+        # per group of three lanes: flux rows, parameters, clamp counting
         self.groups = [
-            (
-                *(rows[min(c, self.n_out - 1)] for c in range(c0, c0 + 3)),
-                *(tuple(float(v) for v in lanes[c]) for c in range(c0, c0 + 3)),
-                *(int(counted[c]) for c in range(c0, c0 + 3)),
-            )
-            for c0 in range(0, lanes.shape[0], 3)
+            (*(rows[c] for c in channels), *lane_params, *(int(counted[c]) for c in launch))
+            for launch, channels, lane_params in lane_groups(lanes, self.n_out)
         ]
 
     @said_plainly
@@ -169,8 +166,7 @@ class PairSums:
             return np.zeros((n_rcv, self.n_out)), np.zeros(n_rcv, dtype=np.int64)
         chunk = chunk_size(n_rcv, self.n_src)
         chunks = -(-self.n_src // chunk)
-        points = cuda.to_device(np.ascontiguousarray(rcv_points, dtype=np.float64))
-        normals = cuda.to_device(np.ascontiguousarray(rcv_normals, dtype=np.float64))
+        points, normals = to_device(rcv_points), to_device(rcv_normals)
         clamps = cuda.to_device(np.zeros((chunks, n_rcv), dtype=np.int64))
         blocks = (-(-n_rcv // THREADS), chunks)
         B = np.empty((n_rcv, 3 * len(self.groups)))
@@ -207,14 +203,14 @@ class RelitFarField:
         self.normals = np.ascontiguousarray(normals, dtype=np.float64)
         self.params = np.ascontiguousarray(params, dtype=np.float64)
         self.channel_of = np.arange(self.params.shape[0])
-        self.starts = cuda.to_device(np.ascontiguousarray(near_starts, dtype=np.int64))
-        self.columns = cuda.to_device(np.ascontiguousarray(near_columns, dtype=np.int32))
+        self.starts = to_device(near_starts, np.int64)
+        self.columns = to_device(near_columns, np.int32)
         self.factors = cuda.to_device(np.ones(len(near_columns), dtype=np.float32))
         self.device_points = cuda.to_device(self.points)
         self.device_normals = cuda.to_device(self.normals)
         self.holds_near = near_coefs is not None and near_coefs.nbytes <= NEAR_SHARE_OF_FREE * _free_bytes()
         if self.holds_near:
-            self.coefs = cuda.to_device(np.ascontiguousarray(near_coefs, dtype=np.float32))
+            self.coefs = to_device(near_coefs, np.float32)
         self.far_sum = far_sum
         #: memory held on the host, bytes (the device holds the lists and the vertices)
         self.nbytes = 0

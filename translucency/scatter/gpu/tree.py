@@ -25,7 +25,7 @@ import numpy as np
 from numba import cuda, int64
 
 from .. import hierarchy, kernels
-from .compiled import for_the_device
+from .compiled import for_the_device, lane_groups, to_device
 from .probe import said_plainly
 
 __all__ = ["WalkedSums"]
@@ -35,6 +35,7 @@ _pair = for_the_device(kernels.weighted_pair)
 _small_and_far = for_the_device(hierarchy.small_and_far)
 _bound_index = for_the_device(hierarchy.bound_index)
 _aggregate_error = for_the_device(hierarchy.aggregate_error)
+_table_rows = for_the_device(kernels.table_rows)
 #: Threads per block.
 THREADS = 128
 #: Depth of a thread's stack of nodes to visit: a walk holds at most one node per level of the tree and one more,
@@ -74,17 +75,7 @@ def _walked_sums(
     group, reach = walk
     theta2, min_distance, bound, log_first, per_log, curvature = opening
     F0, F1, F2 = flux
-    X0, X1, X2, N0, N1, N2, W0, W1, W2 = (
-        table[0],
-        table[1],
-        table[2],
-        table[3],
-        table[4],
-        table[5],
-        table[6],
-        table[7],
-        table[8],
-    )
+    X0, X1, X2, N0, N1, N2, W0, W1, W2 = _table_rows(table)
     g = r // group
     n_src = lit.shape[0]
     n_c = node_flux.shape[1]
@@ -174,9 +165,6 @@ class WalkedSums:
         self.n_out = sources.weights.shape[0]
         lanes = kernels.channel_lanes(params, channel_of, self.n_out)
 
-        def to_device(array, dtype=np.float64):
-            return cuda.to_device(np.ascontiguousarray(array, dtype=dtype))
-
         self.nodes = (
             to_device(tree.order, np.int64),
             to_device(tree.start, np.int64),
@@ -190,12 +178,9 @@ class WalkedSums:
         self.lit = to_device(sources.lit, np.bool_)
         self.table = to_device(sources.table)
         rows = [to_device(row) for row in sources.weights]
-        self.groups = [  # per group of three lanes: flux rows (the last repeated past the end), parameters
-            (
-                tuple(rows[min(c, self.n_out - 1)] for c in range(c0, c0 + 3)),
-                tuple(tuple(float(v) for v in lanes[c]) for c in range(c0, c0 + 3)),
-            )
-            for c0 in range(0, lanes.shape[0], 3)
+        self.groups = [  # per group of three lanes: flux rows, parameters
+            (tuple(rows[c] for c in channels), lane_params)
+            for _, channels, lane_params in lane_groups(lanes, self.n_out)
         ]
         self.opening = (
             rule.theta * rule.theta,
@@ -217,12 +202,9 @@ class WalkedSums:
             limit = np.full((centre.shape[0], self.n_out), np.inf)
         else:
             limit = np.asarray(allow, dtype=np.float64)[members].min(axis=1)
-        receivers = (
-            cuda.to_device(np.ascontiguousarray(rcv_points, dtype=np.float64)),
-            cuda.to_device(np.ascontiguousarray(rcv_normals, dtype=np.float64)),
-        )
-        groups = (cuda.to_device(np.ascontiguousarray(centre)), cuda.to_device(np.ascontiguousarray(spread)))
-        limit = cuda.to_device(np.ascontiguousarray(limit))
+        receivers = (to_device(rcv_points), to_device(rcv_normals))
+        groups = (to_device(centre), to_device(spread))
+        limit = to_device(limit)
         B = np.empty((n_rcv, 3 * len(self.groups)))
         counts = cuda.device_array((n_rcv, 2), dtype=np.int64)
         blocks = -(-n_rcv // THREADS)
