@@ -124,5 +124,5 @@ def test_the_budget_counts_what_the_tree_sum_evaluates():
     walked = ListedWalk(0, tree, sources, params, np.arange(3), rule)
     estimate = first_estimate(walked, points[bright], normals[bright])
     floor = 1e-4 * estimate.max(axis=0)
-    _, direct, clustered = tree_sum(walked, points[rcv], normals[rcv], rule, floor)
+    _, direct, clustered = tree_sum(walked, points[rcv], normals[rcv], floor)
     assert np.array_equal(direct + clustered, counted)

@@ -511,18 +511,18 @@ class ListedWalk:
         return B, lists[1][of], lists[2][of]
 
 
-def tree_sum(walked, rcv_points, rcv_normals, rule: Opening, floor):
+def tree_sum(walked, rcv_points, rcv_normals, floor):
     """Far-field sum with the hierarchy: ``B[o, c]``, sources summed one by one and clusters used, per receiver.
 
     Two walks per block of ``walked.block`` receivers (docs/physics.md §8.3), each made and summed by ``walked``
-    (:class:`ListedWalk` on the CPU, :class:`translucency.scatter.gpu.tree.WalkedSums` on the GPU). The first takes a
-    node as one aggregated source where it is small seen from the receivers (``rule.theta``) and farther than
-    ``rule.min_distance``; its sum is the first estimate ``B_est``. The second takes a node only where its
-    aggregate's error is also within :func:`allowance` of ``B_est`` (``floor (C,)``: the least ``B`` the allowance
-    assumes, W/(m^2 sr)); otherwise its children are opened, down to the leaves' sources. The tree is walked once
-    per group of ``walked.group`` consecutive receivers (the solver orders them along a space-filling curve) with the
-    tests made for the group's bounding sphere, which hold for every receiver of the group, and the group's
-    sources and clusters are summed at each of its receivers.
+    (:class:`ListedWalk` on the CPU, :class:`translucency.scatter.gpu.tree.WalkedSums` on the GPU), by its
+    :class:`Opening` ``walked.rule``. The first takes a node as one aggregated source where it is small seen from the
+    receivers (``theta``) and farther than ``min_distance``; its sum is the first estimate ``B_est``. The second
+    takes a node only where its aggregate's error is also within :func:`allowance` of ``B_est`` (``floor (C,)``:
+    the least ``B`` the allowance assumes, W/(m^2 sr)); otherwise its children are opened, down to the leaves'
+    sources. The tree is walked once per group of ``walked.group`` consecutive receivers (the solver orders them
+    along a space-filling curve) with the tests made for the group's bounding sphere, which hold for every receiver
+    of the group, and the group's sources and clusters are summed at each of its receivers.
 
     Returns
     -------
@@ -540,7 +540,7 @@ def tree_sum(walked, rcv_points, rcv_normals, rule: Opening, floor):
         part = slice(first, min(n_rcv, first + block))
         p, nrm = rcv_points[part], rcv_normals[part]
         B_est, direct_first, clustered_first = walked(p, nrm, None, group)
-        B[part], direct_second, clustered_second = walked(p, nrm, allowance(B_est, floor, rule.eps), group)
+        B[part], direct_second, clustered_second = walked(p, nrm, allowance(B_est, floor, walked.rule.eps), group)
         direct[part] = direct_first + direct_second
         clustered[part] = clustered_first + clustered_second
     return B, direct, clustered

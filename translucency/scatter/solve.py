@@ -216,7 +216,7 @@ def _tree_far_field(model, geometry, medium, lit, w12, flux, params, channel_of,
     )
 
     def evaluate(rcv_points, rcv_normals):
-        B, direct, clustered = hierarchy.tree_sum(walked, rcv_points, rcv_normals, rule, floor)
+        B, direct, clustered = hierarchy.tree_sum(walked, rcv_points, rcv_normals, floor)
         pairs = int(lit.size) * int(rcv_points.shape[0])
         return B, {
             "theta": rule.theta,
