@@ -68,3 +68,39 @@ def test_warm_up_fills_the_cache_in_numba_cache_dir_once(tmp_path):
         timeout=600,
     )
     assert int(empty.stdout) == len(warmup.MAIN_JOB_KERNELS)
+
+
+# Run in a fresh process on an empty cache: numba's compilations of the first process, and whether every kernel of
+# the main job is cached afterwards.
+_TRACED_WARM_UP = """
+from numba.core import event
+compiled = []
+class Listener(event.Listener):
+    def on_start(self, ev):
+        compiled.append(ev.data["dispatcher"].py_func.__qualname__)
+    def on_end(self, ev):
+        pass
+event.register("numba:compile", Listener())
+from translucency.app import warmup
+warmup.warm_up()
+print(sorted(set(compiled)))
+print(warmup.cold_kernels())
+"""
+
+
+@pytest.mark.slow
+def test_relighting_kernels_are_compiled_by_the_second_process_and_found_by_the_first(tmp_path):
+    """The warm-up's second process compiles relighting's own kernels (its operators and their product), and the
+    first finds them in the cache: it compiles none of them itself, and afterwards no kernel of the main job is
+    cold."""
+    from translucency.scatter import lowrank, relight
+
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "cache")}
+    run = subprocess.run([sys.executable, "-c", _TRACED_WARM_UP], env=env, capture_output=True, text=True, timeout=600)
+    assert run.returncode == 0, run.stderr
+    compiled, cold = run.stdout.strip().splitlines()[-2:]
+    assert cold == "[]"
+    own = {kernel.py_func.__qualname__ for kernel in (*relight.RELIGHT_KERNELS, *lowrank.LOW_RANK_KERNELS)}
+    own.add("_operator_rows")  # the near field's operator, which only relighting makes
+    assert own.isdisjoint(eval(compiled)), compiled
+    assert "_grouped_rows_directional" in compiled  # the first process did compile tree's kernels

@@ -9,7 +9,9 @@ compiler (bench/README.md, "First run", measures how long). Two helpers:
   command line can say why it is quiet;
 * :func:`warm_up` (``python -m translucency.app.warmup``, run by ``scripts/setup.sh``) compiles
   the kernels the main job uses by shading a small synthetic surface, unless every one of them is
-  already in the cache (:func:`cold_kernels`, read from numba's cache index).
+  already in the cache (:func:`cold_kernels`, read from numba's cache index). numba compiles on one core
+  and holds the interpreter while it does, so relighting's own kernels are compiled in a second process
+  (:func:`compile_relighting`) while this one compiles the cleaning's and ``tree``'s.
 """
 
 from __future__ import annotations
@@ -18,6 +20,7 @@ import argparse
 import contextlib
 import glob
 import inspect
+import subprocess
 import sys
 import time
 from collections.abc import Callable, Iterator
@@ -40,6 +43,13 @@ MAIN_JOB_KERNELS = (
 )
 
 NOTICE = "compiling the solver's kernels (first run only, a minute or two) ..."
+
+#: The warm-up's light (the plane's normal is +z).
+LIGHT_DIRECTION = (0.3, 0.2, 1.0)
+
+#: The longest the warm-up waits for its second process once its own part is done (s); past it, it stops the
+#: process and compiles what is left itself.
+HELPER_SECONDS = 600.0
 
 
 @contextlib.contextmanager
@@ -111,10 +121,59 @@ def _plane(n: int = 24, spacing: float = 1.0):
     return points, triangles, normals
 
 
+def compile_relighting() -> None:
+    """Compile relighting's own kernels (its near and far operators and a light's product with them) by preparing
+    the operators of :func:`_plane` in marble at the viewer's ``tol`` and applying them to one light, as a shade
+    with ``method="relight"`` would, less its first light's check against ``tree``. The body of the second process of
+    :func:`warm_up`; the kernels land in numba's cache, where the first process then finds them."""
+    from ..scatter import fresnel, solve
+    from ..scatter.materials import material
+    from ..scatter.surface import SurfaceGeometry, spatial_order
+    from .shading.settings import VIEWER_TOL
+
+    points, triangles, normals = _plane()
+    geometry, order, _ = spatial_order(SurfaceGeometry(points, triangles, normals))
+    medium = material("marble").medium()
+    light = np.array(LIGHT_DIRECTION) / np.linalg.norm(LIGHT_DIRECTION)
+    cos = normals @ light
+    phi = np.repeat((fresnel.fresnel_transmittance(cos, medium.eta) * cos)[:, None], medium.n_channels, axis=1)
+    w12 = fresnel.refract(np.broadcast_to(light, normals.shape), normals, medium.eta)
+    operator, _ = solve.relight_operator(geometry, medium, "directional", VIEWER_TOL)
+    operator.apply(geometry.vertex_areas, phi[order], w12[order], {})
+
+
+def _second_process() -> subprocess.Popen | None:
+    """:func:`compile_relighting` in a process of its own, quiet (where it fails, the first process compiles what it
+    left); None where no second core would run it."""
+    from ..threads import thread_count
+
+    if thread_count() < 2:
+        return None
+    command = [sys.executable, "-c", "from translucency.app.warmup import compile_relighting; compile_relighting()"]
+    try:
+        return subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    except OSError:
+        return None
+
+
+def _stop(helper: subprocess.Popen | None, wait: float = 0.0) -> None:
+    """Wait up to ``wait`` seconds for ``helper`` to end, then end it."""
+    if helper is None:
+        return
+    try:
+        helper.wait(timeout=wait)
+    except subprocess.TimeoutExpired:
+        pass
+    if helper.poll() is None:
+        helper.kill()
+        helper.wait()
+
+
 def warm_up(force: bool = False) -> float:
     """Compile the kernels the main job and the viewer use (the cleaning of a small plane, a ``tree`` shade of
-    it in marble, and one with ``relight``); returns the seconds it took (0 when every kernel was already
-    cached and ``force`` is false)."""
+    it in marble, and one with ``relight``, whose own kernels a second process compiles meanwhile:
+    :func:`compile_relighting`); returns the seconds it took (0 when every kernel was already cached and ``force``
+    is false)."""
     if not force and not cold_kernels():
         return 0.0
     from ..geometry import proximity
@@ -124,25 +183,32 @@ def warm_up(force: bool = False) -> float:
     from .shading.settings import VIEWER_METHOD, VIEWER_TOL, ShadeSettings
 
     start = time.perf_counter()
-    points, triangles, normals = _plane()
-    # what the cleaning of a scan counts (translucency.io.defects) and computes
-    edges, edge_of_corner = topology.unique_edges(triangles)
-    faces_per_edge = np.bincount(edge_of_corner.ravel(), minlength=len(edges))
-    topology.count_non_manifold_vertices(triangles, edge_of_corner, faces_per_edge, len(points))
-    topology.face_components(triangles, edge_of_corner)
-    topology.duplicate_triangles(triangles)
-    topology.first_at_same_position(points)
-    measure.degenerate_triangles(points, triangles, 1e-10)
-    measure.vertex_normals(points, triangles)
-    # the up axis (translucency.io.upright): the surface's centroid and the convex hull's candidates
-    measure.area_centroids(points, triangles)
-    measure.hull_candidates(np.random.default_rng(0).normal(size=(4 * measure.CULL_DIRECTIONS + 1, 3)))
-    # and the mapping of a scan onto its proxy (the viewer's screenshot)
-    proximity.closest_points_on_triangles(points + 0.1 * normals, points, triangles)
-    scene = Scene(TriangleMesh(points, triangles), shadows=False, up="+z")
-    light = DirectionalLight((0.3, 0.2, 1.0), 1.0)
-    for method, tol in (("tree", 1e-2), (VIEWER_METHOD, VIEWER_TOL)):
-        scene.shade_with(ShadeSettings(method=method, tol=tol, bounces=0, resolution="full", up="+z"), light)
+    helper = _second_process()
+    try:
+        points, triangles, normals = _plane()
+        # what the cleaning of a scan counts (translucency.io.defects) and computes
+        edges, edge_of_corner = topology.unique_edges(triangles)
+        faces_per_edge = np.bincount(edge_of_corner.ravel(), minlength=len(edges))
+        topology.count_non_manifold_vertices(triangles, edge_of_corner, faces_per_edge, len(points))
+        topology.face_components(triangles, edge_of_corner)
+        topology.duplicate_triangles(triangles)
+        topology.first_at_same_position(points)
+        measure.degenerate_triangles(points, triangles, 1e-10)
+        measure.vertex_normals(points, triangles)
+        # the up axis (translucency.io.upright): the surface's centroid and the convex hull's candidates
+        measure.area_centroids(points, triangles)
+        measure.hull_candidates(np.random.default_rng(0).normal(size=(4 * measure.CULL_DIRECTIONS + 1, 3)))
+        # and the mapping of a scan onto its proxy (the viewer's screenshot)
+        proximity.closest_points_on_triangles(points + 0.1 * normals, points, triangles)
+        scene = Scene(TriangleMesh(points, triangles), shadows=False, up="+z")
+        light = DirectionalLight(LIGHT_DIRECTION, 1.0)
+        scene.shade_with(ShadeSettings(method="tree", tol=1e-2, bounces=0, resolution="full", up="+z"), light)
+    except BaseException:
+        _stop(helper)
+        raise
+    _stop(helper, wait=HELPER_SECONDS)
+    # relighting: its own kernels from the cache the second process filled (or compiled here where it failed)
+    scene.shade_with(ShadeSettings(method=VIEWER_METHOD, tol=VIEWER_TOL, bounces=0, resolution="full", up="+z"), light)
     return time.perf_counter() - start
 
 
