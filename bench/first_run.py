@@ -5,8 +5,9 @@ fresh empty folder (cold) and then at the same folder again (warm). A small driv
 line records the split of the time: numba compilation (the top-level ``numba:compile`` events),
 the imports of the heavy libraries (numba, SciPy, PyVista/VTK, pymeshlab, Embree, Matplotlib) and
 the rest (the work itself). Also measured: ``python -m translucency.app.warmup`` (what
-``scripts/setup.sh`` runs) on an empty cache, and the main job after it. Every row records the load
-average before it ran; the table shows medians over ``--repeats``.
+``scripts/setup.sh`` runs) on an empty cache, and the main job after it. The warm-up compiles relighting's
+kernels in a second process meanwhile, which the driver does not see: its compile column is the first process's.
+Every row records the load average before it ran; the table shows medians over ``--repeats``.
 
     .venv/bin/python bench/first_run.py               # 3 repeats, into results/first_run.{json,md}
     .venv/bin/python bench/first_run.py --quick       # 1 repeat, main job only, into results/tmp/
