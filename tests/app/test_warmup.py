@@ -90,9 +90,9 @@ print(warmup.cold_kernels())
 
 @pytest.mark.slow
 def test_relighting_kernels_are_compiled_by_the_second_process_and_found_by_the_first(tmp_path):
-    """The warm-up's second process compiles relighting's own kernels (its operators and their product), and the
-    first finds them in the cache: it compiles none of them itself, and afterwards no kernel of the main job is
-    cold."""
+    """The warm-up's second process compiles relighting's own kernels (its operators and their product) and the near
+    field's sum, and the first finds them in the cache: it compiles none of them itself, and afterwards no kernel of
+    the main job is cold."""
     from translucency.scatter import lowrank, relight
 
     env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "cache")}
@@ -102,5 +102,6 @@ def test_relighting_kernels_are_compiled_by_the_second_process_and_found_by_the_
     assert cold == "[]"
     own = {kernel.py_func.__qualname__ for kernel in (*relight.RELIGHT_KERNELS, *lowrank.LOW_RANK_KERNELS)}
     own.add("_operator_rows")  # the near field's operator, which only relighting makes
+    own.add("_indexed_rows_directional")  # the near field's sum, which the first process needs last
     assert own.isdisjoint(eval(compiled)), compiled
     assert "_grouped_rows_directional" in compiled  # the first process did compile tree's kernels

@@ -124,16 +124,25 @@ def _plane(n: int = 24, spacing: float = 1.0):
 def compile_relighting() -> None:
     """Compile relighting's own kernels (its near and far operators and a light's product with them) by preparing
     the operators of :func:`_plane` in marble at the viewer's ``tol`` and applying them to one light, as a shade
-    with ``method="relight"`` would, less its first light's check against ``tree``. The body of the second process of
+    with ``method="relight"`` would, less its first light's check against ``tree``; and first the near field's sum
+    over listed points (:func:`~translucency.scatter.kernels.indexed_sum`, with the argument types the near field
+    gives it and empty lists), which the first process needs last. The body of the second process of
     :func:`warm_up`; the kernels land in numba's cache, where the first process then finds them."""
-    from ..scatter import fresnel, solve
+    from ..scatter import fresnel, kernels, solve
     from ..scatter.materials import material
     from ..scatter.surface import SurfaceGeometry, spatial_order
     from .shading.settings import VIEWER_TOL
 
     points, triangles, normals = _plane()
-    geometry, order, _ = spatial_order(SurfaceGeometry(points, triangles, normals))
     medium = material("marble").medium()
+    n_c = medium.n_channels
+    params = kernels.channel_parameters(medium.sigma_a, medium.sigma_s, medium.g, medium.eta)
+    lanes = kernels.channel_lanes(params, np.arange(n_c), n_c)
+    starts, counts, columns = (np.zeros(1, dtype=np.int64) for _ in range(3))  # one receiver, nothing listed
+    table, weights = np.zeros((9, 1)), np.zeros((n_c, 1))
+    model = kernels.MODELS["directional"]
+    kernels.indexed_sum(model, points[:1], normals[:1], table, weights, starts, counts, columns, np.zeros(1), lanes)
+    geometry, order, _ = spatial_order(SurfaceGeometry(points, triangles, normals))
     light = np.array(LIGHT_DIRECTION) / np.linalg.norm(LIGHT_DIRECTION)
     cos = normals @ light
     phi = np.repeat((fresnel.fresnel_transmittance(cos, medium.eta) * cos)[:, None], medium.n_channels, axis=1)
