@@ -1,5 +1,6 @@
 """The first-run notice (real compilation only) and the set-up's warm-up of the solver's kernels."""
 
+import json
 import os
 import subprocess
 import sys
@@ -73,6 +74,7 @@ def test_warm_up_fills_the_cache_in_numba_cache_dir_once(tmp_path):
 # Run in a fresh process on an empty cache: numba's compilations of the first process, and whether every kernel of
 # the main job is cached afterwards.
 _TRACED_WARM_UP = """
+import json
 from numba.core import event
 compiled = []
 class Listener(event.Listener):
@@ -83,8 +85,8 @@ class Listener(event.Listener):
 event.register("numba:compile", Listener())
 from translucency.app import warmup
 warmup.warm_up()
-print(sorted(set(compiled)))
-print(warmup.cold_kernels())
+print(json.dumps(sorted(set(compiled))))
+print(json.dumps(warmup.cold_kernels()))
 """
 
 
@@ -98,10 +100,10 @@ def test_relighting_kernels_are_compiled_by_the_second_process_and_found_by_the_
     env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "cache")}
     run = subprocess.run([sys.executable, "-c", _TRACED_WARM_UP], env=env, capture_output=True, text=True, timeout=600)
     assert run.returncode == 0, run.stderr
-    compiled, cold = run.stdout.strip().splitlines()[-2:]
-    assert cold == "[]"
+    compiled, cold = (json.loads(line) for line in run.stdout.strip().splitlines()[-2:])
+    assert cold == []
     own = {kernel.py_func.__qualname__ for kernel in (*relight.RELIGHT_KERNELS, *lowrank.LOW_RANK_KERNELS)}
     own.add("_operator_rows")  # the near field's operator, which only relighting makes
     own.add("_indexed_rows_directional")  # the near field's sum, which the first process needs last
-    assert own.isdisjoint(eval(compiled)), compiled
+    assert own.isdisjoint(compiled), compiled
     assert "_grouped_rows_directional" in compiled  # the first process did compile tree's kernels

@@ -145,7 +145,7 @@ def compile_relighting() -> None:
     geometry, order, _ = spatial_order(SurfaceGeometry(points, triangles, normals))
     light = np.array(LIGHT_DIRECTION) / np.linalg.norm(LIGHT_DIRECTION)
     cos = normals @ light
-    phi = np.repeat((fresnel.fresnel_transmittance(cos, medium.eta) * cos)[:, None], medium.n_channels, axis=1)
+    phi = np.repeat((fresnel.fresnel_transmittance(cos, medium.eta) * cos)[:, None], n_c, axis=1)
     w12 = fresnel.refract(np.broadcast_to(light, normals.shape), normals, medium.eta)
     operator, _ = solve.relight_operator(geometry, medium, "directional", VIEWER_TOL)
     operator.apply(geometry.vertex_areas, phi[order], w12[order], {})
@@ -158,7 +158,7 @@ def _second_process() -> subprocess.Popen | None:
 
     if thread_count() < 2:
         return None
-    command = [sys.executable, "-c", "from translucency.app.warmup import compile_relighting; compile_relighting()"]
+    command = [sys.executable, "-c", f"from {__name__} import compile_relighting; compile_relighting()"]
     try:
         return subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     except OSError:
