@@ -22,6 +22,7 @@ import glob
 import inspect
 import subprocess
 import sys
+import tempfile
 import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -50,6 +51,9 @@ LIGHT_DIRECTION = (0.3, 0.2, 1.0)
 #: The longest the warm-up waits for its second process once its own part is done (s); past it, it stops the
 #: process and compiles what is left itself.
 HELPER_SECONDS = 600.0
+
+#: This module's import name, also where ``python -m`` runs it as ``__main__`` (the second process imports it).
+MODULE = __spec__.name if __spec__ is not None else __name__
 
 
 @contextlib.contextmanager
@@ -126,8 +130,9 @@ def compile_relighting() -> None:
     the operators of :func:`_plane` in marble at the viewer's ``tol`` and applying them to one light, as a shade
     with ``method="relight"`` would, less its first light's check against ``tree``; and first the near field's sum
     over listed points (:func:`~translucency.scatter.kernels.indexed_sum`, with the argument types the near field
-    gives it and empty lists), which the first process needs last. The body of the second process of
-    :func:`warm_up`; the kernels land in numba's cache, where the first process then finds them."""
+    gives it and empty lists), which the first process reaches after the cleaning's kernels and the near lists'
+    (where it gets there first, it compiles the sum too: the same code, written to the cache twice). The body of the
+    second process of :func:`warm_up`; the kernels land in numba's cache, where the first process then finds them."""
     from ..scatter import fresnel, kernels, solve
     from ..scatter.materials import material
     from ..scatter.surface import SurfaceGeometry, spatial_order
@@ -151,16 +156,16 @@ def compile_relighting() -> None:
     operator.apply(geometry.vertex_areas, phi[order], w12[order], {})
 
 
-def _second_process() -> subprocess.Popen | None:
-    """:func:`compile_relighting` in a process of its own, quiet (where it fails, the first process compiles what it
-    left); None where no second core would run it."""
+def _second_process(errors) -> subprocess.Popen | None:
+    """:func:`compile_relighting` in a process of its own, its output discarded and its errors written to the file
+    ``errors`` (where it fails, the first process compiles what it left); None where no second core would run it."""
     from ..threads import thread_count
 
     if thread_count() < 2:
         return None
-    command = [sys.executable, "-c", f"from {__name__} import compile_relighting; compile_relighting()"]
+    command = [sys.executable, "-c", f"from {MODULE} import compile_relighting; compile_relighting()"]
     try:
-        return subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        return subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=errors)
     except OSError:
         return None
 
@@ -178,6 +183,16 @@ def _stop(helper: subprocess.Popen | None, wait: float = 0.0) -> None:
         helper.wait()
 
 
+def _failure(helper: subprocess.Popen | None, errors) -> str | None:
+    """One line on a second process that ended with an error (its last line of output), or None."""
+    if helper is None or helper.returncode == 0:
+        return None
+    errors.seek(0)
+    lines = [line.strip() for line in errors.read().decode(errors="replace").splitlines() if line.strip()]
+    said = lines[-1] if lines else f"exit status {helper.returncode}"
+    return f"the second compiling process stopped ({said}); its kernels are compiled here instead"
+
+
 def warm_up(force: bool = False) -> float:
     """Compile the kernels the main job and the viewer use (the cleaning of a small plane, a ``tree`` shade of
     it in marble, and one with ``relight``, whose own kernels a second process compiles meanwhile:
@@ -185,40 +200,52 @@ def warm_up(force: bool = False) -> float:
     is false)."""
     if not force and not cold_kernels():
         return 0.0
+    from .shading.settings import VIEWER_METHOD, VIEWER_TOL, ShadeSettings
+
+    start = time.perf_counter()
+    with tempfile.TemporaryFile() as errors:
+        helper = _second_process(errors)
+        try:
+            scene, light = _compile_main_job()
+            _stop(helper, wait=HELPER_SECONDS)
+        finally:
+            _stop(helper)
+        failure = _failure(helper, errors)
+    if failure:
+        print(failure, file=sys.stderr, flush=True)
+    # relighting: its own kernels from the cache the second process filled (or compiled here where it failed)
+    scene.shade_with(ShadeSettings(method=VIEWER_METHOD, tol=VIEWER_TOL, bounces=0, resolution="full", up="+z"), light)
+    return time.perf_counter() - start
+
+
+def _compile_main_job():
+    """The first process's part of :func:`warm_up`: the cleaning's kernels and a ``tree`` shade of :func:`_plane`
+    in marble; ``(scene, light)`` for the shade with ``relight`` that follows."""
     from ..geometry import proximity
     from ..geometry.mesh import TriangleMesh
     from ..scatter.lights import DirectionalLight
     from .shading.scene import Scene
-    from .shading.settings import VIEWER_METHOD, VIEWER_TOL, ShadeSettings
+    from .shading.settings import ShadeSettings
 
-    start = time.perf_counter()
-    helper = _second_process()
-    try:
-        points, triangles, normals = _plane()
-        # what the cleaning of a scan counts (translucency.io.defects) and computes
-        edges, edge_of_corner = topology.unique_edges(triangles)
-        faces_per_edge = np.bincount(edge_of_corner.ravel(), minlength=len(edges))
-        topology.count_non_manifold_vertices(triangles, edge_of_corner, faces_per_edge, len(points))
-        topology.face_components(triangles, edge_of_corner)
-        topology.duplicate_triangles(triangles)
-        topology.first_at_same_position(points)
-        measure.degenerate_triangles(points, triangles, 1e-10)
-        measure.vertex_normals(points, triangles)
-        # the up axis (translucency.io.upright): the surface's centroid and the convex hull's candidates
-        measure.area_centroids(points, triangles)
-        measure.hull_candidates(np.random.default_rng(0).normal(size=(4 * measure.CULL_DIRECTIONS + 1, 3)))
-        # and the mapping of a scan onto its proxy (the viewer's screenshot)
-        proximity.closest_points_on_triangles(points + 0.1 * normals, points, triangles)
-        scene = Scene(TriangleMesh(points, triangles), shadows=False, up="+z")
-        light = DirectionalLight(LIGHT_DIRECTION, 1.0)
-        scene.shade_with(ShadeSettings(method="tree", tol=1e-2, bounces=0, resolution="full", up="+z"), light)
-    except BaseException:
-        _stop(helper)
-        raise
-    _stop(helper, wait=HELPER_SECONDS)
-    # relighting: its own kernels from the cache the second process filled (or compiled here where it failed)
-    scene.shade_with(ShadeSettings(method=VIEWER_METHOD, tol=VIEWER_TOL, bounces=0, resolution="full", up="+z"), light)
-    return time.perf_counter() - start
+    points, triangles, normals = _plane()
+    # what the cleaning of a scan counts (translucency.io.defects) and computes
+    edges, edge_of_corner = topology.unique_edges(triangles)
+    faces_per_edge = np.bincount(edge_of_corner.ravel(), minlength=len(edges))
+    topology.count_non_manifold_vertices(triangles, edge_of_corner, faces_per_edge, len(points))
+    topology.face_components(triangles, edge_of_corner)
+    topology.duplicate_triangles(triangles)
+    topology.first_at_same_position(points)
+    measure.degenerate_triangles(points, triangles, 1e-10)
+    measure.vertex_normals(points, triangles)
+    # the up axis (translucency.io.upright): the surface's centroid and the convex hull's candidates
+    measure.area_centroids(points, triangles)
+    measure.hull_candidates(np.random.default_rng(0).normal(size=(4 * measure.CULL_DIRECTIONS + 1, 3)))
+    # and the mapping of a scan onto its proxy (the viewer's screenshot)
+    proximity.closest_points_on_triangles(points + 0.1 * normals, points, triangles)
+    scene = Scene(TriangleMesh(points, triangles), shadows=False, up="+z")
+    light = DirectionalLight(LIGHT_DIRECTION, 1.0)
+    scene.shade_with(ShadeSettings(method="tree", tol=1e-2, bounces=0, resolution="full", up="+z"), light)
+    return scene, light
 
 
 def main(argv: list[str] | None = None) -> int:

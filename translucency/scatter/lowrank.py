@@ -60,9 +60,9 @@ V_STEP = 1.0 / FIXED_STEPS
 
 
 def rank_limit(rows: int, columns: int) -> int:
-    """Crosses a block of ``rows x columns`` may take before it is split: while they hold below half the bytes of
-    storing it whole (``2 k (rows + columns) < 4 rows columns / 2``: the crosses in 16 bits, a dense block in 32),
-    and at most 96."""
+    """Crosses a block of ``rows x columns`` may take before it is split: while they hold about half the bytes of
+    storing it whole (``2 k (rows + columns) <= 4 rows columns / 2``: the crosses in 16 bits, a dense block in 32;
+    the rows' float32 scales left out), and at most 96."""
     return int(max(1, min(96, rows * columns // (rows + columns))))
 
 
@@ -563,7 +563,8 @@ def _room(array: np.ndarray, size: int) -> np.ndarray:
 #: Crosses per block and channel: ``RANK_PER_SQUARED_DECADE log10(1 / eps)^2`` (:func:`expected_rank`; the ranks grow
 #: faster than the digits asked, and more blocks run out of crosses and are split). Of a block expected to need more
 #: than it may take, :data:`SPLIT_DENSE_SHARE` ends up in dense blocks. Both measured on the default bunny in marble
-#: at ``tol`` 0.1, 0.03 and 0.01 (bench/README.md, "Relighting"): what the budget counts
+#: at ``tol`` 0.1, 0.03 and 0.01 with the rank limit before it counted bytes (bench/README.md, "Choosing the far
+#: field", says how close the count is since): what the budget counts
 #: (:func:`~translucency.scatter.relight.operator_bytes`). The crosses' store reserves :data:`RESERVED_SHARE` times
 #: the expected rank (:class:`_CrossStore`), never more than a block may take.
 RANK_PER_SQUARED_DECADE = 2.5
