@@ -564,7 +564,7 @@ def _room(array: np.ndarray, size: int) -> np.ndarray:
 #: faster than the digits asked, and more blocks run out of crosses and are split). Of a block expected to need more
 #: than it may take, :data:`SPLIT_DENSE_SHARE` ends up in dense blocks. Both measured on the default bunny in marble
 #: at ``tol`` 0.1, 0.03 and 0.01 with the rank limit before it counted bytes (bench/README.md, "Choosing the far
-#: field", says how close the count is since): what the budget counts
+#: field", says how close the count is, per material, before and since): what the budget counts
 #: (:func:`~translucency.scatter.relight.operator_bytes`). The crosses' store reserves :data:`RESERVED_SHARE` times
 #: the expected rank (:class:`_CrossStore`), never more than a block may take.
 RANK_PER_SQUARED_DECADE = 2.5
