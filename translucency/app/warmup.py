@@ -133,7 +133,9 @@ def compile_relighting() -> None:
     gives it and empty lists), which the first process reaches after the cleaning's kernels and the near lists'
     (where it gets there first, it compiles the sum too: the same code, written to the cache twice). The body of the
     second process of :func:`warm_up`; the kernels land in numba's cache, where the first process then finds them."""
-    from ..scatter import fresnel, kernels, solve
+    from ..scatter import kernels, solve
+    from ..scatter.irradiance import incident_flux
+    from ..scatter.lights import DirectionalLight
     from ..scatter.materials import material
     from ..scatter.surface import SurfaceGeometry, spatial_order
     from .shading.settings import VIEWER_TOL
@@ -147,13 +149,11 @@ def compile_relighting() -> None:
     table, weights = np.zeros((9, 1)), np.zeros((n_c, 1))
     model = kernels.MODELS["directional"]
     kernels.indexed_sum(model, points[:1], normals[:1], table, weights, starts, counts, columns, np.zeros(1), lanes)
-    geometry, order, _ = spatial_order(SurfaceGeometry(points, triangles, normals))
-    light = np.array(LIGHT_DIRECTION) / np.linalg.norm(LIGHT_DIRECTION)
-    cos = normals @ light
-    phi = np.repeat((fresnel.fresnel_transmittance(cos, medium.eta) * cos)[:, None], n_c, axis=1)
-    w12 = fresnel.refract(np.broadcast_to(light, normals.shape), normals, medium.eta)
+    geometry = spatial_order(SurfaceGeometry(points, triangles, normals))[0]
+    areas = geometry.vertex_areas
+    light = incident_flux(geometry.points, geometry.normals, areas, DirectionalLight(LIGHT_DIRECTION, 1.0), medium.eta)
     operator, _ = solve.relight_operator(geometry, medium, "directional", VIEWER_TOL)
-    operator.apply(geometry.vertex_areas, phi[order], w12[order], {})
+    operator.apply(areas, light.phi_rgb, light.w12, {})
 
 
 def _second_process(errors) -> subprocess.Popen | None:
