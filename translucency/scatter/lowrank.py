@@ -14,7 +14,7 @@ is a block of the matrix, and
   of leaves;
 * a pair of leaves that is not far apart is stored whole (a dense block), less the pairs the near field
   holds (``held``: they are summed there, docs/physics.md §8.7); where such a pair is in a low-rank block
-  instead, :meth:`FarMatrix.low_rank_entries` gives the value the block holds, for the near field to take off.
+  instead, :meth:`FarMatrix.take_low_rank_entries` takes the value the block holds off the near field's.
 
 The error is set by ``eps`` (the rank), not by the opening ratio: ``ETA`` stays at 0.5 for every ``tol``.
 Each receiver's row is divided by the channel's bound of §8.4 at its own distance before the approximation,
@@ -136,18 +136,18 @@ class FarMatrix:
         B[self.order] = out.sum(axis=0)
         return B
 
-    def low_rank_entries(self, starts: np.ndarray, columns: np.ndarray) -> np.ndarray:
-        """The low-rank blocks' values ``(E, C, 4)`` of the pairs (receiver ``o``, source
-        ``columns[starts[o] : starts[o + 1]]``), vertex indices; 0 for pairs in dense blocks."""
+    def take_low_rank_entries(self, starts: np.ndarray, columns: np.ndarray, coefs: np.ndarray, terms: int) -> None:
+        """Take off ``coefs`` the low-rank blocks' values of the pairs (receiver ``o``, source
+        ``columns[starts[o] : starts[o + 1]]``, vertex indices): pair ``h``'s channel ``c`` from ``coefs[h, c terms :
+        c terms + 4]`` (``coefs (E, C terms)``, in place, nothing else made); pairs in dense blocks are left as they
+        are."""
         held_starts, held_columns, rows = _held_in_order(self.order, starts, columns)
-        values = np.zeros((held_columns.size, self.n_channels, AFFINE_TERMS))
         blocks = self.low_rank
         for_ranges(
-            _entries_of, blocks.shape[0], blocks, self.U, self.U_scale, self.V, held_starts, held_columns, values
+            _take_entries,
+            blocks.shape[0],
+            *(blocks, self.U, self.U_scale, self.V, held_starts, held_columns, rows, coefs, int(terms)),
         )
-        out = np.empty_like(values)
-        out[rows] = values
-        return out
 
 
 def partition(tree: SourceTree, gap: float, eta: float = ETA) -> tuple[np.ndarray, np.ndarray]:
@@ -440,9 +440,10 @@ def _tree_ordered(values, order, wide, narrow, lit_before):
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
-def _entries_of(worker, lo, hi, blocks, U, U_scale, V, starts, columns, out):
-    """``out[h, c] = (U V)[o, j]`` for every pair ``h`` (receiver ``o``, source ``j = columns[h]``, ``h`` in
-    ``starts[o] : starts[o + 1]``, tree order) in the low-rank blocks ``lo .. hi - 1``."""
+def _take_entries(worker, lo, hi, blocks, U, U_scale, V, starts, columns, rows, coefs, terms):
+    """``coefs[rows[h], c terms + t] -= (U V)[o, j]`` (term ``t``) for every pair ``h`` (receiver ``o``, source ``j =
+    columns[h]``, ``h`` in ``starts[o] : starts[o + 1]``, tree order) in the low-rank blocks ``lo .. hi - 1`` (each
+    pair and channel is in one block, so the blocks' threads write apart)."""
     for k in range(lo, hi):
         r0, r1, c0, c1, c, rank, u_at, v_at, s_at = _low_rank_block(blocks, k)
         n = (c1 - c0) * AFFINE_TERMS
@@ -455,7 +456,7 @@ def _entries_of(worker, lo, hi, blocks, U, U_scale, V, starts, columns, out):
                     s = 0.0
                     for q in range(rank):
                         s += float(U[u_at + q * (r1 - r0) + o - r0]) * V[v_at + q * n + (j - c0) * AFFINE_TERMS + t]
-                    out[h, c, t] = s * V_STEP * U_scale[s_at + o - r0]
+                    coefs[rows[h], c * terms + t] -= s * V_STEP * U_scale[s_at + o - r0]
 
 
 @numba.njit(cache=True, nogil=True, fastmath=True, error_model="numpy")
@@ -767,7 +768,7 @@ LOW_RANK_KERNELS = (
     _fixed_point,
     _fill_dense,
     _tree_ordered,
-    _entries_of,
+    _take_entries,
     _apply_low_rank,
     _apply_dense,
 )

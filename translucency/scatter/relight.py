@@ -360,9 +360,7 @@ def prepare(
     )
     # a near vertex's own pair is held whole in the near field (§8.7): where a low-rank block holds it too, the
     # near row takes off what the block holds, so that the two cancel exactly as the product sums them
-    held = far.low_rank_entries(near_starts, near_columns)
-    for c in range(n_c):
-        near_coefs[:, c * QUADRATIC_TERMS : c * QUADRATIC_TERMS + AFFINE_TERMS] -= held[:, c, :]
+    far.take_low_rank_entries(near_starts, near_columns, near_coefs, QUADRATIC_TERMS)
     report("relight operators", 1.0)
     operator = RelightOperator(
         operator_key(medium, model, tol), far, near_starts, near_columns.astype(np.int32), near_coefs
