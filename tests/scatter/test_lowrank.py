@@ -7,7 +7,7 @@ import pytest
 
 from tests.scatter import pairs
 from translucency.geometry.synthetic import icosphere, torus
-from translucency.scatter import cutoff, fits, kernels, lowrank
+from translucency.scatter import crosses, cutoff, fits, kernels, lowrank
 from translucency.scatter.hierarchy import SourceTree
 from translucency.scatter.materials import material
 
@@ -148,6 +148,36 @@ def test_held_pairs_are_zero_in_dense_blocks_and_given_where_a_low_rank_block_ho
             np.testing.assert_allclose(B, np.sum(held[k] * values[j], axis=1), rtol=1e-5, atol=1e-30)
         assert np.all(held[starts[o]] == 0.0)  # the nearest is in a dense block, left out there
     assert np.mean([np.any(held[starts[o] + 1] != 0.0) for o in receivers]) >= 0.75
+
+
+@pytest.mark.parametrize("name", ["marble", "skim_milk", "ketchup"])
+def test_the_count_before_the_build_is_what_the_build_holds(name, monkeypatch):
+    """The budget's count of the crosses (relight.operator_bytes): every block counted, it is what the build stores;
+    a sample of the blocks counted, it is within a tenth of it, in each material."""
+    medium = material(name).medium()
+    points, normals = _surface("torus")
+    eps = 1e-3
+    matrix, params, fit = _build(points, normals, eps, medium=medium)
+    tree = SourceTree(points, lowrank.LEAF_SIZE)
+    far_pairs, dense_pairs = lowrank.partition(tree, 1.0 / float(np.min(medium.sigma_t_reduced)))
+    assert len(far_pairs) * 3 > 2 * crosses.SAMPLED_BLOCKS  # the count draws a sample
+
+    def count():
+        return crosses.sampled_count(
+            kernels.MODELS["directional"], tree, points, normals, params, fit, eps, far_pairs,
+            lambda r: cutoff.pair_bound(medium, "directional", r),
+        )  # fmt: skip
+
+    sampled = count()
+    monkeypatch.setattr(crosses, "SAMPLED_BLOCKS", 10**9)
+    every = count()
+    stored = matrix.U.size + matrix.V.size
+    assert every["cross_entries"] == stored and every["row_scales"] == matrix.U_scale.size
+    sizes = tree.end - tree.start
+    whole = 3 * np.sum(sizes[dense_pairs[:, 0]] * sizes[dense_pairs[:, 1]])
+    assert 4 * (whole + every["dense_entries"]) == matrix.D.size
+    assert abs(sampled["cross_entries"] / stored - 1.0) < 0.1
+    assert abs(sampled["row_scales"] / matrix.U_scale.size - 1.0) < 0.1
 
 
 def test_the_crosses_store_grows_past_what_it_reserved_and_keeps_every_block():

@@ -9,9 +9,10 @@ is a block of the matrix, and
 * a block whose nodes are far apart (gap at least ``gap`` mm and ``max radius <= ETA * centre distance``) is
   a product ``U V`` of low rank per channel, found by **adaptive cross approximation** with partial pivoting
   (Bebendorf 2000): rows are the receivers, columns the (source, term) pairs. It stops when the last cross
-  is below ``eps`` of the block's Frobenius norm (or when the rows it checks are held to ``eps``); a block
-  that needs more than :func:`rank_limit` crosses is split into its children's blocks, down to dense pairs
-  of leaves;
+  is below ``eps`` of the block's Frobenius norm (or when the rows it checks are held to ``eps``; the crosses are
+  :mod:`translucency.scatter.crosses`'); a block that needs more than
+  :func:`~translucency.scatter.crosses.rank_limit` crosses is split into its children's blocks, down to dense
+  pairs of leaves;
 * a pair of leaves that is not far apart is stored whole (a dense block), less the pairs the near field
   holds (``held``: they are summed there, docs/physics.md §8.7); where such a pair is in a low-rank block
   instead, :meth:`FarMatrix.take_low_rank_entries` takes the value the block holds off the near field's.
@@ -40,6 +41,7 @@ import numba
 import numpy as np
 
 from ..threads import for_ranges, thread_count
+from .crosses import CROSS_KERNELS, SCALE_CHUNK, Approximations, far_items, longest_run, rank_limits, split
 from .fits import AFFINE_TERMS, fitted_run, run_space
 from .hierarchy import SourceTree
 
@@ -57,18 +59,6 @@ FIXED_STEPS = 32767
 #: in [-1, 1] and is kept to 2**-15 of it (far below ``eps``). ``U`` is int16 too, each row in steps of its own
 #: float32 scale, its largest entry :data:`FIXED_STEPS` steps (docs/physics.md §8.9).
 V_STEP = 1.0 / FIXED_STEPS
-
-
-def rank_limit(rows: int, columns: int) -> int:
-    """Crosses a block of ``rows x columns`` may take before it is split: while they hold about half the bytes of
-    storing it whole (``2 k (rows + columns) <= 4 rows columns / 2``: the crosses in 16 bits, a dense block in 32;
-    the rows' float32 scales left out), and at most 96."""
-    return int(max(1, min(96, rows * columns // (rows + columns))))
-
-
-def rank_limits(rows, columns) -> np.ndarray:
-    """:func:`rank_limit` of every block of ``rows`` and ``columns`` (arrays, one entry per block), int64."""
-    return np.array([rank_limit(int(m), int(c)) for m, c in zip(rows, columns)], dtype=np.int64)
 
 
 @dataclass
@@ -193,126 +183,6 @@ def _partition(left, right, centre, radius, gap, eta):
                 stack[top + 1, 0], stack[top + 1, 1] = a, right[b]
             top += 2
     return far[:n_far].copy(), dense[:n_dense].copy()
-
-
-#: A cross approximation also stops when this many rows in a row (the next pivot, then rows drawn at random) are
-#: each held to ``eps`` of their own norm by the crosses so far.
-CHECK_ROWS = 3
-
-
-@numba.njit(cache=True, nogil=True, fastmath=True, error_model="numpy")
-def _cross(model, P, N, r0, r1, c0, c1, params, dirs, pinv, row_scale, eps, kmax, U, V, space):
-    """Adaptive cross approximation with partial pivoting of one channel (``params`` of one row): rows ``r0:r1``
-    x sources ``c0:c1`` (columns ``4 (j - c0) + t``), each row scaled by ``row_scale[row]``: the crosses in
-    ``U[:m, :k]`` and ``V[:k, :4 n]`` (``U V`` unscaled on return); ``k``, or -1 when ``kmax`` crosses were not
-    enough.
-
-    It stops when the last cross is below ``eps`` of the block's Frobenius norm (Bebendorf's estimate, on the
-    scaled entries: each row relative to its own receiver's scale), or when the next pivot row and
-    :data:`CHECK_ROWS` - 1 rows drawn at random are each held to ``eps`` of their own norm. ``space`` is
-    :func:`~translucency.scatter.fits.run_space`'s for runs at least as long as the block's sides."""
-    m = r1 - r0
-    n = (c1 - c0) * AFFINE_TERMS
-    fits = np.empty((max(m, c1 - c0), 1, AFFINE_TERMS))
-    used = np.zeros(m, dtype=np.bool_)
-    column_cache = np.empty((m, AFFINE_TERMS))
-    pivot_column = np.empty(kmax + 1)
-    cached = -1
-    row = np.empty(n)
-    seed = (r0 * 7919 + c0 * 104729 + 1) & 0x7FFFFFFF
-    i = 0
-    k = 0
-    passed = 0
-    visited = 0
-    norm2 = 0.0
-    while True:
-        used[i] = True
-        visited += 1
-        full2 = 0.0
-        fitted_run(model, P, N, r0 + i, c0, c1, True, params, dirs, pinv, space, fits)
-        for b in range(c1 - c0):
-            for t in range(AFFINE_TERMS):
-                value = fits[b, 0, t] * row_scale[i]
-                row[b * AFFINE_TERMS + t] = value
-                full2 += value * value
-        for q in range(k):
-            u = U[i, q]
-            for j in range(n):
-                row[j] -= u * V[q, j]
-        j = 0
-        best = 0.0
-        residual2 = 0.0
-        for q in range(n):
-            residual2 += row[q] * row[q]
-            if abs(row[q]) > best:
-                best = abs(row[q])
-                j = q
-        if residual2 <= eps * eps * full2:  # this row is held: check another, drawn at random
-            passed += 1
-            if passed >= CHECK_ROWS or visited >= m:
-                break
-            seed = (seed * 1103515245 + 12345) & 0x7FFFFFFF
-            i = seed % m
-            for _ in range(m):
-                if not used[i]:
-                    break
-                i = (i + 1) % m
-            continue
-        passed = 0
-        if k == kmax:
-            return -1
-        source = j // AFFINE_TERMS
-        if source != cached:
-            fitted_run(model, P, N, c0 + source, r0, r1, False, params, dirs, pinv, space, fits)
-            for a in range(m):
-                for t in range(AFFINE_TERMS):
-                    column_cache[a, t] = fits[a, 0, t] * row_scale[a]
-            cached = source
-        term = j % AFFINE_TERMS
-        pivot = row[j]
-        best = -1.0
-        following = -1
-        for q in range(k):
-            pivot_column[q] = V[q, j]  # read once: down a column of V, each entry on a cache line of its own
-        for a in range(m):
-            value = column_cache[a, term]
-            for q in range(k):
-                value -= U[a, q] * pivot_column[q]
-            U[a, k] = value
-            if not used[a] and abs(value) > best:
-                best = abs(value)
-                following = a
-        v2 = 0.0
-        for q in range(n):
-            V[k, q] = row[q] / pivot
-            v2 += V[k, q] * V[k, q]
-        u2 = 0.0
-        for q in range(k):
-            pivot_column[q] = 0.0  # now the products of the new cross's U with the earlier ones, row by row
-        for a in range(m):
-            u = U[a, k]
-            u2 += u * u
-            for q in range(k):
-                pivot_column[q] += u * U[a, q]
-        cross = 0.0
-        for q in range(k):
-            vv = 0.0
-            for p in range(n):
-                vv += V[k, p] * V[q, p]
-            cross += pivot_column[q] * vv
-        norm2 += u2 * v2 + 2.0 * cross
-        k += 1
-        if following < 0:
-            break
-        i = following
-        if u2 * v2 <= eps * eps * abs(norm2):
-            break
-    # unscaled in U, whose rows then have the receivers' own magnitudes: V stays in [-1, 1], and neither leaves
-    # float32's range where the rows of a block differ by more than it spans
-    for q in range(k):
-        for a in range(m):
-            U[a, q] /= row_scale[a]
-    return k
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
@@ -561,31 +431,18 @@ def _room(array: np.ndarray, size: int) -> np.ndarray:
     return grown
 
 
-#: Crosses per block and channel: ``RANK_PER_SQUARED_DECADE log10(1 / eps)^2`` (:func:`expected_rank`; the ranks grow
-#: faster than the digits asked, and more blocks run out of crosses and are split). Of a block expected to need more
-#: than it may take, :data:`SPLIT_DENSE_SHARE` ends up in dense blocks. Both measured on the default bunny in marble
-#: at ``tol`` 0.1, 0.03 and 0.01 with the rank limit before it counted bytes (bench/README.md, "Choosing the far
-#: field", says how close the count is, per material, before and since): what the budget counts
-#: (:func:`~translucency.scatter.relight.operator_bytes`). The crosses' store reserves :data:`RESERVED_SHARE` times
-#: the expected rank (:class:`_CrossStore`), never more than a block may take.
+#: Crosses per block and channel the crosses' store reserves room for: :data:`RESERVED_SHARE` times
+#: ``RANK_PER_SQUARED_DECADE log10(1 / eps)^2`` (:func:`expected_rank`, measured on the default bunny in marble at
+#: ``tol`` 0.1, 0.03 and 0.01; the ranks grow faster than the digits asked), never more than a block may take
+#: (:class:`_CrossStore`: room never written costs no memory; a store that runs out grows, copied). The budget
+#: counts the crosses by :func:`sampled_count`, which follows the material too.
 RANK_PER_SQUARED_DECADE = 2.5
-SPLIT_DENSE_SHARE = 0.5
 RESERVED_SHARE = 1.5
 
 
 def expected_rank(eps: float) -> float:
     """The crosses a far block is expected to take per channel at ``eps`` (:data:`RANK_PER_SQUARED_DECADE`)."""
     return RANK_PER_SQUARED_DECADE * math.log10(1.0 / eps) ** 2
-
-
-def _scratch(held: list, rows: int, ranks: int, columns: int) -> tuple[np.ndarray, np.ndarray]:
-    """A worker's ``U (rows, ranks)`` and ``V (ranks, columns)`` buffers, grown when a block needs more."""
-    U, V = held
-    if U.shape[0] < rows or U.shape[1] < ranks:
-        held[0] = U = np.empty((max(rows, U.shape[0]), max(ranks, U.shape[1])))
-    if V.shape[0] < ranks or V.shape[1] < columns:
-        held[1] = V = np.empty((max(ranks, V.shape[0]), max(columns, V.shape[1])))
-    return U, V
 
 
 def build(
@@ -682,40 +539,18 @@ def _held_in_order(order, starts, columns):
     return held_starts, rank_of[np.asarray(columns, dtype=np.int64)[rows]], rows
 
 
-#: Blocks whose row scales are computed together (one call of the bound per channel over all their rows).
-SCALE_CHUNK = 2048
-
-
-def _row_scales(tree, P, items, channel_bound):
-    """Per block and channel ``(row node, column node, channel)`` of ``items``: each receiver's row scale, one
-    over the channel's §8.4 bound at the receiver's distance from the column node's centre, so that the crosses
-    hold every row alike, not only the block's brightest (a dark receiver's B is all far field):
-    ``(offsets, row_scales)``, block ``p``'s rows at ``row_scales[offsets[p] : offsets[p + 1]]``."""
-    a, b, c = items[:, 0], items[:, 1], items[:, 2]
-    m = tree.end[a] - tree.start[a]
-    offsets = np.zeros(len(items) + 1, dtype=np.int64)
-    np.cumsum(m, out=offsets[1:])
-    owner = np.repeat(np.arange(len(items)), m)
-    rows = tree.start[a][owner] + np.arange(int(offsets[-1])) - offsets[:-1][owner]
-    r = np.maximum(np.linalg.norm(P[rows] - tree.centre[b][owner], axis=1), 1e-12)
-    own = channel_bound(r)[c[owner], np.arange(r.size)]
-    return offsets, 1.0 / np.clip(own, 1e-280, 1e280)
-
-
 def _crosses(model, tree, P, N, params, dirs, pinv, eps, channel_bound, far_pairs, report):
     """Cross approximations of every far block and channel: ``(found, dense, store)``, ``found`` a list of ``(row
     node, column node, channel, k, where U, V and U's row scales start)`` in ``store`` (:class:`_CrossStore`); a block
-    that needs more crosses than :func:`rank_limit` is split into its children's blocks, and a pair of leaves that
-    does is added to ``dense`` as ``(row node, column node, channel)``."""
+    that needs more crosses than :func:`~translucency.scatter.crosses.rank_limit` is split into its children's blocks
+    (:func:`~translucency.scatter.crosses.split`), and a pair
+    of leaves that does is added to ``dense`` as ``(row node, column node, channel)``."""
     n_c = params.shape[0]
     start, end = tree.start, tree.end
-    channels = [np.ascontiguousarray(params[c : c + 1]) for c in range(n_c)]
     kept_by = [[] for _ in range(thread_count())]
-    buffers = [[np.empty((0, 0)), np.empty((0, 0))] for _ in range(thread_count())]
-    # each thread's fits work in one space made for the longest run there is (made per block, the large ones
-    # were fresh memory every time, which this machine fills at 0.5-2 GB/s)
-    longest = int(np.max(np.maximum(end - start, 1)[far_pairs].max(initial=1)))
-    spaces = [run_space(dirs.shape[0], longest) for _ in range(thread_count())]
+    approximations = Approximations(
+        model, tree, P, N, params, dirs, pinv, eps, channel_bound, longest_run(tree, far_pairs)
+    )
     rows = end[far_pairs[:, 0]] - start[far_pairs[:, 0]]
     cols = (end[far_pairs[:, 1]] - start[far_pairs[:, 1]]) * AFFINE_TERMS
     reserved = RESERVED_SHARE * expected_rank(eps)
@@ -726,18 +561,13 @@ def _crosses(model, tree, P, N, params, dirs, pinv, eps, channel_bound, far_pair
         kept = kept_by[worker]
         for first in range(lo, hi, SCALE_CHUNK):
             chunk = items[first : min(hi, first + SCALE_CHUNK)]
-            offsets, row_scales = _row_scales(tree, P, chunk, channel_bound)
+            offsets, row_scales = approximations.row_scales(chunk)
             for p, (a, b, c) in enumerate(chunk):
-                m, cols = int(end[a] - start[a]), int(end[b] - start[b]) * AFFINE_TERMS
-                kmax = rank_limit(m, cols)
-                U, V = _scratch(buffers[worker], m, kmax, cols)
-                row_scale = row_scales[offsets[p] : offsets[p + 1]]
-                k = _cross(model, P, N, start[a], end[a], start[b], end[b], channels[c], dirs, pinv, row_scale, eps,
-                           kmax, U, V, spaces[worker])  # fmt: skip
-                kept.append((a, b, c, k, *(store.put(U[:m, :k], V[:k, :cols]) if k >= 0 else (-1, -1, -1))))
+                k, U, V = approximations.cross(worker, a, b, c, row_scales[offsets[p] : offsets[p + 1]])
+                kept.append((a, b, c, k, *(store.put(U, V) if k >= 0 else (-1, -1, -1))))
 
     found, dense = [], set()
-    items = np.array([(a, b, c) for a, b in far_pairs for c in range(n_c)], dtype=np.int64).reshape(-1, 3)
+    items = far_items(far_pairs, n_c)
     done, total = 0, max(len(items), 1)
     while len(items):
         at, share = done / total, len(items) / total
@@ -747,12 +577,11 @@ def _crosses(model, tree, P, N, params, dirs, pinv, eps, channel_bound, far_pair
             for a, b, c, k, u_at, v_at, s_at in kept:
                 if k >= 0:
                     found.append((a, b, c, k, u_at, v_at, s_at))
-                elif tree.left[a] < 0 and tree.left[b] < 0:
-                    dense.add((int(a), int(b), int(c)))
                 else:
-                    rows = [a] if tree.left[a] < 0 else [tree.left[a], tree.right[a]]
-                    cols = [b] if tree.left[b] < 0 else [tree.left[b], tree.right[b]]
-                    following += [(r, s, c) for r in rows for s in cols]
+                    children = split(tree, a, b, c)
+                    following += children
+                    if not children:
+                        dense.add((int(a), int(b), int(c)))
             kept.clear()
         done += len(items)
         report(min(0.9, 0.9 * done / total))
@@ -764,7 +593,7 @@ def _crosses(model, tree, P, N, params, dirs, pinv, eps, channel_bound, far_pair
 #: the set-up compiles them ahead (:mod:`translucency.app.warmup`).
 LOW_RANK_KERNELS = (
     _partition,
-    _cross,
+    *CROSS_KERNELS,
     _fixed_point,
     _fill_dense,
     _tree_ordered,

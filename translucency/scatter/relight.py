@@ -45,7 +45,7 @@ import numba
 import numpy as np
 
 from ..threads import for_ranges
-from . import cutoff, hierarchy, kernels, lowrank, nearfield
+from . import crosses, cutoff, hierarchy, kernels, lowrank, nearfield
 from .fits import AFFINE_TERMS, QUADRATIC_TERMS, fit_directions
 from .hierarchy import SourceTree
 from .surface import PerSurface
@@ -77,10 +77,14 @@ EPS_PER_TOL = 6.0
 #: Seconds of one fit the far field counts on one thread (the cross approximations' rows and columns,
 #: :func:`~translucency.scatter.fits.fitted_run`, one channel, with their share of the crosses' own work), and per
 #: near-field entry: the rates of the time estimate the budget compares against ``time_limit``, calibrated on
-#: timed preparations of the default bunny in marble at tol 0.1 and 0.01 (bench/README.md, "Relighting"), with the
-#: fits counted at :func:`~translucency.scatter.lowrank.expected_rank`.
-FIT_SECONDS = 2e-7
-NEAR_ENTRY_SECONDS = 5.5e-6
+#: timed preparations of the default bunny in three materials at tol 0.1, 0.03 and 0.01, the horse and the Igea
+#: (bench/README.md, "Relighting's budget"), with the fits counted by
+#: :func:`~translucency.scatter.crosses.sampled_count`.
+FIT_SECONDS = 1.2e-7
+NEAR_ENTRY_SECONDS = 3.5e-6
+#: What a preparation holds at its peak beyond its operators, as a share of them (its lists, each thread's
+#: scratch, memory the allocator keeps; bench/README.md, "Relighting's budget").
+PEAK_SHARE = 0.1
 
 
 @dataclass
@@ -253,14 +257,14 @@ def _gap(medium) -> float:
     return hierarchy.CLUSTER_MEAN_FREE_PATHS / float(np.min(medium.sigma_t_reduced))
 
 
-def operator_bytes(geometry, medium, tol: float, near_radius: float, far_on_gpu: bool = False) -> tuple[float, dict]:
+def operator_bytes(
+    geometry, medium, model: str, tol: float, near_radius: float, far_on_gpu: bool = False
+) -> tuple[float, dict]:
     """Memory (bytes) the operators of ``geometry`` (the spatially ordered surface) would take, counted
-    before anything is made: the far field's dense blocks exactly, its crosses at
-    :func:`~translucency.scatter.lowrank.expected_rank` each (a block expected to need more than
-    :func:`~translucency.scatter.lowrank.rank_limit` counted at its limit, with
-    :data:`~translucency.scatter.lowrank.SPLIT_DENSE_SHARE` of it dense), the near field's lists by the near
-    triangles' corners; ``(bytes, counts)``, the counts with the fits the far field would evaluate (none, and no far
-    bytes, where the far field is summed on a GPU per light: ``far_on_gpu``)."""
+    before they are made: the far field's dense blocks exactly, its crosses by finding those of a sample of its far
+    blocks (:func:`~translucency.scatter.crosses.sampled_count`, which follows the medium, the model and ``tol``),
+    the near field's lists by the near triangles' corners; ``(bytes, counts)``, the counts with the fits the far field
+    would evaluate (none, and no far bytes, where the far field is summed on a GPU per light: ``far_on_gpu``)."""
     n = geometry.n_vertices
     n_c = medium.n_channels
     offsets, ids = nearfield.lists_of(geometry, np.arange(n), near_radius)
@@ -270,25 +274,28 @@ def operator_bytes(geometry, medium, tol: float, near_radius: float, far_on_gpu:
         return float(near_bytes), {"far_fits": 0.0, "near_entries": near_entries, "eps": 0.0}
     tree = _block_tree(geometry)
     far_pairs, dense_pairs = lowrank.partition(tree, _gap(medium))
-    rows = tree.end[far_pairs[:, 0]] - tree.start[far_pairs[:, 0]]
-    cols = tree.end[far_pairs[:, 1]] - tree.start[far_pairs[:, 1]]
-    rank = lowrank.expected_rank(far_eps(tol))
-    limit = lowrank.rank_limits(rows, AFFINE_TERMS * cols)
-    ranks = np.minimum(rank, limit)
-    far_floats = float(n_c * np.sum(ranks * (rows + AFFINE_TERMS * cols)))
-    dense_rows = tree.end[dense_pairs[:, 0]] - tree.start[dense_pairs[:, 0]]
-    split = float(np.sum((rows * cols)[rank > limit])) * lowrank.SPLIT_DENSE_SHARE
-    dense_pairs_count = split + float(
-        np.sum(dense_rows * (tree.end[dense_pairs[:, 1]] - tree.start[dense_pairs[:, 1]]))
+    params = kernels.channel_parameters(medium.sigma_a, medium.sigma_s, medium.g, medium.eta, model)
+    counted = crosses.sampled_count(
+        kernels.MODELS[model],
+        tree,
+        geometry.points,
+        geometry.normals,
+        params,
+        fit_directions(medium.eta, AFFINE_TERMS),
+        far_eps(tol),
+        far_pairs,
+        lambda r: cutoff.pair_bound(medium, model, r),
     )
-    row_scales = float(n_c * np.sum(rows))
-    fits = dense_pairs_count * n_c + float(n_c * np.sum(ranks * (rows + cols)))
+    sizes = tree.end - tree.start
+    whole = n_c * float(np.sum(sizes[dense_pairs[:, 0]] * sizes[dense_pairs[:, 1]]))  # pairs and channels
+    dense_entries = whole + counted["dense_entries"]
     size = (
-        far_floats * CROSS_ENTRY_BYTES
-        + dense_pairs_count * AFFINE_TERMS * n_c * DENSE_ENTRY_BYTES
-        + row_scales * ROW_SCALE_BYTES
+        counted["cross_entries"] * CROSS_ENTRY_BYTES
+        + dense_entries * AFFINE_TERMS * DENSE_ENTRY_BYTES
+        + counted["row_scales"] * ROW_SCALE_BYTES
         + near_bytes
     )
+    fits = counted["fits"] + whole
     return float(size), {"far_fits": fits, "near_entries": near_entries, "eps": far_eps(tol)}
 
 

@@ -501,7 +501,7 @@ def relight_operator(
         return held, True
     relight.release_operator(geometry)
     radius = near_radius(geometry, medium)
-    size, counts = relight.operator_bytes(geometry, medium, tol, radius, far_on_gpu=device == "gpu")
+    size, counts = relight.operator_bytes(geometry, medium, model, tol, radius, far_on_gpu=device == "gpu")
     plan = relight_plan(size, counts, memory_limit, time_limit)
     if not plan.fits:
         raise BudgetError(over_budget_sentence(plan, geometry.n_vertices), plan)
@@ -509,6 +509,7 @@ def relight_operator(
     operator = relight.prepare(
         geometry, medium, model, tol, radius, NEAR_BETA, progress, far_on_gpu=device == "gpu", tree_far=tree_far
     )
+    operator.stats["budget"] = {**plan.as_dict(), "counts": counts}
     relight.keep_operator(geometry, operator)
     return operator, False
 
@@ -674,15 +675,16 @@ def _warn_relight_check(name: str, checked: dict, tol: float, vertices: int, gav
 
 def relight_plan(size: float, counts: dict, memory_limit, time_limit) -> budget.SolveEstimate:
     """The budget plan of preparing relighting operators of ``size`` bytes (``counts``: the far field's fits and
-    the near field's entries)."""
+    the near field's entries), whose peak is :data:`~translucency.scatter.relight.PEAK_SHARE` more."""
     import numba
 
-    from .relight import FIT_SECONDS, NEAR_ENTRY_SECONDS
+    from .relight import FIT_SECONDS, NEAR_ENTRY_SECONDS, PEAK_SHARE
 
     threads = max(1, numba.get_num_threads())
     seconds = (counts["far_fits"] * FIT_SECONDS + counts["near_entries"] * NEAR_ENTRY_SECONDS) / threads
     budget_bytes = budget.memory_budget(memory_limit, memory.available_memory(), memory.resident_memory())
-    fits = (budget_bytes is None or size <= budget_bytes) and (time_limit is None or seconds <= time_limit)
+    peak = (1.0 + PEAK_SHARE) * size
+    fits = (budget_bytes is None or peak <= budget_bytes) and (time_limit is None or seconds <= time_limit)
     return budget.SolveEstimate(
         base_bytes=0.0,
         far_bytes=size,
@@ -692,7 +694,7 @@ def relight_plan(size: float, counts: dict, memory_limit, time_limit) -> budget.
         block_receivers=0,
         block_bytes=0.0,
         own_points=0.0,
-        peak_bytes=size,
+        peak_bytes=peak,
         seconds=seconds,
         budget_bytes=budget_bytes,
         time_limit=time_limit,

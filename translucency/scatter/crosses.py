@@ -1,0 +1,306 @@
+"""Adaptive cross approximation of the far field's blocks, and the count of what they hold before they are found.
+
+A far block of the relighting operator (docs/physics.md §8.9; :mod:`translucency.scatter.lowrank`), rows the
+receivers and columns the (source, term) pairs of one channel, is approximated by crosses (Bebendorf 2000): each
+step evaluates one row and one column of fits (:func:`~translucency.scatter.fits.fitted_run`). A block that needs
+more than :func:`rank_limit` crosses is split into its children's blocks (:func:`split`). The budget counts what
+every block's crosses would hold from a sample of them (:func:`sampled_count`).
+"""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+
+from ..threads import for_ranges, thread_count
+from .fits import AFFINE_TERMS, fitted_run, run_space
+
+__all__ = ["CHECK_ROWS", "CROSS_KERNELS", "Approximations", "far_items", "rank_limit", "sampled_count", "split"]
+
+
+def rank_limit(rows: int, columns: int) -> int:
+    """Crosses a block of ``rows x columns`` may take before it is split: while they hold about half the bytes of
+    storing it whole (``2 k (rows + columns) <= 4 rows columns / 2``: the crosses in 16 bits, a dense block in 32;
+    the rows' float32 scales left out), and at most 96."""
+    return int(max(1, min(96, rows * columns // (rows + columns))))
+
+
+def rank_limits(rows, columns) -> np.ndarray:
+    """:func:`rank_limit` of every block of ``rows`` and ``columns`` (arrays, one entry per block), int64."""
+    return np.array([rank_limit(int(m), int(c)) for m, c in zip(rows, columns)], dtype=np.int64)
+
+
+#: A cross approximation also stops when this many rows in a row (the next pivot, then rows drawn at random) are
+#: each held to ``eps`` of their own norm by the crosses so far.
+CHECK_ROWS = 3
+
+
+@numba.njit(cache=True, nogil=True, fastmath=True, error_model="numpy")
+def _cross(model, P, N, r0, r1, c0, c1, params, dirs, pinv, row_scale, eps, kmax, U, V, space):
+    """Adaptive cross approximation with partial pivoting of one channel (``params`` of one row): rows ``r0:r1``
+    x sources ``c0:c1`` (columns ``4 (j - c0) + t``), each row scaled by ``row_scale[row]``: the crosses in
+    ``U[:m, :k]`` and ``V[:k, :4 n]`` (``U V`` unscaled on return); ``k``, or -1 when ``kmax`` crosses were not
+    enough.
+
+    It stops when the last cross is below ``eps`` of the block's Frobenius norm (Bebendorf's estimate, on the
+    scaled entries: each row relative to its own receiver's scale), or when the next pivot row and
+    :data:`CHECK_ROWS` - 1 rows drawn at random are each held to ``eps`` of their own norm. ``space`` is
+    :func:`~translucency.scatter.fits.run_space`'s for runs at least as long as the block's sides."""
+    m = r1 - r0
+    n = (c1 - c0) * AFFINE_TERMS
+    fits = np.empty((max(m, c1 - c0), 1, AFFINE_TERMS))
+    used = np.zeros(m, dtype=np.bool_)
+    column_cache = np.empty((m, AFFINE_TERMS))
+    pivot_column = np.empty(kmax + 1)
+    cached = -1
+    row = np.empty(n)
+    seed = (r0 * 7919 + c0 * 104729 + 1) & 0x7FFFFFFF
+    i = 0
+    k = 0
+    passed = 0
+    visited = 0
+    norm2 = 0.0
+    while True:
+        used[i] = True
+        visited += 1
+        full2 = 0.0
+        fitted_run(model, P, N, r0 + i, c0, c1, True, params, dirs, pinv, space, fits)
+        for b in range(c1 - c0):
+            for t in range(AFFINE_TERMS):
+                value = fits[b, 0, t] * row_scale[i]
+                row[b * AFFINE_TERMS + t] = value
+                full2 += value * value
+        for q in range(k):
+            u = U[i, q]
+            for j in range(n):
+                row[j] -= u * V[q, j]
+        j = 0
+        best = 0.0
+        residual2 = 0.0
+        for q in range(n):
+            residual2 += row[q] * row[q]
+            if abs(row[q]) > best:
+                best = abs(row[q])
+                j = q
+        if residual2 <= eps * eps * full2:  # this row is held: check another, drawn at random
+            passed += 1
+            if passed >= CHECK_ROWS or visited >= m:
+                break
+            seed = (seed * 1103515245 + 12345) & 0x7FFFFFFF
+            i = seed % m
+            for _ in range(m):
+                if not used[i]:
+                    break
+                i = (i + 1) % m
+            continue
+        passed = 0
+        if k == kmax:
+            return -1
+        source = j // AFFINE_TERMS
+        if source != cached:
+            fitted_run(model, P, N, c0 + source, r0, r1, False, params, dirs, pinv, space, fits)
+            for a in range(m):
+                for t in range(AFFINE_TERMS):
+                    column_cache[a, t] = fits[a, 0, t] * row_scale[a]
+            cached = source
+        term = j % AFFINE_TERMS
+        pivot = row[j]
+        best = -1.0
+        following = -1
+        for q in range(k):
+            pivot_column[q] = V[q, j]  # read once: down a column of V, each entry on a cache line of its own
+        for a in range(m):
+            value = column_cache[a, term]
+            for q in range(k):
+                value -= U[a, q] * pivot_column[q]
+            U[a, k] = value
+            if not used[a] and abs(value) > best:
+                best = abs(value)
+                following = a
+        v2 = 0.0
+        for q in range(n):
+            V[k, q] = row[q] / pivot
+            v2 += V[k, q] * V[k, q]
+        u2 = 0.0
+        for q in range(k):
+            pivot_column[q] = 0.0  # now the products of the new cross's U with the earlier ones, row by row
+        for a in range(m):
+            u = U[a, k]
+            u2 += u * u
+            for q in range(k):
+                pivot_column[q] += u * U[a, q]
+        cross = 0.0
+        for q in range(k):
+            vv = 0.0
+            for p in range(n):
+                vv += V[k, p] * V[q, p]
+            cross += pivot_column[q] * vv
+        norm2 += u2 * v2 + 2.0 * cross
+        k += 1
+        if following < 0:
+            break
+        i = following
+        if u2 * v2 <= eps * eps * abs(norm2):
+            break
+    # unscaled in U, whose rows then have the receivers' own magnitudes: V stays in [-1, 1], and neither leaves
+    # float32's range where the rows of a block differ by more than it spans
+    for q in range(k):
+        for a in range(m):
+            U[a, q] /= row_scale[a]
+    return k
+
+
+def _scratch(held: list, rows: int, ranks: int, columns: int) -> tuple[np.ndarray, np.ndarray]:
+    """A worker's ``U (rows, ranks)`` and ``V (ranks, columns)`` buffers, grown when a block needs more."""
+    U, V = held
+    if U.shape[0] < rows or U.shape[1] < ranks:
+        held[0] = U = np.empty((max(rows, U.shape[0]), max(ranks, U.shape[1])))
+    if V.shape[0] < ranks or V.shape[1] < columns:
+        held[1] = V = np.empty((max(ranks, V.shape[0]), max(columns, V.shape[1])))
+    return U, V
+
+
+#: Blocks whose row scales are computed together (one call of the bound per channel over all their rows).
+SCALE_CHUNK = 2048
+
+
+def row_scales(tree, P, items, channel_bound):
+    """Per block and channel ``(row node, column node, channel)`` of ``items``: each receiver's row scale, one
+    over the channel's §8.4 bound at the receiver's distance from the column node's centre, so that the crosses
+    hold every row alike, not only the block's brightest (a dark receiver's B is all far field):
+    ``(offsets, row_scales)``, block ``p``'s rows at ``row_scales[offsets[p] : offsets[p + 1]]``."""
+    a, b, c = items[:, 0], items[:, 1], items[:, 2]
+    m = tree.end[a] - tree.start[a]
+    offsets = np.zeros(len(items) + 1, dtype=np.int64)
+    np.cumsum(m, out=offsets[1:])
+    owner = np.repeat(np.arange(len(items)), m)
+    rows = tree.start[a][owner] + np.arange(int(offsets[-1])) - offsets[:-1][owner]
+    r = np.maximum(np.linalg.norm(P[rows] - tree.centre[b][owner], axis=1), 1e-12)
+    own = channel_bound(r)[c[owner], np.arange(r.size)]
+    return offsets, 1.0 / np.clip(own, 1e-280, 1e280)
+
+
+class Approximations:
+    """What every far block's cross approximation needs (:func:`_cross`), with each worker's scratch: the surface in
+    the tree's order (``P``, ``N``, mm), each channel's parameters, the fit's directions, ``eps`` and the bound of
+    §8.4 per channel (``channel_bound(r)``, by which the rows are scaled)."""
+
+    def __init__(self, model, tree, P, N, params, dirs, pinv, eps, channel_bound, longest):
+        self.model, self.tree, self.P, self.N = model, tree, P, N
+        self.channels = [np.ascontiguousarray(params[c : c + 1]) for c in range(params.shape[0])]
+        self.dirs, self.pinv, self.eps, self.channel_bound = dirs, pinv, eps, channel_bound
+        self.buffers = [[np.empty((0, 0)), np.empty((0, 0))] for _ in range(thread_count())]
+        # each thread's fits work in one space made for the longest run there is (made per block, the large ones
+        # were fresh memory every time, which this machine fills at 0.5-2 GB/s)
+        self.spaces = [run_space(dirs.shape[0], longest) for _ in range(thread_count())]
+
+    def row_scales(self, items):
+        """:func:`_row_scales` of the blocks ``items`` (``(row node, column node, channel)`` rows)."""
+        return row_scales(self.tree, self.P, items, self.channel_bound)
+
+    def cross(self, worker, a, b, c, row_scale):
+        """Block ``(a, b)``'s channel ``c`` by :func:`_cross`, up to :func:`rank_limit` crosses: ``(k, U, V)``, ``k``
+        -1 when they were not enough, ``U (m, k)`` and ``V (k, 4 n)`` views of the worker's scratch."""
+        start, end = self.tree.start, self.tree.end
+        m, cols = int(end[a] - start[a]), int(end[b] - start[b]) * AFFINE_TERMS
+        kmax = rank_limit(m, cols)
+        U, V = _scratch(self.buffers[worker], m, kmax, cols)
+        k = _cross(self.model, self.P, self.N, start[a], end[a], start[b], end[b], self.channels[c], self.dirs,
+                   self.pinv, row_scale, self.eps, kmax, U, V, self.spaces[worker])  # fmt: skip
+        return k, U[:m, : max(k, 0)], V[: max(k, 0), :cols]
+
+
+def split(tree, a, b, c) -> list:
+    """The blocks a far block ``(a, b)``'s channel ``c`` is split into when it needs more crosses than it may take:
+    its children's pairs; none for a pair of leaves, which is stored whole."""
+    if tree.left[a] < 0 and tree.left[b] < 0:
+        return []
+    rows = [a] if tree.left[a] < 0 else [tree.left[a], tree.right[a]]
+    cols = [b] if tree.left[b] < 0 else [tree.left[b], tree.right[b]]
+    return [(r, s, c) for r in rows for s in cols]
+
+
+def far_items(far_pairs, n_channels) -> np.ndarray:
+    """``(row node, column node, channel)`` of every far block and channel, ``(F C, 3)`` int64."""
+    items = np.empty((len(far_pairs) * n_channels, 3), dtype=np.int64)
+    items[:, :2] = np.repeat(np.asarray(far_pairs, dtype=np.int64).reshape(-1, 2), n_channels, axis=0)
+    items[:, 2] = np.tile(np.arange(n_channels), len(far_pairs))
+    return items
+
+
+def longest_run(tree, far_pairs) -> int:
+    """The most vertices of a node of ``far_pairs``: the longest run a block's fits take."""
+    return int(np.max(np.maximum(tree.end - tree.start, 1)[far_pairs].max(initial=1)))
+
+
+#: Far blocks (per channel) whose cross approximations :func:`sampled_count` finds, to count what the far field
+#: (:func:`~translucency.scatter.lowrank.build`) would hold before it is made, and the seed of their draw (the same
+#: blocks every time).
+SAMPLED_BLOCKS = 384
+SAMPLE_SEED = 8
+
+
+def sampled_count(model, tree, points, normals, params, fit, eps, far_pairs, channel_bound) -> dict:
+    """What the cross approximations of the blocks ``far_pairs`` would hold in the far field
+    (:func:`~translucency.scatter.lowrank.build`), counted by finding those of :data:`SAMPLED_BLOCKS` of them (each
+    channel a block of its own), and of the blocks they are split into.
+
+    The blocks are drawn systematically with chances in proportion to their rows and columns, ``m + 4 n``, and what a
+    block drawn ``t`` times holds counts ``t / (SAMPLED_BLOCKS p)`` for its chance ``p`` (Hansen and Hurwitz's
+    estimate of a total). It follows the surface, the medium, the model and ``eps``; its spread is the spread of the
+    ranks between neighbouring blocks. With fewer blocks than that, every one is counted.
+
+    Arguments as :func:`~translucency.scatter.lowrank.build`'s (``points``, ``normals`` in vertex order, mm), ``tree``
+    its block tree. Returns floats: ``cross_entries``, the 16-bit entries of ``U`` and ``V``; ``row_scales``, ``U``'s
+    row scales; ``dense_entries``, the (receiver, source, channel) pairs stored whole in blocks that ran out of
+    crosses; ``fits``, the fits of one pair and channel that the cross approximations and those dense blocks
+    evaluate.
+    """
+    order = tree.order
+    P = np.ascontiguousarray(points[order], dtype=np.float64)
+    N = np.ascontiguousarray(normals[order], dtype=np.float64)
+    items = far_items(far_pairs, params.shape[0])
+    if not len(items):
+        return {"cross_entries": 0.0, "row_scales": 0.0, "dense_entries": 0.0, "fits": 0.0}
+    size = tree.end - tree.start
+    weight = (size[items[:, 0]] + AFFINE_TERMS * size[items[:, 1]]).astype(np.float64)
+    if len(items) <= SAMPLED_BLOCKS:
+        chosen, counted = np.arange(len(items)), np.ones(len(items))
+    else:
+        # systematic: evenly spaced marks on the blocks' weights laid end to end in the partition's order (block by
+        # block down the tree, each block's channels in turn), from one random start
+        marks = (np.random.default_rng(SAMPLE_SEED).uniform() + np.arange(SAMPLED_BLOCKS)) * (
+            weight.sum() / SAMPLED_BLOCKS
+        )
+        draws = np.minimum(np.searchsorted(np.cumsum(weight), marks, side="right"), len(items) - 1)
+        chosen, times = np.unique(draws, return_counts=True)
+        counted = times * weight.sum() / (SAMPLED_BLOCKS * weight[chosen])
+    approximations = Approximations(model, tree, P, N, params, *fit, eps, channel_bound, longest_run(tree, far_pairs))
+    held = np.zeros((len(chosen), 4))
+
+    def run(worker, lo, hi):
+        for p in range(lo, hi):
+            pending = [tuple(items[chosen[p]])]
+            while pending:
+                a, b, c = pending.pop()
+                _, row_scale = approximations.row_scales(np.array([[a, b, c]], dtype=np.int64))
+                k, _, _ = approximations.cross(worker, a, b, c, row_scale)
+                m, n = int(size[a]), int(size[b])
+                crosses = k if k >= 0 else rank_limit(m, AFFINE_TERMS * n)
+                held[p, 3] += (crosses + CHECK_ROWS) * n + crosses * m
+                if k >= 0:
+                    held[p, :2] += (k * (m + AFFINE_TERMS * n), m)
+                    continue
+                children = split(tree, a, b, c)
+                pending += children
+                if not children:
+                    held[p, 2:] += m * n
+
+    for_ranges(run, len(chosen))
+    total = counted @ held
+    return {"cross_entries": total[0], "row_scales": total[1], "dense_entries": total[2], "fits": total[3]}
+
+
+#: The compiled kernel of the cross approximations: numba compiles it on first use; the set-up compiles it ahead
+#: (:mod:`translucency.app.warmup`).
+CROSS_KERNELS = (_cross,)
