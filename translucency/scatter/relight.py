@@ -83,8 +83,9 @@ EPS_PER_TOL = 6.0
 FIT_SECONDS = 1.2e-7
 NEAR_ENTRY_SECONDS = 3.5e-6
 #: What a preparation holds at its peak beyond its operators, as a share of them (its lists, each thread's
-#: scratch, memory the allocator keeps; bench/README.md, "Relighting's budget").
-PEAK_SHARE = 0.1
+#: scratch, memory the allocator keeps), with room for the spread of the count of the crosses (bench/README.md,
+#: "Relighting's budget").
+PEAK_SHARE = 0.15
 
 
 @dataclass
