@@ -14,7 +14,7 @@ from translucency.scatter.irradiance import incident_flux
 from translucency.scatter.lights import DirectionalLight, EnvironmentLight, PointLight
 from translucency.scatter.materials import material
 from translucency.scatter.relight import kept_operator
-from translucency.scatter.solve import SurfaceGeometry, solve
+from translucency.scatter.solve import SurfaceGeometry, near_radius, solve
 from translucency.scatter.surface import spatial_order
 from translucency.scatter.visibility import VisibilityCache
 
@@ -243,6 +243,24 @@ def test_operators_over_the_memory_budget_are_refused_before_they_are_made():
     with pytest.raises(BudgetError, match="memory"):
         solve(geometry, phi, -geometry.normals, MARBLE, method="relight", tol=0.01, memory_limit=1e-4)
     assert kept_operator(spatial_order(geometry)[0]) is None
+
+
+def test_operators_far_over_the_budget_are_refused_on_the_rough_count_and_the_others_sampled(monkeypatch):
+    from translucency.scatter import crosses, relight
+
+    _, geometry = _surface(*icosphere(3, 10.0))
+    ordered = spatial_order(geometry)[0]
+    radius = near_radius(ordered, MARBLE)
+    sampled = []
+    count = crosses.sampled_count
+    monkeypatch.setattr(crosses, "sampled_count", lambda *args: sampled.append(1) or count(*args))
+    size, counts = relight.operator_bytes(ordered, MARBLE, "directional", 0.01, radius)
+    assert sampled == [1]
+    # over the budget on the rough count: that count, no sample; within it: the sample decides
+    refused = relight.operator_bytes(ordered, MARBLE, "directional", 0.01, radius, within=lambda b, c: False)
+    assert sampled == [1] and 0.5 * size < refused[0] < 2.0 * size
+    within = relight.operator_bytes(ordered, MARBLE, "directional", 0.01, radius, within=lambda b, c: True)
+    assert sampled == [1, 1] and within == (size, counts)
 
 
 @pytest.mark.slow

@@ -15,7 +15,16 @@ import numpy as np
 from ..threads import for_ranges, thread_count
 from .fits import AFFINE_TERMS, fitted_run, run_space
 
-__all__ = ["CHECK_ROWS", "CROSS_KERNELS", "Approximations", "far_items", "rank_limit", "sampled_count", "split"]
+__all__ = [
+    "CHECK_ROWS",
+    "CROSS_KERNELS",
+    "Approximations",
+    "far_items",
+    "rank_limit",
+    "rank_limits",
+    "sampled_count",
+    "split",
+]
 
 
 def rank_limit(rows: int, columns: int) -> int:

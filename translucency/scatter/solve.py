@@ -501,7 +501,15 @@ def relight_operator(
         return held, True
     relight.release_operator(geometry)
     radius = near_radius(geometry, medium)
-    size, counts = relight.operator_bytes(geometry, medium, model, tol, radius, far_on_gpu=device == "gpu")
+    size, counts = relight.operator_bytes(
+        geometry,
+        medium,
+        model,
+        tol,
+        radius,
+        far_on_gpu=device == "gpu",
+        within=lambda size, counted: relight_plan(size, counted, memory_limit, time_limit).fits,
+    )
     plan = relight_plan(size, counts, memory_limit, time_limit)
     if not plan.fits:
         raise BudgetError(over_budget_sentence(plan, geometry.n_vertices), plan)
