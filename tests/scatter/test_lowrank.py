@@ -151,7 +151,7 @@ def test_held_pairs_are_zero_in_dense_blocks_and_given_where_a_low_rank_block_ho
 
 
 @pytest.mark.parametrize("name", ["marble", "skim_milk", "ketchup"])
-def test_the_count_before_the_build_is_what_the_build_holds(name, monkeypatch):
+def test_the_count_before_the_build_is_what_the_build_holds(name):
     """The budget's count of the crosses (relight.operator_bytes): every block counted, it is what the build stores;
     a sample of the blocks counted, it is within a tenth of it, in each material."""
     medium = material(name).medium()
@@ -162,15 +162,14 @@ def test_the_count_before_the_build_is_what_the_build_holds(name, monkeypatch):
     far_pairs, dense_pairs = lowrank.partition(tree, 1.0 / float(np.min(medium.sigma_t_reduced)))
     assert len(far_pairs) * 3 > 2 * crosses.SAMPLED_BLOCKS  # the count draws a sample
 
-    def count():
+    def count(blocks):
         return crosses.sampled_count(
             kernels.MODELS["directional"], tree, points, normals, params, fit, eps, far_pairs,
-            lambda r: cutoff.pair_bound(medium, "directional", r),
+            lambda r: cutoff.pair_bound(medium, "directional", r), blocks=blocks,
         )  # fmt: skip
 
-    sampled = count()
-    monkeypatch.setattr(crosses, "SAMPLED_BLOCKS", 10**9)
-    every = count()
+    sampled = count(crosses.SAMPLED_BLOCKS)
+    every = count(10**9)
     stored = matrix.U.size + matrix.V.size
     assert every["cross_entries"] == stored and every["row_scales"] == matrix.U_scale.size
     sizes = tree.end - tree.start
@@ -178,6 +177,34 @@ def test_the_count_before_the_build_is_what_the_build_holds(name, monkeypatch):
     assert 4 * (whole + every["dense_entries"]) == matrix.D.size
     assert abs(sampled["cross_entries"] / stored - 1.0) < 0.1
     assert abs(sampled["row_scales"] / matrix.U_scale.size - 1.0) < 0.1
+
+
+def test_the_sampled_count_is_what_every_block_counts_on_average_over_its_starts(monkeypatch):
+    """Hansen and Hurwitz's estimate is unbiased: over many starts of the systematic draw, every count (blocks drawn
+    twice counted twice) averages what counting every block gives."""
+    points, normals = _surface("torus")
+    eps = 1e-3
+    params = kernels.channel_parameters(MARBLE.sigma_a, MARBLE.sigma_s, MARBLE.g, MARBLE.eta, "directional")
+    fit = fits.fit_directions(MARBLE.eta, fits.AFFINE_TERMS)
+    tree = SourceTree(points, lowrank.LEAF_SIZE)
+    far_pairs, _ = lowrank.partition(tree, 1.0 / float(np.min(MARBLE.sigma_t_reduced)))
+
+    def count(blocks):
+        return crosses.sampled_count(
+            kernels.MODELS["directional"], tree, points, normals, params, fit, eps, far_pairs,
+            lambda r: cutoff.pair_bound(MARBLE, "directional", r), blocks=blocks,
+        )  # fmt: skip
+
+    every = count(10**9)
+    size = tree.end - tree.start
+    weights = (size[far_pairs[:, 0]] + 4 * size[far_pairs[:, 1]]).repeat(3)
+    assert weights.max() > weights.sum() / crosses.SAMPLED_BLOCKS  # some blocks are drawn more than once
+    starts = []
+    for seed in range(24):
+        monkeypatch.setattr(crosses, "SAMPLE_SEED", seed)
+        starts.append(count(crosses.SAMPLED_BLOCKS))
+    for key in ("cross_entries", "row_scales", "fits"):
+        assert abs(np.mean([start[key] for start in starts]) / every[key] - 1.0) < 0.02, key
 
 
 def test_the_crosses_store_grows_past_what_it_reserved_and_keeps_every_block():

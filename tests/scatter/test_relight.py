@@ -245,22 +245,30 @@ def test_operators_over_the_memory_budget_are_refused_before_they_are_made():
     assert kept_operator(spatial_order(geometry)[0]) is None
 
 
-def test_operators_far_over_the_budget_are_refused_on_the_rough_count_and_the_others_sampled(monkeypatch):
+def test_operators_far_over_the_budget_are_refused_on_a_first_small_count_and_the_others_counted_in_full(monkeypatch):
     from translucency.scatter import crosses, relight
 
-    _, geometry = _surface(*icosphere(3, 10.0))
+    _, geometry = _surface(*torus(20.0, 8.0, 64, 32))
     ordered = spatial_order(geometry)[0]
     radius = near_radius(ordered, MARBLE)
     sampled = []
     count = crosses.sampled_count
-    monkeypatch.setattr(crosses, "sampled_count", lambda *args: sampled.append(1) or count(*args))
+    monkeypatch.setattr(crosses, "sampled_count", lambda *a, blocks: sampled.append(blocks) or count(*a, blocks=blocks))
     size, counts = relight.operator_bytes(ordered, MARBLE, "directional", 0.01, radius)
-    assert sampled == [1]
-    # over the budget on the rough count: that count, no sample; within it: the sample decides
-    refused = relight.operator_bytes(ordered, MARBLE, "directional", 0.01, radius, within=lambda b, c: False)
-    assert sampled == [1] and 0.5 * size < refused[0] < 2.0 * size
+    assert sampled == [crosses.SAMPLED_BLOCKS]
+    asked = []
+
+    def refuse(b, c):
+        asked.append((b, c["far_fits"]))
+        return False
+
+    # over the budget on the first count, even at FIRST_UNDER of it: that count, and no larger sample
+    first, first_counts = relight.operator_bytes(ordered, MARBLE, "directional", 0.01, radius, within=refuse)
+    assert sampled[1:] == [relight.FIRST_BLOCKS] and 0.7 * size < first < 1.3 * size
+    assert asked == [(relight.FIRST_UNDER * first, relight.FIRST_UNDER * first_counts["far_fits"])]
+    # within it: the larger sample decides
     within = relight.operator_bytes(ordered, MARBLE, "directional", 0.01, radius, within=lambda b, c: True)
-    assert sampled == [1, 1] and within == (size, counts)
+    assert sampled[2:] == [relight.FIRST_BLOCKS, crosses.SAMPLED_BLOCKS] and within == (size, counts)
 
 
 @pytest.mark.slow

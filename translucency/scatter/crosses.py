@@ -249,15 +249,17 @@ SAMPLED_BLOCKS = 384
 SAMPLE_SEED = 8
 
 
-def sampled_count(model, tree, points, normals, params, fit, eps, far_pairs, channel_bound) -> dict:
+def sampled_count(
+    model, tree, points, normals, params, fit, eps, far_pairs, channel_bound, blocks: int = SAMPLED_BLOCKS
+) -> dict:
     """What the cross approximations of the blocks ``far_pairs`` would hold in the far field
-    (:func:`~translucency.scatter.lowrank.build`), counted by finding those of :data:`SAMPLED_BLOCKS` of them (each
-    channel a block of its own), and of the blocks they are split into.
+    (:func:`~translucency.scatter.lowrank.build`), counted by finding those of ``blocks`` of them (each channel a
+    block of its own), and of the blocks they are split into.
 
     The blocks are drawn systematically with chances in proportion to their rows and columns, ``m + 4 n``, and what a
-    block drawn ``t`` times holds counts ``t / (SAMPLED_BLOCKS p)`` for its chance ``p`` (Hansen and Hurwitz's
-    estimate of a total). It follows the surface, the medium, the model and ``eps``; its spread is the spread of the
-    ranks between neighbouring blocks. With fewer blocks than that, every one is counted.
+    block drawn ``t`` times holds counts ``t / (blocks p)`` for its chance ``p`` (Hansen and Hurwitz's estimate of a
+    total). It follows the surface, the medium, the model and ``eps``; its spread is the spread of the ranks between
+    neighbouring blocks. With fewer far blocks than ``blocks``, every one is counted.
 
     Arguments as :func:`~translucency.scatter.lowrank.build`'s (``points``, ``normals`` in vertex order, mm), ``tree``
     its block tree. Returns floats: ``cross_entries``, the 16-bit entries of ``U`` and ``V``; ``row_scales``, ``U``'s
@@ -273,17 +275,15 @@ def sampled_count(model, tree, points, normals, params, fit, eps, far_pairs, cha
         return {"cross_entries": 0.0, "row_scales": 0.0, "dense_entries": 0.0, "fits": 0.0}
     size = tree.end - tree.start
     weight = (size[items[:, 0]] + AFFINE_TERMS * size[items[:, 1]]).astype(np.float64)
-    if len(items) <= SAMPLED_BLOCKS:
+    if len(items) <= blocks:
         chosen, counted = np.arange(len(items)), np.ones(len(items))
     else:
         # systematic: evenly spaced marks on the blocks' weights laid end to end in the partition's order (block by
         # block down the tree, each block's channels in turn), from one random start
-        marks = (np.random.default_rng(SAMPLE_SEED).uniform() + np.arange(SAMPLED_BLOCKS)) * (
-            weight.sum() / SAMPLED_BLOCKS
-        )
+        marks = (np.random.default_rng(SAMPLE_SEED).uniform() + np.arange(blocks)) * (weight.sum() / blocks)
         draws = np.minimum(np.searchsorted(np.cumsum(weight), marks, side="right"), len(items) - 1)
         chosen, times = np.unique(draws, return_counts=True)
-        counted = times * weight.sum() / (SAMPLED_BLOCKS * weight[chosen])
+        counted = times * weight.sum() / (blocks * weight[chosen])
     approximations = Approximations(model, tree, P, N, params, *fit, eps, channel_bound, longest_run(tree, far_pairs))
     held = np.zeros((len(chosen), 4))
 

@@ -267,9 +267,9 @@ def operator_bytes(
     the near field's lists by the near triangles' corners; ``(bytes, counts)``, the counts with the fits the far field
     would evaluate (none, and no far bytes, where the far field is summed on a GPU per light: ``far_on_gpu``).
 
-    ``within(bytes, counts) -> bool``: where the rough count (:func:`rough_crosses`) is not within it even at
-    :data:`ROUGH_UNDER` of itself, the rough count is returned and no block is sampled (on a large surface the
-    sample takes seconds)."""
+    ``within(bytes, counts) -> bool``: the crosses of :data:`FIRST_BLOCKS` blocks are counted first, and where that
+    count is not within it even at :data:`FIRST_UNDER` of itself, it is returned without the larger sample (on a large
+    surface that sample takes seconds)."""
     n = geometry.n_vertices
     n_c = medium.n_channels
     offsets, ids = nearfield.lists_of(geometry, np.arange(n), near_radius)
@@ -281,58 +281,32 @@ def operator_bytes(
     far_pairs, dense_pairs = lowrank.partition(tree, _gap(medium))
     sizes = tree.end - tree.start
     whole = n_c * float(np.sum(sizes[dense_pairs[:, 0]] * sizes[dense_pairs[:, 1]]))  # pairs and channels
-    known = near_bytes + whole * AFFINE_TERMS * DENSE_ENTRY_BYTES
+    params = kernels.channel_parameters(medium.sigma_a, medium.sigma_s, medium.g, medium.eta, model)
+    fit = fit_directions(medium.eta, AFFINE_TERMS)
 
-    def total(counted):
-        size = known + counted["cross_entries"] * CROSS_ENTRY_BYTES + counted["row_scales"] * ROW_SCALE_BYTES
-        size += counted["dense_entries"] * AFFINE_TERMS * DENSE_ENTRY_BYTES
+    def total(blocks):
+        counted = crosses.sampled_count(
+            kernels.MODELS[model],
+            *(tree, geometry.points, geometry.normals, params, fit, far_eps(tol), far_pairs),
+            lambda r: cutoff.pair_bound(medium, model, r),
+            blocks=blocks,
+        )
+        size = near_bytes + (whole + counted["dense_entries"]) * AFFINE_TERMS * DENSE_ENTRY_BYTES
+        size += counted["cross_entries"] * CROSS_ENTRY_BYTES + counted["row_scales"] * ROW_SCALE_BYTES
         return float(size), {"far_fits": counted["fits"] + whole, "near_entries": near_entries, "eps": far_eps(tol)}
 
     if within is not None:
-        rough, rough_counts = total(rough_crosses(tree, far_pairs, n_c, far_eps(tol)))
-        less = {**rough_counts, "far_fits": ROUGH_UNDER * rough_counts["far_fits"]}
-        if not within(ROUGH_UNDER * rough, less):
-            return rough, rough_counts
-    params = kernels.channel_parameters(medium.sigma_a, medium.sigma_s, medium.g, medium.eta, model)
-    return total(
-        crosses.sampled_count(
-            kernels.MODELS[model],
-            tree,
-            geometry.points,
-            geometry.normals,
-            params,
-            fit_directions(medium.eta, AFFINE_TERMS),
-            far_eps(tol),
-            far_pairs,
-            lambda r: cutoff.pair_bound(medium, model, r),
-        )
-    )
+        first, first_counts = total(FIRST_BLOCKS)
+        if not within(FIRST_UNDER * first, {**first_counts, "far_fits": FIRST_UNDER * first_counts["far_fits"]}):
+            return first, first_counts
+    return total(crosses.SAMPLED_BLOCKS)
 
 
-#: The rough count of the crosses (:func:`rough_crosses`) was 20 % under to 12 % over what they held on the default
-#: bunny in three materials (bench/README.md, "Relighting's budget"): a surface over the budget even at this share of
-#: its rough count is refused on it.
-ROUGH_UNDER = 0.75
-#: Of a block the rough count expects to need more crosses than it may take, this share is counted dense.
-ROUGH_SPLIT_DENSE_SHARE = 0.5
-
-
-def rough_crosses(tree, far_pairs, n_channels: int, eps: float) -> dict:
-    """:func:`~translucency.scatter.crosses.sampled_count`'s counts at once, without finding a cross: every far block
-    and channel at :func:`~translucency.scatter.lowrank.expected_rank` crosses (which depends on ``eps`` alone),
-    and a block expected to need more than it may take at its limit, :data:`ROUGH_SPLIT_DENSE_SHARE` of it dense."""
-    rows = (tree.end - tree.start)[far_pairs[:, 0]]
-    sources = (tree.end - tree.start)[far_pairs[:, 1]]
-    rank = lowrank.expected_rank(eps)
-    limit = crosses.rank_limits(rows, AFFINE_TERMS * sources)
-    ranks = np.minimum(rank, limit)
-    split = float(np.sum((rows * sources)[rank > limit])) * ROUGH_SPLIT_DENSE_SHARE
-    return {
-        "cross_entries": n_channels * float(np.sum(ranks * (rows + AFFINE_TERMS * sources))),
-        "row_scales": n_channels * float(np.sum(rows)),
-        "dense_entries": n_channels * split,
-        "fits": n_channels * (split + float(np.sum(ranks * (rows + sources)))),
-    }
+#: Blocks whose crosses are counted first (:func:`operator_bytes`), and the share of that count a surface must be over
+#: the budget at to be refused on it: the spread of a count of 48 blocks is about three times that of 384
+#: (bench/README.md, "Relighting's budget").
+FIRST_BLOCKS = 48
+FIRST_UNDER = 0.75
 
 
 def prepare(
