@@ -245,6 +245,21 @@ def test_operators_over_the_memory_budget_are_refused_before_they_are_made():
     assert kept_operator(spatial_order(geometry)[0]) is None
 
 
+def test_the_plan_of_the_operators_counts_their_peak_above_what_they_hold(monkeypatch):
+    from translucency import memory
+    from translucency.scatter import relight
+    from translucency.scatter.budget import GB
+    from translucency.scatter.solve import relight_plan
+
+    monkeypatch.setattr(memory, "available_memory", lambda: None)  # the limit alone decides
+    monkeypatch.setattr(memory, "resident_memory", lambda: 0)
+    size, counts = 2.0 * GB, {"far_fits": 1e6, "near_entries": 1000}
+    between = (1.0 + 0.5 * relight.PEAK_SHARE) * size  # holds the operators, not the preparation's peak
+    refused = relight_plan(size, counts, between / GB, None)
+    assert not refused.fits and refused.peak_bytes == (1.0 + relight.PEAK_SHARE) * size
+    assert relight_plan(size, counts, (1.0 + 2.0 * relight.PEAK_SHARE) * size / GB, None).fits
+
+
 def test_operators_far_over_the_budget_are_refused_on_a_first_small_count_and_the_others_counted_in_full(monkeypatch):
     from translucency.scatter import crosses, relight
 
