@@ -150,24 +150,37 @@ def test_held_pairs_are_zero_in_dense_blocks_and_given_where_a_low_rank_block_ho
     assert np.mean([np.any(held[starts[o] + 1] != 0.0) for o in receivers]) >= 0.75
 
 
+#: The ``eps`` at which the budget's count of the crosses is tested.
+COUNTED_EPS = 1e-3
+
+
+def _torus_count(medium):
+    """The torus's block tree, its far and dense pairs, and ``count(blocks)``: :func:`crosses.sampled_count` of its
+    far blocks in ``medium`` at :data:`COUNTED_EPS` on ``blocks`` of them."""
+    points, normals = _surface("torus")
+    params = kernels.channel_parameters(medium.sigma_a, medium.sigma_s, medium.g, medium.eta, "directional")
+    fit = fits.fit_directions(medium.eta, fits.AFFINE_TERMS)
+    tree = SourceTree(points, lowrank.LEAF_SIZE)
+    far_pairs, dense_pairs = lowrank.partition(tree, 1.0 / float(np.min(medium.sigma_t_reduced)))
+
+    def count(blocks):
+        return crosses.sampled_count(
+            kernels.MODELS["directional"], tree, points, normals, params, fit, COUNTED_EPS, far_pairs,
+            lambda r: cutoff.pair_bound(medium, "directional", r), blocks=blocks,
+        )  # fmt: skip
+
+    return tree, far_pairs, dense_pairs, count
+
+
 @pytest.mark.parametrize("name", ["marble", "skim_milk", "ketchup"])
 def test_the_count_before_the_build_is_what_the_build_holds(name):
     """The budget's count of the crosses (relight.operator_bytes): every block counted, it is what the build stores;
     a sample of the blocks counted, it is within a tenth of it, in each material."""
     medium = material(name).medium()
     points, normals = _surface("torus")
-    eps = 1e-3
-    matrix, params, fit = _build(points, normals, eps, medium=medium)
-    tree = SourceTree(points, lowrank.LEAF_SIZE)
-    far_pairs, dense_pairs = lowrank.partition(tree, 1.0 / float(np.min(medium.sigma_t_reduced)))
+    matrix, _, _ = _build(points, normals, COUNTED_EPS, medium=medium)
+    tree, far_pairs, dense_pairs, count = _torus_count(medium)
     assert len(far_pairs) * 3 > 2 * crosses.SAMPLED_BLOCKS  # the count draws a sample
-
-    def count(blocks):
-        return crosses.sampled_count(
-            kernels.MODELS["directional"], tree, points, normals, params, fit, eps, far_pairs,
-            lambda r: cutoff.pair_bound(medium, "directional", r), blocks=blocks,
-        )  # fmt: skip
-
     sampled = count(crosses.SAMPLED_BLOCKS)
     every = count(10**9)
     stored = matrix.U.size + matrix.V.size
@@ -182,19 +195,7 @@ def test_the_count_before_the_build_is_what_the_build_holds(name):
 def test_the_sampled_count_is_what_every_block_counts_on_average_over_its_starts(monkeypatch):
     """Hansen and Hurwitz's estimate is unbiased: over many starts of the systematic draw, every count (blocks drawn
     twice counted twice) averages what counting every block gives."""
-    points, normals = _surface("torus")
-    eps = 1e-3
-    params = kernels.channel_parameters(MARBLE.sigma_a, MARBLE.sigma_s, MARBLE.g, MARBLE.eta, "directional")
-    fit = fits.fit_directions(MARBLE.eta, fits.AFFINE_TERMS)
-    tree = SourceTree(points, lowrank.LEAF_SIZE)
-    far_pairs, _ = lowrank.partition(tree, 1.0 / float(np.min(MARBLE.sigma_t_reduced)))
-
-    def count(blocks):
-        return crosses.sampled_count(
-            kernels.MODELS["directional"], tree, points, normals, params, fit, eps, far_pairs,
-            lambda r: cutoff.pair_bound(MARBLE, "directional", r), blocks=blocks,
-        )  # fmt: skip
-
+    tree, far_pairs, _, count = _torus_count(MARBLE)
     every = count(10**9)
     size = tree.end - tree.start
     weights = (size[far_pairs[:, 0]] + 4 * size[far_pairs[:, 1]]).repeat(3)

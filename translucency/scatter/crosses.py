@@ -173,7 +173,7 @@ def _scratch(held: list, rows: int, ranks: int, columns: int) -> tuple[np.ndarra
 SCALE_CHUNK = 2048
 
 
-def row_scales(tree, P, items, channel_bound):
+def _row_scales(tree, P, items, channel_bound):
     """Per block and channel ``(row node, column node, channel)`` of ``items``: each receiver's row scale, one
     over the channel's §8.4 bound at the receiver's distance from the column node's centre, so that the crosses
     hold every row alike, not only the block's brightest (a dark receiver's B is all far field):
@@ -205,7 +205,7 @@ class Approximations:
 
     def row_scales(self, items):
         """:func:`_row_scales` of the blocks ``items`` (``(row node, column node, channel)`` rows)."""
-        return row_scales(self.tree, self.P, items, self.channel_bound)
+        return _row_scales(self.tree, self.P, items, self.channel_bound)
 
     def cross(self, worker, a, b, c, row_scale):
         """Block ``(a, b)``'s channel ``c`` by :func:`_cross`, up to :func:`rank_limit` crosses: ``(k, U, V)``, ``k``
@@ -302,8 +302,9 @@ def sampled_count(
                     continue
                 children = split(tree, a, b, c)
                 pending += children
-                if not children:
-                    held[p, 2:] += m * n
+                if not children:  # a pair of leaves stored whole: its pairs held, and fitted
+                    held[p, 2] += m * n
+                    held[p, 3] += m * n
 
     for_ranges(run, len(chosen))
     total = counted @ held

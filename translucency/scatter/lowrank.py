@@ -435,7 +435,7 @@ def _room(array: np.ndarray, size: int) -> np.ndarray:
 #: ``RANK_PER_SQUARED_DECADE log10(1 / eps)^2`` (:func:`expected_rank`, measured on the default bunny in marble at
 #: ``tol`` 0.1, 0.03 and 0.01; the ranks grow faster than the digits asked), never more than a block may take
 #: (:class:`_CrossStore`: room never written costs no memory; a store that runs out grows, copied). The budget
-#: counts the crosses by :func:`sampled_count`, which follows the material too.
+#: counts the crosses by :func:`~translucency.scatter.crosses.sampled_count`, which follows the material too.
 RANK_PER_SQUARED_DECADE = 2.5
 RESERVED_SHARE = 1.5
 
@@ -543,8 +543,8 @@ def _crosses(model, tree, P, N, params, dirs, pinv, eps, channel_bound, far_pair
     """Cross approximations of every far block and channel: ``(found, dense, store)``, ``found`` a list of ``(row
     node, column node, channel, k, where U, V and U's row scales start)`` in ``store`` (:class:`_CrossStore`); a block
     that needs more crosses than :func:`~translucency.scatter.crosses.rank_limit` is split into its children's blocks
-    (:func:`~translucency.scatter.crosses.split`), and a pair
-    of leaves that does is added to ``dense`` as ``(row node, column node, channel)``."""
+    (:func:`~translucency.scatter.crosses.split`), and a pair of leaves that does is added to ``dense`` as ``(row
+    node, column node, channel)``."""
     n_c = params.shape[0]
     start, end = tree.start, tree.end
     kept_by = [[] for _ in range(thread_count())]
