@@ -163,7 +163,7 @@ def measure(scan: str, name: str, resolution) -> dict | None:
         "load": os.getloadavg()[0],
         "local": [],
     }
-    floor = max(local_reach_floor(geometry, medium), local_reach_floor(proxy_geometry, medium))
+    floor = max(local_reach_floor(geometry, medium, 1e-3), local_reach_floor(proxy_geometry, medium, 1e-3))
     for reach in (floor, 2.0 * floor):
         local_full, full_local_seconds = timed(
             lambda reach=reach: (

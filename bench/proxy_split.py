@@ -162,7 +162,7 @@ def measure() -> dict:
         rows.append(
             (f"`exact` on the proxy, at each full vertex itself, near field {edges:g} edges / {mfp:g} mfp", at_full)
         )
-    reach = max(solver.local_reach_floor(full, medium), solver.local_reach_floor(geometry, medium))
+    reach = max(solver.local_reach_floor(full, medium, 1e-2), solver.local_reach_floor(geometry, medium, 1e-2))
     corners = np.unique(mapping.vertex_index[receivers])
     local_full = exact(full, traced.phi_rgb, traced.w12, medium, receivers, method="cutoff", tol=1e-2, reach_mm=reach)
     local_proxy = np.zeros((n_proxy, 3))

@@ -300,7 +300,7 @@ def test_local_part_grows_by_exactly_the_sources_between_two_reaches():
     points, triangles = icosphere(3, 15.0)
     normals, phi, w12 = _lit(points, triangles, medium, _unit([0.3, 0.0, 1.0]))
     geometry = solve.SurfaceGeometry(points, triangles, normals)
-    floor = solve.local_reach_floor(geometry, medium)
+    floor = solve.local_reach_floor(geometry, medium, 1e-3)  # solve's own tol
     near, far = floor + 0.5, floor + 6.0
     B_near = solve.solve(geometry, phi, w12, medium, method="cutoff", reach_mm=near).B
     B_far = solve.solve(geometry, phi, w12, medium, method="cutoff", reach_mm=far).B

@@ -110,6 +110,43 @@ def test_almost_no_scattering(model, method):
     assert _check(medium, 10.0, model, method) <= TOL
 
 
+#: A 5 mm sphere of 10,242 vertices (edges h = 0.19 mm): fine for potato's and skim milk's decay (h max
+#: sigma_tr = 0.09 and 0.05, so the near field stops at three edges, 0.57 mm, not at their mean free paths of 1.5
+#: and 1.4 mm), coarse for ketchup's green and blue (0.48: it keeps its mean free path, 4.1 mm); docs/physics.md §8.2.
+FINE_SPHERE = {"radius": 5.0, "level": 5}
+
+
+@pytest.mark.parametrize("method", ["tree", pytest.param("cutoff", marks=pytest.mark.slow)])
+@pytest.mark.parametrize("name", ["potato", "skim_milk", "ketchup"])
+def test_a_mesh_fine_for_the_decay_holds_tol_with_the_near_field_three_edges_wide(name, method):
+    medium = material(name).medium()
+    geometry = _sphere(FINE_SPHERE["radius"], medium, FINE_SPHERE["level"])[0]
+    three_edges = solve.NEAR_EDGES * geometry.mean_edge_length
+    reach = solve.near_radius(geometry, medium, TOL)
+    smooth = max(three_edges, np.max(medium.D))  # the diffusion coefficient: 0.50 and 0.48 mm, under three edges
+    assert reach == (smooth if name != "ketchup" else 1.0 / np.min(medium.sigma_t_reduced))
+    assert solve.near_radius(geometry, medium) > three_edges  # exact's reach: a mean free path
+    assert _check(medium, FINE_SPHERE["radius"], "directional", method, level=FINE_SPHERE["level"]) <= TOL
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("model", ["standard", "better"])
+def test_the_near_field_three_edges_wide_costs_the_radial_models_little(model, monkeypatch):
+    """The radial models' ``tree`` is over ``tol`` on this sphere whatever the near field's reach (1.0-1.2 % in
+    skim milk: the nodes' errors add up, docs/physics.md §8.3); three edges instead of a mean free path may move
+    its error by no more than a tenth of ``tol``."""
+    medium = material("skim_milk").medium()
+    geometry, phi, w12, _ = _sphere(FINE_SPHERE["radius"], medium, FINE_SPHERE["level"])
+    exact = solve.solve(geometry, phi, w12, medium, model=model, method="exact").B
+    errors = []
+    for rough in (solve.NEAR_ROUGH_PER_TOL, 0.0):  # 0: the mean free path's reach, as exact's
+        monkeypatch.setattr(solve, "NEAR_ROUGH_PER_TOL", rough)
+        errors.append(
+            per_vertex_error(solve.solve(geometry, phi, w12, medium, model=model, method="tree", tol=TOL).B, exact)
+        )
+    assert abs(errors[0] - errors[1]) <= 0.1 * TOL
+
+
 @pytest.mark.parametrize("eta", [0.99, 2.51, 10.0])
 def test_eta_outside_the_fresnel_fits_is_refused_with_a_sentence(eta):
     with pytest.raises(InvalidParameterError, match=r"eta .*(>= 1|at most 2\.5)") as info:

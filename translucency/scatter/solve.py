@@ -68,10 +68,15 @@ __all__ = ["SurfaceGeometry", "Solution", "solve", "local_reach_floor", "METHODS
 #: ``tol`` bounds the relative error of ``B`` at every receiver whose ``B`` is at least TOL_FLOOR of the
 #: largest in its channel (darker receivers: tol x TOL_FLOOR of that largest, absolute).
 TOL_FLOOR = 1e-4
-#: Near field: triangles with a vertex within max(NEAR_EDGES * mean edge, NEAR_MEAN_FREE_PATHS / min sigma_t')
-#: of the receiver are integrated with sub-triangle quadrature (:mod:`translucency.scatter.nearfield`).
+#: Near field: triangles with a vertex within NEAR_EDGES mean edges of the receiver are integrated with sub-triangle
+#: quadrature (:mod:`translucency.scatter.nearfield`), and within NEAR_MEAN_FREE_PATHS / min sigma_t' where the mesh is
+#: coarse for a channel's decay, ``(mean edge * max sigma_tr)^2 > NEAR_ROUGH_PER_TOL * tol``, or the method is ``exact``
+#: or ``relight``; else within NEAR_DIFFUSION_LENGTHS * max D, where S_d follows the angles more than the distance
+#: (:func:`near_radius`; docs/physics.md §8.2).
 NEAR_EDGES = 3.0
 NEAR_MEAN_FREE_PATHS = 1.0
+NEAR_ROUGH_PER_TOL = 1.0
+NEAR_DIFFUSION_LENGTHS = 1.0
 #: Refinement ratio of the adaptive quadrature (piece diameter over its distance to the receiver; also
 #: the fan rule's radial scale, NEAR_BETA * D_min). A piece is accepted once it is this many times smaller
 #: than its distance: a smaller ratio gives the same B with more pieces, a larger one accepts the piece that
@@ -310,9 +315,21 @@ def unique_channels(medium: Medium):
     return rows, channel_of.astype(np.int64).ravel()
 
 
-def near_radius(geometry: SurfaceGeometry, medium: Medium) -> float:
-    """Radius (mm) inside which triangles get the near-field quadrature (see module constants)."""
-    return max(NEAR_EDGES * geometry.mean_edge_length, NEAR_MEAN_FREE_PATHS / float(np.min(medium.sigma_t_reduced)))
+def near_radius(geometry: SurfaceGeometry, medium: Medium, tol: float | None = None) -> float:
+    """Radius (mm) inside which triangles get the near-field quadrature (docs/physics.md §8.2).
+
+    ``NEAR_EDGES`` mean edges ``h``, and at least ``NEAR_MEAN_FREE_PATHS / min sigma_t'`` for ``exact`` and
+    relighting (``tol`` None: relighting's far field fits each pair in the refracted direction, which nearer pairs
+    do not follow, docs/physics.md §8.7) and for ``tree`` and ``cutoff`` where the vertex rule's relative error on a
+    triangle, about ``(h sigma_tr)^2`` for a channel that decays as ``exp(-sigma_tr r)``, may reach
+    ``NEAR_ROUGH_PER_TOL * tol``. On a mesh fine for every channel's decay, at least ``NEAR_DIFFUSION_LENGTHS *
+    max D``: nearer than ``D`` the directional dipole follows the angles between the normals and the refracted
+    direction, which the vertex rule does not resolve; beyond, the vertex sum is within ``tol``."""
+    edges = NEAR_EDGES * geometry.mean_edge_length
+    roughness = (geometry.mean_edge_length * float(np.max(medium.sigma_tr))) ** 2
+    if tol is not None and roughness <= NEAR_ROUGH_PER_TOL * float(tol):
+        return max(edges, NEAR_DIFFUSION_LENGTHS * float(np.max(medium.D)))
+    return max(edges, NEAR_MEAN_FREE_PATHS / float(np.min(medium.sigma_t_reduced)))
 
 
 def solve(
@@ -396,7 +413,7 @@ def solve(
     phi, w12, receivers = _checked_inputs(
         geometry, phi, w12, medium, model, method, tol, receivers, memory_limit, time_limit
     )
-    _check_reach(reach_mm, method, geometry, medium)
+    _check_reach(reach_mm, method, tol, geometry, medium)
     warn_low_albedo(medium)
     warn_transparent(medium, geometry.diagonal)
     used_device, stats["device"] = pair_device(check_device(device), "cutoff" if reach_mm is not None else method)
@@ -500,7 +517,7 @@ def relight_operator(
     if held is not None:
         return held, True
     relight.release_operator(geometry)
-    radius = near_radius(geometry, medium)
+    radius = near_radius(geometry, medium)  # a mean free path: the far field's fits in the direction need it
     size, counts = relight.operator_bytes(
         geometry,
         medium,
@@ -753,13 +770,13 @@ def _checked_inputs(geometry, phi, w12, medium, model, method, tol, receivers, m
     return phi, w12, receivers
 
 
-def local_reach_floor(geometry: SurfaceGeometry, medium: Medium) -> float:
-    """The smallest ``reach_mm`` of :func:`solve` (mm): the near-field radius plus the longest edge, so that
-    every vertex of a triangle the near field integrates is among the sources summed."""
-    return near_radius(geometry, medium) + geometry.longest_edge
+def local_reach_floor(geometry: SurfaceGeometry, medium: Medium, tol: float) -> float:
+    """The smallest ``reach_mm`` of :func:`solve` (mm) at ``tol``: the near-field radius plus the longest edge, so
+    that every vertex of a triangle the near field integrates is among the sources summed."""
+    return near_radius(geometry, medium, tol) + geometry.longest_edge
 
 
-def _check_reach(reach_mm, method, geometry, medium) -> None:
+def _check_reach(reach_mm, method, tol, geometry, medium) -> None:
     """``reach_mm`` is None, or positive with ``method="cutoff"`` and at least :func:`local_reach_floor`."""
     if reach_mm is None:
         return
@@ -767,7 +784,7 @@ def _check_reach(reach_mm, method, geometry, medium) -> None:
         raise InvalidParameterError(
             f"reach_mm limits the cutoff method's sum; pass method='cutoff' with it, not {method!r}."
         )
-    floor = local_reach_floor(geometry, medium)
+    floor = local_reach_floor(geometry, medium, tol)
     try:
         reach = float(reach_mm)
     except (TypeError, ValueError):
@@ -861,7 +878,7 @@ def _plan(work: _Work, method, tol, memory_limit, time_limit, stats, memory_at_s
     not already held the surface's near grid, triangle tables and the tree's table of every source and node,
     which grow with the scan."""
     geometry = work.geometry
-    radius = near_radius(geometry, work.medium)
+    radius = near_radius(geometry, work.medium, None if method == "exact" else tol)
     near_args = dict(
         model_code=kernels.MODELS[work.model],
         geometry=geometry,
