@@ -740,6 +740,16 @@ def run(labels, repeats, time_limit, memory_limit_gb):
     return rows, compile_run
 
 
+def write_meshes(folder, labels):
+    """Write the meshes of ``labels`` (module table) as ``folder/igea_<label>.ply``, one at a time."""
+    folder.mkdir(parents=True, exist_ok=True)
+    igea, _ = prepare("igea")
+    for label in labels:
+        points, triangles, how = build_mesh(label, igea)
+        write_mesh(folder / f"igea_{label}.ply", points, triangles)
+        print(f"{folder / f'igea_{label}.ply'}: {len(points):,} vertices ({how})")
+
+
 def main(argv=None):
     """Command line: the scaling run (or, with ``--child``, one bake in this process)."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -748,6 +758,11 @@ def main(argv=None):
     parser.add_argument("--repeats", type=int, default=3, help="warm shades per size up to 200k vertices (median)")
     parser.add_argument("--time-limit", type=float, default=900.0, help="seconds a bake may take before it is stopped")
     parser.add_argument("--memory-limit", type=float, default=16.0, help="GB of resident memory a bake may use")
+    parser.add_argument(
+        "--write-meshes",
+        metavar="FOLDER",
+        help="only write the meshes of --sizes as igea_<size>.ply into FOLDER (to bake them by hand)",
+    )
     parser.add_argument("--child", nargs=2, metavar=("MESH", "JSON"), help=argparse.SUPPRESS)
     parser.add_argument("--reference", nargs=2, metavar=("MESH", "JSON"), help=argparse.SUPPRESS)
     parser.add_argument("--fill-cache", metavar="FOLDER", help=argparse.SUPPRESS)
@@ -765,6 +780,9 @@ def main(argv=None):
         print(f"the shared Igea ({SCANS['igea'][0]} in ../shared/meshes) is not present; nothing to benchmark")
         return 0
     labels = args.sizes or (QUICK_SIZES if args.quick else SIZES)
+    if args.write_meshes:
+        write_meshes(Path(args.write_meshes), labels)
+        return 0
     info = machine_info()
     start = time.perf_counter()
     rows, info["compile"] = run(labels, args.repeats, args.time_limit, args.memory_limit)
