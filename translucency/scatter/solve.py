@@ -320,16 +320,19 @@ def near_radius(geometry: SurfaceGeometry, medium: Medium, tol: float | None = N
 
     ``NEAR_EDGES`` mean edges ``h``, and at least ``NEAR_MEAN_FREE_PATHS / min sigma_t'`` for ``exact`` and
     relighting (``tol`` None: relighting's far field fits each pair in the refracted direction, which nearer pairs
-    do not follow, docs/physics.md §8.7) and for ``tree`` and ``cutoff`` where the vertex rule's relative error on a
-    triangle, about ``(h sigma_tr)^2`` for a channel that decays as ``exp(-sigma_tr r)``, may reach
-    ``NEAR_ROUGH_PER_TOL * tol``. On a mesh fine for every channel's decay, at least ``NEAR_DIFFUSION_LENGTHS *
-    max D``: nearer than ``D`` the directional dipole follows the angles between the normals and the refracted
-    direction, which the vertex rule does not resolve; beyond, the vertex sum is within ``tol``."""
+    do not follow, docs/physics.md §8.7) and for ``tree`` and ``cutoff`` where the vertex rule's relative error on
+    the largest triangle, about ``(L sigma_tr)^2`` with ``L`` the longest edge for a channel that decays as
+    ``exp(-sigma_tr r)``, may reach ``NEAR_ROUGH_PER_TOL * tol``. On a mesh fine for every channel's decay, at least
+    ``NEAR_DIFFUSION_LENGTHS * max D`` (nearer than ``D`` the directional dipole follows the angles between the
+    normals and the refracted direction, which the vertex rule does not resolve) and ``L`` (a triangle larger than
+    the mesh's others is listed by the receivers beside it), and never beyond the mean free path."""
     edges = NEAR_EDGES * geometry.mean_edge_length
-    roughness = (geometry.mean_edge_length * float(np.max(medium.sigma_tr))) ** 2
+    mean_free_path = NEAR_MEAN_FREE_PATHS / float(np.min(medium.sigma_t_reduced))
+    roughness = (geometry.longest_edge * float(np.max(medium.sigma_tr))) ** 2
     if tol is not None and roughness <= NEAR_ROUGH_PER_TOL * float(tol):
-        return max(edges, NEAR_DIFFUSION_LENGTHS * float(np.max(medium.D)))
-    return max(edges, NEAR_MEAN_FREE_PATHS / float(np.min(medium.sigma_t_reduced)))
+        short = max(NEAR_DIFFUSION_LENGTHS * float(np.max(medium.D)), geometry.longest_edge)
+        return max(edges, min(short, mean_free_path))
+    return max(edges, mean_free_path)
 
 
 def solve(
