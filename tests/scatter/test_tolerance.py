@@ -119,7 +119,7 @@ FINE_SPHERE = {"radius": 5.0, "level": 5}
 
 @pytest.mark.parametrize("method", ["tree", pytest.param("cutoff", marks=pytest.mark.slow)])
 @pytest.mark.parametrize("name", ["skim_milk", "regular_milk", "ketchup"])
-def test_a_mesh_fine_for_the_decay_holds_tol_with_the_near_field_three_edges_wide(name, method):
+def test_a_mesh_fine_for_the_decay_holds_tol_with_the_shorter_near_field(name, method):
     medium = material(name).medium()
     geometry = _sphere(FINE_SPHERE["radius"], medium, FINE_SPHERE["level"])[0]
     mean_free_path = 1.0 / np.min(medium.sigma_t_reduced)
@@ -175,10 +175,10 @@ def test_a_fine_mesh_with_a_few_large_triangles_keeps_the_long_reach_and_holds_t
 
 @pytest.mark.slow
 @pytest.mark.parametrize("model", ["standard", "better"])
-def test_the_near_field_three_edges_wide_costs_the_radial_models_little(model, monkeypatch):
+def test_the_shorter_near_field_costs_the_radial_models_little(model, monkeypatch):
     """The radial models' ``tree`` is over ``tol`` on this sphere whatever the near field's reach (1.0-1.2 % in
-    skim milk: the nodes' errors add up, docs/physics.md §8.3); three edges instead of a mean free path may move
-    its error by no more than a tenth of ``tol``."""
+    skim milk: the nodes' errors add up, docs/physics.md §8.3); three edges (its reach here) instead of a mean free
+    path may move its error by no more than a tenth of ``tol``."""
     medium = material("skim_milk").medium()
     geometry, phi, w12, _ = _sphere(FINE_SPHERE["radius"], medium, FINE_SPHERE["level"])
     exact = solve.solve(geometry, phi, w12, medium, model=model, method="exact").B

@@ -68,11 +68,9 @@ __all__ = ["SurfaceGeometry", "Solution", "solve", "local_reach_floor", "METHODS
 #: ``tol`` bounds the relative error of ``B`` at every receiver whose ``B`` is at least TOL_FLOOR of the
 #: largest in its channel (darker receivers: tol x TOL_FLOOR of that largest, absolute).
 TOL_FLOOR = 1e-4
-#: Near field: triangles with a vertex within NEAR_EDGES mean edges of the receiver are integrated with sub-triangle
-#: quadrature (:mod:`translucency.scatter.nearfield`), and within NEAR_MEAN_FREE_PATHS / min sigma_t' where the mesh is
-#: coarse for a channel's decay, ``(longest edge * max sigma_tr)^2 > NEAR_ROUGH_PER_TOL * tol``, or the method is
-#: ``exact`` or ``relight``; else within NEAR_DIFFUSION_LENGTHS * max D (where S_d follows the angles more than the
-#: distance) and the longest edge, up to that mean free path (:func:`near_radius`; docs/physics.md §8.2).
+#: Near field: the triangles with a vertex within :func:`near_radius` of the receiver are integrated with sub-triangle
+#: quadrature (:mod:`translucency.scatter.nearfield`); its reach in mean edges, in mean free paths, in diffusion
+#: coefficients ``D``, and the share of ``tol`` the vertex rule may miss where it stops short of a mean free path.
 NEAR_EDGES = 3.0
 NEAR_MEAN_FREE_PATHS = 1.0
 NEAR_ROUGH_PER_TOL = 1.0
