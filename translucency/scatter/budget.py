@@ -48,11 +48,12 @@ HEADROOM_FRACTION = 0.10
 HEADROOM_BYTES = 256 * 2**20
 #: Bytes per vertex the solve holds throughout: positions and normals (given and Morton-ordered),
 #: flux density and refracted direction (given, ordered, flux), areas, the source tree and its
-#: aggregated table, the near field's shared point table (vertex columns), ``B`` and its correction.
-BYTES_PER_VERTEX = 800
+#: aggregated table, ``B`` and its correction (the near field's point table holds a block's vertices only, and
+#: counts with the block).
+BYTES_PER_VERTEX = 704
 #: Bytes per triangle: indices (given, ordered), triangle tables (diameters, centroids, edges) and the
-#: vertex-to-triangle lists of the near-triangle grid.
-BYTES_PER_TRIANGLE = 300
+#: vertex-to-triangle lists of the near-triangle grid (the edges and those lists int32).
+BYTES_PER_TRIANGLE = 264
 #: Bytes per triangle of a near-field block's point table: Dunavant points and edge midpoints (7 + 1.5
 #: columns of 12 float64). A block of ``b`` receivers lists about ``(sqrt(2 b) + sqrt(k))**2 <= 4 b + 2 k``
 #: triangles (a patch of ``2 b`` triangles and its rim, ``k`` near triangles per receiver).
@@ -66,9 +67,9 @@ def block_table_bytes(near_triangles: float) -> tuple[float, float]:
     return 4 * BYTES_PER_TABLE_TRIANGLE, 2 * BYTES_PER_TABLE_TRIANGLE * near_triangles
 
 
-#: Bytes per triangle and numba thread: the stamps of the near lists (1 int64) and of the listing
-#: of quadrature points (2 int32 per vertex and per edge).
-BYTES_PER_TRIANGLE_THREAD = 8 + 2 * 4 * 1.5 + 2 * 4 * 0.5
+#: Bytes per triangle and numba thread: the stamps of the near lists (1 int32) and of the listing
+#: of quadrature points (2 int32 per vertex and per edge of a block's table, counted here for the whole mesh).
+BYTES_PER_TRIANGLE_THREAD = 4 + 2 * 4 * 1.5 + 2 * 4 * 0.5
 #: Bytes of a near-triangle list entry (int32), kept for every receiver or for one block.
 BYTES_PER_NEAR_TRIANGLE = 4
 #: Every receiver's near lists are kept (for a later solve of the same surface: the viewer's) only up to this

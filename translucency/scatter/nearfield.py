@@ -97,9 +97,10 @@ class NearGrid:
     radius : float
         mm.
     n_triangles : int
-    stamps : (threads, m) int64
+    stamps : (threads, m) int32
     next_stamp : int
-        The first stamp the next pass may use.
+        The first stamp the next pass may use (the stamps start again from -1 before it would pass int32's
+        largest).
     """
 
     args: tuple
@@ -129,6 +130,9 @@ class NearGrid:
         receivers = np.ascontiguousarray(receivers, dtype=np.int64)
         points, sorted_points, low, cell, dims, cell_keys = self.args[:6]
         visit = np.argsort(_cell_keys(points[receivers], low, cell, dims), kind="stable")  # cell by cell
+        if self.next_stamp + receivers.size >= np.iinfo(self.stamps.dtype).max:
+            self.stamps.fill(-1)
+            self.next_stamp = 0
         base = self.next_stamp
         self.next_stamp += receivers.size
         for_ranges(
@@ -155,7 +159,9 @@ def near_grid(points, triangles, radius) -> NearGrid:
     n = points.shape[0]
     # vertex -> incident triangles (CSR)
     corner_vertex = triangles.ravel()
-    vt_tris = (np.argsort(corner_vertex, kind="stable") // 3).astype(np.int64)
+    # triangle numbers and stamps as int32 where they fit: with the sorted points they are most of the grid
+    index = np.int32 if triangles.shape[0] < 2**31 - 1 else np.int64
+    vt_tris = (np.argsort(corner_vertex, kind="stable") // 3).astype(index)
     vt_offsets = np.zeros(n + 1, dtype=np.int64)
     np.cumsum(np.bincount(corner_vertex, minlength=n), out=vt_offsets[1:])
     # the grid: cells keyed by their integer coordinates, vertices sorted by key
@@ -179,7 +185,7 @@ def near_grid(points, triangles, radius) -> NearGrid:
         vt_offsets,
         vt_tris,
     )
-    stamps = np.full((thread_count(), triangles.shape[0]), -1, dtype=np.int64)
+    stamps = np.full((thread_count(), triangles.shape[0]), -1, dtype=np.int32)
     return NearGrid(args, float(radius), int(triangles.shape[0]), stamps)
 
 
@@ -352,18 +358,34 @@ class SourcePoints:
         weight and the area are applied per receiver).
     vertex_lit : (n,) bool
         Whether light enters at the vertex.
-    first_rule : (m,) int64
+    vertex_column : (n,) int32
+        Column of each vertex of a lit triangle (the first ``held`` columns), -1 for the others.
+    held : int
+        Vertices in the table: the corners of its lit triangles.
+    first_mid : int
+        Column of the first edge midpoint (after the rule points).
+    first_rule : (m,) int32
         Column of triangle ``t``'s first Dunavant point (its centroid, which the degree-3 rule uses
         too), or -1 where no light enters at any corner.
-    midpoint_column : (e,) int64
+    midpoint_column : (e,) int32
         Column of each edge's midpoint (-1 where neither triangle of the edge has light).
+    corners, lit_triangles, lit_edges, candidates : int64
+        The vertices, the lit triangles and their edges that have columns, and the triangles looked at (the
+        entries of the maps that :meth:`ColumnMaps.clear` puts back).
     """
 
     table: np.ndarray
     weights: np.ndarray
     vertex_lit: np.ndarray
+    vertex_column: np.ndarray
+    held: int
+    first_mid: int
     first_rule: np.ndarray
     midpoint_column: np.ndarray
+    corners: np.ndarray
+    lit_triangles: np.ndarray
+    lit_edges: np.ndarray
+    candidates: np.ndarray
 
 
 @dataclass
@@ -376,9 +398,9 @@ class TriangleTables:
         Longest edge of each triangle, mm.
     centroids : (m, 3) float64
         Centroid of each triangle, mm.
-    edges : (e, 2) int64
+    edges : (e, 2) int32 (int64 from 2**31 edges)
         Unique undirected edges.
-    edge_of_corner : (m, 3) int64
+    edge_of_corner : (m, 3) int32 (int64 from 2**31 edges)
         Edge from corner ``i`` to corner ``i + 1`` of each triangle.
     """
 
@@ -391,11 +413,12 @@ class TriangleTables:
 def triangle_tables(points, triangles) -> TriangleTables:
     """:class:`TriangleTables` of a mesh (``points`` in mm)."""
     edges, edge_of_corner = unique_edges(triangles)
+    index = np.int32 if edges.shape[0] < 2**31 else np.int64  # half the bytes of two tables that span the mesh
     return TriangleTables(
         edge_lengths(points, triangles).max(axis=1),
         triangle_centroids(points, triangles),
-        edges,
-        np.ascontiguousarray(edge_of_corner),
+        edges.astype(index),
+        np.ascontiguousarray(edge_of_corner, dtype=index),
     )
 
 
@@ -422,6 +445,50 @@ def lists_of(surface, receivers: np.ndarray, radius: float):
     return _KEPT.get(surface, key, lambda: grid_of(surface, radius).lists(receivers))
 
 
+@dataclass
+class ColumnMaps:
+    """Where each vertex, triangle and edge of the mesh has its columns in a block's :class:`SourcePoints`: arrays
+    that span the mesh, made once per light (:func:`column_maps`) and reused by every block of receivers, which
+    sets the entries of its own neighbourhood and puts them back (:meth:`clear`). Made afresh per block, they
+    cost a pass over memory the size of the mesh for every block.
+
+    Attributes
+    ----------
+    vertex_lit : (n,) bool
+        Whether light enters at the vertex.
+    vertex_column, first_rule, midpoint_column : (n,), (m,), (e,) int32
+        As in :class:`SourcePoints`; -1 outside a block.
+    listed : (m,) bool
+        The triangles a block's receivers list; False outside a block.
+    """
+
+    vertex_lit: np.ndarray
+    vertex_column: np.ndarray
+    first_rule: np.ndarray
+    midpoint_column: np.ndarray
+    listed: np.ndarray
+
+    def clear(self, shared: SourcePoints) -> None:
+        """Put back the entries a block's ``shared`` points set (their cost is the block's, not the mesh's)."""
+        self.vertex_column[shared.corners] = -1
+        self.first_rule[shared.lit_triangles] = -1
+        self.midpoint_column[shared.lit_edges] = -1
+        self.listed[shared.candidates] = False
+
+
+def column_maps(phi, n_triangles: int, n_edges: int) -> ColumnMaps:
+    """Empty :class:`ColumnMaps` for the light ``phi (n, C)`` on a mesh of ``n_triangles`` triangles and
+    ``n_edges`` edges (the columns as int32: a block's table holds far fewer than 2**31 columns, 96 bytes each)."""
+    n = phi.shape[0]
+    return ColumnMaps(
+        phi.sum(axis=1) > 0,
+        np.full(n, -1, dtype=np.int32),
+        np.full(n_triangles, -1, dtype=np.int32),
+        np.full(n_edges, -1, dtype=np.int32),
+        np.zeros(n_triangles, dtype=bool),
+    )
+
+
 def source_point_table(
     points,
     normals,
@@ -433,38 +500,43 @@ def source_point_table(
     rule_points=RULE_POINTS,
     rule_weights=RULE_WEIGHTS,
     within=None,
+    maps: ColumnMaps | None = None,
 ) -> SourcePoints:
     """Quadrature points every receiver shares (made as :func:`gather_point` makes them).
 
-    Columns ``0..n-1`` are the vertices, then ``len(rule_points)`` Dunavant points per triangle with
-    light at a corner (the first is the centroid), then the midpoints of the edges of those triangles.
-    ``within`` (triangle ids), when given, limits the triangles to those: the ones some receivers list,
-    so that a block of receivers holds the points of its neighbourhood only.
+    The columns are the corners of the triangles with light at a corner (``vertex_column`` maps a vertex to
+    its own), then ``len(rule_points)`` Dunavant points per such triangle (the first is the centroid), then the
+    midpoints of their edges. ``within`` (triangle ids), when given, limits the triangles to those: the ones
+    some receivers list, so that a block of receivers holds the points of its neighbourhood only, not a column
+    for every vertex of the mesh. ``maps`` (:func:`column_maps` of this light), when given, are filled for these
+    points and must be cleared (:meth:`ColumnMaps.clear`) before the next block's; else fresh ones are made.
     """
-    n = points.shape[0]
-    vertex_lit = phi.sum(axis=1) > 0
-    lit = vertex_lit[triangles].any(axis=1)
-    if within is not None:
-        listed = np.zeros(triangles.shape[0], dtype=bool)
-        listed[within] = True
-        lit &= listed
-    lit_triangles = np.flatnonzero(lit)
+    if maps is None:
+        maps = column_maps(phi, triangles.shape[0], tables.edges.shape[0])
+    if within is None:
+        candidates = np.arange(triangles.shape[0])
+    else:
+        maps.listed[within] = True
+        candidates = np.flatnonzero(maps.listed)
+    lit_triangles = candidates[maps.vertex_lit[triangles[candidates]].any(axis=1)]
+    corners = np.unique(triangles[lit_triangles])
+    vertex_column, first_rule, midpoint_column = maps.vertex_column, maps.first_rule, maps.midpoint_column
+    vertex_column[corners] = np.arange(corners.size)
+    n = corners.size
     n_rule = rule_points.shape[0]
-    first_rule = np.full(triangles.shape[0], -1, dtype=np.int64)
     first_rule[lit_triangles] = n + n_rule * np.arange(lit_triangles.size)
     lit_edges = np.unique(tables.edge_of_corner[lit_triangles])
     start_mid = n + n_rule * lit_triangles.size
-    midpoint_column = np.full(tables.edges.shape[0], -1, dtype=np.int64)
     midpoint_column[lit_edges] = start_mid + np.arange(lit_edges.size)
     size = start_mid + lit_edges.size
     table = np.zeros((9, size))
     weights = np.zeros((phi.shape[1], size))
-    table[0:3, :n] = points.T
-    table[3:6, :n] = normals.T
-    table[6:9, :n] = w12.T
-    weights[:, :n] = phi.T
+    table[0:3, :n] = points[corners].T
+    table[3:6, :n] = normals[corners].T
+    table[6:9, :n] = w12[corners].T
+    weights[:, :n] = phi[corners].T
     # an edge as a degenerate "triangle" (its two ends twice) interpolates as the edge does
-    edge_triangles = np.ascontiguousarray(tables.edges[lit_edges][:, [0, 1, 1]])
+    edge_triangles = np.ascontiguousarray(tables.edges[lit_edges][:, [0, 1, 1]], dtype=np.int64)
     for_ranges(
         _fill_shared_points,
         lit_triangles.size + edge_triangles.shape[0],
@@ -483,7 +555,20 @@ def source_point_table(
         n,
         start_mid,
     )
-    return SourcePoints(table, weights, vertex_lit, first_rule, midpoint_column)
+    return SourcePoints(
+        table,
+        weights,
+        maps.vertex_lit,
+        vertex_column,
+        n,
+        start_mid,
+        first_rule,
+        midpoint_column,
+        corners,
+        lit_triangles,
+        lit_edges,
+        candidates,
+    )
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
@@ -751,6 +836,7 @@ def near_field_correction(
     rule_weights=RULE_WEIGHTS,
     fan_nodes=(FAN_ANGULAR, FAN_RADIAL),
     refined_out=None,
+    maps: ColumnMaps | None = None,
 ):
     """Correction ``C[r, c]`` of the vertex sum for every receiver ``r`` (see the module docstring).
 
@@ -767,7 +853,8 @@ def near_field_correction(
     too, and over a triangle wider than a fraction of ``1 / sigma_tr`` faster than the rule follows).
     ``tables`` are the mesh's
     :class:`TriangleTables` (made here when not given). The shared points (:func:`source_point_table`) are
-    made here for the triangles these receivers list only, so that a call holds its neighbourhood's.
+    made here for the triangles these receivers list only, so that a call holds its neighbourhood's; ``maps``
+    (:func:`column_maps` of this light), when given, are used for them and left as they were on return.
     ``refined_out`` (n_receivers,) int64, when given, receives the number of each receiver's own points.
 
     Returns
@@ -793,6 +880,7 @@ def near_field_correction(
         rule_points,
         rule_weights,
         within=triangle_ids[offsets[0] : offsets[-1]],
+        maps=maps,
     )
     diameters, centroids = tables.diameters, tables.centroids
     lanes = channel_lanes(params, channel_of, phi.shape[1])
@@ -809,8 +897,9 @@ def near_field_correction(
     factors = np.empty(room)
     own = np.empty(0)
     ones = np.empty(0)
-    # receiver numbers and list slots (int32: half the memory of a pass that scales with the mesh)
-    stamps = np.full((thread_count(), 2 * (points.shape[0] + tables.edges.shape[0])), -1, dtype=np.int32)
+    # receiver numbers and list slots of the table's vertices and midpoints (int32: half the memory)
+    n_mid = shared.table.shape[1] - shared.first_mid
+    stamps = np.full((thread_count(), 2 * (shared.held + n_mid)), -1, dtype=np.int32)
     for start in starts:
         block = slice(start, min(n_r, start + BLOCK_RECEIVERS))
         rcv = receivers[block]
@@ -832,8 +921,11 @@ def near_field_correction(
             degree3_diameter,
             centroid_factor,
             shared.vertex_lit,
+            shared.vertex_column,
+            shared.held,
             shared.first_rule,
             shared.midpoint_column,
+            shared.first_mid,
             tables.edge_of_corner,
             diameters,
             centroids,
@@ -906,6 +998,8 @@ def near_field_correction(
             ones[:size],
             lanes,
         )
+    if maps is not None:  # the next block's (after an error, the solve and its maps are given up)
+        maps.clear(shared)
     return correction, n_points
 
 
@@ -931,8 +1025,11 @@ def _list_points(
     degree3_diameter,
     centroid_factor,
     vertex_lit,
+    vertex_column,
+    held,
     first_rule,
     midpoint_column,
+    first_mid,
     edge_of_corner,
     diameters,
     centroids,
@@ -949,18 +1046,19 @@ def _list_points(
     """Pass 1: per receiver, the shared-table points (vertex rule, whole triangles) and the number of
     points of its own quadrature (fan rule on its own triangles, refined pieces of the other close ones).
 
-    ``stamps`` (threads x (2 n + 2 e), -1 at first, kept across blocks) holds, per thread, which receiver
-    (``first_receiver + r``) last listed a vertex or an edge midpoint and where: allocating them per
-    block instead would cost a pass over memory proportional to the mesh for every chunk of receivers.
+    ``stamps`` (threads x (2 held + 2 midpoints), -1 at first, kept across blocks) holds, per thread, which
+    receiver (``first_receiver + r``) last listed a vertex or an edge midpoint of the table (by its column:
+    ``vertex_column[v]``, ``midpoint_column[e] - first_mid``) and where: allocating them per block instead would
+    cost a pass over memory proportional to the table for every chunk of receivers.
     """
-    n_v = points.shape[0]
+    n_v = held
     n_rule = RULE_POINTS.shape[0]
     # receivers lo .. hi - 1, with the scratch space and stamps of ``worker``
     stack = np.empty((3 * MAX_DEPTH + 8, 7))
     cx = np.empty((3, 3))
     none = np.empty((0, 7))
-    n_e = midpoint_column.shape[0]
     mine = stamps[worker]
+    n_e = mine.shape[0] // 2 - n_v
     owner = mine[:n_v]  # receiver that last listed a vertex
     slot = mine[n_v : 2 * n_v]  # its position in that receiver's list
     edge_owner = mine[2 * n_v : 2 * n_v + n_e]  # the same for edge midpoints
@@ -980,13 +1078,14 @@ def _list_points(
                 v = triangles[t, corner]
                 if not vertex_lit[v]:
                     continue
-                if owner[v] != me:
-                    owner[v] = me
-                    slot[v] = listed
-                    columns[base + listed] = v
+                cv = vertex_column[v]
+                if owner[cv] != me:
+                    owner[cv] = me
+                    slot[cv] = listed
+                    columns[base + listed] = cv
                     factors[base + listed] = 0.0
                     listed += 1
-                factors[base + slot[v]] -= third
+                factors[base + slot[cv]] -= third
             corner = corner_of(triangles[t], receivers[r])
             if corner >= 0:  # the receiver's own triangle: the fan rule
                 refined += fan_count(points, triangles[t], corner, beta * scale_min, fan_angular, fan_radial)
@@ -999,12 +1098,13 @@ def _list_points(
                 for corner in range(3):
                     v = triangles[t, corner]
                     if vertex_lit[v]:
-                        factors[base + slot[v]] += CORNER_WEIGHT * area
-                    e = edge_of_corner[t, corner]
+                        factors[base + slot[vertex_column[v]]] += CORNER_WEIGHT * area
+                    column = midpoint_column[edge_of_corner[t, corner]]
+                    e = column - first_mid
                     if edge_owner[e] != me:
                         edge_owner[e] = me
                         edge_slot[e] = listed
-                        columns[base + listed] = midpoint_column[e]
+                        columns[base + listed] = column
                         factors[base + listed] = 0.0
                         listed += 1
                     factors[base + edge_slot[e]] += MIDPOINT_WEIGHT * area

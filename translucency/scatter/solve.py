@@ -962,10 +962,11 @@ def _merge_stats(total: dict, part: dict) -> dict:
     return merged
 
 
-def _near_call(args, receivers, offsets, triangle_ids, own=None):
+def _near_call(args, receivers, offsets, triangle_ids, own=None, maps=None):
     """:func:`translucency.scatter.nearfield.near_field_correction` on some receivers with their lists; on the GPU
     where the solve's device is (:mod:`translucency.scatter.gpu.nearfield`, ``exact``'s rules), except for the
-    budget's sample, which counts each receiver's own points (``own``)."""
+    budget's sample, which counts each receiver's own points (``own``). ``maps``: the light's
+    :func:`~translucency.scatter.nearfield.column_maps`, shared by the blocks of a solve."""
     g = args["geometry"]
     common = (
         args["model_code"],
@@ -993,6 +994,7 @@ def _near_call(args, receivers, offsets, triangle_ids, own=None):
         degree3_ratio=args["degree3_ratio"],
         degree3_diameter=args["degree3_diameter"],
         refined_out=own,
+        maps=maps,
     )
 
 
@@ -1144,6 +1146,8 @@ def _near_blocks(args, inner, radius, plan, report):
     correction = np.zeros((n_r, args["phi"].shape[1]))
     total_triangles = total_points = 0
     list_seconds = 0.0
+    tables = nearfield.tables_of(geometry)
+    maps = nearfield.column_maps(args["phi"], geometry.triangles.shape[0], tables.edges.shape[0])
     start = time.perf_counter()
     if plan.keep_lists:
         offsets, triangle_ids = nearfield.lists_of(geometry, inner, radius)
@@ -1151,7 +1155,7 @@ def _near_blocks(args, inner, radius, plan, report):
         bounds = list(range(0, n_r, plan.block_receivers)) + [n_r]
         total_triangles = int(triangle_ids.size)
         for lo, hi in zip(bounds[:-1], bounds[1:]):
-            correction[lo:hi], points = _near_call(args, inner[lo:hi], offsets[lo : hi + 1], triangle_ids)
+            correction[lo:hi], points = _near_call(args, inner[lo:hi], offsets[lo : hi + 1], triangle_ids, maps=maps)
             total_points += int(points.sum())
             report("near field", hi / n_r)
         return correction, total_triangles, total_points, list_seconds
@@ -1172,7 +1176,7 @@ def _near_blocks(args, inner, radius, plan, report):
         start = time.perf_counter()
         offsets, triangle_ids = grid.lists(inner[lo:hi])
         list_seconds += time.perf_counter() - start
-        correction[lo:hi], points = _near_call(args, inner[lo:hi], offsets, triangle_ids)
+        correction[lo:hi], points = _near_call(args, inner[lo:hi], offsets, triangle_ids, maps=maps)
         total_triangles += int(triangle_ids.size)
         total_points += int(points.sum())
         del offsets, triangle_ids
