@@ -385,7 +385,8 @@ def atomic_file(path, *, keep_suffix: bool = False):
 
 
 def write_bytes(path, parts) -> Path:
-    """Write ``parts`` (bytes, or an iterable of bytes-like objects) to ``path`` atomically; returns it."""
+    """Write ``parts`` (bytes, or an iterable of bytes-like objects: a C-contiguous numpy array is written as its
+    bytes, without a copy) to ``path`` atomically; returns it."""
     if isinstance(parts, (bytes, bytearray, memoryview)):
         parts = [parts]
     with atomic_file(path) as temporary, open(temporary, "wb") as stream:

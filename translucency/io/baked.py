@@ -456,7 +456,7 @@ def write_baked_ply(
     faces["count"] = 3
     faces["vertex_indices"] = mesh.triangles.astype(np.int32)
 
-    write_bytes(path, [_ply_header(vertices, faces, comments), vertices.tobytes(), faces.tobytes()])
+    write_bytes(path, [_ply_header(vertices, faces, comments), vertices, faces])  # the records without a copy
     return path
 
 

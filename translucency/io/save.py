@@ -91,7 +91,7 @@ def save_mesh(path, mesh) -> Path:
     return path
 
 
-def _ply_bytes(mesh, suffix) -> list[bytes]:
+def _ply_bytes(mesh, suffix) -> list[bytes | np.ndarray]:
     """Binary little-endian PLY: x y z (double, mm), normals and colours when the mesh has them, triangles."""
     fields = [(axis, "<f8") for axis in "xyz"]
     columns = [mesh.points]
@@ -113,10 +113,10 @@ def _ply_bytes(mesh, suffix) -> list[bytes]:
     header = ["ply", "format binary_little_endian 1.0", f"element vertex {mesh.n_points}"]
     header += [f"property {types[vertices.dtype[name].str]} {name}" for name in vertices.dtype.names]
     header += [f"element face {mesh.n_triangles}", "property list uchar int vertex_indices", "end_header", ""]
-    return ["\n".join(header).encode("ascii"), vertices.tobytes(), faces.tobytes()]
+    return ["\n".join(header).encode("ascii"), vertices, faces]  # the records without a copy
 
 
-def _stl_bytes(mesh, suffix) -> list[bytes]:
+def _stl_bytes(mesh, suffix) -> list[bytes | np.ndarray]:
     """Binary STL: an 80-byte header, the triangle count, per triangle its unit normal and corners (mm)."""
     from ..geometry.measure import triangle_normals
 
@@ -126,7 +126,7 @@ def _stl_bytes(mesh, suffix) -> list[bytes]:
     records["normal"] = np.nan_to_num(triangle_normals(mesh.points, mesh.triangles))
     records["corners"] = mesh.points[mesh.triangles]
     header = b"translucency mesh, mm".ljust(80, b" ")
-    return [header, np.uint32(mesh.n_triangles).tobytes(), records.tobytes()]
+    return [header, np.uint32(mesh.n_triangles).tobytes(), records]
 
 
 def _obj_bytes(mesh, suffix) -> list[bytes]:
