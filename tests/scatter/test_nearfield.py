@@ -140,3 +140,50 @@ def test_one_grid_lists_blocks_of_receivers_as_one_call_lists_them_all():
         assert np.array_equal(np.diff(o), counts)
         for q, r in enumerate(block):
             assert np.array_equal(np.sort(i[o[q] : o[q + 1]]), np.sort(ids[offsets[r] : offsets[r + 1]]))
+
+
+def test_the_grid_starts_its_stamps_again_before_they_pass_int32():
+    """The stamps are int32: a grid listed near their largest value starts them again from -1 (a stamp that wrapped
+    would match an old one and drop triangles), with the same lists as a fresh grid."""
+    from translucency.geometry.synthetic import icosphere
+
+    points, triangles = icosphere(2, 5.0)
+    receivers = np.arange(len(points))
+    fresh = nearfield.near_grid(points, triangles, 1.5).lists(receivers)
+    grid = nearfield.near_grid(points, triangles, 1.5)
+    grid.lists(receivers)  # stamps set
+    grid.next_stamp = np.iinfo(grid.stamps.dtype).max - len(receivers) // 2
+    offsets, ids = grid.lists(receivers)
+    assert grid.next_stamp <= 2 * len(receivers)  # started again
+    assert np.array_equal(offsets, fresh[0]) and np.array_equal(ids, fresh[1])
+
+
+def test_blocks_that_share_the_column_maps_get_what_each_gets_alone_and_leave_them_clean():
+    """The near field's blocks share one light's column maps (vertex, triangle and edge to the columns of the
+    block's point table), each putting back what it set: the same correction as with fresh maps per block, and the
+    maps as made once every block is done."""
+    from translucency.geometry.measure import vertex_normals
+    from translucency.geometry.synthetic import icosphere
+    from translucency.scatter import kernels
+
+    points, triangles = icosphere(3, 4.0)
+    normals = vertex_normals(points, triangles)
+    areas = np.linalg.norm(np.cross(*(points[triangles[:, 1:]] - points[triangles[:, :1]]).transpose(1, 0, 2)), axis=1)
+    medium = material("marble").medium()
+    light = np.array([0.0, 0.0, 1.0])
+    cos = normals @ light
+    phi = np.repeat(np.where(cos > 0, cos, 0.0)[:, None], 3, axis=1)
+    w12 = fresnel.refract(np.broadcast_to(light, normals.shape), normals, medium.eta)
+    params = kernels.channel_parameters(medium.sigma_a, medium.sigma_s, medium.g, medium.eta)
+    tables = nearfield.triangle_tables(points, triangles)
+    maps = nearfield.column_maps(phi, len(triangles), len(tables.edges))
+    grid = nearfield.near_grid(points, triangles, 1.0)
+    for block in np.array_split(np.random.default_rng(3).permutation(len(points)), 5):
+        offsets, ids = grid.lists(block)
+        args = (0, points, triangles, 0.5 * areas, normals, w12, phi, block, offsets, ids, params, np.arange(3))
+        args += (1.5, float(np.min(medium.D)))
+        alone, _ = nearfield.near_field_correction(*args, tables=tables)
+        shared, _ = nearfield.near_field_correction(*args, tables=tables, maps=maps)
+        assert np.array_equal(alone, shared)
+    assert np.all(maps.vertex_column == -1) and np.all(maps.first_rule == -1)
+    assert np.all(maps.midpoint_column == -1) and not maps.listed.any()
