@@ -89,6 +89,9 @@ BYTES_PER_FAR_EVALUATION = 16 * 1024
 MIN_BLOCK_RECEIVERS = 16
 #: Near-field calls per solve when everything fits (the progress callback is called after each).
 PROGRESS_STEPS = 16
+#: Most receivers in a near-field call: its lists and its point table grow with it (about 1.5 kB a receiver on a
+#: fine scan), and a call of more saves no time.
+MAX_BLOCK_RECEIVERS = 128 * 2048
 #: Safety factor on the sampled per-receiver counts (blocks are sized on the sample's mean).
 SAMPLE_SAFETY = 1.5
 
@@ -260,7 +263,9 @@ def estimate(
         + table_per_receiver
     )
     steps = max(1, math.ceil(n_r / PROGRESS_STEPS))
-    usual = min(n_r, max(2048, -(-steps // 2048) * 2048))  # a multiple of the near field's own blocks
+    usual = min(
+        n_r, MAX_BLOCK_RECEIVERS, max(2048, -(-steps // 2048) * 2048)
+    )  # a multiple of the near field's own blocks
     keep_peak = base + max(far, lists + rim + per_receiver * usual)
     if keep_lists is None:  # kept for a later solve of the same receivers when they are small and fit
         keep_lists = lists <= KEPT_LISTS_BYTES and (budget_bytes is None or keep_peak <= budget_bytes)

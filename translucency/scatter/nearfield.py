@@ -43,7 +43,7 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-from ..geometry.measure import edge_lengths, triangle_centroids
+from ..geometry.measure import longest_edges, triangle_centroids
 from ..geometry.topology import unique_edges
 from ..threads import for_ranges, thread_count
 from .fits import QUADRATIC_TERMS, fitted_points, run_scratch
@@ -415,7 +415,7 @@ def triangle_tables(points, triangles) -> TriangleTables:
     edges, edge_of_corner = unique_edges(triangles)
     index = np.int32 if edges.shape[0] < 2**31 else np.int64  # half the bytes of two tables that span the mesh
     return TriangleTables(
-        edge_lengths(points, triangles).max(axis=1),
+        longest_edges(points, triangles),
         triangle_centroids(points, triangles),
         edges.astype(index),
         np.ascontiguousarray(edge_of_corner, dtype=index),

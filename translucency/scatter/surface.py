@@ -17,7 +17,7 @@ from functools import cached_property
 import numpy as np
 
 from ..errors import InvalidParameterError
-from ..geometry.measure import barycentric_vertex_areas, edge_lengths, mean_edge_length, row_lengths, triangle_areas
+from ..geometry.measure import barycentric_vertex_areas, longest_edges, mean_edge_length, row_lengths, triangle_areas
 from ..geometry.morton import by_lowest_vertex, morton_order
 
 __all__ = ["SurfaceGeometry", "PerSurface", "spatial_order", "held_bytes", "ordered_bytes", "checked_array"]
@@ -125,7 +125,7 @@ class SurfaceGeometry:
     @cached_property
     def longest_edge(self) -> float:
         """Longest edge length, mm (0 for a mesh with no triangles)."""
-        return float(edge_lengths(self.points, self.triangles).max(initial=0.0))
+        return float(longest_edges(self.points, self.triangles).max(initial=0.0))
 
 
 class PerSurface:
