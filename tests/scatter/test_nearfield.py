@@ -176,7 +176,7 @@ def test_blocks_that_share_the_column_maps_get_what_each_gets_alone_and_leave_th
     w12 = fresnel.refract(np.broadcast_to(light, normals.shape), normals, medium.eta)
     params = kernels.channel_parameters(medium.sigma_a, medium.sigma_s, medium.g, medium.eta)
     tables = nearfield.triangle_tables(points, triangles)
-    maps = nearfield.column_maps(phi, len(triangles), len(tables.edges))
+    maps = nearfield.column_maps(phi, len(triangles), tables.n_edges)
     grid = nearfield.near_grid(points, triangles, 1.0)
     for block in np.array_split(np.random.default_rng(3).permutation(len(points)), 5):
         offsets, ids = grid.lists(block)

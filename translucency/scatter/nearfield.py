@@ -159,11 +159,15 @@ def near_grid(points, triangles, radius) -> NearGrid:
     n = points.shape[0]
     # vertex -> incident triangles (CSR)
     corner_vertex = triangles.ravel()
-    # triangle numbers and stamps as int32 where they fit: with the sorted points they are most of the grid
-    index = np.int32 if triangles.shape[0] < 2**31 - 1 else np.int64
-    vt_tris = (np.argsort(corner_vertex, kind="stable") // 3).astype(index)
-    vt_offsets = np.zeros(n + 1, dtype=np.int64)
-    np.cumsum(np.bincount(corner_vertex, minlength=n), out=vt_offsets[1:])
+
+    # numbers of vertices, triangles and corners and the stamps as int32 where they fit: with the sorted points they
+    # are most of the grid
+    def index(count):
+        return np.int32 if count < 2**31 - 1 else np.int64
+
+    vt_tris = (np.argsort(corner_vertex, kind="stable") // 3).astype(index(triangles.shape[0]))
+    vt_offsets = np.zeros(n + 1, dtype=index(corner_vertex.size))
+    vt_offsets[1:] = np.cumsum(np.bincount(corner_vertex, minlength=n))
     # the grid: cells keyed by their integer coordinates, vertices sorted by key
     low = points.min(axis=0) if n else np.zeros(3)
     extent = float(np.ptp(points, axis=0).max()) if n else 0.0
@@ -181,7 +185,7 @@ def near_grid(points, triangles, radius) -> NearGrid:
         dims,
         cell_keys,
         cell_start,
-        by_key.astype(np.int64),
+        by_key.astype(index(n)),
         vt_offsets,
         vt_tris,
     )
@@ -398,7 +402,7 @@ class TriangleTables:
         Longest edge of each triangle, mm.
     centroids : (m, 3) float64
         Centroid of each triangle, mm.
-    edges : (e, 2) int32 (int64 from 2**31 edges)
+    n_edges : int
         Unique undirected edges.
     edge_of_corner : (m, 3) int32 (int64 from 2**31 edges)
         Edge from corner ``i`` to corner ``i + 1`` of each triangle.
@@ -406,18 +410,18 @@ class TriangleTables:
 
     diameters: np.ndarray
     centroids: np.ndarray
-    edges: np.ndarray
+    n_edges: int
     edge_of_corner: np.ndarray
 
 
 def triangle_tables(points, triangles) -> TriangleTables:
     """:class:`TriangleTables` of a mesh (``points`` in mm)."""
     edges, edge_of_corner = unique_edges(triangles)
-    index = np.int32 if edges.shape[0] < 2**31 else np.int64  # half the bytes of two tables that span the mesh
+    index = np.int32 if edges.shape[0] < 2**31 else np.int64  # half the bytes of a table that spans the mesh
     return TriangleTables(
         longest_edges(points, triangles),
         triangle_centroids(points, triangles),
-        edges.astype(index),
+        int(edges.shape[0]),
         np.ascontiguousarray(edge_of_corner, dtype=index),
     )
 
@@ -512,7 +516,7 @@ def source_point_table(
     points and must be cleared (:meth:`ColumnMaps.clear`) before the next block's; else fresh ones are made.
     """
     if maps is None:
-        maps = column_maps(phi, triangles.shape[0], tables.edges.shape[0])
+        maps = column_maps(phi, triangles.shape[0], tables.n_edges)
     if within is None:
         candidates = np.arange(triangles.shape[0])
     else:
@@ -525,7 +529,7 @@ def source_point_table(
     n = corners.size
     n_rule = rule_points.shape[0]
     first_rule[lit_triangles] = n + n_rule * np.arange(lit_triangles.size)
-    lit_edges = np.unique(tables.edge_of_corner[lit_triangles])
+    lit_edges, first = np.unique(tables.edge_of_corner[lit_triangles], return_index=True)
     start_mid = n + n_rule * lit_triangles.size
     midpoint_column[lit_edges] = start_mid + np.arange(lit_edges.size)
     size = start_mid + lit_edges.size
@@ -535,8 +539,12 @@ def source_point_table(
     table[3:6, :n] = normals[corners].T
     table[6:9, :n] = w12[corners].T
     weights[:, :n] = phi[corners].T
-    # an edge as a degenerate "triangle" (its two ends twice) interpolates as the edge does
-    edge_triangles = np.ascontiguousarray(tables.edges[lit_edges][:, [0, 1, 1]], dtype=np.int64)
+    # an edge as a degenerate "triangle" (its two ends twice, the smaller first) interpolates as the edge does; its
+    # ends from the first lit triangle with it
+    of, corner = np.divmod(first, 3)
+    ends = triangles[lit_triangles[of][:, None], np.column_stack([corner, (corner + 1) % 3])]
+    ends.sort(axis=1)
+    edge_triangles = np.ascontiguousarray(ends[:, [0, 1, 1]], dtype=np.int64)
     for_ranges(
         _fill_shared_points,
         lit_triangles.size + edge_triangles.shape[0],

@@ -1147,7 +1147,7 @@ def _near_blocks(args, inner, radius, plan, report):
     total_triangles = total_points = 0
     list_seconds = 0.0
     tables = nearfield.tables_of(geometry)
-    maps = nearfield.column_maps(args["phi"], geometry.triangles.shape[0], tables.edges.shape[0])
+    maps = nearfield.column_maps(args["phi"], geometry.triangles.shape[0], tables.n_edges)
     start = time.perf_counter()
     if plan.keep_lists:
         offsets, triangle_ids = nearfield.lists_of(geometry, inner, radius)
