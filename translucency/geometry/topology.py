@@ -169,7 +169,8 @@ def _unique_edges(triangles, n):
             larger[k] = max(a, b)
             slot_of[k] = 3 * t + i
     edge_of_slot = np.empty(3 * m, dtype=np.int64)
-    edges = np.empty((3 * m, 2), dtype=np.int64)
+    # edge ``e`` is (slot_of[e], larger[e]) once its bucket is done: written over entries already read (``e`` is never
+    # past the entry read), so no (3 m, 2) array of the corner edges is held
     count = 0
     for v in range(n):
         lo, hi = start[v], start[v + 1]
@@ -188,12 +189,16 @@ def _unique_edges(triangles, n):
                 larger[j + 1] = key
                 slot_of[j + 1] = slot
         for k in range(lo, hi):
+            slot = slot_of[k]
             if k == lo or larger[k] != larger[k - 1]:
-                edges[count, 0] = v
-                edges[count, 1] = larger[k]
+                larger[count] = larger[k]
+                slot_of[count] = v
                 count += 1
-            edge_of_slot[slot_of[k]] = count - 1
-    return edges[:count].copy(), edge_of_slot
+            edge_of_slot[slot] = count - 1
+    edges = np.empty((count, 2), dtype=np.int64)
+    edges[:, 0] = slot_of[:count]
+    edges[:, 1] = larger[:count]
+    return edges, edge_of_slot
 
 
 @numba.njit(cache=True, inline="always")
