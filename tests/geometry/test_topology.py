@@ -108,3 +108,17 @@ def test_first_at_same_position_matches_numpy_unique_on_the_bytes():
     assert np.array_equal(first_at_same_position(points), first[inverse.ravel()])
     distinct = rng.normal(size=(1000, 3))
     assert np.array_equal(first_at_same_position(distinct), np.arange(1000))
+
+
+def test_corner_edge_numbers_are_unique_edges_numbers_in_int32():
+    """The near field's tables take only the corners' edge numbers and their count: the same as unique_edges', in
+    int32 (edges counted against a set of vertex pairs)."""
+    from translucency.geometry.topology import corner_edge_numbers, unique_edges
+
+    rng = np.random.default_rng(4)
+    triangles = rng.integers(0, 60, size=(400, 3))
+    numbers, count = corner_edge_numbers(triangles)
+    edges, expected = unique_edges(triangles)
+    assert numbers.dtype == np.int32 and np.array_equal(numbers, expected)
+    pairs = {tuple(sorted((int(t[i]), int(t[(i + 1) % 3])))) for t in triangles for i in range(3)}
+    assert count == len(edges) == len(pairs)

@@ -20,6 +20,7 @@ __all__ = [
     "CLEANING_KERNELS",
     "kernel_array",
     "unique_edges",
+    "corner_edge_numbers",
     "face_components",
     "manifold_pairs",
     "boundary_loops",
@@ -51,10 +52,25 @@ def unique_edges(triangles) -> tuple[np.ndarray, np.ndarray]:
     edge_of_corner : ndarray, shape (m, 3), int64
         ``edges[edge_of_corner[t, i]]`` is the edge from corner i to corner i+1 of triangle t.
     """
-    triangles = kernel_array(np.asarray(triangles, dtype=np.int64).reshape(-1, 3), np.int64)
-    n = int(triangles.max()) + 1 if triangles.size else 1
-    edges, edge_of_slot = _unique_edges(triangles, n)
+    count, larger, smaller, edge_of_slot = _numbered_edges(*_edge_inputs(triangles), np.empty(0, dtype=np.int64))
+    edges = np.empty((count, 2), dtype=np.int64)
+    edges[:, 0], edges[:, 1] = smaller[:count], larger[:count]
     return edges, edge_of_slot.reshape(-1, 3)
+
+
+def corner_edge_numbers(triangles) -> tuple[np.ndarray, int]:
+    """:func:`unique_edges`' ``edge_of_corner`` and the number of edges, without the edges: int32 where the corners
+    are fewer than 2**31 (a third of the memory :func:`unique_edges` holds while it counts)."""
+    triangles, n = _edge_inputs(triangles)
+    index = np.int32 if max(3 * triangles.shape[0], n) < 2**31 - 1 else np.int64
+    count, _, _, edge_of_slot = _numbered_edges(triangles, n, np.empty(0, dtype=index))
+    return edge_of_slot.reshape(-1, 3), int(count)
+
+
+def _edge_inputs(triangles):
+    """``(triangles as the kernels take them, number of vertices they index)``."""
+    triangles = kernel_array(np.asarray(triangles, dtype=np.int64).reshape(-1, 3), np.int64)
+    return triangles, int(triangles.max()) + 1 if triangles.size else 1
 
 
 def duplicate_triangles(triangles) -> np.ndarray:
@@ -148,9 +164,10 @@ _INSERTION_SORT_LIMIT = 32
 
 
 @numba.njit(cache=True)
-def _unique_edges(triangles, n):
+def _numbered_edges(triangles, n, like):
     """:func:`unique_edges`: the corner edges counted into buckets by their smaller vertex, each bucket sorted
-    by the larger one, numbered in that order."""
+    by the larger one, numbered in that order. Returns ``(count, larger, smaller, edge_of_slot)``: edge ``e <
+    count`` is ``(smaller[e], larger[e])``; the numbers in ``like``'s integer type."""
     m = triangles.shape[0]
     start = np.zeros(n + 1, dtype=np.int64)
     for t in range(m):
@@ -159,8 +176,8 @@ def _unique_edges(triangles, n):
     for v in range(n):
         start[v + 1] += start[v]
     fill = start[:-1].copy()
-    larger = np.empty(3 * m, dtype=np.int64)
-    slot_of = np.empty(3 * m, dtype=np.int64)
+    larger = np.empty(3 * m, dtype=like.dtype)
+    slot_of = np.empty(3 * m, dtype=like.dtype)
     for t in range(m):
         for i in range(3):
             a, b = triangles[t, i], triangles[t, (i + 1) % 3]
@@ -168,7 +185,7 @@ def _unique_edges(triangles, n):
             fill[min(a, b)] += 1
             larger[k] = max(a, b)
             slot_of[k] = 3 * t + i
-    edge_of_slot = np.empty(3 * m, dtype=np.int64)
+    edge_of_slot = np.empty(3 * m, dtype=like.dtype)
     # edge ``e`` is (slot_of[e], larger[e]) once its bucket is done: written over entries already read (``e`` is never
     # past the entry read), so no (3 m, 2) array of the corner edges is held
     count = 0
@@ -195,10 +212,7 @@ def _unique_edges(triangles, n):
                 slot_of[count] = v
                 count += 1
             edge_of_slot[slot] = count - 1
-    edges = np.empty((count, 2), dtype=np.int64)
-    edges[:, 0] = slot_of[:count]
-    edges[:, 1] = larger[:count]
-    return edges, edge_of_slot
+    return count, larger, slot_of, edge_of_slot
 
 
 @numba.njit(cache=True, inline="always")
@@ -369,7 +383,7 @@ def _non_manifold_vertices(pairs, corner_vertex, n):
 #: compiles each on first use; the set-up compiles them ahead
 #: (:mod:`translucency.app.warmup`).
 CLEANING_KERNELS = (
-    _unique_edges,
+    _numbered_edges,
     _manifold_pairs,
     _face_components,
     _non_manifold_vertices,

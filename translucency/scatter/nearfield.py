@@ -44,7 +44,7 @@ import numba
 import numpy as np
 
 from ..geometry.measure import longest_edges, triangle_centroids
-from ..geometry.topology import unique_edges
+from ..geometry.topology import corner_edge_numbers
 from ..threads import for_ranges, thread_count
 from .fits import QUADRATIC_TERMS, fitted_points, run_scratch
 from .kernels import channel_lanes, indexed_sum
@@ -416,13 +416,12 @@ class TriangleTables:
 
 def triangle_tables(points, triangles) -> TriangleTables:
     """:class:`TriangleTables` of a mesh (``points`` in mm)."""
-    edges, edge_of_corner = unique_edges(triangles)
-    index = np.int32 if edges.shape[0] < 2**31 else np.int64  # half the bytes of a table that spans the mesh
+    edge_of_corner, n_edges = corner_edge_numbers(triangles)  # int32 where it fits: it spans the mesh
     return TriangleTables(
         longest_edges(points, triangles),
         triangle_centroids(points, triangles),
-        int(edges.shape[0]),
-        np.ascontiguousarray(edge_of_corner, dtype=index),
+        n_edges,
+        edge_of_corner,
     )
 
 
