@@ -403,7 +403,7 @@ class TriangleTables:
     centroids : (m, 3) float64
         Centroid of each triangle, mm.
     n_edges : int
-        Unique undirected edges.
+        Number of unique undirected edges.
     edge_of_corner : (m, 3) int32 (int64 from 2**31 edges)
         Edge from corner ``i`` to corner ``i + 1`` of each triangle.
     """
