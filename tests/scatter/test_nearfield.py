@@ -187,3 +187,7 @@ def test_blocks_that_share_the_column_maps_get_what_each_gets_alone_and_leave_th
         assert np.array_equal(alone, shared)
     assert np.all(maps.vertex_column == -1) and np.all(maps.first_rule == -1)
     assert np.all(maps.midpoint_column == -1) and not maps.listed.any()
+    # maps a block left set (an error between setting and clearing) are refused, not read
+    nearfield.source_point_table(points, normals, w12, phi, triangles, 0.5 * areas, tables, within=ids, maps=maps)
+    with pytest.raises(RuntimeError, match="not cleared"):
+        nearfield.near_field_correction(*args, tables=tables, maps=maps)

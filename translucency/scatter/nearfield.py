@@ -463,6 +463,9 @@ class ColumnMaps:
         As in :class:`SourcePoints`; -1 outside a block.
     listed : (m,) bool
         The triangles a block's receivers list; False outside a block.
+    busy : bool
+        A block's entries are set and not yet put back (a block given busy maps is refused: their stale entries
+        would point into another block's table).
     """
 
     vertex_lit: np.ndarray
@@ -470,6 +473,7 @@ class ColumnMaps:
     first_rule: np.ndarray
     midpoint_column: np.ndarray
     listed: np.ndarray
+    busy: bool = False
 
     def clear(self, shared: SourcePoints) -> None:
         """Put back the entries a block's ``shared`` points set (their cost is the block's, not the mesh's)."""
@@ -477,6 +481,7 @@ class ColumnMaps:
         self.first_rule[shared.lit_triangles] = -1
         self.midpoint_column[shared.lit_edges] = -1
         self.listed[shared.candidates] = False
+        self.busy = False
 
 
 def column_maps(phi, n_triangles: int, n_edges: int) -> ColumnMaps:
@@ -516,6 +521,9 @@ def source_point_table(
     """
     if maps is None:
         maps = column_maps(phi, triangles.shape[0], tables.n_edges)
+    if maps.busy:
+        raise RuntimeError("the near field's column maps still hold an earlier block's entries (not cleared).")
+    maps.busy = True
     if within is None:
         candidates = np.arange(triangles.shape[0])
     else:
