@@ -35,18 +35,22 @@ def test_every_node_splits_its_points_at_the_median_of_its_longest_axis(n):
         assert lower.max() <= upper.min()
 
 
-def _walk_by_definition(tree, node_flux, lit, centre, spread, rule, allow=None):
+def _walk_by_definition(tree, node_flux, lit, centre, spread, rule, allow=None, reach=np.inf, listed=None):
     """Sources plus clusters one group (a sphere: ``centre``, ``spread``, mm) evaluates, walked node by node
-    as :class:`~translucency.scatter.hierarchy.Opening` defines it (``allow`` per channel, None: no limit)."""
+    as :class:`~translucency.scatter.hierarchy.Opening` defines it (``allow`` per channel, None: no limit; nodes
+    beyond ``reach`` skipped); ``listed``, a list, receives the columns (source ``j``, cluster ``n + node``)."""
     from translucency.scatter.cutoff import pair_bound
 
-    count, stack = 0, [0]
+    listed = [] if listed is None else listed
+    stack = [0]
     while stack:
         k = stack.pop()
         if node_flux[k].sum() <= 0:
             continue
         near = np.linalg.norm(centre - tree.centre[k]) - spread
         r = tree.radius[k]
+        if near > reach + r:
+            continue
         accept = near > r + rule.min_distance and r < rule.theta * near
         if accept and allow is not None:
             # the bound at the table's distance at or below near - r (the table is log-spaced)
@@ -56,12 +60,13 @@ def _walk_by_definition(tree, node_flux, lit, centre, spread, rule, allow=None):
             error = r**2 * (1.0 / near**2 + MARBLE.sigma_tr**2) * node_flux[k] * bound
             accept = bool(np.all(error <= allow))
         if accept:
-            count += 1
+            listed.append(lit.size + k)
         elif tree.left[k] < 0:
-            count += int(lit[tree.order[tree.start[k] : tree.end[k]]].sum())
+            members = tree.order[tree.start[k] : tree.end[k]]
+            listed.extend(members[lit[members]].tolist())
         else:
             stack += [tree.left[k], tree.right[k]]
-    return count
+    return len(listed)
 
 
 def _lit_sphere(n=3000, seed=5):
@@ -75,7 +80,8 @@ def _lit_sphere(n=3000, seed=5):
 def test_both_walks_list_what_their_definition_lists():
     """The first walk (opening ratio and distance) and the second (the aggregate's error within each group's
     allowance) count, per group, the sources and clusters of the criterion's definition."""
-    from translucency.scatter.hierarchy import GROUP_RECEIVERS, node_sums, opening, walk_lists
+    from translucency.scatter.hierarchy import node_sums, opening
+    from translucency.scatter.treewalk import GROUP_RECEIVERS, walk_lists
 
     rng, points, _, flux = _lit_sphere()
     tree = SourceTree(points)
@@ -95,6 +101,37 @@ def test_both_walks_list_what_their_definition_lists():
         assert first[1][k] + first[2][k] == _walk_by_definition(tree, node_flux, lit, centre, spread, rule)
         assert second[1][k] + second[2][k] == _walk_by_definition(tree, node_flux, lit, centre, spread, rule, least)
     assert second[2].sum() < first[2].sum()  # the allowance opened clusters the first walk took
+
+
+@pytest.mark.parametrize("reach", [np.inf, 12.0])
+def test_groups_that_share_their_walk_list_what_each_lists_alone(reach):
+    """Runs of neighbouring groups decide together what each of their groups would decide alike
+    (:func:`~translucency.scatter.hierarchy.shared_walks`): every group's list holds the sources and clusters of the
+    criterion's definition for that group alone, with allowances that vary from receiver to receiver and nodes
+    skipped beyond a reach."""
+    from translucency.geometry.morton import morton_order
+    from translucency.scatter.hierarchy import node_sums, opening
+    from translucency.scatter.treewalk import GROUP_RECEIVERS, walk_lists
+
+    rng, points, _, flux = _lit_sphere(6000, seed=9)
+    tree = SourceTree(points)
+    rule = opening(MARBLE, "directional", 0.01)
+    node_flux = node_sums(tree, flux)
+    lit = flux.sum(axis=1) > 0
+    receivers = points[morton_order(points)][::7]  # neighbours follow each other, as the solver orders them
+    n = receivers.shape[0]
+    allow = 10.0 ** rng.uniform(-7.0, -5.0, (n, 3)) * (1.0 + (receivers[:, 2:3] < 0) * 1e-3)  # the dark side: less
+    for limit in (None, allow):
+        starts, direct, clustered, columns = walk_lists(tree, node_flux, lit, receivers, rule, limit, reach)
+        for g, first in enumerate(range(0, n, GROUP_RECEIVERS)):
+            members = receivers[np.minimum(np.arange(first, first + GROUP_RECEIVERS), n - 1)]  # the last repeated
+            centre = members.mean(axis=0)
+            spread = np.linalg.norm(members - centre, axis=1).max()
+            least = None if limit is None else limit[first : first + GROUP_RECEIVERS].min(axis=0)
+            expected = []
+            _walk_by_definition(tree, node_flux, lit, centre, spread, rule, least, reach, expected)
+            got = columns[starts[g] : starts[g] + direct[g] + clustered[g]]
+            assert np.array_equal(np.sort(got), np.sort(expected)), g
 
 
 def test_the_budget_counts_what_the_tree_sum_evaluates():

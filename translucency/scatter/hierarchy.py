@@ -32,15 +32,10 @@ import numba
 import numpy as np
 
 from ..geometry.topology import kernel_array
-from ..threads import for_ranges
 from .surface import PerSurface
+from .treewalk import GROUP_RECEIVERS, walk_lists
 
 LEAF_SIZE = 8
-#: Receivers that share one walk of the tree (consecutive along the solver's space-filling curve).
-#: The group's bounding sphere is tested, which is conservative for each member, so a group reaches the error
-#: of single receivers with a larger theta and in less far-field time; larger groups evaluate more clusters
-#: than the shared walk saves (bench/README.md, "Kernel throughput").
-GROUP_RECEIVERS = 4
 #: The largest opening ratio (radius over distance) of a cluster, and the first estimate's (docs/physics.md §8.3).
 THETA_MAX = 0.5
 #: A node's aggregate may err by EPS_PER_TOL * tol of each receiver's estimated B (its bound, which is far above
@@ -373,7 +368,7 @@ class Opening:
     curvature: np.ndarray
 
     def kernel_arguments(self):
-        """The fields as :func:`_traverse` takes them."""
+        """The fields as :func:`~translucency.scatter.treewalk.walk_lists` hands them to its kernel (one tuple)."""
         return self.theta, self.min_distance, self.bound, self.log_first, self.per_log, self.curvature
 
 
@@ -395,69 +390,6 @@ def opening(medium, model: str, tol: float) -> Opening:
         per_log=(steps - 1) / (log_last - log_first),
         curvature=np.ascontiguousarray(np.asarray(medium.sigma_tr, dtype=np.float64) ** 2),
     )
-
-
-def group_spheres(rcv_points, group):
-    """Each group's bounding sphere (centre, radius; mm) and its members' rows (the last group repeats its last
-    receiver)."""
-    n_rcv = rcv_points.shape[0]
-    n_groups = -(-n_rcv // group)
-    members = np.minimum(np.arange(n_groups * group).reshape(n_groups, group), n_rcv - 1)
-    centre = rcv_points[members].mean(axis=1)
-    spread = np.linalg.norm(rcv_points[members] - centre[:, None, :], axis=2).max(axis=1)
-    return centre, spread, members
-
-
-def walk_lists(
-    tree, node_flux, lit, rcv_points, rule: Opening, allow=None, reach=math.inf, group=GROUP_RECEIVERS, count_only=False
-):
-    """The tree walk of :func:`tree_sum` on its own: for every group of ``group`` consecutive receivers
-    (positions mm), the sources and clusters it evaluates under ``rule`` (:class:`Opening`), each node's
-    aggregate error held to the group's ``allow`` (``(n_rcv, C)``, the least of its members; None: no limit,
-    the first estimate's walk).
-
-    Nodes without flux (``node_flux (nodes, C)``) are skipped, and only sources with ``lit`` are listed. Returns
-    ``(starts, direct, clustered, columns)``: the group's list is ``columns[starts[g] : starts[g] + direct[g]
-    + clustered[g]]``, entries ``j < n`` source ``j`` and ``n + k`` node ``k``'s cluster (``count_only``: the
-    counts only, ``columns`` empty).
-    """
-    centre, spread, members = group_spheres(rcv_points, group)
-    n_groups = centre.shape[0]
-    if allow is None:
-        limit = np.full((n_groups, node_flux.shape[1]), np.inf)
-    else:
-        limit = np.ascontiguousarray(np.asarray(allow, dtype=np.float64)[members].min(axis=1))
-    g_direct = np.zeros(n_groups, dtype=np.int64)
-    g_clustered = np.zeros(n_groups, dtype=np.int64)
-    walk = (
-        tree.order,
-        tree.start,
-        tree.end,
-        tree.left,
-        tree.right,
-        tree.centre,
-        tree.radius,
-        node_flux,
-        lit,
-        centre,
-        spread,
-        limit,
-        reach,
-        *rule.kernel_arguments(),
-    )
-    pieces = {}  # each range's list, by its first group (one pass: each range grows its own list)
-
-    def walk_range(worker, lo, hi):
-        pieces[lo] = _traverse(lo, hi, *walk, g_direct, g_clustered)
-
-    for_ranges(walk_range, n_groups)
-    g_counts = g_direct + g_clustered
-    g_starts = np.zeros(n_groups, dtype=np.int64)
-    np.cumsum(g_counts[:-1], out=g_starts[1:])
-    if count_only or not pieces:
-        return g_starts, g_direct, g_clustered, np.empty(0, dtype=np.int64)
-    columns = np.concatenate([pieces[lo] for lo in sorted(pieces)])
-    return g_starts, g_direct, g_clustered, columns
 
 
 def allowance(B_est, floor, eps) -> np.ndarray:
@@ -601,128 +533,10 @@ def sampled_evaluations(model, tree, points, normals, w12, flux, rcv, bright, pa
     return np.repeat(first + direct + clustered, GROUP_RECEIVERS)[: rcv.size]
 
 
-@numba.njit(cache=True, inline="always", error_model="numpy")
-def small_and_far(near, radius, theta2, min_distance):
-    """Whether a node of bounding ``radius`` whose centre is ``near`` from a group of receivers (mm) may be one cluster
-    for it: farther than ``min_distance`` from the node's sphere and ``radius < theta * near`` (``theta2 = theta^2``;
-    :class:`Opening`, docs/physics.md §8.3)."""
-    return near > radius + min_distance and radius * radius < theta2 * near * near
-
-
-@numba.njit(cache=True, inline="always", error_model="numpy")
-def bound_index(distance, log_first, per_log, n_bound):
-    """The entry of :class:`Opening`'s table of the pair bound at the nearest tabulated distance below ``distance``
-    (mm), within the table."""
-    return min(max(int((math.log(distance) - log_first) * per_log), 0), n_bound - 1)
-
-
-@numba.njit(cache=True, inline="always", error_model="numpy")
-def aggregate_error(near, radius, curvature, flux, pair_bound):
-    """The bound of one channel's error of a node's aggregate (:class:`Opening`): ``radius^2 (1 / near^2 +
-    curvature) flux pair_bound``, with ``near`` its centre's distance from the receivers (mm), ``curvature`` =
-    ``sigma_tr^2`` (1/mm^2), its ``flux`` and the pair bound at its nearest point (1/(mm^2 sr))."""
-    return (radius * radius / (near * near) + radius * radius * curvature) * flux * pair_bound
-
-
-@numba.njit(cache=True, nogil=True, error_model="numpy")
-def _traverse(
-    lo,
-    hi,
-    order,
-    start,
-    end,
-    left,
-    right,
-    centre,
-    radius,
-    node_flux,
-    lit,
-    rcv_points,
-    rcv_spread,
-    allow,
-    reach,
-    theta,
-    min_distance,
-    bound,
-    log_first,
-    per_log,
-    curvature,
-    direct,
-    clustered,
-):
-    """Walk the tree for groups ``lo .. hi - 1`` of receivers (a sphere: ``rcv_points`` centres, ``rcv_spread``
-    radii, mm): count the lit sources and clusters each evaluates into ``direct`` and ``clustered``, and return
-    their columns (source ``j`` or ``n + node``), group after group, in one array that grows as it fills. A
-    node is a cluster when the sphere is outside the node's and ``radius < theta * (distance - spread)`` (then
-    ``radius < theta * distance`` for every point of the sphere), and its aggregate's error bound
-    (:class:`Opening`) at the sphere's nearest point is within ``allow[o]`` in every channel."""
-    n_src = lit.shape[0]
-    n_c = node_flux.shape[1]
-    n_bound = bound.shape[1]
-    theta2 = theta * theta
-    columns = np.empty(max(1024, 256 * (hi - lo)), dtype=np.int64)
-    at = 0
-    stack = np.empty(128, dtype=np.int64)
-    for o in range(lo, hi):
-        top = 1
-        stack[0] = 0
-        px = rcv_points[o, 0]
-        py = rcv_points[o, 1]
-        pz = rcv_points[o, 2]
-        n_direct = 0
-        n_cluster = 0
-        while top > 0:
-            top -= 1
-            k = stack[top]
-            weight = 0.0
-            for c in range(n_c):
-                weight += node_flux[k, c]
-            if weight <= 0.0:
-                continue
-            dx = px - centre[k, 0]
-            dy = py - centre[k, 1]
-            dz = pz - centre[k, 2]
-            rk = radius[k]
-            near = math.sqrt(dx * dx + dy * dy + dz * dz) - rcv_spread[o]  # the group's closest distance to the centre
-            if near > reach + rk:  # wholly beyond the cutoff radius
-                continue
-            accept = small_and_far(near, rk, theta2, min_distance)
-            if accept:
-                at_bound = bound_index(near - rk, log_first, per_log, n_bound)
-                for c in range(n_c):
-                    if aggregate_error(near, rk, curvature[c], node_flux[k, c], bound[c, at_bound]) > allow[o, c]:
-                        accept = False
-                        break
-            listed = 1 if accept else (end[k] - start[k] if left[k] < 0 else 0)  # entries this node may write
-            if at + listed > columns.shape[0]:
-                grown = np.empty(2 * columns.shape[0] + listed, dtype=np.int64)
-                grown[:at] = columns[:at]
-                columns = grown
-            if accept:
-                columns[at] = n_src + k
-                at += 1
-                n_cluster += 1
-            elif left[k] < 0:
-                for i in range(start[k], end[k]):
-                    j = order[i]
-                    if lit[j]:
-                        columns[at] = j
-                        at += 1
-                        n_direct += 1
-            else:
-                stack[top] = left[k]
-                stack[top + 1] = right[k]
-                top += 2
-        direct[o] = n_direct
-        clustered[o] = n_cluster
-    return columns[:at]
-
-
 #: The compiled kernels of the source tree's build and traversal: numba compiles each on first use; the set-up compiles
 #: them ahead
 #: (:mod:`translucency.app.warmup`).
 TREE_KERNELS = (
-    _traverse,
     _build,
     _boxes,
     _leaf_sums,

@@ -32,11 +32,11 @@ import numpy as np
 
 from ..errors import BudgetError, TranslucencyError, option, warn_user
 from .budget import format_bytes, format_seconds
-from .hierarchy import GROUP_RECEIVERS
 from .irradiance import IncidentLight, carried_light, incident_flux
 from .names import DEFAULT_DEVICE
 from .solve import Solution, solve
 from .surface import SurfaceGeometry, spatial_order
+from .treewalk import GROUP_RECEIVERS
 from .visibility import VisibilityCache
 
 __all__ = [

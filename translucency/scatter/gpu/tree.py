@@ -1,10 +1,10 @@
 """Method ``tree`` on an NVIDIA GPU: the walk of the source tree and its sum in one kernel (docs/physics.md §8.3).
 
-The CPU lists what each group of receivers evaluates (:func:`~translucency.scatter.hierarchy.walk_lists`) and sums
+The CPU lists what each group of receivers evaluates (:func:`~translucency.scatter.treewalk.walk_lists`) and sums
 the lists (:func:`~translucency.scatter.kernels.grouped_sum`). A GPU thread cannot grow a list, so each thread walks
 the tree for its receiver's group and sums each source or cluster at its receiver as the walk meets it. The walk's
-tests are the CPU's own (:func:`~translucency.scatter.hierarchy.small_and_far`,
-:func:`~translucency.scatter.hierarchy.bound_index`, :func:`~translucency.scatter.hierarchy.aggregate_error`) and so
+tests are the CPU's own (:func:`~translucency.scatter.treewalk.small_and_far`,
+:func:`~translucency.scatter.treewalk.bound_index`, :func:`~translucency.scatter.treewalk.aggregate_error`) and so
 is a pair's sum (:func:`~translucency.scatter.kernels.weighted_pair`), so the GPU evaluates what the CPU evaluates,
 in float64, only in another order. The receivers of a group are neighbouring threads and walk alike, so a warp's
 threads mostly take the same branches.
@@ -24,7 +24,7 @@ import math
 import numpy as np
 from numba import cuda, int64
 
-from .. import hierarchy, kernels
+from .. import kernels, treewalk
 from .compiled import for_the_device, lane_groups, to_device
 from .probe import said_plainly
 
@@ -32,9 +32,9 @@ __all__ = ["WalkedSums"]
 
 
 _pair = for_the_device(kernels.weighted_pair)
-_small_and_far = for_the_device(hierarchy.small_and_far)
-_bound_index = for_the_device(hierarchy.bound_index)
-_aggregate_error = for_the_device(hierarchy.aggregate_error)
+_small_and_far = for_the_device(treewalk.small_and_far)
+_bound_index = for_the_device(treewalk.bound_index)
+_aggregate_error = for_the_device(treewalk.aggregate_error)
 _table_rows = for_the_device(kernels.table_rows)
 #: Threads per block.
 THREADS = 128
@@ -154,9 +154,9 @@ class WalkedSums:
     #: Receivers per call of :func:`~translucency.scatter.hierarchy.tree_sum`: about 100 bytes each on the device
     #: (points, normals, the group's sphere and allowance, ``B`` of three lanes, the counts), 400 MB.
     block = 1 << 22
-    #: Receivers that share a walk: the CPU's (:data:`~translucency.scatter.hierarchy.GROUP_RECEIVERS`). A warp's 32
+    #: Receivers that share a walk: the CPU's (:data:`~translucency.scatter.treewalk.GROUP_RECEIVERS`). A warp's 32
     #: threads walk 32 / ``group`` trees; larger groups walk alike but evaluate more (bench/gpu.py tries 4 to 32).
-    group = hierarchy.GROUP_RECEIVERS
+    group = treewalk.GROUP_RECEIVERS
 
     @said_plainly
     def __init__(self, model, tree, sources, params, channel_of, rule, reach=math.inf):
@@ -197,7 +197,7 @@ class WalkedSums:
         if n_rcv == 0:
             empty = np.zeros(0, dtype=np.int64)
             return np.zeros((0, self.n_out)), empty, empty
-        centre, spread, members = hierarchy.group_spheres(rcv_points, group)
+        centre, spread, members = treewalk.group_spheres(rcv_points, group)
         if allow is None:
             limit = np.full((centre.shape[0], self.n_out), np.inf)
         else:
