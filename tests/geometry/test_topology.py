@@ -12,6 +12,7 @@ from translucency.geometry.topology import (
     duplicate_triangles,
     face_components,
     first_at_same_position,
+    index_dtype,
     unique_edges,
 )
 
@@ -122,3 +123,11 @@ def test_corner_edge_numbers_are_unique_edges_numbers_in_int32():
     assert numbers.dtype == np.int32 and np.array_equal(numbers, expected)
     pairs = {tuple(sorted((int(t[i]), int(t[(i + 1) % 3])))) for t in triangles for i in range(3)}
     assert count == len(edges) == len(pairs)
+
+
+def test_index_dtype_is_int32_while_every_number_fits_it():
+    """Numbers ``0 .. count - 1`` are stored in int32 while ``count - 1`` is below int32's largest value (with one to
+    spare), in int64 from there on."""
+    largest = np.iinfo(np.int32).max
+    assert index_dtype(0) is np.int32 and index_dtype(largest - 1) is np.int32
+    assert index_dtype(largest) is np.int64 and index_dtype(3 * largest) is np.int64

@@ -38,6 +38,12 @@ def kernel_array(values, dtype) -> np.ndarray:
     return array
 
 
+def index_dtype(count: int):
+    """The integer type of the numbers ``0 .. count - 1`` in the kernels' tables: int32 where they fit (half the
+    memory of int64), int64 from 2**31 - 1 on."""
+    return np.int32 if count < 2**31 - 1 else np.int64
+
+
 def unique_edges(triangles) -> tuple[np.ndarray, np.ndarray]:
     """Undirected edges of a triangle list and, for each triangle corner edge, its edge number.
 
@@ -62,7 +68,7 @@ def corner_edge_numbers(triangles) -> tuple[np.ndarray, int]:
     """:func:`unique_edges`' ``edge_of_corner`` and the number of edges, without the edges: int32 where the corners
     are fewer than 2**31 (a third of the memory :func:`unique_edges` holds while it counts)."""
     triangles, n = _edge_inputs(triangles)
-    index = np.int32 if max(3 * triangles.shape[0], n) < 2**31 - 1 else np.int64
+    index = index_dtype(max(3 * triangles.shape[0], n))
     count, _, _, edge_of_slot = _numbered_edges(triangles, n, np.empty(0, dtype=index))
     return edge_of_slot.reshape(-1, 3), int(count)
 

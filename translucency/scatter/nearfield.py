@@ -44,7 +44,7 @@ import numba
 import numpy as np
 
 from ..geometry.measure import longest_edges, triangle_centroids
-from ..geometry.topology import corner_edge_numbers
+from ..geometry.topology import corner_edge_numbers, index_dtype
 from ..threads import for_ranges, thread_count
 from .fits import QUADRATIC_TERMS, fitted_points, run_scratch
 from .kernels import channel_lanes, indexed_sum
@@ -115,7 +115,7 @@ class NearGrid:
         counts = self.counts(receivers)
         offsets = np.zeros(counts.size + 1, dtype=np.int64)
         np.cumsum(counts, out=offsets[1:])
-        triangle_ids = np.empty(offsets[-1], dtype=np.int32 if self.n_triangles < 2**31 else np.int64)
+        triangle_ids = np.empty(offsets[-1], dtype=index_dtype(self.n_triangles))
         self._pass(receivers, offsets, triangle_ids, counts)
         return offsets, triangle_ids
 
@@ -162,11 +162,8 @@ def near_grid(points, triangles, radius) -> NearGrid:
 
     # numbers of vertices, triangles and corners and the stamps as int32 where they fit: with the sorted points they
     # are most of the grid
-    def index(count):
-        return np.int32 if count < 2**31 - 1 else np.int64
-
-    vt_tris = (np.argsort(corner_vertex, kind="stable") // 3).astype(index(triangles.shape[0]))
-    vt_offsets = np.zeros(n + 1, dtype=index(corner_vertex.size))
+    vt_tris = (np.argsort(corner_vertex, kind="stable") // 3).astype(index_dtype(triangles.shape[0]))
+    vt_offsets = np.zeros(n + 1, dtype=index_dtype(corner_vertex.size))
     vt_offsets[1:] = np.cumsum(np.bincount(corner_vertex, minlength=n))
     # the grid: cells keyed by their integer coordinates, vertices sorted by key
     low = points.min(axis=0) if n else np.zeros(3)
@@ -185,7 +182,7 @@ def near_grid(points, triangles, radius) -> NearGrid:
         dims,
         cell_keys,
         cell_start,
-        by_key.astype(index(n)),
+        by_key.astype(index_dtype(n)),
         vt_offsets,
         vt_tris,
     )
