@@ -106,7 +106,7 @@ def test_both_walks_list_what_their_definition_lists():
 @pytest.mark.parametrize("reach", [np.inf, 12.0])
 def test_groups_that_share_their_walk_list_what_each_lists_alone(reach):
     """Runs of neighbouring groups decide together what each of their groups would decide alike
-    (:func:`~translucency.scatter.hierarchy.shared_walks`): every group's list holds the sources and clusters of the
+    (:func:`~translucency.scatter.treewalk.shared_walks`): every group's list holds the sources and clusters of the
     criterion's definition for that group alone, with allowances that vary from receiver to receiver and nodes
     skipped beyond a reach."""
     from translucency.geometry.morton import morton_order
@@ -163,3 +163,33 @@ def test_the_budget_counts_what_the_tree_sum_evaluates():
     floor = 1e-4 * estimate.max(axis=0)
     _, direct, clustered = tree_sum(walked, points[rcv], normals[rcv], floor)
     assert np.array_equal(direct + clustered, counted)
+
+
+def test_a_receiver_or_an_allowance_at_nan_changes_no_other_groups_list(monkeypatch):
+    """A group whose allowance is NaN takes every node it meets, and one whose receiver is at NaN opens every node:
+    the runs they are in leave to each group what they cannot decide for all, so every other group lists what it
+    lists walking alone (the runs turned off)."""
+    from translucency.geometry.morton import morton_order
+    from translucency.scatter import treewalk
+    from translucency.scatter.hierarchy import node_sums, opening
+
+    rng, points, _, flux = _lit_sphere(4000, seed=3)
+    points = points[morton_order(points)]
+    tree = SourceTree(points)
+    rule = opening(MARBLE, "directional", 0.01)
+    node_flux = node_sums(tree, flux)
+    lit = flux.sum(axis=1) > 0
+    receivers = points[::5].copy()
+    allow = 10.0 ** rng.uniform(-5.0, -3.0, (receivers.shape[0], 3))  # about half the nodes opened
+    allow[5] = np.nan
+    receivers[-1] = np.nan
+
+    def lists(levels):
+        monkeypatch.setattr(treewalk, "SHARED_LEVELS", levels)
+        starts, direct, clustered, columns = treewalk.walk_lists(tree, node_flux, lit, receivers, rule, allow)
+        return [np.sort(columns[s : s + n]) for s, n in zip(starts, direct + clustered)]
+
+    levels = treewalk.SHARED_LEVELS
+    assert levels > 0
+    alone, shared = lists(0), lists(levels)
+    assert all(np.array_equal(a, b) for a, b in zip(alone, shared, strict=True))

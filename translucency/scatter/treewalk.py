@@ -40,16 +40,20 @@ def group_spheres(rcv_points, group):
     return centre, spread, members
 
 
-def shared_walks(centre, spread, limit, levels: int = SHARED_LEVELS, fanout: int = WALK_FANOUT):
+def shared_walks(centre, spread, limit, levels: int = SHARED_LEVELS, fanout: int = WALK_FANOUT, scale: float = 0.0):
     """The runs of consecutive groups that share the upper part of their walk (:func:`_traverse`), for groups of
     bounding spheres ``centre (g, 3)``, ``spread (g,)`` (mm) and least allowances ``limit (g, C)``: ``levels`` levels
     of runs of ``fanout**k`` groups, the coarsest first. Each run has a point (its groups' mean centre), by how much
     less and more than its distance to a node's centre each group's nearest distance may be (mm, with a margin for
-    rounding), and its groups' least and largest allowance. Returns ``(points, less, more, allow_lo, allow_hi,
-    level_first, level_span)``, the runs of every level one after another (``level_first``: each level's first)."""
+    the rounding of distances between points up to ``scale`` mm from the origin), and its groups' least and largest
+    allowance (the least of the numbers: a group's NaN allowance passes every node it meets; a NaN largest
+    allowance opens nothing for all).
+    Returns ``(points, less, more, allow_lo, allow_hi, level_first, level_span)``, the runs of every level one after
+    another (``level_first``: each level's first)."""
     n_groups = centre.shape[0]
     spans = [fanout**k for k in range(int(levels), 0, -1)]
-    margin = 1e-9 * (1.0 + float(np.abs(centre).max(initial=0.0)))
+    finite = np.abs(centre[np.isfinite(centre)])
+    margin = 1e-9 * (1.0 + max(float(scale), float(finite.max(initial=0.0))))
     parts, first = [], [0]
     for span in spans:
         n_runs = -(-n_groups // span)
@@ -58,7 +62,8 @@ def shared_walks(centre, spread, limit, levels: int = SHARED_LEVELS, fanout: int
         offset = np.linalg.norm(centre[members] - point[:, None, :], axis=2)
         less = (offset + spread[members]).max(axis=1) + margin
         more = (offset - spread[members]).max(axis=1) + margin
-        parts.append((point, less, more, limit[members].min(axis=1), limit[members].max(axis=1)))
+        allow = limit[members]
+        parts.append((point, less, more, np.fmin.reduce(allow, axis=1), allow.max(axis=1)))
         first.append(first[-1] + n_runs)
     if not parts:
         n_c = limit.shape[1]
@@ -89,6 +94,7 @@ def walk_lists(
     g_direct = np.zeros(n_groups, dtype=np.int64)
     g_clustered = np.zeros(n_groups, dtype=np.int64)
     nodes = (tree.order, tree.start, tree.end, tree.left, tree.right, tree.centre, tree.radius)
+    scale = float(np.abs(tree.centre).max(initial=0.0) + tree.radius.max(initial=0.0))  # the nodes' farthest, mm
     walk = (
         nodes,
         node_flux,
@@ -98,7 +104,7 @@ def walk_lists(
         limit,
         reach,
         rule.kernel_arguments(),
-        shared_walks(centre, spread, limit),
+        shared_walks(centre, spread, limit, SHARED_LEVELS, WALK_FANOUT, scale),
     )
     pieces = {}  # each range's list, by its first group (one pass: each range grows its own list)
 
@@ -154,20 +160,20 @@ def _grown(values, at, more):
 def _expand(first, last, heads, sphere, allowance, walk, out, at, at_heads):
     """Walk down from the nodes ``heads[first:last]`` for groups of receivers whose nearest distances to a node's
     centre are between ``|point - centre| - less`` and ``|point - centre| + more`` (mm; ``sphere = (point, less,
-    more)``) and whose allowances are between ``allow_lo[row]`` and ``allow_hi[row]`` (``allowance = (allow_lo,
+    more, alone)``) and whose allowances are between ``allow_lo[row]`` and ``allow_hi[row]`` (``allowance = (allow_lo,
     allow_hi, row)``), in the tree and its sources ``walk = (tree, node_flux, lit, reach, rule)`` (:func:`walk_lists`).
 
     A node beyond ``reach`` is skipped. It is a :data:`CLUSTER` when :func:`small_and_far` and its
     :func:`aggregate_error` within ``allow_lo`` hold at the nearest distance, and :data:`OPEN` (its children walked, or
     a leaf's lit sources listed) when they fail at the farthest distance with ``allow_hi``. Both tests are monotone in
     the distance and the allowance, so these decisions are every group's. Otherwise the node is
-    :data:`UNDECIDED`: the groups may differ. For one group (``less == -more``, ``allow_lo`` the same as
-    ``allow_hi``) nothing is undecided.
+    :data:`UNDECIDED`: the groups may differ, as they may where a run's distances are not numbers (a receiver at
+    NaN). For one group (``alone``: ``less == -more``, ``allow_lo`` the same as ``allow_hi``) nothing is undecided.
 
     Appends the listed sources and clusters (source ``j``, or ``n + node``) to ``out`` from ``at`` and the
     undecided nodes to ``heads`` from ``at_heads`` (past ``last``). Returns ``(out, at, heads, at_heads, direct,
     clustered)``: the arrays, grown as needed, and the counts of sources and clusters appended."""
-    point, less, more = sphere
+    point, less, more, alone = sphere
     allow_lo, allow_hi, row = allowance
     tree, node_flux, lit, reach, rule = walk
     order, start, end, left, right, centre, radius = tree
@@ -198,9 +204,12 @@ def _expand(first, last, heads, sphere, allowance, walk, out, at, at_heads):
             rk = radius[k]
             near_lo = distance - less
             near_hi = distance + more
-            if near_lo > reach + rk:
+            if not alone and not near_lo <= near_hi:  # a run's bounds that are not numbers: its groups decide alone
+                what = UNDECIDED
+            elif near_lo > reach + rk:
                 continue
-            what = UNDECIDED if near_hi > reach + rk else OPEN
+            else:
+                what = UNDECIDED if near_hi > reach + rk else OPEN
             if what == OPEN and small_and_far(near_lo, rk, theta2, min_distance):
                 what = CLUSTER
                 at_bound = bound_index(near_lo - rk, log_first, per_log, n_bound)
@@ -211,7 +220,7 @@ def _expand(first, last, heads, sphere, allowance, walk, out, at, at_heads):
                     ):
                         what = OPEN
                         break
-            if what == OPEN and near_hi != near_lo and small_and_far(near_hi, rk, theta2, min_distance):
+            if what == OPEN and not alone and small_and_far(near_hi, rk, theta2, min_distance):
                 what = UNDECIDED  # the farthest may take it: open only if its aggregate errs too much even there
                 at_bound = bound_index(near_hi - rk, log_first, per_log, n_bound)
                 for c in range(n_c):
@@ -279,7 +288,7 @@ def _traverse(lo, hi, tree, node_flux, lit, rcv_points, rcv_spread, allow, reach
             if o != lo and o % level_span[level] != 0:
                 continue
             run = level_first[level] + o // level_span[level]
-            sphere = (centres[run], less[run], more[run])
+            sphere = (centres[run], less[run], more[run], False)
             listed, end_listed, heads, end_heads, run_direct[level], run_cluster[level] = _expand(
                 heads_end[level],
                 heads_end[level + 1],
@@ -297,7 +306,7 @@ def _traverse(lo, hi, tree, node_flux, lit, rcv_points, rcv_spread, allow, reach
             columns = _grown(columns, at, listed_end[n_levels])
         columns[at : at + listed_end[n_levels]] = listed[: listed_end[n_levels]]
         at += listed_end[n_levels]
-        sphere = (rcv_points[o], rcv_spread[o], -rcv_spread[o])
+        sphere = (rcv_points[o], rcv_spread[o], -rcv_spread[o], True)
         first, last = heads_end[n_levels], heads_end[n_levels + 1]
         columns, at, heads, _, n_direct, n_cluster = _expand(
             first, last, heads, sphere, (allow, allow, o), walk, columns, at, last
