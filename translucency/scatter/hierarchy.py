@@ -13,7 +13,8 @@ sigma_tr^2)`` times its flux times the pair bound of §8.4 at its nearest distan
 receiver's ``B`` as a first walk (the first two tests alone) estimates it. Clusters whose share of ``B`` is small
 are taken at a wide angle; only those that make much of ``B`` are opened far down (docs/physics.md §8.3).
 The tree is walked once per small group of neighbouring receivers, with the distance from the group's
-bounding sphere (conservative for each member).
+bounding sphere (conservative for each member), by :mod:`translucency.scatter.treewalk`, where neighbouring
+groups share the upper part of their walk.
 
 ========== ========================================================== =====
 symbol     meaning                                                    unit
