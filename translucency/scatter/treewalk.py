@@ -94,7 +94,8 @@ def walk_lists(
     g_direct = np.zeros(n_groups, dtype=np.int64)
     g_clustered = np.zeros(n_groups, dtype=np.int64)
     nodes = (tree.order, tree.start, tree.end, tree.left, tree.right, tree.centre, tree.radius)
-    scale = float(np.abs(tree.centre).max(initial=0.0) + tree.radius.max(initial=0.0))  # the nodes' farthest, mm
+    # the nodes' farthest coordinate (mm), from the root's sphere alone: a walk is made per block of receivers
+    scale = float(np.abs(tree.centre[0]).max() + tree.radius[0]) if tree.radius.size else 0.0
     walk = (
         nodes,
         node_flux,
