@@ -15,7 +15,7 @@ from tests.scatter.test_kernels import _pairs
 from tests.scatter.test_solve import _lit, _unit
 from translucency.errors import DeviceError, InvalidParameterError, command_line_spelling
 from translucency.geometry.synthetic import icosphere
-from translucency.scatter import dipoles, fresnel, kernels, solve
+from translucency.scatter import dipoles, fresnel, hierarchy, kernels, solve
 from translucency.scatter.gpu import probe
 from translucency.scatter.materials import material
 
@@ -72,10 +72,12 @@ def simulated(tmp_path_factory):
     normals, phi, w12 = _lit(points, triangles, marble, _unit([-0.3, 0.5, 0.8]))
     cases.update(tree_points=points, tree_triangles=triangles, tree_normals=normals, tree_phi=phi, tree_w12=w12)
     degree3, solve.NEAR_DEGREE3_RATIO = solve.NEAR_DEGREE3_RATIO, 0.0  # the GPU's near field: exact's rules
+    float32_tol, hierarchy.FLOAT32_TOL = hierarchy.FLOAT32_TOL, 1.0  # the GPU sums its clusters in float64
     try:
         tree = solve.solve(solve.SurfaceGeometry(points, triangles, normals), phi, w12, marble, method="tree", tol=0.1)
     finally:
         solve.NEAR_DEGREE3_RATIO = degree3
+        hierarchy.FLOAT32_TOL = float32_tol
     points, triangles = icosphere(3, 10.0)  # fine enough that the far field's fit shows on the CPU (0.15 %)
     cases.update(relit_points=points, relit_triangles=triangles)
     exact_relit = []
@@ -147,7 +149,7 @@ def test_exact_on_the_gpu_is_exact_on_the_cpu(simulated):
 def test_tree_on_the_gpu_is_tree_on_the_cpu(simulated):
     """The GPU walks the tree and sums as it goes (gpu.tree); the CPU lists, then sums: the same sources and clusters
     for every receiver (the same counts, clusters among them), the same B but for the order of the sums (the near
-    field with exact's rules on both: the GPU's has no degree-3 rule)."""
+    field with exact's rules on both: the GPU's has no degree-3 rule; the CPU's clusters in float64, as the GPU's)."""
     out, _, _, _, _, cpu, _ = simulated
     assert cpu.stats["device"] == "cpu" and str(out["tree_device"]) == _device_name()
     assert cpu.stats["cluster_evaluations"] > 0

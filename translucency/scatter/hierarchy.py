@@ -53,6 +53,9 @@ BOUND_TABLE_MM = (1e-6, 1e5, 4000)
 #: ``min_distance``): nearer than that S_d varies with the angles between normals and refracted
 #: directions as much as with the distance, which a cluster's size-over-distance test does not see.
 CLUSTER_MEAN_FREE_PATHS = 1.0
+#: The lists are summed in float32 where ``tol`` is at least this (each pair within about 1e-4 of itself, well
+#: inside tol; docs/physics.md §8.3), in float64 below it.
+FLOAT32_TOL = 1e-3
 
 
 class SourceTree:
@@ -286,26 +289,31 @@ def node_sums(tree: SourceTree, values) -> np.ndarray:
 @dataclass(frozen=True)
 class AggregatedSources:
     """The sources of one solve and the aggregated source of every node of a :class:`SourceTree`, as
-    one table for :func:`~translucency.scatter.kernels.indexed_sum` (built once per solve by
+    one table for :func:`~translucency.scatter.listsums.grouped_sum` (built once per solve by
     :func:`aggregated_sources`, used for every block of receivers).
 
     Attributes
     ----------
-    table : (9, n + nodes) float64
-        Columns ``0..n-1`` the sources, ``n + k`` the aggregated source of node ``k``: position (mm),
-        unit normal, unit refracted direction.
-    weights : (C, n + nodes) float64
-        Flux per channel of each column.
+    records : (n + nodes, 9 + C) float64
+        Rows ``0..n-1`` the sources, ``n + k`` the aggregated source of node ``k``: position (mm), unit normal,
+        unit refracted direction, flux per channel.
+    n_sources : int
+        ``n``, the rows that are sources.
     node_flux : (nodes, C) float64
         Flux per channel of each node (0: nothing to evaluate under it).
     lit : (n,) bool
         Sources with any flux.
     """
 
-    table: np.ndarray
-    weights: np.ndarray
+    records: np.ndarray
+    n_sources: int
     node_flux: np.ndarray
     lit: np.ndarray
+
+    @property
+    def n_channels(self) -> int:
+        """The flux's channels ``C``."""
+        return self.records.shape[1] - 9
 
 
 def aggregated_sources(tree: SourceTree, points, normals, w12, flux) -> AggregatedSources:
@@ -314,24 +322,20 @@ def aggregated_sources(tree: SourceTree, points, normals, w12, flux) -> Aggregat
     node_flux, _, node_pos, node_nrm, node_dir = aggregate(
         tree.order, tree.start, tree.end, tree.left, tree.right, points, normals, w12, flux
     )
-    table, weights = _source_table((points, normals, w12, flux), (node_pos, node_nrm, node_dir, node_flux))
-    return AggregatedSources(table, weights, np.ascontiguousarray(node_flux), flux.sum(axis=1) > 0)
+    records = _source_records((points, normals, w12, flux), (node_pos, node_nrm, node_dir, node_flux))
+    return AggregatedSources(records, points.shape[0], np.ascontiguousarray(node_flux), flux.sum(axis=1) > 0)
 
 
-def _source_table(sources, nodes) -> tuple[np.ndarray, np.ndarray]:
-    """The ``(table (9, s + k), weights (C, s + k))`` of :class:`AggregatedSources`: first the ``sources``
-    ``(positions, normals, w12, flux)``, then the ``nodes``' aggregates in the same order, filled in place (no
-    stacked copies)."""
+def _source_records(sources, nodes) -> np.ndarray:
+    """The ``records (s + k, 9 + C)`` of :class:`AggregatedSources`: first the ``sources`` ``(positions, normals,
+    w12, flux)``, then the ``nodes``' aggregates in the same order, filled in place (no stacked copies)."""
     n = sources[0].shape[0]
-    total = n + nodes[0].shape[0]
-    table = np.empty((9, total))
-    for k in range(3):
-        table[3 * k : 3 * k + 3, :n] = sources[k].T
-        table[3 * k : 3 * k + 3, n:] = nodes[k].T
-    weights = np.empty((sources[3].shape[1], total))
-    weights[:, :n] = sources[3].T
-    weights[:, n:] = nodes[3].T
-    return table, weights
+    records = np.empty((n + nodes[0].shape[0], 9 + sources[3].shape[1]))
+    for k in range(4):
+        width = sources[k].shape[1]
+        records[:n, 3 * k : 3 * k + width] = sources[k]
+        records[n:, 3 * k : 3 * k + width] = nodes[k]
+    return records
 
 
 @dataclass(frozen=True)
@@ -358,6 +362,9 @@ class Opening:
         ``log`` of the table's first distance (mm) and table steps per unit of ``log`` distance.
     curvature : (C,) float64
         ``sigma_tr^2`` per channel, 1/mm^2: how fast ``S_d`` bends across a node far away.
+    precision : type
+        What the lists are summed in: ``np.float32`` where ``tol >=`` :data:`FLOAT32_TOL`, else ``np.float64``
+        (:func:`~translucency.scatter.listsums.grouped_sum`).
     """
 
     theta: float
@@ -367,6 +374,7 @@ class Opening:
     log_first: float
     per_log: float
     curvature: np.ndarray
+    precision: type = np.float64
 
     def kernel_arguments(self):
         """The fields as :func:`~translucency.scatter.treewalk.walk_lists` hands them to its kernel (one tuple)."""
@@ -375,8 +383,9 @@ class Opening:
 
 def opening(medium, model: str, tol: float) -> Opening:
     """The walk's criterion for ``tol`` (:class:`Opening`): ``theta`` = :data:`THETA_MAX`, ``eps`` =
-    :data:`EPS_PER_TOL` ``* tol``, clusters no nearer than ``CLUSTER_MEAN_FREE_PATHS / min sigma_t'`` (mm), and the
-    bound of one pair's ``S_d`` tabulated for ``medium`` (1/mm) and ``model`` (docs/physics.md §8.3, §8.4)."""
+    :data:`EPS_PER_TOL` ``* tol``, clusters no nearer than ``CLUSTER_MEAN_FREE_PATHS / min sigma_t'`` (mm), the
+    bound of one pair's ``S_d`` tabulated for ``medium`` (1/mm) and ``model`` (docs/physics.md §8.3, §8.4), and sums
+    in float32 where ``tol >=`` :data:`FLOAT32_TOL`."""
     from .cutoff import pair_bound
 
     first, last, steps = BOUND_TABLE_MM
@@ -390,6 +399,7 @@ def opening(medium, model: str, tol: float) -> Opening:
         log_first=log_first,
         per_log=(steps - 1) / (log_last - log_first),
         curvature=np.ascontiguousarray(np.asarray(medium.sigma_tr, dtype=np.float64) ** 2),
+        precision=np.float32 if tol >= FLOAT32_TOL else np.float64,
     )
 
 
@@ -399,22 +409,24 @@ def allowance(B_est, floor, eps) -> np.ndarray:
     return eps * np.maximum(np.asarray(B_est, dtype=np.float64), np.asarray(floor, dtype=np.float64)[None, :])
 
 
-def _sum_of_lists(model, rcv_points, rcv_normals, sources, lists, group, lanes):
-    """:func:`~translucency.scatter.kernels.grouped_sum` of the walk's ``lists`` (:func:`walk_lists`)."""
-    from .kernels import grouped_sum
+def _sum_of_lists(model, rcv_points, rcv_normals, sources, lists, group, lanes, precision):
+    """:func:`~translucency.scatter.listsums.grouped_sum` of the walk's ``lists`` (:func:`walk_lists`) in
+    ``precision`` (:attr:`Opening.precision`)."""
+    from .listsums import grouped_sum
 
     g_starts, g_direct, g_clustered, columns = lists
     return grouped_sum(
         model,
         rcv_points,
         rcv_normals,
-        sources.table,
-        sources.weights,
+        sources.records,
+        sources.n_sources,
         g_starts,
         g_direct + g_clustered,
         group,
         columns,
         lanes,
+        precision,
     )
 
 
@@ -422,7 +434,7 @@ class ListedWalk:
     """A walk of the tree and its sum on the CPU, for :func:`tree_sum`: called with ``(rcv_points mm, rcv_normals,
     allow, group)``, it lists what each group of ``group`` receivers evaluates (:func:`walk_lists`; ``allow``: the
     receivers' allowances ``(n_rcv, C)`` or None) and sums the lists
-    (:func:`~translucency.scatter.kernels.grouped_sum`): ``(B (n_rcv, C), direct (n_rcv,), clustered (n_rcv,))``,
+    (:func:`~translucency.scatter.listsums.grouped_sum`): ``(B (n_rcv, C), direct (n_rcv,), clustered (n_rcv,))``,
     the counts those of each receiver's group. The GPU's is :class:`translucency.scatter.gpu.tree.WalkedSums`."""
 
     #: Receivers per call of :func:`tree_sum`: the lists of this many are held at once.
@@ -434,12 +446,12 @@ class ListedWalk:
         from .kernels import channel_lanes
 
         self.model, self.tree, self.sources, self.rule, self.reach = model, tree, sources, rule, reach
-        self.lanes = channel_lanes(params, channel_of, sources.weights.shape[0])
+        self.lanes = channel_lanes(params, channel_of, sources.n_channels)
 
     def __call__(self, rcv_points, rcv_normals, allow, group):
         sources = self.sources
         lists = walk_lists(self.tree, sources.node_flux, sources.lit, rcv_points, self.rule, allow, self.reach, group)
-        B = _sum_of_lists(self.model, rcv_points, rcv_normals, sources, lists, group, self.lanes)
+        B = _sum_of_lists(self.model, rcv_points, rcv_normals, sources, lists, group, self.lanes, self.rule.precision)
         of = np.arange(rcv_points.shape[0]) // group  # each receiver's group
         return B, lists[1][of], lists[2][of]
 
@@ -516,13 +528,13 @@ def sampled_evaluations(model, tree, points, normals, w12, flux, rcv, bright, pa
         )
         used, position = np.unique(columns, return_inverse=True)  # sorted: the sources, then the nodes
         own, node = used[used < n], used[used >= n] - n
-        table, weights = _source_table(
+        records = _source_records(
             (points[own], normals[own], w12[own], flux[own]),
             (node_pos[node], node_nrm[node], node_dir[node], node_flux[node]),
         )
-        compact = AggregatedSources(table, weights, node_flux, lit)
+        compact = AggregatedSources(records, own.size, node_flux, lit)
         lists = (starts, direct, clustered, position.astype(np.int64).ravel())
-        B = _sum_of_lists(model, points[indices], normals[indices], compact, lists, group, lanes)
+        B = _sum_of_lists(model, points[indices], normals[indices], compact, lists, group, lanes, rule.precision)
         return B, direct + clustered
 
     bright_B, _ = estimate(bright, 1)

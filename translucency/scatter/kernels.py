@@ -6,7 +6,10 @@ once per pair and shared by the channels; only the radial functions are per chan
 function (:func:`_lane`, a model index argument) serves every model, and one kernel each traversal
 (every pair, the cutoff grid, index lists), compiled without ``parallel=True`` and run on threads
 (:mod:`translucency.threads`). Every kernel is tested against the float64 reference
-(relative 1e-12).
+(relative 1e-12). The pair functions compute in the precision they are handed
+(:func:`in_precision_of`): the tree's sums of its lists
+(:func:`translucency.scatter.listsums.grouped_sum`) may take float32 (tested to 5e-5), every
+other kernel float64.
 
 Channel parameters travel as a ``(K, N_PARAMS)`` float64 array built by :func:`channel_parameters`;
 the columns are named by the ``P_*`` constants. Kernels never validate: the solver does, at its
@@ -32,8 +35,10 @@ import math
 
 import numba
 import numpy as np
+from numba import types
+from numba.extending import overload
 
-from ..threads import for_ranges, thread_count
+from ..threads import for_ranges
 from . import fresnel, names
 from .dipoles import D_R_FLOOR, PARALLEL_TOLERANCE
 from .medium import alpha_reduced, diffusion_coefficient, extrapolation_distance, sigma_t, sigma_t_reduced, sigma_tr
@@ -46,6 +51,40 @@ R_Z_R, R_Z_V, R_SIGMA_TR, R_SCALE, R_D, R_C_PHI, R_C_E = range(7)
 MODEL_DIRECTIONAL, MODEL_STANDARD, MODEL_BETTER = 0, 1, 2
 MODELS = dict(zip(names.MODELS, (MODEL_DIRECTIONAL, MODEL_STANDARD, MODEL_BETTER)))  # name -> code
 FOUR_PI_SQUARED = 4.0 * math.pi * math.pi
+#: 1 / k! for k = 0 .. 10: the Taylor polynomial of :func:`exp_nonpositive`.
+INVERSE_FACTORIALS = tuple(1.0 / math.factorial(k) for k in range(11))
+
+
+def in_precision_of(value, x):
+    """``value`` (a constant) as a float of ``x``'s precision: float32 where ``x`` is one, else as it is.
+
+    The pair functions write their constants through it, so that a kernel handed float32 inputs computes in float32
+    (a float64 constant widens every step it enters) and one handed float64 computes as it always has."""
+    return np.float32(value) if isinstance(x, np.float32) else value
+
+
+@overload(in_precision_of, inline="always")
+def _in_precision_of_compiled(value, x):
+    if isinstance(x, types.Float) and x.bitwidth == 32:
+        return lambda value, x: np.float32(value)
+    return lambda value, x: value
+
+
+def exp_reduction(x):
+    """``(lowest, 2^-m, m)`` of :func:`exp_nonpositive` in ``x``'s precision: below ``lowest`` ``e^x`` is 0 (-746 in
+    float64, where it underflows; -87 in float32, below which it would be subnormal), and ``e^x = (e^(x 2^-m))^(2^m)``
+    with ``m`` = 12 squarings in float64 and 7 in float32 (each squaring doubles the relative error of what it
+    squares)."""
+    if isinstance(x, np.float32):
+        return np.float32(-87.0), np.float32(1.0 / 128.0), 7
+    return -746.0, 1.0 / 4096.0, 12
+
+
+@overload(exp_reduction, inline="always")
+def _exp_reduction_compiled(x):
+    if isinstance(x, types.Float) and x.bitwidth == 32:
+        return lambda x: (np.float32(-87.0), np.float32(1.0 / 128.0), 7)
+    return lambda x: (-746.0, 1.0 / 4096.0, 12)
 
 
 def channel_parameters(sigma_a, sigma_s, g, eta, model: str = "directional") -> np.ndarray:
@@ -106,40 +145,21 @@ def _radial_parameters(sigma_a, sigma_s, g, eta, model):
 
 @numba.njit(cache=True, inline="always", fastmath=True)
 def exp_nonpositive(x):
-    """``e^x`` for ``x <= 0`` without a library call, so that loops using it vectorise.
+    """``e^x`` for ``x <= 0`` without a library call, so that loops using it vectorise, in ``x``'s precision.
 
-    ``e^x = (e^(x / 4096))^4096``: a degree-10 Taylor polynomial on ``[-0.182, 0]`` (truncation error
-    below 2e-16) squared 12 times; relative error below 5e-13 (measured against ``math.exp``),
-    exactly 0 below -746 (where ``e^x`` underflows anyway).
+    ``e^x = (e^(x / 2^m))^(2^m)`` (:func:`exp_reduction`: ``m`` = 12 in float64, 7 in float32): the degree-10 Taylor
+    polynomial on ``[-0.182, 0]`` (float64; ``[-0.68, 0]`` in float32; truncation error below 2e-16 and 3e-10)
+    squared ``m`` times. Relative error below 5e-13 in float64 and 2e-5 in float32 (measured against ``math.exp``),
+    exactly 0 below -746 in float64 and below -87 in float32 (where ``e^x`` underflows, or is about to).
     """
-    y = max(x, -746.0) * (1.0 / 4096.0)
-    p = 1.0 + y * (
-        1.0
-        + y
-        * (
-            1.0 / 2.0
-            + y
-            * (
-                1.0 / 6.0
-                + y
-                * (
-                    1.0 / 24.0
-                    + y
-                    * (
-                        1.0 / 120.0
-                        + y
-                        * (
-                            1.0 / 720.0
-                            + y * (1.0 / 5040.0 + y * (1.0 / 40320.0 + y * (1.0 / 362880.0 + y * (1.0 / 3628800.0))))
-                        )
-                    )
-                )
-            )
-        )
-    )
-    for _ in range(12):
+    lowest, scale, squarings = exp_reduction(x)
+    y = max(x, lowest) * scale
+    p = in_precision_of(INVERSE_FACTORIALS[10], x)  # Horner's form of sum_k y^k / k!, k = 0 .. 10
+    for k in range(9, -1, -1):
+        p = p * y + in_precision_of(INVERSE_FACTORIALS[k], x)
+    for _ in range(squarings):
         p = p * p
-    return p
+    return p if x >= lowest else in_precision_of(0.0, x)
 
 
 @numba.njit(cache=True, inline="always", fastmath=True)
@@ -150,14 +170,15 @@ def _ray_source(x_dot_w, x_dot_n, w_dot_n, d, D, inv_D, sigma_tr_, C_phi, C_E, n
     - ((1+s) + 3 D (3 (1+s) + s^2) x.w / d^2) x.n_o)]`` with ``s = sigma_tr d``; written with
     reciprocals and :func:`exp_nonpositive` so that loops using it vectorise.
     """
+    one, three = in_precision_of(1.0, d), in_precision_of(3.0, d)
     s = sigma_tr_ * d
-    one_plus_s = 1.0 + s
-    inv_d = 1.0 / d
+    one_plus_s = one + s
+    inv_d = one / d
     inv_d2 = inv_d * inv_d
-    fluence = C_phi * (d * d * inv_D + 3.0 * one_plus_s * x_dot_w)
+    fluence = C_phi * (d * d * inv_D + three * one_plus_s * x_dot_w)
     flux = C_E * (
-        3.0 * D * one_plus_s * w_dot_n
-        - (one_plus_s + 3.0 * D * (3.0 * one_plus_s + s * s) * x_dot_w * inv_d2) * x_dot_n
+        three * D * one_plus_s * w_dot_n
+        - (one_plus_s + three * D * (three * one_plus_s + s * s) * x_dot_w * inv_d2) * x_dot_n
     )
     return norm_over_4pi2 * exp_nonpositive(-s) * inv_d2 * inv_d * (fluence - flux)
 
@@ -169,13 +190,15 @@ def _channel(p, r2, perp2, mu0, x_dot_w, x_dot_n, x_dot_v, s_dot_v, s_dot_n, v_d
     D = p[P_D]
     d_e = p[P_D_E]
     c = p[P_VIRTUAL]
+    zero, two = in_precision_of(0.0, r2), in_precision_of(2.0, r2)
+    floor = in_precision_of(D_R_FLOOR, r2) * D
     cos_beta = -math.sqrt(perp2 / (r2 + d_e * d_e))
     b = p[P_BACKLIT]
-    d_r2 = r2 + D * mu0 * (D * mu0 - 2.0 * d_e * cos_beta) if mu0 > 0.0 else r2 + b * b
-    d_r = max(math.sqrt(d_r2), D_R_FLOOR * D)
-    d_v = max(math.sqrt(max(r2 - 2.0 * c * x_dot_s + c * c, 0.0)), D_R_FLOOR * D)  # |x - c n_i*|, floored as d_r
-    inv_D = 1.0 / D
-    scale = p[P_NORM] / FOUR_PI_SQUARED
+    d_r2 = r2 + D * mu0 * (D * mu0 - two * d_e * cos_beta) if mu0 > zero else r2 + b * b
+    d_r = max(math.sqrt(d_r2), floor)
+    d_v = max(math.sqrt(max(r2 - two * c * x_dot_s + c * c, zero)), floor)  # |x - c n_i*|, floored as d_r
+    inv_D = in_precision_of(1.0, r2) / D
+    scale = p[P_NORM] / in_precision_of(FOUR_PI_SQUARED, r2)
     real = _ray_source(x_dot_w, x_dot_n, -mu0, d_r, D, inv_D, p[P_SIGMA_TR], p[P_C_PHI], p[P_C_E], scale)
     virtual = _ray_source(
         x_dot_v - c * s_dot_v, x_dot_n - c * s_dot_n, v_dot_n, d_v, D, inv_D, p[P_SIGMA_TR], p[P_C_PHI], p[P_C_E], scale
@@ -200,9 +223,10 @@ def orthonormal_frame(u0, u1, u2):
 def modified_normal(x0, x1, x2, ni0, ni1, ni2):
     """``(r^2, n_i*)`` for the pair offset ``x = x_o - x_i`` (mm): the unit normal of the modified tangent
     plane, ``n_i`` less its part along ``x`` (``n_i`` when ``r = 0`` or ``n_i || x``; docs/physics.md §4.1)."""
+    one = in_precision_of(1.0, x0)
     r2 = x0 * x0 + x1 * x1 + x2 * x2
-    positive = r2 > 0.0
-    inv_r = 1.0 / math.sqrt(r2 if positive else 1.0)
+    positive = r2 > in_precision_of(0.0, x0)
+    inv_r = one / math.sqrt(r2 if positive else one)
     h0 = x0 * inv_r
     h1 = x1 * inv_r
     h2 = x2 * inv_r
@@ -211,8 +235,8 @@ def modified_normal(x0, x1, x2, ni0, ni1, ni2):
     t1 = ni1 - proj * h1
     t2 = ni2 - proj * h2
     tn2 = t0 * t0 + t1 * t1 + t2 * t2
-    regular = positive and tn2 > PARALLEL_TOLERANCE * PARALLEL_TOLERANCE
-    inv_t = 1.0 / math.sqrt(tn2 if regular else 1.0)
+    regular = positive and tn2 > in_precision_of(PARALLEL_TOLERANCE * PARALLEL_TOLERANCE, x0)
+    inv_t = one / math.sqrt(tn2 if regular else one)
     return r2, t0 * inv_t if regular else ni0, t1 * inv_t if regular else ni1, t2 * inv_t if regular else ni2
 
 
@@ -227,9 +251,10 @@ def pair_geometry(x0, x1, x2, ni0, ni1, ni2, w0, w1, w2, nx, ny, nz):
     """
     r2, s0, s1, s2 = modified_normal(x0, x1, x2, ni0, ni1, ni2)
     w_dot_s = w0 * s0 + w1 * s1 + w2 * s2
-    v0 = w0 - 2.0 * w_dot_s * s0
-    v1 = w1 - 2.0 * w_dot_s * s1
-    v2 = w2 - 2.0 * w_dot_s * s2
+    two = in_precision_of(2.0, x0)
+    v0 = w0 - two * w_dot_s * s0
+    v1 = w1 - two * w_dot_s * s1
+    v2 = w2 - two * w_dot_s * s2
     mu0 = -(nx * w0 + ny * w1 + nz * w2)
     x_dot_w = x0 * w0 + x1 * w1 + x2 * w2
     x_dot_n = x0 * nx + x1 * ny + x2 * nz
@@ -238,7 +263,7 @@ def pair_geometry(x0, x1, x2, ni0, ni1, ni2, w0, w1, w2, nx, ny, nz):
     s_dot_v = s0 * v0 + s1 * v1 + s2 * v2
     x_dot_v = x0 * v0 + x1 * v1 + x2 * v2
     x_dot_s = x0 * s0 + x1 * s1 + x2 * s2
-    perp2 = max(r2 - x_dot_w * x_dot_w, 0.0)
+    perp2 = max(r2 - x_dot_w * x_dot_w, in_precision_of(0.0, x0))
     return r2, perp2, mu0, x_dot_w, x_dot_n, x_dot_v, s_dot_v, s_dot_n, v_dot_n, x_dot_s
 
 
@@ -249,15 +274,16 @@ def radial_dipole(model, r2, p):
     z_r = p[R_Z_R]
     z_v = p[R_Z_V]
     st = p[R_SIGMA_TR]
+    one = in_precision_of(1.0, r2)
     d_r = math.sqrt(r2 + z_r * z_r)
     d_v = math.sqrt(r2 + z_v * z_v)
     e_r = math.exp(-st * d_r)
     e_v = math.exp(-st * d_v)
     if model == MODEL_STANDARD:
-        value = z_r * (1.0 + st * d_r) * e_r / (d_r * d_r * d_r) + z_v * (1.0 + st * d_v) * e_v / (d_v * d_v * d_v)
+        value = z_r * (one + st * d_r) * e_r / (d_r * d_r * d_r) + z_v * (one + st * d_v) * e_v / (d_v * d_v * d_v)
     else:
         value = p[R_C_PHI] / p[R_D] * (e_r / d_r - e_v / d_v) + p[R_C_E] * (
-            z_r * (1.0 + st * d_r) * e_r / (d_r * d_r * d_r) - z_v * (1.0 + st * d_v) * e_v / (d_v * d_v * d_v)
+            z_r * (one + st * d_r) * e_r / (d_r * d_r * d_r) - z_v * (one + st * d_v) * e_v / (d_v * d_v * d_v)
         )
     return p[R_SCALE] * value
 
@@ -446,9 +472,9 @@ def vertex_sources(model, n_src, rows, x_o, n_o, p, flux, counted):
     X0, X1, X2, N0, N1, N2, W0, W1, W2 = rows
     F0, F1, F2 = flux
     px, py, pz = x_o
-    a0 = 0.0
-    a1 = 0.0
-    a2 = 0.0
+    a0 = in_precision_of(0.0, px)
+    a1 = a0
+    a2 = a0
     count = 0
     for j in range(n_src):
         e0, e1, e2, n = weighted_pair(
@@ -477,8 +503,9 @@ def weighted_pair(model, x, source, n_o, p, flux, counted):
     e0, e1, e2 = pair_three(
         model, x[0], x[1], x[2], ni0, ni1, ni2, w0, w1, w2, n_o[0], n_o[1], n_o[2], p[0], p[1], p[2]
     )
-    count = (e0 < 0.0) * counted[0] + (e1 < 0.0) * counted[1] + (e2 < 0.0) * counted[2]
-    return max(e0, 0.0) * flux[0], max(e1, 0.0) * flux[1], max(e2, 0.0) * flux[2], count
+    zero = in_precision_of(0.0, e0)
+    count = (e0 < zero) * counted[0] + (e1 < zero) * counted[1] + (e2 < zero) * counted[2]
+    return max(e0, zero) * flux[0], max(e1, zero) * flux[1], max(e2, zero) * flux[2], count
 
 
 def rows_kernel(model, directional, radial):
@@ -626,104 +653,6 @@ def indexed_sources(model, first, last, columns, factors, rows, x_o, n_o, p, flu
     return a0, a1, a2
 
 
-def grouped_sum(model, rcv_points, rcv_normals, table, weights, g_starts, g_counts, group, columns, lanes):
-    """:func:`indexed_sum` for receivers that share their list ``group`` at a time (the tree's walks):
-    receivers ``g * group .. (g + 1) * group - 1`` sum the sources ``columns[g_starts[g] : g_starts[g] +
-    g_counts[g]]`` (factor 1).
-
-    Each group's sources are gathered once into a contiguous buffer of the thread, and every receiver of
-    the group runs the exact kernel's loop (:func:`vertex_sum`'s) over it: ``1 / group`` of the scattered
-    reads, and a loop that vectorises, for the same ``B`` as :func:`indexed_sum`. Returns ``(n_rcv, C)``
-    float64.
-    """
-    n_channels = weights.shape[0]
-    out = np.zeros((rcv_points.shape[0], n_channels))
-    longest = int(g_counts.max()) if g_counts.size else 0
-    buffers = np.empty((thread_count(), 9 + n_channels, max(longest, 1)))
-    for_ranges(
-        rows_kernel(model, _grouped_rows_directional, _grouped_rows_radial),
-        g_starts.shape[0],
-        model,
-        rcv_points,
-        rcv_normals,
-        table,
-        weights,
-        g_starts,
-        g_counts,
-        int(group),
-        columns,
-        lanes,
-        buffers,
-        out,
-    )
-    return out
-
-
-@numba.njit(cache=True, nogil=True, fastmath=True, error_model="numpy")
-def _grouped_rows_directional(
-    worker, lo, hi, model, points, normals, table, weights, starts, counts, group, columns, lanes, buffers, out
-):
-    """:func:`_grouped_rows` of the directional dipole (``model`` is ignored: a constant here)."""
-    _grouped_rows(
-        worker,
-        lo,
-        hi,
-        MODEL_DIRECTIONAL,
-        points,
-        normals,
-        table,
-        weights,
-        starts,
-        counts,
-        group,
-        columns,
-        lanes,
-        buffers,
-        out,
-    )
-
-
-@numba.njit(cache=True, nogil=True, fastmath=True, error_model="numpy")
-def _grouped_rows_radial(
-    worker, lo, hi, model, points, normals, table, weights, starts, counts, group, columns, lanes, buffers, out
-):
-    """:func:`_grouped_rows` of the standard and better dipoles."""
-    _grouped_rows(
-        worker, lo, hi, model, points, normals, table, weights, starts, counts, group, columns, lanes, buffers, out
-    )
-
-
-@numba.njit(cache=True, inline="always", fastmath=True, error_model="numpy")
-def _grouped_rows(
-    worker, lo, hi, model, points, normals, table, weights, starts, counts, group, columns, lanes, buffers, out
-):
-    """Groups ``lo .. hi - 1`` of :func:`grouped_sum`: gather the list, then each receiver of the group over it."""
-    n_out = weights.shape[0]
-    n_rcv = points.shape[0]
-    buffer = buffers[worker]
-    for g in range(lo, hi):
-        first, n = starts[g], counts[g]
-        for k in range(n):
-            i = columns[first + k]
-            for row in range(9):
-                buffer[row, k] = table[row, i]
-            for c in range(n_out):
-                buffer[9 + c, k] = weights[c, i]
-        rows = table_rows(buffer)
-        for r in range(g * group, min(n_rcv, (g + 1) * group)):
-            x_o = (points[r, 0], points[r, 1], points[r, 2])
-            n_o = (normals[r, 0], normals[r, 1], normals[r, 2])
-            for channel_group in range(lanes.shape[0] // 3):
-                c0 = 3 * channel_group
-                F0, F1, F2, p0, p1, p2 = group_inputs(buffer[9:], lanes, c0)
-                a0, a1, a2, _ = vertex_sources(model, n, rows, x_o, n_o, (p0, p1, p2), (F0, F1, F2), (0, 0, 0))
-                store_three(out, r, c0, n_out, a0, a1, a2)
-
-
-#: The compiled kernels of the directional dipole's far-field rows (a ``tree`` solve's): numba compiles each on first
-#: use; the set-up compiles them ahead
-#: (:mod:`translucency.app.warmup`).
-DIRECTIONAL_ROW_KERNELS = (
-    _indexed_rows_directional,
-    _grouped_rows_directional,
-)
+#: The compiled kernels of the directional dipole's indexed rows (a ``tree`` solve's near field): numba compiles each
+#: on first use; the set-up compiles them ahead (:mod:`translucency.app.warmup`).
+DIRECTIONAL_ROW_KERNELS = (_indexed_rows_directional,)

@@ -1,7 +1,7 @@
 """Method ``tree`` on an NVIDIA GPU: the walk of the source tree and its sum in one kernel (docs/physics.md §8.3).
 
 The CPU lists what each group of receivers evaluates (:func:`~translucency.scatter.treewalk.walk_lists`) and sums
-the lists (:func:`~translucency.scatter.kernels.grouped_sum`). A GPU thread cannot grow a list, so each thread walks
+the lists (:func:`~translucency.scatter.listsums.grouped_sum`). A GPU thread cannot grow a list, so each thread walks
 the tree for its receiver's group and sums each source or cluster at its receiver as the walk meets it. The walk's
 tests are the CPU's own (:func:`~translucency.scatter.treewalk.small_and_far`,
 :func:`~translucency.scatter.treewalk.bound_index`, :func:`~translucency.scatter.treewalk.aggregate_error`) and so
@@ -162,7 +162,7 @@ class WalkedSums:
     def __init__(self, model, tree, sources, params, channel_of, rule, reach=math.inf):
         self.model = int(model)
         self.rule, self.reach = rule, float(reach)
-        self.n_out = sources.weights.shape[0]
+        self.n_out = sources.n_channels
         lanes = kernels.channel_lanes(params, channel_of, self.n_out)
 
         self.nodes = (
@@ -176,8 +176,8 @@ class WalkedSums:
         )
         self.node_flux = to_device(sources.node_flux)
         self.lit = to_device(sources.lit, np.bool_)
-        self.table = to_device(sources.table)
-        rows = [to_device(row) for row in sources.weights]
+        self.table = to_device(sources.records[:, :9].T)
+        rows = [to_device(sources.records[:, 9 + c]) for c in range(self.n_out)]
         self.groups = [  # per group of three lanes: flux rows, parameters
             (tuple(rows[c] for c in channels), lane_params)
             for _, channels, lane_params in lane_groups(lanes, self.n_out)
