@@ -101,14 +101,17 @@ SAMPLE_SAFETY = 1.5
 #: budget"): ``tree``'s and the near field's on scans of 0.5-10M vertices on a quiet machine, at three quarters of
 #: the rates measured there, since a time limit matters for scans of that size; other work on the cores slows a
 #: solve below them.
-FAR_RATE = {"exact": 40e6, "cutoff": 15e6, "tree": 25e6}
+FAR_RATE = {"exact": 40e6, "cutoff": 15e6, "tree": 32e6}
 #: Pairs per second of ``exact`` on a GPU, the whole device: an estimate from published all-pairs kernels and the
 #: pair's cost in simple interactions, not a calibration (bench/README.md, "GPU"). ``tree``'s walk is taken to be as
-#: much slower per evaluation there as on the CPU (:data:`FAR_RATE`).
+#: much slower per evaluation there as on the CPU when both summed in float64 (:data:`GPU_TREE_SHARE`).
 GPU_PAIR_RATE = 2e10
+#: ``tree``'s evaluations a second against ``exact``'s pairs on a GPU: the CPU's ratio (25 and 40 million a second
+#: and thread) before its clusters were summed in float32; the GPU sums them in float64.
+GPU_TREE_SHARE = 25e6 / 40e6
 #: Near-field quadrature points per second on a GPU (a solve whose device is ``gpu``): each a pair and an interpolation,
 #: made by a thread that branches as ``tree``'s walk does, so taken at that walk's rate. An estimate, as above.
-GPU_NEAR_RATE = GPU_PAIR_RATE * FAR_RATE["tree"] / FAR_RATE["exact"]
+GPU_NEAR_RATE = GPU_PAIR_RATE * GPU_TREE_SHARE
 NEAR_RATE = 7e6
 LIST_RATE = 60e6
 SETUP_SECONDS_PER_VERTEX = 2e-6
@@ -214,7 +217,11 @@ def solve_seconds(counts: SolveCounts) -> float:
     threads = max(1, counts.threads)
     n_r = counts.n_receivers
     far_rate = FAR_RATE.get(counts.method, FAR_RATE["exact"])
-    far_rate *= GPU_PAIR_RATE / FAR_RATE["exact"] if counts.device == "gpu" else threads
+    if counts.device == "gpu":
+        share = GPU_TREE_SHARE if counts.method == "tree" else far_rate / FAR_RATE["exact"]
+        far_rate = GPU_PAIR_RATE * share
+    else:
+        far_rate *= threads
     far = n_r * counts.far_evaluations / far_rate
     lists = 2 * n_r * counts.near_triangles / LIST_RATE
     setup = SETUP_SECONDS_PER_VERTEX * counts.n_vertices
