@@ -21,7 +21,7 @@ from .kernels import (
 
 
 def grouped_sum(
-    model, rcv_points, rcv_normals, records, n_sources, g_starts, g_counts, group, columns, lanes, precision=np.float64
+    model, rcv_points, rcv_normals, records, g_starts, g_counts, group, columns, lanes, precision=np.float64
 ):
     """Per receiver ``r`` of group ``g = r // group``: ``B[r, c] = sum_k S_d(source columns[k]; x_r)[c] * flux[c]``
     over ``k`` in ``g_starts[g] .. g_starts[g] + g_counts[g]``, for receivers that share their list ``group`` at a
@@ -34,10 +34,11 @@ def grouped_sum(
     of the thread, their positions taken from the group's first receiver, and every receiver of the group runs the
     exact kernel's loop over them: ``1 / group`` of the scattered reads, and loops that vectorise.
 
-    The rows below ``n_sources`` (the mesh's own sources) are summed in float64, the others (the clusters) in
-    ``precision`` (``np.float64``, or ``np.float32``: twice the pairs a vector step, each within about ``2e-5`` of
-    itself; docs/physics.md §8.3). The near field's correction takes the nearest sources' values off again, and
-    where the mesh is coarse next to ``1 / sigma_tr`` the two cancel to many digits. Returns ``(n_rcv, C)`` float64.
+    A column ``-1 - j`` is row ``j`` summed in float64 (the walk marks the sources whose float32 error could show:
+    the near field's correction takes the nearest sources' values off again, and where the mesh is coarse next to
+    ``1 / sigma_tr`` the two cancel to many digits); the others are summed in ``precision`` (``np.float64``, or
+    ``np.float32``: twice the pairs a vector step, each within about ``2e-5`` of itself; docs/physics.md §8.3).
+    Returns ``(n_rcv, C)`` float64.
     """
     n_channels = records.shape[1] - 9
     out = np.zeros((rcv_points.shape[0], n_channels))
@@ -49,7 +50,6 @@ def grouped_sum(
         rcv_points,
         rcv_normals,
         records,
-        int(n_sources),
         g_starts,
         g_counts,
         int(group),
@@ -63,7 +63,7 @@ def grouped_sum(
 
 @numba.njit(cache=True, nogil=True, fastmath=True, error_model="numpy")
 def _grouped_rows_directional(
-    worker, lo, hi, model, points, normals, records, n_sources, starts, counts, group, columns, lanes, buffers, out
+    worker, lo, hi, model, points, normals, records, starts, counts, group, columns, lanes, buffers, out
 ):
     """:func:`_grouped_rows` of the directional dipole (``model`` is ignored: a constant here)."""
     _grouped_rows(
@@ -74,7 +74,6 @@ def _grouped_rows_directional(
         points,
         normals,
         records,
-        n_sources,
         starts,
         counts,
         group,
@@ -87,12 +86,10 @@ def _grouped_rows_directional(
 
 @numba.njit(cache=True, nogil=True, fastmath=True, error_model="numpy")
 def _grouped_rows_radial(
-    worker, lo, hi, model, points, normals, records, n_sources, starts, counts, group, columns, lanes, buffers, out
+    worker, lo, hi, model, points, normals, records, starts, counts, group, columns, lanes, buffers, out
 ):
     """:func:`_grouped_rows` of the standard and better dipoles."""
-    _grouped_rows(
-        worker, lo, hi, model, points, normals, records, n_sources, starts, counts, group, columns, lanes, buffers, out
-    )
+    _grouped_rows(worker, lo, hi, model, points, normals, records, starts, counts, group, columns, lanes, buffers, out)
 
 
 @numba.njit(cache=True, inline="always")
@@ -115,12 +112,10 @@ def _buffer_sums(model, buffer, n, lanes, c0, x_o, n_o):
 
 
 @numba.njit(cache=True, inline="always", fastmath=True, error_model="numpy")
-def _grouped_rows(
-    worker, lo, hi, model, points, normals, records, n_sources, starts, counts, group, columns, lanes, buffers, out
-):
-    """Groups ``lo .. hi - 1`` of :func:`grouped_sum`: gather the list (the sources into the float64 buffer, the
-    clusters into the other; positions from the group's first receiver), then each receiver of the group over
-    both."""
+def _grouped_rows(worker, lo, hi, model, points, normals, records, starts, counts, group, columns, lanes, buffers, out):
+    """Groups ``lo .. hi - 1`` of :func:`grouped_sum`: gather the list (the columns marked float64 into the float64
+    buffer, the others into the other; positions from the group's first receiver), then each receiver of the group
+    over both."""
     n_out = records.shape[1] - 9
     n_rcv = points.shape[0]
     lanes64, lanes_far = lanes
@@ -133,8 +128,8 @@ def _grouped_rows(
         n_near, n_far = 0, 0
         for k in range(n):
             i = columns[first + k]
-            if i < n_sources:
-                _gathered(sources, n_near, records, i, origin, n_out)
+            if i < 0:
+                _gathered(sources, n_near, records, -1 - i, origin, n_out)
                 n_near += 1
             else:
                 _gathered(clusters, n_far, records, i, origin, n_out)
