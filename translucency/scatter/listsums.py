@@ -1,7 +1,7 @@
 """The far field's sums over the tree's lists (docs/physics.md §8.3): each group of receivers' sources and clusters
 gathered once into buffers of the thread, then summed at each receiver of the group by the exact kernel's loop
-(:func:`~translucency.scatter.kernels.vertex_sources`), the mesh's own sources in float64 and the clusters in the
-precision the walk's :class:`~translucency.scatter.hierarchy.Opening` asks for."""
+(:func:`~translucency.scatter.kernels.vertex_sources`): the sources the walk marks in float64, the other sources
+and the clusters in the precision the walk's :class:`~translucency.scatter.hierarchy.Opening` asks for."""
 
 from __future__ import annotations
 
@@ -118,31 +118,31 @@ def _grouped_rows(worker, lo, hi, model, points, normals, records, starts, count
     over both."""
     n_out = records.shape[1] - 9
     n_rcv = points.shape[0]
-    lanes64, lanes_far = lanes
-    sources, clusters = buffers[0][worker], buffers[1][worker]
-    like = clusters[0, 0]  # its value is not read: its type is the clusters' precision
+    lanes64, lanes_narrow = lanes
+    wide, narrow = buffers[0][worker], buffers[1][worker]  # float64, and the precision asked for
+    like = narrow[0, 0]  # its value is not read: its type is the precision asked for
     for g in range(lo, hi):
         first, n = starts[g], counts[g]
         head = g * group
         origin = (points[head, 0], points[head, 1], points[head, 2])
-        n_near, n_far = 0, 0
+        n_wide, n_narrow = 0, 0
         for k in range(n):
             i = columns[first + k]
             if i < 0:
-                _gathered(sources, n_near, records, -1 - i, origin, n_out)
-                n_near += 1
+                _gathered(wide, n_wide, records, -1 - i, origin, n_out)
+                n_wide += 1
             else:
-                _gathered(clusters, n_far, records, i, origin, n_out)
-                n_far += 1
+                _gathered(narrow, n_narrow, records, i, origin, n_out)
+                n_narrow += 1
         for r in range(head, min(n_rcv, head + group)):
             x_o = (points[r, 0] - origin[0], points[r, 1] - origin[1], points[r, 2] - origin[2])
             n_o = (normals[r, 0], normals[r, 1], normals[r, 2])
-            x_far = (in_precision_of(x_o[0], like), in_precision_of(x_o[1], like), in_precision_of(x_o[2], like))
-            n_far_o = (in_precision_of(n_o[0], like), in_precision_of(n_o[1], like), in_precision_of(n_o[2], like))
+            x_narrow = (in_precision_of(x_o[0], like), in_precision_of(x_o[1], like), in_precision_of(x_o[2], like))
+            normal = (in_precision_of(n_o[0], like), in_precision_of(n_o[1], like), in_precision_of(n_o[2], like))
             for channel_group in range(lanes64.shape[0] // 3):
                 c0 = 3 * channel_group
-                a0, a1, a2 = _buffer_sums(model, sources, n_near, lanes64, c0, x_o, n_o)
-                b0, b1, b2 = _buffer_sums(model, clusters, n_far, lanes_far, c0, x_far, n_far_o)
+                a0, a1, a2 = _buffer_sums(model, wide, n_wide, lanes64, c0, x_o, n_o)
+                b0, b1, b2 = _buffer_sums(model, narrow, n_narrow, lanes_narrow, c0, x_narrow, normal)
                 store_three(out, r, c0, n_out, a0 + b0, a1 + b1, a2 + b2)
 
 
