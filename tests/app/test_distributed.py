@@ -55,8 +55,11 @@ def test_blocks_on_the_cluster_equal_the_local_solve(cluster, lit_torus, method)
         spread = solver(geometry, phi, w12, MARBLE, method=method, tol=0.01, receivers=receivers)
         again = solver(geometry, 0.5 * phi, w12, MARBLE, method=method, tol=0.01)  # the surface sent once
     assert spread.stats["blocks"] == 7 and again.stats["blocks"] == 12
-    np.testing.assert_allclose(spread.B, local_some.B, rtol=1e-12, atol=0)
-    np.testing.assert_allclose(again.B, 0.5 * local.B, rtol=1e-12, atol=0)
+    # the same sources and clusters, listed by runs of other groups in another order: tree sums its clusters in
+    # float32 (docs/physics.md §8.3), so the order shows at 1e-7
+    rtol = 1e-6 if method == "tree" else 1e-12
+    np.testing.assert_allclose(spread.B, local_some.B, rtol=rtol, atol=0)
+    np.testing.assert_allclose(again.B, 0.5 * local.B, rtol=rtol, atol=0)
     assert spread.stats["pairs_evaluated"] < local.stats["pairs_evaluated"]
 
 
@@ -67,7 +70,7 @@ def test_bake_of_one_scan_with_a_scheduler_solves_it_on_the_workers(cluster, tmp
     assert cli.main(["bake", str(path), "-o", str(tmp_path / "there"), "--scheduler", cluster.scheduler_address]) == 0
     here = read_baked_ply(tmp_path / "here" / "torus_marble.ply")
     there = read_baked_ply(tmp_path / "there" / "torus_marble.ply")
-    np.testing.assert_allclose(there.radiance, here.radiance, rtol=1e-12, atol=1e-15)
+    np.testing.assert_allclose(there.radiance, here.radiance, rtol=1e-6, atol=1e-15)  # tree's float32 sums' order
     assert "blocks on the cluster" in capsys.readouterr().err
 
 

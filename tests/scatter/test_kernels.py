@@ -178,8 +178,7 @@ def test_grouped_sum_is_the_dense_sum_over_each_groups_list(model, channel_of, p
     """grouped_sum against the reference dipoles summed here over each group's random list (with
     repeats), for groups of 4 and a last group that is short, every model and 1, 3 or 5 channels, in float64
     (to 1e-11) and in float32 (to 5e-5: each pair within about 2e-5, and the directional dipole's real and virtual
-    sources cancel in part; and further from float64 than its rounding, or it was not float32); a column ``-1 - j``
-    is source ``j`` summed in float64."""
+    sources cancel in part; and further from float64 than its rounding, or it was not float32)."""
     rng = np.random.default_rng(11)
     medium = material("skin1").medium()
     x_i, n_i, light, _, _ = _pairs(rng, 300, 2.0)
@@ -196,8 +195,18 @@ def test_grouped_sum_is_the_dense_sum_over_each_groups_list(model, channel_of, p
     columns = rng.integers(0, 300, size=int(counts.sum()))
     receivers = rng.choice(300, n_rcv, replace=False)
     lanes = kernels.channel_lanes(params, channel_of, channel_of.size)
-    marked = np.where(columns < 100, -1 - columns, columns)  # the sources below 100 marked for float64
-    arguments = (kernels.MODELS[model], x_i[receivers], n_i[receivers], records, starts, counts, group, marked, lanes)
+    arguments = (
+        kernels.MODELS[model],
+        x_i[receivers],
+        n_i[receivers],
+        records,
+        100,
+        starts,
+        counts,
+        group,
+        columns,
+        lanes,
+    )
     B = listsums.grouped_sum(*arguments, precision)
     if precision is np.float32:
         B64 = listsums.grouped_sum(*arguments, np.float64)

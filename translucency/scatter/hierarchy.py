@@ -297,6 +297,8 @@ class AggregatedSources:
     records : (n + nodes, 9 + C) float64
         Rows ``0..n-1`` the sources, ``n + k`` the aggregated source of node ``k``: position (mm), unit normal,
         unit refracted direction, flux per channel.
+    n_sources : int
+        ``n``, the rows that are sources.
     node_flux : (nodes, C) float64
         Flux per channel of each node (0: nothing to evaluate under it).
     lit : (n,) bool
@@ -304,6 +306,7 @@ class AggregatedSources:
     """
 
     records: np.ndarray
+    n_sources: int
     node_flux: np.ndarray
     lit: np.ndarray
 
@@ -320,7 +323,7 @@ def aggregated_sources(tree: SourceTree, points, normals, w12, flux) -> Aggregat
         tree.order, tree.start, tree.end, tree.left, tree.right, points, normals, w12, flux
     )
     records = _source_records((points, normals, w12, flux), (node_pos, node_nrm, node_dir, node_flux))
-    return AggregatedSources(records, np.ascontiguousarray(node_flux), flux.sum(axis=1) > 0)
+    return AggregatedSources(records, points.shape[0], np.ascontiguousarray(node_flux), flux.sum(axis=1) > 0)
 
 
 def _source_records(sources, nodes) -> np.ndarray:
@@ -417,6 +420,7 @@ def _sum_of_lists(model, rcv_points, rcv_normals, sources, lists, group, lanes, 
         rcv_points,
         rcv_normals,
         sources.records,
+        sources.n_sources,
         g_starts,
         g_direct + g_clustered,
         group,
@@ -522,16 +526,14 @@ def sampled_evaluations(model, tree, points, normals, w12, flux, rcv, bright, pa
         starts, direct, clustered, columns = walk_lists(
             tree, node_flux, lit, points[indices], rule, None, math.inf, group
         )
-        wide = columns < 0  # the sources to be summed in float64 (walk_lists), kept so in the compact table
-        used, position = np.unique(np.where(wide, -1 - columns, columns), return_inverse=True)  # sources, then nodes
+        used, position = np.unique(columns, return_inverse=True)  # sorted: the sources, then the nodes
         own, node = used[used < n], used[used >= n] - n
         records = _source_records(
             (points[own], normals[own], w12[own], flux[own]),
             (node_pos[node], node_nrm[node], node_dir[node], node_flux[node]),
         )
-        compact = AggregatedSources(records, node_flux, lit)
-        position = position.astype(np.int64).ravel()
-        lists = (starts, direct, clustered, np.where(wide, -1 - position, position))
+        compact = AggregatedSources(records, own.size, node_flux, lit)
+        lists = (starts, direct, clustered, position.astype(np.int64).ravel())
         B = _sum_of_lists(model, points[indices], normals[indices], compact, lists, group, lanes, rule.precision)
         return B, direct + clustered
 

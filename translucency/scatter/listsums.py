@@ -1,7 +1,7 @@
 """The far field's sums over the tree's lists (docs/physics.md §8.3): each group of receivers' sources and clusters
 gathered once into buffers of the thread, then summed at each receiver of the group by the exact kernel's loop
-(:func:`~translucency.scatter.kernels.vertex_sources`): the sources the walk marks in float64, the other sources
-and the clusters in the precision the walk's :class:`~translucency.scatter.hierarchy.Opening` asks for."""
+(:func:`~translucency.scatter.kernels.vertex_sources`), the mesh's own sources in float64 and the clusters in the
+precision the walk's :class:`~translucency.scatter.hierarchy.Opening` asks for."""
 
 from __future__ import annotations
 
@@ -21,7 +21,7 @@ from .kernels import (
 
 
 def grouped_sum(
-    model, rcv_points, rcv_normals, records, g_starts, g_counts, group, columns, lanes, precision=np.float64
+    model, rcv_points, rcv_normals, records, n_sources, g_starts, g_counts, group, columns, lanes, precision=np.float64
 ):
     """Per receiver ``r`` of group ``g = r // group``: ``B[r, c] = sum_k S_d(source columns[k]; x_r)[c] * flux[c]``
     over ``k`` in ``g_starts[g] .. g_starts[g] + g_counts[g]``, for receivers that share their list ``group`` at a
@@ -34,11 +34,10 @@ def grouped_sum(
     of the thread, their positions taken from the group's first receiver, and every receiver of the group runs the
     exact kernel's loop over them: ``1 / group`` of the scattered reads, and loops that vectorise.
 
-    A column ``-1 - j`` is row ``j`` summed in float64 (the walk marks the sources whose float32 error could show:
-    the near field's correction takes the nearest sources' values off again, and where the mesh is coarse next to
-    ``1 / sigma_tr`` the two cancel to many digits); the others are summed in ``precision`` (``np.float64``, or
-    ``np.float32``: twice the pairs a vector step, each within about ``2e-5`` of itself; docs/physics.md §8.3).
-    Returns ``(n_rcv, C)`` float64.
+    The rows below ``n_sources`` (the mesh's own sources) are summed in float64, the others (the clusters) in
+    ``precision`` (``np.float64``, or ``np.float32``: twice the pairs a vector step, each within about ``2e-5`` of
+    itself; docs/physics.md §8.3). The near field's correction takes the nearest sources' values off again, and
+    where the mesh is coarse next to ``1 / sigma_tr`` the two cancel to many digits. Returns ``(n_rcv, C)`` float64.
     """
     n_channels = records.shape[1] - 9
     out = np.zeros((rcv_points.shape[0], n_channels))
@@ -50,6 +49,7 @@ def grouped_sum(
         rcv_points,
         rcv_normals,
         records,
+        int(n_sources),
         g_starts,
         g_counts,
         int(group),
@@ -63,7 +63,7 @@ def grouped_sum(
 
 @numba.njit(cache=True, nogil=True, fastmath=True, error_model="numpy")
 def _grouped_rows_directional(
-    worker, lo, hi, model, points, normals, records, starts, counts, group, columns, lanes, buffers, out
+    worker, lo, hi, model, points, normals, records, n_sources, starts, counts, group, columns, lanes, buffers, out
 ):
     """:func:`_grouped_rows` of the directional dipole (``model`` is ignored: a constant here)."""
     _grouped_rows(
@@ -74,6 +74,7 @@ def _grouped_rows_directional(
         points,
         normals,
         records,
+        n_sources,
         starts,
         counts,
         group,
@@ -86,10 +87,12 @@ def _grouped_rows_directional(
 
 @numba.njit(cache=True, nogil=True, fastmath=True, error_model="numpy")
 def _grouped_rows_radial(
-    worker, lo, hi, model, points, normals, records, starts, counts, group, columns, lanes, buffers, out
+    worker, lo, hi, model, points, normals, records, n_sources, starts, counts, group, columns, lanes, buffers, out
 ):
     """:func:`_grouped_rows` of the standard and better dipoles."""
-    _grouped_rows(worker, lo, hi, model, points, normals, records, starts, counts, group, columns, lanes, buffers, out)
+    _grouped_rows(
+        worker, lo, hi, model, points, normals, records, n_sources, starts, counts, group, columns, lanes, buffers, out
+    )
 
 
 @numba.njit(cache=True, inline="always")
@@ -112,37 +115,39 @@ def _buffer_sums(model, buffer, n, lanes, c0, x_o, n_o):
 
 
 @numba.njit(cache=True, inline="always", fastmath=True, error_model="numpy")
-def _grouped_rows(worker, lo, hi, model, points, normals, records, starts, counts, group, columns, lanes, buffers, out):
-    """Groups ``lo .. hi - 1`` of :func:`grouped_sum`: gather the list (the columns marked float64 into the float64
-    buffer, the others into the other; positions from the group's first receiver), then each receiver of the group
-    over both."""
+def _grouped_rows(
+    worker, lo, hi, model, points, normals, records, n_sources, starts, counts, group, columns, lanes, buffers, out
+):
+    """Groups ``lo .. hi - 1`` of :func:`grouped_sum`: gather the list (the sources into the float64 buffer, the
+    clusters into the other; positions from the group's first receiver), then each receiver of the group over
+    both."""
     n_out = records.shape[1] - 9
     n_rcv = points.shape[0]
-    lanes64, lanes_narrow = lanes
-    wide, narrow = buffers[0][worker], buffers[1][worker]  # float64, and the precision asked for
-    like = narrow[0, 0]  # its value is not read: its type is the precision asked for
+    lanes64, lanes_far = lanes
+    sources, clusters = buffers[0][worker], buffers[1][worker]
+    like = clusters[0, 0]  # its value is not read: its type is the clusters' precision
     for g in range(lo, hi):
         first, n = starts[g], counts[g]
         head = g * group
         origin = (points[head, 0], points[head, 1], points[head, 2])
-        n_wide, n_narrow = 0, 0
+        n_near, n_far = 0, 0
         for k in range(n):
             i = columns[first + k]
-            if i < 0:
-                _gathered(wide, n_wide, records, -1 - i, origin, n_out)
-                n_wide += 1
+            if i < n_sources:
+                _gathered(sources, n_near, records, i, origin, n_out)
+                n_near += 1
             else:
-                _gathered(narrow, n_narrow, records, i, origin, n_out)
-                n_narrow += 1
+                _gathered(clusters, n_far, records, i, origin, n_out)
+                n_far += 1
         for r in range(head, min(n_rcv, head + group)):
             x_o = (points[r, 0] - origin[0], points[r, 1] - origin[1], points[r, 2] - origin[2])
             n_o = (normals[r, 0], normals[r, 1], normals[r, 2])
-            x_narrow = (in_precision_of(x_o[0], like), in_precision_of(x_o[1], like), in_precision_of(x_o[2], like))
-            normal = (in_precision_of(n_o[0], like), in_precision_of(n_o[1], like), in_precision_of(n_o[2], like))
+            x_far = (in_precision_of(x_o[0], like), in_precision_of(x_o[1], like), in_precision_of(x_o[2], like))
+            n_far_o = (in_precision_of(n_o[0], like), in_precision_of(n_o[1], like), in_precision_of(n_o[2], like))
             for channel_group in range(lanes64.shape[0] // 3):
                 c0 = 3 * channel_group
-                a0, a1, a2 = _buffer_sums(model, wide, n_wide, lanes64, c0, x_o, n_o)
-                b0, b1, b2 = _buffer_sums(model, narrow, n_narrow, lanes_narrow, c0, x_narrow, normal)
+                a0, a1, a2 = _buffer_sums(model, sources, n_near, lanes64, c0, x_o, n_o)
+                b0, b1, b2 = _buffer_sums(model, clusters, n_far, lanes_far, c0, x_far, n_far_o)
                 store_three(out, r, c0, n_out, a0 + b0, a1 + b1, a2 + b2)
 
 

@@ -27,13 +27,6 @@ GROUP_RECEIVERS = 4
 #: what its run left undecided (:func:`_traverse`). The lists are those of every group walked alone.
 WALK_FANOUT = 4
 SHARED_LEVELS = 3
-#: A float32 pair is within this of itself, relative (tests/scatter/test_kernels.py; docs/physics.md §8.3).
-FLOAT32_PAIR_ERROR = 3e-5
-#: A leaf's sources are summed in float32 where FLOAT32_PAIR_ERROR of the bound of their sum at the group is within
-#: this share of the group's allowance (a node's aggregate may err by all of it): the near field's correction
-#: takes the nearest sources' values off again, and where they are large next to ``B`` (a coarse mesh) float32's
-#: error would stay.
-FLOAT32_SHARE = 0.1
 
 
 def group_spheres(rcv_points, group):
@@ -79,14 +72,6 @@ def shared_walks(centre, spread, limit, levels: int = SHARED_LEVELS, fanout: int
     return (*joined, np.asarray(first[:-1], dtype=np.int64), np.asarray(spans, dtype=np.int64))
 
 
-def _float32_ratio(rule, allow) -> float:
-    """How many times its pair bound a leaf's allowance must be for its sources to be summed in float32
-    (:func:`walk_lists`): ``FLOAT32_SHARE / FLOAT32_PAIR_ERROR``, or 0 (never) without an allowance or in float64."""
-    if allow is None or rule.precision != np.float32:
-        return 0.0
-    return FLOAT32_SHARE / FLOAT32_PAIR_ERROR
-
-
 def walk_lists(
     tree, node_flux, lit, rcv_points, rule, allow=None, reach=math.inf, group=GROUP_RECEIVERS, count_only=False
 ):
@@ -97,11 +82,8 @@ def walk_lists(
 
     Nodes without flux (``node_flux (nodes, C)``) are skipped, and only sources with ``lit`` are listed. Returns
     ``(starts, direct, clustered, columns)``: the group's list is ``columns[starts[g] : starts[g] + direct[g]
-    + clustered[g]]``, entries ``j < n`` source ``j``, ``n + k`` node ``k``'s cluster, and ``-1 - j`` source ``j``
-    to be summed in float64 (``count_only``: the counts only, ``columns`` empty). A leaf's sources may be summed in
-    float32 (listed as ``j``) where ``rule.precision`` is float32, the walk has an allowance, and
-    :data:`FLOAT32_PAIR_ERROR` of the bound of their sum is within :data:`FLOAT32_SHARE` of it (docs/physics.md
-    §8.3); the first walk's are all float64.
+    + clustered[g]]``, entries ``j < n`` source ``j`` and ``n + k`` node ``k``'s cluster (``count_only``: the
+    counts only, ``columns`` empty).
     """
     centre, spread, members = group_spheres(rcv_points, group)
     n_groups = centre.shape[0]
@@ -122,7 +104,7 @@ def walk_lists(
         spread,
         limit,
         reach,
-        (*rule.kernel_arguments(), _float32_ratio(rule, allow)),
+        rule.kernel_arguments(),
         shared_walks(centre, spread, limit, SHARED_LEVELS, WALK_FANOUT, scale),
     )
     pieces = {}  # each range's list, by its first group (one pass: each range grows its own list)
@@ -189,15 +171,14 @@ def _expand(first, last, heads, sphere, allowance, walk, out, at, at_heads):
     :data:`UNDECIDED`: the groups may differ, as they may where a run's distances are not numbers (a receiver at
     NaN). For one group (``alone``: ``less == -more``, ``allow_lo`` the same as ``allow_hi``) nothing is undecided.
 
-    Appends the listed sources and clusters (source ``j``, ``-1 - j`` where it is to be summed in float64, or
-    ``n + node``; a run marks a leaf float64 by its nearest distance and least allowance) to ``out`` from ``at`` and the
+    Appends the listed sources and clusters (source ``j``, or ``n + node``) to ``out`` from ``at`` and the
     undecided nodes to ``heads`` from ``at_heads`` (past ``last``). Returns ``(out, at, heads, at_heads, direct,
     clustered)``: the arrays, grown as needed, and the counts of sources and clusters appended."""
     point, less, more, alone = sphere
     allow_lo, allow_hi, row = allowance
     tree, node_flux, lit, reach, rule = walk
     order, start, end, left, right, centre, radius = tree
-    theta, min_distance, bound, log_first, per_log, curvature, float32_ratio = rule
+    theta, min_distance, bound, log_first, per_log, curvature = rule
     theta2 = theta * theta
     n_src = lit.shape[0]
     n_c = node_flux.shape[1]
@@ -264,18 +245,10 @@ def _expand(first, last, heads, sphere, allowance, walk, out, at, at_heads):
             elif what == OPEN and left[k] < 0:
                 if at + end[k] - start[k] > out.shape[0]:
                     out = _grown(out, at, end[k] - start[k])
-                gap = near_lo - rk
-                single = float32_ratio > 0.0 and gap > 0.0  # float32 where the sources' error bound is small
-                if single:
-                    at_bound = bound_index(gap, log_first, per_log, n_bound)
-                    for c in range(n_c):
-                        if not node_flux[k, c] * bound[c, at_bound] <= float32_ratio * allow_lo[row, c]:
-                            single = False
-                            break
                 for i in range(start[k], end[k]):
                     j = order[i]
                     if lit[j]:
-                        out[at] = j if single else -1 - j
+                        out[at] = j
                         at += 1
                         n_direct += 1
             elif what == OPEN:
