@@ -169,6 +169,7 @@ def test_exp_nonpositive_in_float32_is_float32_and_within_2e_5():
     error = np.abs(approx - exact) / exact
     assert error.max() <= 2e-5
     assert error.max() > 1e-9
+    assert kernels.exp_nonpositive(np.float32(-110.0)) == 0.0  # underflows, as float64's does past -746
 
 
 @pytest.mark.parametrize("model", ["directional", "standard", "better"])
