@@ -53,7 +53,7 @@ BOUND_TABLE_MM = (1e-6, 1e5, 4000)
 #: ``min_distance``): nearer than that S_d varies with the angles between normals and refracted
 #: directions as much as with the distance, which a cluster's size-over-distance test does not see.
 CLUSTER_MEAN_FREE_PATHS = 1.0
-#: The lists are summed in float32 where ``tol`` is at least this (each pair within about 1e-4 of itself, well
+#: The lists' clusters are summed in float32 where ``tol`` is at least this (each within about 2e-5 of itself, well
 #: inside tol; docs/physics.md §8.3), in float64 below it.
 FLOAT32_TOL = 1e-3
 

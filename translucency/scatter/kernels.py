@@ -53,6 +53,9 @@ MODELS = dict(zip(names.MODELS, (MODEL_DIRECTIONAL, MODEL_STANDARD, MODEL_BETTER
 FOUR_PI_SQUARED = 4.0 * math.pi * math.pi
 #: 1 / k! for k = 0 .. 10: the Taylor polynomial of :func:`exp_nonpositive`.
 INVERSE_FACTORIALS = tuple(1.0 / math.factorial(k) for k in range(11))
+#: :func:`exp_reduction` in float64 and in float32.
+EXP_REDUCTION_64 = (-746.0, 1.0 / 4096.0, 12, INVERSE_FACTORIALS)
+EXP_REDUCTION_32 = (np.float32(-104.0), np.float32(1.0 / 128.0), 7, tuple(np.float32(c) for c in INVERSE_FACTORIALS))
 
 
 def in_precision_of(value, x):
@@ -75,17 +78,14 @@ def exp_reduction(x):
     at ``lowest`` below it, where ``e^x`` underflows to 0 (-746 in float64, -104 in float32), and ``e^x = (e^(x
     2^-m))^(2^m)`` with ``m`` = 12 squarings in float64 and 7 in float32 (each squaring doubles the relative error
     of what it squares). One call for all the constants: each call a kernel inlines costs compile time."""
-    if isinstance(x, np.float32):
-        return np.float32(-104.0), np.float32(1.0 / 128.0), 7, tuple(np.float32(c) for c in INVERSE_FACTORIALS)
-    return -746.0, 1.0 / 4096.0, 12, INVERSE_FACTORIALS
+    return EXP_REDUCTION_32 if isinstance(x, np.float32) else EXP_REDUCTION_64
 
 
 @overload(exp_reduction, inline="always")
 def _exp_reduction_compiled(x):
     if isinstance(x, types.Float) and x.bitwidth == 32:
-        single = tuple(np.float32(c) for c in INVERSE_FACTORIALS)
-        return lambda x: (np.float32(-104.0), np.float32(1.0 / 128.0), 7, single)
-    return lambda x: (-746.0, 1.0 / 4096.0, 12, INVERSE_FACTORIALS)
+        return lambda x: EXP_REDUCTION_32
+    return lambda x: EXP_REDUCTION_64
 
 
 def channel_parameters(sigma_a, sigma_s, g, eta, model: str = "directional") -> np.ndarray:
