@@ -11,6 +11,12 @@ function (:func:`_lane`, a model index argument) serves every model, and one ker
 (:func:`translucency.scatter.listsums.grouped_sum`) may take float32 (tested to 5e-5), every
 other kernel float64.
 
+Inlining: numba's own (``inline="always"``) copies a function's IR into every call and types it again there, which
+made most of the set-up's compilation (the pair functions nest four deep). It is kept where a loop would not
+vectorise without it (the pair's geometry and channels, which return many values, and the loops over sources); the
+leaves (:func:`exp_nonpositive`, :func:`_ray_source`, :func:`modified_normal`, :func:`radial_dipole`, the constants'
+overloads) are plain compiled functions, which LLVM inlines as it optimises (bench/README.md, "First run").
+
 Channel parameters travel as a ``(K, N_PARAMS)`` float64 array built by :func:`channel_parameters`;
 the columns are named by the ``P_*`` constants. Kernels never validate: the solver does, at its
 boundary.
@@ -66,7 +72,7 @@ def in_precision_of(value, x):
     return np.float32(value) if isinstance(x, np.float32) else value
 
 
-@overload(in_precision_of, inline="always")
+@overload(in_precision_of)
 def _in_precision_of_compiled(value, x):
     if isinstance(x, types.Float) and x.bitwidth == 32:
         return lambda value, x: np.float32(value)
@@ -81,7 +87,7 @@ def exp_reduction(x):
     return EXP_REDUCTION_32 if isinstance(x, np.float32) else EXP_REDUCTION_64
 
 
-@overload(exp_reduction, inline="always")
+@overload(exp_reduction)
 def _exp_reduction_compiled(x):
     if isinstance(x, types.Float) and x.bitwidth == 32:
         return lambda x: EXP_REDUCTION_32
@@ -144,7 +150,7 @@ def _radial_parameters(sigma_a, sigma_s, g, eta, model):
     return params
 
 
-@numba.njit(cache=True, inline="always", fastmath=True)
+@numba.njit(cache=True, fastmath=True)
 def exp_nonpositive(x):
     """``e^x`` for ``x <= 0`` without a library call, so that loops using it vectorise, in ``x``'s precision.
 
@@ -170,7 +176,7 @@ def exp_nonpositive(x):
     return p
 
 
-@numba.njit(cache=True, inline="always", fastmath=True)
+@numba.njit(cache=True, fastmath=True)
 def _ray_source(x_dot_w, x_dot_n, w_dot_n, d, D, inv_D, sigma_tr_, C_phi, C_E, norm_over_4pi2):
     """``S'_d`` of one ray source from its dot products and distance (docs/physics.md §4.4), 1/(mm^2 sr).
 
@@ -227,7 +233,7 @@ def orthonormal_frame(u0, u1, u2):
     return a0, a1, a2, u1 * a2 - u2 * a1, u2 * a0 - u0 * a2, u0 * a1 - u1 * a0
 
 
-@numba.njit(cache=True, inline="always", fastmath=True)
+@numba.njit(cache=True, fastmath=True)
 def modified_normal(x0, x1, x2, ni0, ni1, ni2):
     """``(r^2, n_i*)`` for the pair offset ``x = x_o - x_i`` (mm): the unit normal of the modified tangent
     plane, ``n_i`` less its part along ``x`` (``n_i`` when ``r = 0`` or ``n_i || x``; docs/physics.md §4.1)."""
@@ -275,7 +281,7 @@ def pair_geometry(x0, x1, x2, ni0, ni1, ni2, w0, w1, w2, nx, ny, nz):
     return r2, perp2, mu0, x_dot_w, x_dot_n, x_dot_v, s_dot_v, s_dot_n, v_dot_n, x_dot_s
 
 
-@numba.njit(cache=True, inline="always", fastmath=True)
+@numba.njit(cache=True, fastmath=True)
 def radial_dipole(model, r2, p):
     """``S_d`` of the standard (``model`` 1) or better (2) dipole at squared distance ``r2`` (mm^2) for one
     channel (``p``: its parameters, :func:`lane`)."""
