@@ -73,7 +73,7 @@ def _cross(model, P, N, r0, r1, c0, c1, params, dirs, pinv, row_scale, eps, kmax
         used[i] = True
         visited += 1
         full2 = 0.0
-        fitted_run(model, P, N, r0 + i, c0, c1, True, params, dirs, pinv, space, fits)
+        fitted_run(model, P, N, r0 + i, c0, c1, np.bool_(True), params, dirs, pinv, space, fits)
         for b in range(c1 - c0):
             for t in range(AFFINE_TERMS):
                 value = fits[b, 0, t] * row_scale[i]
@@ -107,7 +107,7 @@ def _cross(model, P, N, r0, r1, c0, c1, params, dirs, pinv, row_scale, eps, kmax
             return -1
         source = j // AFFINE_TERMS
         if source != cached:
-            fitted_run(model, P, N, c0 + source, r0, r1, False, params, dirs, pinv, space, fits)
+            fitted_run(model, P, N, c0 + source, r0, r1, np.bool_(False), params, dirs, pinv, space, fits)
             for a in range(m):
                 for t in range(AFFINE_TERMS):
                     column_cache[a, t] = fits[a, 0, t] * row_scale[a]

@@ -328,8 +328,8 @@ def fitted_run(model, P, N, fixed, lo, hi, sources_vary, params, dirs, pinv, spa
     if not _directional_run(model, length, params, scratch, out):
         return
     for c in range(params.shape[0]):
-        _run_channel(params[c], dirs, pinv, True, length, scratch, out[:, c, :])
-        count = 0
+        _run_channel(params[c], dirs, pinv, np.bool_(True), length, scratch, out[:, c, :])
+        count = np.int64(0)
         for q in range(length):  # distances too far apart to interpolate: each direction evaluated
             if span[1, q] - span[0, q] > FIT_INTERPOLATED_SPREAD * span[0, q]:
                 again_at[count] = q
@@ -338,7 +338,7 @@ def fitted_run(model, P, N, fixed, lo, hi, sources_vary, params, dirs, pinv, spa
                 count += 1
         if count > 0:
             _run_geometry(count, again[0], again[1])
-            _run_channel(params[c], dirs, pinv, False, count, again, again_out[:, 0, :])
+            _run_channel(params[c], dirs, pinv, np.bool_(False), count, again, again_out[:, 0, :])
             for k in range(count):
                 for t in range(AFFINE_TERMS):
                     out[again_at[k], c, t] = again_out[k, 0, t]

@@ -16,6 +16,8 @@ made most of the set-up's compilation (the pair functions nest four deep). It is
 vectorise without it (the pair's geometry and channels, which return many values, and the loops over sources); the
 leaves (:func:`exp_nonpositive`, :func:`_ray_source`, :func:`modified_normal`, :func:`radial_dipole`, the constants'
 overloads) are plain compiled functions, which LLVM inlines as it optimises (bench/README.md, "First run").
+numba also compiles a function once per constant it is handed (``True``, ``0``) and per array layout, so the kernels
+hand each other values (``np.bool_(True)``, ``np.int64(0)``) and contiguous arrays.
 
 Channel parameters travel as a ``(K, N_PARAMS)`` float64 array built by :func:`channel_parameters`;
 the columns are named by the ``P_*`` constants. Kernels never validate: the solver does, at its

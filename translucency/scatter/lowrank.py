@@ -206,8 +206,8 @@ def _fill_dense(worker, lo, hi, model, P, N, dense, params, dirs, pinv, held_sta
             o = r0 + a
             for h in range(held_starts[o], held_starts[o + 1]):
                 mark[held_columns[h]] = o
-            fitted_run(model, P, N, o, c0, c1, True, params if last - first == n_c else single[first], dirs, pinv,
-                       space, fits)  # fmt: skip
+            rows = params if last - first == n_c else single[first]
+            fitted_run(model, P, N, o, c0, c1, np.bool_(True), rows, dirs, pinv, space, fits)
             for b in range(c1 - c0):
                 held = mark[c0 + b] == o
                 for c in range(first, last):

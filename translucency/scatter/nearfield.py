@@ -1433,9 +1433,9 @@ def _flush_points(model, queued, params, dirs, pinv, batch, vertex_areas, slot, 
     and add each point's coefficients to its corners' rows of ``out`` (``slot``: each vertex's row), shared by
     ``b_k / A_k`` (per unit flux of the corner); returns 0, the queue's new length."""
     if queued == 0:
-        return 0
+        return np.int64(0)
     scratch, fitted, corners, shares = batch
-    fitted_points(model, queued, params, dirs, pinv, False, scratch, fitted)
+    fitted_points(model, queued, params, dirs, pinv, np.bool_(False), scratch, fitted)
     for q in range(queued):
         for corner in range(3):
             v = corners[q, corner]
@@ -1447,7 +1447,7 @@ def _flush_points(model, queued, params, dirs, pinv, batch, vertex_areas, slot, 
             for c in range(params.shape[0]):
                 for t in range(QUADRATIC_TERMS):
                     row[c * QUADRATIC_TERMS + t] += share * fitted[q, c, t]
-    return 0
+    return np.int64(0)
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
@@ -1496,12 +1496,12 @@ def _operator_rows(
     found = np.empty((4**6, 7))
     own = np.empty((4 * ang_x.shape[0] * rad_x.shape[0], 4))
     batch = (  # the points waiting to be fitted (_queue_point): the fit's scratch, its output, corners, shares
-        run_scratch(dirs_q.shape[0], POINT_BATCH),
+        run_scratch(dirs_q.shape[0], np.int64(POINT_BATCH)),
         np.empty((POINT_BATCH, n_c, QUADRATIC_TERMS)),
         np.empty((POINT_BATCH, 3), dtype=np.int64),
         np.empty((POINT_BATCH, 3)),
     )
-    queued = 0
+    queued = np.int64(0)
     acc = np.zeros((64, width))
     rule = np.zeros(64)  # per listed vertex: its share of the near triangles' vertex rule, mm^2
     one = np.empty(3, dtype=np.int64)  # a vertex as a degenerate triangle (its own point)

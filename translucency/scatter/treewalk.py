@@ -86,6 +86,7 @@ def walk_lists(
     counts only, ``columns`` empty).
     """
     centre, spread, members = group_spheres(rcv_points, group)
+    node_flux = np.ascontiguousarray(node_flux, dtype=np.float64)  # one layout: numba compiles the walk once
     n_groups = centre.shape[0]
     if allow is None:
         limit = np.full((n_groups, node_flux.shape[1]), np.inf)
@@ -233,13 +234,13 @@ def _expand(first, last, heads, sphere, allowance, walk, out, at, at_heads):
                         break
             if what == CLUSTER:
                 if at == out.shape[0]:
-                    out = _grown(out, at, 1)
+                    out = _grown(out, at, np.int64(1))
                 out[at] = n_src + k
                 at += 1
                 n_cluster += 1
             elif what == UNDECIDED:
                 if at_heads == heads.shape[0]:
-                    heads = _grown(heads, at_heads, 1)
+                    heads = _grown(heads, at_heads, np.int64(1))
                 heads[at_heads] = k
                 at_heads += 1
             elif what == OPEN and left[k] < 0:
@@ -289,7 +290,7 @@ def _traverse(lo, hi, tree, node_flux, lit, rcv_points, rcv_spread, allow, reach
             if o != lo and o % level_span[level] != 0:
                 continue
             run = level_first[level] + o // level_span[level]
-            sphere = (centres[run], less[run], more[run], False)
+            sphere = (centres[run], less[run], more[run], np.bool_(False))
             listed, end_listed, heads, end_heads, run_direct[level], run_cluster[level] = _expand(
                 heads_end[level],
                 heads_end[level + 1],
@@ -307,7 +308,7 @@ def _traverse(lo, hi, tree, node_flux, lit, rcv_points, rcv_spread, allow, reach
             columns = _grown(columns, at, listed_end[n_levels])
         columns[at : at + listed_end[n_levels]] = listed[: listed_end[n_levels]]
         at += listed_end[n_levels]
-        sphere = (rcv_points[o], rcv_spread[o], -rcv_spread[o], True)
+        sphere = (rcv_points[o], rcv_spread[o], -rcv_spread[o], np.bool_(True))
         first, last = heads_end[n_levels], heads_end[n_levels + 1]
         columns, at, heads, _, n_direct, n_cluster = _expand(
             first, last, heads, sphere, (allow, allow, o), walk, columns, at, last
