@@ -86,11 +86,9 @@ def fitted_pairs(model, x0, x1, x2, ni0, ni1, ni2, no0, no1, no2, params, dirs, 
     :func:`~translucency.scatter.fits.fitted_points`) must equal, one pair at a time.
 
     The virtual source is affine in ``w`` and goes in exactly; the real source depends on ``w`` also through
-    its corrected distance ``d_r(w)`` (§4.3), evaluated at each direction (interpolated in ``d_r`` from three
-    evaluations where the distances differ by less than
-    :data:`~translucency.scatter.fits.FIT_INTERPOLATED_SPREAD`; one evaluation at a middle distance is not enough
-    even far away, where the real and the virtual source nearly cancel and a small error in the real source is a
-    large one in their difference). The geometry is
+    its corrected distance ``d_r(w)`` (§4.3), evaluated at each direction (one evaluation at a middle distance is
+    not enough even far away, where the real and the virtual source nearly cancel and a small error in the real
+    source is a large one in their difference). The geometry is
     shared by the channels. ``work`` is scratch space, ``(max(len(dirs), 9), FIT_WORK_COLUMNS)`` float64 (no
     allocation here: this runs once per operator entry). Written to ``out[c]``: ``a, b0, b1, b2`` then ``Q00,
     Q11, Q22, 2 Q01, 2 Q02, 2 Q12`` (the coefficients of ``1, w_x, w_y, w_z, w_x^2, w_y^2, w_z^2, w_x w_y, w_x
@@ -136,8 +134,6 @@ def fitted_pairs(model, x0, x1, x2, ni0, ni1, ni2, no0, no1, no2, params, dirs, 
         )
         mirror = 2.0 * (bv0 * s0 + bv1 * s1 + bv2 * s2)  # M b_v = b_v - 2 (n* . b_v) n*
         # the real source's distance at each direction (section 4.3)
-        low = math.inf
-        high = 0.0
         for k in range(n_dirs):
             mu0 = work[k, 3]
             if mu0 > 0.0:
@@ -145,35 +141,8 @@ def fitted_pairs(model, x0, x1, x2, ni0, ni1, ni2, no0, no1, no2, params, dirs, 
                 d_r2 = r2 + D * mu0 * (D * mu0 - 2.0 * d_e * cos_beta)
             else:
                 d_r2 = r2 + backlit * backlit
-            d = max(math.sqrt(d_r2), floor)
-            work[k, 5] = d
-            low = min(low, d)
-            high = max(high, d)
-        if high - low <= fits.FIT_INTERPOLATED_SPREAD * low:
-            # quadratic interpolation in d_r through low, mid, high (one evaluation when they coincide)
-            mid = 0.5 * (low + high)
-            am = _affine_source(x0, x1, x2, x_dot_n, no0, no1, no2, mid, p)
-            al = am
-            ah = am
-            half = 0.5 * (high - low)
-            if half > 0.0:
-                al = _affine_source(x0, x1, x2, x_dot_n, no0, no1, no2, low, p)
-                ah = _affine_source(x0, x1, x2, x_dot_n, no0, no1, no2, high, p)
-            for k in range(n_dirs):
-                t = (work[k, 5] - mid) / half if half > 0.0 else 0.0
-                lw, mw, hw = 0.5 * t * (t - 1.0), 1.0 - t * t, 0.5 * t * (t + 1.0)
-                work[k, 6] = (
-                    lw * al[0]
-                    + mw * am[0]
-                    + hw * ah[0]
-                    + (lw * al[1] + mw * am[1] + hw * ah[1]) * work[k, 0]
-                    + (lw * al[2] + mw * am[2] + hw * ah[2]) * work[k, 1]
-                    + (lw * al[3] + mw * am[3] + hw * ah[3]) * work[k, 2]
-                )
-        else:
-            for k in range(n_dirs):
-                a = _affine_source(x0, x1, x2, x_dot_n, no0, no1, no2, work[k, 5], p)
-                work[k, 6] = a[0] + a[1] * work[k, 0] + a[2] * work[k, 1] + a[3] * work[k, 2]
+            a = _affine_source(x0, x1, x2, x_dot_n, no0, no1, no2, max(math.sqrt(d_r2), floor), p)
+            work[k, 6] = a[0] + a[1] * work[k, 0] + a[2] * work[k, 1] + a[3] * work[k, 2]
         for j in range(n_terms):
             total = 0.0
             for k in range(n_dirs):

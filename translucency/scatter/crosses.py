@@ -13,7 +13,7 @@ import numba
 import numpy as np
 
 from ..threads import for_ranges, thread_count
-from .fits import AFFINE_TERMS, fitted_run, run_space
+from .fits import AFFINE_TERMS, fitted_run, run_scratch
 
 __all__ = [
     "CHECK_ROWS",
@@ -54,7 +54,7 @@ def _cross(model, P, N, r0, r1, c0, c1, params, dirs, pinv, row_scale, eps, kmax
     It stops when the last cross is below ``eps`` of the block's Frobenius norm (Bebendorf's estimate, on the
     scaled entries: each row relative to its own receiver's scale), or when the next pivot row and
     :data:`CHECK_ROWS` - 1 rows drawn at random are each held to ``eps`` of their own norm. ``space`` is
-    :func:`~translucency.scatter.fits.run_space`'s for runs at least as long as the block's sides."""
+    :func:`~translucency.scatter.fits.run_scratch`'s for runs at least as long as the block's sides."""
     m = r1 - r0
     n = (c1 - c0) * AFFINE_TERMS
     fits = np.empty((max(m, c1 - c0), 1, AFFINE_TERMS))
@@ -201,7 +201,7 @@ class Approximations:
         self.buffers = [[np.empty((0, 0)), np.empty((0, 0))] for _ in range(thread_count())]
         # each thread's fits work in one space made for the longest run there is (made per block, the large ones
         # were fresh memory every time, which this machine fills at 0.5-2 GB/s)
-        self.spaces = [run_space(dirs.shape[0], longest) for _ in range(thread_count())]
+        self.spaces = [run_scratch(dirs.shape[0], longest) for _ in range(thread_count())]
 
     def row_scales(self, items):
         """:func:`_row_scales` of the blocks ``items`` (``(row node, column node, channel)`` rows)."""

@@ -49,7 +49,6 @@ __all__ = [
     "fitted_run",
     "fitted_points",
     "run_scratch",
-    "run_space",
 ]
 
 
@@ -57,9 +56,6 @@ __all__ = [
 AFFINE_TERMS = 4
 #: ... of a near-field entry: also the quadratic terms ``w_x^2, w_y^2, w_z^2, w_x w_y, w_x w_z, w_y w_z`` (6).
 QUADRATIC_TERMS = 10
-#: Relative spread of the corrected distances over the fit's directions below which the real source is
-#: interpolated in the distance from three evaluations instead of evaluated at each direction.
-FIT_INTERPOLATED_SPREAD = 0.02
 
 
 def fit_directions(eta: float, terms: int):
@@ -108,7 +104,6 @@ def _affine_terms(x0, x1, x2, x_dot_n, n0, n1, n2, d, D, sigma_tr_, scale, C_phi
 _X0, _X1, _X2, _NI0, _NI1, _NI2, _NO0, _NO1, _NO2 = range(9)  # the pairs
 _R2, _S0, _S1, _S2, _XN, _XS, _SN, _E0, _E1, _E2, _F0, _F1, _F2 = range(13)  # their geometry
 _VA, _VB0, _VB1, _VB2 = range(4)  # the virtual source's a, b
-_AL, _AM, _AH = 0, 4, 8  # the real source's a, b0, b1, b2 at the least, middle and largest distance
 #: Coefficients of the quadratic fit in the source's frame: ``1, w_x, w_y, w_z, w_x^2, w_y^2, w_x w_y, w_x w_z,
 #: w_y w_z`` (:func:`fit_directions`).
 LOCAL_QUADRATIC_TERMS = 9
@@ -127,8 +122,6 @@ def run_scratch(directions, length):
         np.empty((13, width)),
         np.empty((4, width)),
         np.empty((directions, width)),
-        np.empty((2, width)),
-        np.empty((12, width)),
         np.empty((LOCAL_QUADRATIC_TERMS, width)),
     )
 
@@ -170,13 +163,12 @@ def _run_geometry(length, pair, geo):
 
 
 @numba.njit(cache=True, fastmath=True, nogil=True, error_model="numpy")
-def _run_channel(p, dirs, pinv, interpolate, length, scratch, out):
+def _run_channel(p, dirs, pinv, length, scratch, out):
     """The fits of one channel (parameters ``p``) of a run's pairs into ``out (length, terms)``, each step one loop
-    over the run: the virtual source, the corrected distances, ``S_d`` at each direction (the real source
-    interpolated in the distance from its least, middle and largest value where ``interpolate``, or evaluated at
-    each), the least-squares fit, and its terms in global coordinates (:data:`AFFINE_TERMS`, or :data:`QUADRATIC_TERMS`
-    when ``pinv`` has :data:`LOCAL_QUADRATIC_TERMS` rows)."""
-    pair, geo, virtual, dist, span, real, coef = scratch
+    over the run: the virtual source, the corrected distances, ``S_d`` at each direction (the real source evaluated
+    at each direction's distance), the least-squares fit, and its terms in global coordinates (:data:`AFFINE_TERMS`,
+    or :data:`QUADRATIC_TERMS` when ``pinv`` has :data:`LOCAL_QUADRATIC_TERMS` rows)."""
+    pair, geo, virtual, dist, coef = scratch
     n_dirs = dirs.shape[0]
     D = p[P_D]
     d_e = p[P_D_E]
@@ -209,30 +201,17 @@ def _run_channel(p, dirs, pinv, interpolate, length, scratch, out):
             cos_beta = -math.sqrt(max(r2 - xw * xw, 0.0) / (r2 + d_e * d_e))
             front = r2 + D * mu0 * (D * mu0 - 2.0 * d_e * cos_beta)
             dist[k, q] = max(math.sqrt(front if mu0 > 0.0 else r2 + backlit2), floor)
-    if interpolate:
-        _span_and_three_sources(length, n_dirs, pair, geo, dist, span, real, D, sigma_tr_, scale, C_phi, C_E)
     for k in range(n_dirs):  # S_d's real source at each direction, in place of its distance
         u0, u1, u2 = dirs[k, 0], dirs[k, 1], dirs[k, 2]
         for q in range(length):
             w0 = u0 * geo[_E0, q] + u1 * geo[_F0, q] + u2 * pair[_NI0, q]
             w1 = u0 * geo[_E1, q] + u1 * geo[_F1, q] + u2 * pair[_NI1, q]
             w2 = u0 * geo[_E2, q] + u1 * geo[_F2, q] + u2 * pair[_NI2, q]
-            if interpolate:
-                low, high = span[0, q], span[1, q]
-                half = 0.5 * (high - low)
-                t = (dist[k, q] - 0.5 * (low + high)) / half if half > 0.0 else 0.0
-                lw, mw, hw = 0.5 * t * (t - 1.0), 1.0 - t * t, 0.5 * t * (t + 1.0)
-                dist[k, q] = (
-                    lw * (real[_AL, q] + real[_AL + 1, q] * w0 + real[_AL + 2, q] * w1 + real[_AL + 3, q] * w2)
-                    + mw * (real[_AM, q] + real[_AM + 1, q] * w0 + real[_AM + 2, q] * w1 + real[_AM + 3, q] * w2)
-                    + hw * (real[_AH, q] + real[_AH + 1, q] * w0 + real[_AH + 2, q] * w1 + real[_AH + 3, q] * w2)
-                )
-            else:
-                a0, a1, a2, a3 = _affine_terms(
-                    pair[_X0, q], pair[_X1, q], pair[_X2, q], geo[_XN, q], pair[_NO0, q], pair[_NO1, q],
-                    pair[_NO2, q], dist[k, q], D, sigma_tr_, scale, C_phi, C_E,
-                )  # fmt: skip
-                dist[k, q] = a0 + a1 * w0 + a2 * w1 + a3 * w2
+            a0, a1, a2, a3 = _affine_terms(
+                pair[_X0, q], pair[_X1, q], pair[_X2, q], geo[_XN, q], pair[_NO0, q], pair[_NO1, q],
+                pair[_NO2, q], dist[k, q], D, sigma_tr_, scale, C_phi, C_E,
+            )  # fmt: skip
+            dist[k, q] = a0 + a1 * w0 + a2 * w1 + a3 * w2
     for j in range(pinv.shape[0]):  # the least-squares fit over the directions
         for q in range(length):
             coef[j, q] = 0.0
@@ -248,30 +227,6 @@ def _run_channel(p, dirs, pinv, interpolate, length, scratch, out):
         out[q, 3] = geo[_E2, q] * c1 + geo[_F2, q] * c2 + pair[_NI2, q] * c3 - virtual[_VB2, q]
     if pinv.shape[0] == LOCAL_QUADRATIC_TERMS:
         _global_quadratic(length, pair, geo, coef, out)
-
-
-@numba.njit(cache=True, fastmath=True, nogil=True, error_model="numpy")
-def _span_and_three_sources(length, n_dirs, pair, geo, dist, span, real, D, sigma_tr_, scale, C_phi, C_E):
-    """The least and largest corrected distance of each pair into ``span``, and the real source at them and at
-    their middle into ``real`` (the run's interpolation in the distance)."""
-    for q in range(length):
-        span[0, q] = dist[0, q]
-        span[1, q] = dist[0, q]
-    for k in range(1, n_dirs):
-        for q in range(length):
-            span[0, q] = min(span[0, q], dist[k, q])
-            span[1, q] = max(span[1, q], dist[k, q])
-    for q in range(length):
-        x0, x1, x2, xn = pair[_X0, q], pair[_X1, q], pair[_X2, q], geo[_XN, q]
-        n0, n1, n2 = pair[_NO0, q], pair[_NO1, q], pair[_NO2, q]
-        low, high = span[0, q], span[1, q]
-        al = _affine_terms(x0, x1, x2, xn, n0, n1, n2, low, D, sigma_tr_, scale, C_phi, C_E)
-        am = _affine_terms(x0, x1, x2, xn, n0, n1, n2, 0.5 * (low + high), D, sigma_tr_, scale, C_phi, C_E)
-        ah = _affine_terms(x0, x1, x2, xn, n0, n1, n2, high, D, sigma_tr_, scale, C_phi, C_E)
-        for t in range(AFFINE_TERMS):
-            real[_AL + t, q] = al[t]
-            real[_AM + t, q] = am[t]
-            real[_AH + t, q] = ah[t]
 
 
 @numba.njit(cache=True, fastmath=True, nogil=True, error_model="numpy")
@@ -296,65 +251,34 @@ def _global_quadratic(length, pair, geo, coef, out):
         out[q, 9] = 2.0 * (e1 * m20 + f1 * m21 + n1 * m22)
 
 
-@numba.njit(cache=True)
-def run_space(directions, length):
-    """What :func:`fitted_run` works in, for ``directions`` fit directions and runs of up to ``length`` pairs: its
-    scratch (:func:`run_scratch`), and a second one with an output and indices for the pairs it fits again."""
-    return (
-        run_scratch(directions, length),
-        run_scratch(directions, length),
-        np.empty((length, 1, AFFINE_TERMS)),  # taken as [:, 0, :], the layout _run_channel is compiled for
-        np.empty(length, dtype=np.int64),
-    )
-
-
 @numba.njit(cache=True, fastmath=True, nogil=True, error_model="numpy")
-def fitted_run(model, P, N, fixed, lo, hi, sources_vary, params, dirs, pinv, space, out):
+def fitted_run(model, P, N, fixed, lo, hi, sources_vary, params, dirs, pinv, scratch, out):
     """The affine fits (:data:`AFFINE_TERMS`; docs/physics.md §8.7) of a run of pairs that share one end, written to
     ``out[q, c, :]`` for every channel ``c`` (rows of ``params``): receiver ``fixed`` and sources ``lo + q``
     (``sources_vary``; a row of the far field's matrix), or source ``fixed`` and receivers ``lo + q`` (a column);
-    ``P``, ``N`` the points (mm) and unit normals; ``space`` is :func:`run_space`'s.
+    ``P``, ``N`` the points (mm) and unit normals; ``scratch`` is :func:`run_scratch`'s for at least ``hi - lo``
+    pairs.
 
     The fits of each pair alone (to rounding; the tests check them one pair at a time), computed a step at a time
     over the whole run so that each step is one loop the compiler vectorises: the geometry, the virtual source, the
-    corrected distance at every
-    direction, and the real source at the least, middle and largest of them, interpolated in the distance. The
-    pairs whose distances spread by more than :data:`FIT_INTERPOLATED_SPREAD` are fitted again, together, with
-    the real source evaluated at each direction (:func:`fitted_points`' way)."""
-    scratch, again, again_out, again_at = space
-    pair, span = scratch[0], scratch[4]
+    corrected distance at every direction and the real source at it, the fit (:func:`fitted_points`' steps)."""
     length = hi - lo
-    _gathered(P, N, fixed, lo, length, sources_vary, pair)
-    if not _directional_run(model, length, params, scratch, out):
-        return
-    for c in range(params.shape[0]):
-        _run_channel(params[c], dirs, pinv, np.bool_(True), length, scratch, out[:, c, :])
-        count = np.int64(0)
-        for q in range(length):  # distances too far apart to interpolate: each direction evaluated
-            if span[1, q] - span[0, q] > FIT_INTERPOLATED_SPREAD * span[0, q]:
-                again_at[count] = q
-                for t in range(9):
-                    again[0][t, count] = pair[t, q]
-                count += 1
-        if count > 0:
-            _run_geometry(count, again[0], again[1])
-            _run_channel(params[c], dirs, pinv, np.bool_(False), count, again, again_out[:, 0, :])
-            for k in range(count):
-                for t in range(AFFINE_TERMS):
-                    out[again_at[k], c, t] = again_out[k, 0, t]
+    _gathered(P, N, fixed, lo, length, sources_vary, scratch[0])
+    if _directional_run(model, length, params, scratch, out):
+        for c in range(params.shape[0]):
+            _run_channel(params[c], dirs, pinv, length, scratch, out[:, c, :])
 
 
 @numba.njit(cache=True, fastmath=True, nogil=True, error_model="numpy")
-def fitted_points(model, length, params, dirs, pinv, interpolate, scratch, out):
+def fitted_points(model, length, params, dirs, pinv, scratch, out):
     """The fits (affine or quadratic, by ``pinv`` of :func:`fit_directions`) of ``length`` pairs already written
     into the first array of ``scratch`` (:func:`run_scratch`): row ``t`` of it the offsets ``x_o - x_i`` (mm, rows
     0-2), the source normals (3-5) and the receiver normals (6-8), column ``q`` the pair; written to ``out[q, c,
     :]`` for every channel (rows of ``params``), a step at a time over the pairs. The real source is evaluated at
-    each direction's corrected distance (the near field's pairs), or, where ``interpolate``, interpolated in it from
-    its least, middle and largest value."""
+    each direction's corrected distance."""
     if _directional_run(model, length, params, scratch, out):
         for c in range(params.shape[0]):
-            _run_channel(params[c], dirs, pinv, interpolate, length, scratch, out[:, c, :])
+            _run_channel(params[c], dirs, pinv, length, scratch, out[:, c, :])
 
 
 @numba.njit(cache=True, fastmath=True, nogil=True, error_model="numpy")

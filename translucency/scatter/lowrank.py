@@ -42,7 +42,7 @@ import numpy as np
 
 from ..threads import for_ranges, thread_count
 from .crosses import CROSS_KERNELS, SCALE_CHUNK, Approximations, far_items, longest_run, rank_limits, split
-from .fits import AFFINE_TERMS, fitted_run, run_space
+from .fits import AFFINE_TERMS, fitted_run, run_scratch
 from .hierarchy import SourceTree
 
 __all__ = ["ETA", "LEAF_SIZE", "FarMatrix", "build", "partition"]
@@ -192,10 +192,10 @@ def _fill_dense(worker, lo, hi, model, P, N, dense, params, dirs, pinv, held_sta
     order). A block kept for one channel (its cross approximation failed there only) fits that channel alone."""
     n_c = params.shape[0]
     single = params.reshape(n_c, 1, params.shape[1])  # each channel's parameters as a (1, P) array of their own
-    length = 0
+    length = np.int64(0)
     for k in range(lo, hi):
         length = max(length, dense[k, 3] - dense[k, 2])
-    space = run_space(dirs.shape[0], length)
+    space = run_scratch(dirs.shape[0], length)
     fits = np.empty((length, n_c, AFFINE_TERMS))
     mark = stamps[worker]
     for k in range(lo, hi):

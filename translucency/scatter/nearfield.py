@@ -1435,7 +1435,7 @@ def _flush_points(model, queued, params, dirs, pinv, batch, vertex_areas, slot, 
     if queued == 0:
         return np.int64(0)
     scratch, fitted, corners, shares = batch
-    fitted_points(model, queued, params, dirs, pinv, np.bool_(False), scratch, fitted)
+    fitted_points(model, queued, params, dirs, pinv, scratch, fitted)
     for q in range(queued):
         for corner in range(3):
             v = corners[q, corner]
