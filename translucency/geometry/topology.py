@@ -58,19 +58,24 @@ def unique_edges(triangles) -> tuple[np.ndarray, np.ndarray]:
     edge_of_corner : ndarray, shape (m, 3), int64
         ``edges[edge_of_corner[t, i]]`` is the edge from corner i to corner i+1 of triangle t.
     """
-    count, larger, smaller, edge_of_slot = _numbered_edges(*_edge_inputs(triangles), np.empty(0, dtype=np.int64))
+    count, larger, smaller, edge_of_slot = _numbered(triangles)
     edges = np.empty((count, 2), dtype=np.int64)
     edges[:, 0], edges[:, 1] = smaller[:count], larger[:count]
-    return edges, edge_of_slot.reshape(-1, 3)
+    return edges, edge_of_slot.astype(np.int64).reshape(-1, 3)
 
 
 def corner_edge_numbers(triangles) -> tuple[np.ndarray, int]:
     """:func:`unique_edges`' ``edge_of_corner`` and the number of edges, without the edges: int32 where the corners
-    are fewer than 2**31 (a third of the memory :func:`unique_edges` holds while it counts)."""
-    triangles, n = _edge_inputs(triangles)
-    index = index_dtype(max(3 * triangles.shape[0], n))
-    count, _, _, edge_of_slot = _numbered_edges(triangles, n, np.empty(0, dtype=index))
+    are fewer than 2**31 (:func:`unique_edges` widens them to int64)."""
+    count, _, _, edge_of_slot = _numbered(triangles)
     return edge_of_slot.reshape(-1, 3), int(count)
+
+
+def _numbered(triangles):
+    """:func:`_numbered_edges` of ``triangles``, numbered in int32 where the corners are fewer than 2**31 (one
+    compiled kernel for :func:`unique_edges` and :func:`corner_edge_numbers`)."""
+    triangles, n = _edge_inputs(triangles)
+    return _numbered_edges(triangles, n, np.empty(0, dtype=index_dtype(max(3 * triangles.shape[0], n))))
 
 
 def _edge_inputs(triangles):
