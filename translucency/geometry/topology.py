@@ -61,7 +61,7 @@ def unique_edges(triangles) -> tuple[np.ndarray, np.ndarray]:
     count, larger, smaller, edge_of_slot = _numbered(triangles)
     edges = np.empty((count, 2), dtype=np.int64)
     edges[:, 0], edges[:, 1] = smaller[:count], larger[:count]
-    return edges, edge_of_slot.astype(np.int64).reshape(-1, 3)
+    return edges, edge_of_slot.astype(np.int64, copy=False).reshape(-1, 3)
 
 
 def corner_edge_numbers(triangles) -> tuple[np.ndarray, int]:

@@ -234,7 +234,8 @@ def aggregate(order, start, end, left, right, points, normals, w12, flux):
     _leaf_sums(order, start, end, leaves, *(kernel_array(a, np.float64) for a in (points, normals, w12, flux)), sums)
     for nodes in levels:
         sums[nodes] = sums[left[nodes]] + sums[right[nodes]]
-    node_flux, weight, sums = sums[:, :n_out], sums[:, n_out], sums[:, n_out + 1 :]  # flux-weighted pos, normal, w12
+    # the flux contiguous, as the walk takes it; flux-weighted position, normal, w12
+    node_flux, weight, sums = np.ascontiguousarray(sums[:, :n_out]), sums[:, n_out], sums[:, n_out + 1 :]
     # weighted sums -> means
     some = weight > 0.0
     out_pos = np.zeros((n_nodes, 3))
@@ -323,7 +324,7 @@ def aggregated_sources(tree: SourceTree, points, normals, w12, flux) -> Aggregat
         tree.order, tree.start, tree.end, tree.left, tree.right, points, normals, w12, flux
     )
     records = _source_records((points, normals, w12, flux), (node_pos, node_nrm, node_dir, node_flux))
-    return AggregatedSources(records, points.shape[0], np.ascontiguousarray(node_flux), flux.sum(axis=1) > 0)
+    return AggregatedSources(records, points.shape[0], node_flux, flux.sum(axis=1) > 0)
 
 
 def _source_records(sources, nodes) -> np.ndarray:
