@@ -183,12 +183,12 @@ def test_the_count_before_the_build_is_what_the_build_holds(name):
     assert len(far_pairs) * 3 > 2 * crosses.SAMPLED_BLOCKS  # the count draws a sample
     sampled = count(crosses.SAMPLED_BLOCKS)
     every = count(10**9)
-    stored = matrix.U.size + matrix.V.size
-    assert every["cross_entries"] == stored and every["row_scales"] == matrix.U_scale.size
+    stored = matrix.U.nbytes + matrix.V.nbytes + matrix.V8.nbytes
+    assert every["cross_bytes"] == stored and every["row_scales"] == matrix.U_scale.size
     sizes = tree.end - tree.start
     whole = 3 * np.sum(sizes[dense_pairs[:, 0]] * sizes[dense_pairs[:, 1]])
     assert 4 * (whole + every["dense_entries"]) == matrix.D.size
-    assert abs(sampled["cross_entries"] / stored - 1.0) < 0.1
+    assert abs(sampled["cross_bytes"] / stored - 1.0) < 0.1
     assert abs(sampled["row_scales"] / matrix.U_scale.size - 1.0) < 0.1
 
 
@@ -204,7 +204,7 @@ def test_the_sampled_count_is_what_every_block_counts_on_average_over_its_starts
     for seed in range(24):
         monkeypatch.setattr(crosses, "SAMPLE_SEED", seed)
         starts.append(count(crosses.SAMPLED_BLOCKS))
-    for key in ("cross_entries", "row_scales", "fits"):
+    for key in ("cross_bytes", "row_scales", "fits"):
         assert abs(np.mean([start[key] for start in starts]) / every[key] - 1.0) < 0.02, key
 
 
@@ -212,34 +212,50 @@ def test_the_crosses_store_grows_past_what_it_reserved_and_keeps_every_block():
     store = lowrank._CrossStore(5, 7, 2)  # room for less than one block
     rng = np.random.default_rng(0)
     blocks = [
-        (rng.normal(size=(m, k)) * np.logspace(0, -30, m)[:, None], rng.uniform(-1.0, 1.0, size=(k, 4 * n)))
-        for m, k, n in [(3, 2, 4), (8, 5, 2), (1, 1, 1)]
+        (rng.normal(size=(m, k)) * np.logspace(0, -30, m)[:, None], rng.uniform(-1.0, 1.0, size=(k, 4 * n)), narrow)
+        for m, k, n, narrow in [(3, 2, 4, 1), (8, 5, 2, 0), (1, 1, 1, 1)]
     ]
     blocks[1][0][4] = 0.0  # a row of zeros stays zero
-    places = [store.put(U, V) for U, V in blocks]
-    U_all, V_all, scales = store.arrays()
-    assert U_all.size == sum(U.size for U, _ in blocks) and V_all.size == sum(V.size for _, V in blocks)
-    assert scales.size == sum(U.shape[0] for U, _ in blocks)
-    for (U, V), (u_at, v_at, s_at) in zip(blocks, places):
+    places = [store.put(U, V, narrow) for U, V, narrow in blocks]
+    U_all, V_all, scales, V8_all = store.arrays()
+    assert U_all.size == sum(U.size for U, _, _ in blocks)
+    assert V_all.size == sum((V.shape[0] - narrow) * V.shape[1] for _, V, narrow in blocks)
+    assert V8_all.size == sum(narrow * V.shape[1] for _, V, narrow in blocks)
+    assert scales.size == sum(U.shape[0] for U, _, _ in blocks)
+    for (U, V, narrow), (u_at, v_at, s_at, v8_at) in zip(blocks, places):
         held = U_all[u_at : u_at + U.size].reshape(U.shape[1], U.shape[0]).T * scales[s_at : s_at + U.shape[0], None]
         # each row to half a step of its own largest entry, however small the row
         largest = np.abs(U).max(axis=1, keepdims=True)
         assert np.all(np.abs(held - U) <= 0.5001 * largest / lowrank.FIXED_STEPS)
+        wide = V.shape[0] - narrow
         np.testing.assert_allclose(
-            V_all[v_at : v_at + V.size].reshape(V.shape) * lowrank.V_STEP, V, atol=lowrank.V_STEP
+            V_all[v_at : v_at + wide * V.shape[1]].reshape(wide, V.shape[1]) * lowrank.V_STEP,
+            V[:wide],
+            atol=lowrank.V_STEP,
+        )
+        np.testing.assert_allclose(  # the last rows in 8 bits, each entry to half a step
+            V8_all[v8_at : v8_at + narrow * V.shape[1]].reshape(narrow, V.shape[1]) * lowrank.V8_STEP,
+            V[wide:],
+            atol=0.5001 * lowrank.V8_STEP,
         )
 
 
 def _stored_product(matrix, tree_values):
     """``B (n, C)`` in the tree's order for ``tree_values (C, 4 n)``, block by block in numpy from the stored
-    crosses (``U`` a cross at a time, in steps of its row scales; ``V`` in steps of ``V_STEP``) and dense blocks."""
+    components (``U`` one at a time, in steps of its row scales; ``V`` in steps of ``V_STEP``, its last ``k8`` rows of
+    ``V8_STEP``) and dense blocks."""
     n = matrix.order.size
     B = np.zeros((n, matrix.n_channels))
     terms = fits.AFFINE_TERMS
-    for r0, r1, c0, c1, c, k, u_at, v_at, s_at in matrix.low_rank:
+    for r0, r1, c0, c1, c, k, u_at, v_at, s_at, k8, v8_at in matrix.low_rank:
         m, columns = r1 - r0, (c1 - c0) * terms
         U = matrix.U[u_at : u_at + m * k].reshape(k, m).T * matrix.U_scale[s_at : s_at + m, None].astype(np.float64)
-        V = matrix.V[v_at : v_at + k * columns].reshape(k, columns) * lowrank.V_STEP
+        V = np.concatenate(
+            [
+                matrix.V[v_at : v_at + (k - k8) * columns].reshape(k - k8, columns) * lowrank.V_STEP,
+                matrix.V8[v8_at : v8_at + k8 * columns].reshape(k8, columns) * lowrank.V8_STEP,
+            ]
+        )
         B[r0:r1, c] += U @ (V @ tree_values[c, c0 * terms : c1 * terms])
     for r0, r1, c0, c1, first, last, at in matrix.dense:
         m, columns = r1 - r0, (c1 - c0) * terms
@@ -273,3 +289,37 @@ def test_a_light_on_part_of_the_surface_gives_the_stored_matrix_product():
         np.testing.assert_allclose(matrix.apply(values), expected, rtol=0, atol=1e-5 * max(scale, 1e-300))
         if share == 0.0:
             assert np.all(matrix.apply(values) == 0.0)
+
+
+@pytest.mark.parametrize("m, n, k", [(40, 160, 12), (7, 300, 7), (200, 64, 30), (30, 120, 1)])
+def test_the_recompressed_crosses_keep_the_block_and_only_the_singular_values_it_needs(m, n, k):
+    """A block given as ``k`` crosses whose singular values fall over six decades: recompressed, the product moves by
+    at most RECOMPRESS_SHARE eps of its norm, it keeps as many components as numpy's SVD says that allows, each V row
+    is in [-1, 1] with its largest entry 1, and the rows held in 8 bits add at most NARROW_SHARE eps when rounded."""
+    rng = np.random.default_rng(k)
+    eps = 1e-2
+    left, _ = np.linalg.qr(rng.normal(size=(m, k)))
+    right, _ = np.linalg.qr(rng.normal(size=(n, k)))
+    singular = np.logspace(0, -6, k)
+    mix = rng.normal(size=(k, k))  # crosses that are not orthogonal
+    U0 = (left * singular) @ mix
+    V0 = np.linalg.solve(mix, right.T)
+    block = U0 @ V0
+    U = np.zeros((m + 3, k + 2))
+    V = np.zeros((k + 2, n + 5))
+    U[:m, :k], V[:k, :n] = U0, V0
+    kept, narrow = crosses._recompressed(U, V, m, n, k, eps)
+    s = np.linalg.svd(block, compute_uv=False)
+    tail = np.sqrt(np.cumsum(s[::-1] ** 2)[::-1])  # tail[q]: what leaving out components q.. drops
+    expected = int(np.sum(tail > crosses.RECOMPRESS_SHARE * eps * np.linalg.norm(block)))
+    assert kept == expected
+    product = U[:m, :kept] @ V[:kept, :n]
+    assert np.linalg.norm(product - block) <= crosses.RECOMPRESS_SHARE * eps * np.linalg.norm(block) * 1.0001
+    np.testing.assert_allclose(np.abs(V[:kept, :n]).max(axis=1), 1.0)
+    assert 0 <= narrow <= kept
+    rounded = V[:kept, :n].copy()
+    rounded[kept - narrow :] = np.rint(rounded[kept - narrow :] * crosses.NARROW_STEPS) / crosses.NARROW_STEPS
+    moved = np.linalg.norm(U[:m, :kept] @ rounded - product)
+    assert moved <= crosses.NARROW_SHARE * eps * np.linalg.norm(block) * 1.0001
+    if k > 4:
+        assert narrow > 0  # the smallest components are well below what 8 bits lose

@@ -3,8 +3,10 @@
 A far block of the relighting operator (docs/physics.md §8.9; :mod:`translucency.scatter.lowrank`), rows the
 receivers and columns the (source, term) pairs of one channel, is approximated by crosses (Bebendorf 2000): each
 step evaluates one row and one column of fits (:func:`~translucency.scatter.fits.fitted_run`). A block that needs
-more than :func:`rank_limit` crosses is split into its children's blocks (:func:`split`). The budget counts what
-every block's crosses would hold from a sample of them (:func:`sampled_count`).
+more than :func:`rank_limit` crosses is split into its children's blocks (:func:`split`). A block's crosses are then
+recompressed (:func:`_recompressed`): fewer, orthogonal components, the last of them to be held in 8 bits instead of
+16 (docs/physics.md §8.9). The budget counts what every block's crosses would hold from a sample of them
+(:func:`sampled_count`).
 """
 
 from __future__ import annotations
@@ -17,6 +19,9 @@ from .fits import AFFINE_TERMS, fitted_run, run_scratch
 
 __all__ = [
     "CHECK_ROWS",
+    "NARROW_SHARE",
+    "NARROW_STEPS",
+    "RECOMPRESS_SHARE",
     "CROSS_KERNELS",
     "Approximations",
     "far_items",
@@ -44,12 +49,171 @@ def rank_limits(rows, columns) -> np.ndarray:
 CHECK_ROWS = 3
 
 
+#: A block's crosses are recompressed (:func:`_recompressed`) to the fewest orthogonal components whose singular
+#: values left out hold at most this share of ``eps`` of the block's Frobenius norm (the crosses themselves stop at
+#: ``eps``; the two errors add about in quadrature).
+RECOMPRESS_SHARE = 0.5
+#: Steps of the 8-bit fixed point of a component's ``V`` held narrow: its largest entry is this many steps.
+NARROW_STEPS = 127
+#: The last (smallest) components of a block whose ``V`` rounded to :data:`NARROW_STEPS` steps adds at most this share
+#: of ``eps`` of the block's Frobenius norm are held in 8 bits instead of 16.
+NARROW_SHARE = 0.25
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _symmetric_eigen(A):
+    """Eigenvalues (descending) and eigenvectors (columns) of the symmetric ``A`` (``k x k``, overwritten) by cyclic
+    Jacobi rotations (Golub and Van Loan, §8.5), until the off-diagonal part is 1e-15 of the whole: small matrices
+    only, and no LAPACK (whose threads compete with the workers')."""
+    k = A.shape[0]
+    E = np.eye(k)
+    whole = 0.0
+    for p in range(k):
+        for q in range(k):
+            whole += A[p, q] * A[p, q]
+    for _ in range(64):
+        off = 0.0
+        for p in range(k):
+            for q in range(p + 1, k):
+                off += A[p, q] * A[p, q]
+        if off <= 1e-30 * whole:
+            break
+        for p in range(k - 1):
+            for q in range(p + 1, k):
+                apq = A[p, q]
+                if apq == 0.0:
+                    continue
+                theta = (A[q, q] - A[p, p]) / (2.0 * apq)
+                t = (1.0 if theta >= 0.0 else -1.0) / (abs(theta) + np.sqrt(theta * theta + 1.0))
+                c = 1.0 / np.sqrt(t * t + 1.0)
+                s = t * c
+                for r in range(k):
+                    arp, arq = A[r, p], A[r, q]
+                    A[r, p] = c * arp - s * arq
+                    A[r, q] = s * arp + c * arq
+                for r in range(k):
+                    apr, aqr = A[p, r], A[q, r]
+                    A[p, r] = c * apr - s * aqr
+                    A[q, r] = s * apr + c * aqr
+                for r in range(k):
+                    erp, erq = E[r, p], E[r, q]
+                    E[r, p] = c * erp - s * erq
+                    E[r, q] = s * erp + c * erq
+    values = np.empty(k)
+    for p in range(k):
+        values[p] = A[p, p]
+    order = np.argsort(-values)
+    return values[order], np.ascontiguousarray(E[:, order])
+
+
+@numba.njit(cache=True, nogil=True, fastmath=True, error_model="numpy")
+def _small_product(A, B):
+    """``A @ B`` of two small matrices, without BLAS (whose threads compete with the workers')."""
+    C = np.zeros((A.shape[0], B.shape[1]))
+    for i in range(A.shape[0]):
+        for p in range(A.shape[1]):
+            weight = A[i, p]
+            for j in range(B.shape[1]):
+                C[i, j] += weight * B[p, j]
+    return C
+
+
+@numba.njit(cache=True, nogil=True, fastmath=True, error_model="numpy")
+def _recompressed(U, V, m, n, k, eps):
+    """The crosses ``U[:m, :k] V[:k, :n]`` of one block (rows scaled) recompressed in place (Bebendorf 2008, §1.1.5):
+    with ``U = Q R`` (modified Gram-Schmidt) and ``R V V^T R^T = W S^2 W^T`` (:func:`_symmetric_eigen`), the block is
+    ``sum_q (Q W S)_q (S^-1 W^T R V)_q``, components in order of their singular values ``s_q``. The fewest are kept
+    whose left-out ``s_q`` hold at most :data:`RECOMPRESS_SHARE` ``eps`` of ``|S|``, each ``V`` row divided by its
+    largest entry (so that it is in [-1, 1]) and ``U``'s column multiplied by it. Returns ``(kept, narrow)``: the
+    components kept, and how many of the last of them may be held in 8 bits (:data:`NARROW_STEPS`): their rounding
+    ``s_q |dV_q|`` adds, in quadrature, at most :data:`NARROW_SHARE` ``eps`` of ``|S|``."""
+    if k == 0:
+        return 0, 0
+    Q = np.empty((k, m))  # U's columns as rows, then orthonormalised
+    for a in range(m):
+        for p in range(k):
+            Q[p, a] = U[a, p]
+    R = np.zeros((k, k))
+    for p in range(k):
+        for q in range(p):
+            dot = 0.0
+            for a in range(m):
+                dot += Q[q, a] * Q[p, a]
+            R[q, p] = dot
+            for a in range(m):
+                Q[p, a] -= dot * Q[q, a]
+        norm = 0.0
+        for a in range(m):
+            norm += Q[p, a] * Q[p, a]
+        norm = np.sqrt(norm)
+        R[p, p] = norm
+        inverse = 1.0 / norm if norm > 0.0 else 0.0
+        for a in range(m):
+            Q[p, a] *= inverse
+    outer = np.empty((k, k))  # V V^T, then R V V^T R^T: the Gram matrix of R V, the block being Q (R V)
+    for p in range(k):
+        for q in range(p + 1):
+            dot = 0.0
+            for j in range(n):
+                dot += V[p, j] * V[q, j]
+            outer[p, q] = outer[q, p] = dot
+    gram = _small_product(_small_product(R, outer), np.ascontiguousarray(R.T))
+    squares, W = _symmetric_eigen(gram)
+    total2 = 0.0
+    for q in range(k):
+        total2 += max(squares[q], 0.0)
+    kept = k
+    left = 0.0
+    while kept > 0 and left + max(squares[kept - 1], 0.0) <= (RECOMPRESS_SHARE * eps) ** 2 * total2:
+        kept -= 1
+        left += max(squares[kept], 0.0)
+    narrow = 0
+    rounded2 = 0.0
+    budget2 = (NARROW_SHARE * eps) ** 2 * total2
+    to_v = _small_product(np.ascontiguousarray(W.T), R)  # the new V's rows: (W^T R) V, each s_q times a unit row
+    V_new = np.empty((kept, n))
+    column = np.empty(m)
+    for q in range(kept - 1, -1, -1):
+        row = V_new[q]
+        row[:] = 0.0
+        for p in range(k):
+            weight = to_v[q, p]
+            for j in range(n):
+                row[j] += weight * V[p, j]
+        largest = 0.0
+        for j in range(n):
+            largest = max(largest, abs(row[j]))
+        if largest == 0.0:
+            largest = 1.0
+        error2 = 0.0
+        for j in range(n):
+            v = row[j] / largest
+            row[j] = v
+            e = np.rint(v * NARROW_STEPS) / NARROW_STEPS - v
+            error2 += e * e
+        column[:] = 0.0
+        for p in range(k):
+            weight = W[p, q] * largest
+            for a in range(m):
+                column[a] += weight * Q[p, a]
+        for a in range(m):
+            U[a, q] = column[a]
+        error2 *= largest * largest
+        if narrow == kept - 1 - q and rounded2 + error2 <= budget2:
+            narrow += 1
+            rounded2 += error2
+    for q in range(kept):
+        for j in range(n):
+            V[q, j] = V_new[q, j]
+    return kept, narrow
+
+
 @numba.njit(cache=True, nogil=True, fastmath=True, error_model="numpy")
 def _cross(model, P, N, r0, r1, c0, c1, params, dirs, pinv, row_scale, eps, kmax, U, V, space):
     """Adaptive cross approximation with partial pivoting of one channel (``params`` of one row): rows ``r0:r1``
     x sources ``c0:c1`` (columns ``4 (j - c0) + t``), each row scaled by ``row_scale[row]``: the crosses in
-    ``U[:m, :k]`` and ``V[:k, :4 n]`` (``U V`` unscaled on return); ``k``, or -1 when ``kmax`` crosses were not
-    enough.
+    ``U[:m, :k]`` and ``V[:k, :4 n]``, then recompressed (:func:`_recompressed`; ``U V`` unscaled on return):
+    ``(found, kept, narrow)``, the crosses found (-1 when ``kmax`` were not enough) and :func:`_recompressed`'s.
 
     It stops when the last cross is below ``eps`` of the block's Frobenius norm (Bebendorf's estimate, on the
     scaled entries: each row relative to its own receiver's scale), or when the next pivot row and
@@ -104,7 +268,7 @@ def _cross(model, P, N, r0, r1, c0, c1, params, dirs, pinv, row_scale, eps, kmax
             continue
         passed = 0
         if k == kmax:
-            return -1
+            return -1, 0, 0
         source = j // AFFINE_TERMS
         if source != cached:
             fitted_run(model, P, N, c0 + source, r0, r1, np.bool_(False), params, dirs, pinv, space, fits)
@@ -151,12 +315,13 @@ def _cross(model, P, N, r0, r1, c0, c1, params, dirs, pinv, row_scale, eps, kmax
         i = following
         if u2 * v2 <= eps * eps * abs(norm2):
             break
+    kept, narrow = _recompressed(U, V, m, n, k, eps)
     # unscaled in U, whose rows then have the receivers' own magnitudes: V stays in [-1, 1], and neither leaves
     # float32's range where the rows of a block differ by more than it spans
-    for q in range(k):
+    for q in range(kept):
         for a in range(m):
             U[a, q] /= row_scale[a]
-    return k
+    return k, kept, narrow
 
 
 def _scratch(held: list, rows: int, ranks: int, columns: int) -> tuple[np.ndarray, np.ndarray]:
@@ -208,15 +373,18 @@ class Approximations:
         return _row_scales(self.tree, self.P, items, self.channel_bound)
 
     def cross(self, worker, a, b, c, row_scale):
-        """Block ``(a, b)``'s channel ``c`` by :func:`_cross`, up to :func:`rank_limit` crosses: ``(k, U, V)``, ``k``
-        -1 when they were not enough, ``U (m, k)`` and ``V (k, 4 n)`` views of the worker's scratch."""
+        """Block ``(a, b)``'s channel ``c`` by :func:`_cross`, up to :func:`rank_limit` crosses: ``(found, narrow, U,
+        V)``, ``found`` the crosses found (-1 when they were not enough), ``U (m, k)`` and ``V (k, 4 n)`` views of the
+        worker's scratch holding the ``k`` components kept, the last ``narrow`` of them for 8 bits."""
         start, end = self.tree.start, self.tree.end
         m, cols = int(end[a] - start[a]), int(end[b] - start[b]) * AFFINE_TERMS
         kmax = rank_limit(m, cols)
         U, V = _scratch(self.buffers[worker], m, kmax, cols)
-        k = _cross(self.model, self.P, self.N, start[a], end[a], start[b], end[b], self.channels[c], self.dirs,
-                   self.pinv, row_scale, self.eps, kmax, U, V, self.spaces[worker])  # fmt: skip
-        return k, U[:m, : max(k, 0)], V[: max(k, 0), :cols]
+        found, k, narrow = _cross(
+            self.model, self.P, self.N, start[a], end[a], start[b], end[b], self.channels[c],
+            self.dirs, self.pinv, row_scale, self.eps, kmax, U, V, self.spaces[worker],
+        )  # fmt: skip
+        return found, narrow, U[:m, :k], V[:k, :cols]
 
 
 def split(tree, a, b, c) -> list:
@@ -262,17 +430,17 @@ def sampled_count(
     neighbouring blocks. With fewer far blocks than ``blocks``, every one is counted.
 
     Arguments as :func:`~translucency.scatter.lowrank.build`'s (``points``, ``normals`` in vertex order, mm), ``tree``
-    its block tree. Returns floats: ``cross_entries``, the 16-bit entries of ``U`` and ``V``; ``row_scales``, ``U``'s
-    row scales; ``dense_entries``, the (receiver, source, channel) pairs stored whole in blocks that ran out of
-    crosses; ``fits``, the fits of one pair and channel that the cross approximations and those dense blocks
-    evaluate.
+    its block tree. Returns floats: ``cross_bytes``, the bytes of ``U`` and ``V`` (16-bit entries, and 8-bit ones of
+    the components held narrow); ``row_scales``, ``U``'s row scales; ``dense_entries``, the (receiver, source,
+    channel) pairs stored whole in blocks that ran out of crosses; ``fits``, the fits of one pair and channel that the
+    cross approximations and those dense blocks evaluate.
     """
     order = tree.order
     P = np.ascontiguousarray(points[order], dtype=np.float64)
     N = np.ascontiguousarray(normals[order], dtype=np.float64)
     items = far_items(far_pairs, params.shape[0])
     if not len(items):
-        return {"cross_entries": 0.0, "row_scales": 0.0, "dense_entries": 0.0, "fits": 0.0}
+        return {"cross_bytes": 0.0, "row_scales": 0.0, "dense_entries": 0.0, "fits": 0.0}
     size = tree.end - tree.start
     weight = (size[items[:, 0]] + AFFINE_TERMS * size[items[:, 1]]).astype(np.float64)
     if len(items) <= blocks:
@@ -293,12 +461,13 @@ def sampled_count(
             while pending:
                 a, b, c = pending.pop()
                 _, row_scale = approximations.row_scales(np.array([[a, b, c]], dtype=np.int64))
-                k, _, _ = approximations.cross(worker, a, b, c, row_scale)
+                found, narrow, U, _ = approximations.cross(worker, a, b, c, row_scale)
                 m, n = int(size[a]), int(size[b])
-                crosses = k if k >= 0 else rank_limit(m, AFFINE_TERMS * n)
+                crosses = found if found >= 0 else rank_limit(m, AFFINE_TERMS * n)
                 held[p, 3] += (crosses + CHECK_ROWS) * n + crosses * m
-                if k >= 0:
-                    held[p, :2] += (k * (m + AFFINE_TERMS * n), m)
+                if found >= 0:
+                    k = U.shape[1]
+                    held[p, :2] += (2 * k * m + (2 * k - narrow) * AFFINE_TERMS * n, m)
                     continue
                 children = split(tree, a, b, c)
                 pending += children
@@ -308,9 +477,9 @@ def sampled_count(
 
     for_ranges(run, len(chosen))
     total = counted @ held
-    return {"cross_entries": total[0], "row_scales": total[1], "dense_entries": total[2], "fits": total[3]}
+    return {"cross_bytes": total[0], "row_scales": total[1], "dense_entries": total[2], "fits": total[3]}
 
 
 #: The compiled kernel of the cross approximations: numba compiles it on first use; the set-up compiles it ahead
 #: (:mod:`translucency.app.warmup`).
-CROSS_KERNELS = (_cross,)
+CROSS_KERNELS = (_cross, _recompressed, _symmetric_eigen, _small_product)

@@ -20,8 +20,9 @@ is a block of the matrix, and
 The error is set by ``eps`` (the rank), not by the opening ratio: ``ETA`` stays at 0.5 for every ``tol``.
 Each receiver's row is divided by the channel's bound of §8.4 at its own distance before the approximation,
 so that the stopping rule holds the rows of distant (dark) receivers too, not only the block's brightest.
-``U`` and ``V`` are stored in 16-bit fixed point (``U`` with one float32 scale per row, one cross after another),
-dense blocks in float32; a light reads every block once.
+The crosses are recompressed (fewer, orthogonal components) and stored in 16-bit fixed point (``U`` with one float32
+scale per row, one component after another), the smallest components' ``V`` in 8 bits; dense blocks in float32; a light
+reads every block once.
 
 =========== ================================================================ ==============
 symbol      meaning                                                          unit
@@ -41,7 +42,16 @@ import numba
 import numpy as np
 
 from ..threads import for_ranges, thread_count
-from .crosses import CROSS_KERNELS, SCALE_CHUNK, Approximations, far_items, longest_run, rank_limits, split
+from .crosses import (
+    CROSS_KERNELS,
+    NARROW_STEPS,
+    SCALE_CHUNK,
+    Approximations,
+    far_items,
+    longest_run,
+    rank_limits,
+    split,
+)
 from .fits import AFFINE_TERMS, fitted_run, run_scratch
 from .hierarchy import SourceTree
 
@@ -55,10 +65,12 @@ ETA = 0.5
 
 #: Steps of the 16-bit fixed point the blocks are held in: a row's largest entry is this many steps.
 FIXED_STEPS = 32767
-#: ``V`` is stored as int16: a cross's ``V`` is its pivot row over the pivot, the row's largest, so every entry is
-#: in [-1, 1] and is kept to 2**-15 of it (far below ``eps``). ``U`` is int16 too, each row in steps of its own
-#: float32 scale, its largest entry :data:`FIXED_STEPS` steps (docs/physics.md §8.9).
+#: ``V`` is stored as int16: each component's ``V`` is divided by its largest entry, so every entry is in [-1, 1]
+#: and is kept to 2**-15 of it (far below ``eps``); the smallest components of a block as int8 in steps of
+#: :data:`V8_STEP` (``crosses.NARROW_SHARE``). ``U`` is int16, each row in steps of its own float32 scale, its
+#: largest entry :data:`FIXED_STEPS` steps (docs/physics.md §8.9).
 V_STEP = 1.0 / FIXED_STEPS
+V8_STEP = 1.0 / NARROW_STEPS
 
 
 @dataclass
@@ -70,15 +82,18 @@ class FarMatrix:
     order : (n,) int64
         The tree's order: row and column ``k`` of every block is vertex ``order[k]``.
     n_channels : int
-    low_rank : (L, 9) int64
+    low_rank : (L, 11) int64
         Per block and channel: first and last row, first and last column (tree order), the channel, rank
-        ``k``, and where its ``U (rows, k)``, ``V (k, columns x 4)`` and its rows' scales start in ``U``, ``V``
-        and ``U_scale``.
+        ``k``, where its ``U (rows, k)``, the first ``k - k8`` rows of its ``V (k, columns x 4)`` and its rows'
+        scales start in ``U``, ``V`` and ``U_scale``, ``k8``, and where the last ``k8`` rows of its ``V`` start in
+        ``V8``.
     U, V : int16
-        The crosses: ``U`` in steps of ``U_scale`` per row, held a cross at a time (``U`` of a block is ``(k,
+        The crosses: ``U`` in steps of ``U_scale`` per row, held a component at a time (``U`` of a block is ``(k,
         rows)``, so that a light's product runs down the rows); ``V`` row-major in steps of :data:`V_STEP`, its
         columns (source, term).
     U_scale : float32
+    V8 : int8
+        The smallest components' ``V`` rows, in steps of :data:`V8_STEP`.
     dense : (M, 7) int64
         Per dense block: first and last row, first and last column, first and last channel, and where its
         ``(channels, rows, columns x 4)`` entries start in ``D``.
@@ -92,6 +107,7 @@ class FarMatrix:
     U: np.ndarray
     U_scale: np.ndarray
     V: np.ndarray
+    V8: np.ndarray
     dense: np.ndarray
     D: np.ndarray
     stats: dict = field(default_factory=dict)
@@ -99,7 +115,7 @@ class FarMatrix:
     @property
     def nbytes(self) -> int:
         """Memory the blocks hold, bytes."""
-        held = (self.order, self.low_rank, self.U, self.U_scale, self.V, self.dense, self.D)
+        held = (self.order, self.low_rank, self.U, self.U_scale, self.V, self.V8, self.dense, self.D)
         return int(sum(a.nbytes for a in held))
 
     def apply(self, values: np.ndarray, scratch: dict | None = None) -> np.ndarray:
@@ -120,7 +136,9 @@ class FarMatrix:
         # the crosses' products in float32, as their factors are held (B changed by 5e-7 of itself at most on the
         # default bunny; 16 lanes a step instead of 8)
         blocks = self.low_rank
-        for_ranges(_apply_low_rank, blocks.shape[0], blocks, self.U, self.U_scale, self.V, narrow, lit_before, out)
+        for_ranges(
+            _apply_low_rank, blocks.shape[0], blocks, self.U, self.U_scale, self.V, self.V8, narrow, lit_before, out
+        )
         for_ranges(_apply_dense, self.dense.shape[0], self.dense, self.D, wide, lit_before, out)
         B = np.empty((n, self.n_channels))
         B[self.order] = out.sum(axis=0)
@@ -136,7 +154,7 @@ class FarMatrix:
         for_ranges(
             _take_entries,
             blocks.shape[0],
-            *(blocks, self.U, self.U_scale, self.V, held_starts, held_columns, rows, coefs, int(terms)),
+            *(blocks, self.U, self.U_scale, self.V, self.V8, held_starts, held_columns, rows, coefs, int(terms)),
         )
 
 
@@ -224,8 +242,8 @@ def _dense_block(blocks, k):
 
 @numba.njit(cache=True, inline="always")
 def _low_rank_block(blocks, k):
-    """Row ``k`` of :attr:`FarMatrix.low_rank`: rows, columns, channel, rank and where ``U``, ``V`` and ``U``'s
-    row scales start."""
+    """Row ``k`` of :attr:`FarMatrix.low_rank`: rows, columns, channel, rank, where ``U``, ``V`` and ``U``'s
+    row scales start, the components held in 8 bits and where they start in ``V8``."""
     return (
         blocks[k, 0],
         blocks[k, 1],
@@ -236,11 +254,13 @@ def _low_rank_block(blocks, k):
         blocks[k, 6],
         blocks[k, 7],
         blocks[k, 8],
+        blocks[k, 9],
+        blocks[k, 10],
     )
 
 
 @numba.njit(cache=True, nogil=True, fastmath=True, error_model="numpy")
-def _apply_low_rank(worker, lo, hi, blocks, U, U_scale, V, values, lit_before, out):
+def _apply_low_rank(worker, lo, hi, blocks, U, U_scale, V, V8, values, lit_before, out):
     """``out[worker, rows, c] += U (V values[c, columns])`` for the low-rank blocks ``lo .. hi - 1`` (``values``
     float32, per channel, four terms per source; the products in float32, each row's sum added in float64),
     skipping those without a lit source (``lit_before[j]``: how many of the sources before ``j`` are lit)."""
@@ -248,8 +268,9 @@ def _apply_low_rank(worker, lo, hi, blocks, U, U_scale, V, values, lit_before, o
     inner = np.zeros(128, dtype=np.float32)
     rows = np.zeros(1024, dtype=np.float32)
     step = np.float32(V_STEP)
+    step8 = np.float32(V8_STEP)
     for k in range(lo, hi):
-        r0, r1, c0, c1, c, rank, u_at, v_at, s_at = _low_rank_block(blocks, k)
+        r0, r1, c0, c1, c, rank, u_at, v_at, s_at, rank8, v8_at = _low_rank_block(blocks, k)
         if lit_before[c1] == lit_before[c0]:
             continue
         n = (c1 - c0) * AFFINE_TERMS
@@ -257,12 +278,19 @@ def _apply_low_rank(worker, lo, hi, blocks, U, U_scale, V, values, lit_before, o
             inner = np.zeros(2 * rank, dtype=np.float32)
         source = values[c, c0 * AFFINE_TERMS : c1 * AFFINE_TERMS]
         # rows taken as slices: indexed from 0 by the loop's own counter, the products vectorise
-        for q in range(rank):
+        wide = rank - rank8
+        for q in range(wide):
             row = V[v_at + q * n : v_at + (q + 1) * n]
             s = np.float32(0.0)
             for j in range(n):
                 s += np.float32(row[j]) * source[j]
             inner[q] = s * step
+        for q in range(rank8):
+            row8 = V8[v8_at + q * n : v8_at + (q + 1) * n]
+            s = np.float32(0.0)
+            for j in range(n):
+                s += np.float32(row8[j]) * source[j]
+            inner[wide + q] = s * step8
         # U a cross at a time: each cross's column runs down the block's rows in one vector loop (a row of U has
         # only k entries, too short a loop to vectorise well)
         m = r1 - r0
@@ -310,13 +338,14 @@ def _tree_ordered(values, order, wide, narrow, lit_before):
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
-def _take_entries(worker, lo, hi, blocks, U, U_scale, V, starts, columns, rows, coefs, terms):
+def _take_entries(worker, lo, hi, blocks, U, U_scale, V, V8, starts, columns, rows, coefs, terms):
     """``coefs[rows[h], c terms + t] -= (U V)[o, j]`` (term ``t``) for every pair ``h`` (receiver ``o``, source ``j =
     columns[h]``, ``h`` in ``starts[o] : starts[o + 1]``, tree order) in the low-rank blocks ``lo .. hi - 1`` (each
     pair and channel is in one block, so the blocks' threads write apart)."""
     for k in range(lo, hi):
-        r0, r1, c0, c1, c, rank, u_at, v_at, s_at = _low_rank_block(blocks, k)
+        r0, r1, c0, c1, c, rank, u_at, v_at, s_at, rank8, v8_at = _low_rank_block(blocks, k)
         n = (c1 - c0) * AFFINE_TERMS
+        wide = rank - rank8
         for o in range(r0, r1):
             for h in range(starts[o], starts[o + 1]):
                 j = columns[h]
@@ -324,9 +353,12 @@ def _take_entries(worker, lo, hi, blocks, U, U_scale, V, starts, columns, rows, 
                     continue
                 for t in range(AFFINE_TERMS):
                     s = 0.0
-                    for q in range(rank):
-                        s += float(U[u_at + q * (r1 - r0) + o - r0]) * V[v_at + q * n + (j - c0) * AFFINE_TERMS + t]
-                    coefs[rows[h], c * terms + t] -= s * V_STEP * U_scale[s_at + o - r0]
+                    at = (j - c0) * AFFINE_TERMS + t
+                    for q in range(wide):
+                        s += float(U[u_at + q * (r1 - r0) + o - r0]) * V[v_at + q * n + at] * V_STEP
+                    for q in range(rank8):
+                        s += float(U[u_at + (wide + q) * (r1 - r0) + o - r0]) * V8[v8_at + q * n + at] * V8_STEP
+                    coefs[rows[h], c * terms + t] -= s * U_scale[s_at + o - r0]
 
 
 @numba.njit(cache=True, nogil=True, fastmath=True, error_model="numpy")
@@ -358,11 +390,13 @@ def _steps(x):
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
-def _fixed_point(U, V, crosses, scales, V_out):
-    """One block's crosses in 16-bit fixed point: ``U (rows, k)`` as steps of one float32 scale per row (its largest
-    entry :data:`FIXED_STEPS` steps) written a cross at a time to ``crosses (k, rows)``, the scales to ``scales``;
-    ``V (k, columns)`` (in [-1, 1]) as steps of :data:`V_STEP` to ``V_out (k, columns)``."""
+def _fixed_point(U, V, crosses, scales, V_out, V8_out):
+    """One block's components in fixed point: ``U (rows, k)`` as 16-bit steps of one float32 scale per row (its
+    largest entry :data:`FIXED_STEPS` steps) written a component at a time to ``crosses (k, rows)``, the scales to
+    ``scales``; ``V (k, columns)`` (in [-1, 1]) as steps of :data:`V_STEP` to ``V_out (k - k8, columns)`` (int16) and
+    its last ``k8`` rows as steps of :data:`V8_STEP` to ``V8_out (k8, columns)`` (int8)."""
     m, k = U.shape
+    wide = V_out.shape[0]
     for a in range(m):
         largest = 0.0
         for q in range(k):
@@ -374,14 +408,17 @@ def _fixed_point(U, V, crosses, scales, V_out):
         step = np.float64(scale) if scale > 0.0 else 1.0
         for q in range(k):
             crosses[q, a] = _steps(U[a, q] / step)
-    for q in range(k):
+    for q in range(wide):
         for j in range(V.shape[1]):
             V_out[q, j] = _steps(V[q, j] / V_STEP)
+    for q in range(k - wide):
+        for j in range(V.shape[1]):
+            V8_out[q, j] = np.int8(min(max(np.rint(V[wide + q, j] * NARROW_STEPS), -NARROW_STEPS), NARROW_STEPS))
 
 
 class _CrossStore:
-    """The crosses of every block, written once into three arrays as they are found: ``U`` and ``V`` int16, ``U``'s
-    row scales float32 (:func:`_fixed_point`).
+    """The components of every block, written once into four arrays as they are found: ``U`` and ``V`` int16, ``U``'s
+    row scales float32, the smallest components' ``V`` int8 (:func:`_fixed_point`).
 
     Each array is reserved larger than it is likely to need and cut to what was used at the end; memory is given
     to a page only when it is first written, so what is reserved and never written costs nothing, and nothing is
@@ -392,34 +429,47 @@ class _CrossStore:
         self.U = np.empty(max(int(u_size), 1), dtype=np.int16)
         self.V = np.empty(max(int(v_size), 1), dtype=np.int16)
         self.S = np.empty(max(int(rows), 1), dtype=np.float32)
+        self.V8 = np.empty(max(int(v_size), 1), dtype=np.int8)
         self.u_at = 0
         self.v_at = 0
         self.s_at = 0
+        self.v8_at = 0
         self.lock = threading.Lock()
 
-    def put(self, U: np.ndarray, V: np.ndarray) -> tuple[int, int, int]:
-        """Store one block's crosses ``U (m, k)`` (held a cross at a time, as ``(k, m)``) and ``V (k, columns)``
-        (float64, ``V`` in [-1, 1]): where they start in :attr:`U` and :attr:`V`, and where ``U``'s row scales start
-        in :attr:`S`."""
+    def put(self, U: np.ndarray, V: np.ndarray, narrow: int = 0) -> tuple[int, int, int, int]:
+        """Store one block's components ``U (m, k)`` (held a component at a time, as ``(k, m)``) and ``V (k,
+        columns)`` (float64, ``V`` in [-1, 1]), the last ``narrow`` rows of ``V`` in 8 bits: where they start in
+        :attr:`U` and :attr:`V`, where ``U``'s row scales start in :attr:`S`, and where the narrow rows start in
+        :attr:`V8`."""
+        wide = (V.shape[0] - narrow) * V.shape[1]
         with self.lock:
-            u_at, v_at, s_at = self.u_at, self.v_at, self.s_at
+            u_at, v_at, s_at, v8_at = self.u_at, self.v_at, self.s_at, self.v8_at
             self.U = _room(self.U, u_at + U.size)
-            self.V = _room(self.V, v_at + V.size)
+            self.V = _room(self.V, v_at + wide)
+            self.V8 = _room(self.V8, v8_at + V.size - wide)
             self.S = _room(self.S, s_at + U.shape[0])
-            crosses = self.U[u_at : u_at + U.size].reshape(U.shape[1], U.shape[0])  # a cross at a time
-            _fixed_point(U, V, crosses, self.S[s_at : s_at + U.shape[0]], self.V[v_at : v_at + V.size].reshape(V.shape))
+            crosses = self.U[u_at : u_at + U.size].reshape(U.shape[1], U.shape[0])  # a component at a time
+            _fixed_point(
+                U,
+                V,
+                crosses,
+                self.S[s_at : s_at + U.shape[0]],
+                self.V[v_at : v_at + wide].reshape(V.shape[0] - narrow, V.shape[1]),
+                self.V8[v8_at : v8_at + V.size - wide].reshape(narrow, V.shape[1]),
+            )
             self.u_at += U.size
-            self.v_at += V.size
+            self.v_at += wide
             self.s_at += U.shape[0]
-        return u_at, v_at, s_at
+            self.v8_at += V.size - wide
+        return u_at, v_at, s_at, v8_at
 
-    def arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """``(U, V, S)`` cut to what was stored (in place: the memory past it is given back, nothing is copied)."""
-        for name, used in (("U", self.u_at), ("V", self.v_at), ("S", self.s_at)):
+    def arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """``(U, V, S, V8)`` cut to what was stored (in place: the memory past it is given back, nothing is copied)."""
+        for name, used in (("U", self.u_at), ("V", self.v_at), ("S", self.s_at), ("V8", self.v8_at)):
             array = getattr(self, name)
             array.resize(max(used, 1), refcheck=False)
             setattr(self, name, array[:used])
-        return self.U, self.V, self.S
+        return self.U, self.V, self.S, self.V8
 
 
 def _room(array: np.ndarray, size: int) -> np.ndarray:
@@ -486,10 +536,10 @@ def build(
     )
     start, end = tree.start, tree.end
 
-    kept = np.array(found, dtype=np.int64).reshape(-1, 7)
-    a, b, c, k, u_at, v_at, s_at = kept[np.argsort(kept[:, 4], kind="stable")].T  # in the order the store holds them
-    low_rank = np.column_stack([start[a], end[a], start[b], end[b], c, k, u_at, v_at, s_at])
-    U_all, V_all, U_scale = store.arrays()
+    kept = np.array(found, dtype=np.int64).reshape(-1, 9)
+    a, b, c, k, u_at, v_at, s_at, k8, v8_at = kept[np.argsort(kept[:, 4], kind="stable")].T  # as the store holds them
+    low_rank = np.column_stack([start[a], end[a], start[b], end[b], c, k, u_at, v_at, s_at, k8, v8_at])
+    U_all, V_all, U_scale, V8_all = store.arrays()
     del store
 
     dense = np.zeros((len(dense_pairs), 7), dtype=np.int64)
@@ -511,7 +561,7 @@ def build(
     )
     report(1.0)
     ranks = low_rank[:, 5]
-    matrix = FarMatrix(order, n_c, low_rank, U_all, U_scale, V_all, dense, D)
+    matrix = FarMatrix(order, n_c, low_rank, U_all, U_scale, V_all, V8_all, dense, D)
     matrix.stats = {
         "eps": eps,
         "eta": ETA,
@@ -519,7 +569,8 @@ def build(
         "dense_blocks": int(len(dense)),
         "rank_mean": float(ranks.mean()) if ranks.size else 0.0,
         "rank_max": int(ranks.max()) if ranks.size else 0,
-        "far_floats": int(U_all.size + V_all.size),
+        "far_floats": int(U_all.size + V_all.size + V8_all.size),
+        "narrow_share": float(V8_all.size / max(V8_all.size + V_all.size, 1)),
         "dense_floats": int(D.size),
         "bytes": matrix.nbytes,
     }
@@ -541,7 +592,8 @@ def _held_in_order(order, starts, columns):
 
 def _crosses(model, tree, P, N, params, dirs, pinv, eps, channel_bound, far_pairs, report):
     """Cross approximations of every far block and channel: ``(found, dense, store)``, ``found`` a list of ``(row
-    node, column node, channel, k, where U, V and U's row scales start)`` in ``store`` (:class:`_CrossStore`); a block
+    node, column node, channel, k, where U, V and U's row scales start, k8, where V8 starts)`` in ``store``
+    (:class:`_CrossStore`; the last ``k8`` components' ``V`` in 8 bits); a block
     that needs more crosses than :func:`~translucency.scatter.crosses.rank_limit` is split into its children's blocks
     (:func:`~translucency.scatter.crosses.split`), and a pair of leaves that does is added to ``dense`` as ``(row
     node, column node, channel)``."""
@@ -563,8 +615,12 @@ def _crosses(model, tree, P, N, params, dirs, pinv, eps, channel_bound, far_pair
             chunk = items[first : min(hi, first + SCALE_CHUNK)]
             offsets, row_scales = approximations.row_scales(chunk)
             for p, (a, b, c) in enumerate(chunk):
-                k, U, V = approximations.cross(worker, a, b, c, row_scales[offsets[p] : offsets[p + 1]])
-                kept.append((a, b, c, k, *(store.put(U, V) if k >= 0 else (-1, -1, -1))))
+                found, narrow, U, V = approximations.cross(worker, a, b, c, row_scales[offsets[p] : offsets[p + 1]])
+                if found < 0:
+                    kept.append((a, b, c, -1, -1, -1, -1, 0, -1))
+                    continue
+                u_at, v_at, s_at, v8_at = store.put(U, V, narrow)
+                kept.append((a, b, c, U.shape[1], u_at, v_at, s_at, narrow, v8_at))
 
     found, dense = [], set()
     items = far_items(far_pairs, n_c)
@@ -574,9 +630,9 @@ def _crosses(model, tree, P, N, params, dirs, pinv, eps, channel_bound, far_pair
         for_ranges(run, len(items), items, progress=lambda f, at=at, share=share: report(0.9 * (at + f * share)))
         following = []
         for kept in kept_by:
-            for a, b, c, k, u_at, v_at, s_at in kept:
+            for a, b, c, k, u_at, v_at, s_at, k8, v8_at in kept:
                 if k >= 0:
-                    found.append((a, b, c, k, u_at, v_at, s_at))
+                    found.append((a, b, c, k, u_at, v_at, s_at, k8, v8_at))
                 else:
                     children = split(tree, a, b, c)
                     following += children

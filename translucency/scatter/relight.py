@@ -62,11 +62,10 @@ __all__ = [
 ]
 
 #: Bytes per near-field entry per channel (ten float32) plus its column index (int32); per entry of the far field's
-#: crosses (int16, :data:`~translucency.scatter.lowrank.FIXED_STEPS`) and of its dense blocks (float32), and per
-#: scale of a row of ``U`` (float32).
+#: dense blocks (float32), and per scale of a row of ``U`` (float32). The crosses are counted in bytes
+#: (:func:`~translucency.scatter.crosses.sampled_count`).
 NEAR_ENTRY_BYTES = 4 * QUADRATIC_TERMS
 INDEX_BYTES = 4
-CROSS_ENTRY_BYTES = 2
 DENSE_ENTRY_BYTES = 4
 ROW_SCALE_BYTES = 4
 #: The far field's cross approximations stop at ``eps = tol / EPS_PER_TOL`` of each receiver's row: the rows'
@@ -292,7 +291,7 @@ def operator_bytes(
             blocks=blocks,
         )
         size = near_bytes + (whole + counted["dense_entries"]) * AFFINE_TERMS * DENSE_ENTRY_BYTES
-        size += counted["cross_entries"] * CROSS_ENTRY_BYTES + counted["row_scales"] * ROW_SCALE_BYTES
+        size += counted["cross_bytes"] + counted["row_scales"] * ROW_SCALE_BYTES
         return float(size), {"far_fits": counted["fits"] + whole, "near_entries": near_entries, "eps": far_eps(tol)}
 
     if within is not None:
