@@ -53,6 +53,8 @@ CHECK_ROWS = 3
 #: values left out hold at most this share of ``eps`` of the block's Frobenius norm (the crosses themselves stop at
 #: ``eps``; the two errors add about in quadrature).
 RECOMPRESS_SHARE = 0.5
+#: Columns of a block the recompression takes at a time (``k`` rows of them stay in the fastest cache).
+RECOMPRESS_COLUMNS = 128
 #: Steps of the 8-bit fixed point of a component's ``V`` held narrow: its largest entry is this many steps.
 NARROW_STEPS = 127
 #: The last (smallest) components of a block whose ``V`` rounded to :data:`NARROW_STEPS` steps adds at most this share
@@ -63,7 +65,7 @@ NARROW_SHARE = 0.25
 @numba.njit(cache=True, nogil=True, error_model="numpy")
 def _symmetric_eigen(A):
     """Eigenvalues (descending) and eigenvectors (columns) of the symmetric ``A`` (``k x k``, overwritten) by cyclic
-    Jacobi rotations (Golub and Van Loan, §8.5), until the off-diagonal part is 1e-15 of the whole: small matrices
+    Jacobi rotations (Golub and Van Loan, §8.5), until the off-diagonal part is 1e-12 of the whole: small matrices
     only, and no LAPACK (whose threads compete with the workers')."""
     k = A.shape[0]
     E = np.eye(k)
@@ -76,7 +78,7 @@ def _symmetric_eigen(A):
         for p in range(k):
             for q in range(p + 1, k):
                 off += A[p, q] * A[p, q]
-        if off <= 1e-30 * whole:
+        if off <= 1e-24 * whole:
             break
         for p in range(k - 1):
             for q in range(p + 1, k):
@@ -135,28 +137,37 @@ def _recompressed(U, V, m, n, k, eps):
             Q[p, a] = U[a, p]
     R = np.zeros((k, k))
     for p in range(k):
+        current = Q[p]
         for q in range(p):
+            earlier = Q[q]
             dot = 0.0
             for a in range(m):
-                dot += Q[q, a] * Q[p, a]
+                dot += earlier[a] * current[a]
             R[q, p] = dot
             for a in range(m):
-                Q[p, a] -= dot * Q[q, a]
+                current[a] -= dot * earlier[a]
         norm = 0.0
         for a in range(m):
-            norm += Q[p, a] * Q[p, a]
+            norm += current[a] * current[a]
         norm = np.sqrt(norm)
         R[p, p] = norm
         inverse = 1.0 / norm if norm > 0.0 else 0.0
         for a in range(m):
-            Q[p, a] *= inverse
-    outer = np.empty((k, k))  # V V^T, then R V V^T R^T: the Gram matrix of R V, the block being Q (R V)
+            current[a] *= inverse
+    outer = np.zeros((k, k))  # V V^T, then R V V^T R^T: the Gram matrix of R V, the block being Q (R V)
+    for j0 in range(0, n, RECOMPRESS_COLUMNS):  # a run of columns at a time, read from the fastest cache
+        j1 = min(n, j0 + RECOMPRESS_COLUMNS)
+        for p in range(k):
+            first = V[p, j0:j1]  # slices indexed from 0: the loops vectorise
+            for q in range(p + 1):
+                second = V[q, j0:j1]
+                dot = 0.0
+                for j in range(j1 - j0):
+                    dot += first[j] * second[j]
+                outer[p, q] += dot
     for p in range(k):
-        for q in range(p + 1):
-            dot = 0.0
-            for j in range(n):
-                dot += V[p, j] * V[q, j]
-            outer[p, q] = outer[q, p] = dot
+        for q in range(p):
+            outer[q, p] = outer[p, q]
     gram = _small_product(_small_product(R, outer), np.ascontiguousarray(R.T))
     squares, W = _symmetric_eigen(gram)
     total2 = 0.0
@@ -171,15 +182,19 @@ def _recompressed(U, V, m, n, k, eps):
     rounded2 = 0.0
     budget2 = (NARROW_SHARE * eps) ** 2 * total2
     to_v = _small_product(np.ascontiguousarray(W.T), R)  # the new V's rows: (W^T R) V, each s_q times a unit row
-    V_new = np.empty((kept, n))
+    V_new = np.zeros((kept, n))
+    for j0 in range(0, n, RECOMPRESS_COLUMNS):
+        j1 = min(n, j0 + RECOMPRESS_COLUMNS)
+        for q in range(kept):
+            row = V_new[q, j0:j1]
+            for p in range(k):
+                weight = to_v[q, p]
+                source = V[p, j0:j1]
+                for j in range(j1 - j0):
+                    row[j] += weight * source[j]
     column = np.empty(m)
     for q in range(kept - 1, -1, -1):
         row = V_new[q]
-        row[:] = 0.0
-        for p in range(k):
-            weight = to_v[q, p]
-            for j in range(n):
-                row[j] += weight * V[p, j]
         largest = 0.0
         for j in range(n):
             largest = max(largest, abs(row[j]))
@@ -194,8 +209,9 @@ def _recompressed(U, V, m, n, k, eps):
         column[:] = 0.0
         for p in range(k):
             weight = W[p, q] * largest
+            basis = Q[p]
             for a in range(m):
-                column[a] += weight * Q[p, a]
+                column[a] += weight * basis[a]
         for a in range(m):
             U[a, q] = column[a]
         error2 *= largest * largest
