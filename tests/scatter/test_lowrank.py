@@ -323,3 +323,14 @@ def test_the_recompressed_crosses_keep_the_block_and_only_the_singular_values_it
     assert moved <= crosses.NARROW_SHARE * eps * np.linalg.norm(block) * 1.0001
     if k > 4:
         assert narrow > 0  # the smallest components are well below what 8 bits lose
+
+
+def test_crosses_that_are_not_finite_are_left_as_they_are():
+    """A NaN in a block's crosses is not recompressed away: the crosses stay, all 16-bit, and B will show it."""
+    rng = np.random.default_rng(5)
+    U, V = rng.normal(size=(20, 6)), rng.uniform(-1.0, 1.0, size=(6, 40))
+    U[3, 2] = np.nan
+    before_U, before_V = U.copy(), V.copy()
+    assert crosses._recompressed(U, V, 20, 40, 4, 1e-2) == (4, 0)
+    np.testing.assert_array_equal(U, before_U)
+    np.testing.assert_array_equal(V, before_V)

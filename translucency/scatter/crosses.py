@@ -108,6 +108,20 @@ def _symmetric_eigen(A):
     return values[order], np.ascontiguousarray(E[:, order])
 
 
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _all_finite(A, rows, columns):
+    """Whether every entry of ``A[:rows, :columns]`` is finite, read from its bits (its exponent not all ones): numba
+    compiles a function called from a fast-math kernel with fast math, where ``np.isfinite`` may be taken as true."""
+    box = np.empty(1)
+    bits = box.view(np.uint64)
+    for i in range(rows):
+        for j in range(columns):
+            box[0] = A[i, j]
+            if (bits[0] >> np.uint64(52)) & np.uint64(0x7FF) == np.uint64(0x7FF):
+                return False
+    return True
+
+
 @numba.njit(cache=True, nogil=True, fastmath=True, error_model="numpy")
 def _small_product(A, B):
     """``A @ B`` of two small matrices, without BLAS (whose threads compete with the workers')."""
@@ -128,9 +142,12 @@ def _recompressed(U, V, m, n, k, eps):
     whose left-out ``s_q`` hold at most :data:`RECOMPRESS_SHARE` ``eps`` of ``|S|``, each ``V`` row divided by its
     largest entry (so that it is in [-1, 1]) and ``U``'s column multiplied by it. Returns ``(kept, narrow)``: the
     components kept, and how many of the last of them may be held in 8 bits (:data:`NARROW_STEPS`): their rounding
-    ``s_q |dV_q|`` adds, in quadrature, at most :data:`NARROW_SHARE` ``eps`` of ``|S|``."""
+    ``s_q |dV_q|`` adds, in quadrature, at most :data:`NARROW_SHARE` ``eps`` of ``|S|``. Crosses that are not all
+    finite are left as they are (``(k, 0)``)."""
     if k == 0:
         return 0, 0
+    if not (_all_finite(U, m, k) and _all_finite(V, k, n)):  # a NaN or an infinity stays as it is: B shows it
+        return k, 0
     Q = np.empty((k, m))  # U's columns as rows, then orthonormalised
     for a in range(m):
         for p in range(k):
@@ -498,4 +515,4 @@ def sampled_count(
 
 #: The compiled kernel of the cross approximations: numba compiles it on first use; the set-up compiles it ahead
 #: (:mod:`translucency.app.warmup`).
-CROSS_KERNELS = (_cross, _recompressed, _symmetric_eigen, _small_product)
+CROSS_KERNELS = (_cross, _recompressed, _symmetric_eigen, _small_product, _all_finite)

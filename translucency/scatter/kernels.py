@@ -17,7 +17,10 @@ vectorise without it (the pair's geometry and channels, which return many values
 leaves (:func:`exp_nonpositive`, :func:`_ray_source`, :func:`modified_normal`, :func:`radial_dipole`, the constants'
 overloads) are plain compiled functions, which LLVM inlines as it optimises (bench/README.md, "First run").
 numba also compiles a function once per constant it is handed (``True``, ``0``) and per array layout, so the kernels
-hand each other values (``np.bool_(True)``, ``np.int64(0)``) and contiguous arrays.
+hand each other values (``np.bool_(True)``, ``np.int64(0)``) and contiguous arrays. A function called from a
+fast-math kernel is compiled with fast math, whatever its own flags, and cached so (a direct call then gets that
+version too): a test for NaN there may be taken as false, so one that matters reads the bits (as the far field's
+recompression does, :mod:`translucency.scatter.crosses`).
 
 Channel parameters travel as a ``(K, N_PARAMS)`` float64 array built by :func:`channel_parameters`;
 the columns are named by the ``P_*`` constants. Kernels never validate: the solver does, at its
