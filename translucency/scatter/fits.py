@@ -264,9 +264,7 @@ def fitted_run(model, P, N, fixed, lo, hi, sources_vary, params, dirs, pinv, scr
     corrected distance at every direction and the real source at it, the fit (:func:`fitted_points`' steps)."""
     length = hi - lo
     _gathered(P, N, fixed, lo, length, sources_vary, scratch[0])
-    if _directional_run(model, length, params, scratch, out):
-        for c in range(params.shape[0]):
-            _run_channel(params[c], dirs, pinv, length, scratch, out[:, c, :])
+    fitted_points(model, length, params, dirs, pinv, scratch, out)
 
 
 @numba.njit(cache=True, fastmath=True, nogil=True, error_model="numpy")
