@@ -179,7 +179,8 @@ def test_main_job_bakes_the_embedded_default(tmp_path):
     png = tmp_path / "translucency-output" / "bunny_marble.png"
     assert ply.exists() and png.exists()
     baked = read_baked_ply(ply)
-    assert baked.metadata["material"] == "marble" and baked.metadata["method"] == "tree"
+    assert baked.metadata["material"] == "marble" and baked.metadata["method"] == "auto"
+    assert baked.metadata["method_used"] == "tree"  # one light
     # the embedded default keeps its size (given, not inferred) and stands +y up; its light comes from behind
     # (-z for the bunny, which faces +z), to the left and above, to show the glow through the ears
     assert baked.metadata["up"] == "+y" and baked.metadata["source_unit_inferred"] is False

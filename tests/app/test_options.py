@@ -18,12 +18,12 @@ def parse(*argv):
     return parser.parse_args(list(argv))
 
 
-def test_defaults_leave_the_light_to_the_pipeline_and_give_the_tree_method():
+def test_defaults_leave_the_light_to_the_pipeline_and_give_the_auto_method():
     args = parse()
     assert options.lights_from_args(args) is None  # the pipeline places it by the up axis
     assert args.unit is None and args.up == "auto"
     settings = options.solver_settings(args)
-    assert settings.method == "tree" and settings.tol == 0.01 and settings.resolution == "auto"
+    assert settings.method == "auto" and settings.tol == 0.01 and settings.resolution == "auto"
     assert settings.material.name == "marble" and args.mesh is None
 
 

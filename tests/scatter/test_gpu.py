@@ -290,7 +290,7 @@ def test_a_gpu_that_cannot_be_had_is_a_sentence(monkeypatch):
         probe.pair_device("gpu", "exact")
     with pytest.raises(
         InvalidParameterError,
-        match=r"far field of methods exact, tree and relight; choose one of them, or device='auto' for method cutoff",
+        match=r"methods exact, tree, relight and auto; choose one of them, or device='auto' for method cutoff",
     ):
         probe.pair_device("gpu", "cutoff")
 

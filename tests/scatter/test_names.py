@@ -19,7 +19,7 @@ def test_every_choice_passes_unchanged():
     "check, value, words",
     [
         (check_model, "photon", "unknown model 'photon'; choose one of directional, standard, better."),
-        (check_method, "fmm", "unknown method 'fmm'; choose one of exact, cutoff, tree, relight."),
+        (check_method, "fmm", "unknown method 'fmm'; choose one of exact, cutoff, tree, relight, auto."),
         (check_device, "tpu", "device must be one of cpu, gpu, auto, got 'tpu'."),
         (check_tol, 0.0, "tol must be a relative error in (0, 1), got 0.0."),
         (check_tol, 1.0, "tol must be a relative error in (0, 1), got 1.0."),

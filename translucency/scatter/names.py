@@ -34,9 +34,10 @@ __all__ = [
 #: Scattering models (the BSSRDF): FHK14's directional dipole, Jensen 2001's standard dipole,
 #: d'Eon 2012's better dipole.
 MODELS = ("directional", "standard", "better")
-#: Far-field methods: every pair, pairs above the tolerance's cutoff radius, aggregated source clusters,
-#: and the tree's sums prepared once as operators that any light reuses (docs/physics.md §8.7).
-METHODS = ("exact", "cutoff", "tree", "relight")
+#: Far-field methods: every pair, pairs above the tolerance's cutoff radius, aggregated source clusters, operators
+#: prepared once that any light reuses (docs/physics.md §8.7, §8.9), and ``auto``: ``tree`` for a surface's first
+#: lights, the operators once those lights have taken as long as preparing them would (§8.10).
+METHODS = ("exact", "cutoff", "tree", "relight", "auto")
 
 #: Where the pairs of ``exact`` and of relighting's far field are summed: the CPU, an NVIDIA GPU (the optional
 #: extra, :mod:`translucency.scatter.gpu`), or a GPU when one works and the CPU otherwise.
@@ -44,7 +45,7 @@ DEVICES = ("cpu", "gpu", "auto")
 
 DEFAULT_MODEL = "directional"
 DEFAULT_DEVICE = "auto"
-DEFAULT_METHOD = "tree"
+DEFAULT_METHOD = "auto"
 #: Relative error per vertex allowed to ``cutoff`` and ``tree`` (ignored by ``exact``).
 DEFAULT_TOL = 1e-2
 #: Times light that leaves the surface is let in again (docs/physics.md §7.4; the measurements behind the

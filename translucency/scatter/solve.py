@@ -26,6 +26,10 @@ Methods for the far field (each with a tolerance where it has one):
     (:mod:`translucency.scatter.relight`, docs/physics.md §8.7), kept on the surface
     (:func:`relight_operator`) and applied to every later light: slow to prepare, then
     a sparse product per light.
+``auto``
+    ``tree`` here; over a surface's lights, :func:`translucency.scatter.transport.transport` turns it to
+    ``relight`` once the lights have taken as long as preparing would (:mod:`translucency.scatter.method_choice`,
+    docs/physics.md §8.10).
 
 ``tol`` bounds the relative error of ``B`` per receiver against ``exact`` at the 99th percentile over the
 receivers whose ``B`` is at least :data:`TOL_FLOOR` of the largest in its channel (docs/physics.md §8.5).
@@ -373,8 +377,9 @@ def solve(
         Coefficients in 1/mm.
     model : {"directional", "standard", "better"}
         The BSSRDF (FHK14, Jensen 2001, d'Eon 2012).
-    method : {"exact", "cutoff", "tree", "relight"}
-        How the far field is summed (module docstring); ``exact`` by default (the reference).
+    method : {"exact", "cutoff", "tree", "relight", "auto"}
+        How the far field is summed (module docstring); ``exact`` by default (the reference). ``auto`` is ``tree``
+        here (it turns to relighting over a surface's lights: :mod:`translucency.scatter.method_choice`).
     tol : float
         Relative error of ``B`` allowed per receiver against ``exact`` (``cutoff``, ``tree``, ``relight``;
         docs/physics.md §8.5: at the 99th percentile over the receivers whose ``B`` is at least :data:`TOL_FLOOR` of the
@@ -410,10 +415,9 @@ def solve(
     """
     timings: dict[str, float] = {}
     stats: dict[str, object] = {}
-    report = progress or (lambda stage, fraction: None)
-    phi, w12, receivers = _checked_inputs(
-        geometry, phi, w12, medium, model, method, tol, receivers, memory_limit, time_limit
-    )
+    report, limits = progress or (lambda stage, fraction: None), (memory_limit, time_limit)
+    method = _one_light_method(method)
+    phi, w12, receivers = _checked_inputs(geometry, phi, w12, medium, model, method, tol, receivers, *limits)
     _check_reach(reach_mm, method, tol, geometry, medium)
     warn_low_albedo(medium)
     warn_transparent(medium, geometry.diagonal)
@@ -480,6 +484,7 @@ def plan(
         raise InvalidParameterError(
             "plan() estimates the solves of exact, cutoff and tree; relight plans its operators."
         )
+    method = _one_light_method(method)
     phi, w12, receivers = _checked_inputs(
         geometry, phi, w12, medium, model, method, tol, None, memory_limit, time_limit
     )
@@ -518,6 +523,27 @@ def relight_operator(
     if held is not None:
         return held, True
     relight.release_operator(geometry)
+    plan, counts = relight_estimate(geometry, medium, model, tol, device, memory_limit, time_limit)
+    if not plan.fits:
+        raise BudgetError(over_budget_sentence(plan, geometry.n_vertices), plan)
+    tree_far = _tree_per_light(geometry, medium, model, tol) if device == "gpu" else None
+    radius = near_radius(geometry, medium)  # a mean free path: the far field's fits in the direction need it
+    operator = relight.prepare(
+        geometry, medium, model, tol, radius, NEAR_BETA, progress, far_on_gpu=device == "gpu", tree_far=tree_far
+    )
+    operator.stats["budget"] = {**plan.as_dict(), "counts": counts}
+    relight.keep_operator(geometry, operator)
+    return operator, False
+
+
+def relight_estimate(geometry: SurfaceGeometry, medium, model, tol, device="cpu", memory_limit=None, time_limit=None):
+    """The plan of preparing relighting's operators of ``geometry`` (the spatially ordered surface) for the medium,
+    model and ``tol``, against ``memory_limit`` (GB) and ``time_limit`` (s), before anything is prepared: ``(plan,
+    counts)``, the :class:`~translucency.scatter.budget.SolveEstimate` (``seconds``, ``peak_bytes``, ``fits``) and the
+    counts behind it (the far field's fits, the near field's entries; :func:`relight.operator_bytes`,
+    :func:`relight_plan`). ``device`` is where the far field would be summed (``cpu`` or ``gpu``)."""
+    from . import relight
+
     radius = near_radius(geometry, medium)  # a mean free path: the far field's fits in the direction need it
     size, counts = relight.operator_bytes(
         geometry,
@@ -528,16 +554,7 @@ def relight_operator(
         far_on_gpu=device == "gpu",
         within=lambda size, counted: relight_plan(size, counted, memory_limit, time_limit).fits,
     )
-    plan = relight_plan(size, counts, memory_limit, time_limit)
-    if not plan.fits:
-        raise BudgetError(over_budget_sentence(plan, geometry.n_vertices), plan)
-    tree_far = _tree_per_light(geometry, medium, model, tol) if device == "gpu" else None
-    operator = relight.prepare(
-        geometry, medium, model, tol, radius, NEAR_BETA, progress, far_on_gpu=device == "gpu", tree_far=tree_far
-    )
-    operator.stats["budget"] = {**plan.as_dict(), "counts": counts}
-    relight.keep_operator(geometry, operator)
-    return operator, False
+    return relight_plan(size, counts, memory_limit, time_limit), counts
 
 
 def _tree_per_light(geometry, medium, model, tol):
@@ -741,7 +758,7 @@ def size_floor_plan(geometry: SurfaceGeometry, n_channels: int, method: str, mem
         n_lit=0,
         n_channels=int(n_channels),
         threads=max(1, numba.get_num_threads()),
-        method="exact" if method == "relight" else method,
+        method="exact" if method == "relight" else _one_light_method(method),
         near_triangles=0.0,
         near_points=0.0,
         own_points=0.0,
@@ -749,6 +766,13 @@ def size_floor_plan(geometry: SurfaceGeometry, n_channels: int, method: str, mem
     )
     budget_bytes = budget.memory_budget(memory_limit, memory.available_memory(), memory.resident_memory())
     return budget.size_floor(counts, budget_bytes, time_limit)
+
+
+def _one_light_method(method: str) -> str:
+    """``tree`` for ``auto``, any other method as it is: a solve sees one light, and ``auto`` changes to relighting
+    only over a surface's lights (:mod:`translucency.scatter.method_choice`, through
+    :func:`translucency.scatter.transport.transport`)."""
+    return "tree" if method == "auto" else method
 
 
 def _checked_inputs(geometry, phi, w12, medium, model, method, tol, receivers, memory_limit, time_limit):

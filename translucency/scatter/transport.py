@@ -13,7 +13,9 @@ prepared work on it), the incident light (:class:`IncidentLight`, from :func:`in
    ray (shadows only take light away);
 3. :func:`transport`: the solve (:func:`translucency.scatter.solve.solve`; once per light sample with
    ``per_direction``; with a reflectance per vertex through :func:`translucency.scatter.varying.solve_varying`),
-   then the light that leaves the surface and enters again (:func:`translucency.scatter.bounces.solve_bounces`).
+   then the light that leaves the surface and enters again (:func:`translucency.scatter.bounces.solve_bounces`);
+   with the method ``auto``, by the method :mod:`translucency.scatter.method_choice` chooses for this light, the
+   bounces' solves included.
 
 ========= ============================================================ ==============
 symbol    meaning                                                      unit
@@ -26,6 +28,9 @@ T21       Fresnel transmittance out of the medium along the normal      1
 
 from __future__ import annotations
 
+import dataclasses
+import functools
+import time
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -33,6 +38,7 @@ import numpy as np
 from ..errors import BudgetError, TranslucencyError, option, warn_user
 from .budget import format_bytes, format_seconds
 from .irradiance import IncidentLight, carried_light, incident_flux
+from .method_choice import AUTO, chosen_method, count_light, refuse, tally_of
 from .names import DEFAULT_DEVICE
 from .solve import Solution, solve
 from .surface import SurfaceGeometry, spatial_order
@@ -121,6 +127,10 @@ class Transport:
         The bounces' statistics (``{"bounces": 0}`` without), with ``share_of_B`` per channel.
     timings : dict
         Seconds per stage: ``solve_<stage>`` summed over the solves, ``bounce_gather`` and ``bounce_solve``.
+    method : str
+        The method the light was solved by (what ``auto`` chose).
+    method_choice : dict or None
+        With ``auto``: its tally for these settings (:meth:`~translucency.scatter.method_choice.Tally.as_dict`).
     """
 
     B: np.ndarray
@@ -128,6 +138,8 @@ class Transport:
     solutions: list
     bounces: dict
     timings: dict = field(default_factory=dict)
+    method: str = ""
+    method_choice: dict | None = None
 
     @property
     def solver_stats(self) -> dict:
@@ -226,6 +238,42 @@ def transport(
     BudgetError
         Before the work, when a solve's estimate is over its budget.
     """
+    carry = functools.partial(
+        _transported, surface, light, medium, lights=lights, visibility=visibility, reflectance=reflectance,
+        progress=progress, solver=solver,
+    )  # fmt: skip
+    if options.method != AUTO:
+        return dataclasses.replace(carry(options), method=options.method)
+    return _auto(surface, medium, options, reflectance is not None, carry)
+
+
+def _auto(surface, medium, options: TransportOptions, varying: bool, carry) -> Transport:
+    """The light carried by ``carry(options)`` with the method ``auto`` chooses (:mod:`.method_choice`), counted in
+    its tally; relighting's operators refused by the budget when they were to be prepared are solved by ``tree``."""
+    settings = (surface, medium, options.model, options.tol, options.device)
+    chosen = chosen_method(*settings, options.memory_limit, options.time_limit, varying=varying)
+    start = time.perf_counter()
+    try:
+        carried = carry(dataclasses.replace(options, method=chosen))
+    except BudgetError as exc:
+        if chosen != "relight":
+            raise
+        refuse(*settings, str(exc))
+        chosen = "tree"
+        start = time.perf_counter()
+        carried = carry(dataclasses.replace(options, method=chosen))
+    prepared = chosen == "relight" and not carried.operators_reused
+    if chosen == "tree" or prepared:
+        tally = count_light(*settings, chosen, time.perf_counter() - start)
+    else:
+        tally = tally_of(*settings)
+    return dataclasses.replace(carried, method=chosen, method_choice=tally.as_dict())
+
+
+def _transported(
+    surface, light, medium, options: TransportOptions, *, lights, visibility, reflectance, progress, solver
+) -> Transport:
+    """:func:`transport` by ``options.method``, one of the solver's own (not ``auto``)."""
     solve_one = _solver(solver, reflectance)
     if options.per_direction:
         solutions = _solve_per_direction(surface, light, medium, options, progress, solve_one)
@@ -287,8 +335,6 @@ def _solver(solver, reflectance):
     :func:`~translucency.scatter.varying.solve_varying` with a reflectance per vertex."""
     if reflectance is None:
         return solver or solve
-    import functools
-
     from .varying import solve_varying
 
     return functools.partial(solve_varying, reflectance=reflectance, solver=solver)

@@ -175,6 +175,8 @@ def shade_result(scene, settings, lights, solved: Solved) -> ShadeResult:
         **settings.metadata(lights, resolution),
         # what summed the pairs ("cpu" or "gpu (its name)"), where the setting may have been auto
         "device": solved.transport.solver_stats.get("device", settings.device),
+        # the method that solved this light, where the setting may have been auto
+        "method_used": solved.transport.method or settings.method,
         "shadows": scene.shadows,
         "exposure": exposure,
         **unit_metadata(mesh.mm_per_unit, mesh.unit_inferred),
@@ -195,6 +197,7 @@ def shade_result(scene, settings, lights, solved: Solved) -> ShadeResult:
         "solver_vertices": proxy.n_points,
         "vertices": mesh.n_points,
         "bounces": solved.transport.bounces,
+        "method_choice": solved.transport.method_choice,
     }
     return ShadeResult(
         mesh, B, radiance, colors, exposure, scene.full_normals(), stats, timings, metadata, phi, reentered

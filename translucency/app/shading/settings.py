@@ -140,13 +140,14 @@ class ShadeSettings:
     method: str = _setting(
         DEFAULT_METHOD,
         "--",
-        "far-field method: exact (every pair), cutoff, tree, or relight (operators prepared on first use that "
-        "later lights on the same Scene reuse)",
+        "far-field method: exact (every pair), cutoff, tree, relight (operators prepared on first use that "
+        "later lights on the same Scene reuse), or auto (tree, until the lights on the same Scene, material and "
+        "tolerance have taken as long as preparing relight's operators would, then relight)",
     )
     device: str = _setting(
         DEFAULT_DEVICE,
         "--",
-        "where exact, tree and relight sum their far field: cpu, gpu (an NVIDIA GPU, with pip install "
+        "where exact, tree and relight (and so auto) sum their far field: cpu, gpu (an NVIDIA GPU, with pip install "
         '"translucency[gpu]"), or auto (a GPU where one works, for exact and relight, else '
         "the CPU); cutoff and the near field run on the CPU",
     )

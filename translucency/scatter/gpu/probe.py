@@ -17,7 +17,7 @@ __all__ = ["GpuStatus", "gpu_status", "pair_device", "said_plainly", "SIMULATOR"
 
 #: The methods whose far field a GPU sums: ``exact``'s pairs, ``tree``'s walk, and relighting's far field (every pair,
 #: per light; its near field's product too where the operator fits on the GPU).
-GPU_METHODS = ("exact", "tree", "relight")
+GPU_METHODS = ("exact", "tree", "relight", "auto")
 #: The methods ``auto`` takes to a GPU: ``exact``'s pairs and relighting's far field are what GPUs do best; ``tree``'s
 #: walk (one thread per receiver, branching, in float64) has not been measured against the CPU's yet
 #: (bench/README.md, "GPU"), so ``auto`` leaves it on the CPU and ``gpu`` runs it there.
@@ -77,8 +77,8 @@ def pair_device(device: str, method: str) -> tuple[str, str]:
         return "cpu", "cpu"
     if method not in GPU_METHODS:
         raise InvalidParameterError(
-            f"{option('device', 'gpu')} sums the far field of methods exact, tree and relight; choose one of them, "
-            f"or {option('device', 'auto')} for method {method}."
+            f"{option('device', 'gpu')} sums the far field of methods exact, tree, relight and auto; choose one of "
+            f"them, or {option('device', 'auto')} for method {method}."
         )
     status = gpu_status()
     if device == "auto" and (not status.usable or status.name == SIMULATOR):
