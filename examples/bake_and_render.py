@@ -26,7 +26,7 @@ def main():
     if args.quick:
         mesh = tl.decimate_mesh(mesh, target_faces=4000).proxy
     light = tl.DirectionalLight((-0.6, 0.8, 0.4), 1.0)  # from the object toward the light; E = 1 W/m^2
-    settings = tl.ShadeSettings(args.material)  # the tree method at 1 % per vertex; every default in one place
+    settings = tl.ShadeSettings(args.material)  # method auto (tree for one light) at 1 % per vertex; every default once
     result = tl.shade_scan(mesh, settings, light)
     print(f"solved {mesh.n_points} vertices in {sum(result.timings.values()):.2f} s")
 

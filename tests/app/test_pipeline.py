@@ -175,6 +175,33 @@ def test_a_scene_relights_with_operators_it_prepares_once_and_matches_an_exact_s
     assert np.percentile(np.abs(moved.B - exact)[keep] / exact[keep], 99) < 0.01
 
 
+def test_the_default_method_solves_a_scenes_first_light_by_tree_and_relights_once_that_paid(monkeypatch):
+    """With the operators' preparation estimated at no time and the estimate asked after one light, a Scene's second
+    light (and its bounce) prepares them and its third relights with them; each records the method it used."""
+    import dataclasses
+
+    from translucency.geometry.synthetic import torus
+    from translucency.scatter import method_choice
+    from translucency.scatter import solve as solve_module
+
+    def instant(*args, **kwargs):
+        plan, counts = solve_module.relight_estimate(*args, **kwargs)
+        return dataclasses.replace(plan, seconds=0.0), counts
+
+    monkeypatch.setattr(method_choice, "relight_estimate", instant)
+    monkeypatch.setattr(method_choice, "ESTIMATE_AFTER", 1)
+    scene = Scene(TriangleMesh(*torus(20.0, 8.0, 48, 24)))
+    lights = [DirectionalLight(d, 1.0) for d in ((0.3, 0.5, 0.8), (-0.7, 0.2, 0.4), (0.1, -0.6, 0.7))]
+    results = [scene.shade("marble", light, device="cpu") for light in lights]
+    assert [r.metadata["method"] for r in results] == ["auto"] * 3
+    assert [r.metadata["method_used"] for r in results] == ["tree", "relight", "relight"]
+    assert results[0].stats["method_choice"]["tree_lights"] == 1
+    assert "relight operators" in results[2].stats["reused"] and results[2].stats["bounces"]["bounces"] == 1
+    exact = scene.shade("marble", lights[2], method="exact").B
+    keep = exact >= 1e-4 * exact.max(axis=0)
+    assert np.percentile(np.abs(results[2].B - exact)[keep] / exact[keep], 99) < 0.01
+
+
 def test_a_scan_size_scene_lets_its_embree_scene_go_during_the_solve_and_gives_the_same_answer(monkeypatch):
     """From RELEASE_SCENE_VERTICES on the Embree scene is not held through the solve's set-up: the bounce
     builds it again, and the answer is the one of a scene that kept it."""

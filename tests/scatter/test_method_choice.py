@@ -1,13 +1,14 @@
 """Method ``auto``: ``tree`` for a surface's first lights, relighting's operators once those lights took as long as
 preparing them would (docs/physics.md §8.10), never an error where ``tree`` would solve."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 
 from translucency.geometry.measure import vertex_normals
 from translucency.geometry.synthetic import icosphere
 from translucency.scatter import method_choice, relight
-from translucency.scatter.budget import SolveEstimate
 from translucency.scatter.irradiance import incident_flux
 from translucency.scatter.lights import DirectionalLight
 from translucency.scatter.materials import material
@@ -35,7 +36,7 @@ DIRECTIONS = [(0.0, 0.0, 1.0), (0.6, 0.0, 0.8), (0.0, 0.6, 0.8), (-0.6, 0.0, 0.8
 
 
 def _options(**changes) -> TransportOptions:
-    return TransportOptions(**{"model": "directional", "method": "auto", "tol": 0.01, **changes})
+    return TransportOptions(**{"model": "directional", "method": "auto", "tol": 0.01, "device": "cpu", **changes})
 
 
 @pytest.fixture
@@ -47,11 +48,12 @@ def estimate(monkeypatch):
     class Fixed:
         seconds = 0.0
         fits = True
+        asked = 0
 
     def fixed(*args, **kwargs):
+        Fixed.asked += 1
         plan, counts = solve_module.relight_estimate(*args, **kwargs)
-        values = {**vars(plan), "seconds": Fixed.seconds, "fits": Fixed.fits}
-        return SolveEstimate(**values), counts
+        return dataclasses.replace(plan, seconds=Fixed.seconds, fits=Fixed.fits), counts
 
     monkeypatch.setattr(method_choice, "relight_estimate", fixed)
     monkeypatch.setattr(method_choice, "ESTIMATE_AFTER", 1)
@@ -139,7 +141,7 @@ def test_preparing_one_mediums_operators_starts_the_other_mediums_count_again(es
     assert transport(geometry, _light(geometry, DIRECTIONS[1]), MARBLE, _options()).method == "relight"
     again = transport(geometry, _light(geometry, DIRECTIONS[1], POTATO), POTATO, _options())
     assert again.method == "tree" and again.method_choice["tree_lights"] == 1
-    assert relight.kept_operator(spatial_order(geometry)[0], relight.operator_key(MARBLE, "directional", 0.01))
+    assert relight.kept_operator(spatial_order(geometry)[0], relight.operator_key(MARBLE, "directional", 0.01, "cpu"))
     assert transport(geometry, _light(geometry, DIRECTIONS[2]), MARBLE, _options()).operators_reused
 
 
@@ -150,3 +152,59 @@ def test_solve_by_itself_takes_auto_as_tree():
     tree = solve(geometry, light.phi_rgb, light.w12, MARBLE, method="tree", tol=0.01)
     np.testing.assert_array_equal(auto.B, tree.B)
     assert auto.settings["method"] == "tree"
+
+
+def test_tree_lights_add_up_until_the_estimate_and_other_limits_estimate_again(estimate):
+    """The tally grows by each tree light's time (the estimate's own time in it); with the preparation estimated at
+    longer than the lights take, every light stays with tree; the estimate is asked once per limits."""
+    geometry = _sphere()
+    estimate.seconds = 1e9
+    tallies = [transport(geometry, _light(geometry, d), MARBLE, _options()).method_choice for d in DIRECTIONS[:3]]
+    assert [t["tree_lights"] for t in tallies] == [1, 2, 3]
+    assert 0 < tallies[0]["tree_seconds"] < tallies[1]["tree_seconds"] < tallies[2]["tree_seconds"]
+    assert [t["preparation_estimate_s"] for t in tallies] == [None, 1e9, 1e9]
+    assert estimate.asked == 1
+    limited = transport(geometry, _light(geometry, DIRECTIONS[3]), MARBLE, _options(memory_limit=16.0))
+    assert limited.method == "tree" and estimate.asked == 2
+
+
+def test_a_dark_light_at_the_switch_prepares_nothing_and_the_next_light_does(estimate):
+    geometry = _sphere()
+    estimate.seconds = 1e-9
+    transport(geometry, _light(geometry, DIRECTIONS[0]), MARBLE, _options())
+    lit = _light(geometry, DIRECTIONS[1])
+    dark = dataclasses.replace(lit, phi_rgb=np.zeros_like(lit.phi_rgb), flux_rgb=np.zeros_like(lit.flux_rgb))
+    carried = transport(geometry, dark, MARBLE, _options())
+    assert not carried.B.any() and carried.method_choice["tree_lights"] == 1  # the tally is kept
+    assert relight.kept_operator(spatial_order(geometry)[0]) is None
+    after = transport(geometry, lit, MARBLE, _options())
+    assert after.method == "relight" and not after.operators_reused
+
+
+def test_a_reflectance_per_vertex_after_operators_were_prepared_is_still_tree(estimate):
+    geometry = _sphere()
+    estimate.seconds = 1e-9
+    for direction in DIRECTIONS[:2]:
+        transport(geometry, _light(geometry, direction), MARBLE, _options())
+    reflectance = np.full((geometry.n_vertices, 3), 0.5)
+    carried = transport(geometry, _light(geometry, DIRECTIONS[2]), MARBLE, _options(), reflectance=reflectance)
+    assert carried.method == "tree"
+    assert transport(geometry, _light(geometry, DIRECTIONS[3]), MARBLE, _options()).operators_reused
+
+
+def test_a_light_solved_per_direction_that_prepares_starts_the_other_counts_again(estimate):
+    """Its first sample prepares the operators and the others reuse them: still a preparation for the tallies."""
+    from translucency.scatter.lights import EnvironmentLight
+
+    geometry = _sphere()
+    estimate.seconds = 1e-9
+    transport(geometry, _light(geometry, DIRECTIONS[0], POTATO), POTATO, _options())
+    transport(geometry, _light(geometry, DIRECTIONS[0]), MARBLE, _options())
+    sky = incident_flux(
+        geometry.points, geometry.normals, geometry.vertex_areas,
+        [EnvironmentLight(radiance_rgb=(0.3, 0.3, 0.3), n_directions=4)], MARBLE.eta, per_direction=True,
+    )  # fmt: skip
+    carried = transport(geometry, sky, MARBLE, _options(per_direction=True))
+    assert carried.method == "relight" and len(carried.solutions) > 1
+    again = transport(geometry, _light(geometry, DIRECTIONS[1], POTATO), POTATO, _options())
+    assert again.method == "tree" and again.method_choice["tree_lights"] == 1

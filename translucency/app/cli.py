@@ -538,15 +538,15 @@ def _add_view_and_compare_parsers(sub) -> None:
         "show a scan as a translucent object, with controls that solve again",
         "Open the desktop viewer: the scan in a window with a side panel (material, model, tolerance, light, "
         "exposure, false colour), a light you drag in the view, File menu, and h for the keys. Here --method defaults "
-        "to relight (operators prepared once, then every light on every vertex; tree with --screenshot, one "
-        "picture) and --resolution to 'interactive': every vertex with relight, a "
+        "to relight (operators prepared once, then every light on every vertex; auto with --screenshot, one "
+        "picture, which auto solves by tree) and --resolution to 'interactive': every vertex with relight, a "
         "proxy of about 7,500 vertices otherwise.",
     )
     from ..scatter.names import DEFAULT_METHOD, DEFAULT_TOL
     from .shading.settings import VIEWER_METHOD, VIEWER_TOL
 
-    # the viewer's own defaults: relight (operators worth preparing for the lights to come), but tree for
-    # --screenshot, which shows one light
+    # the viewer's own defaults: relight (operators worth preparing for the lights to come), but the default method
+    # (auto: tree for one light) for --screenshot, which shows one light
     p.set_defaults(resolution="interactive", method=None, tol=None)
     own = {"method": (VIEWER_METHOD, DEFAULT_METHOD), "tol": (f"{VIEWER_TOL:g}", f"{DEFAULT_TOL:g}")}
     for action in p._actions:

@@ -25,7 +25,7 @@ from .names import check_device
 from .solve import relight_estimate
 from .surface import PerSurface, spatial_order
 
-__all__ = ["AUTO", "ESTIMATE_AFTER", "Tally", "chosen_method", "tally_of", "count_light", "refuse"]
+__all__ = ["AUTO", "ESTIMATE_AFTER", "Tally", "chosen_method", "count_light", "operators_held", "refuse", "tally_of"]
 
 #: The name of the method this module chooses for.
 AUTO = "auto"
@@ -49,12 +49,15 @@ class Tally:
         The operators' estimated preparation, s (None before it is made).
     refused : str or None
         Why the operators will not be prepared (a sentence; None while they may).
+    limits : tuple or None
+        The memory (GB) and time (s) limits the estimate and the refusal hold for (other limits estimate again).
     """
 
     lights: int = 0
     seconds: float = 0.0
     preparation: float | None = None
     refused: str | None = None
+    limits: tuple | None = None
 
     def as_dict(self) -> dict:
         """The tally as plain numbers (``stats["method_choice"]``)."""
@@ -97,13 +100,15 @@ def chosen_method(
     where the lights solved by ``tree`` have taken at least the operators' estimated preparation (s) and the operators
     fit ``memory_limit`` (GB) and ``time_limit`` (s); ``tree`` otherwise, and always with a reflectance per vertex
     (``varying``: one medium per level, whose operators would replace each other)."""
+    if varying:
+        return "tree"
     surface, key = _ordered(surface), _key(medium, model, tol, device)
     held = relight.kept_operator(surface, key)
     if held is not None:
         return "tree" if isinstance(held, relight.TreeInstead) else "relight"
-    if varying:
-        return "tree"
     tally = _TALLIES.get(surface, key, Tally)
+    if tally.limits != (memory_limit, time_limit):  # the estimate and any refusal were for other limits
+        tally.preparation, tally.refused, tally.limits = None, None, (memory_limit, time_limit)
     if tally.refused is not None or tally.lights < ESTIMATE_AFTER:
         return "tree"
     if tally.preparation is None:
@@ -117,9 +122,15 @@ def chosen_method(
     return "relight" if tally.seconds >= tally.preparation else "tree"
 
 
+def operators_held(surface, medium, model: str, tol: float, device: str) -> bool:
+    """Whether ``surface`` keeps relighting's operators (or their :class:`~translucency.scatter.relight.TreeInstead`)
+    for these settings."""
+    return relight.kept_operator(_ordered(surface), _key(medium, model, tol, device)) is not None
+
+
 def count_light(surface, medium, model: str, tol: float, device: str, method: str, seconds: float) -> Tally:
-    """Count a light that ``auto`` solved by ``method`` in ``seconds``: a ``tree`` light adds to its tally; operators
-    just prepared start every tally of ``surface`` again. Returns the tally of these settings."""
+    """Count a light that ``auto`` solved in ``seconds`` by ``method``: ``tree`` (its tally grows) or ``prepared``
+    (operators made for it: every tally of ``surface`` starts again). Returns the tally of these settings."""
     surface, key = _ordered(surface), _key(medium, model, tol, device)
     if method == "tree":
         tally = _TALLIES.get(surface, key, Tally)
@@ -131,6 +142,8 @@ def count_light(surface, medium, model: str, tol: float, device: str, method: st
     return held or Tally()
 
 
-def refuse(surface, medium, model: str, tol: float, device: str, reason: str) -> None:
-    """Never prepare the operators of these settings on ``surface`` (``reason``: why, a sentence)."""
-    tally_of(surface, medium, model, tol, device).refused = reason
+def refuse(surface, medium, model: str, tol: float, device: str, reason: str, limits: tuple) -> None:
+    """Prepare no operators of these settings on ``surface`` while the memory and time ``limits`` (GB, s) stay as they
+    are (``reason``: why, a sentence)."""
+    tally = tally_of(surface, medium, model, tol, device)
+    tally.refused, tally.limits = reason, limits

@@ -356,7 +356,7 @@ def solve(
     """Diffuse radiance factor ``B`` at the receiver vertices (DESIGN.md; docs/physics.md §5.3, integrated as in §8).
 
     This is the low-level reference: its own defaults are ``method="exact"`` and ``tol=1e-3``, not
-    the shading defaults of :mod:`translucency.scatter.names` (``tree``, 1e-2) that
+    the shading defaults of :mod:`translucency.scatter.names` (``auto``, 1e-2) that
     :class:`~translucency.app.shading.settings.ShadeSettings` and the pipeline use. The steps: the inputs are
     checked, moved onto the spatially ordered surface, the memory and time of the solve are estimated
     against the budget, then the far field (``method``) and the near-field correction are summed and

@@ -35,10 +35,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import BudgetError, TranslucencyError, option, warn_user
+from ..errors import BudgetError, DeviceError, TranslucencyError, option, warn_user
 from .budget import format_bytes, format_seconds
 from .irradiance import IncidentLight, carried_light, incident_flux
-from .method_choice import AUTO, chosen_method, count_light, refuse, tally_of
+from .method_choice import AUTO, chosen_method, count_light, operators_held, refuse, tally_of
 from .names import DEFAULT_DEVICE
 from .solve import Solution, solve
 from .surface import SurfaceGeometry, spatial_order
@@ -187,7 +187,8 @@ def check_unshadowed(surface: SurfaceGeometry, lights, medium, options: Transpor
     stay on ``surface`` for the solve."""
     from .solve import over_budget_sentence, plan
 
-    if options.method == "relight":
+    held = options.method == AUTO and operators_held(surface, medium, options.model, options.tol, options.device)
+    if options.method == "relight" or held:  # relighting plans its own operators
         return
     facing = incident_flux(surface.points, surface.normals, surface.vertex_areas, lights, medium.eta)
     estimate = plan(
@@ -244,27 +245,33 @@ def transport(
     )  # fmt: skip
     if options.method != AUTO:
         return dataclasses.replace(carry(options), method=options.method)
+    if solver is not None:  # a solver of its own (a cluster's): its time and relighting's are not the same to weigh
+        return dataclasses.replace(carry(dataclasses.replace(options, method="tree")), method="tree")
     return _auto(surface, medium, options, reflectance is not None, carry)
 
 
 def _auto(surface, medium, options: TransportOptions, varying: bool, carry) -> Transport:
     """The light carried by ``carry(options)`` with the method ``auto`` chooses (:mod:`.method_choice`), counted in
-    its tally; relighting's operators refused by the budget when they were to be prepared are solved by ``tree``."""
+    its tally; where relighting's operators were to be prepared and the budget or the GPU refused them, the light is
+    solved by ``tree`` and they are not tried again under the same limits."""
     settings = (surface, medium, options.model, options.tol, options.device)
-    chosen = chosen_method(*settings, options.memory_limit, options.time_limit, varying=varying)
+    limits = (options.memory_limit, options.time_limit)
+    chosen = chosen_method(*settings, *limits, varying=varying)
+    held_before = operators_held(*settings)
     start = time.perf_counter()
     try:
         carried = carry(dataclasses.replace(options, method=chosen))
-    except BudgetError as exc:
-        if chosen != "relight":
+    except (BudgetError, DeviceError) as exc:
+        if chosen != "relight" or held_before:
             raise
-        refuse(*settings, str(exc))
+        refuse(*settings, str(exc), limits)
         chosen = "tree"
         start = time.perf_counter()
         carried = carry(dataclasses.replace(options, method=chosen))
-    prepared = chosen == "relight" and not carried.operators_reused
-    if chosen == "tree" or prepared:
-        tally = count_light(*settings, chosen, time.perf_counter() - start)
+    if chosen == "tree":
+        tally = count_light(*settings, "tree", time.perf_counter() - start)
+    elif not held_before and operators_held(*settings):  # prepared for this light
+        tally = count_light(*settings, "prepared", time.perf_counter() - start)
     else:
         tally = tally_of(*settings)
     return dataclasses.replace(carried, method=chosen, method_choice=tally.as_dict())

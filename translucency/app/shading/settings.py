@@ -155,7 +155,7 @@ class ShadeSettings:
         DEFAULT_TOL,
         "1",
         "relative error allowed per vertex, at the 99th percentile (0.01: 1 %%): the far field's (cutoff, "
-        "tree, relight) and the proxy's of resolution auto; exact ignores it",
+        "tree, relight, auto) and the proxy's of resolution auto; exact ignores it",
     )
     resolution: object = _setting(
         "auto",

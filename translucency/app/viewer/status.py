@@ -13,13 +13,14 @@ def status_text(state) -> str:
     )
     # what the last solve used (solve_full and the preview solve by tree, whatever the state's method is)
     method, tol = result.metadata.get("method", state.method), result.metadata.get("tolerance", state.tol)
+    used = result.metadata.get("method_used", method)  # what auto chose for this light
     tolerance = "exact sum" if method == "exact" else f"tolerance {tol:.3g}"
     prepared = result.timings.get("solve_prepare", 0.0)
     if state.shows_moving_frame:
         tolerance += "; no bounce while the light moves"
-    if method == "relight" and prepared:
+    if used == "relight" and prepared:
         tolerance += f" (operators prepared in {prepared:.0f} s, once)"
-    if method == "relight" and result.stats.get("solver", {}).get("relight_fallback"):
+    if used == "relight" and result.stats.get("solver", {}).get("relight_fallback"):
         tolerance += f"; by {result.stats['solver']['relight_fallback']}: the operators missed it"
     if str(result.metadata.get("device", "cpu")).startswith("gpu"):
         tolerance += f"; far field on {result.metadata['device']}"
@@ -30,7 +31,7 @@ def status_text(state) -> str:
         + (f"; false colour: {state.false_colour_quantity}, {state.false_colour_scale}" if state.false_colour else "")
         + "\n"
         f"solved in {state.solve_seconds:.2f} s (wall time) on {result.stats['solver_vertices']} of "
-        f"{result.stats['vertices']} vertices: {method}, {tolerance}"
+        f"{result.stats['vertices']} vertices: {method if used == method else f'{method} ({used})'}, {tolerance}"
     )
 
 
