@@ -4,7 +4,7 @@ A table of timings is only comparable with another measured on the same machine 
 this script makes that comparison directly. Each revision is extracted (``git archive``) into a
 temporary folder and imported from there by a small driver in its own process, with this
 interpreter and its packages. The driver loads a scan, cleans it, keeps one ``Scene`` and times
-``--solves`` warm ``Scene.shade`` calls (marble, the default light and settings) after one untimed
+``--solves`` warm ``Scene.shade`` calls (marble, the default light and settings, method ``tree``) after one untimed
 solve (numba's compilation, the geometry caches). The revisions take turns, ``--rounds`` times, so
 that a change of the machine's load falls on all of them alike. Every row records the load average;
 the table gives the median and the range of each revision's warm solves, its ratio to the first
@@ -83,6 +83,8 @@ import inspect
 parameters = inspect.signature(Scene.shade).parameters
 keywords = any(p.kind is inspect.Parameter.VAR_KEYWORD for p in parameters.values())  # settings by keyword
 single = {"bounces": 0} if "bounces" in parameters or keywords else {}
+if "method" in parameters or keywords:  # tree, the default before auto, which would relight once lights had paid
+    single["method"] = "tree"
 result = scene.shade("marble", **single)
 times, stages = [], []
 for _ in range(solves):
