@@ -109,6 +109,9 @@ def test_the_title_says_when_the_colours_were_solved_on_a_proxy(sphere_result):
     mesh, result = sphere_result
     full = figure_title(mesh, result.metadata, "sphere")
     assert full.startswith("sphere: 642 vertices, ") and "proxy" not in full and "marble" in full
+    assert "exact method (every pair" in full
+    chosen = figure_title(mesh, {**result.metadata, "method": "auto", "method_used": "relight"}, "sphere")
+    assert "auto method: relight (tol " in chosen  # the default says what it chose for the light
     proxy = figure_title(mesh, {**result.metadata, "resolution": "proxy, 1096375 vertices, edge 0.157 mm"}, "igea")
     assert proxy.startswith("igea: 642 vertices, ") and len(proxy.splitlines()) == 3
     assert proxy.splitlines()[1].startswith("solved on a proxy of 1,096,375 vertices (0.157 mm edges)")

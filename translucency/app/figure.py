@@ -37,6 +37,12 @@ def nice_length(span: float) -> float:
     return max(step * power for step in (1.0, 2.0, 5.0) if step * power <= span * (1 + 1e-12))
 
 
+def _method_words(metadata: dict) -> str:
+    """The method as the title says it: ``auto`` with the method it chose for this light (``auto method: tree``)."""
+    method, used = metadata.get("method", "?"), metadata.get("method_used")
+    return f"{method} method: {used}" if used and used != method else f"{method} method"
+
+
 def _light_words(light: dict) -> str:
     if light["type"] == "directional":
         d = np.asarray(light["direction"], dtype=float)
@@ -142,7 +148,8 @@ def figure_title(mesh, metadata: dict, name: str | None = None) -> str:
     )
     return (
         f"{name}: {mesh.n_points:,} vertices, {mesh.extent:.4g} mm across — {material}, "
-        f"{metadata.get('model', '?')} dipole, {method} method ({tolerance})\n{solved}light: {lights}, {shadows}"
+        f"{metadata.get('model', '?')} dipole, {_method_words(metadata)} ({tolerance})\n{solved}light: {lights}, "
+        f"{shadows}"
     )
 
 
