@@ -208,3 +208,53 @@ def test_a_light_solved_per_direction_that_prepares_starts_the_other_counts_agai
     assert carried.method == "relight" and len(carried.solutions) > 1
     again = transport(geometry, _light(geometry, DIRECTIONS[1], POTATO), POTATO, _options())
     assert again.method == "tree" and again.method_choice["tree_lights"] == 1
+
+
+def test_operators_whose_first_light_misses_tol_give_way_to_tree_for_good(estimate, monkeypatch, recwarn):
+    """``auto`` holds tol: operators whose first light's check against ``tree`` finds them ``tol`` or more off (made so
+    here) are given up without a warning, that light is the check's ``tree`` answer at ``tol / 4``, every later light
+    of the medium is ``tree``, also after another medium's operators were prepared; ``relight`` asked by name prepares
+    them again (it keeps them up to 10 tol), and ``auto`` does not use those either."""
+    from translucency.scatter import solve as solve_module
+
+    checked, missing = solve_module._relight_error, [True]
+
+    def check(B, reference, tol):
+        found = checked(B, reference, tol)
+        return {**found, "checked_p99": 2 * tol} if missing[0] else found
+
+    monkeypatch.setattr(solve_module, "_relight_error", check)
+    geometry = _sphere()
+    estimate.seconds = 1e-9
+    transport(geometry, _light(geometry, DIRECTIONS[0]), MARBLE, _options())
+    light = _light(geometry, DIRECTIONS[1])
+    carried = transport(geometry, light, MARBLE, _options())
+    assert carried.method == "tree" and "not under the tolerance" in carried.method_choice["refused"]
+    tree = solve(geometry, light.phi_rgb, light.w12, MARBLE, method="tree", tol=0.01 / 4)
+    np.testing.assert_array_equal(carried.B, tree.B)
+    assert not [w for w in recwarn if "relighting operators" in str(w.message)]
+    missing[0] = False
+    transport(geometry, _light(geometry, DIRECTIONS[0], POTATO), POTATO, _options())
+    assert transport(geometry, _light(geometry, DIRECTIONS[1], POTATO), POTATO, _options()).method == "relight"
+    missing[0] = True
+    again = transport(geometry, _light(geometry, DIRECTIONS[2]), MARBLE, _options())
+    assert again.method == "tree" and again.method_choice["refused"]
+    ordered = spatial_order(geometry)[0]
+    by_name = transport(geometry, _light(geometry, DIRECTIONS[3]), MARBLE, _options(method="relight"))
+    assert by_name.method == "relight" and not by_name.operators_reused
+    assert isinstance(relight.kept_operator(ordered), relight.RelightOperator)
+    assert [w for w in recwarn if "over the tolerance" in str(w.message)]
+    assert transport(geometry, _light(geometry, DIRECTIONS[4]), MARBLE, _options()).method == "tree"
+
+
+def test_operators_made_by_relight_that_miss_tol_are_not_used_by_auto(monkeypatch, recwarn):
+    from translucency.scatter import solve as solve_module
+
+    checked = solve_module._relight_error
+    monkeypatch.setattr(
+        solve_module, "_relight_error", lambda B, reference, tol: {**checked(B, reference, tol), "checked_p99": 2 * tol}
+    )
+    geometry = _sphere()
+    transport(geometry, _light(geometry, DIRECTIONS[0]), MARBLE, _options(method="relight"))
+    carried = transport(geometry, _light(geometry, DIRECTIONS[1]), MARBLE, _options())
+    assert carried.method == "tree" and not carried.operators_reused

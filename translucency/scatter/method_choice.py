@@ -12,6 +12,11 @@ What it keeps per surface (a :class:`Tally` per operator key, :func:`~translucen
 the spatially ordered surface, where relighting keeps its operators) is dropped with the surface. Preparing one set of
 operators starts every other key's count again, so that lights that take turns between two media cannot prepare and
 replace operators at every light.
+
+``auto`` holds ``tol``: operators whose first light is ``tol`` or more off a ``tree`` solve of it at the 99th
+percentile (relighting's fits and far field at dark vertices miss it in some media, docs/physics.md §8.7, §8.9) are
+given up, and every later light of those settings on that surface is solved by ``tree``; so are lights whose
+settings have operators held, made by method ``relight``, that miss ``tol``.
 """
 
 from __future__ import annotations
@@ -25,7 +30,17 @@ from .names import check_device
 from .solve import relight_estimate
 from .surface import PerSurface, spatial_order
 
-__all__ = ["AUTO", "ESTIMATE_AFTER", "Tally", "chosen_method", "count_light", "operators_held", "refuse", "tally_of"]
+__all__ = [
+    "AUTO",
+    "ESTIMATE_AFTER",
+    "Tally",
+    "chosen_method",
+    "count_light",
+    "missed_tol",
+    "operators_held",
+    "refuse",
+    "tally_of",
+]
 
 #: The name of the method this module chooses for.
 AUTO = "auto"
@@ -70,6 +85,9 @@ class Tally:
 
 
 _TALLIES = PerSurface("method auto's tally", counted=False)
+#: Per surface and operator key, why ``auto`` prepares no operators again: their first light missed ``tol`` (a
+#: sentence; kept while the surface is, through other keys' preparations).
+_MISSED = PerSurface("operators that missed tol", counted=False)
 
 
 def _device(device: str) -> str:
@@ -103,10 +121,15 @@ def chosen_method(
     if varying:
         return "tree"
     surface, key = _ordered(surface), _key(medium, model, tol, device)
+    tally = _TALLIES.get(surface, key, Tally)
+    missed = _MISSED.peek(surface, key)
+    if missed is not None:
+        tally.refused = missed
+        return "tree"
     held = relight.kept_operator(surface, key)
     if held is not None:
-        return "tree" if isinstance(held, relight.TreeInstead) else "relight"
-    tally = _TALLIES.get(surface, key, Tally)
+        over = held.stats.get("checked_p99", 0.0) >= tol  # made by method relight, which keeps them up to 10 tol
+        return "tree" if isinstance(held, relight.TreeInstead) or over else "relight"
     if tally.limits != (memory_limit, time_limit):  # the estimate and any refusal were for other limits
         tally.preparation, tally.refused, tally.limits = None, None, (memory_limit, time_limit)
     if tally.refused is not None or tally.lights < ESTIMATE_AFTER:
@@ -140,6 +163,20 @@ def count_light(surface, medium, model: str, tol: float, device: str, method: st
     held = _TALLIES.peek(surface, key)
     _TALLIES.drop(surface)
     return held or Tally()
+
+
+def missed_tol(surface, medium, model: str, tol: float, device: str, p99: float) -> Tally:
+    """Prepare no operators of these settings on ``surface`` again: their first light was ``p99`` (relative) off a
+    ``tree`` solve of it at the 99th percentile, not under ``tol``. Returns the tally of these settings."""
+    ordered, key = _ordered(surface), _key(medium, model, tol, device)
+    reason = (
+        f"relighting's operators were {100 * p99:.3g} % off tree at their first light (99th percentile), "
+        f"not under the tolerance of {100 * tol:.2g} %"
+    )
+    _MISSED.get(ordered, key, lambda: reason)
+    tally = tally_of(surface, medium, model, tol, device)
+    tally.refused = reason
+    return tally
 
 
 def refuse(surface, medium, model: str, tol: float, device: str, reason: str, limits: tuple) -> None:

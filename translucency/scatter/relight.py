@@ -37,6 +37,8 @@ a, b        coefficients of ``S_d`` per unit ``Phi`` and ``Psi``             1/(
 
 from __future__ import annotations
 
+import contextlib
+import contextvars
 import threading
 import time
 from dataclasses import dataclass, field
@@ -54,6 +56,8 @@ __all__ = [
     "RELIGHT_KERNELS",
     "RelightOperator",
     "TreeInstead",
+    "fallback_tols",
+    "first_light_held_to",
     "prepare",
     "operator_bytes",
     "kept_operator",
@@ -202,6 +206,27 @@ class TreeInstead:
 #: Operators whose first light is this many ``tol`` or more off ``tree`` at the 99th percentile are not kept: a
 #: relit light is then solved by ``tree`` (:class:`TreeInstead`).
 FALLBACK_TOLS = 10.0
+
+_FALLBACK_TOLS = contextvars.ContextVar("relight_fallback_tols", default=FALLBACK_TOLS)
+
+
+def fallback_tols() -> float:
+    """How many ``tol`` off ``tree`` at the 99th percentile a fresh set of operators' first light may be before they
+    are given up for :class:`TreeInstead`: :data:`FALLBACK_TOLS`, or what :func:`first_light_held_to` asks."""
+    return _FALLBACK_TOLS.get()
+
+
+@contextlib.contextmanager
+def first_light_held_to(tols: float):
+    """Within the ``with`` block (this thread or task only), operators prepared are kept only where their first light
+    is less than ``tols`` ``tol`` off ``tree`` at the 99th percentile, and a :class:`TreeInstead` is kept in their
+    place otherwise (method ``auto`` asks 1: it holds ``tol``, docs/physics.md §8.10). A :class:`TreeInstead` kept
+    under a stricter ask does not stand for a looser one: those operators are prepared again."""
+    token = _FALLBACK_TOLS.set(float(tols))
+    try:
+        yield
+    finally:
+        _FALLBACK_TOLS.reset(token)
 
 
 def operator_key(medium, model: str, tol: float, device: str = "cpu") -> tuple:

@@ -520,7 +520,8 @@ def relight_operator(
     from . import relight
 
     held = relight.kept_operator(geometry, relight.operator_key(medium, model, tol, device))
-    if held is not None:
+    given_up = isinstance(held, relight.TreeInstead)
+    if held is not None and (not given_up or held.stats["checked_p99"] >= relight.fallback_tols() * tol):
         return held, True
     relight.release_operator(geometry)
     plan, counts = relight_estimate(geometry, medium, model, tol, device, memory_limit, time_limit)
@@ -615,7 +616,7 @@ def _relit(work, receivers, tol, memory_limit, time_limit, report, stats, timing
         checked = _tree_of(work, tol / RELIGHT_CHECK_TOL_FACTOR, None, None, None)
         operator.stats.update(_relight_error(B, checked.B, tol))
         timings["check"] = time.perf_counter() - start
-        gave_way = operator.stats["checked_p99"] >= relight.FALLBACK_TOLS * tol
+        gave_way = operator.stats["checked_p99"] >= relight.fallback_tols() * tol
         if gave_way:  # the check's answer; nothing is kept
             operator.stats["bytes"] = 0
             relight.keep_operator(work.geometry, relight.TreeInstead(operator.key, dict(operator.stats)))
@@ -684,7 +685,7 @@ def _relight_error(B, reference, tol) -> dict:
 def _warn_relight_check(name: str, checked: dict, tol: float, vertices: int, gave_way: bool) -> None:
     """One sentence on the first light's check (:func:`_relight_error`) where it found what ``tol`` does not hold:
     the operators given up for ``tree`` (``gave_way``: :data:`~translucency.scatter.relight.FALLBACK_TOLS` ``tol`` off
-    or more),
+    or more; nothing where method ``auto`` gave them up nearer, :func:`~translucency.scatter.relight.fallback_tols`),
     off at the 99th percentile (the direction fits of §8.7 follow ``S_d`` less closely for some materials, low
     albedo, than ``tol`` asks, and on large scans the far field's large blocks miss the darkest vertices, §8.9), or
     a few vertices far off while the percentile holds (where a scan's normals turn against each other within a mean
@@ -692,6 +693,8 @@ def _warn_relight_check(name: str, checked: dict, tol: float, vertices: int, gav
     from .relight import FALLBACK_TOLS
 
     error = checked["checked_p99"]
+    if gave_way and error < FALLBACK_TOLS * tol:  # method auto's own choice, which holds tol (its tally says so)
+        return
     if gave_way:
         percent = f"{100 * error:,.0f}" if error >= 0.1 else f"{100 * error:.2g}"
         warn_user(
@@ -702,7 +705,7 @@ def _warn_relight_check(name: str, checked: dict, tol: float, vertices: int, gav
         )
     elif error > tol:
         warn_user(
-            f"{name}: the relighting operators are {100 * error:.2g} % off a tree solve of the first light at the "
+            f"{name}: the relighting operators are {100 * error:.3g} % off a tree solve of the first light at the "
             f"99th percentile, over the tolerance of {100 * tol:.2g} % (their fit to the refracted direction, "
             "docs/physics.md §8.7, or their far field at dark vertices, §8.9); solve with method tree where that "
             "matters."

@@ -36,9 +36,10 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import BudgetError, DeviceError, TranslucencyError, option, warn_user
+from . import relight
 from .budget import format_bytes, format_seconds
 from .irradiance import IncidentLight, carried_light, incident_flux
-from .method_choice import AUTO, chosen_method, count_light, operators_held, refuse, tally_of
+from .method_choice import AUTO, chosen_method, count_light, missed_tol, operators_held, refuse, tally_of
 from .names import DEFAULT_DEVICE
 from .solve import Solution, solve
 from .surface import SurfaceGeometry, spatial_order
@@ -260,7 +261,9 @@ def _auto(surface, medium, options: TransportOptions, varying: bool, carry) -> T
     held_before = operators_held(*settings)
     start = time.perf_counter()
     try:
-        carried = carry(dataclasses.replace(options, method=chosen))
+        # operators prepared here are kept only where their first light holds tol (they give way to tree otherwise)
+        with relight.first_light_held_to(1.0):
+            carried = carry(dataclasses.replace(options, method=chosen))
     except (BudgetError, DeviceError) as exc:
         if chosen != "relight" or held_before:
             raise
@@ -272,6 +275,9 @@ def _auto(surface, medium, options: TransportOptions, varying: bool, carry) -> T
         tally = count_light(*settings, "tree", time.perf_counter() - start)
     elif not held_before and operators_held(*settings):  # prepared for this light
         tally = count_light(*settings, "prepared", time.perf_counter() - start)
+        if "relight_fallback" in carried.solver_stats:  # their first light missed tol: it is the check's tree solve
+            tally = missed_tol(*settings, carried.solutions[0].stats["checked_p99"])
+            chosen = "tree"
     else:
         tally = tally_of(*settings)
     return dataclasses.replace(carried, method=chosen, method_choice=tally.as_dict())
