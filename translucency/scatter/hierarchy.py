@@ -43,6 +43,9 @@ THETA_MAX = 0.5
 #: the error it makes: tests/scatter/test_tolerance.py checks the per-vertex tolerance; bench/README.md, "Kernel
 #: throughput", what it costs).
 EPS_PER_TOL = 0.5
+#: ... for the radial models (standard, better), whose ``tree`` at ``EPS_PER_TOL`` was over ``tol`` on the default
+#: bunny and a 5 mm sphere (1.0-1.7 % at tol 0.01; bench/README.md, "Solver: run time against error").
+EPS_PER_TOL_RADIAL = 0.1
 #: The receivers whose first estimate sets the allowance's floor: those with the most incident flux.
 BRIGHTEST_RECEIVERS = 64
 #: The pair bound's table: first and last distance (mm) and the number of log-spaced distances. A node nearer than
@@ -384,9 +387,9 @@ class Opening:
 
 def opening(medium, model: str, tol: float) -> Opening:
     """The walk's criterion for ``tol`` (:class:`Opening`): ``theta`` = :data:`THETA_MAX`, ``eps`` =
-    :data:`EPS_PER_TOL` ``* tol``, clusters no nearer than ``CLUSTER_MEAN_FREE_PATHS / min sigma_t'`` (mm), the
-    bound of one pair's ``S_d`` tabulated for ``medium`` (1/mm) and ``model`` (docs/physics.md §8.3, §8.4), and sums
-    in float32 where ``tol >=`` :data:`FLOAT32_TOL`."""
+    :data:`EPS_PER_TOL` ``* tol`` (:data:`EPS_PER_TOL_RADIAL` for the radial models), clusters no nearer than
+    ``CLUSTER_MEAN_FREE_PATHS / min sigma_t'`` (mm), the bound of one pair's ``S_d`` tabulated for ``medium`` (1/mm)
+    and ``model`` (docs/physics.md §8.3, §8.4), and sums in float32 where ``tol >=`` :data:`FLOAT32_TOL`."""
     from .cutoff import pair_bound
 
     first, last, steps = BOUND_TABLE_MM
@@ -395,7 +398,7 @@ def opening(medium, model: str, tol: float) -> Opening:
     return Opening(
         theta=THETA_MAX,
         min_distance=CLUSTER_MEAN_FREE_PATHS / float(np.min(medium.sigma_t_reduced)),
-        eps=EPS_PER_TOL * float(tol),
+        eps=(EPS_PER_TOL if model == "directional" else EPS_PER_TOL_RADIAL) * float(tol),
         bound=np.ascontiguousarray(pair_bound(medium, model, distances), dtype=np.float64),
         log_first=log_first,
         per_log=(steps - 1) / (log_last - log_first),
