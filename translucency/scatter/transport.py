@@ -276,7 +276,9 @@ def _auto(surface, medium, options: TransportOptions, varying: bool, carry) -> T
     elif not held_before and operators_held(*settings):  # prepared for this light
         tally = count_light(*settings, "prepared", time.perf_counter() - start)
         if "relight_fallback" in carried.solver_stats:  # their first light missed tol: it is the check's tree solve
-            tally = missed_tol(*settings, carried.solutions[0].stats["checked_p99"])
+            # the solve that prepared them (a light per direction may start with a direction that lights nothing)
+            p99 = next(s.stats["checked_p99"] for s in carried.solutions if "checked_p99" in s.stats)
+            tally = missed_tol(*settings, p99)
             chosen = "tree"
     else:
         tally = tally_of(*settings)
