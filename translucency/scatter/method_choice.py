@@ -174,7 +174,7 @@ def missed_tol(surface, medium, model: str, tol: float, device: str, p99: float)
         f"not under the tolerance of {100 * tol:.2g} %"
     )
     _MISSED.get(ordered, key, lambda: reason)
-    tally = tally_of(surface, medium, model, tol, device)
+    tally = _TALLIES.get(ordered, key, Tally)
     tally.refused = reason
     return tally
 
