@@ -38,10 +38,10 @@ def test_over_the_time_budget_the_scan_is_solved_on_a_coarser_proxy():
     to every vertex, and one line says so with the expected error."""
     points, triangles = icosphere(5, 20.0)  # 10242 vertices
     scene = Scene(TriangleMesh(points, triangles), shadows=False)
-    full = scene.shade("marble", time_limit=None)
+    full = scene.shade("marble", bounces=0, time_limit=None)
     estimate = full.stats["solver"]["budget"]["seconds"]
     lines = []
-    result = scene.shade("marble", time_limit=0.3 * estimate, warn=lines.append)
+    result = scene.shade("marble", bounces=0, time_limit=0.3 * estimate, warn=lines.append)
     assert len(lines) == 1 and "proxy" in lines[0] and "time_limit=" in lines[0] and "RMS" not in lines[0]
     # the per-vertex error of docs/physics.md §8.6's rule: 1.25 * 0.3/mm (marble's rate) * the proxy's edge
     edge = float(re.search(r"\(edge ([0-9.]+) mm\)", lines[0]).group(1))
@@ -65,11 +65,11 @@ def test_the_resolution_that_did_not_fit_is_freed_before_the_proxy():
 
     points, triangles = icosphere(5, 20.0)
     scene = Scene(TriangleMesh(points, triangles), shadows=False)
-    full = scene.shade("marble", time_limit=None)
+    full = scene.shade("marble", bounces=0, time_limit=None)
     from translucency.app.shading.settings import resolve_medium
 
     geometry = weakref.ref(scene.solver_mesh(resolve_medium("marble"))[3])
-    scene.shade("marble", time_limit=0.3 * full.stats["solver"]["budget"]["seconds"], warn=lambda line: None)
+    scene.shade("marble", bounces=0, time_limit=0.3 * full.stats["solver"]["budget"]["seconds"], warn=lambda line: None)
     gc.collect()
     assert geometry() is None
 
@@ -78,7 +78,7 @@ def test_too_coarse_a_proxy_is_refused_instead():
     """When the proxy that would fit keeps too few vertices, the sentence of the solver is raised."""
     points, triangles = icosphere(3, 20.0)  # 642 vertices: below the fewest a proxy may keep
     with pytest.raises(BudgetError, match="time_limit="):
-        Scene(TriangleMesh(points, triangles), shadows=False).shade("marble", time_limit=1e-9)
+        Scene(TriangleMesh(points, triangles), shadows=False).shade("marble", bounces=0, time_limit=1e-9)
 
 
 def test_a_refused_resolution_s_light_is_the_one_its_proxy_gets(monkeypatch):
@@ -91,7 +91,7 @@ def test_a_refused_resolution_s_light_is_the_one_its_proxy_gets(monkeypatch):
     monkeypatch.setattr(resolution, "CARRIED_LIGHT_MAX_SIGMA_TR_EDGE", np.inf)  # whatever the proxy's edge
     points, triangles = icosphere(5, 20.0)
     mesh = TriangleMesh(points, triangles)
-    estimate = Scene(mesh).shade("marble", time_limit=None).stats["solver"]["budget"]["seconds"]
+    estimate = Scene(mesh).shade("marble", bounces=0, time_limit=None).stats["solver"]["budget"]["seconds"]
     traced = []
     incident_flux = irradiance.incident_flux
 
@@ -108,7 +108,7 @@ def test_a_refused_resolution_s_light_is_the_one_its_proxy_gets(monkeypatch):
         lambda light, *a: carried.append((light, carried_light(light, *a))) or carried[-1][1],
     )
     lines = []
-    result = Scene(mesh).shade("marble", time_limit=0.3 * estimate, warn=lines.append)
+    result = Scene(mesh).shade("marble", bounces=0, time_limit=0.3 * estimate, warn=lines.append)
     assert result.stats["solver_vertices"] < mesh.n_points
     assert traced[0] == mesh.n_points and set(traced) == {mesh.n_points}  # at every vertex, never on a proxy
     assert "99th percentile of vertices, given the light traced at every vertex" in lines[0]
@@ -118,7 +118,7 @@ def test_a_refused_resolution_s_light_is_the_one_its_proxy_gets(monkeypatch):
     np.testing.assert_array_equal(result.incident_flux, carried[-1][0].phi_rgb)
     monkeypatch.setattr(resolution, "CARRIED_LIGHT_MAX_SIGMA_TR_EDGE", 0.0)  # a proxy traces its own light
     traced.clear(), carried.clear()
-    result = Scene(mesh).shade("marble", time_limit=0.3 * estimate, warn=lambda line: None)
+    result = Scene(mesh).shade("marble", bounces=0, time_limit=0.3 * estimate, warn=lambda line: None)
     assert not carried and traced[0] == mesh.n_points and result.stats["solver_vertices"] in traced[1:]
 
 
@@ -135,29 +135,31 @@ def test_far_over_its_time_budget_a_scan_is_refused_before_its_shadows_are_trace
     monkeypatch.setattr(resolution, "CARRIED_LIGHT_MAX_SIGMA_TR_EDGE", np.inf)  # whatever the proxy's edge
     points, triangles = icosphere(5, 20.0)
     mesh = TriangleMesh(points, triangles)
-    estimate = Scene(mesh).shade("marble", time_limit=None).stats["solver"]["budget"]["seconds"]
+    estimate = Scene(mesh).shade("marble", bounces=0, time_limit=None).stats["solver"]["budget"]["seconds"]
     scenes = []
     occluder = visibility.Occluder.__init__
     monkeypatch.setattr(
         visibility.Occluder, "__init__", lambda self, p, *a, **k: scenes.append(len(p)) or occluder(self, p, *a, **k)
     )
-    late = Scene(mesh).shade("marble", time_limit=0.3 * estimate, warn=lambda line: None)
+    late = Scene(mesh).shade("marble", bounces=0, time_limit=0.3 * estimate, warn=lambda line: None)
     assert scenes[0] == mesh.n_points and late.stats["solver_vertices"] < mesh.n_points
     monkeypatch.setattr(scene_module, "EARLY_PLAN_VERTICES", 0)
     planned = []
     check = transport.check_unshadowed
     monkeypatch.setattr(transport, "check_unshadowed", lambda g, *a: planned.append(g.n_vertices) or check(g, *a))
     scenes.clear()
-    early = Scene(mesh).shade("marble", time_limit=0.3 * estimate, warn=lambda line: None)
+    early = Scene(mesh).shade("marble", bounces=0, time_limit=0.3 * estimate, warn=lambda line: None)
     assert mesh.n_points not in scenes and early.stats["solver_vertices"] == late.stats["solver_vertices"]
     assert planned == [mesh.n_points]  # the proxy, sized to fit, is not planned twice
-    # the same light but where a ray grazes the surface (the flux there is within 1e-4 of nothing): the proxy's
-    # chords and the mesh's facets meet such a ray at different places
+    # the same light but where a ray grazes the surface (the flux there is within 1e-2 of nothing: less than 0.6°
+    # from the tangent plane): the proxy's chords and the mesh's facets meet such a ray at different places
     differ = np.any(early.incident_flux != late.incident_flux, axis=1)
-    assert differ.mean() < 1e-3 and np.all(late.incident_flux[differ] < 1e-4 * late.incident_flux.max())
-    np.testing.assert_allclose(early.B, late.B, rtol=1e-6, atol=1e-6 * late.B.max())
+    assert differ.mean() < 1e-3 and np.all(late.incident_flux[differ] < 1e-2 * late.incident_flux.max())
+    np.testing.assert_allclose(early.B, late.B, rtol=1e-6, atol=1e-3 * late.B.max())  # what those rays bring
     scenes.clear()
-    Scene(mesh).shade("marble", time_limit=0.9 * estimate, warn=lambda line: None)  # over, by less than the factor
+    Scene(mesh).shade(
+        "marble", bounces=0, time_limit=0.9 * estimate, warn=lambda line: None
+    )  # over, by less than the factor
     assert scenes[0] == mesh.n_points
 
 
@@ -171,27 +173,27 @@ def test_the_same_solve_asked_again_goes_straight_to_the_proxy(monkeypatch):
     points, triangles = icosphere(5, 20.0)
     mesh = TriangleMesh(points, triangles)
     scene = Scene(mesh, shadows=False)
-    limit = 0.3 * scene.shade("marble", time_limit=None).stats["solver"]["budget"]["seconds"]
+    limit = 0.3 * scene.shade("marble", bounces=0, time_limit=None).stats["solver"]["budget"]["seconds"]
     tried = []
     carry = transport.transport
     monkeypatch.setattr(
         transport, "transport", lambda geometry, *a, **k: tried.append(geometry.n_vertices) or carry(geometry, *a, **k)
     )
     lines = []
-    first = scene.shade("marble", time_limit=limit, warn=lines.append)
+    first = scene.shade("marble", bounces=0, time_limit=limit, warn=lines.append)
     assert tried[0] == mesh.n_points and first.stats["solver_vertices"] < mesh.n_points
     tried.clear()
-    again = scene.shade("marble", time_limit=limit, warn=lines.append)
+    again = scene.shade("marble", bounces=0, time_limit=limit, warn=lines.append)
     assert mesh.n_points not in tried and tried  # the proxy only
     np.testing.assert_array_equal(again.B, first.B)
     assert len(lines) == 2 and lines[1] == lines[0]
     assert "the refusal of the resolution asked for" in again.stats["reused"]
     assert "the refusal of the resolution asked for" not in first.stats["reused"]
     tried.clear()
-    scene.shade("marble", DirectionalLight([0.0, 1.0, 0.0]), time_limit=limit, warn=lines.append)
+    scene.shade("marble", DirectionalLight([0.0, 1.0, 0.0]), bounces=0, time_limit=limit, warn=lines.append)
     assert tried[0] == mesh.n_points
     tried.clear()
-    scene.shade("marble", time_limit=0.9 * limit, warn=lines.append)
+    scene.shade("marble", bounces=0, time_limit=0.9 * limit, warn=lines.append)
     assert tried[0] == mesh.n_points
 
 
@@ -243,13 +245,58 @@ def test_a_proxy_the_budget_forces_is_said_before_its_solve_works():
     """The line naming the proxy comes before the proxy's far field starts, not after the bake's work."""
     points, triangles = icosphere(5, 20.0)
     scene = Scene(TriangleMesh(points, triangles), shadows=False)
-    estimate = scene.shade("marble", time_limit=None).stats["solver"]["budget"]["seconds"]
+    estimate = scene.shade("marble", bounces=0, time_limit=None).stats["solver"]["budget"]["seconds"]
     events = []
     scene.shade(
         "marble",
+        bounces=0,
         time_limit=0.3 * estimate,
         warn=lambda line: events.append("said"),
         progress=lambda stage, fraction: events.append(stage),
     )
     assert events.count("said") == 1
     assert events.index("said") < events.index("far field")
+
+
+def test_a_light_s_bounce_counts_against_the_time_limit():
+    """The time limit holds a light's solves together: a limit between one solve's estimate and two is enough for
+    the light without a bounce (every vertex) and too little with one (a proxy, said with the light's estimate,
+    about twice the solve's); with no proxy possible, the sentence names the bounce."""
+    points, triangles = icosphere(5, 20.0)
+    mesh = TriangleMesh(points, triangles)
+    scene = Scene(mesh, shadows=False)
+    solve_seconds = scene.shade("marble", bounces=0, time_limit=None).stats["solver"]["budget"]["seconds"]
+    limit = 1.5 * solve_seconds
+    alone = scene.shade("marble", bounces=0, time_limit=limit, warn=lambda line: None)
+    assert alone.stats["solver_vertices"] == mesh.n_points
+    lines = []
+    bounced = scene.shade("marble", bounces=1, time_limit=limit, warn=lines.append)
+    assert bounced.stats["solver_vertices"] < mesh.n_points and len(lines) == 1
+    said = float(re.search(r"would take about ([0-9.]+) s with its bounce \(time_limit=", lines[0]).group(1))
+    assert said == pytest.approx(2 * solve_seconds, rel=0.2)  # the plan is sampled again: not to the digit
+    small, faces = icosphere(3, 20.0)  # too few vertices for a proxy
+    with pytest.raises(BudgetError, match="with its bounce, over the limit"):
+        Scene(TriangleMesh(small, faces), shadows=False).shade("marble", bounces=1, time_limit=1e-9)
+
+
+def test_a_proxy_over_time_fits_what_is_left_after_its_making():
+    """The proxy is sized to the time left of the limit once its making is counted (at least LEAST_TIME_SHARE of
+    the limit): the more is spent, the coarser the edge, down to that share."""
+    from types import SimpleNamespace
+
+    from translucency.app.shading.fallback import (
+        COARSER_TIME_EXPONENT,
+        LEAST_TIME_SHARE,
+        coarser_edge,
+        proxy_seconds,
+    )
+
+    plan = SimpleNamespace(over_memory=False, over_time=True, time_limit=300.0, seconds=1000.0)
+    exc = BudgetError("over", plan)
+    edges = [coarser_edge(10**6, 10**6, 0.1, exc, 0, "tree", spent) for spent in (0.0, 100.0, 150.0, 299.0, 1e4)]
+    assert edges[0] < edges[1] < edges[2] == edges[3] == edges[4]
+    # time as n^k (COARSER_TIME_EXPONENT): the vertices kept, edge^-2, fall as (time left)^(1 / k)
+    k = COARSER_TIME_EXPONENT["tree"]
+    assert (edges[0] / edges[1]) ** 2 == pytest.approx((200.0 / 300.0) ** (1.0 / k), rel=1e-4)  # vertices rounded
+    assert (edges[0] / edges[2]) ** 2 == pytest.approx(LEAST_TIME_SHARE ** (1.0 / k), rel=1e-4)
+    assert proxy_seconds(10**7, 4) > 0 and proxy_seconds(10**7, 2) == pytest.approx(2 * proxy_seconds(10**7, 4))

@@ -117,8 +117,8 @@ def test_the_title_says_when_the_colours_were_solved_on_a_proxy(sphere_result):
     assert proxy.splitlines()[1].startswith("solved on a proxy of 1,096,375 vertices (0.157 mm edges)")
     points, triangles = icosphere(5, 20.0)  # over a tight time limit the pipeline solves on a proxy
     scene = Scene(TriangleMesh(points, triangles), shadows=False)
-    estimate = scene.shade("marble", time_limit=None).stats["solver"]["budget"]["seconds"]
-    coarse = scene.shade("marble", time_limit=0.3 * estimate, warn=lambda line: None)
+    estimate = scene.shade("marble", bounces=0, time_limit=None).stats["solver"]["budget"]["seconds"]
+    coarse = scene.shade("marble", bounces=0, time_limit=0.3 * estimate, warn=lambda line: None)
     assert "solved on a proxy of" in figure_title(scene.mesh, coarse.metadata)
 
 

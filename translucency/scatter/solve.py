@@ -1132,8 +1132,14 @@ def _near_counts(near_args, grid, rcv) -> tuple[float, float, float]:
     return mean(near), mean(points), mean(own)
 
 
-def over_budget_sentence(plan: budget.SolveEstimate, n_vertices: int) -> str:
-    """One sentence saying which budget a solve of ``n_vertices`` is over and what to change."""
+def with_bounces(bounces: int) -> str:
+    """``" with its bounce"`` (``" with its 2 bounces"``; nothing for 0): what a light's estimated time holds."""
+    return {0: "", 1: " with its bounce"}.get(bounces, f" with its {bounces} bounces")
+
+
+def over_budget_sentence(plan: budget.SolveEstimate, n_vertices: int, bounces: int = 0) -> str:
+    """One sentence saying which budget a solve of ``n_vertices`` is over and what to change (over time, with
+    ``bounces``: the light's solves together, its bounces' included)."""
     if plan.over_memory:
         what = (
             f"needs about {budget.format_bytes(plan.peak_bytes)} of memory beyond what the process holds, over "
@@ -1142,7 +1148,7 @@ def over_budget_sentence(plan: budget.SolveEstimate, n_vertices: int) -> str:
         more = option("memory_limit")
     else:
         what = (
-            f"would take about {budget.format_seconds(plan.seconds)}, "
+            f"would take about {budget.format_seconds(plan.seconds)}{with_bounces(bounces)}, "
             f"over the limit of {budget.format_seconds(plan.time_limit)}"
         )
         more = option("time_limit")

@@ -41,7 +41,7 @@ from .budget import format_bytes, format_seconds
 from .irradiance import IncidentLight, carried_light, incident_flux
 from .method_choice import AUTO, chosen_method, count_light, missed_tol, operators_held, refuse, tally_of
 from .names import DEFAULT_DEVICE
-from .solve import Solution, solve
+from .solve import Solution, over_budget_sentence, solve, with_bounces
 from .surface import SurfaceGeometry, spatial_order
 from .treewalk import GROUP_RECEIVERS
 from .visibility import VisibilityCache
@@ -60,11 +60,18 @@ __all__ = [
     "format_bytes",
     "format_seconds",
     "incident_flux",
+    "light_solves",
     "normal_transmittance",
     "solve",
     "spatial_order",
     "transport",
+    "with_bounces",
 ]
+
+
+#: A bounce (its gather and its solve) costs about what the light's first solve is planned to take (bench/README.md,
+#: "Memory and time budget"): a light's first solve is planned against ``1 + bounces`` times its own time.
+BOUNCE_SOLVE_SHARE = 1.0
 
 
 @dataclass(frozen=True)
@@ -171,13 +178,17 @@ def normal_transmittance(eta: float) -> float:
 def check_size(surface: SurfaceGeometry, n_channels: int, options: TransportOptions) -> None:
     """A :class:`~translucency.errors.BudgetError` when even the least a solve of the surface's size needs
     (:func:`translucency.scatter.solve.size_floor_plan`) is over the limits; relighting plans its own."""
-    from .solve import over_budget_sentence, size_floor_plan
+    from .solve import size_floor_plan
 
     if options.method == "relight":
         return
-    floor = size_floor_plan(surface, n_channels, options.method, options.memory_limit, options.time_limit)
+    floor = _first_solve(
+        surface,
+        options,
+        lambda first: size_floor_plan(surface, n_channels, first.method, first.memory_limit, first.time_limit),
+    )
     if not floor.fits:
-        raise BudgetError(over_budget_sentence(floor, surface.n_vertices), floor)
+        raise _for_the_light(BudgetError("", floor), surface, options)
 
 
 def check_unshadowed(surface: SurfaceGeometry, lights, medium, options: TransportOptions, factor: float) -> None:
@@ -186,24 +197,53 @@ def check_unshadowed(surface: SurfaceGeometry, lights, medium, options: Transpor
     take light away, so the solve with them would most likely be over its budget too, and no Embree scene of the
     surface need be built at a size that is then not solved. The ordered surface and source tree the plan makes
     stay on ``surface`` for the solve."""
-    from .solve import over_budget_sentence, plan
+    from .solve import plan
 
     held = options.method == AUTO and operators_held(surface, medium, options.model, options.tol, options.device)
     if options.method == "relight" or held:  # relighting plans its own operators
         return
     facing = incident_flux(surface.points, surface.normals, surface.vertex_areas, lights, medium.eta)
-    estimate = plan(
-        surface,
-        facing.phi_rgb,
-        facing.w12,
-        medium,
-        **options.solve_keywords,
+    estimate = _first_solve(
+        surface, options, lambda first, lit=facing: plan(surface, lit.phi_rgb, lit.w12, medium, **first.solve_keywords)
     )
     del facing
     over_time = estimate.time_limit is not None and estimate.seconds > factor * estimate.time_limit
     over_memory = estimate.budget_bytes is not None and estimate.peak_bytes > factor * estimate.budget_bytes
     if over_time or over_memory:
-        raise BudgetError(over_budget_sentence(estimate, surface.n_vertices), estimate)
+        raise _for_the_light(BudgetError("", estimate), surface, options)
+
+
+def light_solves(options: TransportOptions) -> float:
+    """How many times its own planned time a light's first solve stands for: ``1 + bounces`` (each bounce about one
+    solve more, :data:`BOUNCE_SOLVE_SHARE`), so that ``time_limit`` holds the light's solves together; 1 without a
+    bounce or a time limit, and for relighting, whose plan is its operators' preparation (a bounce is then one more
+    light through them)."""
+    if options.method == "relight" or options.time_limit is None or not options.bounces:
+        return 1.0
+    return 1.0 + BOUNCE_SOLVE_SHARE * options.bounces
+
+
+def _first_solve(surface: SurfaceGeometry, options: TransportOptions, call):
+    """``call(options)`` for a light's first solve (or its plan), planned against its share of ``time_limit``
+    (:func:`light_solves`); a refusal is said for the whole light (:func:`_for_the_light`)."""
+    share = light_solves(options)
+    if share == 1.0:
+        return call(options)
+    try:
+        return call(dataclasses.replace(options, time_limit=options.time_limit / share))
+    except BudgetError as exc:
+        raise _for_the_light(exc, surface, options) from None
+
+
+def _for_the_light(exc: BudgetError, surface: SurfaceGeometry, options: TransportOptions) -> BudgetError:
+    """``exc``'s refusal of a light's first solve as the whole light's: its estimated seconds and the limit times
+    :func:`light_solves` (the limit is then ``time_limit`` itself), in the solver's sentence."""
+    plan, share = exc.estimate, light_solves(options)
+    if plan is None:
+        return exc
+    if share != 1.0:
+        plan = dataclasses.replace(plan, seconds=plan.seconds * share, time_limit=plan.time_limit * share)
+    return BudgetError(over_budget_sentence(plan, surface.n_vertices, options.bounces if share != 1.0 else 0), plan)
 
 
 def transport(
@@ -290,19 +330,13 @@ def _transported(
 ) -> Transport:
     """:func:`transport` by ``options.method``, one of the solver's own (not ``auto``)."""
     solve_one = _solver(solver, reflectance)
-    if options.per_direction:
-        solutions = _solve_per_direction(surface, light, medium, options, progress, solve_one)
-    else:
-        solutions = [
-            solve_one(
-                surface,
-                light.phi_rgb,
-                light.w12,
-                medium,
-                progress=progress,
-                **options.solve_keywords,
-            )
-        ]
+
+    def first(planned: TransportOptions) -> list:
+        if planned.per_direction:
+            return _solve_per_direction(surface, light, medium, planned, progress, solve_one)
+        return [solve_one(surface, light.phi_rgb, light.w12, medium, progress=progress, **planned.solve_keywords)]
+
+    solutions = _first_solve(surface, options, first)
     timings: dict = {}
     for solution in solutions:
         for stage, seconds in solution.timings.items():

@@ -13,7 +13,7 @@ from __future__ import annotations
 import json
 
 from ...errors import option
-from ...scatter.transport import format_bytes, format_seconds
+from ...scatter.transport import format_bytes, format_seconds, with_bounces
 from .resolution import expected_proxy_error
 
 __all__ = [
@@ -23,6 +23,7 @@ __all__ = [
     "budget_phrase",
     "coarsened_line",
     "coarser_edge",
+    "proxy_seconds",
     "refusal_key",
 ]
 
@@ -32,9 +33,9 @@ COARSER_ATTEMPTS = 3
 COARSER_MARGIN = 0.7
 MIN_PROXY_VERTICES = 1000
 #: How the solve's estimated time grows with the vertex count n: as n^2 for ``exact`` (every pair); for the others
-#: more slowly, since fewer clusters open per receiver on a coarser mesh (the exponent is calibrated in
-#: bench/README.md, "Scaling and memory").
-COARSER_TIME_EXPONENT = {"exact": 2.0, "tree": 1.4, "cutoff": 1.4}
+#: more slowly (``tree``'s plans of one scan at several resolutions, bench/README.md, "Memory and time budget";
+#: ``cutoff``'s in "Scaling and memory").
+COARSER_TIME_EXPONENT = {"exact": 2.0, "tree": 1.1, "cutoff": 1.4}
 #: From this many vertices on, the solve at the resolution asked for is planned with every vertex that faces a
 #: light lit before the light's shadows are traced, and refused at once when that plan is over
 #: EARLY_REFUSAL_FACTOR times a budget (:func:`translucency.scatter.transport.check_unshadowed`): no Embree scene of
@@ -42,22 +43,39 @@ COARSER_TIME_EXPONENT = {"exact": 2.0, "tree": 1.4, "cutoff": 1.4}
 #: shadows take away more than a fifth of its light may be solved on a proxy where its full solve would have fitted.
 EARLY_PLAN_VERTICES = 1_000_000
 EARLY_REFUSAL_FACTOR = 1.25
+#: Thread-seconds per vertex of the full mesh that making a proxy takes: its decimation (in parts, side by side), the
+#: map from the full mesh onto it and the light traced at every vertex of the full mesh. A calibration on scans of
+#: 2-10M vertices (bench/README.md, "Memory and time budget"); a proxy over time is sized to fit what is left of
+#: the time limit after it.
+PROXY_SECONDS_PER_VERTEX = 2e-5
+#: Over time, a proxy aims at least at this share of the time limit, however much of it is spent.
+LEAST_TIME_SHARE = 0.5
 
 
-def coarser_edge(solver_vertices: int, mesh_vertices: int, mean_edge: float, exc, attempt: int, method: str) -> float:
+def proxy_seconds(mesh_vertices: int, threads: int) -> float:
+    """Seconds that making a proxy of a mesh of ``mesh_vertices`` should take on ``threads`` threads
+    (:data:`PROXY_SECONDS_PER_VERTEX`)."""
+    return PROXY_SECONDS_PER_VERTEX * mesh_vertices / max(1, threads)
+
+
+def coarser_edge(
+    solver_vertices: int, mesh_vertices: int, mean_edge: float, exc, attempt: int, method: str, spent: float = 0.0
+) -> float:
     """The edge length (mm) of a proxy of the full mesh (``mesh_vertices``, mean edge ``mean_edge`` mm) whose solve
     should fit the budget that the solve at ``solver_vertices`` was over (``exc``, a
-    :class:`~translucency.errors.BudgetError`); ``exc`` is raised again when that proxy would keep fewer than
-    :data:`MIN_PROXY_VERTICES` or the attempts are spent.
+    :class:`~translucency.errors.BudgetError`), in the time left of the limit once ``spent`` seconds are gone (the
+    proxies' making, :func:`proxy_seconds`); ``exc`` is raised again when that proxy
+    would keep fewer than :data:`MIN_PROXY_VERTICES` or the attempts are spent.
 
     Memory grows linearly with the vertex count and time as ``n^COARSER_TIME_EXPONENT``, so the share kept is
-    ``COARSER_MARGIN * budget / estimate`` to the power 1 or ``1 / exponent``; the edge is
-    ``mean_edge * sqrt(mesh_vertices / target)``."""
+    ``COARSER_MARGIN * budget / estimate`` to the power 1 or ``1 / exponent`` (the time budget: what is left of the
+    limit, at least :data:`LEAST_TIME_SHARE` of it); the edge is ``mean_edge * sqrt(mesh_vertices / target)``."""
     plan = exc.estimate
     shares = [COARSER_MARGIN * plan.budget_bytes / plan.peak_bytes] if plan.over_memory else []
     if plan.over_time:
         exponent = COARSER_TIME_EXPONENT.get(method, COARSER_TIME_EXPONENT["tree"])
-        shares.append((COARSER_MARGIN * plan.time_limit / plan.seconds) ** (1.0 / exponent))
+        left = max(plan.time_limit - spent, LEAST_TIME_SHARE * plan.time_limit)
+        shares.append((COARSER_MARGIN * left / plan.seconds) ** (1.0 / exponent))
     target = int(solver_vertices * min(shares or [COARSER_MARGIN]))
     if attempt >= COARSER_ATTEMPTS or target < MIN_PROXY_VERTICES:
         raise exc
@@ -73,14 +91,16 @@ def refusal_key(settings, lights) -> str:
     return json.dumps(described, sort_keys=True, default=str)
 
 
-def budget_phrase(plan) -> str:
-    """``"would need about 25 GB of memory (budget 3.6 GB)"`` or the same for time, from an estimate."""
+def budget_phrase(plan, bounces: int = 0) -> str:
+    """``"would need about 25 GB of memory (budget 3.6 GB)"`` or the same for time, from an estimate (over time,
+    with ``bounces``: the light's solves together, its bounces' included)."""
     if plan.over_memory:
         return (
             f"would need about {format_bytes(plan.peak_bytes)} of memory ({option('memory_limit')} budget "
             f"{format_bytes(plan.budget_bytes)})"
         )
-    return f"would take about {format_seconds(plan.seconds)} ({option('time_limit')} {format_seconds(plan.time_limit)})"
+    limit = format_seconds(plan.time_limit)
+    return f"would take about {format_seconds(plan.seconds)}{with_bounces(bounces)} ({option('time_limit')} {limit})"
 
 
 def coarsened_line(reason: str, medium, proxy_vertices: int, vertices: int, edge: float, carried: bool) -> str:

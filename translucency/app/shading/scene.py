@@ -20,6 +20,7 @@ from ...errors import BudgetError, InvalidParameterError
 from ...geometry.measure import mean_edge_length
 from ...scatter import transport
 from ...scatter.names import DEFAULT_TOL
+from ...threads import thread_count
 from .fallback import (
     COARSER_ATTEMPTS,
     EARLY_PLAN_VERTICES,
@@ -27,6 +28,7 @@ from .fallback import (
     budget_phrase,
     coarsened_line,
     coarser_edge,
+    proxy_seconds,
     refusal_key,
 )
 from .light_cache import LightCache
@@ -244,9 +246,14 @@ class Scene:
                     timings,
                 )
             except BudgetError as exc:
-                reason = reason or budget_phrase(exc.estimate)  # of the resolution asked for
+                # of the resolution asked for: over time, a light's solves and bounces (relighting's: its operators)
+                bounces = 0 if settings.method == "relight" else settings.bounces
+                reason = reason or budget_phrase(exc.estimate, bounces)
+                # estimated, not measured, so that a scan gets the same proxy however busy the machine: the proxies
+                # made so far and the next
+                spent = (attempt + 1) * proxy_seconds(self.mesh.n_points, thread_count())
                 resolution = coarser_edge(
-                    solver_mesh.n_points, self.mesh.n_points, self.mean_edge, exc, attempt, settings.method
+                    solver_mesh.n_points, self.mesh.n_points, self.mean_edge, exc, attempt, settings.method, spent
                 )
                 if attempt == 0 and refusal is not None and not exc.estimate.over_memory:
                     # over time only: that estimate depends on the settings and lights alone

@@ -58,7 +58,7 @@ __all__ = [
 ]
 
 DEFAULT_MATERIAL = "marble"
-#: Seconds a solve may take by its estimate unless told otherwise (``time_limit``).
+#: Seconds a light's solve (its bounces included) may take by its estimate unless told otherwise (``time_limit``).
 DEFAULT_TIME_LIMIT_S = 300.0
 #: From the object toward the default light, in the display frame (right, up, front; see
 #: :func:`translucency.io.upright.display_frame`): above, in front and a little to the right. For a
@@ -183,10 +183,10 @@ class ShadeSettings:
     time_limit: object = _setting(
         DEFAULT_TIME_LIMIT_S,
         "s",
-        "seconds a solve may take by its estimate (None: no limit); over it the solve runs on a coarser proxy or "
-        "stops with a message",
-        flag="seconds a solve may take by its estimate; over it the solve runs on a coarser proxy or stops with a "
-        "message",
+        "seconds a light's solve may take by its estimate, its bounces included (None: no limit); over it the solve "
+        "runs on a coarser proxy, sized to what is left after making it, or stops with a message",
+        flag="seconds a light's solve may take by its estimate, its bounces included; over it the solve runs on a "
+        "coarser proxy, sized to what is left after making it, or stops with a message",
     )
     up: str = _setting("auto", "--", "the scan's up axis, x, y, z, -x, -y, -z, or auto (inferred from the shape)")
     bounces: int = _setting(
