@@ -230,6 +230,7 @@ def test_operators_whose_first_light_misses_tol_give_way_to_tree_for_good(estima
     light = _light(geometry, DIRECTIONS[1])
     carried = transport(geometry, light, MARBLE, _options())
     assert carried.method == "tree" and "not under the tolerance" in carried.method_choice["refused"]
+    assert carried.method_choice["tree_lights"] == 2  # the light before and this one: the count goes on
     tree = solve(geometry, light.phi_rgb, light.w12, MARBLE, method="tree", tol=0.01 / 4)
     np.testing.assert_array_equal(carried.B, tree.B)
     assert not [w for w in recwarn if "relighting operators" in str(w.message)]

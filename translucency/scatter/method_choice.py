@@ -165,16 +165,19 @@ def count_light(surface, medium, model: str, tol: float, device: str, method: st
     return held or Tally()
 
 
-def missed_tol(surface, medium, model: str, tol: float, device: str, p99: float) -> Tally:
+def missed_tol(surface, medium, model: str, tol: float, device: str, p99: float, counted: Tally) -> Tally:
     """Prepare no operators of these settings on ``surface`` again: their first light was ``p99`` (relative) off a
-    ``tree`` solve of it at the 99th percentile, not under ``tol``. Returns the tally of these settings."""
+    ``tree`` solve of it at the 99th percentile, not under ``tol``. ``counted`` is the tally :func:`count_light` gave
+    back for that light (preparing dropped it); it is kept again with the light as one more ``tree`` light (its answer
+    is the check's ``tree`` solve), and returned."""
     ordered, key = _ordered(surface), _key(medium, model, tol, device)
     reason = (
         f"relighting's operators were {100 * p99:.3g} % off tree at their first light (99th percentile), "
         f"not under the tolerance of {100 * tol:.2g} %"
     )
     _MISSED.get(ordered, key, lambda: reason)
-    tally = _TALLIES.get(ordered, key, Tally)
+    tally = _TALLIES.get(ordered, key, lambda: counted)
+    tally.lights += 1
     tally.refused = reason
     return tally
 

@@ -318,7 +318,7 @@ def _auto(surface, medium, options: TransportOptions, varying: bool, carry) -> T
         if "relight_fallback" in carried.solver_stats:  # their first light missed tol: it is the check's tree solve
             # the solve that prepared them (a light per direction may start with a direction that lights nothing)
             p99 = next(s.stats["checked_p99"] for s in carried.solutions if "checked_p99" in s.stats)
-            tally = missed_tol(*settings, p99)
+            tally = missed_tol(*settings, p99, tally)
             chosen = "tree"
     else:
         tally = tally_of(*settings)
