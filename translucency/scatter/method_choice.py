@@ -13,10 +13,11 @@ the spatially ordered surface, where relighting keeps its operators) is dropped 
 operators starts every other key's count again, so that lights that take turns between two media cannot prepare and
 replace operators at every light.
 
-``auto`` holds ``tol``: operators whose first light is ``tol`` or more off a ``tree`` solve of it at the 99th
-percentile (relighting's fits and far field at dark vertices miss it in some media, docs/physics.md §8.7, §8.9) are
-given up, and every later light of those settings on that surface is solved by ``tree``; so are lights whose
-settings have operators held, made by method ``relight``, that miss ``tol``.
+``auto`` holds ``tol``: operators whose first light is :data:`~translucency.scatter.relight.AUTO_KEEP_SHARE` ``tol``
+or more off a ``tree`` solve of it at the 99th percentile (relighting's fits and far field at dark vertices miss it in
+some media, docs/physics.md §8.7, §8.9, and one light's check does not bound another's) are given up, and every later
+light of those settings on that surface is solved by ``tree``; so are lights whose settings have operators held, made
+by method ``relight``, that miss that share of ``tol``.
 """
 
 from __future__ import annotations
@@ -128,7 +129,8 @@ def chosen_method(
         return "tree"
     held = relight.kept_operator(surface, key)
     if held is not None:
-        over = held.stats.get("checked_p99", 0.0) >= tol  # made by method relight, which keeps them up to 10 tol
+        # made by method relight, which keeps them up to 10 tol
+        over = held.stats.get("checked_p99", 0.0) >= relight.AUTO_KEEP_SHARE * tol
         return "tree" if isinstance(held, relight.TreeInstead) or over else "relight"
     if tally.limits != (memory_limit, time_limit):  # the estimate and any refusal were for other limits
         tally.preparation, tally.refused, tally.limits = None, None, (memory_limit, time_limit)
@@ -173,7 +175,8 @@ def missed_tol(surface, medium, model: str, tol: float, device: str, p99: float,
     ordered, key = _ordered(surface), _key(medium, model, tol, device)
     reason = (
         f"relighting's operators were {100 * p99:.3g} % off tree at their first light (99th percentile), "
-        f"not under the tolerance of {100 * tol:.2g} %"
+        f"not under {relight.AUTO_KEEP_SHARE:g} of the tolerance of {100 * tol:.2g} % (another light may be "
+        "further off)"
     )
     _MISSED.get(ordered, key, lambda: reason)
     tally = _TALLIES.get(ordered, key, lambda: counted)

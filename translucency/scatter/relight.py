@@ -53,6 +53,8 @@ from .hierarchy import SourceTree
 from .surface import PerSurface
 
 __all__ = [
+    "AUTO_KEEP_SHARE",
+    "FALLBACK_TOLS",
     "RELIGHT_KERNELS",
     "RelightOperator",
     "TreeInstead",
@@ -206,6 +208,10 @@ class TreeInstead:
 #: Operators whose first light is this many ``tol`` or more off ``tree`` at the 99th percentile are not kept: a
 #: relit light is then solved by ``tree`` (:class:`TreeInstead`).
 FALLBACK_TOLS = 10.0
+#: Method ``auto`` keeps operators only where their first light is less than this share of ``tol`` off ``tree``
+#: (:func:`first_light_held_to`): one light's check does not bound another's, and other lights of the same operators
+#: were further off than the first where relighting's error is in its fits (bench/README.md, "Relighting").
+AUTO_KEEP_SHARE = 0.75
 
 _FALLBACK_TOLS = contextvars.ContextVar("relight_fallback_tols", default=FALLBACK_TOLS)
 
@@ -220,8 +226,9 @@ def fallback_tols() -> float:
 def first_light_held_to(tols: float):
     """Within the ``with`` block (this thread or task only), operators prepared are kept only where their first light
     is less than ``tols`` ``tol`` off ``tree`` at the 99th percentile, and a :class:`TreeInstead` is kept in their
-    place otherwise (method ``auto`` asks 1: it holds ``tol``, docs/physics.md §8.10). A :class:`TreeInstead` kept
-    under a stricter ask does not stand for a looser one: those operators are prepared again."""
+    place otherwise (method ``auto`` asks :data:`AUTO_KEEP_SHARE`: it holds ``tol``, docs/physics.md §8.10). A
+    :class:`TreeInstead` kept under a stricter ask does not stand for a looser one: those operators are prepared
+    again."""
     token = _FALLBACK_TOLS.set(float(tols))
     try:
         yield

@@ -301,8 +301,9 @@ def _auto(surface, medium, options: TransportOptions, varying: bool, carry) -> T
     held_before = operators_held(*settings)
     start = time.perf_counter()
     try:
-        # operators prepared here are kept only where their first light holds tol (they give way to tree otherwise)
-        with relight.first_light_held_to(1.0):
+        # operators prepared here are kept only where their first light holds tol with a margin for the others (they
+        # give way to tree otherwise)
+        with relight.first_light_held_to(relight.AUTO_KEEP_SHARE):
             carried = carry(dataclasses.replace(options, method=chosen))
     except (BudgetError, DeviceError) as exc:
         if chosen != "relight" or held_before:
