@@ -86,8 +86,8 @@ class Tally:
 
 
 _TALLIES = PerSurface("method auto's tally", counted=False)
-#: Per surface and operator key, why ``auto`` prepares no operators again: their first light missed ``tol`` (a
-#: sentence; kept while the surface is, through other keys' preparations).
+#: Per surface and operator key, why ``auto`` prepares no operators again: their first light missed
+#: ``relight.AUTO_KEEP_SHARE`` of ``tol`` (a sentence; kept while the surface is, through other keys' preparations).
 _MISSED = PerSurface("operators that missed tol", counted=False)
 
 
@@ -169,7 +169,8 @@ def count_light(surface, medium, model: str, tol: float, device: str, method: st
 
 def missed_tol(surface, medium, model: str, tol: float, device: str, p99: float, counted: Tally) -> Tally:
     """Prepare no operators of these settings on ``surface`` again: their first light was ``p99`` (relative) off a
-    ``tree`` solve of it at the 99th percentile, not under ``tol``. ``counted`` is the tally :func:`count_light` gave
+    ``tree`` solve of it at the 99th percentile, not under :data:`~translucency.scatter.relight.AUTO_KEEP_SHARE`
+    ``tol``. ``counted`` is the tally :func:`count_light` gave
     back for that light (preparing dropped it); it is kept again with the light as one more ``tree`` light (its answer
     is the check's ``tree`` solve), and returned."""
     ordered, key = _ordered(surface), _key(medium, model, tol, device)

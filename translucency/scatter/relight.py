@@ -187,7 +187,8 @@ class RelightOperator:
 class TreeInstead:
     """What a surface keeps in place of operators whose first light was :data:`FALLBACK_TOLS` ``tol`` or more off a
     ``tree`` solve of it (where the fits to the refracted direction of docs/physics.md §8.7 fail: an index of
-    refraction of 1, a surface far smaller than a mean free path): the key they were made for and their statistics.
+    refraction of 1, a surface far smaller than a mean free path), or :data:`AUTO_KEEP_SHARE` ``tol`` under method
+    ``auto`` (:func:`first_light_held_to`): the key they were made for and their statistics.
     Every light of that key is then solved by ``tree``; the operators' memory is given back.
 
     Attributes
@@ -210,7 +211,8 @@ class TreeInstead:
 FALLBACK_TOLS = 10.0
 #: Method ``auto`` keeps operators only where their first light is less than this share of ``tol`` off ``tree``
 #: (:func:`first_light_held_to`): one light's check does not bound another's, and other lights of the same operators
-#: were further off than the first where relighting's error is in its fits (bench/README.md, "Relighting").
+#: were further off than the first where relighting's error is in its fits (bench/README.md, "Relighting"). It holds
+#: ``tol`` where the other lights are at most ``1 / AUTO_KEEP_SHARE`` times as far off as the first.
 AUTO_KEEP_SHARE = 0.75
 
 _FALLBACK_TOLS = contextvars.ContextVar("relight_fallback_tols", default=FALLBACK_TOLS)

@@ -1151,7 +1151,7 @@ def over_budget_sentence(plan: budget.SolveEstimate, n_vertices: int, bounces: i
             f"would take about {budget.format_seconds(plan.seconds)}{with_bounces(bounces)}, "
             f"over the limit of {budget.format_seconds(plan.time_limit)}"
         )
-        more = option("time_limit")
+        more = option("time_limit") + (f", pass {option('bounces', 0)}" if bounces else "")
     return (
         f"solving at {n_vertices:,} vertices {what}; pass {option('resolution')} with a proxy edge length in mm "
         f"(coarser), raise {more}, or check the scan's {option('unit')}."

@@ -217,7 +217,7 @@ def light_solves(options: TransportOptions) -> float:
     """How many times its own planned time a light's first solve stands for: ``1 + bounces`` (each bounce about one
     solve more, :data:`BOUNCE_SOLVE_SHARE`), so that ``time_limit`` holds the light's solves together; 1 without a
     bounce or a time limit, and for relighting, whose plan is its operators' preparation (a bounce is then one more
-    light through them)."""
+    light through them). ``auto`` is planned as its first lights are solved, by ``tree``."""
     if options.method == "relight" or options.time_limit is None or not options.bounces:
         return 1.0
     return 1.0 + BOUNCE_SOLVE_SHARE * options.bounces

@@ -220,13 +220,14 @@ class Scene:
         resolution, reason, first = settings.resolution, None, 0
         if refusal in self._refused:
             (reason, resolution), first = self._refused[refusal], 1
-        timings = {"geometry": 0.0}
+        timings, proxies = {"geometry": 0.0}, 0
         for attempt in range(first, COARSER_ATTEMPTS + 1):
             start = time.perf_counter()
             solver_mesh, decimation, edge, geometry, geometry_reused = self.solver_mesh(
                 settings.material, resolution, _auto_tol(settings), settings.memory_limit
             )
             timings["geometry"] += time.perf_counter() - start
+            proxies += decimation is not None and not geometry_reused
             line = None
             if reason is not None:
                 carried = carries_full_light(settings.material, edge)
@@ -251,7 +252,7 @@ class Scene:
                 reason = reason or budget_phrase(exc.estimate, bounces)
                 # estimated, not measured, so that a scan gets the same proxy however busy the machine: the proxies
                 # made so far and the next
-                spent = (attempt + 1) * proxy_seconds(self.mesh.n_points, thread_count())
+                spent = (proxies + 1) * proxy_seconds(self.mesh.n_points, thread_count())
                 resolution = coarser_edge(
                     solver_mesh.n_points, self.mesh.n_points, self.mean_edge, exc, attempt, settings.method, spent
                 )

@@ -183,10 +183,12 @@ class ShadeSettings:
     time_limit: object = _setting(
         DEFAULT_TIME_LIMIT_S,
         "s",
-        "seconds a light's solve may take by its estimate, its bounces included (None: no limit); over it the solve "
-        "runs on a coarser proxy, sized to what is left after making it, or stops with a message",
-        flag="seconds a light's solve may take by its estimate, its bounces included; over it the solve runs on a "
-        "coarser proxy, sized to what is left after making it, or stops with a message",
+        "seconds a light's solve may take by its estimate, its bounces included (relight: its operators' "
+        "preparation; None: no limit); over it the solve runs on a coarser proxy, sized to what is left after making "
+        "it, or stops with a message",
+        flag="seconds a light's solve may take by its estimate, its bounces included (relight: its operators' "
+        "preparation); over it the solve runs on a coarser proxy, sized to what is left after making it, or stops "
+        "with a message",
     )
     up: str = _setting("auto", "--", "the scan's up axis, x, y, z, -x, -y, -z, or auto (inferred from the shape)")
     bounces: int = _setting(
