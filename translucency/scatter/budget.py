@@ -181,6 +181,9 @@ class SolveEstimate:
         The budgets it was planned for (None: none).
     fits : bool
         Within both budgets.
+    bounces : int
+        The bounces that ``seconds`` and ``time_limit`` hold besides the solve: 0 for one solve's plan; a light's
+        whole estimate (:func:`translucency.scatter.transport.light_solves`) otherwise.
     """
 
     base_bytes: float
@@ -196,6 +199,7 @@ class SolveEstimate:
     budget_bytes: float | None
     time_limit: float | None
     fits: bool
+    bounces: int = 0
 
     def as_dict(self) -> dict:
         """The estimate as plain numbers (for a result's statistics)."""
@@ -338,6 +342,12 @@ def memory_budget(memory_limit: float | None, available: float | None, resident:
 def format_bytes(size: float) -> str:
     """``size`` bytes as a short text (``"3.2 GB"``, ``"850 MB"``), in units of 2**30 and 2**20."""
     return f"{size / GB:.1f} GB" if size >= GB else f"{size / 2**20:.0f} MB"
+
+
+def bounce_phrase(bounces: int) -> str:
+    """``" with its bounce"`` (``" with its 2 bounces"``; nothing for 0): what a light's estimated time holds besides
+    its solve."""
+    return {0: "", 1: " with its bounce"}.get(bounces, f" with its {bounces} bounces")
 
 
 def format_seconds(seconds: float) -> str:

@@ -1132,14 +1132,9 @@ def _near_counts(near_args, grid, rcv) -> tuple[float, float, float]:
     return mean(near), mean(points), mean(own)
 
 
-def with_bounces(bounces: int) -> str:
-    """``" with its bounce"`` (``" with its 2 bounces"``; nothing for 0): what a light's estimated time holds."""
-    return {0: "", 1: " with its bounce"}.get(bounces, f" with its {bounces} bounces")
-
-
-def over_budget_sentence(plan: budget.SolveEstimate, n_vertices: int, bounces: int = 0) -> str:
-    """One sentence saying which budget a solve of ``n_vertices`` is over and what to change (over time, with
-    ``bounces``: the light's solves together, its bounces' included)."""
+def over_budget_sentence(plan: budget.SolveEstimate, n_vertices: int) -> str:
+    """One sentence saying which budget a solve of ``n_vertices`` is over and what to change (over time, a light's
+    estimate says the bounces it holds, ``plan.bounces``)."""
     if plan.over_memory:
         what = (
             f"needs about {budget.format_bytes(plan.peak_bytes)} of memory beyond what the process holds, over "
@@ -1148,10 +1143,10 @@ def over_budget_sentence(plan: budget.SolveEstimate, n_vertices: int, bounces: i
         more = option("memory_limit")
     else:
         what = (
-            f"would take about {budget.format_seconds(plan.seconds)}{with_bounces(bounces)}, "
+            f"would take about {budget.format_seconds(plan.seconds)}{budget.bounce_phrase(plan.bounces)}, "
             f"over the limit of {budget.format_seconds(plan.time_limit)}"
         )
-        more = option("time_limit") + (f", pass {option('bounces', 0)}" if bounces else "")
+        more = option("time_limit") + (f", pass {option('bounces', 0)}" if plan.bounces else "")
     return (
         f"solving at {n_vertices:,} vertices {what}; pass {option('resolution')} with a proxy edge length in mm "
         f"(coarser), raise {more}, or check the scan's {option('unit')}."

@@ -37,11 +37,11 @@ import numpy as np
 
 from ..errors import BudgetError, DeviceError, TranslucencyError, option, warn_user
 from . import relight
-from .budget import format_bytes, format_seconds
+from .budget import bounce_phrase, format_bytes, format_seconds
 from .irradiance import IncidentLight, carried_light, incident_flux
 from .method_choice import AUTO, chosen_method, count_light, missed_tol, operators_held, refuse, tally_of
 from .names import DEFAULT_DEVICE
-from .solve import Solution, over_budget_sentence, solve, with_bounces
+from .solve import Solution, over_budget_sentence, solve
 from .surface import SurfaceGeometry, spatial_order
 from .treewalk import GROUP_RECEIVERS
 from .visibility import VisibilityCache
@@ -54,6 +54,7 @@ __all__ = [
     "Transport",
     "TransportOptions",
     "VisibilityCache",
+    "bounce_phrase",
     "carried_light",
     "check_size",
     "check_unshadowed",
@@ -65,7 +66,6 @@ __all__ = [
     "solve",
     "spatial_order",
     "transport",
-    "with_bounces",
 ]
 
 
@@ -188,7 +188,7 @@ def check_size(surface: SurfaceGeometry, n_channels: int, options: TransportOpti
         lambda first: size_floor_plan(surface, n_channels, first.method, first.memory_limit, first.time_limit),
     )
     if not floor.fits:
-        raise _for_the_light(BudgetError("", floor), surface, options)
+        raise _for_the_light(floor, surface, options)
 
 
 def check_unshadowed(surface: SurfaceGeometry, lights, medium, options: TransportOptions, factor: float) -> None:
@@ -210,7 +210,7 @@ def check_unshadowed(surface: SurfaceGeometry, lights, medium, options: Transpor
     over_time = estimate.time_limit is not None and estimate.seconds > factor * estimate.time_limit
     over_memory = estimate.budget_bytes is not None and estimate.peak_bytes > factor * estimate.budget_bytes
     if over_time or over_memory:
-        raise _for_the_light(BudgetError("", estimate), surface, options)
+        raise _for_the_light(estimate, surface, options)
 
 
 def light_solves(options: TransportOptions) -> float:
@@ -232,18 +232,22 @@ def _first_solve(surface: SurfaceGeometry, options: TransportOptions, call):
     try:
         return call(dataclasses.replace(options, time_limit=options.time_limit / share))
     except BudgetError as exc:
-        raise _for_the_light(exc, surface, options) from None
+        if exc.estimate is None:
+            raise
+        raise _for_the_light(exc.estimate, surface, options) from None
 
 
-def _for_the_light(exc: BudgetError, surface: SurfaceGeometry, options: TransportOptions) -> BudgetError:
-    """``exc``'s refusal of a light's first solve as the whole light's: its estimated seconds and the limit times
-    :func:`light_solves` (the limit is then ``time_limit`` itself), in the solver's sentence."""
-    plan, share = exc.estimate, light_solves(options)
-    if plan is None:
-        return exc
+def _for_the_light(plan, surface: SurfaceGeometry, options: TransportOptions) -> BudgetError:
+    """The refusal of a light's first solve whose plan is ``plan`` (a
+    :class:`~translucency.scatter.budget.SolveEstimate`), said for the whole light: its estimated seconds and the limit
+    times :func:`light_solves` (the limit is then ``time_limit`` itself) and the bounces they hold, in the solver's
+    sentence."""
+    share = light_solves(options)
     if share != 1.0:
-        plan = dataclasses.replace(plan, seconds=plan.seconds * share, time_limit=plan.time_limit * share)
-    return BudgetError(over_budget_sentence(plan, surface.n_vertices, options.bounces if share != 1.0 else 0), plan)
+        plan = dataclasses.replace(
+            plan, seconds=plan.seconds * share, time_limit=plan.time_limit * share, bounces=options.bounces
+        )
+    return BudgetError(over_budget_sentence(plan, surface.n_vertices), plan)
 
 
 def transport(

@@ -13,7 +13,7 @@ from __future__ import annotations
 import json
 
 from ...errors import option
-from ...scatter.transport import format_bytes, format_seconds, with_bounces
+from ...scatter.transport import bounce_phrase, format_bytes, format_seconds
 from .resolution import expected_proxy_error
 
 __all__ = [
@@ -91,16 +91,18 @@ def refusal_key(settings, lights) -> str:
     return json.dumps(described, sort_keys=True, default=str)
 
 
-def budget_phrase(plan, bounces: int = 0) -> str:
-    """``"would need about 25 GB of memory (budget 3.6 GB)"`` or the same for time, from an estimate (over time,
-    with ``bounces``: the light's solves together, its bounces' included)."""
+def budget_phrase(plan) -> str:
+    """``"would need about 25 GB of memory (budget 3.6 GB)"`` or the same for time, from an estimate (over time, a
+    light's estimate says the bounces it holds)."""
     if plan.over_memory:
         return (
             f"would need about {format_bytes(plan.peak_bytes)} of memory ({option('memory_limit')} budget "
             f"{format_bytes(plan.budget_bytes)})"
         )
     limit = format_seconds(plan.time_limit)
-    return f"would take about {format_seconds(plan.seconds)}{with_bounces(bounces)} ({option('time_limit')} {limit})"
+    return (
+        f"would take about {format_seconds(plan.seconds)}{bounce_phrase(plan.bounces)} ({option('time_limit')} {limit})"
+    )
 
 
 def coarsened_line(reason: str, medium, proxy_vertices: int, vertices: int, edge: float, carried: bool) -> str:

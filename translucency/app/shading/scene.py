@@ -247,9 +247,7 @@ class Scene:
                     timings,
                 )
             except BudgetError as exc:
-                # of the resolution asked for: over time, a light's solves and bounces (relighting's: its operators)
-                bounces = 0 if settings.method == "relight" else settings.bounces
-                reason = reason or budget_phrase(exc.estimate, bounces)
+                reason = reason or budget_phrase(exc.estimate)  # of the resolution asked for
                 # estimated, not measured, so that a scan gets the same proxy however busy the machine: the proxies
                 # made so far and the next
                 spent = (proxies + 1) * proxy_seconds(self.mesh.n_points, thread_count())
