@@ -30,7 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from ..geometry import measure, topology
-from ..scatter import hierarchy, kernels, listsums, nearfield, relight, treewalk
+from ..scatter import cutoff, hierarchy, kernels, listsums, nearfield, relight, treewalk
 
 #: The compiled kernels the main job's solve calls (``tree`` method, near field), the viewer's relighting and the
 #: cleaning of a scan, as each module lists them.
@@ -38,6 +38,7 @@ MAIN_JOB_KERNELS = (
     *kernels.DIRECTIONAL_ROW_KERNELS,
     *listsums.LIST_KERNELS,
     *hierarchy.TREE_KERNELS,
+    *cutoff.LARGEST_KERNELS,
     *treewalk.WALK_KERNELS,
     *nearfield.NEAR_FIELD_KERNELS,
     *relight.RELIGHT_KERNELS,

@@ -30,11 +30,12 @@ import numpy as np
 from scipy import optimize
 
 from ..threads import for_ranges
-from . import dipoles, fresnel
+from . import dipoles, fresnel, kernels
 from .kernels import (
     MODEL_DIRECTIONAL,
     channel_lanes,
     group_inputs,
+    model_pair,
     pair_three,
     rows_kernel,
     source_columns,
@@ -140,6 +141,99 @@ def pair_bound(medium: Medium, model: str, r) -> np.ndarray:
             scale = 1.0 / math.pi if model == "standard" else norm / math.pi
             out[c] = scale * np.asarray(profile(r, a, s, g, eta), dtype=np.float64)
     return out
+
+
+#: Geometries :func:`largest_values` samples per distance, the distances it samples (log-spaced between the first and
+#: the last, mm, and how many) and the seed of the draw (the same geometries every time, so the same ``B``).
+LARGEST_GEOMETRIES = 4096
+LARGEST_DISTANCES_MM = (1e-3, 1e4, 64)
+LARGEST_SEED = 2014
+
+
+def largest_values(medium: Medium, model: str, r) -> np.ndarray:
+    """The largest ``S_d`` (1/(mm^2 sr)) at distance ``r`` (mm) over :data:`LARGEST_GEOMETRIES` sampled geometries,
+    per channel, ``(C, len(r))``, never above :func:`pair_bound`.
+
+    A geometry is the receiver's direction from the source, its normal (both anywhere on the sphere) and a refracted
+    direction light from outside can take (in the cone of ``asin(1 / eta)`` about the source's inward normal). The
+    bound drops the cancellation of the real and the virtual source (docs/physics.md §4.5), which grows with the
+    distance: in marble the largest value is a third of the bound at 1 mm and a two-hundredth at 64 mm, in ketchup a
+    half to a fifth at every distance (bench/README.md, "Kernel throughput"). Sampled at
+    :data:`LARGEST_DISTANCES_MM` and interpolated as the share of the bound in ``log r``; memoised on the
+    coefficients. The radial models: their profile (their bound)."""
+    r = np.atleast_1d(np.asarray(r, dtype=np.float64))
+    bound = pair_bound(medium, model, r)
+    if model != "directional":
+        return bound
+    key = (
+        tuple(np.asarray(medium.sigma_a, float).tolist()),
+        tuple(np.asarray(medium.sigma_s, float).tolist()),
+        tuple(np.asarray(medium.g, float).tolist()),
+        float(medium.eta),
+    )
+    if key not in _SHARES:
+        if len(_SHARES) >= 256:
+            _SHARES.clear()
+        _SHARES[key] = _largest_shares(medium, model)
+    distances, shares = _SHARES[key]
+    out = np.empty_like(bound)
+    for c in range(medium.n_channels):
+        known = np.isfinite(shares[c]) & (shares[c] > 0.0)
+        share = np.exp(np.interp(np.log(r), np.log(distances[known]), np.log(shares[c, known]))) if known.any() else 1.0
+        out[c] = bound[c] * np.minimum(1.0, share)
+    return out
+
+
+_SHARES: dict = {}
+
+
+def _largest_shares(medium: Medium, model: str) -> tuple[np.ndarray, np.ndarray]:
+    """The sampled distances (mm) of :func:`largest_values` and, per channel, the largest sampled ``S_d`` there as a
+    share of :func:`pair_bound` (NaN where the bound is 0)."""
+    first, last, steps = LARGEST_DISTANCES_MM
+    distances = np.exp(np.linspace(math.log(first), math.log(last), steps))
+    params = kernels.channel_parameters(medium.sigma_a, medium.sigma_s, medium.g, medium.eta, model)
+    found = np.zeros((medium.n_channels, steps))
+    _largest(MODEL_DIRECTIONAL, distances, _sampled_geometries(medium.eta), params, found)
+    bound = pair_bound(medium, model, distances)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return distances, np.where(bound > 0.0, found / bound, np.nan)
+
+
+def _sampled_geometries(eta: float) -> np.ndarray:
+    """``(K, 9)`` rows of :func:`largest_values`' geometries, the source at the origin with its normal along ``z``: the
+    receiver's unit direction, its unit normal (uniform on the sphere) and a unit refracted direction (uniform in solid
+    angle within the cone of ``asin(1 / eta)`` about ``-z``)."""
+    rng = np.random.default_rng(LARGEST_SEED)
+    k = LARGEST_GEOMETRIES
+    on_sphere = rng.normal(size=(2, k, 3))
+    on_sphere /= np.linalg.norm(on_sphere, axis=2, keepdims=True)
+    cos_edge = math.cos(math.asin(min(1.0, 1.0 / float(eta))))
+    cos_t = 1.0 - rng.uniform(0.0, 1.0, k) * (1.0 - cos_edge)
+    sin_t = np.sqrt(np.maximum(0.0, 1.0 - cos_t**2))
+    turn = rng.uniform(0.0, 2.0 * math.pi, k)
+    w12 = np.column_stack([sin_t * np.cos(turn), sin_t * np.sin(turn), -cos_t])
+    return np.ascontiguousarray(np.column_stack([on_sphere[0], on_sphere[1], w12]))
+
+
+@numba.njit(cache=True)
+def _largest(model, distances, geometries, params, out):
+    """Into ``out (C, distances)``: the largest of ``out`` and ``S_d`` over the ``geometries`` (rows of
+    :func:`_sampled_geometries`) at each distance (mm)."""
+    values = np.empty(params.shape[0])
+    for a in range(distances.shape[0]):
+        r = distances[a]
+        for q in range(geometries.shape[0]):
+            g = geometries[q]
+            model_pair(model, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, g[6], g[7], g[8], r * g[0], r * g[1], r * g[2],
+                       g[3], g[4], g[5], params, values)  # fmt: skip
+            for c in range(values.shape[0]):
+                out[c, a] = max(out[c, a], values[c])
+
+
+#: The compiled kernel of :func:`largest_values`: numba compiles it on first use; the set-up compiles it ahead
+#: (:mod:`translucency.app.warmup`).
+LARGEST_KERNELS = (_largest,)
 
 
 def receiver_radii(medium: Medium, model: str, tol: float, near_sum, total_flux, radius, largest, floor):

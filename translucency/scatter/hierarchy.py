@@ -8,8 +8,9 @@ flux-weighted normal and refracted direction (both renormalised).
 
 Criterion (:class:`Opening`, the relative opening criterion of Springel 2005 for this kernel): a node is
 accepted when the receiver is farther than ``min_distance`` from its bounding sphere, ``radius / distance <
-theta`` (at most :data:`THETA_MAX`), and the bound of its aggregate's error, ``radius^2 (1 / distance^2 +
-sigma_tr^2)`` times its flux times the pair bound of §8.4 at its nearest distance, is at most ``eps`` of the
+theta`` (at most :data:`THETA_MAX`), and the estimate of its aggregate's error, ``radius^2 (1 / distance^2 +
+sigma_tr^2)`` times its flux times a pair's magnitude at its nearest distance (the bound of §8.4, at most
+:data:`LARGEST_MARGIN` times the largest ``S_d`` of sampled geometries there), is at most ``eps`` of the
 receiver's ``B`` as a first walk (the first two tests alone) estimates it. Clusters whose share of ``B`` is small
 are taken at a wide angle; only those that make much of ``B`` are opened far down (docs/physics.md §8.3).
 The tree is walked once per small group of neighbouring receivers, with the distance from the group's
@@ -46,6 +47,10 @@ EPS_PER_TOL = 0.5
 #: ... for the radial models (standard, better), whose ``tree`` at ``EPS_PER_TOL`` was over ``tol`` on the default
 #: bunny and a 5 mm sphere (1.0-1.7 % at tol 0.01; bench/README.md, "Solver: run time against error").
 EPS_PER_TOL_RADIAL = 0.1
+#: A pair's magnitude in the criterion: the bound of §8.4, but at most this many times the largest ``S_d`` of sampled
+#: geometries at that distance (:func:`~translucency.scatter.cutoff.largest_values`), which the bound exceeds more and
+#: more with the distance (docs/physics.md §8.3; bench/README.md, "Kernel throughput", how it was chosen).
+LARGEST_MARGIN = 20.0
 #: The receivers whose first estimate sets the allowance's floor: those with the most incident flux.
 BRIGHTEST_RECEIVERS = 64
 #: The pair bound's table: first and last distance (mm) and the number of log-spaced distances. A node nearer than
@@ -348,7 +353,8 @@ class Opening:
 
     A node is a cluster for a group of receivers when the group is farther than ``min_distance`` (mm) from the
     node's bounding sphere, the node is small seen from it (``radius < theta * distance``), and the error its
-    aggregate may make, ``radius^2 (1 / distance^2 + sigma_tr^2) flux bound(distance - radius)`` per channel, is
+    aggregate may make, ``radius^2 (1 / distance^2 + sigma_tr^2) flux bound(distance - radius)`` per channel (``bound``
+    a pair's magnitude, below), is
     at most the group's allowance ``eps * max(B_est, floor)`` (the relative opening criterion: the first
     estimate ``B_est`` from a walk with the first two tests alone).
 
@@ -361,7 +367,8 @@ class Opening:
     eps : float
         The allowance's share of each receiver's estimated ``B``.
     bound : (C, K) float64
-        :func:`~translucency.scatter.cutoff.pair_bound` at ``K`` log-spaced distances, 1/(mm^2 sr).
+        A pair's magnitude at ``K`` log-spaced distances, 1/(mm^2 sr): :func:`~translucency.scatter.cutoff.pair_bound`,
+        at most :data:`LARGEST_MARGIN` times :func:`~translucency.scatter.cutoff.largest_values`.
     log_first, per_log : float
         ``log`` of the table's first distance (mm) and table steps per unit of ``log`` distance.
     curvature : (C,) float64
@@ -388,18 +395,22 @@ class Opening:
 def opening(medium, model: str, tol: float) -> Opening:
     """The walk's criterion for ``tol`` (:class:`Opening`): ``theta`` = :data:`THETA_MAX`, ``eps`` =
     :data:`EPS_PER_TOL` ``* tol`` (:data:`EPS_PER_TOL_RADIAL` for the radial models), clusters no nearer than
-    ``CLUSTER_MEAN_FREE_PATHS / min sigma_t'`` (mm), the bound of one pair's ``S_d`` tabulated for ``medium`` (1/mm)
-    and ``model`` (docs/physics.md §8.3, §8.4), and sums in float32 where ``tol >=`` :data:`FLOAT32_TOL`."""
-    from .cutoff import pair_bound
+    ``CLUSTER_MEAN_FREE_PATHS / min sigma_t'`` (mm), one pair's magnitude tabulated for ``medium`` (1/mm) and
+    ``model`` (the bound of docs/physics.md §8.4, at most :data:`LARGEST_MARGIN` times the largest sampled ``S_d``;
+    §8.3), and sums in float32 where ``tol >=`` :data:`FLOAT32_TOL`."""
+    from .cutoff import largest_values, pair_bound
 
     first, last, steps = BOUND_TABLE_MM
     log_first, log_last = math.log(first), math.log(last)
     distances = np.exp(np.linspace(log_first, log_last, steps))
+    magnitude = np.minimum(
+        pair_bound(medium, model, distances), LARGEST_MARGIN * largest_values(medium, model, distances)
+    )
     return Opening(
         theta=THETA_MAX,
         min_distance=CLUSTER_MEAN_FREE_PATHS / float(np.min(medium.sigma_t_reduced)),
         eps=(EPS_PER_TOL if model == "directional" else EPS_PER_TOL_RADIAL) * float(tol),
-        bound=np.ascontiguousarray(pair_bound(medium, model, distances), dtype=np.float64),
+        bound=np.ascontiguousarray(magnitude, dtype=np.float64),
         log_first=log_first,
         per_log=(steps - 1) / (log_last - log_first),
         curvature=np.ascontiguousarray(np.asarray(medium.sigma_tr, dtype=np.float64) ** 2),
