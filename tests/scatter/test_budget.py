@@ -183,6 +183,21 @@ def test_the_size_floor_is_below_every_estimate_of_that_size(method):
     assert not floor.fits and floor.over_memory
 
 
+def test_a_refusal_on_the_size_floor_says_it_is_the_least_not_the_plan():
+    """The floor counts no near or far work, so a sentence made from it says "at least"; a plan's says "about"."""
+    from translucency.app.shading.fallback import budget_phrase
+
+    counts = budget.SolveCounts(50_000, 100_000, 50_000, 20_000, 3, 2, "tree", 100.0, 300.0, 50.0, 1000.0)
+    floor, plan = budget.size_floor(counts, None, 1e-9), budget.estimate(counts, None, 1e-9)
+    assert "would take at least " in solve.over_budget_sentence(floor, 50_000)
+    assert "would take about " in solve.over_budget_sentence(plan, 50_000)
+    assert budget_phrase(floor).startswith("would take at least ") and budget_phrase(plan).startswith(
+        "would take about "
+    )
+    small = budget.size_floor(counts, budget_bytes=1.0)
+    assert "needs at least " in solve.over_budget_sentence(small, 50_000)
+
+
 def test_a_size_no_solve_fits_traces_no_light(monkeypatch):
     """Under a time limit that even the set-up of a full solve is over, the pipeline goes for a proxy (or
     says it cannot) without tracing the light for the full mesh first."""
@@ -194,7 +209,7 @@ def test_a_size_no_solve_fits_traces_no_light(monkeypatch):
     traced = []
     original = irradiance.incident_flux
     monkeypatch.setattr(irradiance, "incident_flux", lambda p, *a, **k: traced.append(len(p)) or original(p, *a, **k))
-    with pytest.raises(BudgetError):
+    with pytest.raises(BudgetError, match="would take at least"):  # the floor's, not a plan's, seconds
         Scene(TriangleMesh(points, triangles), shadows=False).shade("marble", time_limit=1e-9)
     assert len(points) not in traced
 

@@ -184,6 +184,8 @@ class SolveEstimate:
     bounces : int
         The bounces that ``seconds`` and ``time_limit`` hold besides the solve: 0 for one solve's plan; a light's
         whole estimate (:func:`translucency.scatter.transport.light_solves`) otherwise.
+    least : bool
+        ``seconds`` and ``peak_bytes`` are the least a solve of this size takes (:func:`size_floor`), not its plan.
     """
 
     base_bytes: float
@@ -200,6 +202,7 @@ class SolveEstimate:
     time_limit: float | None
     fits: bool
     bounces: int = 0
+    least: bool = False
 
     def as_dict(self) -> dict:
         """The estimate as plain numbers (for a result's statistics)."""
@@ -315,7 +318,7 @@ def size_floor(
     the solve is, and the sample that the full estimate needs (the geometry's ordered copy, source tree and
     near grid) need not be built."""
     floor = dataclasses.replace(counts, near_triangles=0.0, near_points=0.0, own_points=0.0, far_evaluations=0.0)
-    return estimate(floor, budget_bytes, time_limit, keep_lists=False)
+    return dataclasses.replace(estimate(floor, budget_bytes, time_limit, keep_lists=False), least=True)
 
 
 def check_limits(memory_limit, time_limit) -> None:
@@ -342,6 +345,12 @@ def memory_budget(memory_limit: float | None, available: float | None, resident:
 def format_bytes(size: float) -> str:
     """``size`` bytes as a short text (``"3.2 GB"``, ``"850 MB"``), in units of 2**30 and 2**20."""
     return f"{size / GB:.1f} GB" if size >= GB else f"{size / 2**20:.0f} MB"
+
+
+def about(plan) -> str:
+    """``"about"``, or ``"at least"`` where ``plan`` (a :class:`SolveEstimate`) is the least a solve of its size takes
+    (:func:`size_floor`): the words before its seconds or bytes in a sentence."""
+    return "at least" if plan.least else "about"
 
 
 def bounce_phrase(bounces: int) -> str:

@@ -1137,14 +1137,14 @@ def over_budget_sentence(plan: budget.SolveEstimate, n_vertices: int) -> str:
     estimate says the bounces it holds, ``plan.bounces``)."""
     if plan.over_memory:
         what = (
-            f"needs about {budget.format_bytes(plan.peak_bytes)} of memory beyond what the process holds, over "
-            f"the budget of {budget.format_bytes(plan.budget_bytes)}"
+            f"needs {budget.about(plan)} {budget.format_bytes(plan.peak_bytes)} of memory beyond what the process "
+            f"holds, over the budget of {budget.format_bytes(plan.budget_bytes)}"
         )
         more = option("memory_limit")
     else:
         what = (
-            f"would take about {budget.format_seconds(plan.seconds)}{budget.bounce_phrase(plan.bounces)}, "
-            f"over the limit of {budget.format_seconds(plan.time_limit)}"
+            f"would take {budget.about(plan)} {budget.format_seconds(plan.seconds)}"
+            f"{budget.bounce_phrase(plan.bounces)}, over the limit of {budget.format_seconds(plan.time_limit)}"
         )
         more = option("time_limit") + (f", pass {option('bounces', 0)}" if plan.bounces else "")
     return (

@@ -37,7 +37,7 @@ import numpy as np
 
 from ..errors import BudgetError, DeviceError, TranslucencyError, option, warn_user
 from . import relight
-from .budget import bounce_phrase, format_bytes, format_seconds
+from .budget import about, bounce_phrase, format_bytes, format_seconds
 from .irradiance import IncidentLight, carried_light, incident_flux
 from .method_choice import AUTO, chosen_method, count_light, missed_tol, operators_held, refuse, tally_of
 from .names import DEFAULT_DEVICE
@@ -54,6 +54,7 @@ __all__ = [
     "Transport",
     "TransportOptions",
     "VisibilityCache",
+    "about",
     "bounce_phrase",
     "carried_light",
     "check_size",

@@ -13,7 +13,7 @@ from __future__ import annotations
 import json
 
 from ...errors import option
-from ...scatter.transport import bounce_phrase, format_bytes, format_seconds
+from ...scatter.transport import about, bounce_phrase, format_bytes, format_seconds
 from .resolution import expected_proxy_error
 
 __all__ = [
@@ -96,12 +96,13 @@ def budget_phrase(plan) -> str:
     light's estimate says the bounces it holds)."""
     if plan.over_memory:
         return (
-            f"would need about {format_bytes(plan.peak_bytes)} of memory ({option('memory_limit')} budget "
+            f"would need {about(plan)} {format_bytes(plan.peak_bytes)} of memory ({option('memory_limit')} budget "
             f"{format_bytes(plan.budget_bytes)})"
         )
     limit = format_seconds(plan.time_limit)
     return (
-        f"would take about {format_seconds(plan.seconds)}{bounce_phrase(plan.bounces)} ({option('time_limit')} {limit})"
+        f"would take {about(plan)} {format_seconds(plan.seconds)}{bounce_phrase(plan.bounces)} "
+        f"({option('time_limit')} {limit})"
     )
 
 
