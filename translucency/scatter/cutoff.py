@@ -143,11 +143,11 @@ def pair_bound(medium: Medium, model: str, r) -> np.ndarray:
     return out
 
 
-#: Geometries :func:`largest_values` samples per distance, the distances it samples (log-spaced between the first and
-#: the last, mm, and how many) and the seed of the draw (the same geometries every time, so the same ``B``).
+#: Geometries :func:`largest_values` samples per distance, and the distances it samples: log-spaced from the first to
+#: the last number of reduced mean free paths (of the densest and of the thinnest channel), this many a decade.
 LARGEST_GEOMETRIES = 4096
-LARGEST_DISTANCES_MM = (1e-3, 1e4, 64)
-LARGEST_SEED = 2014
+LARGEST_MEAN_FREE_PATHS = (1e-3, 1e4)
+LARGEST_PER_DECADE = 8
 
 
 def largest_values(medium: Medium, model: str, r) -> np.ndarray:
@@ -159,8 +159,9 @@ def largest_values(medium: Medium, model: str, r) -> np.ndarray:
     bound drops the cancellation of the real and the virtual source (docs/physics.md §4.5), which grows with the
     distance: in marble the largest value is a third of the bound at 1 mm and a two-hundredth at 64 mm, in ketchup a
     half to a fifth at every distance (bench/README.md, "Kernel throughput"). Sampled at
-    :data:`LARGEST_DISTANCES_MM` and interpolated as the share of the bound in ``log r``; memoised on the
-    coefficients. The radial models: their profile (their bound)."""
+    :data:`LARGEST_MEAN_FREE_PATHS` (:data:`LARGEST_PER_DECADE` distances a decade) and interpolated as the share of
+    the bound in ``log r``: the bound itself nearer than the first sampled distance, the last share beyond the last;
+    memoised on the coefficients. The radial models: their profile (their bound)."""
     r = np.atleast_1d(np.asarray(r, dtype=np.float64))
     bound = pair_bound(medium, model, r)
     if model != "directional":
@@ -171,49 +172,62 @@ def largest_values(medium: Medium, model: str, r) -> np.ndarray:
         tuple(np.asarray(medium.g, float).tolist()),
         float(medium.eta),
     )
-    if key not in _SHARES:
+    shares = _SHARES.get(key)
+    if shares is None:
+        shares = _largest_shares(medium)
         if len(_SHARES) >= 256:
             _SHARES.clear()
-        _SHARES[key] = _largest_shares(medium, model)
-    distances, shares = _SHARES[key]
+        _SHARES[key] = shares
+    distances, share = shares
     out = np.empty_like(bound)
     for c in range(medium.n_channels):
-        known = np.isfinite(shares[c]) & (shares[c] > 0.0)
-        share = np.exp(np.interp(np.log(r), np.log(distances[known]), np.log(shares[c, known]))) if known.any() else 1.0
-        out[c] = bound[c] * np.minimum(1.0, share)
+        known = np.isfinite(share[c]) & (share[c] > 0.0)
+        if not known.any():
+            out[c] = bound[c]
+            continue
+        # log share 0 (the bound) below the first sampled distance, the last share beyond the last
+        log_share = np.interp(np.log(r), np.log(distances[known]), np.log(share[c, known]), left=0.0)
+        out[c] = bound[c] * np.minimum(1.0, np.exp(log_share))
     return out
 
 
 _SHARES: dict = {}
 
 
-def _largest_shares(medium: Medium, model: str) -> tuple[np.ndarray, np.ndarray]:
-    """The sampled distances (mm) of :func:`largest_values` and, per channel, the largest sampled ``S_d`` there as a
-    share of :func:`pair_bound` (NaN where the bound is 0)."""
-    first, last, steps = LARGEST_DISTANCES_MM
+def _largest_shares(medium: Medium) -> tuple[np.ndarray, np.ndarray]:
+    """The sampled distances (mm) of :func:`largest_values` for the directional dipole and, per channel, the largest
+    sampled ``S_d`` there as a share of :func:`pair_bound` (NaN where the bound is 0)."""
+    sigma = np.asarray(medium.sigma_t_reduced, dtype=np.float64)
+    first, last = LARGEST_MEAN_FREE_PATHS[0] / float(sigma.max()), LARGEST_MEAN_FREE_PATHS[1] / float(sigma.min())
+    steps = max(2, int(math.ceil(LARGEST_PER_DECADE * math.log10(last / first))) + 1)
     distances = np.exp(np.linspace(math.log(first), math.log(last), steps))
-    params = kernels.channel_parameters(medium.sigma_a, medium.sigma_s, medium.g, medium.eta, model)
+    params = kernels.channel_parameters(medium.sigma_a, medium.sigma_s, medium.g, medium.eta, "directional")
     found = np.zeros((medium.n_channels, steps))
     _largest(MODEL_DIRECTIONAL, distances, _sampled_geometries(medium.eta), params, found)
-    bound = pair_bound(medium, model, distances)
+    bound = pair_bound(medium, "directional", distances)
     with np.errstate(divide="ignore", invalid="ignore"):
         return distances, np.where(bound > 0.0, found / bound, np.nan)
 
 
 def _sampled_geometries(eta: float) -> np.ndarray:
     """``(K, 9)`` rows of :func:`largest_values`' geometries, the source at the origin with its normal along ``z``: the
-    receiver's unit direction, its unit normal (uniform on the sphere) and a unit refracted direction (uniform in solid
-    angle within the cone of ``asin(1 / eta)`` about ``-z``)."""
-    rng = np.random.default_rng(LARGEST_SEED)
-    k = LARGEST_GEOMETRIES
-    on_sphere = rng.normal(size=(2, k, 3))
-    on_sphere /= np.linalg.norm(on_sphere, axis=2, keepdims=True)
+    receiver's unit direction, its unit normal (both spread over the sphere) and a unit refracted direction (spread
+    over the solid angle of the cone of ``asin(1 / eta)`` about ``-z``). The points are an additive recurrence (the
+    fractional parts of ``k`` times the square roots of six primes), the same on every machine and library version."""
+    k = np.arange(1, LARGEST_GEOMETRIES + 1, dtype=np.float64)[:, None]
+    u = np.mod(k * np.sqrt(np.array([2.0, 3.0, 5.0, 7.0, 11.0, 13.0])), 1.0)
+
+    def on_sphere(a, b):
+        z = 1.0 - 2.0 * a
+        ring = np.sqrt(np.maximum(0.0, 1.0 - z * z))
+        return np.column_stack([ring * np.cos(2.0 * math.pi * b), ring * np.sin(2.0 * math.pi * b), z])
+
     cos_edge = math.cos(math.asin(min(1.0, 1.0 / float(eta))))
-    cos_t = 1.0 - rng.uniform(0.0, 1.0, k) * (1.0 - cos_edge)
+    cos_t = 1.0 - u[:, 4] * (1.0 - cos_edge)
     sin_t = np.sqrt(np.maximum(0.0, 1.0 - cos_t**2))
-    turn = rng.uniform(0.0, 2.0 * math.pi, k)
+    turn = 2.0 * math.pi * u[:, 5]
     w12 = np.column_stack([sin_t * np.cos(turn), sin_t * np.sin(turn), -cos_t])
-    return np.ascontiguousarray(np.column_stack([on_sphere[0], on_sphere[1], w12]))
+    return np.ascontiguousarray(np.column_stack([on_sphere(u[:, 0], u[:, 1]), on_sphere(u[:, 2], u[:, 3]), w12]))
 
 
 @numba.njit(cache=True)

@@ -40,7 +40,7 @@ from .treewalk import GROUP_RECEIVERS, walk_lists
 LEAF_SIZE = 8
 #: The largest opening ratio (radius over distance) of a cluster, and the first estimate's (docs/physics.md §8.3).
 THETA_MAX = 0.5
-#: A node's aggregate may err by EPS_PER_TOL * tol of each receiver's estimated B (its bound, which is far above
+#: A node's aggregate may err by EPS_PER_TOL * tol of each receiver's estimated B (by its estimate, which is above
 #: the error it makes: tests/scatter/test_tolerance.py checks the per-vertex tolerance; bench/README.md, "Kernel
 #: throughput", what it costs).
 EPS_PER_TOL = 0.5
@@ -53,8 +53,8 @@ EPS_PER_TOL_RADIAL = 0.1
 LARGEST_MARGIN = 20.0
 #: The receivers whose first estimate sets the allowance's floor: those with the most incident flux.
 BRIGHTEST_RECEIVERS = 64
-#: The pair bound's table: first and last distance (mm) and the number of log-spaced distances. A node nearer than
-#: the first distance would take the table's first value, below its own bound: no cluster is that near unless
+#: The table of a pair's magnitude: first and last distance (mm) and the number of log-spaced distances. A node
+#: nearer than the first distance would take the table's first value, below its own: no cluster is that near unless
 #: 1 / sigma_t' is. Beyond the last, the bound is 0 in double precision.
 BOUND_TABLE_MM = (1e-6, 1e5, 4000)
 #: No cluster closer than CLUSTER_MEAN_FREE_PATHS / min sigma_t' to the receiver (the solver's
@@ -406,6 +406,8 @@ def opening(medium, model: str, tol: float) -> Opening:
     magnitude = np.minimum(
         pair_bound(medium, model, distances), LARGEST_MARGIN * largest_values(medium, model, distances)
     )
+    # never larger farther away: the walk's tests must be monotone in the distance (treewalk.shared_walks)
+    magnitude = np.minimum.accumulate(magnitude, axis=1)
     return Opening(
         theta=THETA_MAX,
         min_distance=CLUSTER_MEAN_FREE_PATHS / float(np.min(medium.sigma_t_reduced)),

@@ -1,7 +1,7 @@
 """Which nodes of the source tree each group of receivers takes as one aggregated source: the tree's walk.
 
 A node is a cluster for a group of receivers when the group is farther than ``min_distance`` from its bounding
-sphere, it is small seen from the group, and the bound of its aggregate's error is within the group's allowance
+sphere, it is small seen from the group, and the estimate of its aggregate's error is within the group's allowance
 (:class:`~translucency.scatter.hierarchy.Opening`, docs/physics.md §8.3); otherwise it is opened, down to the
 leaves' lit sources. Neighbouring groups share the upper part of the walk: runs of them list together what each
 of their groups would decide alike (:func:`shared_walks`), and each group walks on alone from what its run left
@@ -133,16 +133,17 @@ def small_and_far(near, radius, theta2, min_distance):
 
 @numba.njit(cache=True, inline="always", error_model="numpy")
 def bound_index(distance, log_first, per_log, n_bound):
-    """The entry of :class:`Opening`'s table of the pair bound at the nearest tabulated distance below ``distance``
-    (mm), within the table."""
+    """The entry of :class:`Opening`'s table of a pair's magnitude at the nearest tabulated distance below
+    ``distance`` (mm), within the table."""
     return min(max(int((math.log(distance) - log_first) * per_log), 0), n_bound - 1)
 
 
 @numba.njit(cache=True, inline="always", error_model="numpy")
 def aggregate_error(near, radius, curvature, flux, pair_bound):
-    """The bound of one channel's error of a node's aggregate (:class:`Opening`): ``radius^2 (1 / near^2 +
+    """The estimate of one channel's error of a node's aggregate (:class:`Opening`): ``radius^2 (1 / near^2 +
     curvature) flux pair_bound``, with ``near`` its centre's distance from the receivers (mm), ``curvature`` =
-    ``sigma_tr^2`` (1/mm^2), its ``flux`` and the pair bound at its nearest point (1/(mm^2 sr))."""
+    ``sigma_tr^2`` (1/mm^2), its ``flux`` and a pair's magnitude at its nearest point (1/(mm^2 sr); the table of
+    :class:`Opening`)."""
     return (radius * radius / (near * near) + radius * radius * curvature) * flux * pair_bound
 
 
