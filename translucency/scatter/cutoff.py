@@ -65,22 +65,34 @@ def cutoff_radius(medium: Medium, tol: float, model: str = "directional") -> flo
     """Radius (mm) beyond which pairs may be skipped with at most ``tol`` of the energy dropped.
 
     Memoised on the coefficients (otherwise a few quadratures and a root search per call)."""
-    key = (
+    return _memoised(
+        _RADII, (*_coefficients(medium), float(tol), str(model)), lambda: _cutoff_radius(medium, tol, model)
+    )
+
+
+_RADII: dict = {}
+
+
+def _coefficients(medium: Medium) -> tuple:
+    """What the kernel of ``medium`` depends on, as a key: its coefficients per channel and ``eta``."""
+    return (
         tuple(np.asarray(medium.sigma_a, float).tolist()),
         tuple(np.asarray(medium.sigma_s, float).tolist()),
         tuple(np.asarray(medium.g, float).tolist()),
         float(medium.eta),
-        float(tol),
-        str(model),
     )
-    if key not in _RADII:
-        if len(_RADII) >= 256:
-            _RADII.clear()
-        _RADII[key] = _cutoff_radius(medium, tol, model)
-    return _RADII[key]
 
 
-_RADII: dict = {}
+def _memoised(store: dict, key, make):
+    """``store[key]``, made by ``make()`` where missing; the store is emptied when it holds 256 (a value made here is
+    returned even where another thread empties the store meanwhile)."""
+    value = store.get(key)
+    if value is None:
+        value = make()
+        if len(store) >= 256:
+            store.clear()
+        store[key] = value
+    return value
 
 
 def _cutoff_radius(medium: Medium, tol: float, model: str) -> float:
@@ -166,19 +178,7 @@ def largest_values(medium: Medium, model: str, r) -> np.ndarray:
     bound = pair_bound(medium, model, r)
     if model != "directional":
         return bound
-    key = (
-        tuple(np.asarray(medium.sigma_a, float).tolist()),
-        tuple(np.asarray(medium.sigma_s, float).tolist()),
-        tuple(np.asarray(medium.g, float).tolist()),
-        float(medium.eta),
-    )
-    shares = _SHARES.get(key)
-    if shares is None:
-        shares = _largest_shares(medium)
-        if len(_SHARES) >= 256:
-            _SHARES.clear()
-        _SHARES[key] = shares
-    distances, share = shares
+    distances, share = _memoised(_SHARES, _coefficients(medium), lambda: _largest_shares(medium))
     out = np.empty_like(bound)
     for c in range(medium.n_channels):
         known = np.isfinite(share[c]) & (share[c] > 0.0)
