@@ -5,6 +5,7 @@ import pytest
 
 from tests.scatter import pairs
 from translucency.scatter import dipoles, fresnel, kernels, listsums
+from translucency.scatter.hierarchy import opening
 from translucency.scatter.materials import material
 
 
@@ -179,7 +180,9 @@ def test_grouped_sum_is_the_dense_sum_over_each_groups_list(model, channel_of, p
     """grouped_sum against the reference dipoles summed here over each group's random list (with
     repeats), for groups of 4 and a last group that is short, every model and 1, 3 or 5 channels, in float64
     (to 1e-11) and in float32 (to 5e-5: each pair within about 2e-5, and the directional dipole's real and virtual
-    sources cancel in part; and further from float64 than its rounding, or it was not float32)."""
+    sources cancel in part; and further from float64 than its rounding, or it was not float32). The rows from 100 on
+    are clusters, each pair of theirs times the second order of its random spread written out here (docs/physics.md
+    §8.3), its bends read at the group's first receiver's distance."""
     rng = np.random.default_rng(11)
     medium = material("skin1").medium()
     x_i, n_i, light, _, _ = _pairs(rng, 300, 2.0)
@@ -196,11 +199,18 @@ def test_grouped_sum_is_the_dense_sum_over_each_groups_list(model, channel_of, p
     columns = rng.integers(0, 300, size=int(counts.sum()))
     receivers = rng.choice(300, n_rcv, replace=False)
     lanes = kernels.channel_lanes(params, channel_of, channel_of.size)
+    shape = rng.normal(size=(200, 3, 3)) * 0.15  # mm: RMS spreads of a few tenths of a mm
+    covariance = shape @ shape.transpose(0, 2, 1)
+    spread = covariance[:, [0, 1, 2, 0, 0, 1], [0, 1, 2, 1, 2, 2]]
+    rule = opening(medium, model, 0.01)
+    bends = rule.bends[channel_of]
     arguments = (
         kernels.MODELS[model],
         x_i[receivers],
         n_i[receivers],
         records,
+        spread,
+        (bends, rule.log_first, rule.per_log),
         100,
         starts,
         counts,
@@ -226,4 +236,18 @@ def test_grouped_sum_is_the_dense_sum_over_each_groups_list(model, channel_of, p
                 profile = dipoles.standard_dipole_profile if model == "standard" else dipoles.better_dipole_profile
                 scale = 1.0 / np.pi if model == "standard" else 1.0 / (np.pi * 4.0 * fresnel.C_phi(1.0 / medium.eta))
                 S = scale * profile(np.linalg.norm(x_i[listed] - x_i[receivers[r]], axis=1), *coefficients)
+            x = x_i[receivers[r]] - x_i[listed]
+            r2 = np.sum(x * x, axis=1)
+            head = x_i[receivers[g * group]] - x_i[listed]
+            head = np.maximum(np.linalg.norm(head, axis=1), 1e-300)  # at 0: the table's first distance
+            at = np.clip(((np.log(head) - rule.log_first) * rule.per_log).astype(int), 0, None)
+            line = bends[c][:, at]
+            along = line[0] + line[1] * np.sqrt(r2)
+            across = line[2] + line[3] * np.sqrt(r2)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                c_along = np.einsum("ki,kij,kj->k", x, covariance[np.maximum(listed - 100, 0)], x) / r2
+                trace = np.trace(covariance[np.maximum(listed - 100, 0)], axis1=1, axis2=2)
+                factor = np.clip(1.0 + 0.5 / r2 * (along * c_along + across * (trace - c_along)), 0.5, 2.0)
+            factor[r2 == 0] = 1.0  # a cluster at the receiver (not in a walk's lists): its pair alone
+            S = np.where(listed >= 100, S * factor, S)
             assert B[r, c] == pytest.approx(float(S @ flux[listed, c]), rel=rel, abs=1e-300)

@@ -132,8 +132,9 @@ def test_a_mesh_fine_for_the_decay_holds_tol_with_the_shorter_near_field(name, m
 @pytest.mark.parametrize("name", ["marble", "skim_milk"])
 @pytest.mark.parametrize("model", ["standard", "better"])
 def test_the_radial_models_tree_holds_tol_on_a_fine_sphere(model, name):
-    """With the walk's allowance of the directional dipole, 1.1-1.7 % off here: the bound of a pair is the radial
-    models' profile itself, and their nodes' errors add up (docs/physics.md §8.3, ``EPS_PER_TOL_RADIAL``)."""
+    """Before the sums took the second order of each cluster's spread off (docs/physics.md §8.3), the walk's allowance
+    of the directional dipole left them 1.1-1.7 % off here: their bound is their profile itself, and their clusters'
+    errors, all of one sign, added up."""
     medium = material(name).medium()
     assert _check(medium, FINE_SPHERE["radius"], model, "tree", level=FINE_SPHERE["level"]) <= TOL
 

@@ -40,13 +40,11 @@ from .treewalk import GROUP_RECEIVERS, walk_lists
 LEAF_SIZE = 8
 #: The largest opening ratio (radius over distance) of a cluster, and the first estimate's (docs/physics.md §8.3).
 THETA_MAX = 0.5
-#: A node's aggregate may err by EPS_PER_TOL * tol of each receiver's estimated B (by its estimate, which is above
-#: the error it makes: tests/scatter/test_tolerance.py checks the per-vertex tolerance; bench/README.md, "Kernel
-#: throughput", what it costs).
-EPS_PER_TOL = 0.5
-#: ... for the radial models (standard, better), whose ``tree`` at ``EPS_PER_TOL`` was over ``tol`` on the default
-#: bunny and a 5 mm sphere (1.0-1.7 % at tol 0.01; bench/README.md, "Solver: run time against error").
-EPS_PER_TOL_RADIAL = 0.1
+#: A node's aggregate may err by EPS_PER_TOL * tol of each receiver's estimated B, by its estimate: a second-order
+#: estimate, where the sums take the second order off (:mod:`translucency.scatter.spread`), so what is left is far
+#: below it (tests/scatter/test_tolerance.py checks the per-vertex tolerance; bench/README.md, "Kernel throughput", what
+#: it costs). The same for every model.
+EPS_PER_TOL = 2.0
 #: A pair's magnitude in the criterion: the bound of §8.4, but at most this many times the largest ``S_d`` of sampled
 #: geometries at that distance (:func:`~translucency.scatter.cutoff.largest_values`), which the bound exceeds more and
 #: more with the distance (docs/physics.md §8.3; bench/README.md, "Kernel throughput", how it was chosen).
@@ -229,17 +227,25 @@ def _boxes(points, order, start, end, left, right):
 
 
 def aggregate(order, start, end, left, right, points, normals, w12, flux):
-    """Aggregated source of every node: flux per channel, flux-weighted position, normal and w12.
+    """Aggregated source of every node: flux per channel, flux-weighted position, normal and w12, and the
+    flux-weighted covariance of its positions.
 
     Leaves sum their sources, then every level of internal nodes its two children, deepest first.
-    Returns ``node_flux (nodes, C)``, ``weight (nodes,)`` (total flux over channels) and the mean
-    position (mm), unit normal and unit refracted direction ``(nodes, 3)`` (0 where no flux).
+    Returns ``node_flux (nodes, C)``, ``weight (nodes,)`` (total flux over channels), the mean
+    position (mm), unit normal and unit refracted direction ``(nodes, 3)`` (0 where no flux), and ``spread (nodes,
+    6)``: the covariance ``xx, yy, zz, xy, xz, yz`` (mm^2) of the positions weighted by ``weight``
+    (:func:`~translucency.scatter.listsums.spread_factor`; docs/physics.md §8.3).
     """
     n_nodes = start.shape[0]
     n_out = flux.shape[1]
-    sums = np.zeros((n_nodes, n_out + 10))
+    sums = np.zeros((n_nodes, n_out + 16))
     leaves, levels = _leaves_then_levels(start, left, right)
-    _leaf_sums(order, start, end, leaves, *(kernel_array(a, np.float64) for a in (points, normals, w12, flux)), sums)
+    points = kernel_array(points, np.float64)
+    # second moments about the points' box centre, not the origin: fewer digits lost to the mean's square
+    origin = 0.5 * (points.min(axis=0) + points.max(axis=0)) if points.shape[0] else np.zeros(3)
+    _leaf_sums(
+        order, start, end, leaves, points, *(kernel_array(a, np.float64) for a in (normals, w12, flux)), origin, sums
+    )
     for nodes in levels:
         sums[nodes] = sums[left[nodes]] + sums[right[nodes]]
     # the flux contiguous, as the walk takes it; flux-weighted position, normal, w12
@@ -248,6 +254,12 @@ def aggregate(order, start, end, left, right, points, normals, w12, flux):
     some = weight > 0.0
     out_pos = np.zeros((n_nodes, 3))
     out_pos[some] = sums[some, 0:3] / weight[some, None]
+    spread = np.zeros((n_nodes, 6))
+    mean = out_pos[some] - origin
+    pairs = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))
+    for k, (a, b) in enumerate(pairs):
+        spread[some, k] = sums[some, 9 + k] / weight[some] - mean[:, a] * mean[:, b]
+    spread[:, :3] = np.maximum(spread[:, :3], 0.0)  # a variance rounded below 0
     unit = []
     for block in (sums[:, 3:6], sums[:, 6:9]):
         length = np.sqrt(np.sum(block**2, axis=1))
@@ -255,13 +267,14 @@ def aggregate(order, start, end, left, right, points, normals, w12, flux):
         ok = some & (length > 0.0)
         out[ok] = block[ok] / length[ok, None]
         unit.append(out)
-    return node_flux, weight, out_pos, unit[0], unit[1]
+    return node_flux, weight, out_pos, unit[0], unit[1], spread
 
 
 @numba.njit(cache=True)
-def _leaf_sums(order, start, end, leaves, points, normals, w12, flux, out):
-    """Per leaf, added into ``out (nodes, C + 10)``: the flux per channel, its total over channels ``w``, and
-    the ``w``-weighted sums of position, normal and ``w12`` (no (n, C + 10) table of the sources first)."""
+def _leaf_sums(order, start, end, leaves, points, normals, w12, flux, origin, out):
+    """Per leaf, added into ``out (nodes, C + 16)``: the flux per channel, its total over channels ``w``, the
+    ``w``-weighted sums of position, normal and ``w12``, and of the products ``xx, yy, zz, xy, xz, yz`` of the
+    positions less ``origin`` (no (n, C + 16) table of the sources first)."""
     n_out = flux.shape[1]
     for leaf in leaves:
         for i in range(start[leaf], end[leaf]):
@@ -275,6 +288,15 @@ def _leaf_sums(order, start, end, leaves, points, normals, w12, flux, out):
                 out[leaf, n_out + 1 + k] += w * points[j, k]
                 out[leaf, n_out + 4 + k] += w * normals[j, k]
                 out[leaf, n_out + 7 + k] += w * w12[j, k]
+            x = points[j, 0] - origin[0]
+            y = points[j, 1] - origin[1]
+            z = points[j, 2] - origin[2]
+            out[leaf, n_out + 10] += w * x * x
+            out[leaf, n_out + 11] += w * y * y
+            out[leaf, n_out + 12] += w * z * z
+            out[leaf, n_out + 13] += w * x * y
+            out[leaf, n_out + 14] += w * x * z
+            out[leaf, n_out + 15] += w * y * z
 
 
 def _sums(order, start, end, left, right, values):
@@ -312,12 +334,15 @@ class AggregatedSources:
         Flux per channel of each node (0: nothing to evaluate under it).
     lit : (n,) bool
         Sources with any flux.
+    spread : (rows - n, 6) float64
+        The covariance of the positions under each aggregate of ``records`` (:func:`aggregate`), mm^2.
     """
 
     records: np.ndarray
     n_sources: int
     node_flux: np.ndarray
     lit: np.ndarray
+    spread: np.ndarray
 
     @property
     def n_channels(self) -> int:
@@ -328,11 +353,11 @@ class AggregatedSources:
 def aggregated_sources(tree: SourceTree, points, normals, w12, flux) -> AggregatedSources:
     """The sources (positions mm, unit normals, unit ``w12``, ``flux (n, C)``) and their aggregates at
     every node of ``tree`` (:func:`aggregate`), in the table :func:`tree_sum` walks."""
-    node_flux, _, node_pos, node_nrm, node_dir = aggregate(
+    node_flux, _, node_pos, node_nrm, node_dir, spread = aggregate(
         tree.order, tree.start, tree.end, tree.left, tree.right, points, normals, w12, flux
     )
     records = _source_records((points, normals, w12, flux), (node_pos, node_nrm, node_dir, node_flux))
-    return AggregatedSources(records, points.shape[0], node_flux, flux.sum(axis=1) > 0)
+    return AggregatedSources(records, points.shape[0], node_flux, flux.sum(axis=1) > 0, spread)
 
 
 def _source_records(sources, nodes) -> np.ndarray:
@@ -373,6 +398,9 @@ class Opening:
         ``log`` of the table's first distance (mm) and table steps per unit of ``log`` distance.
     curvature : (C,) float64
         ``sigma_tr^2`` per channel, 1/mm^2: how fast ``S_d`` bends across a node far away.
+    bends : (C, 2, K) float64
+        The profile's bends at the same distances (:func:`~translucency.scatter.spread.profile_bends`), by which a
+        cluster's sum is corrected for the spread of its sources (docs/physics.md §8.3).
     precision : type
         What the lists are summed in: ``np.float32`` where ``tol >=`` :data:`FLOAT32_TOL`, else ``np.float64``
         (:func:`~translucency.scatter.listsums.grouped_sum`).
@@ -385,6 +413,7 @@ class Opening:
     log_first: float
     per_log: float
     curvature: np.ndarray
+    bends: np.ndarray
     precision: type = np.float64
 
     def kernel_arguments(self):
@@ -394,11 +423,12 @@ class Opening:
 
 def opening(medium, model: str, tol: float) -> Opening:
     """The walk's criterion for ``tol`` (:class:`Opening`): ``theta`` = :data:`THETA_MAX`, ``eps`` =
-    :data:`EPS_PER_TOL` ``* tol`` (:data:`EPS_PER_TOL_RADIAL` for the radial models), clusters no nearer than
-    ``CLUSTER_MEAN_FREE_PATHS / min sigma_t'`` (mm), one pair's magnitude tabulated for ``medium`` (1/mm) and
-    ``model`` (the bound of docs/physics.md §8.4, at most :data:`LARGEST_MARGIN` times the largest sampled ``S_d``;
-    §8.3), and sums in float32 where ``tol >=`` :data:`FLOAT32_TOL`."""
+    :data:`EPS_PER_TOL` ``* tol``, clusters no nearer than ``CLUSTER_MEAN_FREE_PATHS / min sigma_t'`` (mm), one pair's
+    magnitude tabulated for ``medium`` (1/mm) and ``model`` (the bound of docs/physics.md §8.4, at most
+    :data:`LARGEST_MARGIN` times the largest sampled ``S_d``; §8.3), the profile's bends at the same distances
+    (:func:`~translucency.scatter.spread.profile_bends`), and sums in float32 where ``tol >=`` :data:`FLOAT32_TOL`."""
     from .cutoff import largest_values, pair_bound
+    from .spread import profile_bends
 
     first, last, steps = BOUND_TABLE_MM
     log_first, log_last = math.log(first), math.log(last)
@@ -411,11 +441,12 @@ def opening(medium, model: str, tol: float) -> Opening:
     return Opening(
         theta=THETA_MAX,
         min_distance=CLUSTER_MEAN_FREE_PATHS / float(np.min(medium.sigma_t_reduced)),
-        eps=(EPS_PER_TOL if model == "directional" else EPS_PER_TOL_RADIAL) * float(tol),
+        eps=EPS_PER_TOL * float(tol),
         bound=np.ascontiguousarray(magnitude, dtype=np.float64),
         log_first=log_first,
         per_log=(steps - 1) / (log_last - log_first),
         curvature=np.ascontiguousarray(np.asarray(medium.sigma_tr, dtype=np.float64) ** 2),
+        bends=profile_bends(medium, model, distances),
         precision=np.float32 if tol >= FLOAT32_TOL else np.float64,
     )
 
@@ -426,9 +457,9 @@ def allowance(B_est, floor, eps) -> np.ndarray:
     return eps * np.maximum(np.asarray(B_est, dtype=np.float64), np.asarray(floor, dtype=np.float64)[None, :])
 
 
-def _sum_of_lists(model, rcv_points, rcv_normals, sources, lists, group, lanes, precision):
-    """:func:`~translucency.scatter.listsums.grouped_sum` of the walk's ``lists`` (:func:`walk_lists`) in
-    ``precision`` (:attr:`Opening.precision`)."""
+def _sum_of_lists(model, rcv_points, rcv_normals, sources, lists, group, lanes, rule):
+    """:func:`~translucency.scatter.listsums.grouped_sum` of the walk's ``lists`` (:func:`walk_lists`) in the
+    precision of ``rule`` (:class:`Opening`), each cluster with its spread and the rule's bends of the profile."""
     from .listsums import grouped_sum
 
     g_starts, g_direct, g_clustered, columns = lists
@@ -437,13 +468,15 @@ def _sum_of_lists(model, rcv_points, rcv_normals, sources, lists, group, lanes, 
         rcv_points,
         rcv_normals,
         sources.records,
+        sources.spread,
+        (rule.bends, rule.log_first, rule.per_log),
         sources.n_sources,
         g_starts,
         g_direct + g_clustered,
         group,
         columns,
         lanes,
-        precision,
+        rule.precision,
     )
 
 
@@ -468,7 +501,7 @@ class ListedWalk:
     def __call__(self, rcv_points, rcv_normals, allow, group):
         sources = self.sources
         lists = walk_lists(self.tree, sources.node_flux, sources.lit, rcv_points, self.rule, allow, self.reach, group)
-        B = _sum_of_lists(self.model, rcv_points, rcv_normals, sources, lists, group, self.lanes, self.rule.precision)
+        B = _sum_of_lists(self.model, rcv_points, rcv_normals, sources, lists, group, self.lanes, self.rule)
         of = np.arange(rcv_points.shape[0]) // group  # each receiver's group
         return B, lists[1][of], lists[2][of]
 
@@ -532,7 +565,7 @@ def sampled_evaluations(model, tree, points, normals, w12, flux, rcv, bright, pa
     largest) from a table of the columns the walks list."""
     from .kernels import channel_lanes
 
-    node_flux, _, node_pos, node_nrm, node_dir = aggregate(
+    node_flux, _, node_pos, node_nrm, node_dir, spread = aggregate(
         tree.order, tree.start, tree.end, tree.left, tree.right, points, normals, w12, flux
     )
     lit = flux.sum(axis=1) > 0
@@ -549,9 +582,9 @@ def sampled_evaluations(model, tree, points, normals, w12, flux, rcv, bright, pa
             (points[own], normals[own], w12[own], flux[own]),
             (node_pos[node], node_nrm[node], node_dir[node], node_flux[node]),
         )
-        compact = AggregatedSources(records, own.size, node_flux, lit)
+        compact = AggregatedSources(records, own.size, node_flux, lit, spread[node])
         lists = (starts, direct, clustered, position.astype(np.int64).ravel())
-        B = _sum_of_lists(model, points[indices], normals[indices], compact, lists, group, lanes, rule.precision)
+        B = _sum_of_lists(model, points[indices], normals[indices], compact, lists, group, lanes, rule)
         return B, direct + clustered
 
     bright_B, _ = estimate(bright, 1)

@@ -133,9 +133,9 @@ def small_and_far(near, radius, theta2, min_distance):
 
 @numba.njit(cache=True, inline="always", error_model="numpy")
 def bound_index(distance, log_first, per_log, n_bound):
-    """The entry of :class:`Opening`'s table of a pair's magnitude at the nearest tabulated distance below
-    ``distance`` (mm), within the table."""
-    return min(max(int((math.log(distance) - log_first) * per_log), 0), n_bound - 1)
+    """The entry of :class:`Opening`'s table of a pair's magnitude (or of the profile's bends) at the nearest tabulated
+    distance below ``distance`` (mm), within the table (its first at a distance of 0, which has no logarithm)."""
+    return min(max(int((math.log(max(distance, 1e-300)) - log_first) * per_log), 0), n_bound - 1)
 
 
 @numba.njit(cache=True, inline="always", error_model="numpy")

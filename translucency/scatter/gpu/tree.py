@@ -25,6 +25,7 @@ import numpy as np
 from numba import cuda, int64
 
 from .. import kernels, treewalk
+from ..spread import spread_factor
 from .compiled import for_the_device, lane_groups, to_device
 from .probe import said_plainly
 
@@ -36,6 +37,16 @@ _small_and_far = for_the_device(treewalk.small_and_far)
 _bound_index = for_the_device(treewalk.bound_index)
 _aggregate_error = for_the_device(treewalk.aggregate_error)
 _table_rows = for_the_device(kernels.table_rows)
+_spread_factor = for_the_device(spread_factor)
+
+
+@cuda.jit(device=True, inline=True)
+def _line(bends, c, at):
+    """Lane ``c``'s four numbers of the profile's bends at entry ``at``
+    (:func:`~translucency.scatter.spread.profile_bends`)."""
+    return bends[c, 0, at], bends[c, 1, at], bends[c, 2, at], bends[c, 3, at]
+
+
 #: Threads per block.
 THREADS = 128
 #: Depth of a thread's stack of nodes to visit: a walk holds at most one node per level of the tree and one more,
@@ -50,8 +61,10 @@ def _walked_sums(
     node_flux,
     lit,
     table,
+    node_spread,
     flux,
     lanes,
+    bends,
     receivers,
     groups,
     allow,
@@ -61,11 +74,14 @@ def _walked_sums(
     counts,
 ):
     """Thread ``r``: receiver ``r``'s sum of three lanes over what its group's walk takes. ``nodes`` are the tree's
-    ``(order, start, end, left, right, centre, radius)``; ``flux`` the three lanes' rows of flux per column of
-    ``table``, ``lanes`` their parameters; ``receivers`` the points and normals, ``groups`` the groups' centres and
-    radii; ``walk`` is ``(group, reach mm)``; ``opening`` ``(theta^2, min_distance mm, bound, log_first, per_log,
-    curvature)`` (:class:`~translucency.scatter.hierarchy.Opening`). Writes ``out[r]`` and the sources and clusters
-    summed into ``counts[r]``."""
+    ``(order, start, end, left, right, centre, radius)``; ``node_spread`` the covariance of each node's positions
+    (:func:`~translucency.scatter.hierarchy.aggregate`); ``flux`` the three lanes' rows of flux per column of
+    ``table``, ``lanes`` their parameters and ``bends`` their profile's bends (``(3, 4, K)``,
+    :func:`~translucency.scatter.spread.profile_bends`), by which a cluster's pair is scaled
+    (:func:`~translucency.scatter.spread.spread_factor`); ``receivers`` the points and normals, ``groups`` the
+    groups' centres and radii; ``walk`` is ``(group, reach mm)``; ``opening`` ``(theta^2, min_distance mm, bound,
+    log_first, per_log, curvature)`` (:class:`~translucency.scatter.hierarchy.Opening`). Writes ``out[r]`` and the
+    sources and clusters summed into ``counts[r]``."""
     r = cuda.grid(1)
     points, normals = receivers
     if r >= points.shape[0]:
@@ -77,6 +93,7 @@ def _walked_sums(
     F0, F1, F2 = flux
     X0, X1, X2, N0, N1, N2, W0, W1, W2 = _table_rows(table)
     g = r // group
+    head = g * group
     n_src = lit.shape[0]
     n_c = node_flux.shape[1]
     n_bound = bound.shape[1]
@@ -115,6 +132,19 @@ def _walked_sums(
                     break
         if accept or left[k] < 0:
             first, last = (0, 1) if accept else (start[k], end[k])
+            f0, f1, f2 = 1.0, 1.0, 1.0
+            if accept:
+                j = n_src + k
+                o0, o1, o2 = x0 - X0[j], x1 - X1[j], x2 - X2[j]
+                h0, h1, h2 = points[head, 0] - X0[j], points[head, 1] - X1[j], points[head, 2] - X2[j]
+                # the bends at the group's first receiver, as the CPU's sums take them (listsums._gathered_spread)
+                at = _bound_index(math.sqrt(h0 * h0 + h1 * h1 + h2 * h2), log_first, per_log, bends.shape[2])
+                sk = node_spread[k]
+                sk = (sk[0], sk[1], sk[2], sk[3], sk[4], sk[5])
+                trace = sk[0] + sk[1] + sk[2]
+                f0 = _spread_factor(o0, o1, o2, sk, trace, _line(bends, 0, at))
+                f1 = _spread_factor(o0, o1, o2, sk, trace, _line(bends, 1, at))
+                f2 = _spread_factor(o0, o1, o2, sk, trace, _line(bends, 2, at))
             for i in range(first, last):
                 j = n_src + k if accept else order[i]
                 if accept or lit[j]:
@@ -127,9 +157,9 @@ def _walked_sums(
                         (F0[j], F1[j], F2[j]),
                         (0, 0, 0),
                     )
-                    a0 += e0
-                    a1 += e1
-                    a2 += e2
+                    a0 += e0 * f0
+                    a1 += e1 * f1
+                    a2 += e2 * f2
                     if accept:
                         n_cluster += 1
                     else:
@@ -178,8 +208,9 @@ class WalkedSums:
         self.lit = to_device(sources.lit, np.bool_)
         self.table = to_device(sources.records[:, :9].T)
         rows = [to_device(sources.records[:, 9 + c]) for c in range(self.n_out)]
-        self.groups = [  # per group of three lanes: flux rows, parameters
-            (tuple(rows[c] for c in channels), lane_params)
+        self.spread = to_device(sources.spread)
+        self.groups = [  # per group of three lanes: flux rows, parameters, the profile's bends
+            (tuple(rows[c] for c in channels), lane_params, to_device(rule.bends[list(channels)]))
             for _, channels, lane_params in lane_groups(lanes, self.n_out)
         ]
         self.opening = (
@@ -208,7 +239,7 @@ class WalkedSums:
         B = np.empty((n_rcv, 3 * len(self.groups)))
         counts = cuda.device_array((n_rcv, 2), dtype=np.int64)
         blocks = -(-n_rcv // THREADS)
-        for g, (flux, lanes) in enumerate(self.groups):
+        for g, (flux, lanes, bends) in enumerate(self.groups):
             out = cuda.device_array((n_rcv, 3), dtype=np.float64)
             _walked_sums[blocks, THREADS](
                 self.model,
@@ -216,8 +247,10 @@ class WalkedSums:
                 self.node_flux,
                 self.lit,
                 self.table,
+                self.spread,
                 flux,
                 lanes,
+                bends,
                 receivers,
                 groups,
                 limit,
