@@ -203,13 +203,13 @@ def test_grouped_sum_is_the_dense_sum_over_each_groups_list(model, channel_of, p
     covariance = shape @ shape.transpose(0, 2, 1)
     spread = covariance[:, [0, 1, 2, 0, 0, 1], [0, 1, 2, 1, 2, 2]]
     rule = opening(medium, model, 0.01)
-    bends = rule.bends[:, channel_of]
-    records = np.hstack([records, np.vstack([np.zeros((100, 6)), spread])])  # the clusters' covariance
+    bends = rule.bends[channel_of]
     arguments = (
         kernels.MODELS[model],
         x_i[receivers],
         n_i[receivers],
         records,
+        spread,
         (bends, rule.log_first, rule.per_log),
         100,
         starts,
@@ -241,7 +241,7 @@ def test_grouped_sum_is_the_dense_sum_over_each_groups_list(model, channel_of, p
             head = x_i[receivers[g * group]] - x_i[listed]
             head = np.maximum(np.linalg.norm(head, axis=1), 1e-300)  # at 0: the table's first distance
             at = np.clip(((np.log(head) - rule.log_first) * rule.per_log).astype(int), 0, None)
-            line = bends[at, c].T
+            line = bends[c][:, at]
             along = line[0] + line[1] * np.sqrt(r2)
             across = line[2] + line[3] * np.sqrt(r2)
             with np.errstate(divide="ignore", invalid="ignore"):

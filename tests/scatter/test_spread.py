@@ -49,8 +49,8 @@ def _profile(model, r):
 
 def _bends_at(rule, r):
     """The rule's bends of channel 0 at ``r`` (mm), read as the sums read them."""
-    at = bound_index(r, rule.log_first, rule.per_log, rule.bends.shape[0])
-    line = rule.bends[at, 0, :]
+    at = bound_index(r, rule.log_first, rule.per_log, rule.bends.shape[2])
+    line = rule.bends[0, :, at]
     return line[0] + line[1] * r, line[2] + line[3] * r
 
 
@@ -88,9 +88,9 @@ def test_the_factor_takes_the_second_order_off_a_cluster_of_a_radial_profile(dis
     alone = flux.sum() * _profile("standard", [np.linalg.norm(centre)])[0]
     x = -centre  # receiver at the origin
     r = float(np.linalg.norm(x))
-    at = bound_index(r, rule.log_first, rule.per_log, rule.bends.shape[0])
+    at = bound_index(r, rule.log_first, rule.per_log, rule.bends.shape[2])
     spread = (cov[0, 0], cov[1, 1], cov[2, 2], cov[0, 1], cov[0, 2], cov[1, 2])
-    factor = spread_factor(x[0], x[1], x[2], spread, float(np.trace(cov)), tuple(rule.bends[at, 0, :]))
+    factor = spread_factor(x[0], x[1], x[2], spread, float(np.trace(cov)), tuple(rule.bends[0, :, at]))
     assert alone < exact
     assert abs(alone * factor - exact) * gain <= abs(alone - exact)
 

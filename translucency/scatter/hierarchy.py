@@ -325,27 +325,29 @@ class AggregatedSources:
 
     Attributes
     ----------
-    records : (n + nodes, 9 + C + 6) float64
+    records : (n + nodes, 9 + C) float64
         Rows ``0..n-1`` the sources, ``n + k`` the aggregated source of node ``k``: position (mm), unit normal,
-        unit refracted direction, flux per channel, and the covariance ``xx, yy, zz, xy, xz, yz`` of the positions
-        under it (mm^2, :func:`aggregate`; 0 for a source), so that gathering a cluster reads one row.
+        unit refracted direction, flux per channel.
     n_sources : int
         ``n``, the rows that are sources.
     node_flux : (nodes, C) float64
         Flux per channel of each node (0: nothing to evaluate under it).
     lit : (n,) bool
         Sources with any flux.
+    spread : (rows - n, 6) float64
+        The covariance of the positions under each aggregate of ``records`` (:func:`aggregate`), mm^2.
     """
 
     records: np.ndarray
     n_sources: int
     node_flux: np.ndarray
     lit: np.ndarray
+    spread: np.ndarray
 
     @property
     def n_channels(self) -> int:
         """The flux's channels ``C``."""
-        return self.records.shape[1] - 15
+        return self.records.shape[1] - 9
 
 
 def aggregated_sources(tree: SourceTree, points, normals, w12, flux) -> AggregatedSources:
@@ -354,22 +356,19 @@ def aggregated_sources(tree: SourceTree, points, normals, w12, flux) -> Aggregat
     node_flux, _, node_pos, node_nrm, node_dir, spread = aggregate(
         tree.order, tree.start, tree.end, tree.left, tree.right, points, normals, w12, flux
     )
-    records = _source_records((points, normals, w12, flux), (node_pos, node_nrm, node_dir, node_flux, spread))
-    return AggregatedSources(records, points.shape[0], node_flux, flux.sum(axis=1) > 0)
+    records = _source_records((points, normals, w12, flux), (node_pos, node_nrm, node_dir, node_flux))
+    return AggregatedSources(records, points.shape[0], node_flux, flux.sum(axis=1) > 0, spread)
 
 
 def _source_records(sources, nodes) -> np.ndarray:
-    """The ``records (s + k, 9 + C + 6)`` of :class:`AggregatedSources`: first the ``sources`` ``(positions,
-    normals, w12, flux)``, then the ``nodes``' aggregates ``(positions, normals, w12, flux, spread)`` in the same
-    order, filled in place (no stacked copies)."""
-    n, n_out = sources[0].shape[0], sources[3].shape[1]
-    records = np.empty((n + nodes[0].shape[0], 15 + n_out))
+    """The ``records (s + k, 9 + C)`` of :class:`AggregatedSources`: first the ``sources`` ``(positions, normals,
+    w12, flux)``, then the ``nodes``' aggregates in the same order, filled in place (no stacked copies)."""
+    n = sources[0].shape[0]
+    records = np.empty((n + nodes[0].shape[0], 9 + sources[3].shape[1]))
     for k in range(4):
         width = sources[k].shape[1]
         records[:n, 3 * k : 3 * k + width] = sources[k]
         records[n:, 3 * k : 3 * k + width] = nodes[k]
-    records[:n, 9 + n_out :] = 0.0
-    records[n:, 9 + n_out :] = nodes[4]
     return records
 
 
@@ -399,7 +398,7 @@ class Opening:
         ``log`` of the table's first distance (mm) and table steps per unit of ``log`` distance.
     curvature : (C,) float64
         ``sigma_tr^2`` per channel, 1/mm^2: how fast ``S_d`` bends across a node far away.
-    bends : (K, C, 4) float64
+    bends : (C, 2, K) float64
         The profile's bends at the same distances (:func:`~translucency.scatter.spread.profile_bends`), by which a
         cluster's sum is corrected for the spread of its sources (docs/physics.md §8.3).
     precision : type
@@ -469,6 +468,7 @@ def _sum_of_lists(model, rcv_points, rcv_normals, sources, lists, group, lanes, 
         rcv_points,
         rcv_normals,
         sources.records,
+        sources.spread,
         (rule.bends, rule.log_first, rule.per_log),
         sources.n_sources,
         g_starts,
@@ -580,9 +580,9 @@ def sampled_evaluations(model, tree, points, normals, w12, flux, rcv, bright, pa
         own, node = used[used < n], used[used >= n] - n
         records = _source_records(
             (points[own], normals[own], w12[own], flux[own]),
-            (node_pos[node], node_nrm[node], node_dir[node], node_flux[node], spread[node]),
+            (node_pos[node], node_nrm[node], node_dir[node], node_flux[node]),
         )
-        compact = AggregatedSources(records, own.size, node_flux, lit)
+        compact = AggregatedSources(records, own.size, node_flux, lit, spread[node])
         lists = (starts, direct, clustered, position.astype(np.int64).ravel())
         B = _sum_of_lists(model, points[indices], normals[indices], compact, lists, group, lanes, rule)
         return B, direct + clustered

@@ -29,6 +29,7 @@ def grouped_sum(
     rcv_points,
     rcv_normals,
     records,
+    spread,
     bends,
     n_sources,
     g_starts,
@@ -42,23 +43,23 @@ def grouped_sum(
     over ``k`` in ``g_starts[g] .. g_starts[g] + g_counts[g]``, for receivers that share their list ``group`` at a
     time (the tree's walks).
 
-    The sources are rows of ``records (P, 9 + C + 6)``: position (mm), unit normal, unit refracted direction, flux
-    per channel, and for the rows from ``n_sources`` on, the clusters, the covariance of the positions under each
-    (mm^2, :class:`~translucency.scatter.hierarchy.AggregatedSources`), by which its flux is scaled at each receiver
+    The sources are rows of ``records (P, 9 + C)``: position (mm), unit normal, unit refracted direction, flux per
+    channel, one row each, so that gathering one reads one or two cache lines. The rows from ``n_sources`` on are
+    clusters: each with the covariance of its positions in ``spread (P - n_sources, 6)`` (mm^2,
+    :func:`~translucency.scatter.hierarchy.aggregate`), by which its flux is scaled at each receiver
     (:func:`~translucency.scatter.spread.spread_factor`, with ``bends``: the table of
     :func:`~translucency.scatter.spread.profile_bends`, the ``log`` of its first distance in mm and its steps per unit
-    of ``log`` distance); one row each, so that gathering one reads two or three cache lines. ``lanes`` is
-    :func:`~translucency.scatter.kernels.channel_lanes` of the parameters; ``model`` as in
-    :func:`~translucency.scatter.kernels.vertex_sum`. Each group's sources are gathered once into contiguous buffers
-    of the thread, their positions taken from the group's first receiver, and every receiver of the group runs the
-    exact kernel's loop over them: ``1 / group`` of the scattered reads, and loops that vectorise.
+    of ``log`` distance). ``lanes`` is :func:`~translucency.scatter.kernels.channel_lanes` of the parameters; ``model``
+    as in :func:`~translucency.scatter.kernels.vertex_sum`. Each group's sources are gathered once into contiguous
+    buffers of the thread, their positions taken from the group's first receiver, and every receiver of the group
+    runs the exact kernel's loop over them: ``1 / group`` of the scattered reads, and loops that vectorise.
 
     The rows below ``n_sources`` (the mesh's own sources) are summed in float64, the others (the clusters) in
     ``precision`` (``np.float64``, or ``np.float32``: twice the pairs a vector step, each within about ``2e-5`` of
     itself; docs/physics.md §8.3). The near field's correction takes the nearest sources' values off again, and
     where the mesh is coarse next to ``1 / sigma_tr`` the two cancel to many digits. Returns ``(n_rcv, C)`` float64.
     """
-    n_channels = records.shape[1] - 15
+    n_channels = records.shape[1] - 9
     out = np.zeros((rcv_points.shape[0], n_channels))
     longest = max(int(g_counts.max()) if g_counts.size else 0, 1)
     sources = np.empty((thread_count(), 9 + n_channels, longest))
@@ -71,6 +72,7 @@ def grouped_sum(
         (rcv_points, rcv_normals),
         (
             records,
+            np.ascontiguousarray(spread, dtype=np.float64),
             (np.ascontiguousarray(bends[0], dtype=np.float64), float(bends[1]), float(bends[2])),
             int(n_sources),
         ),
@@ -115,20 +117,20 @@ def _buffer_sums(model, buffer, n, lanes, c0, x_o, n_o, flux_rows):
 
 
 @numba.njit(cache=True, inline="always")
-def _gathered_spread(clusters, at, records, i, bends, distance, n_out):
-    """Into column ``at`` of ``clusters``, after its source's rows (:func:`_gathered`): the covariance of the
-    positions under the cluster of row ``i`` of ``records``, its trace, and each channel's bends of the profile at
-    the nearest tabulated distance below ``distance`` (mm, from the group's first receiver; ``bends``:
-    :func:`grouped_sum`'s), as lines in the distance that each receiver of the group reads at its own."""
+def _gathered_spread(clusters, at, spread, node, bends, distance, n_out):
+    """Into column ``at`` of ``clusters``, after its source's rows (:func:`_gathered`): the covariance of node
+    ``node``'s positions (``spread``), its trace, and each channel's two bends of the profile at the nearest tabulated
+    distance below ``distance`` (mm, from the group's first receiver; ``bends``: :func:`grouped_sum`'s), as lines in
+    the distance that each receiver of the group reads at its own."""
     table, log_first, per_log = bends
     row = 9 + n_out
     for m in range(6):
-        clusters[row + m, at] = records[i, row + m]
-    clusters[row + 6, at] = records[i, row] + records[i, row + 1] + records[i, row + 2]
-    k = bound_index(distance, log_first, per_log, table.shape[0])
+        clusters[row + m, at] = spread[node, m]
+    clusters[row + 6, at] = spread[node, 0] + spread[node, 1] + spread[node, 2]
+    k = bound_index(distance, log_first, per_log, table.shape[2])
     for c in range(n_out):
         for m in range(4):
-            clusters[row + 7 + 4 * c + m, at] = table[k, c, m]
+            clusters[row + 7 + 4 * c + m, at] = table[c, m, k]
 
 
 @numba.njit(cache=True, inline="always", fastmath=True)
@@ -163,9 +165,9 @@ def _grouped_rows(worker, lo, hi, model, receivers, table, lists, lanes, buffers
     the list (the sources into the float64 buffer, the clusters with their spread into the other; positions from the
     group's first receiver), then each receiver of the group over both."""
     points, normals = receivers
-    records, bends, n_sources = table
+    records, spread, bends, n_sources = table
     starts, counts, group, columns = lists
-    n_out = records.shape[1] - 15
+    n_out = records.shape[1] - 9
     n_rcv = points.shape[0]
     lanes64, lanes_far = lanes
     sources, clusters, scaled = buffers[0][worker], buffers[1][worker], buffers[2][worker]
@@ -183,7 +185,7 @@ def _grouped_rows(worker, lo, hi, model, receivers, table, lists, lanes, buffers
             else:
                 _gathered(clusters, n_far, records, i, origin, n_out)
                 distance = math.sqrt(clusters[0, n_far] ** 2 + clusters[1, n_far] ** 2 + clusters[2, n_far] ** 2)
-                _gathered_spread(clusters, n_far, records, i, bends, distance, n_out)
+                _gathered_spread(clusters, n_far, spread, i - n_sources, bends, distance, n_out)
                 n_far += 1
         for r in range(head, min(n_rcv, head + group)):
             x_o = (points[r, 0] - origin[0], points[r, 1] - origin[1], points[r, 2] - origin[2])

@@ -39,11 +39,10 @@ FACTOR_RANGE = (0.5, 2.0)
 
 
 def profile_bends(medium: Medium, model: str, distances) -> np.ndarray:
-    """``(K, C, 4)``: at each of the log-spaced ``distances`` (mm), per channel, the profile's two bends ``r^2 f''/f``
-    and ``r f'/f`` (dimensionless) as lines in ``r`` (mm) from there to the next distance, ``r^2 f''/f = t[0] + t[1]
-    r`` and ``r f'/f = t[2] + t[3] r`` on ``[r_k, r_k+1]`` (the last held beyond), so that a group of receivers finds
-    them at its own distance from a cluster with no logarithm (:func:`spread_factor`), a distance's numbers side by
-    side.
+    """``(C, 4, K)``: per channel, the profile's two bends ``r^2 f''/f`` and ``r f'/f`` (dimensionless) as lines in
+    ``r`` (mm) between each of the log-spaced ``distances`` (mm) and the next, ``r^2 f''/f = t[0] + t[1] r`` and
+    ``r f'/f = t[2] + t[3] r`` on ``[r_k, r_k+1]`` (the last held beyond), so that a group of receivers finds them at
+    its own distance from a cluster with no logarithm (:func:`spread_factor`).
 
     ``f`` is the directional dipole on a flat surface at normal incidence
     (:func:`~translucency.scatter.dipoles.directional_dipole_profile`) or the radial models' own profile. The bends
@@ -78,14 +77,14 @@ def profile_bends(medium: Medium, model: str, distances) -> np.ndarray:
     slope[:, :, :-1] = np.diff(bends, axis=2) / np.diff(r)
     lines[:, 0::2] = bends - slope * r
     lines[:, 1::2] = slope
-    return np.ascontiguousarray(lines.transpose(2, 0, 1))
+    return lines
 
 
 @numba.njit(cache=True, inline="always", fastmath=True)
 def spread_factor(x0, x1, x2, spread, trace, lines):
     """The sum over a cluster's sources over its aggregate's ``S_d``, to second order (the module's equation), at the
     offset ``x = x_o - x_c`` (mm) from its flux-weighted centre: ``spread`` its covariance ``xx, yy, zz, xy, xz, yz``
-    and ``trace`` its trace (mm^2), ``lines`` the profile's bends near ``r = |x|`` (four numbers of
+    and ``trace`` its trace (mm^2), ``lines`` the profile's bends near ``r = |x|`` (four numbers, a column of
     :func:`profile_bends`). Held within :data:`FACTOR_RANGE`; 1 at ``x = 0`` (no cluster is that near)."""
     one = in_precision_of(1.0, x0)
     r2 = x0 * x0 + x1 * x1 + x2 * x2

@@ -44,7 +44,7 @@ _spread_factor = for_the_device(spread_factor)
 def _line(bends, c, at):
     """Lane ``c``'s four numbers of the profile's bends at entry ``at``
     (:func:`~translucency.scatter.spread.profile_bends`)."""
-    return bends[at, c, 0], bends[at, c, 1], bends[at, c, 2], bends[at, c, 3]
+    return bends[c, 0, at], bends[c, 1, at], bends[c, 2, at], bends[c, 3, at]
 
 
 #: Threads per block.
@@ -76,7 +76,7 @@ def _walked_sums(
     """Thread ``r``: receiver ``r``'s sum of three lanes over what its group's walk takes. ``nodes`` are the tree's
     ``(order, start, end, left, right, centre, radius)``; ``node_spread`` the covariance of each node's positions
     (:func:`~translucency.scatter.hierarchy.aggregate`); ``flux`` the three lanes' rows of flux per column of
-    ``table``, ``lanes`` their parameters and ``bends`` their profile's bends (``(K, 3, 4)``,
+    ``table``, ``lanes`` their parameters and ``bends`` their profile's bends (``(3, 4, K)``,
     :func:`~translucency.scatter.spread.profile_bends`), by which a cluster's pair is scaled
     (:func:`~translucency.scatter.spread.spread_factor`); ``receivers`` the points and normals, ``groups`` the
     groups' centres and radii; ``walk`` is ``(group, reach mm)``; ``opening`` ``(theta^2, min_distance mm, bound,
@@ -138,7 +138,7 @@ def _walked_sums(
                 o0, o1, o2 = x0 - X0[j], x1 - X1[j], x2 - X2[j]
                 h0, h1, h2 = points[head, 0] - X0[j], points[head, 1] - X1[j], points[head, 2] - X2[j]
                 # the bends at the group's first receiver, as the CPU's sums take them (listsums._gathered_spread)
-                at = _bound_index(math.sqrt(h0 * h0 + h1 * h1 + h2 * h2), log_first, per_log, bends.shape[0])
+                at = _bound_index(math.sqrt(h0 * h0 + h1 * h1 + h2 * h2), log_first, per_log, bends.shape[2])
                 sk = node_spread[k]
                 sk = (sk[0], sk[1], sk[2], sk[3], sk[4], sk[5])
                 trace = sk[0] + sk[1] + sk[2]
@@ -208,9 +208,9 @@ class WalkedSums:
         self.lit = to_device(sources.lit, np.bool_)
         self.table = to_device(sources.records[:, :9].T)
         rows = [to_device(sources.records[:, 9 + c]) for c in range(self.n_out)]
-        self.spread = to_device(sources.records[sources.n_sources :, 9 + self.n_out :])
+        self.spread = to_device(sources.spread)
         self.groups = [  # per group of three lanes: flux rows, parameters, the profile's bends
-            (tuple(rows[c] for c in channels), lane_params, to_device(rule.bends[:, list(channels)]))
+            (tuple(rows[c] for c in channels), lane_params, to_device(rule.bends[list(channels)]))
             for _, channels, lane_params in lane_groups(lanes, self.n_out)
         ]
         self.opening = (
