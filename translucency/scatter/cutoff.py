@@ -65,15 +65,15 @@ def cutoff_radius(medium: Medium, tol: float, model: str = "directional") -> flo
     """Radius (mm) beyond which pairs may be skipped with at most ``tol`` of the energy dropped.
 
     Memoised on the coefficients (otherwise a few quadratures and a root search per call)."""
-    return _memoised(
-        _RADII, (*_coefficients(medium), float(tol), str(model)), lambda: _cutoff_radius(medium, tol, model)
+    return memoised(
+        _RADII, (*coefficients_key(medium), float(tol), str(model)), lambda: _cutoff_radius(medium, tol, model)
     )
 
 
 _RADII: dict = {}
 
 
-def _coefficients(medium: Medium) -> tuple:
+def coefficients_key(medium: Medium) -> tuple:
     """What the kernel of ``medium`` depends on, as a key: its coefficients per channel and ``eta``."""
     return (
         tuple(np.asarray(medium.sigma_a, float).tolist()),
@@ -83,7 +83,7 @@ def _coefficients(medium: Medium) -> tuple:
     )
 
 
-def _memoised(store: dict, key, make):
+def memoised(store: dict, key, make):
     """``store[key]``, made by ``make()`` where missing; the store is emptied when it holds 256 (a value made here is
     returned even where another thread empties the store meanwhile)."""
     value = store.get(key)
@@ -178,7 +178,7 @@ def largest_values(medium: Medium, model: str, r) -> np.ndarray:
     bound = pair_bound(medium, model, r)
     if model != "directional":
         return bound
-    distances, share = _memoised(_SHARES, _coefficients(medium), lambda: _largest_shares(medium))
+    distances, share = memoised(_SHARES, coefficients_key(medium), lambda: _largest_shares(medium))
     out = np.empty_like(bound)
     for c in range(medium.n_channels):
         known = np.isfinite(share[c]) & (share[c] > 0.0)

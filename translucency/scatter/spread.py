@@ -30,6 +30,7 @@ import numba
 import numpy as np
 
 from . import dipoles
+from .cutoff import coefficients_key, memoised
 from .kernels import in_precision_of
 from .medium import Medium
 
@@ -48,8 +49,18 @@ def profile_bends(medium: Medium, model: str, distances) -> np.ndarray:
     (:func:`~translucency.scatter.dipoles.directional_dipole_profile`) or the radial models' own profile. The bends
     come from ``ln f`` by differences in ``ln r``, ``g1 = d ln f / d ln r`` and ``g2 = d g1 / d ln r``: ``r f'/f =
     g1`` and ``r^2 f''/f = g2 - g1 + g1^2``. Where ``f`` is 0 in double precision (far beyond any pair that adds to
-    ``B``), the last distance's bends are held."""
+    ``B``), the last distance's bends are held. Memoised on the medium's coefficients, the model and the distances
+    (a solve's budget and its walk ask for the same table); the table is shared, not to be written to."""
     r = np.asarray(distances, dtype=np.float64)
+    key = (*coefficients_key(medium), str(model), r.size, float(r[0]), float(r[-1]))
+    return memoised(_BENDS, key, lambda: _profile_bends(medium, model, r))
+
+
+_BENDS: dict = {}
+
+
+def _profile_bends(medium: Medium, model: str, r: np.ndarray) -> np.ndarray:
+    """:func:`profile_bends`, made."""
     log_r = np.log(r)
     bends = np.zeros((medium.n_channels, 2, r.size))
     points = np.column_stack([r, np.zeros_like(r)])
