@@ -398,7 +398,7 @@ class Opening:
         ``log`` of the table's first distance (mm) and table steps per unit of ``log`` distance.
     curvature : (C,) float64
         ``sigma_tr^2`` per channel, 1/mm^2: how fast ``S_d`` bends across a node far away.
-    bends : (C, 2, K) float64
+    bends : (C, 4, K) float64
         The profile's bends at the same distances (:func:`~translucency.scatter.spread.profile_bends`), by which a
         cluster's sum is corrected for the spread of its sources (docs/physics.md §8.3).
     precision : type

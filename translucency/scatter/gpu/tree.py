@@ -139,12 +139,18 @@ def _walked_sums(
                 h0, h1, h2 = points[head, 0] - X0[j], points[head, 1] - X1[j], points[head, 2] - X2[j]
                 # the bends at the group's first receiver, as the CPU's sums take them (listsums._gathered_spread)
                 at = _bound_index(math.sqrt(h0 * h0 + h1 * h1 + h2 * h2), log_first, per_log, bends.shape[2])
-                sk = node_spread[k]
-                sk = (sk[0], sk[1], sk[2], sk[3], sk[4], sk[5])
-                trace = sk[0] + sk[1] + sk[2]
-                f0 = _spread_factor(o0, o1, o2, sk, trace, _line(bends, 0, at))
-                f1 = _spread_factor(o0, o1, o2, sk, trace, _line(bends, 1, at))
-                f2 = _spread_factor(o0, o1, o2, sk, trace, _line(bends, 2, at))
+                cov = (
+                    node_spread[k, 0],
+                    node_spread[k, 1],
+                    node_spread[k, 2],
+                    node_spread[k, 3],
+                    node_spread[k, 4],
+                    node_spread[k, 5],
+                )
+                trace = cov[0] + cov[1] + cov[2]
+                f0 = _spread_factor(o0, o1, o2, cov, trace, _line(bends, 0, at))
+                f1 = _spread_factor(o0, o1, o2, cov, trace, _line(bends, 1, at))
+                f2 = _spread_factor(o0, o1, o2, cov, trace, _line(bends, 2, at))
             for i in range(first, last):
                 j = n_src + k if accept else order[i]
                 if accept or lit[j]:
