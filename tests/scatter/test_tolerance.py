@@ -187,7 +187,8 @@ def test_a_fine_mesh_with_a_few_large_triangles_keeps_the_long_reach_and_holds_t
 @pytest.mark.parametrize("model", ["standard", "better"])
 def test_the_shorter_near_field_costs_the_radial_models_little(model, monkeypatch):
     """Three edges (the radial models' near field's reach on this sphere) instead of a mean free path may move their
-    ``tree``'s error by no more than a tenth of ``tol``."""
+    ``tree``'s error by no more than a fifth of ``tol`` (measured with the walk's ``eps`` at ``2 tol``: the standard
+    dipole 0.24 % against 0.08 %; at ``0.1 tol`` before the clusters' second order was taken off, within a tenth)."""
     medium = material("skim_milk").medium()
     geometry, phi, w12, _ = _sphere(FINE_SPHERE["radius"], medium, FINE_SPHERE["level"])
     exact = solve.solve(geometry, phi, w12, medium, model=model, method="exact").B
@@ -197,7 +198,7 @@ def test_the_shorter_near_field_costs_the_radial_models_little(model, monkeypatc
         errors.append(
             per_vertex_error(solve.solve(geometry, phi, w12, medium, model=model, method="tree", tol=TOL).B, exact)
         )
-    assert abs(errors[0] - errors[1]) <= 0.1 * TOL
+    assert abs(errors[0] - errors[1]) <= 0.2 * TOL
 
 
 @pytest.mark.parametrize("eta", [0.99, 2.51, 10.0])

@@ -47,6 +47,23 @@ def _line(bends, c, at):
     return bends[c, 0, at], bends[c, 1, at], bends[c, 2, at], bends[c, 3, at]
 
 
+@cuda.jit(device=True, inline=True)
+def _cluster_factors(cov, offset, head_offset, bends, log_first, per_log):
+    """Three lanes' :func:`~translucency.scatter.spread.spread_factor` of a cluster of covariance ``cov`` (six
+    numbers, mm^2) at the receiver ``offset`` from its centre (mm), its bends read at the group's first receiver
+    (``head_offset``), as the CPU's sums take them (``listsums._gathered_spread``)."""
+    h0, h1, h2 = head_offset
+    at = _bound_index(math.sqrt(h0 * h0 + h1 * h1 + h2 * h2), log_first, per_log, bends.shape[2])
+    spread = (cov[0], cov[1], cov[2], cov[3], cov[4], cov[5])
+    trace = cov[0] + cov[1] + cov[2]
+    o0, o1, o2 = offset
+    return (
+        _spread_factor(o0, o1, o2, spread, trace, _line(bends, 0, at)),
+        _spread_factor(o0, o1, o2, spread, trace, _line(bends, 1, at)),
+        _spread_factor(o0, o1, o2, spread, trace, _line(bends, 2, at)),
+    )
+
+
 #: Threads per block.
 THREADS = 128
 #: Depth of a thread's stack of nodes to visit: a walk holds at most one node per level of the tree and one more,
@@ -135,22 +152,9 @@ def _walked_sums(
             f0, f1, f2 = 1.0, 1.0, 1.0
             if accept:
                 j = n_src + k
-                o0, o1, o2 = x0 - X0[j], x1 - X1[j], x2 - X2[j]
-                h0, h1, h2 = points[head, 0] - X0[j], points[head, 1] - X1[j], points[head, 2] - X2[j]
-                # the bends at the group's first receiver, as the CPU's sums take them (listsums._gathered_spread)
-                at = _bound_index(math.sqrt(h0 * h0 + h1 * h1 + h2 * h2), log_first, per_log, bends.shape[2])
-                cov = (
-                    node_spread[k, 0],
-                    node_spread[k, 1],
-                    node_spread[k, 2],
-                    node_spread[k, 3],
-                    node_spread[k, 4],
-                    node_spread[k, 5],
-                )
-                trace = cov[0] + cov[1] + cov[2]
-                f0 = _spread_factor(o0, o1, o2, cov, trace, _line(bends, 0, at))
-                f1 = _spread_factor(o0, o1, o2, cov, trace, _line(bends, 1, at))
-                f2 = _spread_factor(o0, o1, o2, cov, trace, _line(bends, 2, at))
+                offset = (x0 - X0[j], x1 - X1[j], x2 - X2[j])
+                head_offset = (points[head, 0] - X0[j], points[head, 1] - X1[j], points[head, 2] - X2[j])
+                f0, f1, f2 = _cluster_factors(node_spread[k], offset, head_offset, bends, log_first, per_log)
             for i in range(first, last):
                 j = n_src + k if accept else order[i]
                 if accept or lit[j]:
