@@ -2,12 +2,10 @@
 keeps, the profile's bends against differences of the profile, the factor against the sum over a cluster's sources,
 and a ``tree`` solve whose error is no longer a bias of one sign."""
 
-import sys
-from pathlib import Path
-
 import numpy as np
 import pytest
 
+from tests.scatter.test_tolerance import _sphere
 from translucency.scatter import dipoles, hierarchy, solve
 from translucency.scatter.hierarchy import SourceTree, aggregate, opening
 from translucency.scatter.materials import material
@@ -93,10 +91,6 @@ def test_the_factor_takes_the_second_order_off_a_cluster_of_a_radial_profile(dis
     factor = spread_factor(x[0], x[1], x[2], spread, float(np.trace(cov)), tuple(rule.bends[0, :, at]))
     assert alone < exact
     assert abs(alone * factor - exact) * gain <= abs(alone - exact)
-
-
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from test_tolerance import _sphere  # noqa: E402
 
 
 @pytest.mark.parametrize("model", ["directional", "standard"])

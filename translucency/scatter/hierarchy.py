@@ -234,7 +234,7 @@ def aggregate(order, start, end, left, right, points, normals, w12, flux):
     Returns ``node_flux (nodes, C)``, ``weight (nodes,)`` (total flux over channels), the mean
     position (mm), unit normal and unit refracted direction ``(nodes, 3)`` (0 where no flux), and ``spread (nodes,
     6)``: the covariance ``xx, yy, zz, xy, xz, yz`` (mm^2) of the positions weighted by ``weight``
-    (:func:`~translucency.scatter.listsums.spread_factor`; docs/physics.md §8.3).
+    (:func:`~translucency.scatter.spread.spread_factor`; docs/physics.md §8.3).
     """
     n_nodes = start.shape[0]
     n_out = flux.shape[1]
