@@ -1025,15 +1025,17 @@ def _near_call(args, receivers, offsets, triangle_ids, own=None, maps=None):
     )
 
 
-def _sample_receivers(inner: np.ndarray) -> np.ndarray:
+def _sample_receivers(inner: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
     """The budget's sample of the receivers ``inner``: :data:`SAMPLE_GROUPS` random groups of 4 neighbours
-    (the tree's groups), every receiver when there are few."""
+    (the tree's groups) and the receiver that follows each (the tree's first estimate takes it), or every
+    receiver and None when there are few."""
     n_r = inner.size
     groups = -(-n_r // 4)
     if groups <= SAMPLE_GROUPS:
-        return inner
+        return inner, None
     chosen = np.sort(np.random.default_rng(0).choice(groups, SAMPLE_GROUPS, replace=False))
-    return inner[np.unique(np.minimum((4 * chosen[:, None] + np.arange(4)).ravel(), n_r - 1))]
+    sample = inner[np.unique(np.minimum((4 * chosen[:, None] + np.arange(4)).ravel(), n_r - 1))]
+    return sample, inner[np.minimum(4 * chosen + 4, n_r - 1)]
 
 
 def sample_counts(work: _Work, far_field, near_args, radius, method, tol) -> budget.SolveCounts:
@@ -1043,7 +1045,7 @@ def sample_counts(work: _Work, far_field, near_args, radius, method, tol) -> bud
     import numba
 
     geometry = work.geometry
-    rcv = _sample_receivers(work.inner)
+    rcv, following = _sample_receivers(work.inner)
     near, points, own = _near_counts(*_around(work, near_args, rcv, radius))
     return budget.SolveCounts(
         geometry.n_vertices,
@@ -1056,15 +1058,16 @@ def sample_counts(work: _Work, far_field, near_args, radius, method, tol) -> bud
         near,
         points,
         own,
-        _far_evaluations(work, far_field, rcv, method, tol),
+        _far_evaluations(work, far_field, rcv, method, tol, following),
         device=work.device,
     )
 
 
-def _far_evaluations(work: _Work, far_field, rcv, method, tol) -> float:
+def _far_evaluations(work: _Work, far_field, rcv, method, tol, following=None) -> float:
     """Far-field evaluations per receiver of the sample ``rcv``: ``exact`` every lit source, ``cutoff`` by its
     prepared ``far_field``, ``tree`` by its walks with the nodes' aggregates and a table of the columns they list
-    alone (:func:`~translucency.scatter.hierarchy.sampled_evaluations`)."""
+    alone (:func:`~translucency.scatter.hierarchy.sampled_evaluations`; ``following``: the receiver after each group
+    of the sample, :func:`_sample_receivers`)."""
     geometry, lit = work.geometry, work.lit
     if lit.size == 0 or rcv.size == 0:
         return 0.0
@@ -1085,6 +1088,7 @@ def _far_evaluations(work: _Work, far_field, rcv, method, tol) -> float:
             work.channel_of,
             rule,
             TOL_FLOOR,
+            following,
         )
         return float(evaluations.mean())
     _, far_stats = (far_field or work.far_field(method, tol))(geometry.points[rcv], geometry.normals[rcv])
