@@ -65,6 +65,7 @@ from .gpu.probe import pair_device
 from .medium import CHANNELS, Medium
 from .names import DEFAULT_DEVICE, DEFAULT_MODEL, METHODS, MODELS, check_device, check_method, check_model, check_tol
 from .surface import SurfaceGeometry, checked_array, ordered_bytes, spatial_order
+from .treewalk import GROUP_RECEIVERS
 
 __all__ = ["SurfaceGeometry", "Solution", "solve", "local_reach_floor", "METHODS", "MODELS"]
 
@@ -967,7 +968,7 @@ FAR_CHUNK = 4096
 #: ... and on a GPU at least this many (a multiple of FAR_CHUNK): a call gives the device a thread per receiver, and
 #: a sixteenth of a scan's receivers would leave most of a data-centre GPU idle.
 GPU_FAR_CHUNK = 1 << 20
-#: Receivers sampled for the budget's counts: groups of 4 neighbours (the tree's groups).
+#: Receivers sampled for the budget's counts: groups of GROUP_RECEIVERS neighbours (the tree's groups).
 SAMPLE_GROUPS = 64
 #: Most near-triangle entries the near-field sample may list (bounds its memory: ~170 bytes each).
 SAMPLE_NEAR_ENTRIES = 500_000
@@ -1026,16 +1027,16 @@ def _near_call(args, receivers, offsets, triangle_ids, own=None, maps=None):
 
 
 def _sample_receivers(inner: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
-    """The budget's sample of the receivers ``inner``: :data:`SAMPLE_GROUPS` random groups of 4 neighbours
-    (the tree's groups) and the receiver that follows each (the tree's first estimate takes it), or every
-    receiver and None when there are few."""
-    n_r = inner.size
-    groups = -(-n_r // 4)
+    """The budget's sample of the receivers ``inner``: :data:`SAMPLE_GROUPS` random groups of
+    :data:`GROUP_RECEIVERS` neighbours (the tree's groups) and the receiver that follows each (the tree's first
+    estimate takes it), or every receiver and None when there are few."""
+    n_r, size = inner.size, GROUP_RECEIVERS
+    groups = -(-n_r // size)
     if groups <= SAMPLE_GROUPS:
         return inner, None
     chosen = np.sort(np.random.default_rng(0).choice(groups, SAMPLE_GROUPS, replace=False))
-    sample = inner[np.unique(np.minimum((4 * chosen[:, None] + np.arange(4)).ravel(), n_r - 1))]
-    return sample, inner[np.minimum(4 * chosen + 4, n_r - 1)]
+    sample = inner[np.unique(np.minimum((size * chosen[:, None] + np.arange(size)).ravel(), n_r - 1))]
+    return sample, inner[np.minimum(size * chosen + size, n_r - 1)]
 
 
 def sample_counts(work: _Work, far_field, near_args, radius, method, tol) -> budget.SolveCounts:
