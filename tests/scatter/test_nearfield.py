@@ -191,3 +191,34 @@ def test_blocks_that_share_the_column_maps_get_what_each_gets_alone_and_leave_th
     nearfield.source_point_table(points, normals, w12, phi, triangles, 0.5 * areas, tables, within=ids, maps=maps)
     with pytest.raises(RuntimeError, match="not cleared"):
         nearfield.near_field_correction(*args, tables=tables, maps=maps)
+
+
+@pytest.mark.parametrize("unlit", [(), (2,), (0, 1, 2)])
+@pytest.mark.parametrize("corner", [0, 1, 2])
+def test_the_fan_gathered_a_ray_at_a_time_is_the_fan_rule_gathered_point_by_point(corner, unlit):
+    """:func:`nearfield.fan_gathered` writes the columns that :func:`nearfield.fan_rule` and
+    :func:`nearfield.gather_point` write for each of its points (an obtuse triangle with bent normals, spread
+    refracted directions and a flux per channel; a corner or every corner unlit)."""
+    rng = np.random.default_rng(corner)
+    points = np.array([[0.0, 0.0, 0.0], [2.0, 0.1, 0.0], [-0.6, 0.9, 0.2]])
+    normals = np.array([[0.1, 0.0, 1.0], [0.0, 0.3, 1.0], [-0.2, 0.1, 1.0]])
+    normals /= np.linalg.norm(normals, axis=1)[:, None]
+    w12 = -normals + 0.2 * rng.normal(size=(3, 3))
+    w12 /= np.linalg.norm(w12, axis=1)[:, None]
+    phi = rng.uniform(0.5, 2.0, size=(3, 3))
+    phi[list(unlit)] = 0.0
+    tri = np.array([0, 1, 2])
+    beta, scale_min, area = 1.5, 0.05, 0.9
+    fan = (*nearfield.gauss_legendre_unit(nearfield.FAN_ANGULAR), *nearfield.gauss_legendre_unit(nearfield.FAN_RADIAL))
+    n = nearfield.fan_count(points, tri, corner, beta * scale_min, nearfield.FAN_ANGULAR, nearfield.FAN_RADIAL)
+    rows = np.empty((n, 4))
+    nearfield.fan_rule(points, tri, corner, beta, scale_min, *fan, rows)
+    expected = np.zeros((9, n + 1)), np.zeros((3, n + 1))
+    for j in range(n):
+        nearfield.gather_point(points, normals, w12, phi, tri, *rows[j, :3], rows[j, 3] * area, *expected, j + 1)
+    got = np.zeros((9, n + 1)), np.zeros((3, n + 1))
+    end = nearfield.fan_gathered(points, normals, w12, phi, tri, corner, area, beta, scale_min, fan, *got, 1)
+    assert end == n + 1
+    assert n > 15  # more than one set of nodes: sectors (the obtuse corner) or stretches (long edges)
+    for g, e in zip(got, expected, strict=True):
+        np.testing.assert_allclose(g, e, rtol=1e-12, atol=1e-14)

@@ -284,6 +284,20 @@ def _near_pass(
         counts[q] = count
 
 
+@numba.njit(cache=True, inline="always")
+def corner_flux(phi, a, b, c):
+    """The flux ``phi`` summed over the channels at the vertices ``a, b, c``: the weights of their refracted
+    directions where :func:`gather_point` interpolates the direction."""
+    fa = 0.0
+    fb = 0.0
+    fc = 0.0
+    for ch in range(phi.shape[1]):
+        fa += phi[a, ch]
+        fb += phi[b, ch]
+        fc += phi[c, ch]
+    return fa, fb, fc
+
+
 @numba.njit(cache=True, fastmath=True)
 def gather_point(points, normals, w12, phi, tri, b0, b1, b2, weight, buf, weights, column):
     """Write the point with barycentric ``b`` of triangle ``tri`` to column ``column`` of the buffer.
@@ -295,13 +309,7 @@ def gather_point(points, normals, w12, phi, tri, b0, b1, b2, weight, buf, weight
     """
     a, b, c = tri[0], tri[1], tri[2]
     n_out = phi.shape[1]
-    fa = 0.0
-    fb = 0.0
-    fc = 0.0
-    for ch in range(n_out):
-        fa += phi[a, ch]
-        fb += phi[b, ch]
-        fc += phi[c, ch]
+    fa, fb, fc = corner_flux(phi, a, b, c)
     wa = b0 * fa
     wb = b1 * fb
     wc = b2 * fc
@@ -777,6 +785,19 @@ def fan_count(points, tri, corner, scale, n_ang, n_rad):
     return frame[5] * frame[6] * n_ang * n_rad
 
 
+@numba.njit(cache=True, inline="always")
+def fan_ray(a, bu, bv, alpha, share, scale, stretches):
+    """The fan's ray at the angle ``share * alpha`` from the first edge of a :func:`corner_frame` (``a, bu, bv``
+    mm, ``alpha`` rad): where it meets the opposite edge (``t``, from its first end), its length (mm) and the step
+    of ``u = log(1 + r / scale)`` a radial stretch covers."""
+    theta = alpha * share
+    sin_t = math.sin(theta)
+    cos_t = math.cos(theta)
+    t = a * sin_t / (bv * cos_t + (a - bu) * sin_t)
+    length = math.sqrt(((1.0 - t) * a + t * bu) ** 2 + (t * bv) ** 2)
+    return t, length, math.log1p(length / scale) / stretches
+
+
 @numba.njit(cache=True, fastmath=True)
 def fan_rule(points, tri, corner, beta, scale_min, ang_x, ang_w, rad_x, rad_w, out):
     """Polar ("fan") rule over a triangle around its corner ``corner``, where the receiver sits.
@@ -800,12 +821,7 @@ def fan_rule(points, tri, corner, beta, scale_min, ang_x, ang_w, rad_x, rad_w, o
     n = 0
     for sector in range(sectors):
         for j in range(ang_x.shape[0]):
-            theta = alpha * (sector + ang_x[j]) / sectors
-            sin_t = math.sin(theta)
-            cos_t = math.cos(theta)
-            t = a * sin_t / (bv * cos_t + (a - bu) * sin_t)  # where the ray meets the opposite edge
-            length = math.sqrt(((1.0 - t) * a + t * bu) ** 2 + (t * bv) ** 2)
-            du = math.log1p(length / scale) / stretches
+            t, length, du = fan_ray(a, bu, bv, alpha, (sector + ang_x[j]) / sectors, scale, stretches)
             for stretch in range(stretches):
                 for k in range(rad_x.shape[0]):
                     r = scale * math.expm1(du * (stretch + rad_x[k]))
@@ -815,6 +831,83 @@ def fan_rule(points, tri, corner, beta, scale_min, ang_x, ang_w, rad_x, rad_w, o
                     out[n, (corner + 2) % 3] = s * t
                     out[n, 3] = alpha / sectors * ang_w[j] * du * rad_w[k] * (r + scale) * r * 2.0 / area2
                     n += 1
+
+
+@numba.njit(cache=True, fastmath=True)
+def fan_gathered(points, normals, w12, phi, tri, corner, area, beta, scale_min, fan, buf, weights, column):
+    """:func:`fan_rule` about ``corner`` of ``tri`` (area mm^2; ``fan`` its nodes ``(ang_x, ang_w, rad_x, rad_w)``)
+    with each point gathered as :func:`gather_point` gathers it, into columns ``column ..`` of ``buf`` and
+    ``weights``; returns the next column.
+
+    Along a ray from the corner to the opposite edge the barycentric coordinates are ``(1 - s, s (1 - t), s t)``,
+    so every quantity :func:`gather_point` interpolates is ``q_corner + s (q_end - q_corner)``, ``q_end`` the
+    ray's end on the edge: each point costs one multiply-add per quantity instead of a sum over three corners.
+    """
+    ang_x, ang_w, rad_x, rad_w = fan
+    scale = beta * scale_min
+    a, bu, bv, area2, alpha, sectors, stretches = corner_frame(points, tri, corner, scale)
+    i0, i1, i2 = tri[corner], tri[(corner + 1) % 3], tri[(corner + 2) % 3]
+    n_out = phi.shape[1]
+    f0, f1, f2 = corner_flux(phi, i0, i1, i2)
+    first = tri[0]  # where no light enters, the point is a copy of the first corner (as gather_point's)
+    p00, p01, p02 = points[i0, 0], points[i0, 1], points[i0, 2]
+    n00, n01, n02 = normals[i0, 0], normals[i0, 1], normals[i0, 2]
+    v00, v01, v02 = f0 * w12[i0, 0], f0 * w12[i0, 1], f0 * w12[i0, 2]
+    for sector in range(sectors):
+        for j in range(ang_x.shape[0]):
+            t, length, du = fan_ray(a, bu, bv, alpha, (sector + ang_x[j]) / sectors, scale, stretches)
+            u = 1.0 - t
+            # the ray's end on the opposite edge, less the corner: what a step in s adds
+            df = u * f1 + t * f2 - f0
+            dp0 = u * points[i1, 0] + t * points[i2, 0] - points[i0, 0]
+            dp1 = u * points[i1, 1] + t * points[i2, 1] - points[i0, 1]
+            dp2 = u * points[i1, 2] + t * points[i2, 2] - points[i0, 2]
+            dn0 = u * normals[i1, 0] + t * normals[i2, 0] - normals[i0, 0]
+            dn1 = u * normals[i1, 1] + t * normals[i2, 1] - normals[i0, 1]
+            dn2 = u * normals[i1, 2] + t * normals[i2, 2] - normals[i0, 2]
+            dv0 = u * f1 * w12[i1, 0] + t * f2 * w12[i2, 0] - f0 * w12[i0, 0]
+            dv1 = u * f1 * w12[i1, 1] + t * f2 * w12[i2, 1] - f0 * w12[i0, 1]
+            dv2 = u * f1 * w12[i1, 2] + t * f2 * w12[i2, 2] - f0 * w12[i0, 2]
+            for stretch in range(stretches):
+                for k in range(rad_x.shape[0]):
+                    r = scale * math.expm1(du * (stretch + rad_x[k]))
+                    s = r / length
+                    weight = alpha / sectors * ang_w[j] * du * rad_w[k] * (r + scale) * r * 2.0 / area2 * area
+                    m0 = n00 + s * dn0
+                    m1 = n01 + s * dn1
+                    m2 = n02 + s * dn2
+                    mn = math.sqrt(m0 * m0 + m1 * m1 + m2 * m2)
+                    if mn <= 0.0:
+                        m0, m1, m2, mn = 0.0, 0.0, 1.0, 1.0
+                    v0 = v00 + s * dv0
+                    v1 = v01 + s * dv1
+                    v2 = v02 + s * dv2
+                    vn = math.sqrt(v0 * v0 + v1 * v1 + v2 * v2)
+                    buf[3, column] = m0 / mn
+                    buf[4, column] = m1 / mn
+                    buf[5, column] = m2 / mn
+                    if f0 + s * df <= 0.0 or vn <= 0.0:  # no light enters here
+                        buf[0, column] = points[first, 0]
+                        buf[1, column] = points[first, 1]
+                        buf[2, column] = points[first, 2]
+                        buf[6, column] = -m0 / mn
+                        buf[7, column] = -m1 / mn
+                        buf[8, column] = -m2 / mn
+                        for ch in range(n_out):
+                            weights[ch, column] = 0.0
+                    else:
+                        buf[0, column] = p00 + s * dp0
+                        buf[1, column] = p01 + s * dp1
+                        buf[2, column] = p02 + s * dp2
+                        buf[6, column] = v0 / vn
+                        buf[7, column] = v1 / vn
+                        buf[8, column] = v2 / vn
+                        for ch in range(n_out):
+                            weights[ch, column] = weight * (
+                                phi[i0, ch] + s * (u * phi[i1, ch] + t * phi[i2, ch] - phi[i0, ch])
+                            )
+                    column += 1
+    return column
 
 
 @numba.njit(cache=True, inline="always")
@@ -907,6 +1000,10 @@ def near_field_correction(
     room = max((bound[min(n_r, s + BLOCK_RECEIVERS)] - bound[s] for s in starts), default=0)
     columns = np.empty(room, dtype=np.int64)  # buffers reused by every block (no fresh pages per block)
     factors = np.empty(room)
+    # the positions of the triangles that take a receiver's own points, in its list of near triangles
+    own_items = np.empty(
+        max((offsets[min(n_r, s + BLOCK_RECEIVERS)] - offsets[s] for s in starts), default=0), np.int64
+    )
     own = np.empty(0)
     ones = np.empty(0)
     # receiver numbers and list slots of the table's vertices and midpoints (int32: half the memory)
@@ -918,6 +1015,7 @@ def near_field_correction(
         col_offsets = bound[start : block.stop + 1] - bound[start]
         n_columns = np.zeros(rcv.size, dtype=np.int64)
         n_refined = np.zeros(rcv.size, dtype=np.int64)
+        n_own = np.zeros(rcv.size, dtype=np.int64)
         for_ranges(
             _list_points,
             rcv.size,
@@ -948,6 +1046,8 @@ def near_field_correction(
             factors,
             n_columns,
             n_refined,
+            own_items,
+            n_own,
             start,
             stamps,
         )
@@ -976,12 +1076,11 @@ def near_field_correction(
             triangle_ids,
             beta,
             scale_min,
-            shared.first_rule,
-            diameters,
-            centroids,
+            own_items,
+            n_own,
             rule_points,
             rule_weights,
-            *fan,
+            fan,
             ref_offsets,
             refined,
             refined_weights,
@@ -1052,11 +1151,15 @@ def _list_points(
     factors,
     n_columns,
     n_refined,
+    own_items,
+    n_own,
     first_receiver,
     stamps,
 ):
     """Pass 1: per receiver, the shared-table points (vertex rule, whole triangles) and the number of
-    points of its own quadrature (fan rule on its own triangles, refined pieces of the other close ones).
+    points of its own quadrature (fan rule on its own triangles, refined pieces of the other close ones), with
+    the positions in ``triangle_ids`` of the triangles that take them (``own_items``, from the receiver's first
+    position in the block's lists on; ``n_own`` per receiver), so that pass 2 visits those alone.
 
     ``stamps`` (threads x (2 held + 2 midpoints), -1 at first, kept across blocks) holds, per thread, which
     receiver (``first_receiver + r``) last listed a vertex or an edge midpoint of the table (by its column:
@@ -1079,8 +1182,8 @@ def _list_points(
         me = first_receiver + r
         xo = points[receivers[r]]
         base = col_offsets[r]
-        listed = 0
-        refined = 0
+        listed, refined, items = 0, 0, 0  # columns, own points, triangles with own points
+        item_base = offsets[r] - offsets[0]
         for k in range(offsets[r], offsets[r + 1]):
             t = triangle_ids[k]
             if first_rule[t] < 0:  # no light enters at any corner: nothing to integrate
@@ -1101,6 +1204,8 @@ def _list_points(
             corner = corner_of(triangles[t], receivers[r])
             if corner >= 0:  # the receiver's own triangle: the fan rule
                 refined += fan_count(points, triangles[t], corner, beta * scale_min, fan_angular, fan_radial)
+                own_items[item_base + items] = k
+                items += 1
             elif (
                 diameters[t] <= degree3_diameter
                 and integrated_whole(diameters[t], centroids[t], xo, degree3_ratio, 0.0)
@@ -1130,8 +1235,11 @@ def _list_points(
                     listed += 1
             else:
                 refined += n_rule * subdivided_pieces(points, triangles[t], xo, beta, scale_min, stack, cx, none)
+                own_items[item_base + items] = k
+                items += 1
         n_columns[r] = listed
         n_refined[r] = refined
+        n_own[r] = items
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
@@ -1150,21 +1258,19 @@ def _refined_points(
     triangle_ids,
     beta,
     scale_min,
-    first_rule,
-    diameters,
-    centroids,
+    own_items,
+    n_own,
     rule_points,
     rule_weights,
-    ang_x,
-    ang_w,
-    rad_x,
-    rad_w,
+    fan,
     ref_offsets,
     refined,
     refined_weights,
 ):
-    """Pass 2: each receiver's own quadrature points (fan rule, refined pieces), from ``ref_offsets`` on."""
+    """Pass 2: each receiver's own quadrature points (fan rule, refined pieces), from ``ref_offsets`` on, on the
+    triangles pass 1 found (``own_items``, ``n_own``: :func:`_list_points`)."""
     # receivers lo .. hi - 1, with their own scratch space
+    ang_x, ang_w, rad_x, rad_w = fan
     stack = np.empty((3 * MAX_DEPTH + 8, 7))
     cx = np.empty((3, 3))
     found = np.empty((4**6, 7))
@@ -1172,14 +1278,28 @@ def _refined_points(
     for r in range(lo, hi):
         xo = points[receivers[r]]
         column = ref_offsets[r]
-        for k in range(offsets[r], offsets[r + 1]):
-            t = triangle_ids[k]
-            if first_rule[t] < 0:
-                continue
+        item_base = offsets[r] - offsets[0]
+        for item in range(n_own[r]):
+            t = triangle_ids[own_items[item_base + item]]
             tri = triangles[t]
             corner = corner_of(tri, receivers[r])
-            if corner < 0 and integrated_whole(diameters[t], centroids[t], xo, beta, scale_min):
-                continue  # a whole triangle: its points are the shared ones
+            if corner >= 0:  # the fan rule, gathered a ray at a time
+                column = fan_gathered(
+                    points,
+                    normals,
+                    w12,
+                    phi,
+                    tri,
+                    corner,
+                    triangle_areas[t],
+                    beta,
+                    scale_min,
+                    fan,
+                    refined,
+                    refined_weights,
+                    column,
+                )
+                continue
             n, own, found = _own_points(
                 points,
                 tri,

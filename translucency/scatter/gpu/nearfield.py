@@ -35,7 +35,7 @@ __all__ = ["near_field_correction", "release"]
 
 
 _pair = for_the_device(kernels.weighted_pair)
-_gather = for_the_device(nearfield.gather_point)
+_gather = for_the_device(nearfield.gather_point, "corner_flux")
 _whole = for_the_device(nearfield.integrated_whole)
 _corner_of = for_the_device(nearfield.corner_of)
 _pieces = for_the_device(nearfield.subdivided_pieces)
