@@ -109,10 +109,12 @@ class NearGrid:
     stamps: np.ndarray
     next_stamp: int = 0
 
-    def lists(self, receivers):
+    def lists(self, receivers, counts=None):
         """For each receiver vertex, the triangles that have a vertex within the radius of it (its own 1-ring
-        included): ``(offsets, triangle_ids)``, as :func:`near_triangles` returns them."""
-        counts = self.counts(receivers)
+        included): ``(offsets, triangle_ids)``, as :func:`near_triangles` returns them. ``counts``: the receivers'
+        :meth:`counts`, where the caller has them (else counted here, a pass of its own)."""
+        if counts is None:
+            counts = self.counts(receivers)
         offsets = np.zeros(counts.size + 1, dtype=np.int64)
         np.cumsum(counts, out=offsets[1:])
         triangle_ids = np.empty(offsets[-1], dtype=index_dtype(self.n_triangles))

@@ -1207,7 +1207,7 @@ def _near_blocks(args, inner, radius, plan, report):
         hi = int(np.searchsorted(cost, (cost[lo - 1] if lo else 0.0) + cap, side="right"))
         hi = min(n_r, max(hi, lo + 1))
         start = time.perf_counter()
-        offsets, triangle_ids = grid.lists(inner[lo:hi])
+        offsets, triangle_ids = grid.lists(inner[lo:hi], counts[lo:hi])
         list_seconds += time.perf_counter() - start
         correction[lo:hi], points = _near_call(args, inner[lo:hi], offsets, triangle_ids, maps=maps)
         total_triangles += int(triangle_ids.size)
