@@ -183,7 +183,7 @@ def tree_solve(geometry, phi, w12, medium, sample, patches=None, reference="gpu"
 
 #: The receivers that share a walk of the tree on the GPU, tried on meshes of at most GROUPS_UP_TO vertices beside the
 #: package's (``gpu.tree.WalkedSums.group``).
-GROUPS = (8, 16, 32)
+GROUPS = (4, 16, 32)
 GROUPS_UP_TO = 200_000
 
 

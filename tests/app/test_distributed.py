@@ -51,7 +51,7 @@ def test_blocks_on_the_cluster_equal_the_local_solve(cluster, lit_torus, method)
     # the tree's groups of receivers are those of a local solve of the same receivers
     local_some = solve(geometry, phi, w12, MARBLE, method=method, tol=0.01, receivers=receivers)
     with distributed.Client(cluster) as client:
-        solver = BlockSolver(client, block_receivers=100)
+        solver = BlockSolver(client, block_receivers=104)  # a multiple of the tree's groups of 8
         spread = solver(geometry, phi, w12, MARBLE, method=method, tol=0.01, receivers=receivers)
         again = solver(geometry, 0.5 * phi, w12, MARBLE, method=method, tol=0.01)  # the surface sent once
     assert spread.stats["blocks"] == 7 and again.stats["blocks"] == 12

@@ -18,8 +18,9 @@ def test_the_gpu_benchmark_runs_in_the_simulator_and_agrees_with_the_cpu():
     assert payload["whole_solves"]["largest_relative_difference"] < 1e-10
     tree = row["tree"]  # by patches, as the 10M torus's
     assert tree["device"] == "gpu (CUDA simulator)" and tree["patches"] and tree["error_p99"] < 0.01
-    assert list(row["tree_groups"]) == ["32"]  # 32 receivers sharing a walk: more evaluations each than 4
-    assert tree["evaluations_per_receiver"] < row["tree_groups"]["32"]["evaluations_per_receiver"]
+    assert list(row["tree_groups"]) == ["32"]  # 32 receivers sharing a walk, measured against the CPU's
+    wide = row["tree_groups"]["32"]
+    assert wide["device"] == tree["device"] and wide["error_p99"] < 0.01 and wide["evaluations_per_receiver"] > 0
     assert [run["lights"][0]["far_on_gpu"] for run in payload["relit"]] == ["every pair", "tree"]
     for run in payload["relit"]:
         relit = run["lights"]

@@ -511,9 +511,9 @@ def tree_sum(walked, rcv_points, rcv_normals, floor):
 
     Two walks per block of ``walked.block`` receivers (docs/physics.md §8.3), each made and summed by ``walked``
     (:class:`ListedWalk` on the CPU, :class:`translucency.scatter.gpu.tree.WalkedSums` on the GPU), by its
-    :class:`Opening` ``walked.rule``. The first, at each group's first receiver alone, takes a node as one aggregated
-    source where it is small seen from that receiver (``theta``) and farther than ``min_distance``; its sums give
-    each group its first estimate ``B_est`` (:func:`group_estimate`). The second
+    :class:`Opening` ``walked.rule``. The first, at each group's first and last receivers alone, takes a node as one
+    aggregated source where it is small seen from that receiver (``theta``) and farther than ``min_distance``; its
+    sums give each group its first estimate ``B_est`` (:func:`group_estimate`). The second
     takes a node only where its aggregate's error is also within :func:`allowance` of ``B_est`` (``floor (C,)``:
     the least ``B`` the allowance assumes, W/(m^2 sr)); otherwise its children are opened, down to the leaves'
     sources. The tree is walked once per group of ``walked.group`` consecutive receivers (the solver orders them
@@ -535,23 +535,29 @@ def tree_sum(walked, rcv_points, rcv_normals, floor):
     for first in range(0, n_rcv, block):
         part = slice(first, min(n_rcv, first + block))
         p, nrm = rcv_points[part], rcv_normals[part]
-        B_ends, direct[part][::group], clustered[part][::group] = walked(p[::group], nrm[::group], None, 1)
-        B_est = np.repeat(group_estimate(B_ends), group, axis=0)[: p.shape[0]]
+        ends = group_ends(p.shape[0], group)
+        B_ends, direct_first, clustered_first = walked(p[ends.ravel()], nrm[ends.ravel()], None, 1)
+        np.add.at(direct[part], ends.ravel(), direct_first)
+        np.add.at(clustered[part], ends.ravel(), clustered_first)
+        B_est = np.repeat(group_estimate(B_ends.reshape(2, -1, B_ends.shape[1])), group, axis=0)[: p.shape[0]]
         B[part], direct_second, clustered_second = walked(p, nrm, allowance(B_est, floor, walked.rule.eps), group)
         direct[part] += direct_second
         clustered[part] += clustered_second
     return B, direct, clustered
 
 
-def group_estimate(B_ends, B_next=None) -> np.ndarray:
-    """Each group's first estimate from the first walk's sums ``B_ends (groups, C)`` at the groups' first receivers:
-    the lesser of its own and ``B_next``, the sum at the receiver that follows the group (the receivers of a group
-    lie between the two along the solver's space-filling curve). ``B_next`` None: the next group's first receiver
-    (the last group its own). docs/physics.md §8.3."""
-    B_ends = np.asarray(B_ends, dtype=np.float64)
-    if B_next is None:
-        B_next = np.concatenate([B_ends[1:], B_ends[-1:]])
-    return np.minimum(B_ends, B_next)
+def group_ends(n_rcv: int, group: int) -> np.ndarray:
+    """The first and the last receiver of each group of ``group`` consecutive receivers of ``n_rcv`` (the last group
+    may be short): ``(2, groups)`` int64."""
+    first = np.arange(0, n_rcv, group)
+    return np.stack([first, np.minimum(first + group, n_rcv) - 1])
+
+
+def group_estimate(B_ends) -> np.ndarray:
+    """Each group's first estimate from the first walk's sums ``B_ends (2, groups, C)`` at its first and its last
+    receiver (:func:`group_ends`): the lesser of the two (the group's receivers lie between them along the
+    solver's space-filling curve, and a group is the same in any block of receivers). docs/physics.md §8.3."""
+    return np.minimum(B_ends[0], B_ends[1])
 
 
 def first_estimate(walked, rcv_points, rcv_normals):
@@ -571,15 +577,12 @@ def brightest(flux, areas, count: int = BRIGHTEST_RECEIVERS) -> np.ndarray:
     return np.sort(np.argpartition(-density, count)[:count])
 
 
-def sampled_evaluations(
-    model, tree, points, normals, w12, flux, rcv, bright, params, channel_of, rule, floor_share, following=None
-):
+def sampled_evaluations(model, tree, points, normals, w12, flux, rcv, bright, params, channel_of, rule, floor_share):
     """Sources and clusters :func:`tree_sum` evaluates at each receiver ``rcv`` (vertex indices, in groups of
     :data:`GROUP_RECEIVERS` neighbours), for the sources' ``flux (n, C)``, counted without the whole table of
     aggregated sources (the budget's sample): the nodes' aggregates, and the first estimate at each group's first
-    receiver and the receiver that follows it (``following``, a vertex per group; None: the next group's first, as
-    when ``rcv`` are consecutive) and at ``bright`` (the floor: ``floor_share`` of their largest) from a table of
-    the columns the walks list. The first walk's evaluations are shared out over each group's receivers."""
+    and last receivers and at ``bright`` (the floor: ``floor_share`` of their largest) from a table of the columns
+    the walks list. The first walk's evaluations are shared out over each group's receivers."""
     from .kernels import channel_lanes
 
     node_flux, _, node_pos, node_nrm, node_dir, spread = aggregate(
@@ -606,9 +609,10 @@ def sampled_evaluations(
 
     bright_B, _ = estimate(bright, 1)
     floor = floor_share * bright_B.max(axis=0)
-    B_ends, first = estimate(rcv[::GROUP_RECEIVERS], 1)
-    B_next = None if following is None else estimate(np.asarray(following), 1)[0]
-    B_est = np.repeat(group_estimate(B_ends, B_next), GROUP_RECEIVERS, axis=0)[: rcv.size]
+    ends = group_ends(rcv.size, GROUP_RECEIVERS)
+    B_ends, first = estimate(rcv[ends.ravel()], 1)
+    B_est = np.repeat(group_estimate(B_ends.reshape(2, -1, B_ends.shape[1])), GROUP_RECEIVERS, axis=0)[: rcv.size]
+    first = first.reshape(2, -1).sum(axis=0)
     _, direct, clustered, _ = walk_lists(
         tree, node_flux, lit, points[rcv], rule, allowance(B_est, floor, rule.eps), math.inf, GROUP_RECEIVERS, True
     )

@@ -1026,17 +1026,15 @@ def _near_call(args, receivers, offsets, triangle_ids, own=None, maps=None):
     )
 
 
-def _sample_receivers(inner: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
+def _sample_receivers(inner: np.ndarray) -> np.ndarray:
     """The budget's sample of the receivers ``inner``: :data:`SAMPLE_GROUPS` random groups of
-    :data:`GROUP_RECEIVERS` neighbours (the tree's groups) and the receiver that follows each (the tree's first
-    estimate takes it), or every receiver and None when there are few."""
+    :data:`GROUP_RECEIVERS` neighbours (the tree's groups), every receiver when there are few."""
     n_r, size = inner.size, GROUP_RECEIVERS
     groups = -(-n_r // size)
     if groups <= SAMPLE_GROUPS:
-        return inner, None
+        return inner
     chosen = np.sort(np.random.default_rng(0).choice(groups, SAMPLE_GROUPS, replace=False))
-    sample = inner[np.unique(np.minimum((size * chosen[:, None] + np.arange(size)).ravel(), n_r - 1))]
-    return sample, inner[np.minimum(size * chosen + size, n_r - 1)]
+    return inner[np.unique(np.minimum((size * chosen[:, None] + np.arange(size)).ravel(), n_r - 1))]
 
 
 def sample_counts(work: _Work, far_field, near_args, radius, method, tol) -> budget.SolveCounts:
@@ -1046,7 +1044,7 @@ def sample_counts(work: _Work, far_field, near_args, radius, method, tol) -> bud
     import numba
 
     geometry = work.geometry
-    rcv, following = _sample_receivers(work.inner)
+    rcv = _sample_receivers(work.inner)
     near, points, own = _near_counts(*_around(work, near_args, rcv, radius))
     return budget.SolveCounts(
         geometry.n_vertices,
@@ -1059,16 +1057,15 @@ def sample_counts(work: _Work, far_field, near_args, radius, method, tol) -> bud
         near,
         points,
         own,
-        _far_evaluations(work, far_field, rcv, method, tol, following),
+        _far_evaluations(work, far_field, rcv, method, tol),
         device=work.device,
     )
 
 
-def _far_evaluations(work: _Work, far_field, rcv, method, tol, following=None) -> float:
+def _far_evaluations(work: _Work, far_field, rcv, method, tol) -> float:
     """Far-field evaluations per receiver of the sample ``rcv``: ``exact`` every lit source, ``cutoff`` by its
     prepared ``far_field``, ``tree`` by its walks with the nodes' aggregates and a table of the columns they list
-    alone (:func:`~translucency.scatter.hierarchy.sampled_evaluations`; ``following``: the receiver after each group
-    of the sample, :func:`_sample_receivers`)."""
+    alone (:func:`~translucency.scatter.hierarchy.sampled_evaluations`)."""
     geometry, lit = work.geometry, work.lit
     if lit.size == 0 or rcv.size == 0:
         return 0.0
@@ -1089,7 +1086,6 @@ def _far_evaluations(work: _Work, far_field, rcv, method, tol, following=None) -
             work.channel_of,
             rule,
             TOL_FLOOR,
-            following,
         )
         return float(evaluations.mean())
     _, far_stats = (far_field or work.far_field(method, tol))(geometry.points[rcv], geometry.normals[rcv])
