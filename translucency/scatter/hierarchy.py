@@ -535,11 +535,11 @@ def tree_sum(walked, rcv_points, rcv_normals, floor):
     for first in range(0, n_rcv, block):
         part = slice(first, min(n_rcv, first + block))
         p, nrm = rcv_points[part], rcv_normals[part]
-        ends = group_ends(p.shape[0], group)
-        B_ends, direct_first, clustered_first = walked(p[ends.ravel()], nrm[ends.ravel()], None, 1)
-        np.add.at(direct[part], ends.ravel(), direct_first)
-        np.add.at(clustered[part], ends.ravel(), clustered_first)
-        B_est = np.repeat(group_estimate(B_ends.reshape(2, -1, B_ends.shape[1])), group, axis=0)[: p.shape[0]]
+        ends = group_ends(p.shape[0], group).ravel()
+        B_ends, direct_first, clustered_first = walked(p[ends], nrm[ends], None, 1)
+        np.add.at(direct[part], ends, direct_first)
+        np.add.at(clustered[part], ends, clustered_first)
+        B_est = group_estimate(B_ends, group, p.shape[0])
         B[part], direct_second, clustered_second = walked(p, nrm, allowance(B_est, floor, walked.rule.eps), group)
         direct[part] += direct_second
         clustered[part] += clustered_second
@@ -553,11 +553,13 @@ def group_ends(n_rcv: int, group: int) -> np.ndarray:
     return np.stack([first, np.minimum(first + group, n_rcv) - 1])
 
 
-def group_estimate(B_ends) -> np.ndarray:
-    """Each group's first estimate from the first walk's sums ``B_ends (2, groups, C)`` at its first and its last
-    receiver (:func:`group_ends`): the lesser of the two (the group's receivers lie between them along the
-    solver's space-filling curve, and a group is the same in any block of receivers). docs/physics.md §8.3."""
-    return np.minimum(B_ends[0], B_ends[1])
+def group_estimate(B_ends, group: int, n_rcv: int) -> np.ndarray:
+    """Each of ``n_rcv`` receivers' first estimate ``(n_rcv, C)`` from the first walk's sums ``B_ends (2 groups, C)``
+    at the receivers of :func:`group_ends` (raveled): its group's lesser of the two (the group's receivers lie
+    between them along the solver's space-filling curve, and a group is the same in any block of receivers).
+    docs/physics.md §8.3."""
+    first, last = np.asarray(B_ends, dtype=np.float64).reshape(2, -1, np.shape(B_ends)[1])
+    return np.repeat(np.minimum(first, last), group, axis=0)[:n_rcv]
 
 
 def first_estimate(walked, rcv_points, rcv_normals):
@@ -611,13 +613,12 @@ def sampled_evaluations(model, tree, points, normals, w12, flux, rcv, bright, pa
     floor = floor_share * bright_B.max(axis=0)
     ends = group_ends(rcv.size, GROUP_RECEIVERS)
     B_ends, first = estimate(rcv[ends.ravel()], 1)
-    B_est = np.repeat(group_estimate(B_ends.reshape(2, -1, B_ends.shape[1])), GROUP_RECEIVERS, axis=0)[: rcv.size]
-    first = first.reshape(2, -1).sum(axis=0)
+    B_est = group_estimate(B_ends, GROUP_RECEIVERS, rcv.size)
     _, direct, clustered, _ = walk_lists(
         tree, node_flux, lit, points[rcv], rule, allowance(B_est, floor, rule.eps), math.inf, GROUP_RECEIVERS, True
     )
-    sizes = np.diff(np.append(np.arange(0, rcv.size, GROUP_RECEIVERS), rcv.size))
-    return np.repeat(first / sizes + direct + clustered, sizes)
+    sizes = ends[1] - ends[0] + 1
+    return np.repeat(first.reshape(2, -1).sum(axis=0) / sizes + direct + clustered, sizes)
 
 
 #: The compiled kernels of the source tree's build and traversal: numba compiles each on first use; the set-up compiles

@@ -20,8 +20,8 @@ from ..threads import for_ranges
 #: Receivers that share one walk of the tree (consecutive along the solver's space-filling curve).
 #: The group's bounding sphere is tested, which is conservative for each member, so a group reaches the error
 #: of single receivers with a larger theta and in less far-field time; larger groups evaluate more clusters
-#: than the shared walk and the first estimate, made at a group's first receiver alone, save (bench/README.md,
-#: "Kernel throughput").
+#: than the shared walk and the first estimate, made at a group's first and last receivers alone, save
+#: (bench/README.md, "Kernel throughput").
 GROUP_RECEIVERS = 8
 #: Groups share the upper part of their walk: runs of WALK_FANOUT**k consecutive groups (k = SHARED_LEVELS .. 1,
 #: the coarsest first) list together what each of their groups would decide alike, and each group walks on from
