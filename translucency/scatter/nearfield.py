@@ -534,18 +534,21 @@ def source_point_table(
     if within is None:
         candidates = np.arange(triangles.shape[0])
     else:
-        maps.listed[within] = True
-        candidates = np.flatnonzero(maps.listed)
-    lit_triangles = candidates[maps.vertex_lit[triangles[candidates]].any(axis=1)]
-    corners = np.unique(triangles[lit_triangles])
+        candidates = _listed_once(within, maps.listed)
     vertex_column, first_rule, midpoint_column = maps.vertex_column, maps.first_rule, maps.midpoint_column
-    vertex_column[corners] = np.arange(corners.size)
-    n = corners.size
     n_rule = rule_points.shape[0]
-    first_rule[lit_triangles] = n + n_rule * np.arange(lit_triangles.size)
-    lit_edges, first = np.unique(tables.edge_of_corner[lit_triangles], return_index=True)
+    lit_triangles, corners, lit_edges, edge_triangles = _numbered_columns(
+        triangles,
+        candidates,
+        maps.vertex_lit,
+        tables.edge_of_corner,
+        vertex_column,
+        first_rule,
+        midpoint_column,
+        n_rule,
+    )
+    n = corners.size
     start_mid = n + n_rule * lit_triangles.size
-    midpoint_column[lit_edges] = start_mid + np.arange(lit_edges.size)
     size = start_mid + lit_edges.size
     table = np.zeros((9, size))
     weights = np.zeros((phi.shape[1], size))
@@ -553,12 +556,6 @@ def source_point_table(
     table[3:6, :n] = normals[corners].T
     table[6:9, :n] = w12[corners].T
     weights[:, :n] = phi[corners].T
-    # an edge as a degenerate "triangle" (its two ends twice, the smaller first) interpolates as the edge does; its
-    # ends from the first lit triangle with it
-    of, corner = np.divmod(first, 3)
-    ends = triangles[lit_triangles[of][:, None], np.column_stack([corner, (corner + 1) % 3])]
-    ends.sort(axis=1)
-    edge_triangles = np.ascontiguousarray(ends[:, [0, 1, 1]], dtype=np.int64)
     for_ranges(
         _fill_shared_points,
         lit_triangles.size + edge_triangles.shape[0],
@@ -591,6 +588,65 @@ def source_point_table(
         lit_edges,
         candidates,
     )
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _listed_once(within, listed):
+    """The triangles of ``within`` each once, in the order they are met, marked in ``listed`` (False on entry)."""
+    once = np.empty(min(within.shape[0], listed.shape[0]), np.int64)
+    n = 0
+    for t in within:
+        if not listed[t]:
+            listed[t] = True
+            once[n] = t
+            n += 1
+    return once[:n]
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _numbered_columns(
+    triangles, candidates, vertex_lit, edge_of_corner, vertex_column, first_rule, midpoint_column, n_rule
+):
+    """The columns of a block's shared points, set in the maps (whose entries are -1 on entry): each corner of a
+    candidate triangle with light at a corner (``vertex_column``, in the order they are met), then ``n_rule`` rule
+    points per such triangle (``first_rule``), then each of their edges' midpoint (``midpoint_column``). Returns the
+    lit triangles, the corners, the edges, and each edge as a degenerate triangle ``(a, b, b)`` of its ends (smaller
+    first, from the first lit triangle that has it), which interpolates as the edge does."""
+    lit = np.empty(candidates.shape[0], np.int64)
+    corners = np.empty(3 * candidates.shape[0], np.int64)
+    n_lit = 0
+    n = 0
+    for t in candidates:
+        if not (vertex_lit[triangles[t, 0]] or vertex_lit[triangles[t, 1]] or vertex_lit[triangles[t, 2]]):
+            continue
+        lit[n_lit] = t
+        n_lit += 1
+        for c in range(3):
+            v = triangles[t, c]
+            if vertex_column[v] < 0:
+                vertex_column[v] = n
+                corners[n] = v
+                n += 1
+    start_mid = n + n_rule * n_lit
+    edges = np.empty(3 * n_lit, np.int64)
+    ends = np.empty((3 * n_lit, 3), np.int64)
+    m = 0
+    for j in range(n_lit):
+        t = lit[j]
+        first_rule[t] = n + n_rule * j
+        for c in range(3):
+            e = edge_of_corner[t, c]
+            if midpoint_column[e] < 0:
+                midpoint_column[e] = start_mid + m
+                edges[m] = e
+                a, b = triangles[t, c], triangles[t, (c + 1) % 3]
+                if b < a:
+                    a, b = b, a
+                ends[m, 0] = a
+                ends[m, 1] = b
+                ends[m, 2] = b
+                m += 1
+    return lit[:n_lit], corners[:n], edges[:m], ends[:m]
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
