@@ -34,6 +34,7 @@ import numba
 import numpy as np
 
 from ..geometry.topology import kernel_array
+from ..threads import for_ranges
 from .surface import PerSurface
 from .treewalk import GROUP_RECEIVERS, walk_lists
 
@@ -230,7 +231,7 @@ def aggregate(order, start, end, left, right, points, normals, w12, flux):
     """Aggregated source of every node: flux per channel, flux-weighted position, normal and w12, and the
     flux-weighted covariance of its positions.
 
-    Leaves sum their sources, then every level of internal nodes its two children, deepest first.
+    Leaves sum their sources (on every thread), then every internal node its two children, deepest first.
     Returns ``node_flux (nodes, C)``, ``weight (nodes,)`` (total flux over channels), the mean
     position (mm), unit normal and unit refracted direction ``(nodes, 3)`` (0 where no flux), and ``spread (nodes,
     6)``: the covariance ``xx, yy, zz, xy, xz, yz`` (mm^2) of the positions weighted by ``weight``
@@ -239,44 +240,35 @@ def aggregate(order, start, end, left, right, points, normals, w12, flux):
     n_nodes = start.shape[0]
     n_out = flux.shape[1]
     sums = np.zeros((n_nodes, n_out + 16))
-    leaves, levels = _leaves_then_levels(start, left, right)
+    leaves = np.flatnonzero(left < 0)
     points = kernel_array(points, np.float64)
     # second moments about the points' box centre, not the origin: fewer digits lost to the mean's square
     origin = 0.5 * (points.min(axis=0) + points.max(axis=0)) if points.shape[0] else np.zeros(3)
-    _leaf_sums(
-        order, start, end, leaves, points, *(kernel_array(a, np.float64) for a in (normals, w12, flux)), origin, sums
+    for_ranges(
+        _leaf_sums,
+        leaves.size,
+        order,
+        start,
+        end,
+        leaves,
+        points,
+        *(kernel_array(a, np.float64) for a in (normals, w12, flux)),
+        origin,
+        sums,
     )
-    for nodes in levels:
-        sums[nodes] = sums[left[nodes]] + sums[right[nodes]]
-    # the flux contiguous, as the walk takes it; flux-weighted position, normal, w12
-    node_flux, weight, sums = np.ascontiguousarray(sums[:, :n_out]), sums[:, n_out], sums[:, n_out + 1 :]
-    # weighted sums -> means
-    some = weight > 0.0
-    out_pos = np.zeros((n_nodes, 3))
-    out_pos[some] = sums[some, 0:3] / weight[some, None]
-    spread = np.zeros((n_nodes, 6))
-    mean = out_pos[some] - origin
-    pairs = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))
-    for k, (a, b) in enumerate(pairs):
-        spread[some, k] = sums[some, 9 + k] / weight[some] - mean[:, a] * mean[:, b]
-    spread[:, :3] = np.maximum(spread[:, :3], 0.0)  # a variance rounded below 0
-    unit = []
-    for block in (sums[:, 3:6], sums[:, 6:9]):
-        length = np.sqrt(np.sum(block**2, axis=1))
-        out = np.zeros((n_nodes, 3))
-        ok = some & (length > 0.0)
-        out[ok] = block[ok] / length[ok, None]
-        unit.append(out)
-    return node_flux, weight, out_pos, unit[0], unit[1], spread
+    node_flux, weight = np.empty((n_nodes, n_out)), np.empty(n_nodes)
+    out_pos, out_nrm, out_dir, spread = (np.zeros((n_nodes, width)) for width in (3, 3, 3, 6))
+    _node_means(left, right, sums, origin, node_flux, weight, out_pos, out_nrm, out_dir, spread)
+    return node_flux, weight, out_pos, out_nrm, out_dir, spread
 
 
-@numba.njit(cache=True)
-def _leaf_sums(order, start, end, leaves, points, normals, w12, flux, origin, out):
-    """Per leaf, added into ``out (nodes, C + 16)``: the flux per channel, its total over channels ``w``, the
-    ``w``-weighted sums of position, normal and ``w12``, and of the products ``xx, yy, zz, xy, xz, yz`` of the
-    positions less ``origin`` (no (n, C + 16) table of the sources first)."""
+@numba.njit(cache=True, nogil=True)
+def _leaf_sums(worker, lo, hi, order, start, end, leaves, points, normals, w12, flux, origin, out):
+    """Per leaf ``leaves[lo:hi]``, into its row of ``out (nodes, C + 16)``: the flux per channel, its total over
+    channels ``w``, the ``w``-weighted sums of position, normal and ``w12``, and of the products ``xx, yy, zz, xy,
+    xz, yz`` of the positions less ``origin`` (no (n, C + 16) table of the sources first)."""
     n_out = flux.shape[1]
-    for leaf in leaves:
+    for leaf in leaves[lo:hi]:
         for i in range(start[leaf], end[leaf]):
             j = order[i]
             w = 0.0
@@ -297,6 +289,46 @@ def _leaf_sums(order, start, end, leaves, points, normals, w12, flux, origin, ou
             out[leaf, n_out + 13] += w * x * y
             out[leaf, n_out + 14] += w * x * z
             out[leaf, n_out + 15] += w * y * z
+
+
+@numba.njit(cache=True, nogil=True)
+def _node_means(left, right, sums, origin, node_flux, weight, out_pos, out_nrm, out_dir, spread):
+    """:func:`aggregate`'s outputs from the leaves' ``sums``: every internal node's sums as its two children's
+    (nodes are numbered parent first, so in reverse every node's children come before it), then the flux, the
+    weighted means, the unit normal and ``w12``, and the covariance about the mean."""
+    n_nodes, n_out = node_flux.shape
+    for node in range(n_nodes - 1, -1, -1):
+        if left[node] >= 0:
+            for k in range(sums.shape[1]):
+                sums[node, k] = sums[left[node], k] + sums[right[node], k]
+    for node in range(n_nodes):
+        for c in range(n_out):
+            node_flux[node, c] = sums[node, c]
+        w = sums[node, n_out]
+        weight[node] = w
+        if not w > 0.0:
+            continue
+        for k in range(3):
+            out_pos[node, k] = sums[node, n_out + 1 + k] / w
+        x = out_pos[node, 0] - origin[0]
+        y = out_pos[node, 1] - origin[1]
+        z = out_pos[node, 2] - origin[2]
+        products = (x * x, y * y, z * z, x * y, x * z, y * z)
+        for k in range(6):
+            spread[node, k] = sums[node, n_out + 10 + k] / w - products[k]
+        for k in range(3):
+            spread[node, k] = max(spread[node, k], 0.0)  # a variance rounded below 0
+        _unit_into(sums[node, n_out + 4 : n_out + 7], out_nrm[node])
+        _unit_into(sums[node, n_out + 7 : n_out + 10], out_dir[node])
+
+
+@numba.njit(cache=True, inline="always")
+def _unit_into(v, out):
+    """``v / |v|`` into ``out`` (left as it is where ``v`` is 0)."""
+    length = math.sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
+    if length > 0.0:
+        for k in range(3):
+            out[k] = v[k] / length
 
 
 def _sums(order, start, end, left, right, values):
@@ -628,4 +660,5 @@ TREE_KERNELS = (
     _build,
     _boxes,
     _leaf_sums,
+    _node_means,
 )
