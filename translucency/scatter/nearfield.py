@@ -1773,6 +1773,8 @@ def _operator_rows(
 #: (:mod:`translucency.app.warmup`).
 NEAR_FIELD_KERNELS = (
     _near_pass,
+    _listed_once,
+    _numbered_columns,
     _fill_shared_points,
     _list_points,
     _refined_points,
