@@ -186,16 +186,26 @@ def test_longest_edges_and_centroids_match_numpy():
     np.testing.assert_allclose(triangle_centroids(points, triangles), corners.mean(axis=1), rtol=1e-14, atol=1e-14)
 
 
-@pytest.mark.parametrize("chunk", [1, 2, 1 << 20])
-def test_mean_edge_length_counts_each_shared_edge_once_whatever_the_chunks(monkeypatch, chunk):
+def test_mean_edge_length_counts_each_shared_edge_once():
     """Two triangles of a 2 x 3 mm rectangle: edges 2, 3, 2, 3 and the shared diagonal sqrt(13), each once."""
-    from translucency.geometry import measure
-
-    monkeypatch.setattr(measure, "EDGE_CHUNK", chunk)
     points = np.array([[0.0, 0, 0], [2, 0, 0], [2, 3, 0], [0, 3, 0]])
     triangles = np.array([[0, 1, 2], [0, 2, 3]])
     assert mean_edge_length(points, triangles) == pytest.approx((10 + np.sqrt(13)) / 5, rel=1e-14)
     assert np.isnan(mean_edge_length(points, np.zeros((0, 3), dtype=np.int64)))
+
+
+def test_mean_edge_length_is_that_of_the_unique_edges_on_any_triangle_list():
+    """Repeated indices (an edge from a vertex to itself counts, of length 0), duplicate and non-manifold triangles:
+    the mean of unique_edges' lengths."""
+    from translucency.geometry.topology import unique_edges
+
+    rng = np.random.default_rng(3)
+    for _ in range(20):
+        points = rng.normal(size=(30, 3))
+        triangles = rng.integers(0, 30, size=(60, 3))
+        edges, _ = unique_edges(triangles)
+        expected = np.linalg.norm(points[edges[:, 0]] - points[edges[:, 1]], axis=1).mean()
+        assert mean_edge_length(points, triangles) == pytest.approx(expected, rel=1e-14)
 
 
 def test_row_lengths_are_numpys_norm_bit_for_bit():

@@ -36,7 +36,7 @@ import numba
 import numpy as np
 
 from ..errors import InvalidParameterError
-from .topology import kernel_array, unique_edges
+from .topology import edge_census, kernel_array
 
 __all__ = [
     "CLEANING_KERNELS",
@@ -46,6 +46,9 @@ __all__ = [
     "triangle_normals",
     "row_lengths",
     "vertex_normals",
+    "vertex_measures",
+    "area_centroids",
+    "centroids_and_volumes",
     "vertex_areas",
     "barycentric_vertex_areas",
     "longest_edges",
@@ -124,6 +127,17 @@ def area_centroids(points, triangles, labels=None, count: int = 1):
     ``labels (m,)`` gives each triangle's label in ``0 .. count - 1`` (all 0 when omitted). Returns
     ``(areas (count,), centroids (count, 3))``; a label without area has its centroid at the origin.
     """
+    return centroids_and_volumes(points, triangles, labels, count)[:2]
+
+
+def centroids_and_volumes(points, triangles, labels=None, count: int = 1):
+    """:func:`area_centroids` and, in the same pass, each label's signed volume about its centroid ``c`` (mm³):
+    ``sum_t (p0 - c) . ((p1 - p0) x (p2 - p0)) / 6``. Returns ``(areas (count,), centroids (count, 3), volumes
+    (count,))``.
+
+    The volume is summed about a corner ``r`` of the label's first triangle and moved to ``c`` at the end (``V_c = V_r
+    - (c - r) . sum_t ((p1 - p0) x (p2 - p0)) / 6``), so that a surface far from the origin loses no digits to it.
+    """
     points, triangles = _kernel_mesh(points, triangles)
     labels = kernel_array(np.zeros(triangles.shape[0], dtype=np.int64) if labels is None else labels, np.int64)
     return _area_centroids(points, triangles, labels, int(count))
@@ -131,9 +145,12 @@ def area_centroids(points, triangles, labels=None, count: int = 1):
 
 @numba.njit(cache=True)
 def _area_centroids(points, triangles, labels, count):
-    """:func:`area_centroids`."""
+    """:func:`centroids_and_volumes`."""
     areas = np.zeros(count)
     sums = np.zeros((count, 3))
+    reference = np.full(count, -1, dtype=np.int64)  # the first corner of each label's first triangle
+    about = np.zeros(count)  # the volume about it, times 6
+    crosses = np.zeros((count, 3))
     for t in range(triangles.shape[0]):
         c0, c1, c2 = _cross(points, triangles, t)
         area = 0.5 * math.sqrt(c0 * c0 + c1 * c1 + c2 * c2)
@@ -141,11 +158,25 @@ def _area_centroids(points, triangles, labels, count):
         areas[k] += area
         for i in range(3):
             sums[k, i] += area * (points[triangles[t, 0], i] + points[triangles[t, 1], i] + points[triangles[t, 2], i])
+        p0, r = triangles[t, 0], reference[k]
+        if r < 0:
+            reference[k] = r = p0
+        d0, d1, d2 = points[p0, 0] - points[r, 0], points[p0, 1] - points[r, 1], points[p0, 2] - points[r, 2]
+        about[k] += d0 * c0 + d1 * c1 + d2 * c2
+        crosses[k, 0] += c0
+        crosses[k, 1] += c1
+        crosses[k, 2] += c2
+    volumes = np.zeros(count)
     for k in range(count):
         if areas[k] > 0.0:
             for i in range(3):
                 sums[k, i] /= 3.0 * areas[k]
-    return areas, sums
+        if reference[k] >= 0:
+            shift = 0.0
+            for i in range(3):
+                shift += (sums[k, i] - points[reference[k], i]) * crosses[k, i]
+            volumes[k] = (about[k] - shift) / 6.0
+    return areas, sums, volumes
 
 
 #: Directions whose extreme points span the polytope that :func:`hull_candidates` culls inside.
@@ -264,21 +295,29 @@ def _normalise_rows(vectors: np.ndarray) -> np.ndarray:
 
 @numba.njit(cache=True, nogil=True)
 def _unit_rows(vectors):
-    # each row is first divided by its largest component, so that rows of subnormal numbers (a scan of
-    # 1e-160 mm) do not lose their length to underflow in the squares
     out = np.zeros_like(vectors)
     for i in range(vectors.shape[0]):
-        scale = abs(vectors[i, 0])
-        for k in range(1, 3):
-            if abs(vectors[i, k]) > scale:
-                scale = abs(vectors[i, k])
-        if not scale > 0.0:  # zero, or NaN
-            continue
-        x, y, z = vectors[i, 0] / scale, vectors[i, 1] / scale, vectors[i, 2] / scale
-        length = math.sqrt(x * x + y * y + z * z)
-        if length > 0.0:  # not NaN
-            out[i, 0], out[i, 1], out[i, 2] = x / length, y / length, z / length
+        out[i, 0], out[i, 1], out[i, 2] = _unit(vectors[i, 0], vectors[i, 1], vectors[i, 2])
     return out
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _unit(x, y, z):
+    """``(x, y, z)`` divided by its length; zero for a zero vector or one with a NaN."""
+    # first divided by its largest component, so that vectors of subnormal numbers (a scan of 1e-160 mm) do not lose
+    # their length to underflow in the squares
+    scale = abs(x)
+    if abs(y) > scale:
+        scale = abs(y)
+    if abs(z) > scale:
+        scale = abs(z)
+    if not scale > 0.0:  # zero, or NaN
+        return 0.0, 0.0, 0.0
+    x, y, z = x / scale, y / scale, z / scale
+    length = math.sqrt(x * x + y * y + z * z)
+    if not length > 0.0:  # NaN
+        return 0.0, 0.0, 0.0
+    return x / length, y / length, z / length
 
 
 def _accumulate(triangles: np.ndarray, values: np.ndarray, n_points: int) -> np.ndarray:
@@ -309,9 +348,42 @@ def vertex_normals(points, triangles) -> np.ndarray:
     ndarray, shape (n, 3), float64
         Unit normals (dimensionless); zero vectors for vertices without a non-degenerate triangle.
     """
-    triangles = kernel_array(np.asarray(triangles).reshape(-1, 3), np.int64)
-    cross = kernel_array(triangle_cross_products(points, triangles), np.float64)
-    return _normalise_rows(_vertex_sums(triangles, cross, len(points)))
+    return vertex_measures(points, triangles)[0]
+
+
+def vertex_measures(points, triangles) -> tuple[np.ndarray, np.ndarray, float]:
+    """:func:`vertex_normals`, the barycentric :func:`vertex_areas` (mm²) and the total area (mm²), in one pass over
+    the triangles: ``(normals (n, 3), areas (n,), total)``; the normals and areas the same to the bit as those
+    functions', the total the triangles' areas summed with compensation."""
+    points, triangles = _kernel_mesh(points, triangles)
+    normals, areas = np.empty((points.shape[0], 3)), np.empty(points.shape[0])
+    total = _vertex_measures(points, triangles, normals, areas)
+    return normals, areas, float(total)
+
+
+@numba.njit(cache=True)
+def _vertex_measures(points, triangles, normals, areas):
+    """:func:`vertex_measures` into ``normals`` and ``areas``; returns the total area. Each vertex's sums are taken
+    in triangle order (as :func:`_vertex_sums`), the normal's and the area's side by side in one row."""
+    sums = np.zeros((points.shape[0], 4))
+    total = compensation = 0.0
+    for t in range(triangles.shape[0]):
+        c0, c1, c2 = _cross(points, triangles, t)
+        area = 0.5 * math.sqrt(c0 * c0 + c1 * c1 + c2 * c2)
+        third = area / 3.0
+        s = total + area  # Neumaier's compensated sum
+        compensation += (total - s) + area if total >= area else (area - s) + total
+        total = s
+        for i in range(3):
+            v = triangles[t, i]
+            sums[v, 0] += c0
+            sums[v, 1] += c1
+            sums[v, 2] += c2
+            sums[v, 3] += third
+    for v in range(points.shape[0]):
+        normals[v, 0], normals[v, 1], normals[v, 2] = _unit(sums[v, 0], sums[v, 1], sums[v, 2])
+        areas[v] = sums[v, 3]
+    return total + compensation
 
 
 def vertex_areas(points, triangles, method: str = "barycentric") -> np.ndarray:
@@ -430,22 +502,14 @@ def _centroids(points, triangles):
     return out
 
 
-#: Edges measured at once by :func:`mean_edge_length` (its temporaries: about 80 bytes per edge, so that a
-#: chunk, not the mesh, bounds them).
-EDGE_CHUNK = 1 << 20
-
-
 def mean_edge_length(points, triangles) -> float:
-    """Mean length of the unique edges, in mm (nan without triangles)."""
-    edges, _ = unique_edges(triangles)
-    if len(edges) == 0:
+    """Mean length of the unique edges, in mm (nan without triangles); the lengths summed with compensation in one
+    pass over every vertex's corners (:func:`~translucency.geometry.topology.edge_census`), without a table of the
+    edges."""
+    if np.asarray(triangles).size == 0:
         return float("nan")
-    p = np.asarray(points, dtype=np.float64)
-    total = 0.0
-    for first in range(0, len(edges), EDGE_CHUNK):
-        part = edges[first : first + EDGE_CHUNK]
-        total += float(np.linalg.norm(p[part[:, 0]] - p[part[:, 1]], axis=1).sum())
-    return total / len(edges)
+    census = edge_census(triangles, points, faces=False)
+    return census.edge_length_sum / census.edges
 
 
 def signed_volume(points, triangles, origin=None) -> float:
@@ -480,6 +544,7 @@ CLEANING_KERNELS = (
     _row_lengths,
     _unit_rows,
     _vertex_sums,
+    _vertex_measures,
     _degenerate,
     _longest_edges,
     _centroids,

@@ -4,8 +4,11 @@ Every loader returns a :class:`TriangleMesh`, every repair and decimation step t
 a new one, and the solver receives its plain arrays (``points``, ``triangles``). The record holds
 arrays only; its conversions to and from ``pyvista.PolyData`` live in :mod:`translucency.io.polydata`.
 A mesh is immutable:
-its arrays are private read-only copies, so a mesh handed to the solver cannot change under it, and
-"changing" a mesh means building a new one with :meth:`TriangleMesh.replace`.
+its arrays are private read-only copies (an array that is already read-only and owns its memory, such as another
+mesh's, is taken as it is), so a mesh handed to the solver cannot change under it, and
+"changing" a mesh means building a new one with :meth:`TriangleMesh.replace`. What is measured on a mesh (its
+vertex normals and areas, total area, mean edge length) is kept with it, and a step that measured them on the way
+(the cleaning) hands them over with :meth:`TriangleMesh.remember`.
 
 =============== ======================================================== =====
 field           meaning                                                  unit
@@ -26,7 +29,6 @@ its name from the file.
 from __future__ import annotations
 
 import dataclasses
-import functools
 from collections.abc import Mapping
 from pathlib import Path
 from types import MappingProxyType
@@ -35,12 +37,23 @@ from typing import Any
 import numpy as np
 
 from ..errors import MeshError
-from .measure import triangle_areas, vertex_areas, vertex_normals
+from .measure import mean_edge_length, triangle_areas, vertex_areas, vertex_normals
 
 __all__ = ["TriangleMesh", "validate_mesh_arrays"]
 
 
 def _read_only_copy(array: np.ndarray, dtype=None) -> np.ndarray:
+    """``array`` itself when it is read-only, owns its memory and has the type and layout asked for, else a read-only
+    copy."""
+    if (
+        isinstance(array, np.ndarray)
+        and type(array) is np.ndarray
+        and array.base is None
+        and not array.flags.writeable
+        and array.flags.c_contiguous
+        and (dtype is None or array.dtype == dtype)
+    ):
+        return array
     copy = np.array(array, dtype=dtype, copy=True, order="C")
     copy.setflags(write=False)
     return copy
@@ -167,6 +180,7 @@ class TriangleMesh:
         object.__setattr__(self, "source", None if self.source is None else Path(self.source))
         object.__setattr__(self, "mm_per_unit", mm_per_unit)
         object.__setattr__(self, "unit_inferred", bool(self.unit_inferred))
+        object.__setattr__(self, "_measured", {})
 
     # --- sizes -------------------------------------------------------------------------------------
     @property
@@ -193,25 +207,64 @@ class TriangleMesh:
         low, high = self.bounds
         return float(np.max(high - low))
 
-    @functools.cached_property
+    @property
     def surface_area(self) -> float:
         """Total area of the triangles, in mm² (computed once: the mesh is immutable)."""
-        return float(triangle_areas(self.points, self.triangles).sum())
+        if "surface_area" not in self._measured:
+            self._measured["surface_area"] = float(triangle_areas(self.points, self.triangles).sum())
+        return self._measured["surface_area"]
+
+    @property
+    def mean_edge_length(self) -> float:
+        """Mean length of the unique edges, in mm (:func:`~translucency.geometry.measure.mean_edge_length`, computed
+        once)."""
+        if "mean_edge_length" not in self._measured:
+            self._measured["mean_edge_length"] = float(mean_edge_length(self.points, self.triangles))
+        return self._measured["mean_edge_length"]
 
     # --- per-vertex geometry -------------------------------------------------------------------------
     def vertex_normals(self) -> np.ndarray:
-        """Area-weighted unit vertex normals, (n, 3) float64.
+        """Area-weighted unit vertex normals, (n, 3) float64 (a copy of those computed once).
 
         See :func:`translucency.geometry.measure.vertex_normals`.
         """
-        return vertex_normals(self.points, self.triangles)
+        if "vertex_normals" not in self._measured:
+            normals = vertex_normals(self.points, self.triangles)
+            normals.flags.writeable = False  # computed here: kept without a copy
+            self.remember(vertex_normals=normals)
+        return np.array(self._measured["vertex_normals"])
 
     def vertex_areas(self, method: str = "barycentric") -> np.ndarray:
-        """Area of each vertex's share of the surface in mm², (n,) float64.
+        """Area of each vertex's share of the surface in mm², (n,) float64 (the barycentric ones: a copy of those
+        computed once).
 
         See :func:`translucency.geometry.measure.vertex_areas`.
         """
-        return vertex_areas(self.points, self.triangles, method=method)
+        if method != "barycentric":
+            return vertex_areas(self.points, self.triangles, method=method)
+        if "vertex_areas" not in self._measured:
+            self.remember(vertex_areas=vertex_areas(self.points, self.triangles))
+        return np.array(self._measured["vertex_areas"])
+
+    def remember(self, *, vertex_normals=None, vertex_areas=None, surface_area=None, mean_edge_length=None) -> None:
+        """Keep measures of this very mesh computed elsewhere (the cleaning measures them on the way), so that they
+        are not computed again: unit vertex normals (n, 3), barycentric vertex areas (n,) in mm², the total area in
+        mm² and the mean unique-edge length in mm. The caller vouches that they are this mesh's; the arrays are
+        kept read-only."""
+        given = dict(
+            vertex_normals=vertex_normals,
+            vertex_areas=vertex_areas,
+            surface_area=surface_area,
+            mean_edge_length=mean_edge_length,
+        )
+        for name, value in given.items():
+            if value is None:
+                continue
+            if isinstance(value, np.ndarray):
+                value = _read_only_copy(value, np.float64)
+            else:
+                value = float(value)
+            self._measured[name] = value
 
     # --- building new meshes -------------------------------------------------------------------------
     def replace(self, **changes: Any) -> TriangleMesh:

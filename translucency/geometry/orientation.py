@@ -26,7 +26,7 @@ import numpy as np
 from scipy import sparse
 from scipy.sparse import csgraph
 
-from .measure import area_centroids, triangle_cross_products
+from .measure import centroids_and_volumes
 from .topology import face_components, unique_edges
 
 __all__ = ["coherent_orientation", "outward_flips", "flip_triangles"]
@@ -107,13 +107,7 @@ def outward_flips(points, triangles, components=None) -> tuple[np.ndarray, int]:
     if len(triangles) == 0:
         return np.zeros(0, dtype=bool), 0
     count, component = face_components(triangles) if components is None else components
-    _, centroid = area_centroids(points, triangles, component, count)
-    p0 = points[triangles[:, 0]]
-    cross = triangle_cross_products(points, triangles)
-    # signed volume of the tetrahedron (c, p0, p1, p2) = (p0 - c) . ((p1 - c) x (p2 - c)) / 6
-    #                                               = (p0 - c) . ((p1 - p0) x (p2 - p0)) / 6
-    c = centroid[component]
-    tetra = np.einsum("ij,ij->i", p0 - c, cross) / 6.0
-    volume = np.bincount(component, weights=tetra, minlength=count)
+    # signed volume of the tetrahedra (c, p0, p1, p2) = (p0 - c) . ((p1 - p0) x (p2 - p0)) / 6, per component
+    _, _, volume = centroids_and_volumes(points, triangles, component, count)
     flip_component = volume < 0
     return flip_component[component], int(np.count_nonzero(flip_component))

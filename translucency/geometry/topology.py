@@ -11,6 +11,8 @@ Corners ``(t, i)`` are numbered ``3 t + i`` (the "slot" of corner i of triangle 
 
 from __future__ import annotations
 
+import dataclasses
+
 import numba
 import numpy as np
 from scipy import sparse
@@ -18,6 +20,8 @@ from scipy.sparse import csgraph
 
 __all__ = [
     "CLEANING_KERNELS",
+    "EdgeCensus",
+    "edge_census",
     "kernel_array",
     "unique_edges",
     "corner_edge_numbers",
@@ -226,6 +230,253 @@ def _numbered_edges(triangles, n, like):
     return count, larger, slot_of, edge_of_slot
 
 
+@dataclasses.dataclass(frozen=True)
+class EdgeCensus:
+    """What :func:`edge_census` counts of a triangle list, with the definitions of :mod:`translucency.io.defects`.
+
+    Attributes
+    ----------
+    null_faces : int
+        Triangles with a repeated vertex index (when there are any, the counts below that need distinct corners are
+        not meaningful: count ``triangles`` without them).
+    unreferenced_vertices : int
+        Vertices ``0 .. n - 1`` that no triangle uses.
+    edges : int
+        Unique undirected edges (:func:`unique_edges`' count).
+    boundary_edges : ndarray, shape (b, 2), int64
+        The edges of exactly one triangle, the smaller index first.
+    non_manifold_edges, inconsistent_edges, non_manifold_vertices : int
+        Edges of more than two triangles; edges of two triangles that run them the same way; vertices whose
+        triangles form more than one fan.
+    duplicate : ndarray of bool, shape (m,)
+        :func:`duplicate_triangles` (empty when ``faces`` was False).
+    components : int
+        :func:`face_components`' count (0 when ``faces`` was False).
+    labels : ndarray, shape (m,), int64
+        :func:`face_components`' labels (empty when ``faces`` was False).
+    edge_length_sum : float
+        Sum of the unique edges' lengths in the points' unit (0 without points).
+    """
+
+    null_faces: int
+    unreferenced_vertices: int
+    edges: int
+    boundary_edges: np.ndarray
+    non_manifold_edges: int
+    inconsistent_edges: int
+    non_manifold_vertices: int
+    duplicate: np.ndarray
+    components: int
+    labels: np.ndarray
+    edge_length_sum: float
+
+
+def edge_census(triangles, points=None, *, lengths: bool = True, faces: bool = True) -> EdgeCensus:
+    """Count the edges, fans, duplicate triangles and face components of a triangle list in one pass over each
+    vertex's corners (the corners grouped by vertex with a counting sort, then every vertex's star on its own).
+
+    Parameters
+    ----------
+    triangles : array_like of int, shape (m, 3)
+    points : array_like, shape (n, 3), optional
+        Vertex positions (any length unit); ``n`` is their count (without them, ``triangles.max() + 1``).
+    lengths : bool, default True
+        Sum the unique edges' lengths (with ``points``).
+    faces : bool, default True
+        Count what needs the triangles' identity too (fans, inconsistent edges, duplicates, components); False
+        counts the edges, their lengths and the boundary alone.
+
+    Returns
+    -------
+    EdgeCensus
+    """
+    triangles, n = _edge_inputs(triangles)
+    measured = np.empty((0, 3))
+    if points is not None:
+        points = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+        n = points.shape[0]
+        measured = points if lengths else measured
+    measured = kernel_array(measured, np.float64)
+    like = np.empty(0, dtype=index_dtype(max(3 * triangles.shape[0], n)))
+    counts, boundary, duplicate, components, labels, length = _census(triangles, n, measured, bool(faces), like)
+    null, unreferenced, edges, non_manifold_edges, inconsistent, non_manifold_vertices = (int(c) for c in counts)
+    return EdgeCensus(
+        null_faces=null,
+        unreferenced_vertices=unreferenced,
+        edges=edges,
+        boundary_edges=boundary,
+        non_manifold_edges=non_manifold_edges,
+        inconsistent_edges=inconsistent,
+        non_manifold_vertices=non_manifold_vertices,
+        duplicate=duplicate,
+        components=int(components),
+        labels=labels,
+        edge_length_sum=float(length),
+    )
+
+
+@numba.njit(cache=True)
+def _stars(triangles, n, like):
+    """The corners grouped by vertex, in triangle order within a vertex: ``(start, star, null)``, rows ``start[v] ..
+    start[v + 1] - 1`` of ``star`` the ``(slot, next vertex, previous vertex)`` of the corners at ``v``; ``null`` the
+    triangles with a repeated index."""
+    m = triangles.shape[0]
+    start = np.zeros(n + 1, dtype=np.int64)
+    null = 0
+    for t in range(m):
+        a, b, c = triangles[t, 0], triangles[t, 1], triangles[t, 2]
+        start[a + 1] += 1
+        start[b + 1] += 1
+        start[c + 1] += 1
+        if a == b or b == c or a == c:
+            null += 1
+    for v in range(n):
+        start[v + 1] += start[v]
+    fill = start[:-1].copy()
+    star = np.empty((3 * m, 3), dtype=like.dtype)
+    for t in range(m):
+        for i in range(3):
+            v = triangles[t, i]
+            k = fill[v]
+            fill[v] = k + 1
+            star[k, 0] = 3 * t + i
+            star[k, 1] = triangles[t, (i + 1) % 3]
+            star[k, 2] = triangles[t, (i + 2) % 3]
+    return start, star, null
+
+
+@numba.njit(cache=True)
+def _sort_ends(ends, code, k):
+    """Sort ``ends[:k]`` (stable), ``code`` along: by insertion when short, else by a merge sort."""
+    if k > 2 * _INSERTION_SORT_LIMIT:
+        order = np.argsort(ends[:k], kind="mergesort")
+        ends[:k] = ends[:k][order]
+        code[:k] = code[:k][order]
+        return
+    for i in range(1, k):
+        key, value = ends[i], code[i]
+        j = i - 1
+        while j >= 0 and ends[j] > key:
+            ends[j + 1] = ends[j]
+            code[j + 1] = code[j]
+            j -= 1
+        ends[j + 1] = key
+        code[j + 1] = value
+
+
+@numba.njit(cache=True)
+def _mark_duplicates(star, lo, hi, v, n, keys, members, duplicate):
+    """Mark, among the corners ``lo .. hi - 1`` at their triangle's smallest vertex ``v``, each triangle on the same
+    other two vertices as an earlier one (:func:`duplicate_triangles`); returns how many."""
+    count = 0
+    for k in range(lo, hi):
+        a, b = star[k, 1], star[k, 2]
+        if a > v and b > v:
+            keys[count] = min(a, b) * n + max(a, b)
+            members[count] = star[k, 0] // 3
+            count += 1
+    found = 0
+    if count > _INSERTION_SORT_LIMIT:
+        order = np.argsort(keys[:count], kind="mergesort")
+        for i in range(1, count):
+            if keys[order[i]] == keys[order[i - 1]]:
+                duplicate[members[order[i]]] = True
+                found += 1
+        return found
+    for i in range(1, count):
+        for j in range(i):
+            if keys[j] == keys[i]:
+                duplicate[members[i]] = True
+                found += 1
+                break
+    return found
+
+
+@numba.njit(cache=True, inline="always")
+def _add(total, compensation, x):
+    """Neumaier's compensated sum: ``(total + x, its compensation)``."""
+    s = total + x
+    if abs(total) >= abs(x):
+        compensation += (total - s) + x
+    else:
+        compensation += (x - s) + total
+    return s, compensation
+
+
+@numba.njit(cache=True)
+def _census(triangles, n, points, faces, like):
+    """:func:`edge_census`: ``(counts, boundary edges, duplicate, components, labels, edge length sum)``."""
+    m = triangles.shape[0]
+    start, star, null = _stars(triangles, n, like)
+    widest = 1
+    for v in range(n):
+        widest = max(widest, start[v + 1] - start[v])
+    ends = np.empty(2 * widest, dtype=np.int64)
+    code = np.empty(2 * widest, dtype=np.int64)  # 2 * corner in the star + 1 where the end is the corner's next
+    fan = np.empty(widest, dtype=np.int64)
+    keys = np.empty(widest, dtype=np.int64)
+    members = np.empty(widest, dtype=np.int64)
+    parent = np.empty(m if faces else 0, dtype=like.dtype)
+    for t in range(parent.shape[0]):
+        parent[t] = t
+    duplicate = np.zeros(m if faces else 0, dtype=np.bool_)
+    boundary = np.empty((64, 2), dtype=np.int64)
+    found = 0  # boundary edges
+    counts = np.zeros(6, dtype=np.int64)  # null, unreferenced, edges, non-manifold edges, inconsistent, fans
+    counts[0] = null
+    total = compensation = 0.0
+    for v in range(n):
+        lo, hi = start[v], start[v + 1]
+        if lo == hi:
+            counts[1] += 1
+            continue
+        k = 0
+        for j in range(hi - lo):
+            ends[k], code[k] = star[lo + j, 1], 2 * j + 1
+            ends[k + 1], code[k + 1] = star[lo + j, 2], 2 * j
+            k += 2
+            fan[j] = j
+        _sort_ends(ends, code, k)
+        first = 0
+        while first < k:
+            w, last = ends[first], first + 1
+            while last < k and ends[last] == w:
+                last += 1
+            size = last - first
+            if w == v:  # an edge from v to itself (a triangle with a repeated index)
+                counts[2] += 1
+            elif w > v:
+                counts[2] += 1
+                if points.shape[0]:
+                    d0, d1, d2 = points[v, 0] - points[w, 0], points[v, 1] - points[w, 1], points[v, 2] - points[w, 2]
+                    total, compensation = _add(total, compensation, np.sqrt(d0 * d0 + d1 * d1 + d2 * d2))
+                if size == 1:
+                    if found == boundary.shape[0]:
+                        boundary = np.concatenate((boundary, np.empty_like(boundary)))
+                    boundary[found, 0], boundary[found, 1] = v, w
+                    found += 1
+                elif size > 2:
+                    counts[3] += 1
+            if faces and size == 2 and w != v:
+                j1, j2 = code[first] >> 1, code[first + 1] >> 1
+                _join(fan, j1, j2)
+                if w > v:
+                    if (code[first] & 1) == (code[first + 1] & 1):  # both run the edge the same way
+                        counts[4] += 1
+                    _join(parent, star[lo + j1, 0] // 3, star[lo + j2, 0] // 3)
+            first = last
+        if faces:
+            roots = 0
+            for j in range(hi - lo):
+                if fan[j] == j:
+                    roots += 1
+            if roots > 1:
+                counts[5] += 1
+            _mark_duplicates(star, lo, hi, v, n, keys, members, duplicate)
+    components, labels = _labels(parent)
+    return counts, boundary[:found].copy(), duplicate, components, labels, total + compensation
+
+
 @numba.njit(cache=True, inline="always")
 def _root(parent, x):
     """Root of ``x`` in the union-find forest ``parent``, halving the path on the way."""
@@ -395,6 +646,7 @@ def _non_manifold_vertices(pairs, corner_vertex, n):
 #: (:mod:`translucency.app.warmup`).
 CLEANING_KERNELS = (
     _numbered_edges,
+    _census,
     _manifold_pairs,
     _face_components,
     _non_manifold_vertices,

@@ -45,7 +45,7 @@ import time
 import numpy as np
 
 from ..errors import InvalidParameterError, MeshError
-from ..geometry.measure import triangle_areas, vertex_normals
+from ..geometry.measure import triangle_areas, vertex_measures, vertex_normals
 from ..geometry.mesh import TriangleMesh, validate_mesh_arrays
 from ..geometry.orientation import coherent_orientation, flip_triangles, outward_flips
 from ..geometry.topology import (
@@ -55,7 +55,7 @@ from ..geometry.topology import (
     first_at_same_position,
     unique_edges,
 )
-from .defects import ZERO_AREA_RATIO, MeshDefects, defects_and_components, find_defects, zero_area_mask
+from .defects import ZERO_AREA_RATIO, MeshDefects, survey_mesh, zero_area_mask
 from .polydata import as_triangle_mesh
 
 __all__ = ["CleanReport", "clean_mesh", "clean_arrays", "smooth_vertex_normals"]
@@ -251,20 +251,19 @@ def clean_mesh(
         For out-of-range options.
     """
     mesh = as_triangle_mesh(mesh, unit, entry="clean_mesh")
-    points, triangles, origin, normals, report = clean_arrays(
-        mesh.points,
-        mesh.triangles,
-        merge_duplicate_vertices=merge_duplicate_vertices,
-        remove_degenerate_faces=remove_degenerate_faces,
-        repair_non_manifold=repair_non_manifold,
-        min_island_fraction=min_island_fraction,
-        max_hole_edges=max_hole_edges,
-        orient_outward=orient_outward,
-        smooth_normals=smooth_normals,
-    )
+    options = (merge_duplicate_vertices, remove_degenerate_faces, repair_non_manifold, min_island_fraction)
+    options += (max_hole_edges, orient_outward, smooth_normals)
+    points, triangles, origin, normals, report, measures = _clean(mesh.points, mesh.triangles, options)
     point_data = {name: np.asarray(values)[origin] for name, values in mesh.point_data.items() if name != "normals"}
     point_data["normals"] = normals
-    return mesh.replace(points=points, triangles=triangles, point_data=point_data), report
+    for array in (triangles, normals, measures["vertex_areas"]):
+        if array.base is None and array is not mesh.triangles:
+            array.flags.writeable = False  # the cleaning's own: the mesh takes them without a copy
+    cleaned = mesh.replace(points=points, triangles=triangles, point_data=point_data)
+    if report.settings["smooth_normals"] == 0:
+        measures["vertex_normals"] = cleaned.point_data["normals"]
+    cleaned.remember(**measures)
+    return cleaned, report
 
 
 def clean_arrays(
@@ -299,20 +298,22 @@ def clean_arrays(
         Unit vertex normals of the result (smoothed when asked).
     report : CleanReport
     """
+    options = (merge_duplicate_vertices, remove_degenerate_faces, repair_non_manifold, min_island_fraction)
+    options += (max_hole_edges, orient_outward, smooth_normals)
+    return _clean(points, triangles, options)[:5]
+
+
+def _clean(points, triangles, options: tuple):
+    """:func:`clean_arrays` with its options in their order, and the measures of the result taken on the way:
+    ``{"vertex_areas", "surface_area", "mean_edge_length"}`` (barycentric vertex areas, mm²; total area, mm²; mean
+    unique-edge length, mm, or None)."""
     started = time.perf_counter()
     points, triangles = validate_mesh_arrays(points, triangles)
-    settings = _clean_settings(
-        merge_duplicate_vertices,
-        remove_degenerate_faces,
-        repair_non_manifold,
-        min_island_fraction,
-        max_hole_edges,
-        orient_outward,
-        smooth_normals,
-    )
-    before, components = defects_and_components(points, triangles)
+    settings = _clean_settings(*options)
+    survey = survey_mesh(points, triangles)
+    before = survey.defects
     repair = _Repair(
-        points, triangles, np.arange(len(points), dtype=np.int64), points, triangles, components=components
+        points, triangles, np.arange(len(points), dtype=np.int64), points, triangles, components=survey.components
     )
     if settings["merge_duplicate_vertices"]:
         _merge_vertices(repair, before)  # 1
@@ -330,13 +331,21 @@ def clean_arrays(
         _fill_holes(repair, before, settings["max_hole_edges"], settings["remove_degenerate_faces"])  # 9
     if settings["orient_outward"]:
         _orient_outward(repair)  # 10
-    _remove_unreferenced_vertices(repair)  # 11
-    normals = smooth_vertex_normals(repair.points, repair.triangles, iterations=settings["smooth_normals"])  # 12
+    # no step removed, added or reconnected a face (flips at most): the same edges and vertices in use
+    same_faces = repair.points is repair.input_points and len(repair.triangles) == len(repair.input_triangles)
+    _remove_unreferenced_vertices(repair, before if same_faces else None)  # 11
+    plain, vertex_areas, surface_area = vertex_measures(repair.points, repair.triangles)
+    normals = _smoothed(plain, repair.triangles, settings["smooth_normals"])  # 12
     repair.counts["normal_smoothing_iterations"] = settings["smooth_normals"]
 
     points, triangles, origin = repair.points, repair.triangles, repair.origin
     unchanged = points.shape == repair.input_points.shape and np.array_equal(triangles, repair.input_triangles)
-    after = before if unchanged else find_defects(points, triangles)
+    mean_edge = survey.mean_edge_length if same_faces else None  # flips and unused vertices leave the edges
+    if not unchanged:
+        after_survey = survey_mesh(points, triangles, lengths=mean_edge is None)
+        after, mean_edge = after_survey.defects, mean_edge if mean_edge is not None else after_survey.mean_edge_length
+    else:
+        after = before
     report = CleanReport(
         before=before,
         after=after,
@@ -345,7 +354,8 @@ def clean_arrays(
         seconds=time.perf_counter() - started,
         **repair.counts,
     )
-    return points, triangles, origin, normals, report
+    measures = dict(vertex_areas=vertex_areas, surface_area=surface_area, mean_edge_length=mean_edge)
+    return points, triangles, origin, normals, report, measures
 
 
 def smooth_vertex_normals(points, triangles, iterations: int = 1) -> np.ndarray:
@@ -367,9 +377,13 @@ def smooth_vertex_normals(points, triangles, iterations: int = 1) -> np.ndarray:
     ndarray, shape (n, 3), float64
         Unit normals (zero for vertices without triangles).
     """
+    return _smoothed(vertex_normals(points, triangles), triangles, iterations)
+
+
+def _smoothed(normals, triangles, iterations):
+    """:func:`smooth_vertex_normals` from the plain normals."""
     from scipy import sparse
 
-    normals = vertex_normals(points, triangles)
     if iterations <= 0:
         return normals
     n = len(normals)
@@ -558,13 +572,18 @@ def _orient_outward(repair: _Repair) -> None:
         repair.triangles = flip_triangles(repair.triangles, flip)
         counts["faces_flipped_coherent"] = counts.get("faces_flipped_coherent", 0) + int(np.count_nonzero(flip))
     flip, components_flipped = outward_flips(repair.points, repair.triangles, repair.known_components())
-    repair.triangles = flip_triangles(repair.triangles, flip)
+    if components_flipped:
+        repair.triangles = flip_triangles(repair.triangles, flip)
     counts["components_flipped_outward"] = components_flipped
     counts["faces_flipped_outward"] = int(np.count_nonzero(flip))
 
 
-def _remove_unreferenced_vertices(repair: _Repair) -> None:
-    """Step 11: drop the vertices no triangle uses."""
+def _remove_unreferenced_vertices(repair: _Repair, before: MeshDefects | None) -> None:
+    """Step 11: drop the vertices no triangle uses (``before``: the input's defects, when the faces are still the
+    input's and so use the same vertices)."""
+    if before is not None and before.unreferenced_vertices == 0:
+        repair.counts["unreferenced_vertices_removed"] = 0
+        return
     used = np.zeros(len(repair.points), dtype=bool)
     used[repair.triangles.ravel()] = True
     repair.counts["unreferenced_vertices_removed"] = int(np.count_nonzero(~used))

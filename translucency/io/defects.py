@@ -39,19 +39,14 @@ import dataclasses
 import numpy as np
 
 from ..geometry.measure import degenerate_triangles
-from ..geometry.topology import (
-    boundary_loops,
-    count_non_manifold_vertices,
-    duplicate_triangles,
-    face_components,
-    first_at_same_position,
-    manifold_pairs,
-    unique_edges,
-)
+from ..geometry.topology import boundary_loops, edge_census, first_at_same_position
 
 __all__ = [
     "MeshDefects",
+    "MeshSurvey",
     "find_defects",
+    "defects_and_components",
+    "survey_mesh",
     "zero_area_mask",
     "ZERO_AREA_RATIO",
 ]
@@ -141,7 +136,7 @@ def _count_duplicate_vertices(points: np.ndarray) -> int:
 
 def find_defects(points, triangles) -> MeshDefects:
     """Count the defects of a triangle mesh (:func:`defects_and_components` without the components)."""
-    return defects_and_components(points, triangles)[0]
+    return survey_mesh(points, triangles, lengths=False).defects
 
 
 def defects_and_components(points, triangles) -> tuple[MeshDefects, tuple[int, np.ndarray] | None]:
@@ -167,55 +162,58 @@ def defects_and_components(points, triangles) -> tuple[MeshDefects, tuple[int, n
     >>> find_defects(points, [[0, 1, 2]]).unreferenced_vertices
     1
     """
-    labels = None
+    survey = survey_mesh(points, triangles, lengths=False)
+    return survey.defects, survey.components
+
+
+@dataclasses.dataclass(frozen=True)
+class MeshSurvey:
+    """:func:`survey_mesh`'s result: the defects, the face components ``(count, label per triangle)`` (None when some
+    face is null, or every face), and the mean length of the unique edges in the points' unit (None when some face is
+    null, or when it was not asked for)."""
+
+    defects: MeshDefects
+    components: tuple[int, np.ndarray] | None
+    mean_edge_length: float | None
+
+
+def survey_mesh(points, triangles, *, lengths: bool = True) -> MeshSurvey:
+    """:func:`defects_and_components`, and the mean unique-edge length (in the points' unit) measured on the way when
+    ``lengths`` (one pass over every vertex's corners, :func:`~translucency.geometry.topology.edge_census`)."""
     points = np.ascontiguousarray(points, dtype=np.float64)
     triangles = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
     n, m = len(points), len(triangles)
-    referenced = np.zeros(n, dtype=bool)
-    referenced[triangles.ravel()] = True
-
-    null = (
-        (triangles[:, 0] == triangles[:, 1])
-        | (triangles[:, 1] == triangles[:, 2])
-        | (triangles[:, 0] == triangles[:, 2])
-    )
-    proper = triangles[~null]
-    duplicate_faces = int(np.count_nonzero(duplicate_triangles(proper)))
-    zero_area = int(np.count_nonzero(zero_area_mask(points, proper)))
-
-    inconsistent = non_manifold_edges = loops = largest = non_manifold_vertices = components = boundary_edges = 0
-    if len(proper):
-        edges, edge_of_corner = unique_edges(proper)
-        slot_edge = edge_of_corner.ravel()
-        faces_per_edge = np.bincount(slot_edge, minlength=len(edges))
-        # +1 when a triangle runs along the edge from its smaller to its larger index, else -1;
-        # the two triangles of a consistently oriented edge run it in opposite directions
-        direction = np.where(proper.ravel() == edges[slot_edge, 0], 1.0, -1.0)
-        direction_sum = np.bincount(slot_edge, weights=direction, minlength=len(edges))
-        inconsistent = int(np.count_nonzero((faces_per_edge == 2) & (direction_sum != 0)))
-        non_manifold_edges = int(np.count_nonzero(faces_per_edge > 2))
-        boundary = edges[faces_per_edge == 1]
-        boundary_edges = len(boundary)
-        loops, largest = boundary_loops(boundary)
-        pairs = manifold_pairs(edge_of_corner, faces_per_edge)
-        non_manifold_vertices = count_non_manifold_vertices(proper, edge_of_corner, faces_per_edge, n, pairs)
-        components, labels = face_components(proper, pairs=pairs)
-
+    census = edge_census(triangles, points, lengths=lengths)
+    proper, unreferenced = triangles, census.unreferenced_vertices
+    if census.null_faces:  # counted again without them (the vertices only they use stay referenced)
+        null = (
+            (triangles[:, 0] == triangles[:, 1])
+            | (triangles[:, 1] == triangles[:, 2])
+            | (triangles[:, 0] == triangles[:, 2])
+        )
+        proper = triangles[~null]
+        referenced = np.zeros(n, dtype=bool)
+        referenced[triangles.ravel()] = True
+        unreferenced = int(np.count_nonzero(~referenced))
+        census = edge_census(proper, points, lengths=lengths)
+    loops, largest = boundary_loops(census.boundary_edges)
     defects = MeshDefects(
         vertices=n,
         triangles=m,
         duplicate_vertices=_count_duplicate_vertices(points),
-        unreferenced_vertices=int(np.count_nonzero(~referenced)),
-        null_faces=int(np.count_nonzero(null)),
-        duplicate_faces=int(duplicate_faces),
-        zero_area_faces=zero_area,
-        non_manifold_edges=non_manifold_edges,
-        non_manifold_vertices=non_manifold_vertices,
-        boundary_edges=int(boundary_edges),
+        unreferenced_vertices=unreferenced,
+        null_faces=m - len(proper),
+        duplicate_faces=int(np.count_nonzero(census.duplicate)),
+        zero_area_faces=int(np.count_nonzero(zero_area_mask(points, proper))),
+        non_manifold_edges=census.non_manifold_edges,
+        non_manifold_vertices=census.non_manifold_vertices,
+        boundary_edges=len(census.boundary_edges),
         boundary_loops=int(loops),
         largest_boundary_loop=int(largest),
-        components=int(components),
-        inconsistent_edges=inconsistent,
+        components=census.components if len(proper) else 0,
+        inconsistent_edges=census.inconsistent_edges,
     )
-    # labels of every triangle only (a null face has none)
-    return defects, (int(components), labels) if labels is not None and len(proper) == m else None
+    whole = len(proper) == m and m > 0  # labels of every triangle only (a null face has none)
+    components = (census.components, census.labels) if whole else None
+    mean = census.edge_length_sum / census.edges if whole and lengths and census.edges else None
+    return MeshSurvey(defects, components, mean)

@@ -109,6 +109,9 @@ def load_mesh(path, unit: str | float | None = None, *, format: str | None = Non
     path = Path(path)
     points, triangles, point_data = read_mesh_arrays(path, format=format)
     points, mm_per_unit = to_millimetres(points, triangles, unit, path.name)
+    for array in (points, triangles):
+        if isinstance(array, np.ndarray) and array.base is None:
+            array.flags.writeable = False  # read here and held nowhere else: the mesh takes them without a copy
     return TriangleMesh(points, triangles, point_data, source=path, mm_per_unit=mm_per_unit, unit_inferred=unit is None)
 
 
@@ -146,7 +149,7 @@ def _extent(points: np.ndarray, triangles: np.ndarray) -> float:
     """Largest side of the bounding box of the vertices the triangles use (in the points' unit)."""
     referenced = np.zeros(len(points), dtype=bool)
     referenced[triangles.ravel()] = True
-    used = points[referenced]
+    used = points if referenced.all() else points[referenced]
     return float(np.max(used.max(axis=0) - used.min(axis=0)))
 
 

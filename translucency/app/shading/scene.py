@@ -14,10 +14,7 @@ from __future__ import annotations
 import dataclasses
 import time
 
-import numpy as np
-
 from ...errors import BudgetError, InvalidParameterError
-from ...geometry.measure import mean_edge_length
 from ...scatter import transport
 from ...scatter.names import DEFAULT_TOL
 from ...threads import thread_count
@@ -128,14 +125,14 @@ class Scene:
     def mean_edge(self) -> float:
         """The full mesh's mean edge length (mm), measured once."""
         if self._mean_edge is None:
-            self._mean_edge = mean_edge_length(self.mesh.points, self.mesh.triangles)
+            self._mean_edge = self.mesh.mean_edge_length  # kept with the mesh (the cleaning measures it on the way)
         return self._mean_edge
 
     def full_normals(self):
         """The full mesh's unit vertex normals, computed once (the solver's at full resolution and the result's)."""
         if self._normals is None:
-            # an array of its own (numba's own memory is not), read-only: the light's cache key hashes it once
-            self._normals = np.array(self.mesh.vertex_normals())
+            # an array of its own (the mesh hands out a copy), read-only: the light's cache key hashes it once
+            self._normals = self.mesh.vertex_normals()
             self._normals.flags.writeable = False  # shared with the full-resolution surface and the light's cache key
         return self._normals
 
