@@ -36,6 +36,7 @@ import numba
 import numpy as np
 
 from ..errors import InvalidParameterError
+from ..threads import for_ranges
 from .topology import edge_census, kernel_array
 
 __all__ = [
@@ -49,6 +50,7 @@ __all__ = [
     "vertex_measures",
     "area_centroids",
     "centroids_and_volumes",
+    "extreme_points",
     "vertex_areas",
     "barycentric_vertex_areas",
     "longest_edges",
@@ -103,14 +105,15 @@ def degenerate_triangles(points, triangles, ratio: float) -> np.ndarray:
     """True for the triangles with ``|(p1 - p0) x (p2 - p0)| <= ratio * longest_edge**2`` (twice the area
     against the square of the longest edge: 0 for a sliver or a point), ``(m,)`` bool; one pass in numba."""
     points, triangles = _kernel_mesh(points, triangles)
-    return _degenerate(points, triangles, float(ratio))
-
-
-@numba.njit(cache=True)
-def _degenerate(points, triangles, ratio):
-    """:func:`degenerate_triangles`."""
     out = np.empty(triangles.shape[0], dtype=np.bool_)
-    for t in range(triangles.shape[0]):
+    for_ranges(_degenerate, triangles.shape[0], points, triangles, float(ratio), out)
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
+def _degenerate(worker, lo, hi, points, triangles, ratio, out):
+    """:func:`degenerate_triangles` of triangles ``lo .. hi - 1``."""
+    for t in range(lo, hi):
         longest = 0.0
         for i in range(3):
             a, b = triangles[t, i], triangles[t, (i + 1) % 3]
@@ -118,7 +121,13 @@ def _degenerate(points, triangles, ratio):
             longest = max(longest, math.sqrt(d0 * d0 + d1 * d1 + d2 * d2))
         c0, c1, c2 = _cross(points, triangles, t)
         out[t] = math.sqrt(c0 * c0 + c1 * c1 + c2 * c2) <= ratio * longest * longest
-    return out
+
+
+#: Triangles (or points) in a block of the sums and searches run on several threads: each block's result is kept
+#: apart and the blocks' are combined in their order, so that the result does not depend on the number of threads.
+BLOCK = 1 << 18
+#: The most partial sums (blocks x labels) :func:`centroids_and_volumes` keeps; with more labels it sums in one block.
+MAX_PARTIAL_SUMS = 1 << 20
 
 
 def area_centroids(points, triangles, labels=None, count: int = 1):
@@ -140,43 +149,73 @@ def centroids_and_volumes(points, triangles, labels=None, count: int = 1):
     """
     points, triangles = _kernel_mesh(points, triangles)
     labels = kernel_array(np.zeros(triangles.shape[0], dtype=np.int64) if labels is None else labels, np.int64)
-    return _area_centroids(points, triangles, labels, int(count))
+    count = int(count)
+    blocks = max(1, -(-triangles.shape[0] // BLOCK))
+    if blocks * count > MAX_PARTIAL_SUMS:
+        blocks = 1
+    partial = np.zeros((blocks, count, 8))  # area, area-weighted corner sums (3), volume about the reference, cross
+    reference = np.full((blocks, count), -1, dtype=np.int64)
+    for_ranges(_centroid_blocks, blocks, points, triangles, labels, partial, reference)
+    return _combined_centroids(points, partial, reference)
+
+
+@numba.njit(cache=True, nogil=True)
+def _centroid_blocks(worker, lo, hi, points, triangles, labels, partial, reference):
+    """:func:`centroids_and_volumes`' sums over blocks ``lo .. hi - 1`` of triangles, each block's apart; the volume
+    (times 6) about a reference, the first corner of the label's first triangle in the block."""
+    m, blocks = triangles.shape[0], partial.shape[0]
+    for b in range(lo, hi):
+        sums, first = partial[b], reference[b]
+        for t in range(b * m // blocks, (b + 1) * m // blocks):
+            c0, c1, c2 = _cross(points, triangles, t)
+            area = 0.5 * math.sqrt(c0 * c0 + c1 * c1 + c2 * c2)
+            k = labels[t]
+            sums[k, 0] += area
+            for i in range(3):
+                sums[k, 1 + i] += area * (
+                    points[triangles[t, 0], i] + points[triangles[t, 1], i] + points[triangles[t, 2], i]
+                )
+            p0, r = triangles[t, 0], first[k]
+            if r < 0:
+                first[k] = r = p0
+            d0, d1, d2 = points[p0, 0] - points[r, 0], points[p0, 1] - points[r, 1], points[p0, 2] - points[r, 2]
+            sums[k, 4] += d0 * c0 + d1 * c1 + d2 * c2
+            sums[k, 5] += c0
+            sums[k, 6] += c1
+            sums[k, 7] += c2
 
 
 @numba.njit(cache=True)
-def _area_centroids(points, triangles, labels, count):
-    """:func:`centroids_and_volumes`."""
-    areas = np.zeros(count)
-    sums = np.zeros((count, 3))
-    reference = np.full(count, -1, dtype=np.int64)  # the first corner of each label's first triangle
-    about = np.zeros(count)  # the volume about it, times 6
-    crosses = np.zeros((count, 3))
-    for t in range(triangles.shape[0]):
-        c0, c1, c2 = _cross(points, triangles, t)
-        area = 0.5 * math.sqrt(c0 * c0 + c1 * c1 + c2 * c2)
-        k = labels[t]
-        areas[k] += area
-        for i in range(3):
-            sums[k, i] += area * (points[triangles[t, 0], i] + points[triangles[t, 1], i] + points[triangles[t, 2], i])
-        p0, r = triangles[t, 0], reference[k]
-        if r < 0:
-            reference[k] = r = p0
-        d0, d1, d2 = points[p0, 0] - points[r, 0], points[p0, 1] - points[r, 1], points[p0, 2] - points[r, 2]
-        about[k] += d0 * c0 + d1 * c1 + d2 * c2
-        crosses[k, 0] += c0
-        crosses[k, 1] += c1
-        crosses[k, 2] += c2
-    volumes = np.zeros(count)
+def _combined_centroids(points, partial, reference):
+    """The blocks' sums of :func:`_centroid_blocks` added in block order: ``(areas, centroids, volumes)``."""
+    count = partial.shape[1]
+    areas, centroids, volumes = np.zeros(count), np.zeros((count, 3)), np.zeros(count)
+    about, cross = np.zeros(count), np.zeros((count, 3))
+    first = np.full(count, -1, dtype=np.int64)
+    for b in range(partial.shape[0]):
+        for k in range(count):
+            r = reference[b, k]
+            if r < 0:
+                continue
+            if first[k] < 0:
+                first[k] = r
+            areas[k] += partial[b, k, 0]
+            shift = 0.0  # the block's volume moved from its reference to the label's
+            for i in range(3):
+                centroids[k, i] += partial[b, k, 1 + i]
+                cross[k, i] += partial[b, k, 5 + i]
+                shift += (points[r, i] - points[first[k], i]) * partial[b, k, 5 + i]
+            about[k] += partial[b, k, 4] + shift
     for k in range(count):
         if areas[k] > 0.0:
             for i in range(3):
-                sums[k, i] /= 3.0 * areas[k]
-        if reference[k] >= 0:
+                centroids[k, i] /= 3.0 * areas[k]
+        if first[k] >= 0:
             shift = 0.0
             for i in range(3):
-                shift += (sums[k, i] - points[reference[k], i]) * crosses[k, i]
+                shift += (centroids[k, i] - points[first[k], i]) * cross[k, i]
             volumes[k] = (about[k] - shift) / 6.0
-    return areas, sums, volumes
+    return areas, centroids, volumes
 
 
 #: Directions whose extreme points span the polytope that :func:`hull_candidates` culls inside.
@@ -202,38 +241,50 @@ def hull_candidates(points) -> np.ndarray:
     ring = np.sqrt(1.0 - z * z)
     directions = np.ascontiguousarray(np.stack([ring * np.cos(angle), ring * np.sin(angle), z], axis=1))
     try:
-        inner = ConvexHull(points[np.unique(_extremes(points, directions))])
+        inner = ConvexHull(points[np.unique(extreme_points(points, directions))])
     except (QhullError, ValueError):  # the extremes are flat: nothing to cull by
         return np.array(points)
-    margin = 1e-9 * float(np.max(np.abs(points)))
-    return points[_outside_or_on(points, np.ascontiguousarray(inner.equations), margin)]
-
-
-@numba.njit(cache=True)
-def _extremes(points, directions):
-    """Index of the point farthest along each direction."""
-    best = np.full(directions.shape[0], -np.inf)
-    index = np.zeros(directions.shape[0], dtype=np.int64)
-    for i in range(points.shape[0]):
-        for d in range(directions.shape[0]):
-            v = points[i, 0] * directions[d, 0] + points[i, 1] * directions[d, 1] + points[i, 2] * directions[d, 2]
-            if v > best[d]:
-                best[d] = v
-                index[d] = i
-    return index
-
-
-@numba.njit(cache=True)
-def _outside_or_on(points, equations, margin):
-    """True for the points not strictly inside every facet ``n . x + offset < 0`` (by ``margin``, mm)."""
+    margin = 1e-9 * max(float(points.max()), -float(points.min()))  # of the largest |coordinate|
     keep = np.zeros(points.shape[0], dtype=np.bool_)
-    for i in range(points.shape[0]):
+    for_ranges(_outside_or_on, points.shape[0], points, np.ascontiguousarray(inner.equations), margin, keep)
+    return points[keep]
+
+
+def extreme_points(points, directions) -> np.ndarray:
+    """Index of the first of the points (n, 3) farthest along each direction (d, 3), ``(d,)`` int64; blocks of points
+    searched on several threads."""
+    points, directions = kernel_array(points, np.float64), kernel_array(directions, np.float64)
+    blocks = max(1, -(-points.shape[0] // BLOCK))
+    best = np.full((blocks, directions.shape[0]), -np.inf)
+    index = np.zeros((blocks, directions.shape[0]), dtype=np.int64)
+    for_ranges(_extremes, blocks, points, directions, best, index)
+    first_best = np.argmax(best, axis=0)  # the first block that holds the largest value: the first point
+    return index[first_best, np.arange(directions.shape[0])]
+
+
+@numba.njit(cache=True, nogil=True)
+def _extremes(worker, lo, hi, points, directions, best, index):
+    """:func:`extreme_points` in blocks ``lo .. hi - 1`` of points, each block's into its row of ``best``/``index``."""
+    n, blocks = points.shape[0], best.shape[0]
+    for b in range(lo, hi):
+        for i in range(b * n // blocks, (b + 1) * n // blocks):
+            for d in range(directions.shape[0]):
+                v = points[i, 0] * directions[d, 0] + points[i, 1] * directions[d, 1] + points[i, 2] * directions[d, 2]
+                if v > best[b, d]:
+                    best[b, d] = v
+                    index[b, d] = i
+
+
+@numba.njit(cache=True, nogil=True)
+def _outside_or_on(worker, lo, hi, points, equations, margin, keep):
+    """True in ``keep`` for the points ``lo .. hi - 1`` not strictly inside every facet ``n . x + offset < 0`` (by
+    ``margin``, mm)."""
+    for i in range(lo, hi):
         for f in range(equations.shape[0]):
             e = equations[f]
             if points[i, 0] * e[0] + points[i, 1] * e[1] + points[i, 2] * e[2] + e[3] >= -margin:
                 keep[i] = True
                 break
-    return keep
 
 
 def triangle_areas(points, triangles) -> np.ndarray:
@@ -548,7 +599,8 @@ CLEANING_KERNELS = (
     _degenerate,
     _longest_edges,
     _centroids,
-    _area_centroids,
+    _centroid_blocks,
+    _combined_centroids,
     _extremes,
     _outside_or_on,
 )

@@ -107,8 +107,8 @@ def validate_mesh_arrays(points, triangles, *, what: str = "the mesh") -> tuple[
             f"{what} has {len(points)} vertices but no triangles (a point cloud); "
             "reconstruct a surface from it first (for example in MeshLab) and load that mesh."
         )
-    finite = np.isfinite(points).all(axis=1)
-    if not finite.all():
+    finite = None if np.isfinite(points.sum()) else np.isfinite(points).all(axis=1)  # a NaN or inf makes the sum one
+    if finite is not None and not finite.all():
         bad = int(np.count_nonzero(~finite))
         raise MeshError(
             f"{what} has {bad} {'vertex' if bad == 1 else 'vertices'} with NaN or infinite coordinates "

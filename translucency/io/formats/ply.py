@@ -178,7 +178,9 @@ def _read_ply_with_plyfile(path: Path, header: PlyHeader, plyfile):
     polygons = None
     if face is not None:
         lists = ply[face[0]].data[face[1]]
-        if lists.dtype != object:  # fixed-length lists of the fast path
+        if lists.dtype != object and lists.shape[1:] == (3,):  # all triangles: widened to int64 in one copy
+            polygons = np.array(lists, dtype=np.int64, order="C")
+        elif lists.dtype != object:  # fixed-length lists of the fast path
             lists = np.asarray(lists, dtype=np.int64)
             polygons = triangulate_polygons(np.arange(len(lists) + 1) * lists.shape[1], lists.ravel())
         else:
