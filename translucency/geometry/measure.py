@@ -339,36 +339,33 @@ def _row_lengths(vectors):
     return lengths
 
 
-def _normalise_rows(vectors: np.ndarray) -> np.ndarray:
-    """Each row of ``vectors`` (n, 3) divided by its length; zero rows, and rows with a NaN, give zero."""
-    return _unit_rows(kernel_array(vectors, np.float64))
-
-
-@numba.njit(cache=True, nogil=True)
-def _unit_rows(vectors):
-    out = np.zeros_like(vectors)
-    for i in range(vectors.shape[0]):
-        out[i, 0], out[i, 1], out[i, 2] = _unit(vectors[i, 0], vectors[i, 1], vectors[i, 2])
+def _normalise_rows(vectors: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
+    """Each row of ``vectors`` (n, 3) divided by its length into ``out`` (a new array when not given; ``vectors``
+    itself may be given); zero rows, and rows with a NaN, give zero."""
+    out = np.zeros(np.shape(vectors)) if out is None else out
+    _unit_rows(kernel_array(vectors, np.float64), out)
     return out
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
-def _unit(x, y, z):
-    """``(x, y, z)`` divided by its length; zero for a zero vector or one with a NaN."""
-    # first divided by its largest component, so that vectors of subnormal numbers (a scan of 1e-160 mm) do not lose
-    # their length to underflow in the squares
-    scale = abs(x)
-    if abs(y) > scale:
-        scale = abs(y)
-    if abs(z) > scale:
-        scale = abs(z)
-    if not scale > 0.0:  # zero, or NaN
-        return 0.0, 0.0, 0.0
-    x, y, z = x / scale, y / scale, z / scale
-    length = math.sqrt(x * x + y * y + z * z)
-    if not length > 0.0:  # NaN
-        return 0.0, 0.0, 0.0
-    return x / length, y / length, z / length
+@numba.njit(cache=True, nogil=True)
+def _unit_rows(vectors, out):
+    # each row is first divided by its largest component, so that rows of subnormal numbers (a scan of
+    # 1e-160 mm) do not lose their length to underflow in the squares; a row is read before its unit is written
+    # (``out`` may be ``vectors``' memory)
+    for i in range(vectors.shape[0]):
+        v0, v1, v2 = vectors[i, 0], vectors[i, 1], vectors[i, 2]
+        out[i, 0] = out[i, 1] = out[i, 2] = 0.0
+        scale = abs(v0)
+        if abs(v1) > scale:
+            scale = abs(v1)
+        if abs(v2) > scale:
+            scale = abs(v2)
+        if not scale > 0.0:  # zero, or NaN
+            continue
+        x, y, z = v0 / scale, v1 / scale, v2 / scale
+        length = math.sqrt(x * x + y * y + z * z)
+        if length > 0.0:  # not NaN
+            out[i, 0], out[i, 1], out[i, 2] = x / length, y / length, z / length
 
 
 def _accumulate(triangles: np.ndarray, values: np.ndarray, n_points: int) -> np.ndarray:
@@ -409,13 +406,14 @@ def vertex_measures(points, triangles) -> tuple[np.ndarray, np.ndarray, float]:
     points, triangles = _kernel_mesh(points, triangles)
     normals, areas = np.empty((points.shape[0], 3)), np.empty(points.shape[0])
     total = _vertex_measures(points, triangles, normals, areas)
-    return normals, areas, float(total)
+    return _normalise_rows(normals, normals), areas, float(total)
 
 
 @numba.njit(cache=True)
 def _vertex_measures(points, triangles, normals, areas):
-    """:func:`vertex_measures` into ``normals`` and ``areas``; returns the total area. Each vertex's sums are taken
-    in triangle order (as :func:`_vertex_sums`), the normal's and the area's side by side in one row."""
+    """:func:`vertex_measures` into ``normals`` (not yet normalised) and ``areas``; returns the total area. Each
+    vertex's sums are taken in triangle order (as :func:`_vertex_sums`), the normal's and the area's side by side in
+    one row."""
     sums = np.zeros((points.shape[0], 4))
     total = compensation = 0.0
     for t in range(triangles.shape[0]):
@@ -432,8 +430,7 @@ def _vertex_measures(points, triangles, normals, areas):
             sums[v, 2] += c2
             sums[v, 3] += third
     for v in range(points.shape[0]):
-        normals[v, 0], normals[v, 1], normals[v, 2] = _unit(sums[v, 0], sums[v, 1], sums[v, 2])
-        areas[v] = sums[v, 3]
+        normals[v, 0], normals[v, 1], normals[v, 2], areas[v] = sums[v, 0], sums[v, 1], sums[v, 2], sums[v, 3]
     return total + compensation
 
 
