@@ -223,8 +223,9 @@ class TriangleMesh:
         return self._measured["mean_edge_length"]
 
     # --- per-vertex geometry -------------------------------------------------------------------------
-    def vertex_normals(self) -> np.ndarray:
-        """Area-weighted unit vertex normals, (n, 3) float64 (a copy of those computed once).
+    def vertex_normals(self, copy: bool = True) -> np.ndarray:
+        """Area-weighted unit vertex normals, (n, 3) float64: a copy of those computed once (``copy=False``: the
+        mesh's own, read-only).
 
         See :func:`translucency.geometry.measure.vertex_normals`.
         """
@@ -232,11 +233,11 @@ class TriangleMesh:
             normals = vertex_normals(self.points, self.triangles)
             normals.flags.writeable = False  # computed here: kept without a copy
             self.remember(vertex_normals=normals)
-        return np.array(self._measured["vertex_normals"])
+        return np.array(self._measured["vertex_normals"]) if copy else self._measured["vertex_normals"]
 
-    def vertex_areas(self, method: str = "barycentric") -> np.ndarray:
+    def vertex_areas(self, method: str = "barycentric", copy: bool = True) -> np.ndarray:
         """Area of each vertex's share of the surface in mm², (n,) float64 (the barycentric ones: a copy of those
-        computed once).
+        computed once; ``copy=False``: the mesh's own, read-only).
 
         See :func:`translucency.geometry.measure.vertex_areas`.
         """
@@ -244,7 +245,7 @@ class TriangleMesh:
             return vertex_areas(self.points, self.triangles, method=method)
         if "vertex_areas" not in self._measured:
             self.remember(vertex_areas=vertex_areas(self.points, self.triangles))
-        return np.array(self._measured["vertex_areas"])
+        return np.array(self._measured["vertex_areas"]) if copy else self._measured["vertex_areas"]
 
     def remember(self, *, vertex_normals=None, vertex_areas=None, surface_area=None, mean_edge_length=None) -> None:
         """Keep measures of this very mesh computed elsewhere (the cleaning measures them on the way), so that they

@@ -131,17 +131,16 @@ class Scene:
     def full_normals(self):
         """The full mesh's unit vertex normals, computed once (the solver's at full resolution and the result's)."""
         if self._normals is None:
-            # an array of its own (the mesh hands out a copy), read-only: the light's cache key hashes it once
-            self._normals = self.mesh.vertex_normals()
-            self._normals.flags.writeable = False  # shared with the full-resolution surface and the light's cache key
+            # the mesh's own array (not a view), read-only: shared with the full-resolution surface and the light's
+            # cache key, which hashes it once
+            self._normals = self.mesh.vertex_normals(copy=False)
         return self._normals
 
     def full_areas(self):
         """The full mesh's barycentric vertex areas (mm²), computed once (the solver's at full resolution and the
         light's at every vertex)."""
         if self._areas is None:
-            self._areas = self.mesh.vertex_areas()
-            self._areas.flags.writeable = False  # shared with the full-resolution surface's cache
+            self._areas = self.mesh.vertex_areas(copy=False)  # read-only: shared with the full-resolution surface
         return self._areas
 
     def solver_mesh(self, medium, resolution="full", tol=DEFAULT_TOL, memory_limit=None):
