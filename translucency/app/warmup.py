@@ -30,7 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from ..geometry import measure, topology
-from ..scatter import cutoff, hierarchy, kernels, listsums, nearfield, relight, treewalk
+from ..scatter import cutoff, fresnel, hierarchy, irradiance, kernels, listsums, nearfield, relight, treewalk
 
 #: The compiled kernels the main job's solve calls (``tree`` method, near field), the viewer's relighting and the
 #: cleaning of a scan, as each module lists them.
@@ -42,6 +42,8 @@ MAIN_JOB_KERNELS = (
     *treewalk.WALK_KERNELS,
     *nearfield.NEAR_FIELD_KERNELS,
     *relight.RELIGHT_KERNELS,
+    *irradiance.LIGHT_KERNELS,
+    *fresnel.FRESNEL_KERNELS,
     *topology.CLEANING_KERNELS,
     *measure.CLEANING_KERNELS,
 )

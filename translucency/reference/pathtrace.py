@@ -69,10 +69,10 @@ from ..errors import InvalidParameterError, MeshError
 from ..geometry.measure import signed_volume, triangle_normals
 from ..geometry.topology import boundary_loops, unique_edges
 from ..scatter.budget import check_limits
-from ..scatter.fresnel import fresnel_transmittance, refract
+from ..scatter.fresnel import fresnel_reflectance_scalar, fresnel_transmittance, refract
 from ..scatter.kernels import orthonormal_frame
 from ..scatter.medium import Medium
-from ..scatter.montecarlo import fresnel_reflectance_scalar, sample_hg_cosine
+from ..scatter.montecarlo import sample_hg_cosine
 from ..scatter.visibility import Occluder
 from .trace_settings import WorkTally, check_seed, check_spp, check_time, progress_line
 

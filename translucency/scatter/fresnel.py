@@ -23,13 +23,18 @@ F_dr       Egan-Hilgeman fit of the internal diffuse reflectance (Jensen 2001)  
 
 from __future__ import annotations
 
+import math
+
+import numba
 import numpy as np
 
 __all__ = [
     "ETA_MAX",
     "fresnel_reflectance",
+    "fresnel_reflectance_scalar",
     "fresnel_transmittance",
     "refract",
+    "refracted",
     "two_C1",
     "three_C2",
     "C_phi",
@@ -62,21 +67,42 @@ def fresnel_reflectance(cos_i, eta):
     ndarray
         ``F_r = (r_s^2 + r_p^2) / 2`` with ``r_s = (c - eta c_t) / (c + eta c_t)`` and
         ``r_p = (eta c - c_t) / (eta c + c_t)``; 1 under total internal reflection
-        (``sin^2 theta_t >= 1``) and at grazing incidence.
+        (``sin^2 theta_t >= 1``) and at grazing incidence (:func:`fresnel_reflectance_scalar` at each element).
     """
-    c = np.clip(np.asarray(cos_i, dtype=np.float64), 0.0, 1.0)
-    eta = np.asarray(eta, dtype=np.float64)
+    c, e = _flat_broadcast(np.asarray(cos_i, dtype=np.float64), np.asarray(eta, dtype=np.float64))
+    out = np.empty(c.shape)
+    _reflectances(c.reshape(-1), e.reshape(-1), out.reshape(-1))
+    return out
+
+
+def _flat_broadcast(*arrays):
+    """``arrays`` broadcast to one shape, each C-contiguous (copied only where it is broadcast or strided)."""
+    shape = np.broadcast_shapes(*(a.shape for a in arrays))
+    return tuple(np.asarray(a if a.shape == shape else np.broadcast_to(a, shape), order="C") for a in arrays)
+
+
+@numba.njit(cache=True)
+def fresnel_reflectance_scalar(cos_i, eta):
+    """:func:`fresnel_reflectance` of one cosine and one ``eta`` (floats), for compiled loops."""
+    c = min(max(cos_i, 0.0), 1.0)
     sin2_t = (1.0 - c * c) / (eta * eta)  # Snell: sin^2 theta_t = sin^2 theta_i / eta^2
-    total_internal = sin2_t >= 1.0
-    c_t = np.sqrt(np.maximum(1.0 - sin2_t, 0.0))
+    if sin2_t >= 1.0:
+        return 1.0  # total internal reflection
+    c_t = math.sqrt(1.0 - sin2_t)
     denom_s = c + eta * c_t
     denom_p = eta * c + c_t
-    grazing = (denom_s <= 0.0) | (denom_p <= 0.0)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        r_s = (c - eta * c_t) / denom_s
-        r_p = (eta * c - c_t) / denom_p
-        reflectance = 0.5 * (r_s * r_s + r_p * r_p)
-    return np.where(total_internal | grazing, 1.0, reflectance)
+    if denom_s <= 0.0 or denom_p <= 0.0:
+        return 1.0  # grazing
+    r_s = (c - eta * c_t) / denom_s
+    r_p = (eta * c - c_t) / denom_p
+    return 0.5 * (r_s * r_s + r_p * r_p)
+
+
+@numba.njit(cache=True, nogil=True)
+def _reflectances(c, eta, out):
+    """:func:`fresnel_reflectance_scalar` of each pair of ``c`` and ``eta`` (flat, same length) into ``out``."""
+    for k in range(c.shape[0]):
+        out[k] = fresnel_reflectance_scalar(c[k], eta[k])
 
 
 def fresnel_transmittance(cos_i, eta):
@@ -91,7 +117,8 @@ def fresnel_transmittance(cos_i, eta):
 def refract(w_i, n, eta):
     """Refracted direction ``w12`` of light arriving from outside (docs/physics.md §3.2).
 
-    ``w12 = -e w_i + (e c - sqrt(1 - e^2 (1 - c^2))) n`` with ``c = n . w_i`` and ``e = 1 / eta``.
+    ``w12 = -e w_i + (e c - sqrt(1 - e^2 (1 - c^2))) n`` with ``c = n . w_i`` and ``e = 1 / eta``
+    (:func:`refracted` at each row).
 
     Parameters
     ----------
@@ -110,10 +137,28 @@ def refract(w_i, n, eta):
     """
     w_i = np.asarray(w_i, dtype=np.float64)
     n = np.asarray(n, dtype=np.float64)
-    e = 1.0 / np.asarray(eta, dtype=np.float64)[..., None]
-    c = np.clip(np.sum(n * w_i, axis=-1, keepdims=True), 0.0, 1.0)
-    root = np.sqrt(np.maximum(1.0 - e * e * (1.0 - c * c), 0.0))
-    return -e * w_i + (e * c - root) * n
+    eta = np.asarray(eta, dtype=np.float64)[..., None]
+    w_i, n, eta = _flat_broadcast(w_i, n, eta)
+    out = np.empty(w_i.shape)
+    _refracted_rows(w_i.reshape(-1, 3), n.reshape(-1, 3), eta.reshape(-1, 3)[:, 0].copy(), out.reshape(-1, 3))
+    return out
+
+
+@numba.njit(cache=True, inline="always")
+def refracted(w0, w1, w2, n0, n1, n2, eta):
+    """:func:`refract` of one direction ``w`` toward the light and one outward unit normal ``n``: ``w12``'s three
+    components."""
+    e = 1.0 / eta
+    c = min(max(n0 * w0 + n1 * w1 + n2 * w2, 0.0), 1.0)
+    k = e * c - math.sqrt(max(1.0 - e * e * (1.0 - c * c), 0.0))
+    return -e * w0 + k * n0, -e * w1 + k * n1, -e * w2 + k * n2
+
+
+@numba.njit(cache=True, nogil=True)
+def _refracted_rows(w, n, eta, out):
+    """:func:`refracted` of each row of ``w`` and ``n`` (and element of ``eta``) into the rows of ``out``."""
+    for k in range(w.shape[0]):
+        out[k, 0], out[k, 1], out[k, 2] = refracted(w[k, 0], w[k, 1], w[k, 2], n[k, 0], n[k, 1], n[k, 2], eta[k])
 
 
 def two_C1(eta):
@@ -167,3 +212,8 @@ def F_dr_egan_hilgeman(eta):
     """
     eta = np.asarray(eta, dtype=np.float64)
     return -1.440 / (eta * eta) + 0.710 / eta + 0.668 + 0.0636 * eta
+
+
+#: The compiled kernels of the Fresnel terms over arrays: numba compiles each on first use; the set-up compiles them
+#: ahead (:mod:`translucency.app.warmup`).
+FRESNEL_KERNELS = (fresnel_reflectance_scalar, _reflectances, _refracted_rows)

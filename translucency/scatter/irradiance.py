@@ -47,14 +47,17 @@ eta        relative index of refraction n_inside / n_outside              1
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import asdict, dataclass, field
 
+import numba
 import numpy as np
 
 from ..errors import InvalidParameterError, warn_user
 from ..geometry.measure import row_lengths
-from .fresnel import fresnel_transmittance, refract
+from ..geometry.topology import kernel_array
+from .fresnel import fresnel_reflectance_scalar, refracted
 from .lights import POINT_LIGHT_MIN_DISTANCE_MM, PointLight, as_light_list, point_light_irradiance
 from .visibility import Occluder, VisibilityCache, array_digest
 
@@ -276,9 +279,10 @@ def warn_near_point_lights(lights, points, areas) -> None:
 
 
 def _irradiance(job, stats) -> np.ndarray:
-    """Irradiance (W/m², k x 3) of a job's sample on a surface facing it, at its vertices."""
+    """Irradiance (W/m², k x 3) of a job's sample on a surface facing it, at its vertices (one row for all of them
+    for a direction)."""
     if job.kind == "dir":
-        return np.broadcast_to(job.rgb, (len(job.front), 3))
+        return np.asarray(job.rgb, dtype=np.float64).reshape(1, 3)
     stats.n_distance_clamped += int(np.count_nonzero(job.distance < POINT_LIGHT_MIN_DISTANCE_MM))
     return point_light_irradiance(job.rgb, job.distance)  # inverse square, E = I / d_m^2
 
@@ -403,27 +407,14 @@ def incident_flux(
         if occluder is not None:
             _apply_visibility(batch, occluder, cache, origins_key, points, normals, stats)
         seconds_visibility += time.perf_counter() - t
-        # All samples of the batch at once: one Fresnel and refraction evaluation over every
-        # (vertex, sample) pair, summed per vertex with bincount.
-        sizes = [len(job.front) for job in batch]
-        front = np.concatenate([job.front for job in batch])
-        c = np.concatenate([job.cos for job in batch])
-        w = np.concatenate([np.broadcast_to(job.w, (len(job.front), 3)) for job in batch])
-        irradiance = np.concatenate([_irradiance(job, stats) for job in batch])
-        phi_pairs = (fresnel_transmittance(c, eta) * c)[:, None] * irradiance  # T12 E cos(theta) V
-        w12_pairs = refract(w, normals[front], eta)  # docs/physics.md §3.2
-        weighted_pairs = phi_pairs.sum(axis=1)[:, None] * w12_pairs
-        bounds = np.cumsum(sizes)[:-1]
-        for job, f, p, w12_k, weighted in zip(
-            batch,
-            np.split(front, bounds),
-            np.split(phi_pairs, bounds),
-            np.split(w12_pairs, bounds),
-            np.split(weighted_pairs, bounds),
-        ):
-            phi[f] += p  # a sample's vertices are distinct: a scatter-add per sample (not a bincount over all n)
-            weighted_w12[f] += weighted
-            if contributions is not None:
+        for job in batch:  # a sample's vertices are distinct: each adds once to a vertex's sums
+            rows = (job.front, job.cos, np.atleast_2d(job.w), _irradiance(job, stats), normals)
+            keep = contributions is not None
+            p, w12_k = (np.empty((job.front.size if keep else 0, 3)) for _ in range(2))
+            inputs = (kernel_array(a, dt) for a, dt in zip(rows, (np.int64, *(np.float64,) * 4), strict=True))
+            _entering(*inputs, float(eta), phi, weighted_w12, p, w12_k)
+            if keep:
+                f = job.front
                 direction = job.vector.copy() if job.kind == "dir" else None
                 contributions.append(LightContribution(job.light, direction, f, p, areas[f, None] * p, w12_k))
 
@@ -446,18 +437,58 @@ def incident_flux(
     )
 
 
+@numba.njit(cache=True, nogil=True)
+def _entering(front, cos, w, irradiance, normals, eta, phi, weighted, pairs_phi, pairs_w12):
+    """One light sample's light into the vertices ``front`` facing it (cosines ``cos``): the flux density ``T12 E
+    cos(theta)`` (docs/physics.md §3.1, §5.1) added to their rows of ``phi (n, 3)``, and the refracted direction
+    ``w12`` (§3.2) weighted by its sum over the channels to ``weighted``. ``w`` (unit, toward the light) and
+    ``irradiance`` (W/m²) have a row per vertex or one for all; each pair's flux density and ``w12`` also go to
+    ``pairs_phi`` and ``pairs_w12`` where they have rows."""
+    w_step = 1 if w.shape[0] == front.shape[0] and w.shape[0] > 1 else 0
+    e_step = 1 if irradiance.shape[0] == front.shape[0] and irradiance.shape[0] > 1 else 0
+    keep = pairs_phi.shape[0] > 0
+    for q in range(front.shape[0]):
+        v = front[q]
+        c = cos[q]
+        t = (1.0 - fresnel_reflectance_scalar(c, eta)) * c
+        e = irradiance[q * e_step]
+        p0, p1, p2 = t * e[0], t * e[1], t * e[2]
+        d = w[q * w_step]
+        w0, w1, w2 = refracted(d[0], d[1], d[2], normals[v, 0], normals[v, 1], normals[v, 2], eta)
+        phi[v, 0] += p0
+        phi[v, 1] += p1
+        phi[v, 2] += p2
+        total = p0 + p1 + p2
+        weighted[v, 0] += total * w0
+        weighted[v, 1] += total * w1
+        weighted[v, 2] += total * w2
+        if keep:
+            pairs_phi[q, 0], pairs_phi[q, 1], pairs_phi[q, 2] = p0, p1, p2
+            pairs_w12[q, 0], pairs_w12[q, 1], pairs_w12[q, 2] = w0, w1, w2
+
+
 def _mean_direction(weighted, weight, normals):
     """``(w12_mean, w12, lit)``: the flux-weighted mean refracted direction ``weighted / weight`` (n, 3) where any
     flux enters (``lit``; every ``w12`` there points into the medium, so the mean never vanishes), the inward normal
     elsewhere (any inward unit vector will do), ``(0, 0, -1)`` where that normal is 0 too; and its unit vector."""
     lit = weight > 0.0
-    w12_mean = np.negative(normals)
-    np.divide(weighted, weight[:, None], out=w12_mean, where=lit[:, None])  # (no masked copies of (n, 3) rows)
-    lengths = row_lengths(w12_mean)
-    degenerate = lengths == 0.0  # a degenerate normal where no light arrives
-    w12_mean[degenerate] = (0.0, 0.0, -1.0)
-    lengths[degenerate] = 1.0
-    return w12_mean, w12_mean / lengths[:, None], lit
+    w12_mean, w12 = np.empty_like(weighted), np.empty_like(weighted)
+    _mean_directions(*(kernel_array(a, np.float64) for a in (weighted, weight, normals)), w12_mean, w12)
+    return w12_mean, w12, lit
+
+
+@numba.njit(cache=True, nogil=True)
+def _mean_directions(weighted, weight, normals, mean, unit):
+    """:func:`_mean_direction`'s mean and unit directions into ``mean`` and ``unit``, a vertex at a time."""
+    for v in range(weighted.shape[0]):
+        for k in range(3):
+            mean[v, k] = weighted[v, k] / weight[v] if weight[v] > 0.0 else -normals[v, k]
+        length = math.sqrt(mean[v, 0] * mean[v, 0] + mean[v, 1] * mean[v, 1] + mean[v, 2] * mean[v, 2])
+        if length == 0.0:  # a degenerate normal where no light arrives
+            mean[v, 0], mean[v, 1], mean[v, 2] = 0.0, 0.0, -1.0
+            length = 1.0
+        for k in range(3):
+            unit[v, k] = mean[v, k] / length
 
 
 def carried_light(light: IncidentLight, gather, normals, areas) -> IncidentLight:
@@ -522,3 +553,8 @@ def carried_light(light: IncidentLight, gather, normals, areas) -> IncidentLight
         stats=light.stats,
         contributions=contributions,
     )
+
+
+#: The compiled kernels of the light that enters (with :data:`translucency.scatter.fresnel.FRESNEL_KERNELS`): numba
+#: compiles each on first use; the set-up compiles them ahead (:mod:`translucency.app.warmup`).
+LIGHT_KERNELS = (_entering, _mean_directions)

@@ -55,6 +55,7 @@ import numba
 import numpy as np
 
 from ..errors import InvalidParameterError
+from .fresnel import fresnel_reflectance_scalar
 from .medium import validate_coefficients
 
 __all__ = [
@@ -143,40 +144,6 @@ def _uniform(state):
 # --------------------------------------------------------------------------------------------------
 # Physics helpers (scalar, njit)
 # --------------------------------------------------------------------------------------------------
-
-
-@numba.njit(cache=True)
-def fresnel_reflectance_scalar(cos_i, eta):
-    """Unpolarised Fresnel reflectance of a smooth boundary, scalar njit version (docs/physics.md §3.1).
-
-    Same convention as :func:`translucency.scatter.fresnel.fresnel_reflectance`: ``eta`` is
-    ``n_transmitted / n_incident`` (``eta`` for light entering the medium, ``1 / eta`` for light
-    inside it hitting the boundary) and ``cos_i`` the cosine on the incident side.
-
-    Parameters
-    ----------
-    cos_i : float
-        Cosine of the angle of incidence, clipped to [0, 1].
-    eta : float
-        Relative index ``n_transmitted / n_incident`` (> 0).
-
-    Returns
-    -------
-    float
-        ``(r_s^2 + r_p^2) / 2``; 1 under total internal reflection and at grazing incidence.
-    """
-    c = min(max(cos_i, 0.0), 1.0)
-    sin2_t = (1.0 - c * c) / (eta * eta)  # Snell
-    if sin2_t >= 1.0:
-        return 1.0  # total internal reflection
-    c_t = math.sqrt(1.0 - sin2_t)
-    denom_s = c + eta * c_t
-    denom_p = eta * c + c_t
-    if denom_s <= 0.0 or denom_p <= 0.0:
-        return 1.0  # grazing
-    r_s = (c - eta * c_t) / denom_s
-    r_p = (eta * c - c_t) / denom_p
-    return 0.5 * (r_s * r_s + r_p * r_p)
 
 
 @numba.njit(cache=True, inline="always")
