@@ -44,11 +44,12 @@ import numba
 import numpy as np
 
 from ..geometry.measure import longest_edges, triangle_centroids
-from ..geometry.topology import corner_edge_numbers, index_dtype
+from ..geometry.topology import corner_edge_numbers, index_dtype, kernel_array
 from ..threads import for_ranges, thread_count
 from .fits import QUADRATIC_TERMS, fitted_points, run_scratch
 from .kernels import channel_lanes, indexed_sum
 from .surface import PerSurface
+from .treewalk import GROUP_RECEIVERS, group_spheres
 
 # Dunavant (1985) 7-point rule, exact for polynomials of degree 5: barycentric points and weights
 # (weights sum to 1; multiply by the area).
@@ -439,6 +440,39 @@ def tables_of(surface) -> TriangleTables:
     """:func:`triangle_tables` of ``surface`` (a :class:`~translucency.scatter.surface.SurfaceGeometry`), kept while
     it lives (geometry only)."""
     return _KEPT.get(surface, "tables", lambda: triangle_tables(surface.points, surface.triangles))
+
+
+def vertices_near(points, centres, radius: float) -> np.ndarray:
+    """Whether each of ``points (n, 3)`` is within ``radius`` (mm) of one of ``centres (k, 3)``, without a grid or a
+    tree of the points: the centres are taken :data:`~translucency.scatter.treewalk.GROUP_RECEIVERS` at a time in
+    their order (neighbours, as the solver's samples come), and a point is tested against a group's members only
+    where it lies within the group's bounding sphere grown by ``radius``. For a few hundred centres on a scan (the
+    budget's sample), one pass over the points."""
+    near = np.zeros(len(points), dtype=np.bool_)
+    if len(centres) == 0:
+        return near
+    centres = kernel_array(centres, np.float64)
+    middle, spread, members = group_spheres(centres, GROUP_RECEIVERS)
+    for_ranges(_points_near, near.size, kernel_array(points, np.float64), centres, middle, spread, members,
+               float(radius), near)  # fmt: skip
+    return near
+
+
+@numba.njit(cache=True, nogil=True)
+def _points_near(worker, lo, hi, points, centres, middle, spread, members, radius, near):
+    """Points ``lo .. hi - 1`` of :func:`vertices_near`."""
+    r2 = radius * radius
+    for i in range(lo, hi):
+        x0, x1, x2 = points[i, 0], points[i, 1], points[i, 2]
+        for g in range(middle.shape[0]):
+            reach = radius + spread[g]
+            if (x0 - middle[g, 0]) ** 2 + (x1 - middle[g, 1]) ** 2 + (x2 - middle[g, 2]) ** 2 > reach * reach:
+                continue
+            for c in members[g]:
+                if (x0 - centres[c, 0]) ** 2 + (x1 - centres[c, 1]) ** 2 + (x2 - centres[c, 2]) ** 2 <= r2:
+                    near[i] = True
+            if near[i]:
+                break
 
 
 def grid_of(surface, radius: float) -> NearGrid:
@@ -1775,6 +1809,7 @@ NEAR_FIELD_KERNELS = (
     _near_pass,
     _listed_once,
     _numbered_columns,
+    _points_near,
     _fill_shared_points,
     _list_points,
     _refined_points,

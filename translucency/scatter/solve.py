@@ -1101,15 +1101,11 @@ def _around(work: _Work, near_args, rcv, radius):
     """``(near_args, grid, rcv)`` for the near field's sample at the receivers ``rcv``: on the triangles with a
     vertex within ``radius`` (mm) of one of them, as a surface of their own (the near grid lists a receiver's
     triangles by that test, so their lists and quadrature are the same), or on the whole surface."""
-    from scipy.spatial import cKDTree
-
     geometry = work.geometry
     if rcv.size == 0:
         return near_args, nearfield.grid_of(geometry, radius), rcv
-    distance, _ = cKDTree(geometry.points[rcv]).query(
-        geometry.points, distance_upper_bound=radius * (1.0 + 1e-9), workers=-1
-    )
-    triangles = geometry.triangles[np.any(np.isfinite(distance)[geometry.triangles], axis=1)]
+    near = nearfield.vertices_near(geometry.points, geometry.points[rcv], radius * (1.0 + 1e-9))
+    triangles = geometry.triangles[np.any(near[geometry.triangles], axis=1)]
     if triangles.shape[0] > SAMPLE_SURFACE_SHARE * geometry.triangles.shape[0]:
         return near_args, nearfield.grid_of(geometry, radius), rcv
     vertices, local = np.unique(triangles, return_inverse=True)
