@@ -141,8 +141,15 @@ def first_at_same_position(points) -> np.ndarray:
     ``-0.0`` and ``0.0`` are the same position. One pass with a hash table of the coordinates' bits
     (linear time, where a sort of 24-byte keys grows as ``n log n``).
     """
-    bits = np.ascontiguousarray(np.asarray(points, dtype=np.float64).reshape(-1, 3) + 0.0).view(np.uint64)
-    return _first_at_same_position(bits)
+    points = np.ascontiguousarray(np.asarray(points, dtype=np.float64).reshape(-1, 3))
+    return _first_at_same_position(kernel_array(points.view(np.uint64), np.uint64))
+
+
+@numba.njit(cache=True, inline="always")
+def _position_bits(bits, i, k):
+    """Bit pattern of coordinate ``k`` of point ``i``, that of ``0.0`` for ``-0.0`` (the same position)."""
+    b = bits[i, k]
+    return np.uint64(0) if b == np.uint64(0x8000000000000000) else b
 
 
 @numba.njit(cache=True)
@@ -156,9 +163,10 @@ def _first_at_same_position(bits):
     table = np.full(size, -1, dtype=np.int64)
     first = np.empty(n, dtype=np.int64)
     for i in range(n):
-        h = bits[i, 0] * np.uint64(0x9E3779B97F4A7C15)
-        h ^= bits[i, 1] * np.uint64(0xC2B2AE3D27D4EB4F)
-        h ^= bits[i, 2] * np.uint64(0x165667B19E3779F9)
+        x, y, z = _position_bits(bits, i, 0), _position_bits(bits, i, 1), _position_bits(bits, i, 2)
+        h = x * np.uint64(0x9E3779B97F4A7C15)
+        h ^= y * np.uint64(0xC2B2AE3D27D4EB4F)
+        h ^= z * np.uint64(0x165667B19E3779F9)
         h ^= h >> np.uint64(29)
         slot = h & mask
         while True:
@@ -167,7 +175,7 @@ def _first_at_same_position(bits):
                 table[slot] = i
                 first[i] = i
                 break
-            if bits[j, 0] == bits[i, 0] and bits[j, 1] == bits[i, 1] and bits[j, 2] == bits[i, 2]:
+            if _position_bits(bits, j, 0) == x and _position_bits(bits, j, 1) == y and _position_bits(bits, j, 2) == z:
                 first[i] = j
                 break
             slot = (slot + np.uint64(1)) & mask

@@ -339,7 +339,9 @@ def _clean(points, triangles, options: tuple):
     repair.counts["normal_smoothing_iterations"] = settings["smooth_normals"]
 
     points, triangles, origin = repair.points, repair.triangles, repair.origin
-    unchanged = points.shape == repair.input_points.shape and np.array_equal(triangles, repair.input_triangles)
+    unchanged = points.shape == repair.input_points.shape and (
+        triangles is repair.input_triangles or np.array_equal(triangles, repair.input_triangles)
+    )
     mean_edge = survey.mean_edge_length if same_faces else None  # flips and unused vertices leave the edges
     if not unchanged:
         after_survey = survey_mesh(points, triangles, lengths=mean_edge is None)

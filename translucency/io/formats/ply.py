@@ -172,8 +172,10 @@ def _read_ply_with_plyfile(path: Path, header: PlyHeader, plyfile):
             raise MeshError(
                 f"{path.name} is corrupt or truncated ({short_reason(exc)}); download or export the file again."
             ) from exc
-    vertex_data = {
-        p.name: np.array(ply["vertex"].data[p.name]) for p in ply["vertex"].properties if not hasattr(p, "len_dtype")
+    vertex_data = {  # x, y, z as views: the points are stacked from them in one copy
+        p.name: ply["vertex"].data[p.name] if p.name in ("x", "y", "z") else np.array(ply["vertex"].data[p.name])
+        for p in ply["vertex"].properties
+        if not hasattr(p, "len_dtype")
     }
     polygons = None
     if face is not None:
