@@ -160,14 +160,14 @@ def near_grid(points, triangles, radius) -> NearGrid:
     points = np.ascontiguousarray(points, dtype=np.float64)
     triangles = np.ascontiguousarray(triangles, dtype=np.int64)
     n = points.shape[0]
-    # vertex -> incident triangles (CSR)
-    corner_vertex = triangles.ravel()
-
-    # numbers of vertices, triangles and corners and the stamps as int32 where they fit: with the sorted points they
-    # are most of the grid
-    vt_tris = (np.argsort(corner_vertex, kind="stable") // 3).astype(index_dtype(triangles.shape[0]))
-    vt_offsets = np.zeros(n + 1, dtype=index_dtype(corner_vertex.size))
-    vt_offsets[1:] = np.cumsum(np.bincount(corner_vertex, minlength=n))
+    # vertex -> incident triangles (CSR); numbers of vertices, triangles and corners and the stamps as int32 where
+    # they fit: with the sorted points they are most of the grid
+    vt_offsets, vt_tris = _vertex_triangles(
+        triangles,
+        n,
+        np.zeros(1, dtype=index_dtype(3 * triangles.shape[0])),
+        np.zeros(1, dtype=index_dtype(triangles.shape[0])),
+    )
     # the grid: cells keyed by their integer coordinates, vertices sorted by key
     low = points.min(axis=0) if n else np.zeros(3)
     extent = float(np.ptp(points, axis=0).max()) if n else 0.0
@@ -175,8 +175,10 @@ def near_grid(points, triangles, radius) -> NearGrid:
     dims = (np.floor((points.max(axis=0) - low) / cell).astype(np.int64) + 1) if n else np.ones(3, dtype=np.int64)
     keys = _cell_keys(points, low, cell, dims)
     by_key = np.argsort(keys, kind="stable")
-    cell_keys, cell_start = np.unique(keys[by_key], return_index=True)
-    cell_start = np.append(cell_start, n).astype(np.int64)
+    sorted_keys = keys[by_key]
+    cell_start = np.flatnonzero(np.diff(sorted_keys, prepend=-1)).astype(np.int64)  # where a cell's run begins
+    cell_keys = sorted_keys[cell_start]
+    cell_start = np.append(cell_start, n)
     args = (
         points,
         np.ascontiguousarray(points[by_key]),
@@ -191,6 +193,26 @@ def near_grid(points, triangles, radius) -> NearGrid:
     )
     stamps = np.full((thread_count(), triangles.shape[0]), -1, dtype=np.int32)
     return NearGrid(args, float(radius), int(triangles.shape[0]), stamps)
+
+
+@numba.njit(cache=True, nogil=True)
+def _vertex_triangles(triangles, n, like_offsets, like_triangles):
+    """The triangles at each of ``n`` vertices, by counting (CSR ``(offsets (n + 1,), triangles)`` in the types of
+    the ``like_`` arrays): a vertex's in increasing order, a triangle once per corner at the vertex."""
+    offsets = np.zeros(n + 1, dtype=like_offsets.dtype)
+    for t in range(triangles.shape[0]):
+        for c in range(3):
+            offsets[triangles[t, c] + 1] += 1
+    for v in range(n):
+        offsets[v + 1] += offsets[v]
+    fill = offsets[:-1].copy()
+    out = np.empty(3 * triangles.shape[0], dtype=like_triangles.dtype)
+    for t in range(triangles.shape[0]):
+        for c in range(3):
+            v = triangles[t, c]
+            out[fill[v]] = t
+            fill[v] += 1
+    return offsets, out
 
 
 def near_triangles(points, triangles, receivers, radius):
@@ -1807,6 +1829,7 @@ def _operator_rows(
 #: (:mod:`translucency.app.warmup`).
 NEAR_FIELD_KERNELS = (
     _near_pass,
+    _vertex_triangles,
     _listed_once,
     _numbered_columns,
     _points_near,
