@@ -19,13 +19,30 @@ def morton_order(points, bits: int = 16) -> np.ndarray:
     ndarray of int64, shape (n,)
         ``points[order]`` is the curve's order.
     """
-    points = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+    points = np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 3)
     if len(points) == 0:
         return np.zeros(0, dtype=np.int64)
-    low = points.min(axis=0)
-    size = float(np.ptp(points, axis=0).max()) or 1.0
-    cells = np.minimum(((points - low) / size * (1 << bits)).astype(np.uint64), np.uint64((1 << bits) - 1))
-    return np.argsort(_interleaved(cells, bits), kind="stable").astype(np.int64)
+    return np.argsort(_codes(points, bits), kind="stable").astype(np.int64)
+
+
+@numba.njit(cache=True, nogil=True)
+def _codes(points, bits):  # pragma: no cover - compiled
+    """Each point's Morton code (:func:`_interleaved`) in its cell of a ``2^bits`` grid over the points' bounding box
+    (a cube of the box's longest side from its lowest corner)."""
+    low = points[0].copy()
+    high = points[0].copy()
+    for i in range(points.shape[0]):
+        for a in range(3):
+            low[a] = min(low[a], points[i, a])
+            high[a] = max(high[a], points[i, a])
+    size = max(high[0] - low[0], high[1] - low[1], high[2] - low[2])
+    size = size if size > 0.0 else 1.0
+    top = np.uint64((1 << bits) - 1)
+    cells = np.empty((points.shape[0], 3), dtype=np.uint64)
+    for i in range(points.shape[0]):
+        for a in range(3):
+            cells[i, a] = min(np.uint64((points[i, a] - low[a]) / size * (1 << bits)), top)
+    return _interleaved(cells, bits)
 
 
 @numba.njit(cache=True)
@@ -42,25 +59,34 @@ def _interleaved(cells, bits):  # pragma: no cover - compiled
     return code
 
 
-def by_lowest_vertex(triangles, n_vertices: int) -> np.ndarray:
+def by_lowest_vertex(triangles, n_vertices: int, relabel=None) -> np.ndarray:
     """The rows of ``triangles`` (m, 3) in the order of their lowest vertex index, ties in their given order (what
-    a stable sort on ``triangles.min(axis=1)`` gives), by counting: linear in ``m`` and ``n_vertices``."""
-    triangles = np.ascontiguousarray(triangles, dtype=np.int64)
-    return triangles[_counting_order(triangles, int(n_vertices))]
+    a stable sort on ``triangles.min(axis=1)`` gives), by counting: linear in ``m`` and ``n_vertices``. With
+    ``relabel`` (n,) int64, the rows of ``relabel[triangles]`` (vertices numbered anew, ``n_vertices`` of them) in
+    that order, without that array first. Returns (m, 3) int64."""
+    triangles = np.ascontiguousarray(triangles)
+    relabel = np.arange(int(n_vertices)) if relabel is None else np.ascontiguousarray(relabel, dtype=np.int64)
+    return _counting_order(triangles, relabel, int(n_vertices))
 
 
-@numba.njit(cache=True)
-def _counting_order(triangles, n):  # pragma: no cover - compiled
+@numba.njit(cache=True, nogil=True)
+def _counting_order(triangles, relabel, n):  # pragma: no cover - compiled
+    """:func:`by_lowest_vertex`: the rows relabelled, counted by their lowest vertex, and placed."""
+    relabelled = np.empty((triangles.shape[0], 3), dtype=np.int64)  # one pass of the relabel's scattered reads
     lowest = np.empty(triangles.shape[0], dtype=np.int64)
     start = np.zeros(n + 1, dtype=np.int64)
     for t in range(triangles.shape[0]):
-        v = min(triangles[t, 0], triangles[t, 1], triangles[t, 2])
+        for c in range(3):
+            relabelled[t, c] = relabel[triangles[t, c]]
+        v = min(relabelled[t, 0], relabelled[t, 1], relabelled[t, 2])
         lowest[t] = v
         start[v + 1] += 1
     for v in range(n):
         start[v + 1] += start[v]
-    order = np.empty(triangles.shape[0], dtype=np.int64)
+    out = np.empty((triangles.shape[0], 3), dtype=np.int64)
     for t in range(triangles.shape[0]):
-        order[start[lowest[t]]] = t
+        row = start[lowest[t]]
         start[lowest[t]] += 1
-    return order
+        for c in range(3):
+            out[row, c] = relabelled[t, c]
+    return out

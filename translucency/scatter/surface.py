@@ -213,7 +213,7 @@ def spatial_order(surface: SurfaceGeometry) -> tuple[SurfaceGeometry, np.ndarray
         areas = known.get("vertex_areas", surface.vertex_areas_mm2)
         ordered = SurfaceGeometry(
             surface.points[order],
-            by_lowest_vertex(rank[surface.triangles], order.size),
+            by_lowest_vertex(surface.triangles, order.size, relabel=rank),
             surface.normals[order],
             mean_edge_mm=known.get("mean_edge_length", surface.mean_edge_mm),
             vertex_areas_mm2=None if areas is None else areas[order],
