@@ -29,8 +29,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..geometry import measure, topology
-from ..scatter import cutoff, fresnel, hierarchy, irradiance, kernels, listsums, nearfield, relight, treewalk
+from ..geometry import measure, morton, topology
+from ..scatter import cutoff, fresnel, hierarchy, irradiance, kernels, listsums, nearfield, relight, surface, treewalk
 
 #: The compiled kernels the main job's solve calls (``tree`` method, near field), the viewer's relighting and the
 #: cleaning of a scan, as each module lists them.
@@ -44,6 +44,8 @@ MAIN_JOB_KERNELS = (
     *relight.RELIGHT_KERNELS,
     *irradiance.LIGHT_KERNELS,
     *fresnel.FRESNEL_KERNELS,
+    *morton.MORTON_KERNELS,
+    *surface.ORDER_KERNELS,
     *topology.CLEANING_KERNELS,
     *measure.CLEANING_KERNELS,
 )

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-__all__ = ["morton_order", "by_lowest_vertex"]
+__all__ = ["morton_order", "by_lowest_vertex", "MORTON_KERNELS"]
 
 
 def morton_order(points, bits: int = 16) -> np.ndarray:
@@ -90,3 +90,8 @@ def _counting_order(triangles, relabel, n):  # pragma: no cover - compiled
         for c in range(3):
             out[row, c] = relabelled[t, c]
     return out
+
+
+#: The compiled kernels of the spatial order: numba compiles each on first use; the set-up compiles them ahead
+#: (:mod:`translucency.app.warmup`).
+MORTON_KERNELS = (_codes, _interleaved, _counting_order)

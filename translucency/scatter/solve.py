@@ -64,7 +64,7 @@ from . import budget, cutoff, hierarchy, kernels, nearfield
 from .gpu.probe import pair_device
 from .medium import CHANNELS, Medium
 from .names import DEFAULT_DEVICE, DEFAULT_MODEL, METHODS, MODELS, check_device, check_method, check_model, check_tol
-from .surface import SurfaceGeometry, checked_array, ordered_bytes, spatial_order
+from .surface import SurfaceGeometry, checked_array, ordered_bytes, ordered_light, spatial_order
 from .treewalk import GROUP_RECEIVERS
 
 __all__ = ["SurfaceGeometry", "Solution", "solve", "local_reach_floor", "METHODS", "MODELS"]
@@ -875,7 +875,7 @@ def _ordered_work(geometry, phi, w12, medium, model, receivers, stats) -> _Work:
     # work on the spatially ordered copy, receivers in its order; B goes back to the caller's order
     n = geometry.n_vertices
     geometry, order, rank = spatial_order(geometry)
-    phi, w12 = phi[order], w12[order]
+    phi, w12, flux, lit = ordered_light(phi, w12, geometry.vertex_areas, order)
     if receivers.size == n and np.array_equal(receivers, np.arange(n)):  # every vertex: the order is the tree's
         inner, visit = np.arange(n), order
     else:
@@ -887,8 +887,6 @@ def _ordered_work(geometry, phi, w12, medium, model, receivers, stats) -> _Work:
     stats["channels_computed"] = int(rows.shape[0])
     stats["channels_skipped_identical"] = int(medium.n_channels - rows.shape[0])
 
-    flux = phi * geometry.vertex_areas[:, None]
-    lit = np.flatnonzero(np.any(flux > 0, axis=1))
     stats["sources"] = int(lit.size)
     stats["sources_skipped_no_flux"] = int(n - lit.size)
     stats["receivers"] = int(receivers.size)

@@ -14,13 +14,24 @@ import weakref
 from dataclasses import dataclass, field
 from functools import cached_property
 
+import numba
 import numpy as np
 
 from ..errors import InvalidParameterError
 from ..geometry.measure import barycentric_vertex_areas, longest_edges, mean_edge_length, row_lengths, triangle_areas
 from ..geometry.morton import by_lowest_vertex, morton_order
+from ..threads import for_ranges
 
-__all__ = ["SurfaceGeometry", "PerSurface", "spatial_order", "held_bytes", "ordered_bytes", "checked_array"]
+__all__ = [
+    "SurfaceGeometry",
+    "PerSurface",
+    "spatial_order",
+    "ordered_light",
+    "held_bytes",
+    "ordered_bytes",
+    "checked_array",
+    "ORDER_KERNELS",
+]
 
 
 def checked_array(value, dtype, shape, name: str) -> np.ndarray:
@@ -224,6 +235,31 @@ def spatial_order(surface: SurfaceGeometry) -> tuple[SurfaceGeometry, np.ndarray
     return _ORDERED.get(surface, "morton", make)
 
 
+def ordered_light(phi, w12, areas, order) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The light on the spatially ordered surface (:func:`spatial_order`) in one pass: ``phi[order]`` (n, C) W/m²,
+    ``w12[order]`` (n, 3), the flux ``phi[order] * areas`` (``areas``: the ordered surface's vertex areas, mm²), and
+    the vertices with any flux (their indices, increasing)."""
+    phi = np.ascontiguousarray(phi, dtype=np.float64)
+    w12 = np.ascontiguousarray(w12, dtype=np.float64)
+    out = (np.empty_like(phi), np.empty_like(w12), np.empty_like(phi), np.empty(phi.shape[0], dtype=np.bool_))
+    for_ranges(_ordered_rows, phi.shape[0], phi, w12, np.ascontiguousarray(areas, dtype=np.float64), order, *out)
+    return out[0], out[1], out[2], np.flatnonzero(out[3])
+
+
+@numba.njit(cache=True, nogil=True)
+def _ordered_rows(worker, lo, hi, phi, w12, areas, order, phi_out, w12_out, flux, lit):
+    """Rows ``lo .. hi - 1`` of :func:`ordered_light`."""
+    for i in range(lo, hi):
+        j = order[i]
+        lit[i] = False
+        for c in range(phi.shape[1]):
+            phi_out[i, c] = phi[j, c]
+            flux[i, c] = phi[j, c] * areas[i]
+            lit[i] = lit[i] or flux[i, c] > 0.0
+        for k in range(3):
+            w12_out[i, k] = w12[j, k]
+
+
 def held_bytes(surface: SurfaceGeometry) -> int:
     """Bytes of the surface's own arrays and of what the algorithms keep for it, counted ones only
     (:class:`PerSurface`)."""
@@ -243,3 +279,8 @@ def ordered_bytes(surface: SurfaceGeometry) -> int:
         return 0
     ordered, order, rank = held
     return held_bytes(ordered) + _array_bytes([order, rank])
+
+
+#: The compiled kernel of the light's move onto the ordered surface: numba compiles it on first use; the set-up
+#: compiles it ahead (:mod:`translucency.app.warmup`).
+ORDER_KERNELS = (_ordered_rows,)
