@@ -168,9 +168,18 @@ def defects_and_components(points, triangles) -> tuple[MeshDefects, tuple[int, n
 
 @dataclasses.dataclass(frozen=True)
 class MeshSurvey:
-    """:func:`survey_mesh`'s result: the defects, the face components ``(count, label per triangle)`` (None when some
-    face is null, or every face), and the mean length of the unique edges in the points' unit (None when some face is
-    null, or when it was not asked for)."""
+    """:func:`survey_mesh`'s result.
+
+    Attributes
+    ----------
+    defects : MeshDefects
+        The mesh's defects, counted.
+    components : tuple of (int, ndarray) or None
+        The face components ``(count, label per triangle)``; None when some face is null, or every face.
+    mean_edge_length : float or None
+        The mean length of the unique edges, in the points' unit; None when some face is null, or when it was not
+        asked for.
+    """
 
     defects: MeshDefects
     components: tuple[int, np.ndarray] | None
