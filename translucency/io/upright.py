@@ -133,7 +133,7 @@ def base_scores(points, triangles) -> dict:
     in_use = np.zeros(points.shape[0], dtype=bool)
     in_use[triangles.ravel()] = True
     try:
-        used = hull_candidates(points[in_use])
+        used = hull_candidates(points if in_use.all() else points[in_use])  # a cleaned scan uses every vertex
         if len(used) > HULL_POINTS:  # a convex scan keeps every point: the hull of an even share of them
             used = used[np.linspace(0, len(used) - 1, HULL_POINTS).astype(np.int64)]
         hull = ConvexHull(used)
