@@ -34,7 +34,7 @@ import numba
 import numpy as np
 
 from ..geometry.topology import kernel_array
-from ..threads import for_ranges
+from ..threads import for_ranges, thread_count
 from .surface import PerSurface
 from .treewalk import GROUP_RECEIVERS, walk_lists
 
@@ -82,7 +82,7 @@ class SourceTree:
 
     def __init__(self, points: np.ndarray, leaf_size: int = LEAF_SIZE):
         points = np.ascontiguousarray(points, dtype=np.float64)
-        self.order, self.start, self.end, self.left, self.right = _build(points, max(1, int(leaf_size)))
+        self.order, self.start, self.end, self.left, self.right = _built(points, max(1, int(leaf_size)))
         self.centre, self.radius = _bounds(points, self.order, self.start, self.end, self.left, self.right)
 
     @property
@@ -100,43 +100,86 @@ def tree_of(surface, leaf_size: int = LEAF_SIZE) -> SourceTree:
     return _TREES.get(surface, int(leaf_size), lambda: SourceTree(surface.points, leaf_size))
 
 
-@numba.njit(cache=True)
-def _build(points, leaf_size):
+#: The tree's build splits its top levels alone, then builds this many subtrees per thread side by side.
+SUBTREES_PER_THREAD = 4
+
+
+def _built(points, leaf_size):
     """The tree's ``(order, start, end, left, right)``: a node of more than ``leaf_size`` points is split at
     the median of its box's longest axis (the lower half first); nodes are numbered depth first, a
-    parent before its children, the left subtree before the right."""
+    parent before its children, the left subtree before the right. The top levels are split here until there are
+    :data:`SUBTREES_PER_THREAD` subtrees a thread (or every node is a leaf), and the subtrees are built on the
+    threads: each splits its own rows and numbers its own nodes from where a depth-first count puts them
+    (:func:`_node_count`), so the tree is the same as one built in one pass."""
     n = points.shape[0]
-    # a split leaves at least (leaf_size + 1) // 2 points on each side, so there are at most this many nodes
-    capacity = 2 * (n // max(1, (leaf_size + 1) // 2) + 1) + 1
-    start = np.empty(capacity, dtype=np.int64)
-    end = np.empty(capacity, dtype=np.int64)
-    left = np.full(capacity, -1, dtype=np.int64)
-    right = np.full(capacity, -1, dtype=np.int64)
+    count = _node_count(n, leaf_size)
+    start = np.empty(count, dtype=np.int64)
+    end = np.empty(count, dtype=np.int64)
+    left = np.full(count, -1, dtype=np.int64)
+    right = np.full(count, -1, dtype=np.int64)
     order = np.arange(n)
     points = points.copy()  # moved with ``order``: the passes over a node read memory in sequence
-    stack = np.empty((128, 4), dtype=np.int64)  # lo, hi, parent, side; depth is log2(n / leaf_size)
-    stack[0, 0], stack[0, 1], stack[0, 2], stack[0, 3] = 0, n, -1, 0
-    top, count = 1, 0
-    while top > 0:
-        top -= 1
-        lo, hi, parent, side = stack[top, 0], stack[top, 1], stack[top, 2], stack[top, 3]
-        node = count
-        count += 1
-        start[node], end[node] = lo, hi
-        if parent >= 0:
-            if side == 0:
-                left[parent] = node
-            else:
-                right[parent] = node
+    tasks = [(0, n, 0)]  # rows lo .. hi - 1 and the node they start at, in depth-first order
+    while len(tasks) < SUBTREES_PER_THREAD * thread_count():
+        lo, hi, node = max(tasks, key=lambda task: task[1] - task[0])
         if hi - lo <= leaf_size:
-            continue
-        axis = _longest_axis(points, lo, hi)
+            break
+        start[node], end[node] = lo, hi
         mid = lo + (hi - lo) // 2
-        _select(points, order, lo, hi, mid, axis)
-        stack[top, 0], stack[top, 1], stack[top, 2], stack[top, 3] = mid, hi, node, 1
-        stack[top + 1, 0], stack[top + 1, 1], stack[top + 1, 2], stack[top + 1, 3] = lo, mid, node, 0
-        top += 2
-    return order, start[:count].copy(), end[:count].copy(), left[:count].copy(), right[:count].copy()
+        _split(points, order, lo, hi, mid)
+        left[node], right[node] = node + 1, node + 1 + _node_count(mid - lo, leaf_size)
+        at = tasks.index((lo, hi, node))
+        tasks[at : at + 1] = [(lo, mid, left[node]), (mid, hi, right[node])]
+    tasks = np.array(tasks, dtype=np.int64).reshape(-1, 3)
+    for_ranges(_build_subtrees, tasks.shape[0], points, order, tasks, leaf_size, start, end, left, right)
+    return order, start, end, left, right
+
+
+def _node_count(n: int, leaf_size: int) -> int:
+    """Nodes of the tree over ``n`` points (a node of more than ``leaf_size`` splits into ``n // 2`` and the rest)."""
+    sizes = {}
+
+    def count(k):
+        if k <= leaf_size:
+            return 1
+        if k not in sizes:
+            sizes[k] = 1 + count(k // 2) + count(k - k // 2)
+        return sizes[k]
+
+    return count(int(n))
+
+
+@numba.njit(cache=True, nogil=True)
+def _split(points, order, lo, hi, mid):
+    """Rows ``lo .. hi - 1`` split at ``mid`` along their box's longest axis (:func:`_select`)."""
+    _select(points, order, lo, hi, mid, _longest_axis(points, lo, hi))
+
+
+@numba.njit(cache=True, nogil=True)
+def _build_subtrees(worker, first, last, points, order, tasks, leaf_size, start, end, left, right):
+    """Subtrees ``first .. last - 1`` of ``tasks`` (rows lo, hi, first node) of :func:`_built`, each depth first."""
+    stack = np.empty((128, 4), dtype=np.int64)  # lo, hi, parent, side; depth is log2(n / leaf_size)
+    for task in range(first, last):
+        stack[0, 0], stack[0, 1], stack[0, 2], stack[0, 3] = tasks[task, 0], tasks[task, 1], -1, 0
+        top, count = 1, tasks[task, 2]
+        while top > 0:
+            top -= 1
+            lo, hi, parent, side = stack[top, 0], stack[top, 1], stack[top, 2], stack[top, 3]
+            node = count
+            count += 1
+            start[node], end[node] = lo, hi
+            if parent >= 0:
+                if side == 0:
+                    left[parent] = node
+                else:
+                    right[parent] = node
+            if hi - lo <= leaf_size:
+                continue
+            mid = lo + (hi - lo) // 2
+            _select(points, order, lo, hi, mid, _longest_axis(points, lo, hi))
+            stack[top, 0], stack[top, 1], stack[top, 2], stack[top, 3] = mid, hi, node, 1
+            stack[top + 1, 0], stack[top + 1, 1], stack[top + 1, 2], stack[top + 1, 3] = lo, mid, node, 0
+            top += 2
 
 
 @numba.njit(cache=True, inline="always")
@@ -657,7 +700,8 @@ def sampled_evaluations(model, tree, points, normals, w12, flux, rcv, bright, pa
 #: them ahead
 #: (:mod:`translucency.app.warmup`).
 TREE_KERNELS = (
-    _build,
+    _split,
+    _build_subtrees,
     _boxes,
     _leaf_sums,
     _node_means,
