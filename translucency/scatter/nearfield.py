@@ -493,6 +493,7 @@ def _points_near(worker, lo, hi, points, centres, middle, spread, members, radiu
             for c in members[g]:
                 if (x0 - centres[c, 0]) ** 2 + (x1 - centres[c, 1]) ** 2 + (x2 - centres[c, 2]) ** 2 <= r2:
                     near[i] = True
+                    break
             if near[i]:
                 break
 
