@@ -23,6 +23,7 @@ __all__ = [
     "EdgeCensus",
     "edge_census",
     "kernel_array",
+    "corner_starts",
     "unique_edges",
     "corner_edge_numbers",
     "face_components",
@@ -323,23 +324,33 @@ def edge_census(triangles, points=None, *, lengths: bool = True, faces: bool = T
     )
 
 
+@numba.njit(cache=True, nogil=True)
+def corner_starts(triangles, n, like):
+    """Where each of ``n`` vertices' corners start in the list of ``triangles``' corners grouped by vertex, the
+    first pass of a counting sort: ``starts (n + 1,)`` in ``like``'s type, vertex ``v``'s corners at ``starts[v] ..
+    starts[v + 1] - 1``. The callers fill the list, each with what it keeps of a corner, triangle by triangle
+    (``fill = starts[:-1].copy()``), so that a vertex's corners are in triangle order."""
+    starts = np.zeros(n + 1, dtype=like.dtype)
+    for t in range(triangles.shape[0]):
+        for c in range(3):
+            starts[triangles[t, c] + 1] += 1
+    for v in range(n):
+        starts[v + 1] += starts[v]
+    return starts
+
+
 @numba.njit(cache=True)
 def _stars(triangles, n, like):
     """The corners grouped by vertex, in triangle order within a vertex: ``(start, star, null)``, rows ``start[v] ..
     start[v + 1] - 1`` of ``star`` the ``(slot, next vertex, previous vertex)`` of the corners at ``v``; ``null`` the
     triangles with a repeated index."""
     m = triangles.shape[0]
-    start = np.zeros(n + 1, dtype=np.int64)
+    start = corner_starts(triangles, n, np.empty(0, dtype=np.int64))
     null = 0
     for t in range(m):
         a, b, c = triangles[t, 0], triangles[t, 1], triangles[t, 2]
-        start[a + 1] += 1
-        start[b + 1] += 1
-        start[c + 1] += 1
         if a == b or b == c or a == c:
             null += 1
-    for v in range(n):
-        start[v + 1] += start[v]
     fill = start[:-1].copy()
     star = np.empty((3 * m, 3), dtype=like.dtype)
     for t in range(m):

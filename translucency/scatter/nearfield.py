@@ -44,7 +44,7 @@ import numba
 import numpy as np
 
 from ..geometry.measure import longest_edges, triangle_centroids
-from ..geometry.topology import corner_edge_numbers, index_dtype, kernel_array
+from ..geometry.topology import corner_edge_numbers, corner_starts, index_dtype, kernel_array
 from ..threads import for_ranges, thread_count
 from .fits import QUADRATIC_TERMS, fitted_points, run_scratch
 from .kernels import channel_lanes, indexed_sum
@@ -199,12 +199,7 @@ def near_grid(points, triangles, radius) -> NearGrid:
 def _vertex_triangles(triangles, n, like_offsets, like_triangles):
     """The triangles at each of ``n`` vertices, by counting (CSR ``(offsets (n + 1,), triangles)`` in the types of
     the ``like_`` arrays): a vertex's in increasing order, a triangle once per corner at the vertex."""
-    offsets = np.zeros(n + 1, dtype=like_offsets.dtype)
-    for t in range(triangles.shape[0]):
-        for c in range(3):
-            offsets[triangles[t, c] + 1] += 1
-    for v in range(n):
-        offsets[v + 1] += offsets[v]
+    offsets = corner_starts(triangles, n, like_offsets)
     fill = offsets[:-1].copy()
     out = np.empty(3 * triangles.shape[0], dtype=like_triangles.dtype)
     for t in range(triangles.shape[0]):
