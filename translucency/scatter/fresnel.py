@@ -78,7 +78,12 @@ def fresnel_reflectance(cos_i, eta):
 def _flat_broadcast(*arrays):
     """``arrays`` broadcast to one shape, each C-contiguous (copied only where it is broadcast or strided)."""
     shape = np.broadcast_shapes(*(a.shape for a in arrays))
-    return tuple(np.asarray(a if a.shape == shape else np.broadcast_to(a, shape), order="C") for a in arrays)
+    return tuple(_contiguous(a, shape) for a in arrays)
+
+
+def _contiguous(a: np.ndarray, shape: tuple) -> np.ndarray:
+    """``a`` broadcast to ``shape``, C-contiguous (copied only where it is broadcast or strided)."""
+    return np.asarray(a if a.shape == tuple(shape) else np.broadcast_to(a, shape), order="C")
 
 
 @numba.njit(cache=True)
@@ -137,10 +142,11 @@ def refract(w_i, n, eta):
     """
     w_i = np.asarray(w_i, dtype=np.float64)
     n = np.asarray(n, dtype=np.float64)
-    eta = np.asarray(eta, dtype=np.float64)[..., None]
-    w_i, n, eta = _flat_broadcast(w_i, n, eta)
+    eta = np.asarray(eta, dtype=np.float64)
+    rows = np.broadcast_shapes(w_i.shape[:-1], n.shape[:-1], eta.shape)  # eta one number a row, not three
+    w_i, n, eta = _contiguous(w_i, (*rows, 3)), _contiguous(n, (*rows, 3)), _contiguous(eta, rows)
     out = np.empty(w_i.shape)
-    _refracted_rows(w_i.reshape(-1, 3), n.reshape(-1, 3), eta.reshape(-1, 3)[:, 0].copy(), out.reshape(-1, 3))
+    _refracted_rows(w_i.reshape(-1, 3), n.reshape(-1, 3), eta.reshape(-1), out.reshape(-1, 3))
     return out
 
 

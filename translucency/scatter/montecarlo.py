@@ -63,7 +63,6 @@ __all__ = [
     "TwoMediaTally",
     "simulate_half_space",
     "simulate_two_media",
-    "fresnel_reflectance_scalar",
     "sample_hg_cosine",
     "LAUNCH_MODES",
 ]
