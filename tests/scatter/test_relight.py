@@ -391,3 +391,46 @@ def _lit(mesh, geometry, medium):
         cache=VisibilityCache(),
     )
     return geometry, incident.phi_rgb, incident.w12
+
+
+def test_the_near_operator_takes_the_degree3_rule_where_the_solve_does():
+    """The near field's operator with the degree-3 rule of shared points on the triangles the solve takes it on
+    (``tree``'s near field) relights a light as it does with Dunavant's degree-5 rule there: both integrate the
+    same fitted kernel, and the two rules differ by far less than tol on triangles that far away."""
+    from translucency.scatter import nearfield
+    from translucency.scatter.relight import _apply_rows, _inputs
+    from translucency.scatter.solve import NEAR_BETA, degree3_rule
+
+    mesh, geometry = _surface(*torus(20.0, 8.0, 96, 48))  # triangles narrower than the rule's widest (1.98 mm)
+    _, phi, w12 = _lit(mesh, geometry, MARBLE)
+    n = geometry.n_vertices
+    receivers = np.arange(n)
+    offsets, ids = nearfield.lists_of(geometry, receivers, near_radius(geometry, MARBLE))
+    params = kernels.channel_parameters(MARBLE.sigma_a, MARBLE.sigma_s, MARBLE.g, MARBLE.eta, "directional")
+    fit = fits.fit_directions(MARBLE.eta, fits.QUADRATIC_TERMS)
+    tables = nearfield.triangle_tables(geometry.points, geometry.triangles)
+    common = (geometry.points, geometry.triangles, geometry.triangle_areas, geometry.normals, geometry.vertex_areas)
+    degree3 = degree3_rule(MARBLE, "tree")
+    shared = sum(
+        nearfield.by_degree3(
+            tables.diameters[t], tables.centroids[t], geometry.points[r], min(degree3["degree3_ratio"], NEAR_BETA),
+            degree3["degree3_diameter"], float(np.min(MARBLE.D)),
+        ) and r not in geometry.triangles[t]
+        for r in range(0, n, 37) for t in ids[offsets[r] : offsets[r + 1]]
+    )  # fmt: skip
+    assert shared > 100  # the rule is taken on this surface
+    relit = []
+    for rule in ({}, degree3):
+        starts, columns, coefs = nearfield.near_field_operator(
+            0, *common, receivers, offsets, ids, params, NEAR_BETA, float(np.min(MARBLE.D)), fit, tables=tables, **rule
+        )
+        values = np.empty((n, 3 * fits.QUADRATIC_TERMS))
+        lit = np.empty(n, dtype=bool)
+        _inputs(geometry.vertex_areas, phi, w12, values, lit)
+        B = np.zeros((n, 3))
+        rows = starts[:-1].copy()
+        _apply_rows(0, 0, n, rows, np.diff(starts), columns.astype(np.int32), rows, coefs, values, lit, B)
+        relit.append(B)
+    # the near rows alone (their far part is the far field's): a fifth of tol; a rule's weight astray is tens of %
+    assert np.percentile(_per_vertex_error(relit[1], relit[0]), 99) < 2e-3
+    assert np.abs(relit[1] - relit[0]).max() > 0.0

@@ -771,6 +771,18 @@ def integrated_whole(diameter, centroid, xo, beta, scale_min):
     return diameter <= beta * max(math.sqrt(d2), scale_min)
 
 
+@numba.njit(cache=True, inline="always")
+def by_degree3(diameter, centroid, xo, ratio, widest, scale_min):
+    """Whether a whole triangle takes the degree-3 rule of shared points (:data:`CORNER_WEIGHT`, ...) at ``x_o``:
+    no wider than ``widest`` (mm), at least ``1 / ratio`` of its ``diameter`` away (``ratio`` 0: never), and only
+    beyond ``scale_min`` (mm; ``D_min``): nearer, ``S_d`` varies with the angles too."""
+    return (
+        diameter <= widest
+        and integrated_whole(diameter, centroid, xo, ratio, 0.0)
+        and integrated_whole(scale_min, centroid, xo, 1.0, 0.0)
+    )
+
+
 @numba.njit(cache=True, fastmath=True)
 def subdivided_pieces(points, tri, xo, beta, scale_min, stack, cx, out):
     """Adaptive midpoint subdivision of a triangle that is too close to be integrated whole.
@@ -1316,11 +1328,7 @@ def _list_points(
                 refined += fan_count(points, triangles[t], corner, beta * scale_min, fan_angular, fan_radial)
                 own_items[item_base + items] = k
                 items += 1
-            elif (
-                diameters[t] <= degree3_diameter
-                and integrated_whole(diameters[t], centroids[t], xo, degree3_ratio, 0.0)
-                and integrated_whole(scale_min, centroids[t], xo, 1.0, 0.0)
-            ):  # degree 3 (shared points), only beyond D_min: nearer, S_d varies with the angles too
+            elif by_degree3(diameters[t], centroids[t], xo, degree3_ratio, degree3_diameter, scale_min):
                 area = triangle_areas[t]
                 for corner in range(3):
                     v = triangles[t, corner]
@@ -1530,11 +1538,15 @@ def near_field_operator(
     rule_weights=RULE_WEIGHTS,
     fan_nodes=(FAN_ANGULAR, FAN_RADIAL),
     progress=None,
+    degree3_ratio=0.0,
+    degree3_diameter=math.inf,
 ):
     """The correction of :func:`near_field_correction` as a linear operator on the vertices' flux, for relighting.
 
     The same quadrature (fan rule on the receiver's own triangles, subdivided pieces of the close ones,
-    Dunavant's rule on the others; no degree-3 substitution) with every vertex treated as lit, ``Phi``,
+    Dunavant's rule on the others, the degree-3 rule where ``degree3_ratio`` and ``degree3_diameter`` allow it, as
+    there: its corners join the vertices' own points and each edge's midpoint is one point for both its triangles)
+    with every vertex treated as lit, ``Phi``,
     ``Psi = Phi w12`` and ``Xi = Phi w12 w12^T`` interpolated linearly, and ``S_d`` as the quadratic fit
     (docs/physics.md §8.7), the points of a receiver fitted :data:`POINT_BATCH` at a time by
     :func:`~translucency.scatter.fits.fitted_points`. The coefficient of a point is
@@ -1566,9 +1578,12 @@ def near_field_operator(
     """
     if tables is None:
         tables = triangle_tables(points, triangles)
+    degree3_ratio = min(degree3_ratio, beta)  # a degree-3 triangle is one the refinement leaves whole
     n_r = receivers.shape[0]
     counts = near_vertex_counts(triangles, receivers, offsets, triangle_ids)
     stamps = np.full((thread_count(), 2 * points.shape[0]), -1, dtype=np.int64)
+    n_edges = int(tables.edge_of_corner.max(initial=-1)) + 1 if degree3_ratio > 0.0 else 0
+    edge_stamps = np.full((thread_count(), 2 * n_edges), -1, dtype=np.int64)  # per edge: receiver, slot
     fan = (*gauss_legendre_unit(fan_nodes[0]), *gauss_legendre_unit(fan_nodes[1]))
     starts = np.zeros(n_r + 1, dtype=np.int64)
     np.cumsum(counts, out=starts[1:])
@@ -1591,6 +1606,7 @@ def near_field_operator(
         scale_min,
         tables.diameters,
         tables.centroids,
+        (float(degree3_ratio), float(degree3_diameter), tables.edge_of_corner, edge_stamps),
         rule_points,
         rule_weights,
         *fan,
@@ -1699,6 +1715,7 @@ def _operator_rows(
     scale_min,
     diameters,
     centroids,
+    degree3,
     rule_points,
     rule_weights,
     ang_x,
@@ -1714,7 +1731,14 @@ def _operator_rows(
 ):
     """Rows of :func:`near_field_operator` for receivers ``lo .. hi - 1``: the near triangles' quadrature
     less their vertex rule, plus the near vertices' own pairs of the vertex sum; accumulated in float64,
-    stored as float32."""
+    stored as float32. ``degree3``: the degree-3 rule's ratio and widest triangle (:func:`by_degree3`), the
+    triangles' edges (``edge_of_corner``) and each thread's edge stamps (receiver, then the midpoint's slot)."""
+    degree3_ratio, degree3_diameter, edge_of_corner, edge_stamps = degree3
+    n_e = edge_stamps.shape[1] // 2
+    edge_owner = edge_stamps[worker, :n_e]
+    edge_slot = edge_stamps[worker, n_e:]
+    mid_ends = np.empty((64, 2), dtype=np.int64)  # per midpoint of a degree-3 triangle's edge: its two vertices
+    mid_weights = np.empty(64)  # and its weight, mm^2
     n_v = points.shape[0]
     n_c = params.shape[0]
     width = QUADRATIC_TERMS * n_c
@@ -1746,6 +1770,7 @@ def _operator_rows(
         if rule.shape[0] < size:
             rule = np.zeros(2 * size)
         listed = 0
+        n_mid = 0
         for k in range(offsets[r], offsets[r + 1]):
             t = triangle_ids[k]
             third = triangle_areas[t] / 3.0
@@ -1758,12 +1783,35 @@ def _operator_rows(
                     rule[listed] = 0.0
                     listed += 1
                 rule[slot[v]] += third  # the vertex rule: a third of the area at each corner
+            if corner_of(triangles[t], v_o) < 0 and by_degree3(
+                diameters[t], centroids[t], xo, degree3_ratio, degree3_diameter, scale_min
+            ):  # the degree-3 rule: its corners on the vertices' own points, each edge's midpoint listed once
+                area = triangle_areas[t]
+                if mid_weights.shape[0] < n_mid + 3:
+                    mid_ends = np.concatenate((mid_ends, np.empty_like(mid_ends)))
+                    mid_weights = np.concatenate((mid_weights, np.empty_like(mid_weights)))
+                for corner in range(3):
+                    rule[slot[triangles[t, corner]]] -= CORNER_WEIGHT * area
+                    e = edge_of_corner[t, corner]
+                    if edge_owner[e] != r:
+                        edge_owner[e] = r
+                        edge_slot[e] = n_mid
+                        mid_ends[n_mid, 0] = triangles[t, corner]
+                        mid_ends[n_mid, 1] = triangles[t, (corner + 1) % 3]
+                        mid_weights[n_mid] = 0.0
+                        n_mid += 1
+                    mid_weights[edge_slot[e]] += MIDPOINT_WEIGHT * area
         # every near vertex once: its pair of the vertex sum less the vertex rule of the near triangles around it
-        # (nothing where all its triangles are near), with the quadratic fit
+        # (nothing where all its triangles are near), with the degree-3 rule's corners, with the quadratic fit
         for i in range(listed):
             v = columns[starts[r] + i]
             one[:] = v
             queued = _queue_point(points, normals, one, 1.0, 0.0, 0.0, vertex_areas[v] - rule[i], xo, no, batch, queued)
+            if queued == POINT_BATCH:
+                queued = _flush_points(model, queued, params, dirs_q, pinv_q, batch, vertex_areas, slot, acc)
+        for i in range(n_mid):  # the degree-3 rule's midpoints
+            one[0], one[1], one[2] = mid_ends[i, 0], mid_ends[i, 1], mid_ends[i, 0]
+            queued = _queue_point(points, normals, one, 0.5, 0.5, 0.0, mid_weights[i], xo, no, batch, queued)
             if queued == POINT_BATCH:
                 queued = _flush_points(model, queued, params, dirs_q, pinv_q, batch, vertex_areas, slot, acc)
         for k in range(offsets[r], offsets[r + 1]):
@@ -1771,6 +1819,14 @@ def _operator_rows(
             tri = triangles[t]
             area = triangle_areas[t]
             corner = corner_of(tri, v_o)
+            if corner < 0 and by_degree3(diameters[t], centroids[t], xo, degree3_ratio, degree3_diameter, scale_min):
+                third = 1.0 / 3.0  # the degree-3 rule's centroid
+                queued = _queue_point(
+                    points, normals, tri, third, third, third, CENTROID_WEIGHT * area, xo, no, batch, queued
+                )
+                if queued == POINT_BATCH:
+                    queued = _flush_points(model, queued, params, dirs_q, pinv_q, batch, vertex_areas, slot, acc)
+                continue
             if corner < 0 and integrated_whole(diameters[t], centroids[t], xo, beta, scale_min):
                 for q in range(n_rule):
                     queued = _queue_point(

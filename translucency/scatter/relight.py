@@ -352,6 +352,7 @@ def prepare(
     progress=None,
     far_on_gpu: bool = False,
     tree_far=None,
+    degree3: dict | None = None,
 ) -> RelightOperator:
     """The operators of ``geometry`` (the solver's spatially ordered surface, mm) for the medium (1/mm),
     model and tolerance: the far field's hierarchical matrix over every vertex (fitted coefficients, cross
@@ -360,7 +361,8 @@ def prepare(
     (mm; quadrature refinement ratio ``beta``). ``tree_far(w12, flux) -> (B, evaluations)``: a light's far field by
     ``tree`` on the GPU, which a surface too large for every pair per light sums instead (:func:`_with_far_on_gpu`).
 
-    ``progress(stage, fraction)`` is called with the stage ``"relight operators"``.
+    ``progress(stage, fraction)`` is called with the stage ``"relight operators"``. ``degree3``: where the near field
+    takes the degree-3 rule (:func:`~translucency.scatter.solve.degree3_rule`'s keywords; None: nowhere).
     """
     report = progress or (lambda stage, fraction: None)
     start = time.perf_counter()
@@ -387,6 +389,7 @@ def prepare(
         fit_directions(medium.eta, QUADRATIC_TERMS),
         tables=nearfield.tables_of(geometry),
         progress=lambda fraction: report("relight operators", 0.5 * fraction),
+        **(degree3 or {}),
     )
     near_seconds = time.perf_counter() - start
     report("relight operators", 0.5)

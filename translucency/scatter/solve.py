@@ -96,6 +96,17 @@ NEAR_DEGREE3_RATIO = 1.0
 NEAR_DEGREE3_DECAY = 0.5
 
 
+def degree3_rule(medium, method: str) -> dict:
+    """Where the near field takes the degree-3 rule of shared points (:data:`NEAR_DEGREE3_RATIO`,
+    :data:`NEAR_DEGREE3_DECAY`): ``degree3_ratio`` (0 for ``exact``: Dunavant's rule everywhere) and
+    ``degree3_diameter`` (mm), the keywords of :func:`~translucency.scatter.nearfield.near_field_correction` and
+    :func:`~translucency.scatter.nearfield.near_field_operator`."""
+    return {
+        "degree3_ratio": 0.0 if method == "exact" else NEAR_DEGREE3_RATIO,
+        "degree3_diameter": NEAR_DEGREE3_DECAY / max(float(np.max(medium.sigma_tr)), 1e-300),
+    }
+
+
 @dataclass
 class Solution:
     """What :func:`solve` returns.
@@ -531,7 +542,16 @@ def relight_operator(
     tree_far = _tree_per_light(geometry, medium, model, tol) if device == "gpu" else None
     radius = near_radius(geometry, medium)  # a mean free path: the far field's fits in the direction need it
     operator = relight.prepare(
-        geometry, medium, model, tol, radius, NEAR_BETA, progress, far_on_gpu=device == "gpu", tree_far=tree_far
+        geometry,
+        medium,
+        model,
+        tol,
+        radius,
+        NEAR_BETA,
+        progress,
+        far_on_gpu=device == "gpu",
+        tree_far=tree_far,
+        degree3=degree3_rule(medium, "relight"),
     )
     operator.stats["budget"] = {**plan.as_dict(), "counts": counts}
     relight.keep_operator(geometry, operator)
@@ -914,8 +934,7 @@ def _plan(work: _Work, method, tol, memory_limit, time_limit, stats, memory_at_s
         params=work.params,
         channel_of=work.channel_of,
         medium=work.medium,
-        degree3_ratio=0.0 if method == "exact" else NEAR_DEGREE3_RATIO,
-        degree3_diameter=NEAR_DEGREE3_DECAY / max(float(np.max(work.medium.sigma_tr)), 1e-300),
+        **degree3_rule(work.medium, method),
         device=work.device,
     )
     available, resident = memory_at_start or (memory.available_memory(), memory.resident_memory())
