@@ -208,6 +208,18 @@ def test_the_sampled_count_is_what_every_block_counts_on_average_over_its_starts
         assert abs(np.mean([start[key] for start in starts]) / every[key] - 1.0) < 0.02, key
 
 
+def _in_fixed_point(U, V, narrow):
+    """One block's components ``U (m, k)``, ``V (k, columns)`` in the store's fixed point (``lowrank._fixed_point``):
+    ``U``, ``V``, ``U``'s row scales and the last ``narrow`` rows of ``V``, each flat."""
+    (m, k), columns = U.shape, V.shape[1]
+    parts = (np.empty(k * m, np.int16), np.empty((k - narrow) * columns, np.int16))
+    parts += (np.empty(m, np.float32), np.empty(narrow * columns, np.int8))
+    lowrank._fixed_point(
+        U, V, parts[0].reshape(k, m), parts[2], parts[1].reshape(k - narrow, columns), parts[3].reshape(narrow, columns)
+    )
+    return parts
+
+
 def test_the_crosses_store_grows_past_what_it_reserved_and_keeps_every_block():
     store = lowrank._CrossStore(5, 7, 2)  # room for less than one block
     rng = np.random.default_rng(0)
@@ -216,7 +228,7 @@ def test_the_crosses_store_grows_past_what_it_reserved_and_keeps_every_block():
         for m, k, n, narrow in [(3, 2, 4, 1), (8, 5, 2, 0), (1, 1, 1, 1)]
     ]
     blocks[1][0][4] = 0.0  # a row of zeros stays zero
-    places = [store.put(U, V, narrow) for U, V, narrow in blocks]
+    places = [store.put_converted(*_in_fixed_point(U, V, narrow)) for U, V, narrow in blocks]
     U_all, V_all, scales, V8_all = store.arrays()
     assert U_all.size == sum(U.size for U, _, _ in blocks)
     assert V_all.size == sum((V.shape[0] - narrow) * V.shape[1] for _, V, narrow in blocks)

@@ -394,6 +394,7 @@ class Approximations:
 
     def __init__(self, model, tree, P, N, params, dirs, pinv, eps, channel_bound, longest):
         self.model, self.tree, self.P, self.N = model, tree, P, N
+        self.params = np.ascontiguousarray(params, dtype=np.float64)
         self.channels = [np.ascontiguousarray(params[c : c + 1]) for c in range(params.shape[0])]
         self.dirs, self.pinv, self.eps, self.channel_bound = dirs, pinv, eps, channel_bound
         self.buffers = [[np.empty((0, 0)), np.empty((0, 0))] for _ in range(thread_count())]

@@ -47,6 +47,8 @@ from .crosses import (
     NARROW_STEPS,
     SCALE_CHUNK,
     Approximations,
+    _cross,
+    _scratch,
     far_items,
     longest_run,
     rank_limits,
@@ -417,13 +419,15 @@ def _fixed_point(U, V, crosses, scales, V_out, V8_out):
 
 
 class _CrossStore:
-    """The components of every block, written once into four arrays as they are found: ``U`` and ``V`` int16, ``U``'s
-    row scales float32, the smallest components' ``V`` int8 (:func:`_fixed_point`).
+    """The components of every block in four arrays: ``U`` and ``V`` int16, ``U``'s row scales float32, the smallest
+    components' ``V`` int8 (:func:`_fixed_point`), a worker's run of blocks at a time (:func:`_found_crosses` fills
+    the worker's own room, :meth:`put_converted` copies it in under a lock: one copy a run, where a block at a time
+    kept the workers waiting on each other's Python).
 
     Each array is reserved larger than it is likely to need and cut to what was used at the end; memory is given
-    to a page only when it is first written, so what is reserved and never written costs nothing, and nothing is
-    copied. (Blocks kept apart and then copied into the far field's arrays spent seconds on pages filled twice.)
-    Threads write under a lock; a store that runs out of room grows by half again (copied)."""
+    to a page only when it is first written, so what is reserved and never written costs nothing. (Blocks kept
+    apart and then copied into the far field's arrays spent seconds on pages filled twice.) A store that runs out
+    of room grows by half again (copied)."""
 
     def __init__(self, u_size: int, v_size: int, rows: int):
         self.U = np.empty(max(int(u_size), 1), dtype=np.int16)
@@ -436,32 +440,20 @@ class _CrossStore:
         self.v8_at = 0
         self.lock = threading.Lock()
 
-    def put(self, U: np.ndarray, V: np.ndarray, narrow: int = 0) -> tuple[int, int, int, int]:
-        """Store one block's components ``U (m, k)`` (held a component at a time, as ``(k, m)``) and ``V (k,
-        columns)`` (float64, ``V`` in [-1, 1]), the last ``narrow`` rows of ``V`` in 8 bits: where they start in
-        :attr:`U` and :attr:`V`, where ``U``'s row scales start in :attr:`S`, and where the narrow rows start in
-        :attr:`V8`."""
-        wide = (V.shape[0] - narrow) * V.shape[1]
+    def put_converted(self, U: np.ndarray, V: np.ndarray, S: np.ndarray, V8: np.ndarray) -> tuple[int, int, int, int]:
+        """Store the components of a run of blocks already in fixed point (:func:`_found_crosses`' ``U``, ``V``, ``S``,
+        ``V8``, each one piece): where each starts in :attr:`U`, :attr:`V`, :attr:`S` and :attr:`V8`."""
         with self.lock:
-            u_at, v_at, s_at, v8_at = self.u_at, self.v_at, self.s_at, self.v8_at
-            self.U = _room(self.U, u_at + U.size)
-            self.V = _room(self.V, v_at + wide)
-            self.V8 = _room(self.V8, v8_at + V.size - wide)
-            self.S = _room(self.S, s_at + U.shape[0])
-            crosses = self.U[u_at : u_at + U.size].reshape(U.shape[1], U.shape[0])  # a component at a time
-            _fixed_point(
-                U,
-                V,
-                crosses,
-                self.S[s_at : s_at + U.shape[0]],
-                self.V[v_at : v_at + wide].reshape(V.shape[0] - narrow, V.shape[1]),
-                self.V8[v8_at : v8_at + V.size - wide].reshape(narrow, V.shape[1]),
-            )
+            at = self.u_at, self.v_at, self.s_at, self.v8_at
+            for name, part, start in zip(("U", "V", "S", "V8"), (U, V, S, V8), at):
+                held = _room(getattr(self, name), start + part.size)
+                held[start : start + part.size] = part
+                setattr(self, name, held)
             self.u_at += U.size
-            self.v_at += wide
-            self.s_at += U.shape[0]
-            self.v8_at += V.size - wide
-        return u_at, v_at, s_at, v8_at
+            self.v_at += V.size
+            self.s_at += S.size
+            self.v8_at += V8.size
+        return at
 
     def arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """``(U, V, S, V8)`` cut to what was stored (in place: the memory past it is given back, nothing is copied)."""
@@ -609,18 +601,36 @@ def _crosses(model, tree, P, N, params, dirs, pinv, eps, channel_bound, far_pair
     ranks = np.minimum(reserved, rank_limits(rows, cols)).astype(np.int64)
     store = _CrossStore(n_c * np.sum(ranks * rows), n_c * np.sum(ranks * cols), n_c * np.sum(rows))
 
+    rooms = [_Room() for _ in range(thread_count())]
+
     def run(worker, lo, hi, items):
         kept = kept_by[worker]
         for first in range(lo, hi, SCALE_CHUNK):
             chunk = items[first : min(hi, first + SCALE_CHUNK)]
             offsets, row_scales = approximations.row_scales(chunk)
-            for p, (a, b, c) in enumerate(chunk):
-                found, narrow, U, V = approximations.cross(worker, a, b, c, row_scales[offsets[p] : offsets[p + 1]])
-                if found < 0:
-                    kept.append((a, b, c, -1, -1, -1, -1, 0, -1))
-                    continue
-                u_at, v_at, s_at, v8_at = store.put(U, V, narrow)
-                kept.append((a, b, c, U.shape[1], u_at, v_at, s_at, narrow, v8_at))
+            blocks = np.column_stack(
+                [start[chunk[:, 0]], end[chunk[:, 0]], start[chunk[:, 1]], end[chunk[:, 1]], chunk[:, 2]]
+            )
+            blocks = np.column_stack([blocks, rank_limits(blocks[:, 1] - blocks[:, 0], cols_of(blocks))])
+            done = 0
+            while done < len(chunk):
+                count, info, parts = _run_of_crosses(
+                    approximations, rooms[worker], worker, blocks[done:], offsets[done:], row_scales
+                )
+                bases = np.array(store.put_converted(*parts), dtype=np.int64)
+                for p in range(count):
+                    a, b, c = chunk[done + p]
+                    found, k, narrow, u_at, v_at, s_at, v8_at = info[p]
+                    if found < 0:
+                        kept.append((a, b, c, -1, -1, -1, -1, 0, -1))
+                    else:
+                        kept.append(
+                            (a, b, c, k, bases[0] + u_at, bases[1] + v_at, bases[2] + s_at, narrow, bases[3] + v8_at)
+                        )
+                done += count
+
+    def cols_of(blocks):
+        return (blocks[:, 3] - blocks[:, 2]) * AFFINE_TERMS
 
     found, dense = [], set()
     items = far_items(far_pairs, n_c)
@@ -645,11 +655,94 @@ def _crosses(model, tree, P, N, params, dirs, pinv, eps, channel_bound, far_pair
     return found, dense, store
 
 
+class _Room:
+    """A worker's room for a run of blocks' components in fixed point (:func:`_found_crosses`), grown when one block
+    needs more than it holds, kept between runs (its pages are written once)."""
+
+    #: Elements of ``U``, ``V`` and ``V8`` (each) and rows of ``S`` a room holds at first.
+    ELEMENTS = 1 << 22
+    ROWS = 1 << 18
+
+    def __init__(self):
+        self.grow(self.ELEMENTS, self.ROWS)
+
+    def grow(self, elements: int, rows: int) -> None:
+        """Room for ``elements`` of each of ``U``, ``V``, ``V8`` and ``rows`` row scales."""
+        self.U = np.empty(elements, dtype=np.int16)
+        self.V = np.empty(elements, dtype=np.int16)
+        self.V8 = np.empty(elements, dtype=np.int8)
+        self.S = np.empty(rows, dtype=np.float32)
+
+
+def _run_of_crosses(approximations, room: _Room, worker: int, blocks, offsets, row_scales):
+    """The cross approximations of ``blocks`` (rows: first and last row, first and last column, channel, crosses
+    it may take; tree order) in one compiled run (:func:`_found_crosses`), as many as ``room`` holds (it grows when
+    not even the first fits): ``(count, info, (U, V, S, V8))``, ``info`` per block done as :func:`_found_crosses`
+    writes it, and the parts of the room they fill."""
+    rows = blocks[:, 1] - blocks[:, 0]
+    cols = (blocks[:, 3] - blocks[:, 2]) * AFFINE_TERMS
+    first = int(blocks[0, 5])
+    if first * max(int(rows[0]), int(cols[0])) > room.U.size or int(rows[0]) > room.S.size:
+        room.grow(2 * first * max(int(rows[0]), int(cols[0])), 2 * int(rows[0]))
+    U, V = _scratch(approximations.buffers[worker], int(rows.max()), int(blocks[:, 5].max()), int(cols.max()))
+    info = np.empty((blocks.shape[0], 7), dtype=np.int64)
+    used = np.zeros(4, dtype=np.int64)
+    count = _found_crosses(
+        approximations.model, approximations.P, approximations.N, approximations.params,
+        approximations.dirs, approximations.pinv, approximations.eps,
+        blocks, offsets, row_scales, U, V, approximations.spaces[worker],
+        (room.U, room.V, room.S, room.V8), info, used,
+    )  # fmt: skip
+    return count, info[:count], (room.U[: used[0]], room.V[: used[1]], room.S[: used[2]], room.V8[: used[3]])
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _found_crosses(model, P, N, params, dirs, pinv, eps, blocks, offsets, row_scales, U, V, space, room, info, used):
+    """The cross approximations (:func:`~translucency.scatter.crosses._cross`) of ``blocks`` in turn (rows: first and
+    last row, first and last column, channel, crosses it may take), each block's components in fixed point
+    (:func:`_fixed_point`) one after another in ``room`` (``U``, ``V`` int16, ``S`` float32, ``V8`` int8), until the
+    next block might not fit: returns how many blocks were done. ``info[p]``: crosses found (-1: not enough), kept,
+    held narrow, and where block ``p``'s ``U``, ``V``, ``S`` and ``V8`` start in ``room``; ``used``: how much of
+    each the run filled. Block ``p``'s row scales are ``row_scales[offsets[p] : offsets[p + 1]]``."""
+    U_room, V_room, S_room, V8_room = room
+    u_at, v_at, s_at, v8_at = 0, 0, 0, 0
+    for p in range(blocks.shape[0]):
+        r0, r1, c0, c1, c, kmax = blocks[p, 0], blocks[p, 1], blocks[p, 2], blocks[p, 3], blocks[p, 4], blocks[p, 5]
+        m, n = r1 - r0, (c1 - c0) * AFFINE_TERMS
+        if u_at + kmax * m > U_room.size or max(v_at, v8_at) + kmax * n > V_room.size or s_at + m > S_room.size:
+            used[0], used[1], used[2], used[3] = u_at, v_at, s_at, v8_at
+            return p
+        found, k, narrow = _cross(
+            model, P, N, r0, r1, c0, c1, params[c : c + 1], dirs, pinv,
+            row_scales[offsets[p] : offsets[p + 1]], eps, kmax, U, V, space,
+        )  # fmt: skip
+        info[p, 0], info[p, 1], info[p, 2] = found, k, narrow
+        info[p, 3], info[p, 4], info[p, 5], info[p, 6] = u_at, v_at, s_at, v8_at
+        if found < 0:
+            continue
+        wide = k - narrow
+        _fixed_point(
+            U[:m, :k],
+            V[:k, :n],
+            U_room[u_at : u_at + k * m].reshape((k, m)),
+            S_room[s_at : s_at + m],
+            V_room[v_at : v_at + wide * n].reshape((wide, n)),
+            V8_room[v8_at : v8_at + narrow * n].reshape((narrow, n)),
+        )
+        u_at += k * m
+        v_at += wide * n
+        s_at += m
+        v8_at += narrow * n
+    used[0], used[1], used[2], used[3] = u_at, v_at, s_at, v8_at
+    return blocks.shape[0]
+
+
 #: The compiled kernels of the far field's cross approximations and products: numba compiles each on first use;
 #: the set-up compiles them ahead (:mod:`translucency.app.warmup`).
 LOW_RANK_KERNELS = (
     _partition,
     *CROSS_KERNELS,
+    _found_crosses,
     _fixed_point,
     _fill_dense,
     _tree_ordered,
