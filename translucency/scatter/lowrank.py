@@ -54,7 +54,7 @@ from .crosses import (
     rank_limits,
     split,
 )
-from .fits import AFFINE_TERMS, fitted_run, run_scratch
+from .fits import AFFINE_TERMS, fitted_points, run_scratch
 from .hierarchy import SourceTree
 
 __all__ = ["ETA", "LEAF_SIZE", "FarMatrix", "build", "partition"]
@@ -214,26 +214,34 @@ def _fill_dense(worker, lo, hi, model, P, N, dense, params, dirs, pinv, held_sta
     single = params.reshape(n_c, 1, params.shape[1])  # each channel's parameters as a (1, P) array of their own
     length = np.int64(0)
     for k in range(lo, hi):
-        length = max(length, dense[k, 3] - dense[k, 2])
+        length = max(length, (dense[k, 1] - dense[k, 0]) * (dense[k, 3] - dense[k, 2]))
     space = run_scratch(dirs.shape[0], length)
+    pairs = space[0]
     fits = np.empty((length, n_c, AFFINE_TERMS))
     mark = stamps[worker]
     for k in range(lo, hi):
         r0, r1, c0, c1, first, last, at = _dense_block(dense, k)
-        m = r1 - r0
-        n = (c1 - c0) * AFFINE_TERMS
+        m, sources = r1 - r0, c1 - c0
+        n = sources * AFFINE_TERMS
+        # every pair of the block in one run of fits (a run a row was too short a loop to vectorise well)
+        for a in range(m):
+            for b in range(sources):
+                q = a * sources + b
+                for t in range(3):
+                    pairs[t, q] = P[r0 + a, t] - P[c0 + b, t]
+                    pairs[3 + t, q] = N[c0 + b, t]
+                    pairs[6 + t, q] = N[r0 + a, t]
+        fitted_points(model, m * sources, params if last - first == n_c else single[first], dirs, pinv, space, fits)
         for a in range(m):
             o = r0 + a
             for h in range(held_starts[o], held_starts[o + 1]):
                 mark[held_columns[h]] = o
-            rows = params if last - first == n_c else single[first]
-            fitted_run(model, P, N, o, c0, c1, np.bool_(True), rows, dirs, pinv, space, fits)
-            for b in range(c1 - c0):
+            for b in range(sources):
                 held = mark[c0 + b] == o
                 for c in range(first, last):
                     at_b = at + ((c - first) * m + a) * n + b * AFFINE_TERMS
                     for t in range(AFFINE_TERMS):
-                        D[at_b + t] = 0.0 if held else fits[b, c - first, t]
+                        D[at_b + t] = 0.0 if held else fits[a * sources + b, c - first, t]
 
 
 @numba.njit(cache=True, inline="always")
