@@ -668,8 +668,8 @@ class _Room:
     needs more than it holds, kept between runs (its pages are written once)."""
 
     #: Elements of ``U``, ``V`` and ``V8`` (each) and rows of ``S`` a room holds at first.
-    ELEMENTS = 1 << 22
-    ROWS = 1 << 18
+    ELEMENTS = 1 << 20
+    ROWS = 1 << 16
 
     def __init__(self):
         self.grow(self.ELEMENTS, self.ROWS)
