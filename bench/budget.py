@@ -116,6 +116,8 @@ def run_relight_case(scan: str, material: str, tol: float) -> dict:
         "measured_peak_mb": peak / 2**20,
         "estimated_s": plan["seconds"],
         "measured_s": result.timings["solve_prepare"],
+        "far_fits": plan["counts"]["far_fits"],
+        "near_entries": plan["counts"]["near_entries"],
         "threads": numba.get_num_threads(),
         "load": os.getloadavg()[0],
     }
