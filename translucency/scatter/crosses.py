@@ -24,6 +24,7 @@ __all__ = [
     "RECOMPRESS_SHARE",
     "CROSS_KERNELS",
     "Approximations",
+    "cross_approximation",
     "far_items",
     "rank_limit",
     "rank_limits",
@@ -242,7 +243,7 @@ def _recompressed(U, V, m, n, k, eps):
 
 
 @numba.njit(cache=True, nogil=True, fastmath=True, error_model="numpy")
-def _cross(model, P, N, r0, r1, c0, c1, params, dirs, pinv, row_scale, eps, kmax, U, V, space):
+def cross_approximation(model, P, N, r0, r1, c0, c1, params, dirs, pinv, row_scale, eps, kmax, U, V, space):
     """Adaptive cross approximation with partial pivoting of one channel (``params`` of one row): rows ``r0:r1``
     x sources ``c0:c1`` (columns ``4 (j - c0) + t``), each row scaled by ``row_scale[row]``: the crosses in
     ``U[:m, :k]`` and ``V[:k, :4 n]``, then recompressed (:func:`_recompressed`; ``U V`` unscaled on return):
@@ -388,9 +389,9 @@ def _row_scales(tree, P, items, channel_bound):
 
 
 class Approximations:
-    """What every far block's cross approximation needs (:func:`_cross`), with each worker's scratch: the surface in
-    the tree's order (``P``, ``N``, mm), each channel's parameters, the fit's directions, ``eps`` and the bound of
-    §8.4 per channel (``channel_bound(r)``, by which the rows are scaled)."""
+    """What every far block's cross approximation needs (:func:`cross_approximation`), with each worker's scratch:
+    the surface in the tree's order (``P``, ``N``, mm), each channel's parameters, the fit's directions, ``eps`` and
+    the bound of §8.4 per channel (``channel_bound(r)``, by which the rows are scaled)."""
 
     def __init__(self, model, tree, P, N, params, dirs, pinv, eps, channel_bound, longest):
         self.model, self.tree, self.P, self.N = model, tree, P, N
@@ -402,19 +403,25 @@ class Approximations:
         # were fresh memory every time, which this machine fills at 0.5-2 GB/s)
         self.spaces = [run_scratch(dirs.shape[0], longest) for _ in range(thread_count())]
 
+    def scratch(self, worker: int, rows: int, ranks: int, columns: int) -> tuple[np.ndarray, np.ndarray]:
+        """Worker ``worker``'s ``U (rows, ranks)`` and ``V (ranks, columns)`` buffers (or larger), grown when a block
+        needs more (:func:`_scratch`)."""
+        return _scratch(self.buffers[worker], rows, ranks, columns)
+
     def row_scales(self, items):
         """:func:`_row_scales` of the blocks ``items`` (``(row node, column node, channel)`` rows)."""
         return _row_scales(self.tree, self.P, items, self.channel_bound)
 
     def cross(self, worker, a, b, c, row_scale):
-        """Block ``(a, b)``'s channel ``c`` by :func:`_cross`, up to :func:`rank_limit` crosses: ``(found, narrow, U,
-        V)``, ``found`` the crosses found (-1 when they were not enough), ``U (m, k)`` and ``V (k, 4 n)`` views of the
-        worker's scratch holding the ``k`` components kept, the last ``narrow`` of them for 8 bits."""
+        """Block ``(a, b)``'s channel ``c`` by :func:`cross_approximation`, up to :func:`rank_limit` crosses:
+        ``(found, narrow, U, V)``, ``found`` the crosses found (-1 when they were not enough), ``U (m, k)`` and ``V (k,
+        4 n)`` views of the worker's scratch holding the ``k`` components kept, the last ``narrow`` of them for 8
+        bits."""
         start, end = self.tree.start, self.tree.end
         m, cols = int(end[a] - start[a]), int(end[b] - start[b]) * AFFINE_TERMS
         kmax = rank_limit(m, cols)
-        U, V = _scratch(self.buffers[worker], m, kmax, cols)
-        found, k, narrow = _cross(
+        U, V = self.scratch(worker, m, kmax, cols)
+        found, k, narrow = cross_approximation(
             self.model, self.P, self.N, start[a], end[a], start[b], end[b], self.channels[c],
             self.dirs, self.pinv, row_scale, self.eps, kmax, U, V, self.spaces[worker],
         )  # fmt: skip
@@ -516,4 +523,4 @@ def sampled_count(
 
 #: The compiled kernel of the cross approximations: numba compiles it on first use; the set-up compiles it ahead
 #: (:mod:`translucency.app.warmup`).
-CROSS_KERNELS = (_cross, _recompressed, _symmetric_eigen, _small_product, _all_finite)
+CROSS_KERNELS = (cross_approximation, _recompressed, _symmetric_eigen, _small_product, _all_finite)

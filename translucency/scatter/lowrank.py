@@ -47,8 +47,7 @@ from .crosses import (
     NARROW_STEPS,
     SCALE_CHUNK,
     Approximations,
-    _cross,
-    _scratch,
+    cross_approximation,
     far_items,
     longest_run,
     rank_limits,
@@ -692,7 +691,7 @@ def _run_of_crosses(approximations, room: _Room, worker: int, blocks, offsets, r
     first = int(blocks[0, 5])
     if first * max(int(rows[0]), int(cols[0])) > room.U.size or int(rows[0]) > room.S.size:
         room.grow(2 * first * max(int(rows[0]), int(cols[0])), 2 * int(rows[0]))
-    U, V = _scratch(approximations.buffers[worker], int(rows.max()), int(blocks[:, 5].max()), int(cols.max()))
+    U, V = approximations.scratch(worker, int(rows.max()), int(blocks[:, 5].max()), int(cols.max()))
     info = np.empty((blocks.shape[0], 7), dtype=np.int64)
     used = np.zeros(4, dtype=np.int64)
     count = _found_crosses(
@@ -706,10 +705,10 @@ def _run_of_crosses(approximations, room: _Room, worker: int, blocks, offsets, r
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
 def _found_crosses(model, P, N, params, dirs, pinv, eps, blocks, offsets, row_scales, U, V, space, room, info, used):
-    """The cross approximations (:func:`~translucency.scatter.crosses._cross`) of ``blocks`` in turn (rows: first and
-    last row, first and last column, channel, crosses it may take), each block's components in fixed point
-    (:func:`_fixed_point`) one after another in ``room`` (``U``, ``V`` int16, ``S`` float32, ``V8`` int8), until the
-    next block might not fit: returns how many blocks were done. ``info[p]``: crosses found (-1: not enough), kept,
+    """The cross approximations (:func:`~translucency.scatter.crosses.cross_approximation`) of ``blocks`` in turn
+    (rows: first and last row, first and last column, channel, crosses it may take), each block's components in fixed
+    point (:func:`_fixed_point`) one after another in ``room`` (``U``, ``V`` int16, ``S`` float32, ``V8`` int8), until
+    the next block might not fit: returns how many blocks were done. ``info[p]``: crosses found (-1: not enough), kept,
     held narrow, and where block ``p``'s ``U``, ``V``, ``S`` and ``V8`` start in ``room``; ``used``: how much of
     each the run filled. Block ``p``'s row scales are ``row_scales[offsets[p] : offsets[p + 1]]``."""
     U_room, V_room, S_room, V8_room = room
@@ -720,7 +719,7 @@ def _found_crosses(model, P, N, params, dirs, pinv, eps, blocks, offsets, row_sc
         if u_at + kmax * m > U_room.size or max(v_at, v8_at) + kmax * n > V_room.size or s_at + m > S_room.size:
             used[0], used[1], used[2], used[3] = u_at, v_at, s_at, v8_at
             return p
-        found, k, narrow = _cross(
+        found, k, narrow = cross_approximation(
             model, P, N, r0, r1, c0, c1, params[c : c + 1], dirs, pinv,
             row_scales[offsets[p] : offsets[p + 1]], eps, kmax, U, V, space,
         )  # fmt: skip
