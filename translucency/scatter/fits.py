@@ -144,8 +144,8 @@ def _run_geometry(length, pair, geo):
     dot products, and the frame ``(e, f, n_i)`` the fit's directions are given in.
 
     Three loops, each writing a few rows: one loop writing all thirteen did not vectorise (the compiler checks, at
-    run time, every row it writes against every row it reads, and gives up past a few such checks), and took four
-    times as long."""
+    run time, every row it writes against every row it reads, and gives up past a few such checks; bench/README.md,
+    "The preparation, 7 December 2026 (night)")."""
     for q in range(length):
         r2, s0, s1, s2 = modified_normal(
             pair[_X0, q], pair[_X1, q], pair[_X2, q], pair[_NI0, q], pair[_NI1, q], pair[_NI2, q]
