@@ -46,6 +46,7 @@ __all__ = [
     "AFFINE_TERMS",
     "QUADRATIC_TERMS",
     "fit_directions",
+    "fitted_block",
     "fitted_run",
     "fitted_points",
     "run_scratch",
@@ -274,6 +275,18 @@ def fitted_run(model, P, N, fixed, lo, hi, sources_vary, params, dirs, pinv, scr
     length = hi - lo
     _gathered(P, N, fixed, lo, length, sources_vary, scratch[0])
     fitted_points(model, length, params, dirs, pinv, scratch, out)
+
+
+@numba.njit(cache=True, fastmath=True, nogil=True, error_model="numpy")
+def fitted_block(model, P, N, r0, r1, c0, c1, params, dirs, pinv, scratch, out):
+    """The affine fits of every pair of a block, receivers ``r0 .. r1 - 1`` and sources ``c0 .. c1 - 1``, in one run
+    (:func:`fitted_points`; a run a row was too short a loop to vectorise well): receiver ``r0 + a`` and source ``c0 +
+    b`` written to ``out[a (c1 - c0) + b, c, :]`` for every channel ``c`` (rows of ``params``); ``scratch`` is
+    :func:`run_scratch`'s for at least ``(r1 - r0) (c1 - c0)`` pairs."""
+    sources = c1 - c0
+    for a in range(r1 - r0):
+        _gathered(P, N, r0 + a, c0, sources, True, scratch[0][:, a * sources :])
+    fitted_points(model, (r1 - r0) * sources, params, dirs, pinv, scratch, out)
 
 
 @numba.njit(cache=True, fastmath=True, nogil=True, error_model="numpy")

@@ -53,7 +53,7 @@ from .crosses import (
     rank_limits,
     split,
 )
-from .fits import AFFINE_TERMS, fitted_points, run_scratch
+from .fits import AFFINE_TERMS, fitted_block, run_scratch
 from .hierarchy import SourceTree
 
 __all__ = ["ETA", "LEAF_SIZE", "FarMatrix", "build", "partition"]
@@ -215,22 +215,14 @@ def _fill_dense(worker, lo, hi, model, P, N, dense, params, dirs, pinv, held_sta
     for k in range(lo, hi):
         length = max(length, (dense[k, 1] - dense[k, 0]) * (dense[k, 3] - dense[k, 2]))
     space = run_scratch(dirs.shape[0], length)
-    pairs = space[0]
     fits = np.empty((length, n_c, AFFINE_TERMS))
     mark = stamps[worker]
     for k in range(lo, hi):
         r0, r1, c0, c1, first, last, at = _dense_block(dense, k)
         m, sources = r1 - r0, c1 - c0
         n = sources * AFFINE_TERMS
-        # every pair of the block in one run of fits (a run a row was too short a loop to vectorise well)
-        for a in range(m):
-            for b in range(sources):
-                q = a * sources + b
-                for t in range(3):
-                    pairs[t, q] = P[r0 + a, t] - P[c0 + b, t]
-                    pairs[3 + t, q] = N[c0 + b, t]
-                    pairs[6 + t, q] = N[r0 + a, t]
-        fitted_points(model, m * sources, params if last - first == n_c else single[first], dirs, pinv, space, fits)
+        rows = params if last - first == n_c else single[first]
+        fitted_block(model, P, N, r0, r1, c0, c1, rows, dirs, pinv, space, fits)
         for a in range(m):
             o = r0 + a
             for h in range(held_starts[o], held_starts[o + 1]):
@@ -615,10 +607,11 @@ def _crosses(model, tree, P, N, params, dirs, pinv, eps, channel_bound, far_pair
         for first in range(lo, hi, SCALE_CHUNK):
             chunk = items[first : min(hi, first + SCALE_CHUNK)]
             offsets, row_scales = approximations.row_scales(chunk)
+            row_node, column_node = chunk[:, 0], chunk[:, 1]
+            kmax = rank_limits(end[row_node] - start[row_node], (end[column_node] - start[column_node]) * AFFINE_TERMS)
             blocks = np.column_stack(
-                [start[chunk[:, 0]], end[chunk[:, 0]], start[chunk[:, 1]], end[chunk[:, 1]], chunk[:, 2]]
+                [start[row_node], end[row_node], start[column_node], end[column_node], chunk[:, 2], kmax]
             )
-            blocks = np.column_stack([blocks, rank_limits(blocks[:, 1] - blocks[:, 0], cols_of(blocks))])
             done = 0
             while done < len(chunk):
                 count, info, parts = _run_of_crosses(
@@ -635,9 +628,6 @@ def _crosses(model, tree, P, N, params, dirs, pinv, eps, channel_bound, far_pair
                             (a, b, c, k, bases[0] + u_at, bases[1] + v_at, bases[2] + s_at, narrow, bases[3] + v8_at)
                         )
                 done += count
-
-    def cols_of(blocks):
-        return (blocks[:, 3] - blocks[:, 2]) * AFFINE_TERMS
 
     found, dense = [], set()
     items = far_items(far_pairs, n_c)
