@@ -121,14 +121,14 @@ def _built(points, leaf_size):
     points = points.copy()  # moved with ``order``: the passes over a node read memory in sequence
     tasks = [(0, n, 0)]  # rows lo .. hi - 1 and the node they start at, in depth-first order
     while len(tasks) < SUBTREES_PER_THREAD * thread_count():
-        lo, hi, node = max(tasks, key=lambda task: task[1] - task[0])
+        at = max(range(len(tasks)), key=lambda k: tasks[k][1] - tasks[k][0])  # the largest subtree
+        lo, hi, node = tasks[at]
         if hi - lo <= leaf_size:
             break
         start[node], end[node] = lo, hi
         mid = lo + (hi - lo) // 2
         _split(points, order, lo, hi, mid)
         left[node], right[node] = node + 1, node + 1 + _node_count(mid - lo, leaf_size)
-        at = tasks.index((lo, hi, node))
         tasks[at : at + 1] = [(lo, mid, left[node]), (mid, hi, right[node])]
     tasks = np.array(tasks, dtype=np.int64).reshape(-1, 3)
     for_ranges(_build_subtrees, tasks.shape[0], points, order, tasks, leaf_size, start, end, left, right)
@@ -176,7 +176,7 @@ def _build_subtrees(worker, first, last, points, order, tasks, leaf_size, start,
             if hi - lo <= leaf_size:
                 continue
             mid = lo + (hi - lo) // 2
-            _select(points, order, lo, hi, mid, _longest_axis(points, lo, hi))
+            _split(points, order, lo, hi, mid)
             stack[top, 0], stack[top, 1], stack[top, 2], stack[top, 3] = mid, hi, node, 1
             stack[top + 1, 0], stack[top + 1, 1], stack[top + 1, 2], stack[top + 1, 3] = lo, mid, node, 0
             top += 2

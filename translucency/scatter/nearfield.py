@@ -1582,7 +1582,7 @@ def near_field_operator(
     n_r = receivers.shape[0]
     counts = near_vertex_counts(triangles, receivers, offsets, triangle_ids)
     stamps = np.full((thread_count(), 2 * points.shape[0]), -1, dtype=np.int64)
-    n_edges = int(tables.edge_of_corner.max(initial=-1)) + 1 if degree3_ratio > 0.0 else 0
+    n_edges = tables.n_edges if degree3_ratio > 0.0 else 0
     edge_stamps = np.full((thread_count(), 2 * n_edges), -1, dtype=np.int64)  # per edge: receiver, slot
     fan = (*gauss_legendre_unit(fan_nodes[0]), *gauss_legendre_unit(fan_nodes[1]))
     starts = np.zeros(n_r + 1, dtype=np.int64)
