@@ -104,7 +104,7 @@ def _affine_terms(x0, x1, x2, x_dot_n, n0, n1, n2, d, D, sigma_tr_, scale, C_phi
 # vectorises, one that writes rows of an array it also reads may not)
 _X0, _X1, _X2, _NI0, _NI1, _NI2, _NO0, _NO1, _NO2 = range(9)  # the pairs
 _R2, _S0, _S1, _S2, _XN, _XS, _SN, _E0, _E1, _E2, _F0, _F1, _F2 = range(13)  # their geometry
-_VA, _VB0, _VB1, _VB2 = range(4)  # the virtual source's a, b
+_VA, _VB0, _VB1, _VB2, _INVERSE = range(5)  # the virtual source's a, b; 1 / (r^2 + d_e^2)
 #: Coefficients of the quadratic fit in the source's frame: ``1, w_x, w_y, w_z, w_x^2, w_y^2, w_x w_y, w_x w_z,
 #: w_y w_z`` (:func:`fit_directions`).
 LOCAL_QUADRATIC_TERMS = 9
@@ -121,7 +121,7 @@ def run_scratch(directions, length):
     return (
         np.empty((9, width)),
         np.empty((13, width)),
-        np.empty((4, width)),
+        np.empty((5, width)),
         np.empty((directions, width)),
         np.empty((LOCAL_QUADRATIC_TERMS, width)),
     )
@@ -199,6 +199,7 @@ def _run_channel(p, dirs, pinv, length, scratch, out):
         virtual[_VB0, q] = bv0 - mirror * s0
         virtual[_VB1, q] = bv1 - mirror * s1
         virtual[_VB2, q] = bv2 - mirror * s2
+        virtual[_INVERSE, q] = 1.0 / (geo[_R2, q] + d_e * d_e)
     for k in range(n_dirs):  # the real source's corrected distance at each direction (section 4.3)
         u0, u1, u2 = dirs[k, 0], dirs[k, 1], dirs[k, 2]
         for q in range(length):
@@ -208,7 +209,7 @@ def _run_channel(p, dirs, pinv, length, scratch, out):
             r2 = geo[_R2, q]
             mu0 = -(pair[_NO0, q] * w0 + pair[_NO1, q] * w1 + pair[_NO2, q] * w2)
             xw = pair[_X0, q] * w0 + pair[_X1, q] * w1 + pair[_X2, q] * w2
-            cos_beta = -math.sqrt(max(r2 - xw * xw, 0.0) / (r2 + d_e * d_e))
+            cos_beta = -math.sqrt(max(r2 - xw * xw, 0.0) * virtual[_INVERSE, q])
             front = r2 + D * mu0 * (D * mu0 - 2.0 * d_e * cos_beta)
             dist[k, q] = max(math.sqrt(front if mu0 > 0.0 else r2 + backlit2), floor)
     for k in range(n_dirs):  # S_d's real source at each direction, in place of its distance
