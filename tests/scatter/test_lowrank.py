@@ -209,12 +209,12 @@ def test_the_sampled_count_is_what_every_block_counts_on_average_over_its_starts
 
 
 def _in_fixed_point(U, V, narrow):
-    """One block's components ``U (m, k)``, ``V (k, columns)`` in the store's fixed point (``lowrank._fixed_point``):
+    """One block's components ``U (m, k)``, ``V (k, columns)`` in the store's fixed point (``crosses.fixed_point``):
     ``U``, ``V``, ``U``'s row scales and the last ``narrow`` rows of ``V``, each flat."""
     (m, k), columns = U.shape, V.shape[1]
     parts = (np.empty(k * m, np.int16), np.empty((k - narrow) * columns, np.int16))
     parts += (np.empty(m, np.float32), np.empty(narrow * columns, np.int8))
-    lowrank._fixed_point(
+    crosses.fixed_point(
         U, V, parts[0].reshape(k, m), parts[2], parts[1].reshape(k - narrow, columns), parts[3].reshape(narrow, columns)
     )
     return parts
@@ -238,17 +238,17 @@ def test_the_crosses_store_grows_past_what_it_reserved_and_keeps_every_block():
         held = U_all[u_at : u_at + U.size].reshape(U.shape[1], U.shape[0]).T * scales[s_at : s_at + U.shape[0], None]
         # each row to half a step of its own largest entry, however small the row
         largest = np.abs(U).max(axis=1, keepdims=True)
-        assert np.all(np.abs(held - U) <= 0.5001 * largest / lowrank.FIXED_STEPS)
+        assert np.all(np.abs(held - U) <= 0.5001 * largest / crosses.FIXED_STEPS)
         wide = V.shape[0] - narrow
         np.testing.assert_allclose(
-            V_all[v_at : v_at + wide * V.shape[1]].reshape(wide, V.shape[1]) * lowrank.V_STEP,
+            V_all[v_at : v_at + wide * V.shape[1]].reshape(wide, V.shape[1]) * crosses.V_STEP,
             V[:wide],
-            atol=lowrank.V_STEP,
+            atol=crosses.V_STEP,
         )
         np.testing.assert_allclose(  # the last rows in 8 bits, each entry to half a step
-            V8_all[v8_at : v8_at + narrow * V.shape[1]].reshape(narrow, V.shape[1]) * lowrank.V8_STEP,
+            V8_all[v8_at : v8_at + narrow * V.shape[1]].reshape(narrow, V.shape[1]) * crosses.V8_STEP,
             V[wide:],
-            atol=0.5001 * lowrank.V8_STEP,
+            atol=0.5001 * crosses.V8_STEP,
         )
 
 
@@ -264,8 +264,8 @@ def _stored_product(matrix, tree_values):
         U = matrix.U[u_at : u_at + m * k].reshape(k, m).T * matrix.U_scale[s_at : s_at + m, None].astype(np.float64)
         V = np.concatenate(
             [
-                matrix.V[v_at : v_at + (k - k8) * columns].reshape(k - k8, columns) * lowrank.V_STEP,
-                matrix.V8[v8_at : v8_at + k8 * columns].reshape(k8, columns) * lowrank.V8_STEP,
+                matrix.V[v_at : v_at + (k - k8) * columns].reshape(k - k8, columns) * crosses.V_STEP,
+                matrix.V8[v8_at : v8_at + k8 * columns].reshape(k8, columns) * crosses.V8_STEP,
             ]
         )
         B[r0:r1, c] += U @ (V @ tree_values[c, c0 * terms : c1 * terms])
@@ -303,7 +303,7 @@ def test_a_light_on_part_of_the_surface_gives_the_stored_matrix_product():
             assert np.all(matrix.apply(values) == 0.0)
 
 
-@pytest.mark.parametrize("m, n, k", [(40, 160, 12), (7, 300, 7), (200, 64, 30), (30, 120, 1)])
+@pytest.mark.parametrize("m, n, k", [(40, 160, 12), (7, 300, 7), (200, 64, 30), (30, 120, 1), (150, 400, 80)])
 def test_the_recompressed_crosses_keep_the_block_and_only_the_singular_values_it_needs(m, n, k):
     """A block given as ``k`` crosses whose singular values fall over six decades: recompressed, the product moves by
     at most RECOMPRESS_SHARE eps of its norm, it keeps as many components as numpy's SVD says that allows, each V row
@@ -320,7 +320,7 @@ def test_the_recompressed_crosses_keep_the_block_and_only_the_singular_values_it
     U = np.zeros((m + 3, k + 2))
     V = np.zeros((k + 2, n + 5))
     U[:m, :k], V[:k, :n] = U0, V0
-    kept, narrow = crosses._recompressed(U, V, m, n, k, eps)
+    kept, narrow = crosses._recompressed(U, V, m, n, k, eps, V0 @ V0.T)
     s = np.linalg.svd(block, compute_uv=False)
     tail = np.sqrt(np.cumsum(s[::-1] ** 2)[::-1])  # tail[q]: what leaving out components q.. drops
     expected = int(np.sum(tail > crosses.RECOMPRESS_SHARE * eps * np.linalg.norm(block)))
@@ -337,12 +337,28 @@ def test_the_recompressed_crosses_keep_the_block_and_only_the_singular_values_it
         assert narrow > 0  # the smallest components are well below what 8 bits lose
 
 
+@pytest.mark.parametrize("k", [1, 9, crosses.LAPACK_LARGEST, crosses.LAPACK_LARGEST + 1, 90])
+def test_the_recompression_s_eigenvectors_are_numpy_s_whichever_way_they_are_found(k):
+    """Up to LAPACK_LARGEST by LAPACK, above by Jacobi rotations: the eigenvalues of a symmetric matrix whose
+    eigenvalues fall over twelve decades, descending, within 1e-12 of the largest of numpy's, and the eigenvectors
+    reproduce it."""
+    rng = np.random.default_rng(k)
+    basis, _ = np.linalg.qr(rng.normal(size=(k, k)))
+    values = np.logspace(0, -12, k)
+    A = (basis * values) @ basis.T
+    A = 0.5 * (A + A.T)
+    found, vectors = crosses._symmetric_eigen(A.copy())
+    np.testing.assert_allclose(found, np.sort(np.linalg.eigvalsh(A))[::-1], rtol=0, atol=1e-12)
+    np.testing.assert_allclose((vectors * found) @ vectors.T, A, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(vectors.T @ vectors, np.eye(k), rtol=0, atol=1e-10)
+
+
 def test_crosses_that_are_not_finite_are_left_as_they_are():
     """A NaN in a block's crosses is not recompressed away: the crosses stay, all 16-bit, and B will show it."""
     rng = np.random.default_rng(5)
     U, V = rng.normal(size=(20, 6)), rng.uniform(-1.0, 1.0, size=(6, 40))
     U[3, 2] = np.nan
     before_U, before_V = U.copy(), V.copy()
-    assert crosses._recompressed(U, V, 20, 40, 4, 1e-2) == (4, 0)
+    assert crosses._recompressed(U, V, 20, 40, 4, 1e-2, V @ V.T) == (4, 0)
     np.testing.assert_array_equal(U, before_U)
     np.testing.assert_array_equal(V, before_V)

@@ -1,12 +1,15 @@
-"""Adaptive cross approximation of the far field's blocks, and the count of what they hold before they are found.
+"""Adaptive cross approximation of the far field's blocks, held in fixed point, and the count of what they hold before
+they are found.
 
 A far block of the relighting operator (docs/physics.md §8.9; :mod:`translucency.scatter.lowrank`), rows the
 receivers and columns the (source, term) pairs of one channel, is approximated by crosses (Bebendorf 2000): each
 step evaluates one row and one column of fits (:func:`~translucency.scatter.fits.fitted_run`). A block that needs
 more than :func:`rank_limit` crosses is split into its children's blocks (:func:`split`). A block's crosses are then
 recompressed (:func:`_recompressed`): fewer, orthogonal components, the last of them to be held in 8 bits instead of
-16 (docs/physics.md §8.9). The budget counts what every block's crosses would hold from a sample of them
-(:func:`sampled_count`).
+16 (docs/physics.md §8.9), and written in fixed point (:func:`fixed_point`). A worker finds a run of blocks in one
+compiled call (:func:`run_of_crosses`); the budget counts what every block's crosses would hold from a sample of
+them found by the same call (:func:`sampled_count`), so that a block counted holds what the build holds, to the
+byte.
 """
 
 from __future__ import annotations
@@ -19,15 +22,24 @@ from .fits import AFFINE_TERMS, fitted_run, run_scratch
 
 __all__ = [
     "CHECK_ROWS",
+    "FIXED_STEPS",
     "NARROW_SHARE",
     "NARROW_STEPS",
     "RECOMPRESS_SHARE",
+    "SAMPLED_BLOCKS",
+    "V8_STEP",
+    "V_STEP",
     "CROSS_KERNELS",
     "Approximations",
+    "Room",
+    "block_rows",
     "cross_approximation",
     "far_items",
+    "fixed_point",
+    "found_crosses",
     "rank_limit",
     "rank_limits",
+    "run_of_crosses",
     "sampled_count",
     "split",
 ]
@@ -62,13 +74,31 @@ NARROW_STEPS = 127
 #: of ``eps`` of the block's Frobenius norm are held in 8 bits instead of 16.
 NARROW_SHARE = 0.25
 
+#: Steps of the 16-bit fixed point the blocks are held in: a row's largest entry is this many steps.
+FIXED_STEPS = 32767
+#: ``V`` is stored as int16: each component's ``V`` is divided by its largest entry, so every entry is in [-1, 1]
+#: and is kept to 2**-15 of it (far below ``eps``); the smallest components of a block as int8 in steps of
+#: :data:`V8_STEP` (``crosses.NARROW_SHARE``). ``U`` is int16, each row in steps of its own float32 scale, its
+#: largest entry :data:`FIXED_STEPS` steps (docs/physics.md §8.9).
+V_STEP = 1.0 / FIXED_STEPS
+V8_STEP = 1.0 / NARROW_STEPS
+
+
+#: The largest ``k x k`` a recompression hands to LAPACK's ``syevd``; larger ones take Jacobi rotations. Above it
+#: OpenBLAS starts threads of its own inside the call, which compete with the workers' (bench/README.md, "The
+#: preparation, 8 December 2026").
+LAPACK_LARGEST = 64
+
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
 def _symmetric_eigen(A):
-    """Eigenvalues (descending) and eigenvectors (columns) of the symmetric ``A`` (``k x k``, overwritten) by cyclic
-    Jacobi rotations (Golub and Van Loan, §8.5), until the off-diagonal part is 1e-12 of the whole: small matrices
-    only, and no LAPACK (whose threads compete with the workers')."""
+    """Eigenvalues (descending) and eigenvectors (columns) of the symmetric ``A`` (``k x k``, overwritten): LAPACK's
+    ``syevd`` up to :data:`LAPACK_LARGEST`, else cyclic Jacobi rotations (Golub and Van Loan, §8.5) until the
+    off-diagonal part is 1e-12 of the whole."""
     k = A.shape[0]
+    if k <= LAPACK_LARGEST:
+        ascending, vectors = np.linalg.eigh(A)
+        return ascending[::-1].copy(), np.ascontiguousarray(vectors[:, ::-1])
     E = np.eye(k)
     whole = 0.0
     for p in range(k):
@@ -136,8 +166,9 @@ def _small_product(A, B):
 
 
 @numba.njit(cache=True, nogil=True, fastmath=True, error_model="numpy")
-def _recompressed(U, V, m, n, k, eps):
-    """The crosses ``U[:m, :k] V[:k, :n]`` of one block (rows scaled) recompressed in place (Bebendorf 2008, §1.1.5):
+def _recompressed(U, V, m, n, k, eps, outer):
+    """The crosses ``U[:m, :k] V[:k, :n]`` of one block (rows scaled) recompressed in place (Bebendorf 2008, §1.1.5),
+    ``outer[:k, :k]`` their ``V V^T`` (the cross approximation keeps it as it goes):
     with ``U = Q R`` (modified Gram-Schmidt) and ``R V V^T R^T = W S^2 W^T`` (:func:`_symmetric_eigen`), the block is
     ``sum_q (Q W S)_q (S^-1 W^T R V)_q``, components in order of their singular values ``s_q``. The fewest are kept
     whose left-out ``s_q`` hold at most :data:`RECOMPRESS_SHARE` ``eps`` of ``|S|``, each ``V`` row divided by its
@@ -172,21 +203,8 @@ def _recompressed(U, V, m, n, k, eps):
         inverse = 1.0 / norm if norm > 0.0 else 0.0
         for a in range(m):
             current[a] *= inverse
-    outer = np.zeros((k, k))  # V V^T, then R V V^T R^T: the Gram matrix of R V, the block being Q (R V)
-    for j0 in range(0, n, RECOMPRESS_COLUMNS):  # a run of columns at a time, read from the fastest cache
-        j1 = min(n, j0 + RECOMPRESS_COLUMNS)
-        for p in range(k):
-            first = V[p, j0:j1]  # slices indexed from 0: the loops vectorise
-            for q in range(p + 1):
-                second = V[q, j0:j1]
-                dot = 0.0
-                for j in range(j1 - j0):
-                    dot += first[j] * second[j]
-                outer[p, q] += dot
-    for p in range(k):
-        for q in range(p):
-            outer[q, p] = outer[p, q]
-    gram = _small_product(_small_product(R, outer), np.ascontiguousarray(R.T))
+    # R V V^T R^T: the Gram matrix of R V, the block being Q (R V)
+    gram = _small_product(_small_product(R, np.ascontiguousarray(outer[:k, :k])), np.ascontiguousarray(R.T))
     squares, W = _symmetric_eigen(gram)
     total2 = 0.0
     for q in range(k):
@@ -242,6 +260,65 @@ def _recompressed(U, V, m, n, k, eps):
     return kept, narrow
 
 
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _steps(x):
+    """``x`` rounded to the nearest whole step (halves to even), at most :data:`FIXED_STEPS` either way, as int16."""
+    return np.int16(min(max(np.rint(x), -FIXED_STEPS), FIXED_STEPS))
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def fixed_point(U, V, crosses, scales, V_out, V8_out):
+    """One block's components in fixed point: ``U (rows, k)`` as 16-bit steps of one float32 scale per row (its
+    largest entry :data:`FIXED_STEPS` steps) written a component at a time to ``crosses (k, rows)``, the scales to
+    ``scales``; ``V (k, columns)`` (in [-1, 1]) as steps of :data:`V_STEP` to ``V_out (k - k8, columns)`` (int16) and
+    its last ``k8`` rows as steps of :data:`V8_STEP` to ``V8_out (k8, columns)`` (int8)."""
+    m, k = U.shape
+    wide = V_out.shape[0]
+    for a in range(m):
+        largest = 0.0
+        for q in range(k):
+            size = abs(U[a, q])
+            if size > largest or size != size:  # a NaN stays, as it would in numpy's max: B shows it
+                largest = size
+        scale = np.float32(largest / FIXED_STEPS)
+        scales[a] = scale
+        step = np.float64(scale) if scale > 0.0 else 1.0
+        for q in range(k):
+            crosses[q, a] = _steps(U[a, q] / step)
+    for q in range(wide):
+        for j in range(V.shape[1]):
+            V_out[q, j] = _steps(V[q, j] / V_STEP)
+    for q in range(k - wide):
+        for j in range(V.shape[1]):
+            V8_out[q, j] = np.int8(min(max(np.rint(V[wide + q, j] * NARROW_STEPS), -NARROW_STEPS), NARROW_STEPS))
+
+
+@numba.njit(cache=True, nogil=True, fastmath=True, error_model="numpy")
+def _grown_grams(k, pivot, U_row, pivot_column, column_dots, row_dots, u2, v2, grams):
+    """The Gram matrices ``grams = (U^T U, V V^T)`` of :func:`cross_approximation` grown by its new cross ``k``
+    (``u_k``, ``v_k``), and ``sum_q (u_k . u_q) (v_k . v_q)`` over the earlier ones (the cross terms of the block's
+    norm): ``u_k . u_q = c . u_q - sum_p V[p, j] (u_p . u_q)`` and ``v_k . v_q = (f . v_q - sum_p U[i, p] (v_p . v_q)) /
+    pivot``, with ``c . u_q`` (``column_dots``) and ``f . v_q`` (``row_dots``) taken in the passes that subtracted the
+    earlier crosses from the column's and the row's fits ``c``, ``f``; ``pivot_column`` is ``V[:k, j]``, ``U_row``
+    ``U[i]``, ``u2`` and ``v2`` the new cross's squared norms. Costs ``k^2``, not two more passes over ``U`` and
+    ``V``."""
+    gram_u, gram_v = grams[0], grams[1]
+    cross = 0.0
+    for q in range(k):
+        uu = column_dots[q]
+        vv = row_dots[q]
+        for p in range(k):  # the Gram matrices are symmetric: read along a row
+            uu -= pivot_column[p] * gram_u[q, p]
+            vv -= U_row[p] * gram_v[q, p]
+        vv /= pivot
+        gram_u[k, q] = gram_u[q, k] = uu
+        gram_v[k, q] = gram_v[q, k] = vv
+        cross += uu * vv
+    gram_u[k, k] = u2
+    gram_v[k, k] = v2
+    return cross
+
+
 @numba.njit(cache=True, nogil=True, fastmath=True, error_model="numpy")
 def cross_approximation(model, P, N, r0, r1, c0, c1, params, dirs, pinv, row_scale, eps, kmax, U, V, space):
     """Adaptive cross approximation with partial pivoting of one channel (``params`` of one row): rows ``r0:r1``
@@ -259,7 +336,14 @@ def cross_approximation(model, P, N, r0, r1, c0, c1, params, dirs, pinv, row_sca
     used = np.zeros(m, dtype=np.bool_)
     column_cache = np.empty((m, AFFINE_TERMS))
     pivot_column = np.empty(kmax + 1)
+    # the Gram matrices of U's columns and V's rows as they grow, and the dot products of a new row's fits with V's
+    # rows and of a new column's with U's columns, taken in the passes that subtract the crosses so far: a new
+    # cross's dot products with the earlier ones then cost k^2, not two more passes over U and V
+    grams = np.empty((2, kmax + 1, kmax + 1))  # U^T U, V V^T
+    row_dots = np.empty(kmax + 1)
+    column_dots = np.empty(kmax + 1)
     cached = -1
+    fitted = np.empty(n)
     row = np.empty(n)
     seed = (r0 * 7919 + c0 * 104729 + 1) & 0x7FFFFFFF
     i = 0
@@ -275,12 +359,17 @@ def cross_approximation(model, P, N, r0, r1, c0, c1, params, dirs, pinv, row_sca
         for b in range(c1 - c0):
             for t in range(AFFINE_TERMS):
                 value = fits[b, 0, t] * row_scale[i]
+                fitted[b * AFFINE_TERMS + t] = value
                 row[b * AFFINE_TERMS + t] = value
                 full2 += value * value
         for q in range(k):
             u = U[i, q]
+            dot = 0.0
             for j in range(n):
-                row[j] -= u * V[q, j]
+                v = V[q, j]
+                dot += fitted[j] * v
+                row[j] -= u * v
+            row_dots[q] = dot
         j = 0
         best = 0.0
         residual2 = 0.0
@@ -316,11 +405,17 @@ def cross_approximation(model, P, N, r0, r1, c0, c1, params, dirs, pinv, row_sca
         following = -1
         for q in range(k):
             pivot_column[q] = V[q, j]  # read once: down a column of V, each entry on a cache line of its own
+            column_dots[q] = 0.0
+        u2 = 0.0
         for a in range(m):
-            value = column_cache[a, term]
+            entry = column_cache[a, term]
+            value = entry
             for q in range(k):
-                value -= U[a, q] * pivot_column[q]
+                w = U[a, q]
+                value -= w * pivot_column[q]
+                column_dots[q] += entry * w
             U[a, k] = value
+            u2 += value * value
             if not used[a] and abs(value) > best:
                 best = abs(value)
                 following = a
@@ -328,28 +423,14 @@ def cross_approximation(model, P, N, r0, r1, c0, c1, params, dirs, pinv, row_sca
         for q in range(n):
             V[k, q] = row[q] / pivot
             v2 += V[k, q] * V[k, q]
-        u2 = 0.0
-        for q in range(k):
-            pivot_column[q] = 0.0  # now the products of the new cross's U with the earlier ones, row by row
-        for a in range(m):
-            u = U[a, k]
-            u2 += u * u
-            for q in range(k):
-                pivot_column[q] += u * U[a, q]
-        cross = 0.0
-        for q in range(k):
-            vv = 0.0
-            for p in range(n):
-                vv += V[k, p] * V[q, p]
-            cross += pivot_column[q] * vv
-        norm2 += u2 * v2 + 2.0 * cross
+        norm2 += u2 * v2 + 2.0 * _grown_grams(k, pivot, U[i], pivot_column, column_dots, row_dots, u2, v2, grams)
         k += 1
         if following < 0:
             break
         i = following
         if u2 * v2 <= eps * eps * abs(norm2):
             break
-    kept, narrow = _recompressed(U, V, m, n, k, eps)
+    kept, narrow = _recompressed(U, V, m, n, k, eps, grams[1])
     # unscaled in U, whose rows then have the receivers' own magnitudes: V stays in [-1, 1], and neither leaves
     # float32's range where the rows of a block differ by more than it spans
     for q in range(kept):
@@ -412,21 +493,6 @@ class Approximations:
         """:func:`_row_scales` of the blocks ``items`` (``(row node, column node, channel)`` rows)."""
         return _row_scales(self.tree, self.P, items, self.channel_bound)
 
-    def cross(self, worker, a, b, c, row_scale):
-        """Block ``(a, b)``'s channel ``c`` by :func:`cross_approximation`, up to :func:`rank_limit` crosses:
-        ``(found, narrow, U, V)``, ``found`` the crosses found (-1 when they were not enough), ``U (m, k)`` and ``V (k,
-        4 n)`` views of the worker's scratch holding the ``k`` components kept, the last ``narrow`` of them for 8
-        bits."""
-        start, end = self.tree.start, self.tree.end
-        m, cols = int(end[a] - start[a]), int(end[b] - start[b]) * AFFINE_TERMS
-        kmax = rank_limit(m, cols)
-        U, V = self.scratch(worker, m, kmax, cols)
-        found, k, narrow = cross_approximation(
-            self.model, self.P, self.N, start[a], end[a], start[b], end[b], self.channels[c],
-            self.dirs, self.pinv, row_scale, self.eps, kmax, U, V, self.spaces[worker],
-        )  # fmt: skip
-        return found, narrow, U[:m, :k], V[:k, :cols]
-
 
 def split(tree, a, b, c) -> list:
     """The blocks a far block ``(a, b)``'s channel ``c`` is split into when it needs more crosses than it may take:
@@ -449,6 +515,98 @@ def far_items(far_pairs, n_channels) -> np.ndarray:
 def longest_run(tree, far_pairs) -> int:
     """The most vertices of a node of ``far_pairs``: the longest run a block's fits take."""
     return int(np.max(np.maximum(tree.end - tree.start, 1)[far_pairs].max(initial=1)))
+
+
+def block_rows(tree, items) -> np.ndarray:
+    """The rows :func:`found_crosses` takes for the blocks ``items`` (``(row node, column node, channel)``): first
+    and last row, first and last column, channel, and the crosses each may take
+    (:func:`rank_limit`)."""
+    start, end = tree.start, tree.end
+    row_node, column_node = items[:, 0], items[:, 1]
+    kmax = rank_limits(end[row_node] - start[row_node], (end[column_node] - start[column_node]) * AFFINE_TERMS)
+    return np.column_stack([start[row_node], end[row_node], start[column_node], end[column_node], items[:, 2], kmax])
+
+
+class Room:
+    """A worker's room for a run of blocks' components in fixed point (:func:`found_crosses`), grown when one block
+    needs more than it holds, kept between runs (its pages are written once)."""
+
+    #: Elements of ``U``, ``V`` and ``V8`` (each) and rows of ``S`` a room holds at first.
+    ELEMENTS = 1 << 20
+    ROWS = 1 << 16
+
+    def __init__(self):
+        self.grow(self.ELEMENTS, self.ROWS)
+
+    def grow(self, elements: int, rows: int) -> None:
+        """Room for ``elements`` of each of ``U``, ``V``, ``V8`` and ``rows`` row scales."""
+        self.U = np.empty(elements, dtype=np.int16)
+        self.V = np.empty(elements, dtype=np.int16)
+        self.V8 = np.empty(elements, dtype=np.int8)
+        self.S = np.empty(rows, dtype=np.float32)
+
+
+def run_of_crosses(approximations, room: Room, worker: int, blocks, offsets, row_scales):
+    """The cross approximations of ``blocks`` (rows: first and last row, first and last column, channel, crosses
+    it may take; tree order) in one compiled run (:func:`found_crosses`), as many as ``room`` holds (it grows when
+    not even the first fits): ``(count, info, (U, V, S, V8))``, ``info`` per block done as :func:`found_crosses`
+    writes it, and the parts of the room they fill."""
+    rows = blocks[:, 1] - blocks[:, 0]
+    cols = (blocks[:, 3] - blocks[:, 2]) * AFFINE_TERMS
+    first = int(blocks[0, 5])
+    if first * max(int(rows[0]), int(cols[0])) > room.U.size or int(rows[0]) > room.S.size:
+        room.grow(2 * first * max(int(rows[0]), int(cols[0])), 2 * int(rows[0]))
+    U, V = approximations.scratch(worker, int(rows.max()), int(blocks[:, 5].max()), int(cols.max()))
+    info = np.empty((blocks.shape[0], 7), dtype=np.int64)
+    used = np.zeros(4, dtype=np.int64)
+    count = found_crosses(
+        approximations.model, approximations.P, approximations.N, approximations.params,
+        approximations.dirs, approximations.pinv, approximations.eps,
+        blocks, offsets, row_scales, U, V, approximations.spaces[worker],
+        (room.U, room.V, room.S, room.V8), info, used,
+    )  # fmt: skip
+    return count, info[:count], (room.U[: used[0]], room.V[: used[1]], room.S[: used[2]], room.V8[: used[3]])
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def found_crosses(model, P, N, params, dirs, pinv, eps, blocks, offsets, row_scales, U, V, space, room, info, used):
+    """The cross approximations (:func:`~translucency.scatter.crosses.cross_approximation`) of ``blocks`` in turn
+    (rows: first and last row, first and last column, channel, crosses it may take), each block's components in fixed
+    point (:func:`fixed_point`) one after another in ``room`` (``U``, ``V`` int16, ``S`` float32, ``V8`` int8), until
+    the next block might not fit: returns how many blocks were done. ``info[p]``: crosses found (-1: not enough), kept,
+    held narrow, and where block ``p``'s ``U``, ``V``, ``S`` and ``V8`` start in ``room``; ``used``: how much of
+    each the run filled. Block ``p``'s row scales are ``row_scales[offsets[p] : offsets[p + 1]]``."""
+    U_room, V_room, S_room, V8_room = room
+    u_at, v_at, s_at, v8_at = 0, 0, 0, 0
+    for p in range(blocks.shape[0]):
+        r0, r1, c0, c1, c, kmax = blocks[p, 0], blocks[p, 1], blocks[p, 2], blocks[p, 3], blocks[p, 4], blocks[p, 5]
+        m, n = r1 - r0, (c1 - c0) * AFFINE_TERMS
+        if u_at + kmax * m > U_room.size or max(v_at, v8_at) + kmax * n > V_room.size or s_at + m > S_room.size:
+            used[0], used[1], used[2], used[3] = u_at, v_at, s_at, v8_at
+            return p
+        found, k, narrow = cross_approximation(
+            model, P, N, r0, r1, c0, c1, params[c : c + 1], dirs, pinv,
+            row_scales[offsets[p] : offsets[p + 1]], eps, kmax, U, V, space,
+        )  # fmt: skip
+        info[p, 0], info[p, 1], info[p, 2] = found, k, narrow
+        info[p, 3], info[p, 4], info[p, 5], info[p, 6] = u_at, v_at, s_at, v8_at
+        if found < 0:
+            continue
+        wide = k - narrow
+        fixed_point(
+            U[:m, :k],
+            V[:k, :n],
+            U_room[u_at : u_at + k * m].reshape((k, m)),
+            S_room[s_at : s_at + m],
+            V_room[v_at : v_at + wide * n].reshape((wide, n)),
+            V8_room[v8_at : v8_at + narrow * n].reshape((narrow, n)),
+        )
+        u_at += k * m
+        v_at += wide * n
+        s_at += m
+        v8_at += narrow * n
+    used[0], used[1], used[2], used[3] = u_at, v_at, s_at, v8_at
+    return blocks.shape[0]
 
 
 #: Far blocks (per channel) whose cross approximations :func:`sampled_count` finds, to count what the far field
@@ -494,6 +652,7 @@ def sampled_count(
         chosen, times = np.unique(draws, return_counts=True)
         counted = times * weight.sum() / (blocks * weight[chosen])
     approximations = Approximations(model, tree, P, N, params, *fit, eps, channel_bound, longest_run(tree, far_pairs))
+    rooms = [Room() for _ in range(thread_count())]
     held = np.zeros((len(chosen), 4))
 
     def run(worker, lo, hi):
@@ -501,13 +660,17 @@ def sampled_count(
             pending = [tuple(items[chosen[p]])]
             while pending:
                 a, b, c = pending.pop()
-                _, row_scale = approximations.row_scales(np.array([[a, b, c]], dtype=np.int64))
-                found, narrow, U, _ = approximations.cross(worker, a, b, c, row_scale)
+                item = np.array([[a, b, c]], dtype=np.int64)
+                offsets, row_scale = approximations.row_scales(item)
+                # the build's own compiled run: the crosses of a block are then those the build finds, to the bit
+                _, info, _ = run_of_crosses(
+                    approximations, rooms[worker], worker, block_rows(tree, item), offsets, row_scale
+                )
+                found, k, narrow = (int(x) for x in info[0, :3])
                 m, n = int(size[a]), int(size[b])
                 crosses = found if found >= 0 else rank_limit(m, AFFINE_TERMS * n)
                 held[p, 3] += (crosses + CHECK_ROWS) * n + crosses * m
                 if found >= 0:
-                    k = U.shape[1]
                     held[p, :2] += (2 * k * m + (2 * k - narrow) * AFFINE_TERMS * n, m)
                     continue
                 children = split(tree, a, b, c)
@@ -521,6 +684,15 @@ def sampled_count(
     return {"cross_bytes": total[0], "row_scales": total[1], "dense_entries": total[2], "fits": total[3]}
 
 
-#: The compiled kernel of the cross approximations: numba compiles it on first use; the set-up compiles it ahead
+#: The compiled kernels of the cross approximations: numba compiles them on first use; the set-up compiles them ahead
 #: (:mod:`translucency.app.warmup`).
-CROSS_KERNELS = (cross_approximation, _recompressed, _symmetric_eigen, _small_product, _all_finite)
+CROSS_KERNELS = (
+    cross_approximation,
+    _recompressed,
+    _symmetric_eigen,
+    _small_product,
+    _all_finite,
+    _grown_grams,
+    found_crosses,
+    fixed_point,
+)

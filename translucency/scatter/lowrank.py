@@ -44,13 +44,16 @@ import numpy as np
 from ..threads import for_ranges, thread_count
 from .crosses import (
     CROSS_KERNELS,
-    NARROW_STEPS,
     SCALE_CHUNK,
+    V8_STEP,
+    V_STEP,
     Approximations,
-    cross_approximation,
+    Room,
+    block_rows,
     far_items,
     longest_run,
     rank_limits,
+    run_of_crosses,
     split,
 )
 from .fits import AFFINE_TERMS, fitted_block, run_scratch
@@ -63,15 +66,6 @@ LEAF_SIZE = 32
 #: A block is far (low rank) when the larger of its two bounding radii is at most ``ETA`` times the distance
 #: of their centres.
 ETA = 0.5
-
-#: Steps of the 16-bit fixed point the blocks are held in: a row's largest entry is this many steps.
-FIXED_STEPS = 32767
-#: ``V`` is stored as int16: each component's ``V`` is divided by its largest entry, so every entry is in [-1, 1]
-#: and is kept to 2**-15 of it (far below ``eps``); the smallest components of a block as int8 in steps of
-#: :data:`V8_STEP` (``crosses.NARROW_SHARE``). ``U`` is int16, each row in steps of its own float32 scale, its
-#: largest entry :data:`FIXED_STEPS` steps (docs/physics.md §8.9).
-V_STEP = 1.0 / FIXED_STEPS
-V8_STEP = 1.0 / NARROW_STEPS
 
 
 @dataclass
@@ -384,42 +378,9 @@ def _apply_dense(worker, lo, hi, blocks, D, values, lit_before, out):
                 target[r0 + a, c] += s
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy")
-def _steps(x):
-    """``x`` rounded to the nearest whole step (halves to even), at most :data:`FIXED_STEPS` either way, as int16."""
-    return np.int16(min(max(np.rint(x), -FIXED_STEPS), FIXED_STEPS))
-
-
-@numba.njit(cache=True, nogil=True, error_model="numpy")
-def _fixed_point(U, V, crosses, scales, V_out, V8_out):
-    """One block's components in fixed point: ``U (rows, k)`` as 16-bit steps of one float32 scale per row (its
-    largest entry :data:`FIXED_STEPS` steps) written a component at a time to ``crosses (k, rows)``, the scales to
-    ``scales``; ``V (k, columns)`` (in [-1, 1]) as steps of :data:`V_STEP` to ``V_out (k - k8, columns)`` (int16) and
-    its last ``k8`` rows as steps of :data:`V8_STEP` to ``V8_out (k8, columns)`` (int8)."""
-    m, k = U.shape
-    wide = V_out.shape[0]
-    for a in range(m):
-        largest = 0.0
-        for q in range(k):
-            size = abs(U[a, q])
-            if size > largest or size != size:  # a NaN stays, as it would in numpy's max: B shows it
-                largest = size
-        scale = np.float32(largest / FIXED_STEPS)
-        scales[a] = scale
-        step = np.float64(scale) if scale > 0.0 else 1.0
-        for q in range(k):
-            crosses[q, a] = _steps(U[a, q] / step)
-    for q in range(wide):
-        for j in range(V.shape[1]):
-            V_out[q, j] = _steps(V[q, j] / V_STEP)
-    for q in range(k - wide):
-        for j in range(V.shape[1]):
-            V8_out[q, j] = np.int8(min(max(np.rint(V[wide + q, j] * NARROW_STEPS), -NARROW_STEPS), NARROW_STEPS))
-
-
 class _CrossStore:
     """The components of every block in four arrays: ``U`` and ``V`` int16, ``U``'s row scales float32, the smallest
-    components' ``V`` int8 (:func:`_fixed_point`), a worker's run of blocks at a time (:func:`_found_crosses` fills
+    components' ``V`` int8 (:func:`fixed_point`), a worker's run of blocks at a time (:func:`found_crosses` fills
     the worker's own room, :meth:`put_converted` copies it in under a lock: one copy a run, where a block at a time
     kept the workers waiting on each other's Python).
 
@@ -440,7 +401,7 @@ class _CrossStore:
         self.lock = threading.Lock()
 
     def put_converted(self, U: np.ndarray, V: np.ndarray, S: np.ndarray, V8: np.ndarray) -> tuple[int, int, int, int]:
-        """Store the components of a run of blocks already in fixed point (:func:`_found_crosses`' ``U``, ``V``, ``S``,
+        """Store the components of a run of blocks already in fixed point (:func:`found_crosses`' ``U``, ``V``, ``S``,
         ``V8``, each one piece): where each starts in :attr:`U`, :attr:`V`, :attr:`S` and :attr:`V8`."""
         with self.lock:
             at = self.u_at, self.v_at, self.s_at, self.v8_at
@@ -476,7 +437,7 @@ def _room(array: np.ndarray, size: int) -> np.ndarray:
 #: ``RANK_PER_SQUARED_DECADE log10(1 / eps)^2`` (:func:`expected_rank`, measured on the default bunny in marble at
 #: ``tol`` 0.1, 0.03 and 0.01; the ranks grow faster than the digits asked), never more than a block may take
 #: (:class:`_CrossStore`: room never written costs no memory; a store that runs out grows, copied). The budget
-#: counts the crosses by :func:`~translucency.scatter.crosses.sampled_count`, which follows the material too.
+#: counts the crosses by :func:`sampled_count`, which follows the material too.
 RANK_PER_SQUARED_DECADE = 2.5
 RESERVED_SHARE = 1.5
 
@@ -600,21 +561,17 @@ def _crosses(model, tree, P, N, params, dirs, pinv, eps, channel_bound, far_pair
     ranks = np.minimum(reserved, rank_limits(rows, cols)).astype(np.int64)
     store = _CrossStore(n_c * np.sum(ranks * rows), n_c * np.sum(ranks * cols), n_c * np.sum(rows))
 
-    rooms = [_Room() for _ in range(thread_count())]
+    rooms = [Room() for _ in range(thread_count())]
 
     def run(worker, lo, hi, items):
         kept = kept_by[worker]
         for first in range(lo, hi, SCALE_CHUNK):
             chunk = items[first : min(hi, first + SCALE_CHUNK)]
             offsets, row_scales = approximations.row_scales(chunk)
-            row_node, column_node = chunk[:, 0], chunk[:, 1]
-            kmax = rank_limits(end[row_node] - start[row_node], (end[column_node] - start[column_node]) * AFFINE_TERMS)
-            blocks = np.column_stack(
-                [start[row_node], end[row_node], start[column_node], end[column_node], chunk[:, 2], kmax]
-            )
+            blocks = block_rows(tree, chunk)
             done = 0
             while done < len(chunk):
-                count, info, parts = _run_of_crosses(
+                count, info, parts = run_of_crosses(
                     approximations, rooms[worker], worker, blocks[done:], offsets[done:], row_scales
                 )
                 bases = np.array(store.put_converted(*parts), dtype=np.int64)
@@ -652,95 +609,11 @@ def _crosses(model, tree, P, N, params, dirs, pinv, eps, channel_bound, far_pair
     return found, dense, store
 
 
-class _Room:
-    """A worker's room for a run of blocks' components in fixed point (:func:`_found_crosses`), grown when one block
-    needs more than it holds, kept between runs (its pages are written once)."""
-
-    #: Elements of ``U``, ``V`` and ``V8`` (each) and rows of ``S`` a room holds at first.
-    ELEMENTS = 1 << 20
-    ROWS = 1 << 16
-
-    def __init__(self):
-        self.grow(self.ELEMENTS, self.ROWS)
-
-    def grow(self, elements: int, rows: int) -> None:
-        """Room for ``elements`` of each of ``U``, ``V``, ``V8`` and ``rows`` row scales."""
-        self.U = np.empty(elements, dtype=np.int16)
-        self.V = np.empty(elements, dtype=np.int16)
-        self.V8 = np.empty(elements, dtype=np.int8)
-        self.S = np.empty(rows, dtype=np.float32)
-
-
-def _run_of_crosses(approximations, room: _Room, worker: int, blocks, offsets, row_scales):
-    """The cross approximations of ``blocks`` (rows: first and last row, first and last column, channel, crosses
-    it may take; tree order) in one compiled run (:func:`_found_crosses`), as many as ``room`` holds (it grows when
-    not even the first fits): ``(count, info, (U, V, S, V8))``, ``info`` per block done as :func:`_found_crosses`
-    writes it, and the parts of the room they fill."""
-    rows = blocks[:, 1] - blocks[:, 0]
-    cols = (blocks[:, 3] - blocks[:, 2]) * AFFINE_TERMS
-    first = int(blocks[0, 5])
-    if first * max(int(rows[0]), int(cols[0])) > room.U.size or int(rows[0]) > room.S.size:
-        room.grow(2 * first * max(int(rows[0]), int(cols[0])), 2 * int(rows[0]))
-    U, V = approximations.scratch(worker, int(rows.max()), int(blocks[:, 5].max()), int(cols.max()))
-    info = np.empty((blocks.shape[0], 7), dtype=np.int64)
-    used = np.zeros(4, dtype=np.int64)
-    count = _found_crosses(
-        approximations.model, approximations.P, approximations.N, approximations.params,
-        approximations.dirs, approximations.pinv, approximations.eps,
-        blocks, offsets, row_scales, U, V, approximations.spaces[worker],
-        (room.U, room.V, room.S, room.V8), info, used,
-    )  # fmt: skip
-    return count, info[:count], (room.U[: used[0]], room.V[: used[1]], room.S[: used[2]], room.V8[: used[3]])
-
-
-@numba.njit(cache=True, nogil=True, error_model="numpy")
-def _found_crosses(model, P, N, params, dirs, pinv, eps, blocks, offsets, row_scales, U, V, space, room, info, used):
-    """The cross approximations (:func:`~translucency.scatter.crosses.cross_approximation`) of ``blocks`` in turn
-    (rows: first and last row, first and last column, channel, crosses it may take), each block's components in fixed
-    point (:func:`_fixed_point`) one after another in ``room`` (``U``, ``V`` int16, ``S`` float32, ``V8`` int8), until
-    the next block might not fit: returns how many blocks were done. ``info[p]``: crosses found (-1: not enough), kept,
-    held narrow, and where block ``p``'s ``U``, ``V``, ``S`` and ``V8`` start in ``room``; ``used``: how much of
-    each the run filled. Block ``p``'s row scales are ``row_scales[offsets[p] : offsets[p + 1]]``."""
-    U_room, V_room, S_room, V8_room = room
-    u_at, v_at, s_at, v8_at = 0, 0, 0, 0
-    for p in range(blocks.shape[0]):
-        r0, r1, c0, c1, c, kmax = blocks[p, 0], blocks[p, 1], blocks[p, 2], blocks[p, 3], blocks[p, 4], blocks[p, 5]
-        m, n = r1 - r0, (c1 - c0) * AFFINE_TERMS
-        if u_at + kmax * m > U_room.size or max(v_at, v8_at) + kmax * n > V_room.size or s_at + m > S_room.size:
-            used[0], used[1], used[2], used[3] = u_at, v_at, s_at, v8_at
-            return p
-        found, k, narrow = cross_approximation(
-            model, P, N, r0, r1, c0, c1, params[c : c + 1], dirs, pinv,
-            row_scales[offsets[p] : offsets[p + 1]], eps, kmax, U, V, space,
-        )  # fmt: skip
-        info[p, 0], info[p, 1], info[p, 2] = found, k, narrow
-        info[p, 3], info[p, 4], info[p, 5], info[p, 6] = u_at, v_at, s_at, v8_at
-        if found < 0:
-            continue
-        wide = k - narrow
-        _fixed_point(
-            U[:m, :k],
-            V[:k, :n],
-            U_room[u_at : u_at + k * m].reshape((k, m)),
-            S_room[s_at : s_at + m],
-            V_room[v_at : v_at + wide * n].reshape((wide, n)),
-            V8_room[v8_at : v8_at + narrow * n].reshape((narrow, n)),
-        )
-        u_at += k * m
-        v_at += wide * n
-        s_at += m
-        v8_at += narrow * n
-    used[0], used[1], used[2], used[3] = u_at, v_at, s_at, v8_at
-    return blocks.shape[0]
-
-
 #: The compiled kernels of the far field's cross approximations and products: numba compiles each on first use;
 #: the set-up compiles them ahead (:mod:`translucency.app.warmup`).
 LOW_RANK_KERNELS = (
     _partition,
     *CROSS_KERNELS,
-    _found_crosses,
-    _fixed_point,
     _fill_dense,
     _tree_ordered,
     _take_entries,
