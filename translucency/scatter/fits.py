@@ -85,11 +85,12 @@ def fit_directions(eta: float, terms: int):
 
 
 @numba.njit(cache=True, fastmath=True)
-def _affine_terms(x0, x1, x2, x_dot_n, n0, n1, n2, d, D, sigma_tr_, scale, C_phi, C_E):
-    """``S'_d`` of one ray source of distance ``d`` (mm) as ``a + b . w`` (docs/physics.md §4.4 rearranged,
-    §8.7): ``(a, b0, b1, b2)`` for the offset ``x`` to the exit point and the receiver normal ``n``, with the
-    channel's parameters as numbers (``scale = norm / (4 pi^2)``): a loop over pairs that reads them before it
-    starts vectorises, one that reads them from an array in every pass did not."""
+def _affine_parts(x_dot_n, d, D, sigma_tr_, scale, C_phi, C_E):
+    """``S'_d`` of one ray source of distance ``d`` (mm) as ``a + b . w`` with ``b = along_x x + along_n n``
+    (docs/physics.md §4.4 rearranged, §8.7): ``(a, along_x, along_n)`` for the offset ``x`` to the exit point and the
+    receiver normal ``n`` (``x_dot_n`` their dot product), with the channel's parameters as numbers (``scale = norm /
+    (4 pi^2)``): a loop over pairs that reads them before it starts vectorises, one that reads them from an array in
+    every pass did not."""
     s = sigma_tr_ * d
     one_plus_s = 1.0 + s
     inv_d = 1.0 / d
@@ -97,6 +98,13 @@ def _affine_terms(x0, x1, x2, x_dot_n, n0, n1, n2, d, D, sigma_tr_, scale, C_phi
     a = k * (C_phi * d * d / D + C_E * one_plus_s * x_dot_n)
     along_x = k * (3.0 * C_phi * one_plus_s + 3.0 * C_E * D * (3.0 * one_plus_s + s * s) * x_dot_n * inv_d * inv_d)
     along_n = -k * 3.0 * C_E * D * one_plus_s
+    return a, along_x, along_n
+
+
+@numba.njit(cache=True, fastmath=True)
+def _affine_terms(x0, x1, x2, x_dot_n, n0, n1, n2, d, D, sigma_tr_, scale, C_phi, C_E):
+    """:func:`_affine_parts` as ``(a, b0, b1, b2)``: ``b = along_x x + along_n n``."""
+    a, along_x, along_n = _affine_parts(x_dot_n, d, D, sigma_tr_, scale, C_phi, C_E)
     return a, along_x * x0 + along_n * n0, along_x * x1 + along_n * n1, along_x * x2 + along_n * n2
 
 
@@ -110,20 +118,33 @@ _VA, _VB0, _VB1, _VB2, _INVERSE = range(5)  # the virtual source's a, b; 1 / (r^
 LOCAL_QUADRATIC_TERMS = 9
 
 
+#: The steps of a run go over its pairs rounded up to a multiple of this many, the last pair repeated: a vectorised
+#: loop does what is left past its last whole vector one pair at a time, which took a run of 40 pairs 1.5 times as
+#: long a pair as a run of 128 (bench/README.md, "The preparation, 8 December 2026").
+RUN_STEP = 16
+
+
+@numba.njit(cache=True)
+def _rounded_up(length):
+    """``length`` rounded up to a multiple of :data:`RUN_STEP`."""
+    return (length + RUN_STEP - 1) // RUN_STEP * RUN_STEP
+
+
 @numba.njit(cache=True)
 def run_scratch(directions, length):
     """Scratch space of :func:`fitted_run` and :func:`fitted_points` for ``directions`` fit directions and up to
     ``length`` pairs: a tuple of arrays (the pairs' offsets and normals are the rows of the first, see
-    :func:`fitted_points`), their rows a little longer than the run and an odd number of cache lines long (rows
-    a power of two apart in memory compete for the same cache sets, which made runs of 512 three times
-    slower)."""
-    width = (length // 8 + 1) // 2 * 16 + 8
+    :func:`fitted_points`), their rows as long as the run rounded up to :data:`RUN_STEP` pairs and an odd number of
+    cache lines long (rows a power of two apart in memory compete for the same cache sets, which made runs of 512
+    three times slower)."""
+    width = _rounded_up(length) + 8
     return (
         np.empty((9, width)),
         np.empty((13, width)),
         np.empty((5, width)),
         np.empty((directions, width)),
         np.empty((LOCAL_QUADRATIC_TERMS, width)),
+        np.empty((2 * directions, width)),
     )
 
 
@@ -173,12 +194,13 @@ def _run_geometry(length, pair, geo):
 
 
 @numba.njit(cache=True, fastmath=True, nogil=True, error_model="numpy")
-def _run_channel(p, dirs, pinv, length, scratch, out):
+def _run_channel(p, dirs, pinv, length, steps, scratch, out):
     """The fits of one channel (parameters ``p``) of a run's pairs into ``out (length, terms)``, each step one loop
-    over the run: the virtual source, the corrected distances, ``S_d`` at each direction (the real source evaluated
-    at each direction's distance), the least-squares fit, and its terms in global coordinates (:data:`AFFINE_TERMS`,
-    or :data:`QUADRATIC_TERMS` when ``pinv`` has :data:`LOCAL_QUADRATIC_TERMS` rows)."""
-    pair, geo, virtual, dist, coef = scratch
+    over the run's first ``steps`` pairs (:func:`_padded_run`): the virtual source, the corrected distances (with
+    ``x . w`` and ``n_o . w`` at each direction, kept for the next step), ``S_d`` at each direction (the real source
+    evaluated at each direction's distance), the least-squares fit, and its terms in global coordinates
+    (:data:`AFFINE_TERMS`, or :data:`QUADRATIC_TERMS` when ``pinv`` has :data:`LOCAL_QUADRATIC_TERMS` rows)."""
+    pair, geo, virtual, dist, coef, along = scratch
     n_dirs = dirs.shape[0]
     D = p[P_D]
     d_e = p[P_D_E]
@@ -186,7 +208,7 @@ def _run_channel(p, dirs, pinv, length, scratch, out):
     floor = D_R_FLOOR * D
     height = p[P_VIRTUAL]
     sigma_tr_, scale, C_phi, C_E = p[P_SIGMA_TR], p[P_NORM] / FOUR_PI_SQUARED, p[P_C_PHI], p[P_C_E]
-    for q in range(length):  # the virtual source, exactly affine in w (section 4.2)
+    for q in range(steps):  # the virtual source, exactly affine in w (section 4.2)
         s0, s1, s2 = geo[_S0, q], geo[_S1, q], geo[_S2, q]
         d_v = max(math.sqrt(max(geo[_R2, q] - 2.0 * height * geo[_XS, q] + height * height, 0.0)), floor)
         a_v, bv0, bv1, bv2 = _affine_terms(
@@ -202,7 +224,7 @@ def _run_channel(p, dirs, pinv, length, scratch, out):
         virtual[_INVERSE, q] = 1.0 / (geo[_R2, q] + d_e * d_e)
     for k in range(n_dirs):  # the real source's corrected distance at each direction (section 4.3)
         u0, u1, u2 = dirs[k, 0], dirs[k, 1], dirs[k, 2]
-        for q in range(length):
+        for q in range(steps):
             w0 = u0 * geo[_E0, q] + u1 * geo[_F0, q] + u2 * pair[_NI0, q]
             w1 = u0 * geo[_E1, q] + u1 * geo[_F1, q] + u2 * pair[_NI1, q]
             w2 = u0 * geo[_E2, q] + u1 * geo[_F2, q] + u2 * pair[_NI2, q]
@@ -212,24 +234,24 @@ def _run_channel(p, dirs, pinv, length, scratch, out):
             cos_beta = -math.sqrt(max(r2 - xw * xw, 0.0) * virtual[_INVERSE, q])
             front = r2 + D * mu0 * (D * mu0 - 2.0 * d_e * cos_beta)
             dist[k, q] = max(math.sqrt(front if mu0 > 0.0 else r2 + backlit2), floor)
+            along[k, q] = xw
+            along[n_dirs + k, q] = mu0
     for k in range(n_dirs):  # S_d's real source at each direction, in place of its distance
-        u0, u1, u2 = dirs[k, 0], dirs[k, 1], dirs[k, 2]
-        for q in range(length):
-            w0 = u0 * geo[_E0, q] + u1 * geo[_F0, q] + u2 * pair[_NI0, q]
-            w1 = u0 * geo[_E1, q] + u1 * geo[_F1, q] + u2 * pair[_NI1, q]
-            w2 = u0 * geo[_E2, q] + u1 * geo[_F2, q] + u2 * pair[_NI2, q]
-            a0, a1, a2, a3 = _affine_terms(
-                pair[_X0, q], pair[_X1, q], pair[_X2, q], geo[_XN, q], pair[_NO0, q], pair[_NO1, q],
-                pair[_NO2, q], dist[k, q], D, sigma_tr_, scale, C_phi, C_E,
-            )  # fmt: skip
-            dist[k, q] = a0 + a1 * w0 + a2 * w1 + a3 * w2
-    for j in range(pinv.shape[0]):  # the least-squares fit over the directions
-        for q in range(length):
-            coef[j, q] = 0.0
-        for k in range(n_dirs):
-            g = pinv[j, k]
-            for q in range(length):
-                coef[j, q] += g * dist[k, q]
+        for q in range(steps):
+            a, along_x, along_n = _affine_parts(geo[_XN, q], dist[k, q], D, sigma_tr_, scale, C_phi, C_E)
+            dist[k, q] = (
+                a + along_x * along[k, q] - along_n * along[n_dirs + k, q]
+            )  # b . w, b = along_x x + along_n n_o
+    if pinv.shape[0] == AFFINE_TERMS and n_dirs == 7:
+        _affine_fit(pinv, steps, dist, coef)
+    else:
+        for j in range(pinv.shape[0]):  # the least-squares fit over the directions
+            for q in range(steps):
+                coef[j, q] = 0.0
+            for k in range(n_dirs):
+                g = pinv[j, k]
+                for q in range(steps):
+                    coef[j, q] += g * dist[k, q]
     for q in range(length):  # from the source's frame to global coordinates, less the virtual source
         c1, c2, c3 = coef[1, q], coef[2, q], coef[3, q]
         out[q, 0] = coef[0, q] - virtual[_VA, q]
@@ -238,6 +260,55 @@ def _run_channel(p, dirs, pinv, length, scratch, out):
         out[q, 3] = geo[_E2, q] * c1 + geo[_F2, q] * c2 + pair[_NI2, q] * c3 - virtual[_VB2, q]
     if pinv.shape[0] == LOCAL_QUADRATIC_TERMS:
         _global_quadratic(length, pair, geo, coef, out)
+
+
+@numba.njit(cache=True, fastmath=True, nogil=True, error_model="numpy")
+def _affine_fit(pinv, steps, dist, coef):
+    """The affine least-squares fit over seven directions in one loop over the run (its 28 weights read before it):
+    thirty-two loops of a step each cost more to start than a run of 50 pairs takes in them."""
+    g00, g01, g02, g03, g04, g05, g06 = (
+        pinv[0, 0],
+        pinv[0, 1],
+        pinv[0, 2],
+        pinv[0, 3],
+        pinv[0, 4],
+        pinv[0, 5],
+        pinv[0, 6],
+    )
+    g10, g11, g12, g13, g14, g15, g16 = (
+        pinv[1, 0],
+        pinv[1, 1],
+        pinv[1, 2],
+        pinv[1, 3],
+        pinv[1, 4],
+        pinv[1, 5],
+        pinv[1, 6],
+    )
+    g20, g21, g22, g23, g24, g25, g26 = (
+        pinv[2, 0],
+        pinv[2, 1],
+        pinv[2, 2],
+        pinv[2, 3],
+        pinv[2, 4],
+        pinv[2, 5],
+        pinv[2, 6],
+    )
+    g30, g31, g32, g33, g34, g35, g36 = (
+        pinv[3, 0],
+        pinv[3, 1],
+        pinv[3, 2],
+        pinv[3, 3],
+        pinv[3, 4],
+        pinv[3, 5],
+        pinv[3, 6],
+    )
+    for q in range(steps):
+        d0, d1, d2, d3 = dist[0, q], dist[1, q], dist[2, q], dist[3, q]
+        d4, d5, d6 = dist[4, q], dist[5, q], dist[6, q]
+        coef[0, q] = g00 * d0 + g01 * d1 + g02 * d2 + g03 * d3 + g04 * d4 + g05 * d5 + g06 * d6
+        coef[1, q] = g10 * d0 + g11 * d1 + g12 * d2 + g13 * d3 + g14 * d4 + g15 * d5 + g16 * d6
+        coef[2, q] = g20 * d0 + g21 * d1 + g22 * d2 + g23 * d3 + g24 * d4 + g25 * d5 + g26 * d6
+        coef[3, q] = g30 * d0 + g31 * d1 + g32 * d2 + g33 * d3 + g34 * d4 + g35 * d5 + g36 * d6
 
 
 @numba.njit(cache=True, fastmath=True, nogil=True, error_model="numpy")
@@ -298,18 +369,32 @@ def fitted_points(model, length, params, dirs, pinv, scratch, out):
     :]`` for every channel (rows of ``params``), a step at a time over the pairs. The real source is evaluated at
     each direction's corrected distance."""
     if _directional_run(model, length, params, scratch, out):
+        steps = _padded_run(length, scratch[0])
+        _run_geometry(steps, scratch[0], scratch[1])
         for c in range(params.shape[0]):
-            _run_channel(params[c], dirs, pinv, length, scratch, out[:, c, :])
+            _run_channel(params[c], dirs, pinv, length, steps, scratch, out[:, c, :])
+
+
+@numba.njit(cache=True, fastmath=True, nogil=True, error_model="numpy")
+def _padded_run(length, pair):
+    """The pairs a run's steps go over: ``length`` rounded up to :data:`RUN_STEP` where the scratch ``pair`` has room,
+    the last pair written again into the rows past it (so that every step computes finite numbers there, which
+    nothing reads)."""
+    steps = min(_rounded_up(length), pair.shape[1])
+    if length > 0:
+        for t in range(pair.shape[0]):
+            for q in range(length, steps):
+                pair[t, q] = pair[t, length - 1]
+    return steps
 
 
 @numba.njit(cache=True, fastmath=True, nogil=True, error_model="numpy")
 def _directional_run(model, length, params, scratch, out) -> bool:
-    """The start of a run's fits: for the directional dipole the geometry (:func:`_run_geometry`, True: the
-    channels are to come), for the radial models the whole of them (False)."""
+    """The start of a run's fits: for the directional dipole nothing (True: the geometry and the channels are to
+    come), for the radial models the whole of them (False)."""
     if model != MODEL_DIRECTIONAL:
         _radial_run(model, length, params, scratch[0], out)
         return False
-    _run_geometry(length, scratch[0], scratch[1])
     return True
 
 
