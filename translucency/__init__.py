@@ -14,6 +14,11 @@ os.environ.setdefault("NUMBA_THREADING_LAYER", "omp")
 
 __version__ = "0.1.0"
 
+# numba's cached kernels, removed where they were compiled from other sources than these (an update in place)
+from .kernel_cache import refresh as _refresh_kernel_cache  # noqa: E402
+
+_refresh_kernel_cache()
+
 _LAZY = {
     # scattering physics
     "Medium": "translucency.scatter.medium",
