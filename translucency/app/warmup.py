@@ -50,7 +50,7 @@ MAIN_JOB_KERNELS = (
     *measure.CLEANING_KERNELS,
 )
 
-NOTICE = "compiling the solver's kernels (first run only, a minute or two) ..."
+NOTICE = "compiling the solver's kernels (the first run, and the first after an update; a minute or two) ..."
 
 #: The warm-up's light (the plane's normal is +z).
 LIGHT_DIRECTION = (0.3, 0.2, 1.0)
