@@ -118,26 +118,14 @@ _VA, _VB0, _VB1, _VB2, _INVERSE = range(5)  # the virtual source's a, b; 1 / (r^
 LOCAL_QUADRATIC_TERMS = 9
 
 
-#: The steps of a run go over its pairs rounded up to a multiple of this many, the last pair repeated: a vectorised
-#: loop does what is left past its last whole vector one pair at a time, which took a run of 40 pairs 1.5 times as
-#: long a pair as a run of 128 (bench/README.md, "The preparation, 8 December 2026").
-RUN_STEP = 16
-
-
-@numba.njit(cache=True)
-def _rounded_up(length):
-    """``length`` rounded up to a multiple of :data:`RUN_STEP`."""
-    return (length + RUN_STEP - 1) // RUN_STEP * RUN_STEP
-
-
 @numba.njit(cache=True)
 def run_scratch(directions, length):
     """Scratch space of :func:`fitted_run` and :func:`fitted_points` for ``directions`` fit directions and up to
     ``length`` pairs: a tuple of arrays (the pairs' offsets and normals are the rows of the first, see
-    :func:`fitted_points`), their rows as long as the run rounded up to :data:`RUN_STEP` pairs and an odd number of
-    cache lines long (rows a power of two apart in memory compete for the same cache sets, which made runs of 512
-    three times slower)."""
-    width = _rounded_up(length) + 8
+    :func:`fitted_points`), their rows a little longer than the run and an odd number of cache lines long (rows
+    a power of two apart in memory compete for the same cache sets, which made runs of 512 three times
+    slower)."""
+    width = (length // 8 + 1) // 2 * 16 + 8
     return (
         np.empty((9, width)),
         np.empty((13, width)),
@@ -194,9 +182,9 @@ def _run_geometry(length, pair, geo):
 
 
 @numba.njit(cache=True, fastmath=True, nogil=True, error_model="numpy")
-def _run_channel(p, dirs, pinv, length, steps, scratch, out):
+def _run_channel(p, dirs, pinv, length, scratch, out):
     """The fits of one channel (parameters ``p``) of a run's pairs into ``out (length, terms)``, each step one loop
-    over the run's first ``steps`` pairs (:func:`_padded_run`): the virtual source, the corrected distances (with
+    over the run: the virtual source, the corrected distances (with
     ``x . w`` and ``n_o . w`` at each direction, kept for the next step), ``S_d`` at each direction (the real source
     evaluated at each direction's distance), the least-squares fit, and its terms in global coordinates
     (:data:`AFFINE_TERMS`, or :data:`QUADRATIC_TERMS` when ``pinv`` has :data:`LOCAL_QUADRATIC_TERMS` rows)."""
@@ -208,7 +196,7 @@ def _run_channel(p, dirs, pinv, length, steps, scratch, out):
     floor = D_R_FLOOR * D
     height = p[P_VIRTUAL]
     sigma_tr_, scale, C_phi, C_E = p[P_SIGMA_TR], p[P_NORM] / FOUR_PI_SQUARED, p[P_C_PHI], p[P_C_E]
-    for q in range(steps):  # the virtual source, exactly affine in w (section 4.2)
+    for q in range(length):  # the virtual source, exactly affine in w (section 4.2)
         s0, s1, s2 = geo[_S0, q], geo[_S1, q], geo[_S2, q]
         d_v = max(math.sqrt(max(geo[_R2, q] - 2.0 * height * geo[_XS, q] + height * height, 0.0)), floor)
         a_v, bv0, bv1, bv2 = _affine_terms(
@@ -224,7 +212,7 @@ def _run_channel(p, dirs, pinv, length, steps, scratch, out):
         virtual[_INVERSE, q] = 1.0 / (geo[_R2, q] + d_e * d_e)
     for k in range(n_dirs):  # the real source's corrected distance at each direction (section 4.3)
         u0, u1, u2 = dirs[k, 0], dirs[k, 1], dirs[k, 2]
-        for q in range(steps):
+        for q in range(length):
             w0 = u0 * geo[_E0, q] + u1 * geo[_F0, q] + u2 * pair[_NI0, q]
             w1 = u0 * geo[_E1, q] + u1 * geo[_F1, q] + u2 * pair[_NI1, q]
             w2 = u0 * geo[_E2, q] + u1 * geo[_F2, q] + u2 * pair[_NI2, q]
@@ -237,20 +225,20 @@ def _run_channel(p, dirs, pinv, length, steps, scratch, out):
             along[k, q] = xw
             along[n_dirs + k, q] = mu0
     for k in range(n_dirs):  # S_d's real source at each direction, in place of its distance
-        for q in range(steps):
+        for q in range(length):
             a, along_x, along_n = _affine_parts(geo[_XN, q], dist[k, q], D, sigma_tr_, scale, C_phi, C_E)
             dist[k, q] = (
                 a + along_x * along[k, q] - along_n * along[n_dirs + k, q]
             )  # b . w, b = along_x x + along_n n_o
     if pinv.shape[0] == AFFINE_TERMS and n_dirs == 7:
-        _affine_fit(pinv, steps, dist, coef)
+        _affine_fit(pinv, length, dist, coef)
     else:
         for j in range(pinv.shape[0]):  # the least-squares fit over the directions
-            for q in range(steps):
+            for q in range(length):
                 coef[j, q] = 0.0
             for k in range(n_dirs):
                 g = pinv[j, k]
-                for q in range(steps):
+                for q in range(length):
                     coef[j, q] += g * dist[k, q]
     for q in range(length):  # from the source's frame to global coordinates, less the virtual source
         c1, c2, c3 = coef[1, q], coef[2, q], coef[3, q]
@@ -263,7 +251,7 @@ def _run_channel(p, dirs, pinv, length, steps, scratch, out):
 
 
 @numba.njit(cache=True, fastmath=True, nogil=True, error_model="numpy")
-def _affine_fit(pinv, steps, dist, coef):
+def _affine_fit(pinv, length, dist, coef):
     """The affine least-squares fit over seven directions in one loop over the run (its 28 weights read before it):
     thirty-two loops of a step each cost more to start than a run of 50 pairs takes in them."""
     g00, g01, g02, g03, g04, g05, g06 = (
@@ -302,7 +290,7 @@ def _affine_fit(pinv, steps, dist, coef):
         pinv[3, 5],
         pinv[3, 6],
     )
-    for q in range(steps):
+    for q in range(length):
         d0, d1, d2, d3 = dist[0, q], dist[1, q], dist[2, q], dist[3, q]
         d4, d5, d6 = dist[4, q], dist[5, q], dist[6, q]
         coef[0, q] = g00 * d0 + g01 * d1 + g02 * d2 + g03 * d3 + g04 * d4 + g05 * d5 + g06 * d6
@@ -369,23 +357,9 @@ def fitted_points(model, length, params, dirs, pinv, scratch, out):
     :]`` for every channel (rows of ``params``), a step at a time over the pairs. The real source is evaluated at
     each direction's corrected distance."""
     if _directional_run(model, length, params, scratch, out):
-        steps = _padded_run(length, scratch[0])
-        _run_geometry(steps, scratch[0], scratch[1])
+        _run_geometry(length, scratch[0], scratch[1])
         for c in range(params.shape[0]):
-            _run_channel(params[c], dirs, pinv, length, steps, scratch, out[:, c, :])
-
-
-@numba.njit(cache=True, fastmath=True, nogil=True, error_model="numpy")
-def _padded_run(length, pair):
-    """The pairs a run's steps go over: ``length`` rounded up to :data:`RUN_STEP` where the scratch ``pair`` has room,
-    the last pair written again into the rows past it (so that every step computes finite numbers there, which
-    nothing reads)."""
-    steps = min(_rounded_up(length), pair.shape[1])
-    if length > 0:
-        for t in range(pair.shape[0]):
-            for q in range(length, steps):
-                pair[t, q] = pair[t, length - 1]
-    return steps
+            _run_channel(params[c], dirs, pinv, length, scratch, out[:, c, :])
 
 
 @numba.njit(cache=True, fastmath=True, nogil=True, error_model="numpy")
